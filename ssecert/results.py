@@ -1,0 +1,197 @@
+"""Results of analyses: one ``Check`` per question, gathered in a ``Certificate``.
+
+Analyses return these objects and never print; renderers (terminal table,
+JSON, HTML) read them.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+__all__ = ["Verdict", "Check", "Certificate", "to_jsonable", "REQUIRED_CHECKS"]
+
+# Checks that decide the exit status; the others are advisory.
+REQUIRED_CHECKS = ("observability", "sparse_observability", "observer_gain", "observer_stability")
+
+
+class Verdict(str, enum.Enum):
+    """Outcome of a check."""
+
+    HOLDS = "holds"
+    FAILS = "fails"
+    INCONCLUSIVE = "inconclusive"
+
+    def __str__(self) -> str:
+        return self.value
+
+
+def to_jsonable(value: Any) -> Any:
+    """Convert results to JSON-compatible Python objects.
+
+    Arrays become nested lists, complex numbers ``{"re": ..., "im": ...}``,
+    and non-finite floats the strings ``"Infinity"``, ``"-Infinity"`` and
+    ``"NaN"`` (strict JSON has no literal for them; ``float()`` in Python
+    and ``Number()`` in JavaScript read these strings back).
+    """
+    if isinstance(value, (Check, Certificate)):
+        return value.to_dict()
+    if isinstance(value, enum.Enum):
+        return value.value
+    if isinstance(value, Mapping):
+        return {str(k): to_jsonable(v) for k, v in value.items()}
+    if isinstance(value, np.ndarray):
+        return to_jsonable(value.tolist())
+    if isinstance(value, (list, tuple, set, frozenset)):
+        return [to_jsonable(v) for v in value]
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        v = float(value)
+        if math.isnan(v):
+            return "NaN"
+        if math.isinf(v):
+            return "Infinity" if v > 0 else "-Infinity"
+        return v
+    if isinstance(value, (complex, np.complexfloating)):
+        return {"re": to_jsonable(value.real), "im": to_jsonable(value.imag)}
+    if value is None or isinstance(value, str):
+        return value
+    raise TypeError(f"cannot convert {type(value).__name__} to JSON")
+
+
+@dataclass(frozen=True)
+class Check:
+    """The answer to one question about a design.
+
+    Attributes
+    ----------
+    id : str
+        Snake-case identifier used in JSON (``"sparse_observability"``).
+    title : str
+        Human-readable title.
+    verdict : Verdict
+        ``holds``, ``fails`` or ``inconclusive``.
+    summary : str
+        One sentence saying what was found and why.
+    value : object
+        Headline value (an index, a count, a constant).
+    margin : float or None
+        How far the decision is from its threshold, in the units stated in
+        ``evidence``; ``None`` when not meaningful.
+    method : str
+        How the answer was computed.
+    required : bool
+        Whether the check decides the exit status.
+    fields : mapping
+        Check-specific JSON fields (``max_removable``, ``breaking_set``...).
+    evidence : mapping
+        Data that lets anyone re-check the verdict.
+    witness : mapping or None
+        Counterexample when the check fails.
+    tolerances : mapping
+        Tolerances used.
+    """
+
+    id: str
+    title: str
+    verdict: Verdict
+    summary: str
+    value: Any = None
+    margin: float | None = None
+    method: str = ""
+    required: bool = True
+    fields: Mapping[str, Any] = field(default_factory=dict)
+    evidence: Mapping[str, Any] = field(default_factory=dict)
+    witness: Mapping[str, Any] | None = None
+    tolerances: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "verdict", Verdict(self.verdict))
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary with the check-specific fields at top level."""
+        out: dict[str, Any] = {
+            "verdict": self.verdict.value,
+            "title": self.title,
+            "summary": self.summary,
+            "required": self.required,
+            "value": self.value,
+            "margin": self.margin,
+            "method": self.method,
+        }
+        out.update(self.fields)
+        if self.witness is not None:
+            out["witness"] = self.witness
+        out["evidence"] = self.evidence
+        out["tolerances"] = self.tolerances
+        return to_jsonable(out)
+
+
+def combine_verdicts(verdicts: Sequence[Verdict]) -> Verdict:
+    """Fails if any fails, else inconclusive if any is, else holds."""
+    verdicts = [Verdict(v) for v in verdicts]
+    if Verdict.FAILS in verdicts:
+        return Verdict.FAILS
+    if Verdict.INCONCLUSIVE in verdicts:
+        return Verdict.INCONCLUSIVE
+    return Verdict.HOLDS
+
+
+@dataclass(frozen=True)
+class Certificate:
+    """Ordered checks of one design and the overall verdict.
+
+    The overall verdict follows the exit-status rule: it combines the
+    required checks only (advisory checks are reported but do not count).
+    """
+
+    system: Any
+    checks: tuple[Check, ...]
+    meta: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "checks", tuple(self.checks))
+        ids = [c.id for c in self.checks]
+        if len(set(ids)) != len(ids):
+            raise ValueError(f"check ids must be unique, got {ids}")
+
+    def __getitem__(self, check_id: str) -> Check:
+        for check in self.checks:
+            if check.id == check_id:
+                return check
+        raise KeyError(check_id)
+
+    def __contains__(self, check_id: object) -> bool:
+        return any(c.id == check_id for c in self.checks)
+
+    @property
+    def verdict(self) -> Verdict:
+        """Overall verdict over the required checks."""
+        return combine_verdicts([c.verdict for c in self.checks if c.required])
+
+    @property
+    def exit_code(self) -> int:
+        """0 holds, 1 fails, 3 inconclusive."""
+        return {Verdict.HOLDS: 0, Verdict.FAILS: 1, Verdict.INCONCLUSIVE: 3}[self.verdict]
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON document: version, system, verdict, checks."""
+        from . import __version__
+
+        out: dict[str, Any] = {
+            "ssecert_version": __version__,
+            "system": self.system.to_dict(),
+            "verdict": self.verdict.value,
+            "checks": {c.id: c.to_dict() for c in self.checks},
+        }
+        if self.meta:
+            out["meta"] = to_jsonable(dict(self.meta))
+        return out

@@ -1,0 +1,1 @@
+"""Structural analyses: can any estimator succeed, and will Lasso find the attack?"""

@@ -1,0 +1,538 @@
+"""Numerical building blocks of the structural analyses.
+
+* ``eigen_clusters``: eigenvalues grouped into clusters with their
+  eigenspaces, grouping decided from condition numbers and a defect-aware
+  radius, every doubtful grouping reported instead of guessed;
+* ``staircase``: orthogonal observability staircase (block Arnoldi on the
+  rows of C), the reliable way to get the observable subspace and the
+  observability index (the rank of the stacked observability matrix is not);
+* ``sensor_subspaces``: the same for every sensor alone, vectorised;
+* ``screen_positive_definite``: batched Cholesky test that never raises;
+* ``stacked_rank``: exact rank decisions of many small stacks by SVD.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg
+
+from ..tolerances import BORDERLINE, EPS, NONZERO, ZERO, Tolerances, classify
+
+try:  # the gufunc behind numpy.linalg.cholesky: NaN instead of an exception
+    from numpy.linalg import _umath_linalg as _ul
+
+    _CHOLESKY = _ul.cholesky_lo
+except (ImportError, AttributeError):  # pragma: no cover - depends on numpy build
+    _CHOLESKY = None
+
+__all__ = [
+    "EigenCluster",
+    "EigenAnalysis",
+    "eigen_clusters",
+    "Staircase",
+    "staircase",
+    "SensorSubspaces",
+    "sensor_subspaces",
+    "screen_positive_definite",
+    "stacked_rank",
+    "matrix_norm",
+]
+
+
+def matrix_norm(M: np.ndarray) -> float:
+    """Spectral norm, or 0 for an empty matrix."""
+    if M.size == 0:
+        return 0.0
+    return float(np.linalg.norm(M, 2))
+
+
+# ---------------------------------------------------------------------------
+# eigenvalue clusters
+
+
+@dataclass(frozen=True)
+class EigenCluster:
+    """A group of computed eigenvalues treated as one eigenvalue.
+
+    Attributes
+    ----------
+    center : complex
+        Mean of the group (real when the group is closed under conjugation).
+    members : tuple of int
+        Indices into ``EigenAnalysis.eigenvalues``.
+    geometric : int
+        Dimension of the eigenspace (numerical null space of A - center I).
+    basis : ndarray, shape (n, geometric)
+        Orthonormal basis of the eigenspace; real when ``center`` is real.
+    error : float
+        Estimated angle between ``basis`` and the exact eigenspace.
+    conjugate_pair : bool
+        True when the group stands for itself and its complex conjugate.
+    problem : str
+        Empty when the group is sound; otherwise why it is not.
+    """
+
+    center: complex
+    members: tuple[int, ...]
+    geometric: int
+    basis: np.ndarray
+    error: float
+    conjugate_pair: bool
+    problem: str = ""
+
+    @property
+    def algebraic(self) -> int:
+        """Number of computed eigenvalues in the group."""
+        return len(self.members)
+
+    @property
+    def is_real(self) -> bool:
+        return not self.conjugate_pair
+
+
+@dataclass(frozen=True)
+class EigenAnalysis:
+    """Eigenvalues of A grouped into clusters (one per conjugate pair)."""
+
+    eigenvalues: np.ndarray
+    clusters: tuple[EigenCluster, ...]
+    norm: float
+    condition: np.ndarray
+    threshold: float
+    problems: tuple[str, ...] = field(default=())
+
+    @property
+    def ok(self) -> bool:
+        return not self.problems
+
+
+def _eigen_condition(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Eigenvalues and their condition numbers 1 / |y^H x| (unit x, y)."""
+    w, vl, vr = scipy.linalg.eig(A, left=True, right=True)
+    vl = vl / np.linalg.norm(vl, axis=0)
+    vr = vr / np.linalg.norm(vr, axis=0)
+    dots = np.abs(np.sum(vl.conj() * vr, axis=0))
+    with np.errstate(divide="ignore"):
+        kappa = np.where(dots > 0, 1.0 / np.maximum(dots, np.finfo(float).tiny), np.inf)
+    return w, kappa
+
+
+def eigen_clusters(A: np.ndarray, *, tolerances: Tolerances | None = None) -> EigenAnalysis:
+    """Group the eigenvalues of ``A`` and compute each group's eigenspace.
+
+    Two computed eigenvalues are grouped when their distance is below the
+    larger of (i) their first-order error bounds ``n eps ||A|| kappa``
+    (``kappa`` the eigenvalue condition number, huge for the perturbed
+    copies of a defective eigenvalue) and (ii) the spread a defective
+    eigenvalue of the group's size shows in floating point,
+    ``||A|| (n cluster_rtol)^(1/m)``.  Each group's eigenspace is the
+    numerical null space of ``A - center I``.  A group is reported as a
+    problem (and analyses that need it become inconclusive) when the null
+    space is empty or borderline, larger than the group, or when a single
+    eigenvalue is so ill-conditioned that it may be a defective one that was
+    not recognised.
+
+    Parameters
+    ----------
+    A : ndarray, shape (n, n)
+    tolerances : Tolerances, optional
+
+    Returns
+    -------
+    EigenAnalysis
+    """
+    tol = tolerances or Tolerances()
+    A = np.asarray(A, dtype=float)
+    n = A.shape[0]
+    norm = max(matrix_norm(A), np.finfo(float).tiny)
+    lam, kappa = _eigen_condition(A)
+    delta = np.minimum(n * EPS * norm * kappa, norm)  # first-order error bound
+
+    threshold = 10 * tol.rtol(n) * norm
+
+    def singular_at(members: list[int]) -> bool:
+        center = lam[members].mean()
+        smin = np.linalg.svd(A - center * np.eye(n), compute_uv=False)[-1]
+        return bool(smin <= tol.borderline_factor * threshold)
+
+    # Level-wise single linkage.  Edges are added by increasing distance;
+    # the connected component an edge closes is accepted as one eigenvalue
+    # when its diameter is within the spread a defective eigenvalue of that
+    # size can show, ||A|| (n * 1e4 * cluster_rtol)^(1/m), and either all its
+    # members are equal to rounding or A - mu I is singular at its mean.
+    # Components that fail stay split; a later, larger component can pass
+    # (a Jordan block's perturbed eigenvalues only average out when all are
+    # in), and every acceptance is validated, so no radius alone merges
+    # distinct eigenvalues.
+    labels = np.arange(n)
+    dist = np.abs(lam[:, None] - lam[None, :])
+    tight = n * tol.cluster_rtol * norm
+    wide = n * 1e4 * tol.cluster_rtol
+    ii, jj = np.triu_indices(n, 1)
+    keep = dist[ii, jj] <= norm * wide ** (1.0 / n)
+    ii, jj = ii[keep], jj[keep]
+    order = np.argsort(dist[ii, jj], kind="stable")
+    parent = list(range(n))
+
+    def find(x: int) -> int:
+        while parent[x] != x:
+            parent[x] = parent[parent[x]]
+            x = parent[x]
+        return x
+
+    members_of = {i: [i] for i in range(n)}
+    for e in order:
+        i, j = int(ii[e]), int(jj[e])
+        ri, rj = find(i), find(j)
+        if ri != rj:
+            parent[rj] = ri
+            members_of[ri] = members_of[ri] + members_of.pop(rj)
+        comp = members_of[find(i)]
+        if len(set(labels[comp].tolist())) == 1:
+            continue
+        diameter = float(dist[np.ix_(comp, comp)].max())
+        m = len(comp)
+        if diameter <= tight or (
+            diameter <= norm * wide ** (1.0 / m) and singular_at(comp)
+        ):
+            labels[comp] = labels[comp[0]]
+
+    groups = [np.nonzero(labels == g)[0] for g in np.unique(labels)]
+    group_of = {int(i): gi for gi, members in enumerate(groups) for i in members}
+    clusters: list[EigenCluster] = []
+    problems: list[str] = []
+    for gi, members in enumerate(groups):
+        center = complex(lam[members].mean())
+        # conjugate-closed group: every member's conjugate lies in the group
+        conj_groups = {group_of[int(np.argmin(np.abs(lam - lam[i].conj())))] for i in members}
+        self_conjugate = conj_groups == {gi}
+        if self_conjugate:
+            center = complex(center.real, 0.0)
+        elif center.imag < 0:
+            continue  # represented by its conjugate group
+        M = A - (center.real if self_conjugate else center) * np.eye(n)
+        _, s, vh = np.linalg.svd(M)
+        codes = classify(s, threshold, factor=tol.borderline_factor)
+        g = int(np.count_nonzero(codes == ZERO))
+        problem = ""
+        label = f"{center.real:.6g}" if self_conjugate else f"{center:.6g}"
+        if np.any(codes == BORDERLINE):
+            problem = (
+                f"eigenvalue {label}: a singular value of A - lambda I "
+                f"({s[codes == BORDERLINE].min():.2e}) is within a factor "
+                f"{tol.borderline_factor:g} of the rank threshold {threshold:.2e}"
+            )
+        elif g == 0:
+            problem = (
+                f"eigenvalues near {label} are too close to separate and do not behave as "
+                f"one eigenvalue (A - lambda I is not singular at their mean)"
+            )
+        elif g > len(members):
+            problem = (
+                f"eigenvalue {label}: eigenspace dimension {g} exceeds the {len(members)} "
+                f"eigenvalues grouped there"
+            )
+        elif len(members) == 1 and delta[members[0]] > np.sqrt(EPS) * norm:
+            problem = (
+                f"eigenvalue {label} is ill-conditioned (condition number "
+                f"{kappa[members[0]]:.1e}); it may be a defective eigenvalue that cannot be "
+                f"resolved in floating point"
+            )
+        basis = vh[n - g :].conj().T if g else np.zeros((n, 0))
+        if self_conjugate:
+            basis = np.real(basis)
+        zero_max = float(s[n - g]) if g else 0.0
+        gap = float(s[n - g - 1]) if g < n else norm
+        error = max(zero_max, threshold / 10) / max(gap, np.finfo(float).tiny) if g else np.inf
+        if problem:
+            problems.append(problem)
+        clusters.append(
+            EigenCluster(
+                center=center,
+                members=tuple(int(i) for i in members),
+                geometric=g,
+                basis=basis,
+                error=float(min(error, 1.0)),
+                conjugate_pair=not self_conjugate,
+                problem=problem,
+            )
+        )
+    return EigenAnalysis(
+        eigenvalues=lam,
+        clusters=tuple(clusters),
+        norm=norm,
+        condition=kappa,
+        threshold=threshold,
+        problems=tuple(problems),
+    )
+
+
+# ---------------------------------------------------------------------------
+# observability staircase
+
+
+@dataclass(frozen=True)
+class Staircase:
+    """Orthogonal observability staircase of (A, C).
+
+    Attributes
+    ----------
+    basis : ndarray, shape (r, n)
+        Orthonormal rows spanning the observable row space (span of C A^k).
+    block_sizes : tuple of int
+        Rank added at each step; their count is the observability index
+        when ``r == n``.
+    step_margins : tuple of float
+        Smallest kept singular value at each step, relative to its scale
+        (``||C||`` at step 0, ``||A||`` later).
+    problem : str
+        Empty unless a rank decision was borderline.
+    """
+
+    basis: np.ndarray
+    block_sizes: tuple[int, ...]
+    step_margins: tuple[float, ...]
+    problem: str = ""
+
+    @property
+    def rank(self) -> int:
+        return int(self.basis.shape[0])
+
+    @property
+    def index(self) -> int:
+        """Number of steps taken (the observability index when observable)."""
+        return len(self.block_sizes)
+
+    def unobservable_direction(self) -> np.ndarray | None:
+        """A unit vector orthogonal to the observable row space, or None."""
+        n = self.basis.shape[1]
+        if self.rank >= n:
+            return None
+        if self.rank == 0:
+            z = np.zeros(n)
+            z[0] = 1.0
+            return z
+        _, _, vh = np.linalg.svd(self.basis)
+        return vh[-1]
+
+
+def _orthogonalize(W: np.ndarray, basis: np.ndarray) -> np.ndarray:
+    """Rows of W minus their projection on the orthonormal rows of basis (twice)."""
+    if basis.shape[0] == 0:
+        return W
+    for _ in range(2):
+        W = W - (W @ basis.T) @ basis
+    return W
+
+
+def staircase(
+    A: np.ndarray,
+    C: np.ndarray,
+    *,
+    max_steps: int | None = None,
+    tolerances: Tolerances | None = None,
+) -> Staircase:
+    """Observable row space of (A, C) by orthogonal block Krylov steps.
+
+    Each step multiplies the newly found orthonormal rows by A, removes
+    their component in the rows already found (twice, for stability) and
+    keeps the singular directions above the rank threshold.
+
+    Parameters
+    ----------
+    A : ndarray, shape (n, n)
+    C : ndarray, shape (p, n)
+    max_steps : int, optional
+        Stop after this many steps (default n): the row space of the first
+        ``max_steps`` blocks is that of O_tau with tau = max_steps.
+    tolerances : Tolerances, optional
+
+    Returns
+    -------
+    Staircase
+    """
+    tol = tolerances or Tolerances()
+    A = np.asarray(A, dtype=float)
+    C = np.asarray(C, dtype=float)
+    n = A.shape[0]
+    steps = n if max_steps is None else max_steps
+    normA = max(matrix_norm(A), np.finfo(float).tiny)
+    normC = matrix_norm(C)
+    basis = np.zeros((0, n))
+    blocks: list[int] = []
+    margins: list[float] = []
+    problem = ""
+    if normC == 0.0:
+        return Staircase(basis, (), (), "")
+    W = C / normC
+    scale = 1.0
+    for step in range(steps):
+        W = _orthogonalize(W, basis)
+        if W.shape[0] == 0:
+            break
+        _, s, vh = np.linalg.svd(W, full_matrices=False)
+        thr = tol.rtol(*W.shape) * scale
+        codes = classify(s, thr, factor=tol.borderline_factor)
+        if np.any(codes == BORDERLINE) and not problem:
+            problem = (
+                f"staircase step {step}: singular value {s[codes == BORDERLINE].min():.2e} is "
+                f"within a factor {tol.borderline_factor:g} of the rank threshold {thr:.2e}"
+            )
+        r = int(np.count_nonzero(codes == NONZERO))
+        if r == 0:
+            break
+        new = _orthogonalize(vh[:r], basis)
+        new, _ = np.linalg.qr(new.T)
+        new = new.T
+        basis = np.vstack([basis, new])
+        blocks.append(r)
+        margins.append(float(s[r - 1] / scale))
+        if basis.shape[0] >= n:
+            break
+        W = new @ A
+        scale = normA
+    return Staircase(basis, tuple(blocks), tuple(margins), problem)
+
+
+@dataclass(frozen=True)
+class SensorSubspaces:
+    """Observable row space of (A, c_i) for every sensor i.
+
+    Attributes
+    ----------
+    bases : ndarray, shape (p, n, n)
+        ``bases[i, :ranks[i]]`` are orthonormal rows spanning sensor i's
+        observable row space; the other rows are zero.
+    ranks : ndarray of int, shape (p,)
+    borderline : ndarray of bool, shape (p,)
+        Sensors whose rank decision was borderline.
+    margins : ndarray, shape (p,)
+        Smallest relative Krylov residual kept for each sensor.
+    """
+
+    bases: np.ndarray
+    ranks: np.ndarray
+    borderline: np.ndarray
+    margins: np.ndarray
+
+    def projectors(self) -> np.ndarray:
+        """Orthogonal projectors Q_i^T Q_i onto the sensors' row spaces, (p, n, n)."""
+        return np.einsum("pkn,pkm->pnm", self.bases, self.bases)
+
+
+def sensor_subspaces(
+    A: np.ndarray, C: np.ndarray, *, tolerances: Tolerances | None = None
+) -> SensorSubspaces:
+    """Krylov (Arnoldi) basis of each sensor's observable row space, vectorised.
+
+    Parameters
+    ----------
+    A : ndarray, shape (n, n)
+    C : ndarray, shape (p, n)
+    tolerances : Tolerances, optional
+
+    Returns
+    -------
+    SensorSubspaces
+    """
+    tol = tolerances or Tolerances()
+    A = np.asarray(A, dtype=float)
+    C = np.asarray(C, dtype=float)
+    p, n = C.shape
+    normA = max(matrix_norm(A), np.finfo(float).tiny)
+    bases = np.zeros((p, n, n))
+    ranks = np.zeros(p, dtype=np.int64)
+    borderline = np.zeros(p, dtype=bool)
+    margins = np.full(p, np.inf)
+    row_norms = np.linalg.norm(C, axis=1)
+    scale_C = max(float(row_norms.max()), np.finfo(float).tiny)
+    codes = classify(row_norms, tol.rtol(p, n) * scale_C, factor=tol.borderline_factor)
+    borderline |= codes == BORDERLINE
+    active = codes == NONZERO
+    bases[active, 0] = C[active] / row_norms[active, None]
+    ranks[active] = 1
+    margins[active] = row_norms[active] / scale_C
+    thr = tol.rtol(n) * normA
+    for k in range(1, n):
+        idx = np.nonzero(active)[0]
+        if idx.size == 0:
+            break
+        Q = bases[idx, :k]
+        w = bases[idx, k - 1] @ A
+        for _ in range(2):
+            w = w - np.einsum("ik,ikn->in", np.einsum("ikn,in->ik", Q, w), Q)
+        nrm = np.linalg.norm(w, axis=1)
+        codes = classify(nrm, thr, factor=tol.borderline_factor)
+        borderline[idx[codes == BORDERLINE]] = True
+        keep = codes == NONZERO
+        active[idx[~keep]] = False
+        kept = idx[keep]
+        bases[kept, k] = w[keep] / nrm[keep, None]
+        ranks[kept] += 1
+        margins[kept] = np.minimum(margins[kept], nrm[keep] / normA)
+    return SensorSubspaces(bases, ranks, borderline, margins)
+
+
+# ---------------------------------------------------------------------------
+# batched decisions
+
+
+def screen_positive_definite(mats: np.ndarray, shift: float | np.ndarray) -> np.ndarray:
+    """True where ``mats - shift I`` has a Cholesky factorization.
+
+    Batched and exception-free: a matrix that is not positive definite
+    gives False for that matrix only.
+
+    Parameters
+    ----------
+    mats : ndarray, shape (N, n, n)
+        Symmetric matrices (only the lower triangle is read).
+    shift : float or ndarray of shape (N,)
+
+    Returns
+    -------
+    ndarray of bool, shape (N,)
+    """
+    n = mats.shape[-1]
+    shifted = mats - np.asarray(shift)[..., None, None] * np.eye(n)
+    if _CHOLESKY is not None:
+        with np.errstate(all="ignore"):
+            L = _CHOLESKY(shifted)
+        return np.isfinite(L[:, -1, -1]) & np.isfinite(L[:, 0, 0])
+    return np.linalg.eigvalsh(shifted)[:, 0] > 0  # pragma: no cover
+
+
+def stacked_rank(
+    stacks: np.ndarray, *, tolerances: Tolerances | None = None, rows: int | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Full-column-rank decision for a batch of stacked matrices by SVD.
+
+    Parameters
+    ----------
+    stacks : ndarray, shape (N, m, n)
+        Zero padding rows are allowed: they change no singular value.
+    tolerances : Tolerances, optional
+    rows : int, optional
+        Number of meaningful rows for the default tolerance (default m).
+
+    Returns
+    -------
+    codes : ndarray of int8, shape (N,)
+        ZERO (rank deficient), BORDERLINE or NONZERO (full column rank) for
+        the smallest singular value.
+    smallest : ndarray, shape (N,)
+        Smallest singular value relative to the largest.
+    null_vectors : ndarray, shape (N, n)
+        Right singular vector of the smallest singular value.
+    """
+    tol = tolerances or Tolerances()
+    N, m, n = stacks.shape
+    if m < n:
+        stacks = np.concatenate([stacks, np.zeros((N, n - m, n))], axis=1)
+    _, s, vh = np.linalg.svd(stacks, full_matrices=False)
+    smax = np.maximum(s[:, 0], np.finfo(float).tiny)
+    rel = s[:, n - 1] / smax
+    codes = classify(rel, tol.rtol(rows or m, n), factor=tol.borderline_factor)
+    return codes, rel, vh[:, n - 1, :]

@@ -1,0 +1,122 @@
+"""Numerical tolerances: one place, relative to the data, reported with results.
+
+Rank decisions follow one rule everywhere.  A singular value ``sigma`` of a
+matrix whose largest singular value (or a data norm standing for it) is
+``scale`` is
+
+* **zero** when ``sigma <= rtol * scale``,
+* **borderline** when ``rtol * scale < sigma <= borderline_factor * rtol * scale``,
+* **nonzero** otherwise,
+
+with ``rtol = max(shape) * eps`` unless given.  A borderline decision makes
+the analysis that depends on it inconclusive instead of guessing.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+__all__ = [
+    "EPS",
+    "BORDERLINE_FACTOR",
+    "Tolerances",
+    "default_rtol",
+    "classify",
+    "ZERO",
+    "BORDERLINE",
+    "NONZERO",
+]
+
+EPS = float(np.finfo(np.float64).eps)
+BORDERLINE_FACTOR = 100.0
+
+ZERO = 0
+BORDERLINE = 1
+NONZERO = 2
+
+
+def default_rtol(*dims: int) -> float:
+    """``max(dims) * eps``, the default relative rank tolerance."""
+    return max(max(dims, default=1), 1) * EPS
+
+
+def classify(
+    values: np.ndarray | float,
+    threshold: np.ndarray | float,
+    *,
+    factor: float = BORDERLINE_FACTOR,
+) -> np.ndarray:
+    """Classify nonnegative magnitudes as ZERO, BORDERLINE or NONZERO.
+
+    Parameters
+    ----------
+    values : array_like
+        Nonnegative magnitudes (singular values, residual norms).
+    threshold : array_like
+        Absolute threshold ``rtol * scale``, broadcast against ``values``.
+    factor : float, default 100
+        Width of the borderline band above the threshold.
+
+    Returns
+    -------
+    numpy.ndarray of int8
+        Codes ``ZERO`` (0), ``BORDERLINE`` (1), ``NONZERO`` (2).
+
+    Examples
+    --------
+    >>> classify([1e-20, 1e-14, 1.0], 1e-15).tolist()
+    [0, 1, 2]
+    """
+    values = np.asarray(values, dtype=np.float64)
+    threshold = np.asarray(threshold, dtype=np.float64)
+    codes = np.full(np.broadcast(values, threshold).shape, NONZERO, dtype=np.int8)
+    codes[values <= factor * threshold] = BORDERLINE
+    codes[values <= threshold] = ZERO
+    return codes
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    """Tolerances used by the structural analyses.
+
+    Parameters
+    ----------
+    rank_rtol : float or None, default None
+        Relative rank tolerance; ``None`` means ``max(shape) * eps`` of the
+        matrix being decided.
+    borderline_factor : float, default 100
+        A singular value within this factor above the rank threshold is
+        borderline and makes the decision inconclusive.
+    cluster_rtol : float, default 100 * eps
+        Base of the eigenvalue grouping radius: eigenvalues of a group of
+        ``m`` lie within ``||A|| * (n * cluster_rtol) ** (1 / m)`` of each
+        other, the spread a defective eigenvalue of multiplicity ``m``
+        shows in floating point.
+    screen_rtol : float, default 1000 * eps
+        Shift of the batched Cholesky screening of subset Gramians, relative
+        to their largest possible eigenvalue; a subset that fails screening
+        is decided exactly by a singular value decomposition.
+    witness_rtol : float, default 1e-6
+        Largest accepted output mismatch of a simulated stealthy attack,
+        relative to the attack's size.
+    irrepresentable_rtol : float, default 1e-9
+        An irrepresentable constant within this relative distance of 1 is
+        inconclusive.
+    """
+
+    rank_rtol: float | None = None
+    borderline_factor: float = BORDERLINE_FACTOR
+    cluster_rtol: float = 100 * EPS
+    screen_rtol: float = 1000 * EPS
+    witness_rtol: float = 1e-6
+    irrepresentable_rtol: float = 1e-9
+
+    def rtol(self, *dims: int) -> float:
+        """Relative rank tolerance for a matrix with dimensions ``dims``."""
+        return self.rank_rtol if self.rank_rtol is not None else default_rtol(*dims)
+
+    def to_dict(self) -> dict[str, float | None]:
+        """Plain dictionary, for evidence and JSON."""
+        return asdict(self)
