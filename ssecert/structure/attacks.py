@@ -1,0 +1,215 @@
+"""Stealthy attacks: the counterexample behind a failed sparse-observability check.
+
+If removing the sensor set B leaves (A, C) unobservable, some z != 0 has
+C_i A^k z = 0 for every sensor i outside B and every k.  Split B into
+parts B_a and B_b of at most s sensors each and let
+
+    a_a(k) = P_a C A^k z,        a_b(k) = -P_b C A^k z,
+
+with P_a, P_b the selections of the sensors in B_a, B_b.  Then the plant
+started at x0 under attack a_a and the plant started at x0 + z under attack
+a_b produce identical outputs at every step:
+
+    C A^k x0 + P_a C A^k z = C A^k (x0 + z) - P_b C A^k z,
+
+because (I - P_a - P_b) C A^k z = 0.  No estimator can tell x0 from x0 + z.
+When B has at most s sensors, B_b is empty and a_a alone is an undetectable
+attack: it makes x0 look exactly like x0 + z.
+
+The construction assumes the attacked sensor set is fixed over the window,
+as the sparse-observability definition does.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .._validation import as_index_list, as_int_option, as_real_matrix
+from ..system import System
+from ..tolerances import Tolerances
+
+__all__ = ["StealthyAttack", "stealthy_attack", "initial_state"]
+
+
+def initial_state(n: int, rng: np.random.Generator) -> np.ndarray:
+    """x0 with entries of magnitude uniform in [2, 3] and random signs."""
+    return rng.uniform(2.0, 3.0, n) * rng.choice([-1.0, 1.0], n)
+
+
+@dataclass(frozen=True)
+class StealthyAttack:
+    """Two attacks that make x0 and x0 + z indistinguishable.
+
+    Attributes
+    ----------
+    z : ndarray, shape (n,)
+        Unit-norm indistinguishable direction.
+    sensors_a, sensors_b : tuple of int
+        Attacked sensors of the two explanations (0-based), at most s each.
+    attack_a, attack_b : ndarray, shape (horizon, p)
+        ``attack_a[k] = P_a C A^k z`` and ``attack_b[k] = -P_b C A^k z``.
+    x0 : ndarray, shape (n,)
+        Initial state of the simulated check.
+    outputs_a, outputs_b : ndarray, shape (horizon, p)
+        Simulated outputs from x0 under attack_a and from x0 + z under
+        attack_b.
+    residual : float
+        ``max_k ||outputs_a[k] - outputs_b[k]|| / max_k ||C|| ||A^k z||``.
+    verified : bool
+        ``residual <= witness_rtol``.
+    """
+
+    z: np.ndarray
+    sensors_a: tuple[int, ...]
+    sensors_b: tuple[int, ...]
+    attack_a: np.ndarray
+    attack_b: np.ndarray
+    x0: np.ndarray
+    outputs_a: np.ndarray
+    outputs_b: np.ndarray
+    residual: float
+    verified: bool
+    rtol: float
+
+    @property
+    def undetectable(self) -> bool:
+        """True when one attack alone suffices (sensors_b is empty)."""
+        return not self.sensors_b
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON fields of the witness."""
+        return {
+            "z": self.z,
+            "sensors_a": list(self.sensors_a),
+            "sensors_b": list(self.sensors_b),
+            "attack_a": self.attack_a,
+            "attack_b": self.attack_b,
+            "x0": self.x0,
+            "residual": self.residual,
+            "verified": self.verified,
+            "residual_rtol": self.rtol,
+            "meaning": (
+                "the plant from x0 under attack_a and the plant from x0 + z under attack_b "
+                "give identical outputs"
+                + ("; attack_a alone is undetectable" if self.undetectable else "")
+            ),
+        }
+
+
+def stealthy_attack(
+    system: System,
+    breaking_set: Sequence[int],
+    z: np.ndarray,
+    max_attacked: int,
+    *,
+    horizon: int | None = None,
+    seed: int = 0,
+    tolerances: Tolerances | None = None,
+) -> StealthyAttack:
+    """Build the stealthy attack of a breaking set and verify it by simulation.
+
+    Parameters
+    ----------
+    system : System
+    breaking_set : sequence of int
+        Sensors whose removal leaves the plant unobservable (at most 2s of
+        them, else no split into two s-sparse attacks exists).
+    z : ndarray, shape (n,)
+        A direction with ``C_i A^k z = 0`` for the sensors outside
+        ``breaking_set``; normalised here.
+    max_attacked : int
+        s, the number of sensors each attack may use.
+    horizon : int, optional
+        Number of simulated steps (default n).
+    seed : int, default 0
+        Seed of the simulated initial state x0.
+    tolerances : Tolerances, optional
+
+    Returns
+    -------
+    StealthyAttack
+
+    Raises
+    ------
+    ValueError
+        If the breaking set has more than 2s sensors or z is zero.
+
+    Examples
+    --------
+    >>> from ssecert import System
+    >>> ugv = System([[1.0, 0.0099], [0.0, 0.9876]], [[1, 0], [0, 1], [0, 1]])
+    >>> w = stealthy_attack(ugv, [0], [1.0, 0.0], 1, horizon=5)
+    >>> w.verified, w.undetectable
+    (True, True)
+    """
+    tol = tolerances or Tolerances()
+    s = as_int_option(max_attacked, "max_attacked", min_value=0)
+    B = sorted(as_index_list(breaking_set, "breaking_set", upper=system.p))
+    if len(B) > 2 * s and B:
+        raise ValueError(
+            f"breaking_set has {len(B)} sensors; a split into two attacks of at most "
+            f"max_attacked = {s} sensors needs at most {2 * s}"
+        )
+    z = np.array(as_real_matrix(z, "z", shape=(system.n,), ndim=1))
+    nz = np.linalg.norm(z)
+    if nz == 0.0:
+        raise ValueError("z must be nonzero")
+    z = z / nz
+    first = np.flatnonzero(np.abs(z) > 1e-12)
+    if first.size and z[first[0]] < 0:
+        z = -z
+    H = system.n if horizon is None else as_int_option(horizon, "horizon", min_value=1)
+    sensors_a = tuple(B[:s]) if B else ()
+    sensors_b = tuple(B[s:]) if B else ()
+
+    A, C = system.A, system.C
+    p = system.p
+    mask_a = np.zeros(p)
+    mask_a[list(sensors_a)] = 1.0
+    mask_b = np.zeros(p)
+    mask_b[list(sensors_b)] = 1.0
+    attack_a = np.empty((H, p))
+    attack_b = np.empty((H, p))
+    w = z.copy()
+    for k in range(H):
+        y = C @ w
+        attack_a[k] = mask_a * y
+        attack_b[k] = -mask_b * y
+        w = A @ w
+
+    # independent simulation of the two explanations
+    rng = np.random.default_rng(seed)
+    x0 = initial_state(system.n, rng)
+    xa, xb = x0.copy(), x0 + z
+    outputs_a = np.empty((H, p))
+    outputs_b = np.empty((H, p))
+    scale = 0.0
+    normC = float(np.linalg.norm(C, 2))
+    for k in range(H):
+        outputs_a[k] = C @ xa + attack_a[k]
+        outputs_b[k] = C @ xb + attack_b[k]
+        scale = max(scale, normC * float(np.linalg.norm(xb - xa)))
+        xa, xb = A @ xa, A @ xb
+    diff = float(np.max(np.linalg.norm(outputs_a - outputs_b, axis=1)))
+    # rounding in the simulated states themselves is of order eps * ||x||
+    floor = np.finfo(float).eps * normC * float(
+        max(np.abs(outputs_a).max(initial=0.0), 1.0)
+    )
+    residual = diff / max(scale, floor, np.finfo(float).tiny)
+    return StealthyAttack(
+        z=z,
+        sensors_a=sensors_a,
+        sensors_b=sensors_b,
+        attack_a=attack_a,
+        attack_b=attack_b,
+        x0=x0,
+        outputs_a=outputs_a,
+        outputs_b=outputs_b,
+        residual=residual,
+        verified=bool(residual <= tol.witness_rtol),
+        rtol=tol.witness_rtol,
+    )

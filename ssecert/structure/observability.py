@@ -1,0 +1,229 @@
+"""Observability of (A, C), decided reliably in floating point.
+
+The rank of the stacked observability matrix is not a reliable test: for
+``A = diag(linspace(0.1, 0.95, 20))`` and ``C = ones((1, 20))`` the pair is
+observable with a PBH margin of 0.02, yet ``numpy.linalg.matrix_rank``
+reports rank 18 for O_20, whose monomial rows are nearly parallel.  Two
+backward-stable methods are used instead and must agree:
+
+* the PBH test: ``[A - lambda I; C]`` has full column rank at every
+  eigenvalue lambda (eigenvalues grouped, see ``eigen_clusters``); the
+  smallest of these singular values is the reported margin;
+* the orthogonal observability staircase, which also gives the
+  observability index (the fewest steps whose outputs determine x(0)).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..results import Check, Verdict
+from ..system import System
+from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances, classify
+from ._linalg import EigenAnalysis, eigen_clusters, matrix_norm, staircase
+
+__all__ = ["observability", "pbh_margins", "observability_index"]
+
+
+def pbh_margins(
+    A: np.ndarray,
+    C: np.ndarray,
+    centers: np.ndarray,
+    *,
+    tolerances: Tolerances | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Relative PBH singular values at the given eigenvalues.
+
+    Parameters
+    ----------
+    A : ndarray, shape (n, n)
+    C : ndarray, shape (p, n)
+    centers : array_like of complex
+        Eigenvalues (or group centers) at which to test.
+    tolerances : Tolerances, optional
+
+    Returns
+    -------
+    margins : ndarray
+        ``sigma_min([A - lambda I; C]) / ||[A; C]||`` for each lambda.
+    codes : ndarray of int8
+        Rank decision (ZERO: rank deficient, BORDERLINE, NONZERO).
+    """
+    tol = tolerances or Tolerances()
+    n = A.shape[0]
+    stacked_norm = max(matrix_norm(np.vstack([A, C])), np.finfo(float).tiny)
+    margins = np.empty(len(centers))
+    for i, lam in enumerate(np.asarray(centers, dtype=complex)):
+        shift = lam.real if lam.imag == 0 else lam
+        M = np.vstack([A - shift * np.eye(n), C])
+        margins[i] = np.linalg.svd(M, compute_uv=False)[-1] / stacked_norm
+    codes = classify(margins, tol.rtol(n + C.shape[0], n), factor=tol.borderline_factor)
+    return margins, codes
+
+
+def observability_index(system: System, *, tolerances: Tolerances | None = None) -> int | None:
+    """Fewest steps tau with O_tau of full column rank, or None if unobservable.
+
+    Examples
+    --------
+    >>> from ssecert import System
+    >>> observability_index(System([[1.0, 0.0099], [0.0, 0.9876]], [[1, 0]]))
+    2
+    """
+    sc = staircase(system.A, system.C, tolerances=tolerances)
+    if sc.problem or sc.rank < system.n:
+        return None
+    return sc.index
+
+
+def observability(
+    system: System,
+    *,
+    tolerances: Tolerances | None = None,
+    eigen: EigenAnalysis | None = None,
+) -> Check:
+    """Is (A, C) observable?  PBH test and staircase, which must agree.
+
+    Parameters
+    ----------
+    system : System
+    tolerances : Tolerances, optional
+    eigen : EigenAnalysis, optional
+        Precomputed eigenvalue groups of ``system.A``.
+
+    Returns
+    -------
+    Check
+        ``id = "observability"``; ``value`` and ``fields["observability_index"]``
+        hold the index when observable; ``margin`` is the smallest relative
+        PBH singular value over the eigenvalues.  A failing check carries an
+        unobservable direction ``z`` (C A^k z = 0 for all k) as witness.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from ssecert import System
+    >>> A = np.diag(np.linspace(0.1, 0.95, 20))
+    >>> check = observability(System(A, np.ones((1, 20))))
+    >>> check.verdict.value, check.fields["observability_index"]
+    ('holds', 20)
+    """
+    tol = tolerances or Tolerances()
+    A, C = system.A, system.C
+    n = system.n
+    eig = eigen if eigen is not None else eigen_clusters(A, tolerances=tol)
+    sc = staircase(A, C, tolerances=tol)
+
+    centers = np.array([c.center for c in eig.clusters], dtype=complex)
+    margins, codes = pbh_margins(A, C, centers, tolerances=tol)
+    # margin over every computed eigenvalue, as reported to users
+    raw = eig.eigenvalues[eig.eigenvalues.imag >= 0]
+    raw_margins, _ = pbh_margins(A, C, raw, tolerances=tol)
+    margin = float(min(margins.min(initial=np.inf), raw_margins.min(initial=np.inf)))
+
+    if eig.problems:
+        pbh_state, pbh_note = "unknown", "; ".join(eig.problems)
+    elif np.any(codes == ZERO):
+        pbh_state, pbh_note = "unobservable", ""
+    elif np.any(codes == BORDERLINE):
+        pbh_state = "unknown"
+        pbh_note = f"a PBH singular value ({margins[codes == BORDERLINE].min():.2e}) is borderline"
+    else:
+        pbh_state, pbh_note = "observable", ""
+    if sc.problem:
+        stair_state, stair_note = "unknown", sc.problem
+    else:
+        stair_state, stair_note = ("observable" if sc.rank == n else "unobservable"), ""
+
+    evidence = {
+        "eigenvalues": eig.eigenvalues,
+        "pbh": [
+            {
+                "eigenvalue": c.center,
+                "algebraic_multiplicity": c.algebraic,
+                "geometric_multiplicity": c.geometric,
+                "pbh_margin": float(m),
+                "decision": {ZERO: "rank deficient", BORDERLINE: "borderline", NONZERO: "full rank"}[
+                    int(code)
+                ],
+            }
+            for c, m, code in zip(eig.clusters, margins, codes)
+        ],
+        "staircase_block_sizes": list(sc.block_sizes),
+        "staircase_step_margins": list(sc.step_margins),
+        "observable_dimension": sc.rank,
+        "pbh_state": pbh_state,
+        "staircase_state": stair_state,
+        "margin_definition": "min over eigenvalues of sigma_min([A - lambda I; C]) / ||[A; C]||_2",
+    }
+    tolerances_out = {
+        "rank_rtol": tol.rtol(n + system.p, n),
+        "borderline_factor": tol.borderline_factor,
+        "eigenvalue_threshold": eig.threshold,
+    }
+    method = "PBH test at grouped eigenvalues, re-checked by the orthogonal staircase"
+    title = "Observability of (A, C)"
+
+    if pbh_state == "observable" and stair_state == "observable":
+        return Check(
+            id="observability",
+            title=title,
+            verdict=Verdict.HOLDS,
+            summary=(
+                f"(A, C) is observable: x(0) is determined by {sc.index} steps of output; "
+                f"PBH margin {margin:.3g}."
+            ),
+            value=sc.index,
+            margin=margin,
+            method=method,
+            fields={"observability_index": sc.index, "unobservable_dimension": 0},
+            evidence=evidence,
+            tolerances=tolerances_out,
+        )
+    if stair_state == "unobservable" and pbh_state in ("unobservable", "unknown"):
+        z = sc.unobservable_direction()
+        bad = [
+            {"eigenvalue": c.center, "pbh_margin": float(m)}
+            for c, m, code in zip(eig.clusters, margins, codes)
+            if code == ZERO
+        ]
+        witness = {
+            "z": z,
+            "unobservable_dimension": n - sc.rank,
+            "unobservable_eigenvalues": bad,
+            "meaning": "C A^k z = 0 for every k: x0 and x0 + z give identical outputs",
+        }
+        note = "" if pbh_state == "unobservable" else f" (PBH inconclusive: {pbh_note})"
+        return Check(
+            id="observability",
+            title=title,
+            verdict=Verdict.FAILS,
+            summary=(
+                f"(A, C) is not observable: a {n - sc.rank}-dimensional subspace of states "
+                f"produces no output{note}."
+            ),
+            value=None,
+            margin=margin,
+            method=method,
+            fields={"observability_index": None, "unobservable_dimension": n - sc.rank},
+            evidence=evidence,
+            witness=witness,
+            tolerances=tolerances_out,
+        )
+    reasons = [r for r in (pbh_note, stair_note) if r]
+    if pbh_state != stair_state and "unknown" not in (pbh_state, stair_state):
+        reasons.append(f"PBH says {pbh_state} but the staircase says {stair_state}")
+    if stair_state == "observable" and pbh_state == "unknown":
+        reasons.append("the staircase finds full rank but the PBH test cannot confirm it")
+    return Check(
+        id="observability",
+        title=title,
+        verdict=Verdict.INCONCLUSIVE,
+        summary="Observability could not be decided reliably: " + "; ".join(reasons) + ".",
+        value=None,
+        margin=margin,
+        method=method,
+        fields={"observability_index": None, "unobservable_dimension": None},
+        evidence=evidence,
+        tolerances=tolerances_out,
+    )
