@@ -161,7 +161,10 @@ def observability(
         "borderline_factor": tol.borderline_factor,
         "eigenvalue_threshold": eig.threshold,
     }
-    method = "PBH test at grouped eigenvalues, re-checked by the orthogonal staircase"
+    method = "pbh+staircase"
+    evidence["method_detail"] = (
+        "PBH test at grouped eigenvalues, re-checked by the orthogonal observability staircase"
+    )
     title = "Observability of (A, C)"
 
     if pbh_state == "observable" and stair_state == "observable":
@@ -170,7 +173,8 @@ def observability(
             title=title,
             verdict=Verdict.HOLDS,
             summary=(
-                f"(A, C) is observable: x(0) is determined by {sc.index} steps of output; "
+                f"(A, C) is observable: x(0) is determined by {sc.index} "
+                f"step{'s' if sc.index != 1 else ''} of output; "
                 f"PBH margin {margin:.3g}."
             ),
             value=sc.index,

@@ -1,0 +1,210 @@
+"""The ``ssecert`` command.
+
+Exit status: 0 every required check holds; 1 a required check fails; 3 none
+fails but one is inconclusive; 2 bad input or usage; 4 internal error.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+import traceback
+from collections.abc import Sequence
+from pathlib import Path
+from typing import NoReturn, TextIO
+
+from . import __version__
+
+__all__ = ["main"]
+
+EXIT_BAD_INPUT = 2
+EXIT_INTERNAL = 4
+
+
+class UsageError(Exception):
+    """Bad command-line usage (exit status 2)."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> NoReturn:  # one line, no usage dump
+        raise UsageError(f"{message} (see '{self.prog} --help')")
+
+
+class _Progress:
+    """Throttled progress on a terminal; silent otherwise."""
+
+    def __init__(self, stream: TextIO) -> None:
+        self.stream = stream
+        self.enabled = stream.isatty()
+        self.start = time.monotonic()
+        self.last = 0.0
+        self.shown = False
+
+    def __call__(self, label: str, done: int, total: int) -> None:
+        if not self.enabled:
+            return
+        now = time.monotonic()
+        if now - self.start < 1.0 or (now - self.last < 0.25 and done < total):
+            return
+        self.last = now
+        pct = 100.0 * done / max(total, 1)
+        self.stream.write(f"\r{label}: {done:,}/{total:,} sets ({pct:5.1f}%)   ")
+        self.stream.flush()
+        self.shown = True
+
+    def close(self) -> None:
+        if self.shown:
+            self.stream.write("\r" + " " * 70 + "\r")
+            self.stream.flush()
+
+
+def _nonnegative_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {value}")
+    return value
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(float(text)) if "e" in text.lower() else int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {value}")
+    return value
+
+
+def _build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(
+        prog="ssecert",
+        description="Certify secure state estimation under sparse sensor attacks.",
+    )
+    parser.add_argument("--version", action="version", version=f"ssecert {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+
+    analyze = sub.add_parser(
+        "analyze",
+        help="run every structural check of a design (no simulations, no report)",
+        description=(
+            "Observability, s-sparse observability (breaking sensor set and stealthy attack) "
+            "and the irrepresentable constant of a design. SPEC is a .toml, .json, .npz or "
+            ".mat file, or the name of a packaged example (see 'ssecert examples')."
+        ),
+    )
+    analyze.add_argument("spec", metavar="SPEC", help="spec file or packaged example name")
+    analyze.add_argument("--json", metavar="PATH", dest="json_path",
+                         help="write the JSON certificate to PATH ('-' for stdout)")
+    analyze.add_argument("--max-attacked", type=_nonnegative_int, metavar="S",
+                         help="number of attacked sensors s (required for .npz/.mat)")
+    analyze.add_argument("--horizon", type=_positive_int, metavar="T",
+                         help="stacked horizon tau (default: the spec's, else n)")
+    analyze.add_argument("--max-sets", type=_positive_int, metavar="N", default=50_000_000,
+                         help="enumeration budget in sets (default 5e7)")
+    analyze.add_argument("--method", choices=("auto", "enumeration", "eigenspace"),
+                         default="auto", help="sparse-observability method (default auto)")
+    analyze.add_argument("--seed", type=_nonnegative_int, default=0, metavar="N",
+                         help="seed of the simulated stealthy-attack check (default 0)")
+
+    examples = sub.add_parser("examples", help="list the packaged examples or print one",
+                              description="List packaged example specs, or print one.")
+    examples.add_argument("name", nargs="?", help="example to print")
+    return parser
+
+
+def _resolve_spec(text: str) -> Path:
+    from .examples import example_path, list_examples
+
+    path = Path(text)
+    if path.exists() or path.suffix:
+        return path
+    if text in list_examples():
+        return example_path(text)
+    raise UsageError(
+        f"{text}: no such file, and no packaged example of that name "
+        f"(available: {', '.join(list_examples())})"
+    )
+
+
+def _cmd_analyze(args: argparse.Namespace) -> int:
+    from .analyze import analyze
+    from .report.json import certificate_json, write_json
+    from .report.table import render_table
+    from .spec import load_spec
+
+    spec = load_spec(_resolve_spec(args.spec), max_attacked=args.max_attacked,
+                     horizon=args.horizon)
+    to_stdout_json = args.json_path == "-"
+    human = sys.stderr if to_stdout_json else sys.stdout
+    progress = _Progress(sys.stderr)
+    try:
+        cert = analyze(spec, method=args.method, max_sets=args.max_sets, seed=args.seed,
+                       progress=progress)
+    finally:
+        progress.close()
+    human.write(render_table(cert))
+    if to_stdout_json:
+        sys.stdout.write(certificate_json(cert))
+    elif args.json_path:
+        target = Path(args.json_path)
+        if target.parent and not target.parent.exists():
+            raise UsageError(f"--json {args.json_path}: folder {target.parent} does not exist")
+        write_json(cert, target)
+        human.write(f"JSON written to {target}\n")
+    return cert.exit_code
+
+
+def _cmd_examples(args: argparse.Namespace) -> int:
+    from .examples import example_path, list_examples
+
+    if args.name is None:
+        for name in list_examples():
+            sys.stdout.write(f"{name}\n")
+        return 0
+    try:
+        path = example_path(args.name)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    sys.stdout.write(path.read_text())
+    return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``ssecert`` command; returns the exit status."""
+    from .spec import SpecError
+
+    parser = _build_parser()
+    try:
+        args = parser.parse_args(argv)
+        if args.command is None:
+            parser.print_help(sys.stderr)
+            return EXIT_BAD_INPUT
+        if args.command == "analyze":
+            return _cmd_analyze(args)
+        if args.command == "examples":
+            return _cmd_examples(args)
+        raise UsageError(f"unknown command {args.command!r}")  # pragma: no cover
+    except (UsageError, SpecError) as exc:
+        sys.stderr.write(f"ssecert: error: {exc}\n")
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        sys.stderr.write("ssecert: interrupted\n")
+        return 130
+    except BrokenPipeError:  # pragma: no cover - e.g. piping into head
+        return 0
+    except Exception as exc:  # noqa: BLE001 - report, ask for a bug report
+        sys.stderr.write(
+            f"ssecert: internal error: {type(exc).__name__}: {exc}\n"
+            "This is a bug in ssecert; please report it with the command and spec file that "
+            "triggered it. Details:\n"
+        )
+        traceback.print_exc(limit=6, file=sys.stderr)
+        return EXIT_INTERNAL
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,100 @@
+"""Readable terminal summary of a certificate."""
+
+from __future__ import annotations
+
+import math
+import textwrap
+from typing import Any
+
+from ..results import Certificate, Check, Verdict
+
+__all__ = ["render_table"]
+
+_MARK = {Verdict.HOLDS: "holds", Verdict.FAILS: "FAILS", Verdict.INCONCLUSIVE: "inconclusive"}
+
+
+def _fmt(value: Any) -> str:
+    if value is None:
+        return "-"
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "-"
+        if math.isinf(value):
+            return "inf"
+        return f"{value:.4g}"
+    return str(value)
+
+
+def _sensor_list(check: Check, names: tuple[str, ...], key: str) -> str:
+    indices = check.fields.get(key)
+    if not indices:
+        return "[]" if indices == [] else "-"
+    return ", ".join(f"{names[i]} ({i})" for i in indices)
+
+
+def render_table(certificate: Certificate, *, width: int = 100) -> str:
+    """Plain-text table of checks, with each check's finding underneath.
+
+    Parameters
+    ----------
+    certificate : Certificate
+    width : int, default 100
+        Line width for wrapped sentences.
+
+    Returns
+    -------
+    str
+    """
+    system = certificate.system
+    meta = certificate.meta or {}
+    lines = []
+    header = f"ssecert: {system.name}  (n = {system.n}, p = {system.p}"
+    if "max_attacked" in meta:
+        header += f", s = {meta['max_attacked']}, horizon = {meta.get('horizon')}"
+    header += ")"
+    lines.append(header)
+    spec = meta.get("spec") or {}
+    if spec.get("source"):
+        digest = (spec.get("sha256") or "")[:12]
+        lines.append(f"spec: {spec['source']}" + (f"  sha256 {digest}" if digest else ""))
+    lines.append("")
+    rows = [("check", "verdict", "value", "margin", "method")]
+    for check in certificate.checks:
+        name = check.id + ("" if check.required else " *")
+        rows.append((name, _MARK[check.verdict], _fmt(check.value), _fmt(check.margin),
+                     check.method))
+    widths = [max(len(r[i]) for r in rows) for i in range(5)]
+    for j, row in enumerate(rows):
+        lines.append("  ".join(cell.ljust(widths[i]) for i, cell in enumerate(row)).rstrip())
+        if j == 0:
+            lines.append("  ".join("-" * w for w in widths))
+    lines.append("* advisory: reported, does not change the exit status")
+    lines.append("")
+    for check in certificate.checks:
+        lines.append(f"{check.id}: {_MARK[check.verdict]}")
+        body = textwrap.fill(check.summary, width=width - 2, initial_indent="  ",
+                             subsequent_indent="  ")
+        lines.append(body)
+        if check.id == "sparse_observability":
+            f = check.fields
+            extra = (f"  max_removable = {_fmt(f.get('max_removable'))}"
+                     + (" (lower bound)" if f.get("max_removable_is_lower_bound") else "")
+                     + f", max_correctable = {_fmt(f.get('max_correctable'))}"
+                     + f", breaking set: {_sensor_list(check, system.sensors, 'breaking_set')}")
+            lines.append(extra)
+            if check.witness:
+                w = check.witness
+                a = ", ".join(system.sensors[i] for i in w.get("sensors_a", [])) or "none"
+                b = ", ".join(system.sensors[i] for i in w.get("sensors_b", [])) or "none"
+                lines.append(f"  stealthy attack: sensors {a} / {b}; simulated output mismatch "
+                             f"{_fmt(w.get('residual'))} (verified: {w.get('verified')})")
+        if check.id == "irrepresentable" and check.fields.get("worst_support") is not None:
+            names = check.fields.get("worst_support_names") or check.fields["worst_support"]
+            lines.append(f"  worst support: {', '.join(map(str, names))}")
+    for note in meta.get("notes", []):
+        lines.append("")
+        lines.append(textwrap.fill("note: " + note, width=width))
+    lines.append("")
+    code = certificate.exit_code
+    lines.append(f"verdict: {_MARK[certificate.verdict]} (exit status {code})")
+    return "\n".join(lines) + "\n"
