@@ -71,7 +71,13 @@ def _nonnegative_int(text: str) -> int:
 
 def _positive_int(text: str) -> int:
     try:
-        value = int(float(text)) if "e" in text.lower() else int(text)
+        if "e" in text.lower():  # 5e7
+            number = float(text)
+            if not number.is_integer():  # also refuses inf and nan
+                raise ValueError(text)
+            value = int(number)
+        else:
+            value = int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
     if value < 1:
@@ -136,6 +142,13 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     from .report.table import render_table
     from .spec import load_spec
 
+    target = None
+    if args.json_path and args.json_path != "-":
+        target = Path(args.json_path)
+        if target.is_dir():
+            raise UsageError(f"--json {args.json_path}: is a folder, expected a file path")
+        if not target.parent.exists():
+            raise UsageError(f"--json {args.json_path}: folder {target.parent} does not exist")
     spec = load_spec(_resolve_spec(args.spec), max_attacked=args.max_attacked,
                      horizon=args.horizon)
     to_stdout_json = args.json_path == "-"
@@ -149,11 +162,12 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     human.write(render_table(cert))
     if to_stdout_json:
         sys.stdout.write(certificate_json(cert))
-    elif args.json_path:
-        target = Path(args.json_path)
-        if target.parent and not target.parent.exists():
-            raise UsageError(f"--json {args.json_path}: folder {target.parent} does not exist")
-        write_json(cert, target)
+    elif target is not None:
+        try:
+            write_json(cert, target)
+        except OSError as exc:
+            raise UsageError(f"--json {args.json_path}: cannot write: "
+                             f"{exc.strerror or exc}") from None
         human.write(f"JSON written to {target}\n")
     return cert.exit_code
 
@@ -181,8 +195,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         args = parser.parse_args(argv)
         if args.command is None:
-            parser.print_help(sys.stderr)
-            return EXIT_BAD_INPUT
+            raise UsageError("no command given; use 'ssecert analyze SPEC' or "
+                             "'ssecert examples' (see 'ssecert --help')")
         if args.command == "analyze":
             return _cmd_analyze(args)
         if args.command == "examples":

@@ -33,6 +33,7 @@ import math
 import numbers
 import re
 import tomllib
+import zipfile
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -133,13 +134,20 @@ def _err(source: str, key: str | None, message: str) -> SpecError:
     return SpecError(f"{where}: {message}")
 
 
+def _suggest(key: Any, allowed: tuple[str, ...]) -> str:
+    """' (did you mean 'X'?)' for a misspelt or wrongly capitalised key, else ''."""
+    text = str(key)
+    close = [a for a in allowed if a.lower() == text.lower()]
+    close = close or difflib.get_close_matches(text, allowed, n=1)
+    return f" (did you mean '{close[0]}'?)" if close else ""
+
+
 def _check_keys(source: str, prefix: str, table: Any, allowed: tuple[str, ...]) -> None:
     if not isinstance(table, Mapping):
         raise _err(source, prefix or None, f"expected a table, got {describe(table)}")
     for key in table:
         if key not in allowed:
-            close = difflib.get_close_matches(str(key), allowed, n=1)
-            hint = f" (did you mean '{close[0]}'?)" if close else ""
+            hint = _suggest(key, allowed)
             full = f"{prefix}.{key}" if prefix else str(key)
             raise _err(
                 source, full, f"unknown key{hint}; allowed here: {', '.join(allowed)}"
@@ -154,7 +162,7 @@ def _convert(source: str, key: str, func: Any, *args: Any, **kwargs: Any) -> Any
         message = str(exc)
         # converters name their argument first; the key already names it here
         name = kwargs.get("name") or (args[1] if len(args) > 1 else None)
-        if isinstance(name, str) and message.startswith(name):
+        if isinstance(name, str) and message.startswith(name + " "):
             message = message[len(name) :].lstrip(" :")
         raise _err(source, key, message) from None
 
@@ -339,7 +347,7 @@ def _observer(source: str, table: Any, n: int, p: int) -> dict[str, Any]:
             gain = _convert(source, "observer.gain", as_real_matrix, gain, "gain", shape=(n, p),
                             shape_hint="n x p: states by sensors")
         out["gain"] = gain
-        if gain == "place":
+        if isinstance(gain, str) and gain == "place":
             out["poles"] = _poles(source, "observer.poles",
                                   _require(source, table, "poles", "observer"), n)
         elif "poles" in table:
@@ -445,11 +453,14 @@ def _read_arrays(path: Path, source: str) -> dict[str, Any]:
     """Variables of an .npz or .mat file."""
     if path.suffix.lower() == ".npz":
         try:
-            with np.load(path, allow_pickle=False) as npz:
-                data = {k: npz[k] for k in npz.files}
-        except ValueError as exc:
-            raise SpecError(f"{source}: cannot read the .npz file: {exc}") from None
-        except OSError as exc:
+            with open(path, "rb") as handle:  # closed even when numpy fails
+                loaded = np.load(handle, allow_pickle=False)
+                if not isinstance(loaded, np.lib.npyio.NpzFile):
+                    raise ValueError("expected an .npz archive of named arrays (numpy.savez), "
+                                     "got a single .npy array")
+                with loaded as npz:
+                    data = {k: npz[k] for k in npz.files}
+        except (ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:
             raise SpecError(f"{source}: cannot read the .npz file: {exc}") from None
     else:
         import scipy.io
@@ -460,13 +471,12 @@ def _read_arrays(path: Path, source: str) -> dict[str, Any]:
             raise SpecError(
                 f"{source}: MATLAB v7.3 (HDF5) files are not supported; save with -v7"
             ) from None
-        except (ValueError, OSError, TypeError) as exc:
+        except (ValueError, OSError, TypeError, EOFError, scipy.io.matlab.MatReadError) as exc:
             raise SpecError(f"{source}: cannot read the .mat file: {exc}") from None
         data = {k: v for k, v in raw.items() if not k.startswith("__")}
     for key in data:
         if key not in _SYSTEM_KEYS:
-            close = difflib.get_close_matches(key, _SYSTEM_KEYS, n=1)
-            hint = f" (did you mean '{close[0]}'?)" if close else ""
+            hint = _suggest(key, _SYSTEM_KEYS)
             raise _err(source, key, f"unknown variable{hint}; expected A, C and optionally sensors")
     if "sensors" in data:
         data["sensors"] = _names(source, data["sensors"])

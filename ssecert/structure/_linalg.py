@@ -269,6 +269,28 @@ def eigen_clusters(A: np.ndarray, *, tolerances: Tolerances | None = None) -> Ei
     )
 
 
+def _classify_krylov(
+    values: np.ndarray, scale: float | np.ndarray, rtol: float,
+    err_pess: float | np.ndarray, err_step: float | np.ndarray, factor: float,
+) -> np.ndarray:
+    """Zero / borderline / nonzero for Krylov residuals with amplified errors.
+
+    A residual that is zero in exact arithmetic appears at the size of the
+    accumulated basis error.  The zero threshold uses the pessimistic,
+    compounded estimate ``err_pess`` (so an exact zero is never taken for a
+    direction, which would overstate observability); the borderline band
+    above it reaches ``factor`` times the single-step estimate ``err_step``
+    and at least twice the zero threshold.
+    """
+    zero = np.asarray(scale) * (rtol + np.asarray(err_pess))
+    upper = np.maximum(factor * np.asarray(scale) * (rtol + np.asarray(err_step)), 2.0 * zero)
+    values = np.asarray(values, dtype=float)
+    codes = np.full(np.broadcast(values, zero).shape, NONZERO, dtype=np.int8)
+    codes[values <= upper] = BORDERLINE
+    codes[values <= zero] = ZERO
+    return codes
+
+
 # ---------------------------------------------------------------------------
 # observability staircase
 
@@ -333,6 +355,7 @@ def staircase(
     *,
     max_steps: int | None = None,
     tolerances: Tolerances | None = None,
+    error_model: str = "linear",
 ) -> Staircase:
     """Observable row space of (A, C) by orthogonal block Krylov steps.
 
@@ -348,12 +371,22 @@ def staircase(
         Stop after this many steps (default n): the row space of the first
         ``max_steps`` blocks is that of O_tau with tau = max_steps.
     tolerances : Tolerances, optional
+    error_model : {"linear", "compound"}, default "linear"
+        How rounding errors accumulate in the zero threshold of later steps.
+        ``"compound"`` multiplies the amplification of every normalisation
+        (pessimistic: a residual that is zero in exact arithmetic is never
+        taken for a new direction, even for strongly non-normal A, but long
+        chains of small residuals become borderline); ``"linear"`` adds the
+        single-step amplifications (tight for well-conditioned A; pair it
+        with an independent check such as the PBH test).
 
     Returns
     -------
     Staircase
     """
     tol = tolerances or Tolerances()
+    if error_model not in ("linear", "compound"):
+        raise ValueError(f"error_model must be 'linear' or 'compound', got {error_model!r}")
     A = np.asarray(A, dtype=float)
     C = np.asarray(C, dtype=float)
     n = A.shape[0]
@@ -368,17 +401,24 @@ def staircase(
         return Staircase(basis, (), (), "")
     W = C / normC
     scale = 1.0
+    # err estimates how far the computed basis is from the exact Krylov
+    # subspace: each normalisation by a small residual amplifies earlier
+    # rounding errors, and a residual that is exactly zero in exact
+    # arithmetic shows up at size scale * err, not scale * eps.
+    rtol0 = tol.rtol(n, C.shape[0])
+    err, err_step = 0.0, 0.0
     for step in range(steps):
         W = _orthogonalize(W, basis)
         if W.shape[0] == 0:
             break
         _, s, vh = np.linalg.svd(W, full_matrices=False)
-        thr = tol.rtol(*W.shape) * scale
-        codes = classify(s, thr, factor=tol.borderline_factor)
+        codes = _classify_krylov(s, scale, tol.rtol(*W.shape), err, err_step,
+                                 tol.borderline_factor)
+        thr = scale * (tol.rtol(*W.shape) + err)
         if np.any(codes == BORDERLINE) and not problem:
             problem = (
                 f"staircase step {step}: singular value {s[codes == BORDERLINE].min():.2e} is "
-                f"within a factor {tol.borderline_factor:g} of the rank threshold {thr:.2e}"
+                f"within the borderline band above the rank threshold {thr:.2e}"
             )
         r = int(np.count_nonzero(codes == NONZERO))
         if r == 0:
@@ -389,6 +429,12 @@ def staircase(
         basis = np.vstack([basis, new])
         blocks.append(r)
         margins.append(float(s[r - 1] / scale))
+        step_amp = scale * rtol0 / float(s[r - 1])
+        if error_model == "compound":
+            err = max(err, scale * (err + rtol0) / float(s[r - 1]))
+        else:
+            err = err + step_amp
+        err_step = max(err_step, step_amp)
         if basis.shape[0] >= n:
             break
         W = new @ A
@@ -410,12 +456,16 @@ class SensorSubspaces:
         Sensors whose rank decision was borderline.
     margins : ndarray, shape (p,)
         Smallest relative Krylov residual kept for each sensor.
+    errors : ndarray, shape (p,)
+        Estimated distance of each computed basis from the exact subspace
+        (rounding amplified by the Krylov normalisations).
     """
 
     bases: np.ndarray
     ranks: np.ndarray
     borderline: np.ndarray
     margins: np.ndarray
+    errors: np.ndarray
 
     def projectors(self) -> np.ndarray:
         """Orthogonal projectors Q_i^T Q_i onto the sensors' row spaces, (p, n, n)."""
@@ -454,7 +504,9 @@ def sensor_subspaces(
     bases[active, 0] = C[active] / row_norms[active, None]
     ranks[active] = 1
     margins[active] = row_norms[active] / scale_C
-    thr = tol.rtol(n) * normA
+    rtol0 = tol.rtol(n)
+    err = np.zeros(p)  # basis error estimates, as in ``staircase``
+    err_step = np.zeros(p)
     for k in range(1, n):
         idx = np.nonzero(active)[0]
         if idx.size == 0:
@@ -464,7 +516,8 @@ def sensor_subspaces(
         for _ in range(2):
             w = w - np.einsum("ik,ikn->in", np.einsum("ikn,in->ik", Q, w), Q)
         nrm = np.linalg.norm(w, axis=1)
-        codes = classify(nrm, thr, factor=tol.borderline_factor)
+        codes = _classify_krylov(nrm, normA, rtol0, err[idx], err_step[idx],
+                                 tol.borderline_factor)
         borderline[idx[codes == BORDERLINE]] = True
         keep = codes == NONZERO
         active[idx[~keep]] = False
@@ -472,7 +525,9 @@ def sensor_subspaces(
         bases[kept, k] = w[keep] / nrm[keep, None]
         ranks[kept] += 1
         margins[kept] = np.minimum(margins[kept], nrm[keep] / normA)
-    return SensorSubspaces(bases, ranks, borderline, margins)
+        err[kept] = np.maximum(err[kept], normA * (err[kept] + rtol0) / nrm[keep])
+        err_step[kept] = np.maximum(err_step[kept], normA * rtol0 / nrm[keep])
+    return SensorSubspaces(bases, ranks, borderline, margins, err)
 
 
 # ---------------------------------------------------------------------------
@@ -505,7 +560,11 @@ def screen_positive_definite(mats: np.ndarray, shift: float | np.ndarray) -> np.
 
 
 def stacked_rank(
-    stacks: np.ndarray, *, tolerances: Tolerances | None = None, rows: int | None = None
+    stacks: np.ndarray,
+    *,
+    tolerances: Tolerances | None = None,
+    rows: int | None = None,
+    data_error: np.ndarray | float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Full-column-rank decision for a batch of stacked matrices by SVD.
 
@@ -516,6 +575,9 @@ def stacked_rank(
     tolerances : Tolerances, optional
     rows : int, optional
         Number of meaningful rows for the default tolerance (default m).
+    data_error : float or ndarray of shape (N,), default 0
+        Relative error already present in the stacked rows, added to the
+        rank tolerance.
 
     Returns
     -------
@@ -534,5 +596,7 @@ def stacked_rank(
     _, s, vh = np.linalg.svd(stacks, full_matrices=False)
     smax = np.maximum(s[:, 0], np.finfo(float).tiny)
     rel = s[:, n - 1] / smax
-    codes = classify(rel, tol.rtol(rows or m, n), factor=tol.borderline_factor)
+    codes = classify(
+        rel, tol.rtol(rows or m, n) + np.asarray(data_error), factor=tol.borderline_factor
+    )
     return codes, rel, vh[:, n - 1, :]

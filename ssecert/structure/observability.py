@@ -22,7 +22,7 @@ from ..system import System
 from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances, classify
 from ._linalg import EigenAnalysis, eigen_clusters, matrix_norm, staircase
 
-__all__ = ["observability", "pbh_margins", "observability_index"]
+__all__ = ["observability", "pbh_margins", "observability_index", "unobservable_residual"]
 
 
 def pbh_margins(
@@ -155,79 +155,117 @@ def observability(
         "pbh_state": pbh_state,
         "staircase_state": stair_state,
         "margin_definition": "min over eigenvalues of sigma_min([A - lambda I; C]) / ||[A; C]||_2",
+        "method_detail": (
+            "PBH test at grouped eigenvalues, re-checked by the orthogonal observability "
+            "staircase; an unobservable direction is verified by simulating C A^k z"
+        ),
     }
     tolerances_out = {
         "rank_rtol": tol.rtol(n + system.p, n),
         "borderline_factor": tol.borderline_factor,
         "eigenvalue_threshold": eig.threshold,
+        "witness_rtol": tol.witness_rtol,
     }
     method = "pbh+staircase"
-    evidence["method_detail"] = (
-        "PBH test at grouped eigenvalues, re-checked by the orthogonal observability staircase"
-    )
     title = "Observability of (A, C)"
 
-    if pbh_state == "observable" and stair_state == "observable":
+    def check(verdict: Verdict, summary: str, index: int | None, unobs: int | None,
+              witness: dict | None = None) -> Check:
         return Check(
             id="observability",
             title=title,
-            verdict=Verdict.HOLDS,
-            summary=(
-                f"(A, C) is observable: x(0) is determined by {sc.index} "
-                f"step{'s' if sc.index != 1 else ''} of output; "
-                f"PBH margin {margin:.3g}."
-            ),
-            value=sc.index,
+            verdict=verdict,
+            summary=summary,
+            value=index,
             margin=margin,
             method=method,
-            fields={"observability_index": sc.index, "unobservable_dimension": 0},
-            evidence=evidence,
-            tolerances=tolerances_out,
-        )
-    if stair_state == "unobservable" and pbh_state in ("unobservable", "unknown"):
-        z = sc.unobservable_direction()
-        bad = [
-            {"eigenvalue": c.center, "pbh_margin": float(m)}
-            for c, m, code in zip(eig.clusters, margins, codes)
-            if code == ZERO
-        ]
-        witness = {
-            "z": z,
-            "unobservable_dimension": n - sc.rank,
-            "unobservable_eigenvalues": bad,
-            "meaning": "C A^k z = 0 for every k: x0 and x0 + z give identical outputs",
-        }
-        note = "" if pbh_state == "unobservable" else f" (PBH inconclusive: {pbh_note})"
-        return Check(
-            id="observability",
-            title=title,
-            verdict=Verdict.FAILS,
-            summary=(
-                f"(A, C) is not observable: a {n - sc.rank}-dimensional subspace of states "
-                f"produces no output{note}."
-            ),
-            value=None,
-            margin=margin,
-            method=method,
-            fields={"observability_index": None, "unobservable_dimension": n - sc.rank},
+            fields={"observability_index": index, "unobservable_dimension": unobs},
             evidence=evidence,
             witness=witness,
             tolerances=tolerances_out,
         )
+
+    if pbh_state == "observable" and stair_state == "observable":
+        return check(
+            Verdict.HOLDS,
+            f"(A, C) is observable: x(0) is determined by {sc.index} "
+            f"step{'s' if sc.index != 1 else ''} of output; PBH margin {margin:.3g}.",
+            sc.index, 0,
+        )
+
+    # candidate unobservable directions: PBH null vectors, then the
+    # conservative staircase, each verified by simulation
+    candidates: list[tuple[np.ndarray, str, list]] = []
+    if pbh_state == "unobservable":
+        for c, code in zip(eig.clusters, codes):
+            if code == ZERO:
+                candidates.append((_pbh_null_vector(A, C, c.center), "PBH null vector",
+                                   [c.center]))
+    conservative = staircase(A, C, tolerances=tol, error_model="compound")
+    if not conservative.problem and conservative.rank < n:
+        candidates.append((conservative.unobservable_direction(), "staircase", []))
+    for z, source, eigenvalues in candidates:
+        residual = unobservable_residual(A, C, z)
+        if residual <= tol.witness_rtol:
+            unobs = n - sc.rank if stair_state == "unobservable" else n - conservative.rank
+            evidence["unobservable_direction_source"] = source
+            witness = {
+                "z": z,
+                "unobservable_dimension": unobs,
+                "unobservable_eigenvalues": eigenvalues,
+                "residual": residual,
+                "meaning": "C A^k z = 0 for every k: x0 and x0 + z give identical outputs",
+            }
+            note = "" if stair_state == "unobservable" else " (confirmed by simulation)"
+            return check(
+                Verdict.FAILS,
+                f"(A, C) is not observable: a {unobs}-dimensional subspace of states produces "
+                f"no output{note}.",
+                None, unobs, witness,
+            )
+        evidence.setdefault("rejected_directions", []).append(
+            {"source": source, "residual": residual}
+        )
+
     reasons = [r for r in (pbh_note, stair_note) if r]
     if pbh_state != stair_state and "unknown" not in (pbh_state, stair_state):
         reasons.append(f"PBH says {pbh_state} but the staircase says {stair_state}")
     if stair_state == "observable" and pbh_state == "unknown":
         reasons.append("the staircase finds full rank but the PBH test cannot confirm it")
-    return Check(
-        id="observability",
-        title=title,
-        verdict=Verdict.INCONCLUSIVE,
-        summary="Observability could not be decided reliably: " + "; ".join(reasons) + ".",
-        value=None,
-        margin=margin,
-        method=method,
-        fields={"observability_index": None, "unobservable_dimension": None},
-        evidence=evidence,
-        tolerances=tolerances_out,
+    if candidates:
+        reasons.append("no unobservable direction survived the simulation check")
+    return check(
+        Verdict.INCONCLUSIVE,
+        "Observability could not be decided reliably: " + "; ".join(reasons) + ".",
+        None, None,
     )
+
+
+def _pbh_null_vector(A: np.ndarray, C: np.ndarray, lam: complex) -> np.ndarray:
+    """Real unit vector from the null space of [A - lambda I; C]."""
+    n = A.shape[0]
+    shift = lam.real if lam.imag == 0 else lam
+    _, _, vh = np.linalg.svd(np.vstack([A - shift * np.eye(n), C]))
+    v = vh[-1].conj()
+    z = v.real if np.linalg.norm(v.real) >= np.linalg.norm(v.imag) else v.imag
+    return np.real(z) / np.linalg.norm(z)
+
+
+def unobservable_residual(A: np.ndarray, C: np.ndarray, z: np.ndarray) -> float:
+    """max over k < n of ||C A^k z|| / (||C|| ||A^k z||), by simulating z forward.
+
+    Zero (to rounding) exactly when z is unobservable; steps where A^k z
+    has vanished (nilpotent parts) are skipped.
+    """
+    n = A.shape[0]
+    normC = max(float(np.linalg.norm(C, 2)), np.finfo(float).tiny)
+    w = np.asarray(z, dtype=float)
+    start = float(np.linalg.norm(w))
+    worst = 0.0
+    for _ in range(n):
+        size = float(np.linalg.norm(w))
+        if size <= 1e-12 * start:
+            break
+        worst = max(worst, float(np.linalg.norm(C @ w)) / (normC * size))
+        w = A @ w
+    return worst

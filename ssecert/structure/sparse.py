@@ -145,7 +145,7 @@ def _enumeration(
             break
         level = _scan_level(
             P, sub.ranks[rest], proj, base, k, rest, full, tol,
-            critical=(k == target), progress=progress,
+            critical=(k == target), progress=progress, errors=sub.errors[rest],
         )
         out.checked += level.checked
         if level.critical:
@@ -191,8 +191,11 @@ def _scan_level(
     *,
     critical: bool = False,
     progress: Progress | None = None,
+    errors: np.ndarray | None = None,
 ) -> _Level:
     """Check every removal of ``full`` plus k sensors of ``rest``."""
+    if errors is None:
+        errors = np.zeros(rest.size)
     q = rest.size
     n = proj.shape[-1]
     shift = tol.screen_rtol * max(q, 1)
@@ -217,7 +220,7 @@ def _scan_level(
         bad = np.flatnonzero(~ok)
         if bad.size:
             subsets = block.subsets(bad)
-            codes, _, nulls = _refine(P, ranks, subsets, q, tol)
+            codes, _, nulls = _refine(P, ranks, subsets, q, tol, errors)
             for row, code, zvec in zip(subsets, codes, nulls):
                 removed = tuple(sorted(full.tolist() + rest[row].tolist()))
                 if code == ZERO:
@@ -304,7 +307,7 @@ def scan_removals(
     P = sub.bases[rest]
     proj = np.einsum("qkn,qkm->qnm", P, P)
     level = _scan_level(P, sub.ranks[rest], proj, proj.sum(axis=0), k, rest, full, tol,
-                        progress=progress)
+                        progress=progress, errors=sub.errors[rest])
     return RemovalScan(size, level.checked, tuple(sorted(level.failures)), level.borderline)
 
 
@@ -338,8 +341,14 @@ def _refine(
     removed: np.ndarray,
     q: int,
     tol: Tolerances,
+    errors: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Exact rank decision for the kept sensors of each removed subset."""
+    """Exact rank decision for the kept sensors of each removed subset.
+
+    The tolerance adds the largest basis error of the kept sensors: a sum
+    of subspaces that is rank deficient in exact arithmetic shows a
+    smallest singular value of about that size.
+    """
     n = P.shape[-1]
     codes = np.empty(removed.shape[0], dtype=np.int8)
     rel = np.empty(removed.shape[0])
@@ -359,7 +368,8 @@ def _refine(
         stacks[idx < 0] = 0.0
         stacks = stacks.reshape(len(chunk), width * n, n)
         rows = int(max(ranks[k].sum() for k in kept))
-        c, r, z = stacked_rank(stacks, tolerances=tol, rows=max(rows, 1))
+        data_error = np.array([errors[k].max(initial=0.0) for k in kept])
+        c, r, z = stacked_rank(stacks, tolerances=tol, rows=max(rows, 1), data_error=data_error)
         codes[start : start + len(chunk)] = c
         rel[start : start + len(chunk)] = r
         nulls[start : start + len(chunk)] = z
@@ -393,7 +403,8 @@ def _eigenspace(
         V = cluster.basis
         g = cluster.geometric
         W = (C @ V) / safe[:, None]  # relative visibility of the eigenspace per sensor
-        thr = max(tol.rtol(p, n), cluster.error) + g * EPS
+        # the eigenspace error is an estimate, not a bound: a factor 10 of safety
+        thr = tol.rtol(p, n + g) + 10.0 * cluster.error
         if g == 1:
             mags = np.abs(W[:, 0])
             codes = classify(mags, thr, factor=tol.borderline_factor)
@@ -465,8 +476,9 @@ def _hyperplanes(
 ) -> tuple[list, list, str, int]:
     """Smallest supports of W u over u != 0 for an eigenspace of dimension g > 1."""
     p, g = W.shape
-    _, sv, vh = np.linalg.svd(W, full_matrices=False)
+    _, sv, vh = np.linalg.svd(W, full_matrices=True)
     smax = max(float(sv[0]), np.finfo(float).tiny)
+    sv = np.concatenate([sv, np.zeros(g - sv.size)])  # fewer sensors than g: rank < g
     rank_codes = classify(sv / smax, thr, factor=tol.borderline_factor)
     if np.any(rank_codes == BORDERLINE):
         return [], [], "the sensors' view of its eigenspace has a borderline rank", 0
@@ -616,7 +628,7 @@ def _recheck_holds(
             continue
         Ck = system.C[list(kept)]
         m, codes = pbh_margins(system.A, Ck, centers, tolerances=tol)
-        sc = staircase(system.A, Ck, tolerances=tol)
+        sc = staircase(system.A, Ck, tolerances=tol, error_model="compound")
         pbh_ok = bool(np.all(codes == NONZERO)) and not eig.problems
         stair_ok = sc.rank == system.n and not sc.problem
         value = float(m.min()) if m.size else None
