@@ -151,6 +151,15 @@ class Certificate:
 
     The overall verdict follows the exit-status rule: it combines the
     required checks only (advisory checks are reported but do not count).
+
+    Attributes
+    ----------
+    system : System
+        The plant the checks are about.
+    checks : tuple of Check
+        Checks in report order, ids unique.
+    meta : mapping
+        Provenance: spec file and hash, versions, seed, date, notes.
     """
 
     system: Any

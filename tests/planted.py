@@ -27,7 +27,7 @@ import numpy as np
 
 def exact_rank(rows: list[list[Fraction]]) -> int:
     """Rank over Q by Gaussian elimination on Fractions."""
-    M = [list(r) for r in rows]
+    M = [[Fraction(x) for x in r] for r in rows]
     if not M:
         return 0
     rank, cols = 0, len(M[0])

@@ -44,13 +44,25 @@ def irrepresentable_constant(
 ) -> float:
     """rho(S) for one support of rows of O, straight from the definition.
 
-    Uses ``numpy.linalg.pinv``; returns inf when O_Sbar lacks full column
-    rank.  Meant for checking and small problems.
+    Uses ``numpy.linalg.pinv``; meant for checking and small problems.
+
+    Parameters
+    ----------
+    O : array_like, shape (m, n)
+        Stacked observability matrix (or any sensing matrix).
+    support : sequence of int
+        Rows of O in the attack support S.
+
+    Returns
+    -------
+    float
+        ``|| O_Sbar^{dagger T} O_S^T ||_inf``; inf when O_Sbar lacks full
+        column rank.
 
     Examples
     --------
     >>> import numpy as np
-    >>> irrepresentable_constant(2.0 * np.ones((3, 1)), [0])
+    >>> round(irrepresentable_constant(2.0 * np.ones((3, 1)), [0]), 12)
     0.5
     """
     O = np.asarray(O, dtype=float)

@@ -64,6 +64,17 @@ def pbh_margins(
 def observability_index(system: System, *, tolerances: Tolerances | None = None) -> int | None:
     """Fewest steps tau with O_tau of full column rank, or None if unobservable.
 
+    Computed by the orthogonal staircase, not by ranks of O_tau.
+
+    Parameters
+    ----------
+    system : System
+    tolerances : Tolerances, optional
+
+    Returns
+    -------
+    int or None
+
     Examples
     --------
     >>> from ssecert import System
@@ -197,10 +208,15 @@ def observability(
     # conservative staircase, each verified by simulation
     candidates: list[tuple[np.ndarray, str, list]] = []
     if pbh_state == "unobservable":
+        unobservable = [
+            {"eigenvalue": c.center, "pbh_margin": float(m)}
+            for c, m, code in zip(eig.clusters, margins, codes)
+            if code == ZERO
+        ]
         for c, code in zip(eig.clusters, codes):
             if code == ZERO:
                 candidates.append((_pbh_null_vector(A, C, c.center), "PBH null vector",
-                                   [c.center]))
+                                   unobservable))
     conservative = staircase(A, C, tolerances=tol, error_model="compound")
     if not conservative.problem and conservative.rank < n:
         candidates.append((conservative.unobservable_direction(), "staircase", []))

@@ -1,0 +1,221 @@
+"""s-sparse observability: both methods against each other and against planted truth."""
+
+import itertools
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from planted import exact_rank, planted
+
+from ssecert import System, analyze, scan_removals, sparse_observability
+from ssecert.examples import load_example
+from ssecert.structure.observability import unobservable_residual
+
+KINDS = ("distinct", "jordan", "identity", "mixed")
+
+
+@pytest.mark.parametrize(
+    "name, max_removable, breaking_set, verdict",
+    [
+        ("notes-example-0", 0, [0], "fails"),
+        ("notes-example-1", 0, [2], "fails"),
+        ("notes-example-2", 1, [0, 2], "fails"),
+        ("notes-example-3", 2, [0, 1, 2], "holds"),
+        ("ugv", 0, [0], "fails"),
+        ("lasso-example-1", 2, [0, 1, 2], "holds"),
+    ],
+)
+@pytest.mark.parametrize("method", ["auto", "enumeration", "eigenspace"])
+def test_documented_examples(name, max_removable, breaking_set, verdict, method):
+    spec = load_example(name)
+    check = sparse_observability(spec.system, spec.max_attacked, method=method)
+    assert check.verdict.value == verdict
+    assert check.fields["max_removable"] == max_removable
+    assert check.fields["breaking_set"] == breaking_set
+    assert check.fields["max_correctable"] == max_removable // 2
+    assert check.fields["max_removable_is_lower_bound"] is False
+
+
+def test_random_thesis_plant_tolerates_three_attacks():
+    spec = load_example("random-n15-p30")
+    check = sparse_observability(spec.system, spec.max_attacked)
+    assert check.verdict.value == "holds"
+    assert check.fields["max_removable"] == 29
+    assert check.margin is not None and check.margin > 0
+
+
+def _truth_check(pl, seed, method):
+    system = System(pl.A, pl.C)
+    for s in (0, 1, 2):
+        check = sparse_observability(system, s, method=method)
+        assert check.verdict.value != "inconclusive", (seed, pl.description, check.summary)
+        assert check.fields["max_removable"] == pl.max_removable, (seed, pl.description)
+        assert tuple(check.fields["breaking_set"]) == pl.breaking_set, (seed, pl.description)
+        expected = "holds" if 2 * s <= pl.max_removable else "fails"
+        assert check.verdict.value == expected
+        if expected == "fails":
+            w = check.witness
+            assert w["verified"] and w["residual"] < 1e-8
+            assert len(w["sensors_a"]) <= s and len(w["sensors_b"]) <= s
+            assert sorted(w["sensors_a"] + w["sensors_b"]) == list(pl.breaking_set)
+
+
+@pytest.mark.parametrize("seed", range(300))
+def test_methods_agree_with_planted_truth(seed):
+    """Hundreds of plants with a planted smallest breaking set of known size."""
+    rng = np.random.default_rng(seed)
+    pl = planted(rng, KINDS[seed % 4], integer=seed % 3 != 0)
+    for method in ("enumeration", "eigenspace"):
+        system = System(pl.A, pl.C)
+        check = sparse_observability(system, 1, method=method)
+        assert check.verdict.value != "inconclusive", (seed, method, pl.description, check.summary)
+        assert check.fields["max_removable"] == pl.max_removable, (seed, method, pl.description)
+        assert tuple(check.fields["breaking_set"]) == pl.breaking_set, (seed, method)
+
+
+@given(seed=st.integers(0, 2**32 - 1), kind=st.sampled_from(KINDS), integer=st.booleans())
+def test_methods_agree_property(seed, kind, integer):
+    pl = planted(np.random.default_rng(seed), kind, integer=integer)
+    for method in ("enumeration", "eigenspace"):
+        _truth_check(pl, seed, method)
+
+
+def test_planted_breaking_sizes_are_varied():
+    """The generator plants small breaking sets, not the generic p - 1."""
+    sizes = {planted(np.random.default_rng(seed), KINDS[seed % 4]).max_removable
+             for seed in range(200)}
+    assert {-1, 0, 1, 2} <= sizes
+
+
+def test_witness_reproduces_identical_outputs():
+    spec = load_example("notes-example-2")
+    check = sparse_observability(spec.system, 1, horizon=4)
+    w = check.witness
+    A, C = spec.system.A, spec.system.C
+    x0 = np.array([0.3, -1.2, 2.0])
+    z = np.array(w["z"])
+    xa, xb = x0.copy(), x0 + z
+    for k in range(4):
+        ya = C @ xa + np.array(w["attack_a"][k])
+        yb = C @ xb + np.array(w["attack_b"][k])
+        np.testing.assert_allclose(ya, yb, atol=1e-12)
+        xa, xb = A @ xa, A @ xb
+    assert np.linalg.norm(z) == pytest.approx(1.0)
+    assert w["sensors_a"] == [0] and w["sensors_b"] == [2]
+    attacked_a = np.flatnonzero(np.abs(np.array(w["attack_a"])).sum(axis=0))
+    assert set(attacked_a) <= {0}
+
+
+def test_undetectable_attack_when_breaking_set_fits_in_s():
+    spec = load_example("ugv")
+    w = sparse_observability(spec.system, 1).witness
+    assert w["sensors_b"] == [] and w["sensors_a"] == [0]
+    assert "undetectable" in w["meaning"]
+    assert np.allclose(w["attack_b"], 0.0)
+
+
+def test_unobservable_plant_is_an_answer():
+    system = System(np.eye(3), [[1.0, 0, 0], [0, 1.0, 0]])
+    for method in ("enumeration", "eigenspace"):
+        check = sparse_observability(system, 0, method=method)
+        assert check.verdict.value == "fails"
+        assert check.fields["max_removable"] == -1
+        assert check.fields["max_correctable"] == -1
+        assert check.fields["breaking_set"] == []
+        z = np.array(check.witness["z"])
+        assert unobservable_residual(system.A, system.C, z) < 1e-12
+
+
+def test_more_attacked_than_sensors_fails_with_witness():
+    system = System(np.eye(2), np.eye(2))
+    check = sparse_observability(system, 5)
+    assert check.verdict.value == "fails"
+    assert check.witness["verified"]
+
+
+def test_generic_plants_lose_nothing_by_removing_sensors():
+    rng = np.random.default_rng(7)
+    for n, p in [(3, 5), (6, 9), (15, 30)]:
+        system = System(rng.standard_normal((n, n)), rng.standard_normal((p, n)))
+        for method in ("enumeration", "eigenspace"):
+            check = sparse_observability(system, 2, method=method)
+            assert check.fields["max_removable"] == p - 1
+            assert check.verdict.value == "holds"
+
+
+def test_budget_gives_lower_bound_or_inconclusive():
+    # A = I, n = 3, p = 8 generic integer rows: max_removable = 8 - 3 = 5
+    rng = np.random.default_rng(3)
+    C = rng.integers(-4, 5, size=(8, 3)).astype(float)
+    system = System(np.eye(3), C)
+    exact = sparse_observability(system, 1, method="enumeration")
+    assert exact.fields["max_removable_is_lower_bound"] is False
+    truth = exact.fields["max_removable"]
+    # budget enough for sets of up to 2 sensors (1 + 8 + 28 = 37) but not all
+    limited = sparse_observability(system, 1, method="enumeration", max_sets=40)
+    assert limited.verdict.value == "holds"
+    assert limited.fields["max_removable_is_lower_bound"] is True
+    assert 2 <= limited.fields["max_removable"] <= truth
+    starved = sparse_observability(system, 2, method="enumeration", max_sets=10)
+    assert starved.verdict.value == "inconclusive"
+    assert "--max-sets" in starved.summary
+
+
+def test_scan_removals_matches_exact_rank_reference():
+    """Every set of removed sensors decided as an exact rational rank would."""
+    rng = np.random.default_rng(11)
+    for trial in range(12):
+        pl = planted(rng, KINDS[trial % 4], integer=True)
+        A = np.round(pl.A).astype(int)
+        C = np.round(pl.C).astype(int)
+        n, p = A.shape[0], C.shape[0]
+        blocks = [C]
+        for _ in range(n - 1):
+            blocks.append(blocks[-1] @ A)
+        for size in range(p + 1):
+            scan = scan_removals(System(A, C), size, prune=False)
+            expected = []
+            for removed in itertools.combinations(range(p), size):
+                keep = [i for i in range(p) if i not in removed]
+                rows = [list(map(int, b[i])) for b in blocks for i in keep]
+                if exact_rank(rows) < n:
+                    expected.append(removed)
+            assert list(scan.breaking_sets) == expected, (trial, size)
+            assert scan.borderline == 0
+
+
+def test_progress_is_reported_during_enumeration():
+    calls = []
+    system = System(np.eye(3), np.random.default_rng(1).integers(-3, 4, size=(7, 3)))
+    sparse_observability(system, 1, method="enumeration", progress=lambda d, t: calls.append((d, t)))
+    assert calls and all(0 < d <= t for d, t in calls)
+
+
+def test_eigenspace_answers_large_generic_plant():
+    rng = np.random.default_rng(0)
+    system = System(rng.standard_normal((50, 50)), rng.standard_normal((1000, 50)))
+    check = sparse_observability(system, 3, method="eigenspace")
+    assert check.fields["max_removable"] == 999
+    assert check.verdict.value == "holds"
+
+
+def test_analyze_reports_the_documented_examples():
+    cert = analyze(load_example("ugv"))
+    assert cert.verdict.value == "fails" and cert.exit_code == 1
+    assert cert["sparse_observability"].fields["breaking_set"] == [0]
+    assert not cert["irrepresentable"].required
+
+
+@pytest.mark.parametrize("bad", [-1, 1.5, "2", True])
+def test_bad_max_attacked(bad):
+    with pytest.raises((TypeError, ValueError), match="max_attacked"):
+        sparse_observability(System([[1.0]], [[1.0]]), bad)
+
+
+def test_bad_method_and_budget():
+    system = System([[1.0]], [[1.0]])
+    with pytest.raises(ValueError, match="method"):
+        sparse_observability(system, 0, method="pbh")
+    with pytest.raises(ValueError, match="max_sets"):
+        sparse_observability(system, 0, max_sets=0)
