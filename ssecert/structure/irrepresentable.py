@@ -189,7 +189,8 @@ def irrepresentable(
         return make(
             Verdict.FAILS, math.inf, first,
             f"O_tau (horizon {tau}) has rank {sc.rank} < n = {n}, so no O_Sbar has full column "
-            f"rank as Theorem 1 requires; the first support {describe_support(first)} is a witness.",
+            f"rank as Theorem 1 requires; the first support {', '.join(map(str, describe_support(first)))} "
+            f"is a witness.",
             witness={"support": list(first), "support_names": describe_support(first),
                      "reason": "O_Sbar lacks full column rank"},
         )
@@ -243,7 +244,8 @@ def irrepresentable(
         return make(
             Verdict.FAILS, math.inf, infinite,
             f"For {n_inf} of {total} supports O_Sbar lacks full column rank (Theorem 1's "
-            f"assumption); the first is {describe_support(infinite)}, so rho is inf there.",
+            f"assumption); the first is {', '.join(map(str, describe_support(infinite)))}, so rho is inf "
+            f"there.",
             witness={"support": list(infinite), "support_names": describe_support(infinite),
                      "reason": "O_Sbar lacks full column rank"},
         )
@@ -257,20 +259,21 @@ def irrepresentable(
     rel = abs(direct - worst) / max(1.0, abs(worst))
     evidence["recompute_relative_difference"] = rel
     names = describe_support(worst_support)
+    label = ", ".join(map(str, names))
     if not math.isfinite(direct) or rel > 1e-6:
         return make(Verdict.INCONCLUSIVE, worst, worst_support,
-                    f"The worst constant {worst:.6g} on {names} does not match its direct "
+                    f"The worst constant {worst:.6g} on {label} does not match its direct "
                     f"recomputation {direct:.6g}.")
     margin = 1.0 - worst
     band = tol.irrepresentable_rtol
     if worst < 1.0 - band:
         return make(Verdict.HOLDS, worst, worst_support,
-                    f"The worst irrepresentable constant is {worst:.4g} < 1 (support {names}): "
+                    f"The worst irrepresentable constant is {worst:.4g} < 1 (support {label}): "
                     f"Lasso identifies every attack on {k} {'sensors' if mode == 'block' else 'entries'}"
                     f" for small enough lambda.", margin=margin)
     if worst > 1.0 + band:
         return make(Verdict.FAILS, worst, worst_support,
-                    f"The irrepresentable constant reaches {worst:.4g} >= 1 on support {names}: "
+                    f"The irrepresentable constant reaches {worst:.4g} >= 1 on support {label}: "
                     f"Lasso's support recovery is not guaranteed there.", margin=margin,
                     witness={"support": list(worst_support), "support_names": names,
                              "value": worst})
