@@ -755,73 +755,60 @@ def sparse_observability(
             "breaking_set": list(bset) if bset is not None else None,
         }
 
+    def make(verdict: Verdict, summary: str, value: int | None, extra: dict[str, Any],
+             margin: float | None = None, witness: dict | None = None) -> Check:
+        return Check(
+            id="sparse_observability",
+            title=title,
+            verdict=verdict,
+            summary=summary,
+            value=value,
+            margin=margin,
+            method=outcome.method,
+            fields=extra,
+            evidence=evidence,
+            witness=witness,
+            tolerances=tolerances_out,
+        )
+
     if outcome.status == "exact":
         mr = outcome.max_removable
         assert mr is not None and outcome.breaking_set is not None and outcome.z is not None
-        if 2 * s <= mr:
-            margin, records, problem = _recheck_holds(system, outcome, eig, tol)
-            evidence["recheck"] = records
-            evidence["margin_definition"] = (
-                "smallest relative PBH singular value sigma_min([A - lambda I; C_T]) / ||[A; C]||"
-                " over the kept-sensor sets T that come closest to breaking"
-            )
-            if problem:
-                return Check(
-                    id="sparse_observability",
-                    title=title,
-                    verdict=Verdict.INCONCLUSIVE,
-                    summary=f"The {outcome.method} method finds max_removable = {mr}, but {problem}.",
-                    value=mr,
-                    margin=margin,
-                    method=outcome.method,
-                    fields=fields(mr, False, outcome.breaking_set),
-                    evidence=evidence,
-                    tolerances=tolerances_out,
-                )
-            return Check(
-                id="sparse_observability",
-                title=title,
-                verdict=Verdict.HOLDS,
-                summary=(
-                    f"Removing any {mr} of the {p} sensors keeps the plant observable, so up to "
-                    f"{mr // 2} attacked sensors can be corrected (s = {s} needed)."
-                ),
-                value=mr,
-                margin=margin,
-                method=outcome.method,
-                fields=fields(mr, False, outcome.breaking_set),
-                evidence=evidence,
-                tolerances=tolerances_out,
-            )
-        return _failing_check(
-            system, s, outcome, H, seed, tol, title, fields, evidence, tolerances_out
+        if 2 * s > mr:
+            verdict, summary, witness = _failure(system, s, outcome, H, seed, tol, evidence)
+            return make(verdict, summary, mr, fields(mr, False, outcome.breaking_set),
+                        witness=witness)
+        margin, records, problem = _recheck_holds(system, outcome, eig, tol)
+        evidence["recheck"] = records
+        evidence["margin_definition"] = (
+            "smallest relative PBH singular value sigma_min([A - lambda I; C_T]) / ||[A; C]||"
+            " over the kept-sensor sets T that come closest to breaking"
         )
+        if problem:
+            summary = f"The {outcome.method} method finds max_removable = {mr}, but {problem}."
+        else:
+            summary = (
+                f"Removing any {mr} of the {p} sensors keeps the plant observable, so up to "
+                f"{mr // 2} attacked sensors can be corrected (s = {s} needed)."
+            )
+        return make(Verdict.INCONCLUSIVE if problem else Verdict.HOLDS, summary, mr,
+                    fields(mr, False, outcome.breaking_set), margin=margin)
 
     if outcome.status == "lower_bound" and outcome.max_removable is not None:
         mr = outcome.max_removable
         if mr >= 2 * s:
             margin, records, problem = _recheck_holds(system, outcome, eig, tol)
             evidence["recheck"] = records
-            verdict = Verdict.INCONCLUSIVE if problem else Verdict.HOLDS
-            summary = (
-                f"Every set of up to {mr} sensors was checked and none breaks observability, so "
-                f"s = {s} attacked sensors can be corrected; the exact max_removable was not "
-                f"computed ({'; '.join(outcome.problems)})."
-            )
             if problem:
                 summary = f"Lower bound max_removable >= {mr}, but {problem}."
-            return Check(
-                id="sparse_observability",
-                title=title,
-                verdict=verdict,
-                summary=summary,
-                value=mr,
-                margin=margin,
-                method=outcome.method,
-                fields=fields(mr, True, None),
-                evidence=evidence,
-                tolerances=tolerances_out,
-            )
+            else:
+                summary = (
+                    f"Every set of up to {mr} sensors was checked and none breaks observability, "
+                    f"so s = {s} attacked sensors can be corrected; the exact max_removable was "
+                    f"not computed ({'; '.join(outcome.problems)})."
+                )
+            return make(Verdict.INCONCLUSIVE if problem else Verdict.HOLDS, summary, mr,
+                        fields(mr, True, None), margin=margin)
     reasons = [pr for o in tried for pr in o.problems] or ["no method could decide"]
     needed = next((o.needed for o in tried if o.needed is not None), None)
     hint = ""
@@ -831,36 +818,40 @@ def sparse_observability(
             f"--max-sets (max_sets=...)."
         )
     lower = outcome.max_removable if outcome.status == "lower_bound" else None
-    return Check(
-        id="sparse_observability",
-        title=title,
-        verdict=Verdict.INCONCLUSIVE,
-        summary=f"Sparse observability could not be decided: {'; '.join(reasons)}.{hint}",
-        value=lower,
-        margin=None,
-        method=outcome.method,
-        fields={**fields(lower, lower is not None, None), "sets_needed": needed},
-        evidence=evidence,
-        tolerances=tolerances_out,
-    )
+    return make(Verdict.INCONCLUSIVE,
+                f"Sparse observability could not be decided: {'; '.join(reasons)}.{hint}",
+                lower, {**fields(lower, lower is not None, None), "sets_needed": needed})
 
 
-def _failing_check(system, s, outcome, H, seed, tol, title, fields, evidence, tolerances_out):
-    mr = outcome.max_removable
-    B = outcome.breaking_set
-    names = [system.sensors[i] for i in B]
-    # independent confirmation: the kept sensors fail the staircase
+def _failure(
+    system: System, s: int, outcome: _Outcome, H: int, seed: int, tol: Tolerances,
+    evidence: dict[str, Any],
+) -> tuple[Verdict, str, dict[str, Any]]:
+    """Verdict, summary and stealthy-attack witness of a failing check."""
     from ._linalg import staircase
 
+    mr = outcome.max_removable
+    B = outcome.breaking_set
+    assert mr is not None and B is not None
+    names = [system.sensors[i] for i in B]
+    # independent confirmation that the kept sensors do not observe the plant
     kept = [i for i in range(system.p) if i not in set(B)]
-    sc_rank = staircase(system.A, system.C[kept], tolerances=tol).rank if kept else 0
+    sc_rank = (
+        staircase(system.A, system.C[kept], tolerances=tol, error_model="compound").rank
+        if kept else 0
+    )
     evidence["breaking_set_check"] = {
         "kept_sensors": kept,
         "kept_observable_dimension": sc_rank,
         "unobservable": sc_rank < system.n,
     }
     witness = stealthy_attack(system, B, outcome.z, s, horizon=H, seed=seed, tolerances=tol)
-    wdict = witness.to_dict()
+    if not witness.verified or (kept and sc_rank >= system.n):
+        return Verdict.INCONCLUSIVE, (
+            f"The {outcome.method} method finds breaking set {list(B)}, but the stealthy attack "
+            f"built from it does not verify (output mismatch {witness.residual:.2e}, kept sensors "
+            f"observable dimension {sc_rank})."
+        ), witness.to_dict()
     if mr == -1:
         what = "(A, C) itself is not observable: some states produce no output at all."
     elif len(B) <= s:
@@ -880,24 +871,4 @@ def _failing_check(system, s, outcome, H, seed, tol, title, fields, evidence, to
         f"max_removable = {mr} < 2s = {2 * s}: {s} attacked sensor{'s' if s != 1 else ''} "
         f"cannot be corrected. {what}"
     )
-    verdict = Verdict.FAILS
-    if not witness.verified or (kept and sc_rank >= system.n):
-        verdict = Verdict.INCONCLUSIVE
-        summary = (
-            f"The {outcome.method} method finds breaking set {list(B)}, but the stealthy attack "
-            f"built from it does not verify (output mismatch {witness.residual:.2e}, kept sensors "
-            f"observable dimension {sc_rank})."
-        )
-    return Check(
-        id="sparse_observability",
-        title=title,
-        verdict=verdict,
-        summary=summary,
-        value=mr,
-        margin=None,
-        method=outcome.method,
-        fields=fields(mr, False, B),
-        evidence=evidence,
-        witness=wdict,
-        tolerances=tolerances_out,
-    )
+    return Verdict.FAILS, summary, witness.to_dict()
