@@ -1,0 +1,1 @@
+"""Observer gains and observer designs."""

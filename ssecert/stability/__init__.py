@@ -1,0 +1,1 @@
+"""Stability certificates: Lyapunov, LMIs for the sparse observers, thesis assumptions."""
