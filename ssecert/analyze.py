@@ -68,7 +68,9 @@ def analyze(
     -------
     Certificate
         Checks ``observability``, ``sparse_observability`` (required) and
-        ``irrepresentable`` (advisory).
+        ``irrepresentable`` (advisory); with an ``[observer]`` section also
+        ``observer_gain``, ``observer_stability`` (required), ``iss_gain``
+        and ``thesis_assumptions`` (advisory).
 
     Examples
     --------
@@ -108,12 +110,11 @@ def analyze(
             progress=relay("irrepresentable"),
         ),
     ]
-    notes = []
     if spec.observer is not None:
-        notes.append(
-            "The [observer] section was validated; observer gain and stability checks are not "
-            "part of this version of ssecert."
-        )
+        from .stability.checks import observer_checks
+
+        checks.extend(observer_checks(system, spec.observer, observability=checks[0], seed=seed))
+    notes = []
     if spec.scenarios:
         notes.append(
             "The [[scenario]] sections were validated; simulations are not part of this version "

@@ -6,6 +6,8 @@ import math
 import textwrap
 from typing import Any
 
+import numpy as np
+
 from ..results import Certificate, Check, Verdict
 
 __all__ = ["render_table"]
@@ -88,6 +90,17 @@ def render_table(certificate: Certificate, *, width: int = 100) -> str:
                 b = ", ".join(system.sensors[i] for i in w.get("sensors_b", [])) or "none"
                 lines.append(f"  stealthy attack: sensors {a} / {b}; simulated output mismatch "
                              f"{_fmt(w.get('residual'))} (verified: {w.get('verified')})")
+        if check.id == "observer_gain" and check.fields.get("L") is not None:
+            L = np.asarray(check.fields["L"], dtype=float)
+            line = f"  L ({L.shape[0]} x {L.shape[1]}, {check.fields.get('gain_method')})"
+            if check.fields.get("nilpotency_index") is not None:
+                line += f", nilpotency index {check.fields['nilpotency_index']}"
+            lines.append(line)
+        if check.id == "iss_gain" and check.fields.get("gamma") is not None:
+            lines.append(f"  gamma = {check.fields['gamma']:.4g}, alpha = {check.fields['alpha']:.3g}")
+        if check.id == "thesis_assumptions":
+            items = check.fields.get("items", {})
+            lines.append("  " + ", ".join(f"{k}: {v}" for k, v in items.items()))
         if check.id == "irrepresentable" and check.fields.get("worst_support") is not None:
             names = check.fields.get("worst_support_names") or check.fields["worst_support"]
             lines.append(f"  worst support: {', '.join(map(str, names))}")

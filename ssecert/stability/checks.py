@@ -1,0 +1,258 @@
+"""Observer checks for the ``[observer]`` section: gain, stability, ISS gain, thesis assumptions.
+
+JSON ids: ``observer_gain`` and ``observer_stability`` (required),
+``iss_gain`` and ``thesis_assumptions`` (advisory).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from ..design.gains import GainError
+from ..design.observer import ObserverDesign, build_observer
+from ..results import Check, Verdict
+from ..system import System
+from .lmi import LureModel, circle_certificate, iss_certificate, iss_from_circle
+from .lyapunov import lyapunov_certificate
+from .thesis import thesis_assumptions
+
+__all__ = ["observer_checks", "observer_gain_check", "observer_stability_check", "iss_gain_check",
+           "thesis_assumptions_check"]
+
+ISS_OPTIMIZE_LIMIT = 60  # largest dissipation LMI solved directly
+
+
+def _lyapunov_evidence(cert) -> dict[str, Any]:
+    return {
+        "P": cert.P,
+        "decrease_P_minus_FtPF": cert.decrease,
+        "margin": cert.margin,
+        "error_bound": cert.error_bound,
+        "contraction": cert.contraction,
+        "condition_number_P": cert.condition,
+        "residual": cert.residual,
+        "margin_definition": "lambda_min(P - F'PF) / ||P||, recomputed from P",
+    }
+
+
+def observer_gain_check(design: ObserverDesign) -> Check:
+    """Is the gain what was asked for, and is the linear error matrix F = A - L S stable?"""
+    gain = design.gain
+    F = design.error_matrix
+    computed_radius = float(np.abs(np.linalg.eigvals(F)).max())
+    fields: dict[str, Any] = {"L": gain.L, "gain_method": gain.method, "kind": design.kind}
+    title = f"Observer gain ({gain.method})"
+    evidence: dict[str, Any] = {"details": gain.details, "computed_eigenvalue_radius": computed_radius}
+    if gain.method == "deadbeat":
+        index = gain.details.get("nilpotency_index")
+        fields["nilpotency_index"] = index
+        fields["observability_index"] = gain.details.get("observability_index")
+        if gain.verified:
+            fields["spectral_radius"] = 0.0
+            return Check(
+                id="observer_gain", title=title, verdict=Verdict.HOLDS,
+                summary=(
+                    f"A - L C is nilpotent with index {index} (by matrix powers, not eigenvalues), "
+                    f"the observability index: the error vanishes in {index} step"
+                    f"{'s' if index != 1 else ''} without attack"
+                    + ("" if gain.details.get("minimal") else " (index not minimal)") + "."),
+                value=index, margin=None, method="deadbeat (flag construction, power test)",
+                fields=fields, evidence=evidence,
+                tolerances={"deadbeat_rtol": 1e-8, "clear_factor": 100})
+        fields["spectral_radius"] = computed_radius
+        return Check(
+            id="observer_gain", title=title, verdict=Verdict.INCONCLUSIVE,
+            summary=("The deadbeat gain could not be verified nilpotent: "
+                     + (gain.details.get("problem") or "the power test did not conclude") + "."),
+            value=index, method="deadbeat (flag construction, power test)", fields=fields,
+            evidence=evidence)
+    cert = lyapunov_certificate(F)
+    fields["spectral_radius"] = cert.spectral_radius
+    evidence.update(_lyapunov_evidence(cert))
+    verdict = Verdict(cert.verdict)
+    if verdict is Verdict.HOLDS:
+        summary = (f"The linear error dynamics e+ = (A - L C) e are stable (spectral radius "
+                   f"{cert.spectral_radius:.4g}), certified by a Lyapunov matrix P: the error "
+                   f"contracts at least by {cert.contraction:.4g} per step in the P-norm.")
+    elif verdict is Verdict.FAILS:
+        summary = (f"A - L C is not stable: {cert.reason}. With this gain the error does not "
+                   f"vanish even without attack.")
+    else:
+        summary = f"The stability of A - L C could not be certified: {cert.reason}."
+    return Check(id="observer_gain", title=title, verdict=verdict, summary=summary,
+                 value=cert.spectral_radius, margin=cert.margin, method="discrete Lyapunov (dlyap)",
+                 fields=fields, evidence=evidence,
+                 witness=cert.witness if verdict is Verdict.FAILS else None,
+                 tolerances={"error_bound": cert.error_bound, "clear_factor": 100})
+
+
+def observer_stability_check(design: ObserverDesign) -> tuple[Check, Any]:
+    """Global asymptotic stability of the observer's error dynamics without attack.
+
+    Returns the Check and the underlying certificate (for the ISS check).
+    """
+    title = f"Observer stability ({design.kind})"
+    if not design.sparse:
+        cert = lyapunov_certificate(design.error_matrix)
+        verdict = Verdict(cert.verdict)
+        summary = {
+            Verdict.HOLDS: (f"The error dynamics are linear and certified stable by a Lyapunov "
+                            f"matrix (contraction {cert.contraction:.4g} per step)."),
+            Verdict.FAILS: f"The error dynamics are unstable: {cert.reason}.",
+            Verdict.INCONCLUSIVE: f"Stability could not be certified: {cert.reason}.",
+        }[verdict]
+        return Check(id="observer_stability", title=title, verdict=verdict, summary=summary,
+                     value=cert.contraction, margin=cert.margin, method="discrete Lyapunov",
+                     fields={"decay_rate": None if cert.contraction is None
+                             else 1 - cert.contraction},
+                     evidence=_lyapunov_evidence(cert),
+                     witness=cert.witness if verdict is Verdict.FAILS else None,
+                     tolerances={"error_bound": cert.error_bound}), cert
+    if design.inner_steps > 1:
+        return Check(
+            id="observer_stability", title=title, verdict=Verdict.INCONCLUSIVE,
+            summary=(f"Certificates for an SSO with {design.inner_steps} inner steps per sample "
+                     f"are not implemented (the Lur'e model covers one step)."),
+            method="circle criterion", fields={}), None
+    model = LureModel.from_design(design)
+    cert = circle_certificate(model)
+    verdict = Verdict(cert.verdict)
+    fields = {"decay_rate": cert.decay, "structure": cert.structure, "shrink": design.shrink,
+              "step": design.step, "threshold": design.threshold}
+    evidence = cert.evidence()
+    evidence["lmi"] = ("[A B]' P [A B] - diag(P, 0) + [[0, q Cw' T], [q T Cw, -2 T]] <= -margin ||P|| I"
+                       " with xi = (e, a_hat), A = [[F, -L], [0, 0]], B = [[0], [I]], "
+                       "Cw = [-step L2 S, I - step L2]")
+    evidence["model"] = {"A": model.A, "B": model.B, "Cw": model.Cw, "q": model.q}
+    if verdict is Verdict.HOLDS:
+        summary = (f"The error state (e, a_hat) converges to 0 from every initial condition "
+                   f"without attack: V = xi' P xi decreases by at least a factor "
+                   f"{1 - cert.decay:.6g} per step (circle criterion with a diagonal multiplier, "
+                   f"{cert.structure} P, verified margin {cert.margin:.3g} against an error bound "
+                   f"{cert.error_bound:.1e}).")
+    elif verdict is Verdict.FAILS:
+        summary = f"The observer is not globally asymptotically stable: {cert.reason}."
+    else:
+        summary = f"No stability certificate: {cert.reason}."
+    return Check(id="observer_stability", title=title, verdict=verdict, summary=summary,
+                 value=cert.decay, margin=cert.margin, method="circle criterion (LMI, Clarabel)",
+                 fields=fields, evidence=evidence,
+                 witness=cert.details.get("witness") if verdict is Verdict.FAILS else None,
+                 tolerances={"error_bound": cert.error_bound, "clear_factor": 100,
+                             "lmi_eta": 1e-4}), (model, cert)
+
+
+def iss_gain_check(design: ObserverDesign, stability: Any) -> Check:
+    """l2 gain from attack to estimation error (and ISS decay), advisory."""
+    title = "ISS gain from attack to estimation error"
+    norm = ("l2 gain: sum_k |e(k)|^2 <= gamma^2 sum_k |a(k)|^2 + V(xi(0)), with a the "
+            + ("stacked " if design.window > 1 else "") + "attack and e the state estimation error")
+    if not design.sparse:
+        model = LureModel.linear(design.error_matrix, design.gain.L)
+        cert = iss_certificate(model, alpha=0.0)
+    else:
+        if stability is None or stability[1].verdict != "holds":
+            return Check(id="iss_gain", title=title, verdict=Verdict.INCONCLUSIVE, required=False,
+                         summary="No ISS gain without a stability certificate.",
+                         method="dissipation inequality", fields={"norm": norm})
+        model, circle = stability
+        cert = iss_from_circle(model, circle)
+        if model.N + model.m + model.r <= ISS_OPTIMIZE_LIMIT:
+            direct = iss_certificate(model, alpha=0.5 * float(circle.decay or 0.0))
+            if direct.verdict == "holds" and (cert.gamma is None or direct.gamma < cert.gamma):
+                cert = direct
+    verdict = Verdict(cert.verdict)
+    fields = {"gamma": cert.gamma, "alpha": cert.decay, "norm": norm}
+    if verdict is Verdict.HOLDS:
+        summary = (f"V(xi+) - V(xi) <= -{cert.decay:.3g} V(xi) - |e|^2 + gamma^2 |a|^2 holds with "
+                   f"gamma = {cert.gamma:.4g}: the estimation error is input-to-state stable with "
+                   f"respect to the attack, with l2 gain at most {cert.gamma:.4g}.")
+    else:
+        summary = f"No ISS gain certified: {cert.reason}."
+    evidence = cert.evidence()
+    evidence["inequality"] = "V(xi+) - V(xi) <= -alpha V(xi) - |e|^2 + gamma^2 |a|^2"
+    return Check(id="iss_gain", title=title, verdict=verdict, summary=summary, required=False,
+                 value=cert.gamma, margin=cert.margin, method="dissipation inequality (LMI)",
+                 fields=fields, evidence=evidence,
+                 tolerances={"error_bound": cert.error_bound})
+
+
+def thesis_assumptions_check(design: ObserverDesign, observability: Check | None,
+                             *, seed: int = 0) -> Check:
+    """The thesis's Assumptions 1-3, Lemma 1 and epsilon bound (5.20), advisory."""
+    holds = None if observability is None else observability.verdict is Verdict.HOLDS
+    verdict, items = thesis_assumptions(design, observability_holds=holds, seed=seed)
+    failing = [i.name for i in items if i.verdict == "fails"]
+    open_ = [i.name for i in items if i.verdict == "inconclusive"]
+    if verdict == "holds":
+        summary = "Every assumption of the thesis's stability proof holds on this design."
+    elif verdict == "fails":
+        summary = ("The thesis's stability proof does not apply to this design: "
+                   + "; ".join(f"{i.name}: {i.reason}" for i in items if i.verdict == "fails")[:600])
+    else:
+        summary = f"Not all assumptions could be decided ({', '.join(open_)})."
+    return Check(
+        id="thesis_assumptions", title="Thesis assumptions (Ch. 5)", verdict=Verdict(verdict),
+        summary=summary, required=False, value=len(failing), method="proof or counterexample search",
+        fields={"items": {i.name: i.verdict for i in items}},
+        evidence={i.name: i.to_dict() for i in items},
+    )
+
+
+def observer_checks(
+    system: System,
+    observer: Mapping[str, Any],
+    *,
+    observability: Check | None = None,
+    seed: int = 0,
+) -> list[Check]:
+    """All observer checks of a spec's ``[observer]`` section.
+
+    Parameters
+    ----------
+    system : System
+    observer : mapping
+        The validated ``[observer]`` section.
+    observability : Check, optional
+        The plant's observability check (decides Assumption 1, and whether
+        a failing gain is the plant's fault).
+    seed : int, default 0
+
+    Returns
+    -------
+    list of Check
+        ``observer_gain``, ``observer_stability`` and, when a gain exists,
+        ``iss_gain`` and (sparse observers) ``thesis_assumptions``.
+
+    Examples
+    --------
+    >>> from ssecert.examples import load_example
+    >>> spec = load_example("ugv")
+    >>> [(c.id, c.verdict.value) for c in observer_checks(spec.system, spec.observer)]
+    ... # doctest: +NORMALIZE_WHITESPACE
+    [('observer_gain', 'holds'), ('observer_stability', 'inconclusive'),
+     ('iss_gain', 'inconclusive'), ('thesis_assumptions', 'fails')]
+    """
+    try:
+        design = build_observer(system, observer)
+    except GainError as exc:
+        unobservable = observability is not None and observability.verdict is Verdict.FAILS
+        verdict = Verdict.FAILS if unobservable else Verdict.INCONCLUSIVE
+        gain = Check(id="observer_gain", title="Observer gain", verdict=verdict,
+                     summary=f"The requested gain cannot be computed: {exc}.",
+                     method=str(observer.get("gain", observer["kind"])),
+                     fields={"L": None, "spectral_radius": None, "kind": observer["kind"]})
+        stab = Check(id="observer_stability", title="Observer stability",
+                     verdict=Verdict.INCONCLUSIVE, summary="No gain, so no stability analysis.",
+                     method="", fields={})
+        return [gain, stab]
+    checks = [observer_gain_check(design)]
+    stability, cert = observer_stability_check(design)
+    checks.append(stability)
+    checks.append(iss_gain_check(design, cert))
+    if design.sparse:
+        checks.append(thesis_assumptions_check(design, observability, seed=seed))
+    return checks
