@@ -98,12 +98,13 @@ def observer_stability_check(design: ObserverDesign) -> tuple[Check, Any]:
     if not design.sparse:
         cert = lyapunov_certificate(design.error_matrix)
         verdict = Verdict(cert.verdict)
-        summary = {
-            Verdict.HOLDS: (f"The error dynamics are linear and certified stable by a Lyapunov "
-                            f"matrix (contraction {cert.contraction:.4g} per step)."),
-            Verdict.FAILS: f"The error dynamics are unstable: {cert.reason}.",
-            Verdict.INCONCLUSIVE: f"Stability could not be certified: {cert.reason}.",
-        }[verdict]
+        if verdict is Verdict.HOLDS:
+            summary = (f"The error dynamics are linear and certified stable by a Lyapunov matrix "
+                       f"(contraction {cert.contraction:.4g} per step).")
+        elif verdict is Verdict.FAILS:
+            summary = f"The error dynamics are unstable: {cert.reason}."
+        else:
+            summary = f"Stability could not be certified: {cert.reason}."
         return Check(id="observer_stability", title=title, verdict=verdict, summary=summary,
                      value=cert.contraction, margin=cert.margin, method="discrete Lyapunov",
                      fields={"decay_rate": None if cert.contraction is None
@@ -126,7 +127,9 @@ def observer_stability_check(design: ObserverDesign) -> tuple[Check, Any]:
     evidence["lmi"] = ("[A B]' P [A B] - diag(P, 0) + [[0, q Cw' T], [q T Cw, -2 T]] <= -margin ||P|| I"
                        " with xi = (e, a_hat), A = [[F, -L], [0, 0]], B = [[0], [I]], "
                        "Cw = [-step L2 S, I - step L2]")
-    evidence["model"] = {"A": model.A, "B": model.B, "Cw": model.Cw, "q": model.q}
+    evidence["model"] = {"A": model.A, "B": model.B, "Cw": model.Cw, "E": model.E, "Dw": model.Dw,
+                         "Ce": model.Ce, "q": model.q, "n_e": model.n_e,
+                         "threshold": model.threshold}
     if verdict is Verdict.HOLDS:
         summary = (f"The error state (e, a_hat) converges to 0 from every initial condition "
                    f"without attack: V = xi' P xi decreases by at least a factor "

@@ -1,0 +1,130 @@
+"""Observer gains: deadbeat (float and exact), placement with re-check, OGD, pinv."""
+
+import warnings
+
+import control
+import numpy as np
+import pytest
+import sympy as sp
+from planted import planted
+
+from ssecert import System
+from ssecert.design.gains import (
+    GainError,
+    deadbeat_gain,
+    exact_deadbeat_gain,
+    nilpotency,
+    ogd_gain,
+    pinv_gain,
+    place_gain,
+)
+from ssecert.structure.observability import observability_index
+
+
+@pytest.mark.parametrize("seed", range(60))
+def test_deadbeat_is_nilpotent_with_minimal_index(seed):
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(2, 13))
+    p = int(rng.integers(1, n))  # p < n: control.place cannot do this
+    system = System(rng.standard_normal((n, n)), rng.standard_normal((p, n)))
+    gain = deadbeat_gain(system)
+    index = observability_index(system)
+    F = system.A - gain.L @ system.C
+    power = np.linalg.matrix_power(F, index)
+    scale = max(1.0, np.linalg.norm(system.A, 2))
+    assert np.linalg.norm(power, 2) <= 1e-8 * scale**index
+    assert np.linalg.norm(np.linalg.matrix_power(F, index - 1), 2) > 1e-6 * scale ** (index - 1)
+    assert gain.verified and gain.details["nilpotency_index"] == index
+    assert gain.details["minimal"]
+
+
+def test_control_place_refuses_what_deadbeat_does():
+    rng = np.random.default_rng(4)
+    A, C = rng.standard_normal((6, 6)), rng.standard_normal((2, 6))
+    with pytest.raises(Exception, match="repeated"):
+        control.place(A.T, C.T, np.zeros(6))
+    assert deadbeat_gain(System(A, C)).details["nilpotency_index"] == 3
+
+
+def test_eigenvalues_cannot_prove_nilpotency():
+    rng = np.random.default_rng(2)
+    system = System(rng.standard_normal((15, 15)), rng.standard_normal((1, 15)))
+    gain = deadbeat_gain(system)
+    assert gain.verified and gain.details["nilpotency_index"] == 15
+    assert np.abs(np.linalg.eigvals(gain.error_matrix)).max() > 1e-3  # far from 0
+
+
+def _observable_planted(seed):
+    for attempt in range(100):
+        pl = planted(np.random.default_rng(1000 * seed + attempt), "jordan", integer=True)
+        if pl.max_removable >= 0:
+            return pl
+    raise AssertionError("no observable plant generated")
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_exact_deadbeat_on_integer_plants(seed):
+    pl = _observable_planted(seed)
+    A = np.round(pl.A).astype(int).tolist()
+    C = np.round(pl.C).astype(int).tolist()
+    gain = exact_deadbeat_gain(A, C)
+    assert gain.verified
+    # independent exact re-check with sympy
+    Le = sp.Matrix([[sp.Rational(x) for x in row] for row in gain.details["L_exact"]])
+    F = sp.Matrix(A) - Le * sp.Matrix(C)
+    k = gain.details["exact_index"]
+    assert (F**k).is_zero_matrix
+    assert k == 1 or not (F ** (k - 1)).is_zero_matrix
+    assert k == observability_index(System(pl.A, pl.C))
+
+
+def test_exact_deadbeat_single_output_chain():
+    gain = exact_deadbeat_gain([[0, 1, 0], [0, 0, 1], [1, 2, 3]], [[1, 0, 0]])
+    assert gain.details["exact_index"] == 3
+
+
+def test_deadbeat_refuses_unobservable_plant():
+    with pytest.raises(GainError, match="not observable"):
+        deadbeat_gain(System(np.diag([0.5, 0.9]), [[1.0, 0.0]]))
+
+
+def test_nilpotency_test_follows_design_rule():
+    assert nilpotency(np.diag([1.0, 1.0, 1.0], 1)).index == 4
+    assert nilpotency(np.array([[0.5]])).index is None
+    # ||F|| = 1e-7 is above its threshold 1e-8 but not clearly (100 times): inconclusive
+    result = nilpotency(np.array([[0.0, 1e-7], [0.0, 0.0]]), scale=1.0)
+    assert result.index == 2 and not result.conclusive
+    assert nilpotency(np.array([[0.0, 1e-3], [0.0, 0.0]]), scale=1.0).conclusive
+
+
+def test_place_gain_is_rechecked():
+    system = System([[1.0, 0.1], [0.0, 1.0]], [[1.0, 0.0]])
+    gain = place_gain(system, [0.2, 0.3])
+    assert np.allclose(sorted(np.linalg.eigvals(gain.error_matrix).real), [0.2, 0.3])
+
+
+def test_place_miss_is_an_error(monkeypatch):
+    system = System([[1.0, 0.1], [0.0, 1.0]], [[1.0, 0.0]])
+
+    def bad_place(A, B, poles):
+        warnings.warn("convergence not reached")
+        return np.array([[0.0, 0.0]])
+
+    monkeypatch.setattr(control, "place", bad_place)
+    with pytest.raises(GainError, match="miss"):
+        place_gain(system, [0.2, 0.3])
+
+
+def test_place_refusal_is_an_error():
+    with pytest.raises(GainError, match="refused"):
+        place_gain(System(np.eye(2), [[1.0, 0.0]]), [0.1, 0.1])
+
+
+def test_ogd_and_pinv_gains():
+    system = System([[0.5, 1.0], [0.0, 0.5]], [[1, 0], [0, 1], [1, 1]])
+    g = ogd_gain(system, 0.1)
+    np.testing.assert_allclose(g.L, 0.1 * system.A @ system.C.T)
+    p = pinv_gain(system)
+    np.testing.assert_allclose(p.error_matrix, 0.0, atol=1e-12)
+    with pytest.raises(GainError, match="full column rank"):
+        pinv_gain(System(np.eye(2), [[1.0, 0.0]]))

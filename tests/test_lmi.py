@@ -1,0 +1,181 @@
+"""LMI certificates: confirmed by simulation, re-verified without the solver, honest failures."""
+
+import json
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from ssecert import System
+from ssecert.design.observer import build_observer
+from ssecert.examples import load_example
+from ssecert.stability import lmi
+from ssecert.stability.checks import observer_checks
+from ssecert.stability.lmi import (
+    LureModel,
+    circle_certificate,
+    circle_matrix,
+    iss_certificate,
+    iss_from_circle,
+    region_map,
+    verify_certificate,
+)
+
+
+def random_design(seed, *, shrink=None, step=None):
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(2, 5))
+    p = int(rng.integers(n, n + 4))
+    A = rng.standard_normal((n, n))
+    A = A / np.abs(np.linalg.eigvals(A)).max()  # spectral radius 1, as in the thesis
+    C = rng.standard_normal((p, n))
+    q = float(rng.uniform(0.2, 0.7)) if shrink is None else shrink
+    nu = float(rng.uniform(0.005, 0.05)) if step is None else step
+    return build_observer(System(A, C), {"kind": "elastic_net", "gain": "deadbeat", "step": nu,
+                                         "threshold": 0.1, "shrink": q})
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_elastic_net_certificates_hold_along_simulated_trajectories(seed):
+    design = random_design(seed)
+    model = LureModel.from_design(design)
+    cert = circle_certificate(model)
+    assert cert.verdict == "holds"
+    rng = np.random.default_rng(100 + seed)
+    mags = np.exp(rng.uniform(np.log(1e-3), np.log(1e2), (300, 1)))
+    xi0 = rng.standard_normal((300, model.N)) * mags
+    traj = model.simulate(xi0, 200)
+    V = np.einsum("kri,ij,krj->kr", traj, cert.P, traj)
+    # the certified decrease holds at every step of every trajectory
+    assert np.all(V[1:] <= (1 - cert.decay) * V[:-1] * (1 + 1e-9) + 1e-300)
+    assert np.all(np.linalg.norm(traj[-1], axis=1) <= 1e-6 * np.maximum(np.linalg.norm(xi0, axis=1), 1))
+
+
+@pytest.mark.parametrize("kind", ["sso", "dsso"])
+def test_sso_and_dsso_on_the_ugv_are_inconclusive_with_the_reason(kind):
+    spec = load_example("ugv")
+    obs = {"kind": kind, "step": 0.7, "threshold": 0.1}
+    if kind == "dsso":
+        obs["gain"] = "deadbeat"
+    design = build_observer(spec.system, obs)
+    model = LureModel.from_design(design)
+    cert = circle_certificate(model)
+    assert cert.verdict == "inconclusive"
+    assert "shrink = 1" in cert.reason and "eigenvalue at 1" in cert.reason
+    assert cert.details["spectral_radius_at_sector_vertex"] >= 1 - 1e-9
+    # the mode e = v, a_hat = -C v (v the eigenvector of A at 1) is an eigenvector at 1
+    v = np.array([1.0, 0.0])
+    mode = np.concatenate([v, -spec.system.C @ v])
+    np.testing.assert_allclose(model.vertex(1.0) @ mode, mode, atol=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_unstable_linear_error_matrix_is_never_certified(seed):
+    rng = np.random.default_rng(seed)
+    A = rng.standard_normal((3, 3))
+    C = rng.standard_normal((4, 3))
+    L = 0.1 * rng.standard_normal((3, 4))
+    if np.abs(np.linalg.eigvals(A - L @ C)).max() < 1.05:
+        L = np.zeros((3, 4))
+        A = A / np.abs(np.linalg.eigvals(A)).max() * 1.2
+    design = build_observer(System(A, C), {"kind": "elastic_net", "gain": L, "step": 0.01,
+                                           "threshold": 0.1, "shrink": 0.3})
+    model = LureModel.from_design(design)
+    cert = circle_certificate(model)
+    assert cert.verdict == "fails"
+    witness = cert.details["witness"]
+    # the dead zone keeps a_hat at 0 near the origin, so a small error grows like F^k
+    xi0 = np.concatenate([1e-6 * witness["initial_error"], np.zeros(model.m)])
+    traj = model.simulate(xi0, 40)
+    assert np.linalg.norm(traj[-1]) > 10 * np.linalg.norm(xi0)
+
+
+def test_evidence_reverifies_without_the_solver():
+    spec = load_example("ugv")
+    checks = observer_checks(spec.system, {"kind": "elastic_net", "gain": "deadbeat", "step": 0.1,
+                                           "threshold": 0.1, "shrink": 0.5})
+    stability = json.loads(json.dumps(next(c for c in checks if c.id == "observer_stability")
+                                      .to_dict()))
+    assert stability["verdict"] == "holds"
+    ev = stability["evidence"]
+    mo = ev["model"]
+    model = LureModel(*(np.array(mo[k], dtype=float) for k in ("A", "B", "Cw", "E", "Dw", "Ce")),
+                      mo["q"], mo["n_e"], mo["threshold"])
+    P, t = np.array(ev["P"]), np.array(ev["multipliers_T"])
+    M = circle_matrix(model, P, t)
+    assert np.linalg.eigvalsh(M)[-1] < -50 * ev["error_bound"] * np.linalg.norm(P, 2)
+    assert np.linalg.eigvalsh(P)[0] > 0 and np.all(t >= 0)
+    ok, margin, bound, _ = verify_certificate(model, P, t)
+    assert ok and margin == pytest.approx(stability["margin"], rel=1e-6)
+
+
+def test_iss_gain_bounds_simulated_attacks():
+    design = random_design(3, shrink=0.4, step=0.02)
+    model = LureModel.from_design(design)
+    circle = circle_certificate(model)
+    for cert in (iss_certificate(model, alpha=circle.decay / 2), iss_from_circle(model, circle)):
+        assert cert.verdict == "holds"
+        rng = np.random.default_rng(0)
+        attacks = rng.uniform(-5, 5, (300, 50, model.r)) * (rng.random((1, 50, model.r)) < 0.3)
+        traj = model.simulate(np.zeros((50, model.N)), 300, attack=attacks)
+        e = traj[:-1, :, : model.n_e]
+        energy_e = np.sum(e**2, axis=(0, 2))
+        energy_a = np.sum(attacks**2, axis=(0, 2))
+        assert np.all(energy_e <= cert.gamma**2 * energy_a * (1 + 1e-9))
+
+
+def test_linear_observer_iss_gain():
+    F = np.array([[0.5, 0.2], [0.0, 0.3]])
+    L = np.array([[1.0], [0.5]])
+    cert = iss_certificate(LureModel.linear(F, L))
+    assert cert.verdict == "holds"
+    # the l2 gain of e+ = F e + L a is at least the peak of |(zI - F)^-1 L| on the circle
+    z = np.exp(1j * np.linspace(0, np.pi, 400))
+    peak = max(np.linalg.norm(np.linalg.solve(zz * np.eye(2) - F, L)) for zz in z)
+    assert peak <= cert.gamma <= 1.05 * peak + 1e-3
+
+
+def test_solver_failure_is_inconclusive(monkeypatch):
+    import cvxpy
+
+    def broken(self, *args, **kwargs):
+        raise cvxpy.error.SolverError("simulated failure")
+
+    monkeypatch.setattr(cvxpy.Problem, "solve", broken)
+    cert = circle_certificate(LureModel.from_design(random_design(1)))
+    assert cert.verdict == "inconclusive" and "simulated failure" in cert.reason
+
+
+def test_unverifiable_solution_is_inconclusive(monkeypatch):
+    design = random_design(2)
+    model = LureModel.from_design(design)
+
+    def fake(model, kind, structure, alpha, options):
+        return np.eye(model.N), np.ones(model.m), None, {"structure": structure, "status": "optimal"}
+
+    monkeypatch.setattr(lmi, "_solve", fake)
+    cert = circle_certificate(model)
+    assert cert.verdict == "inconclusive"
+
+
+def test_full_structure_agrees_with_block_diagonal():
+    model = LureModel.from_design(random_design(5))
+    a = circle_certificate(model, structure="block-diagonal")
+    b = circle_certificate(model, structure="full")
+    assert a.verdict == b.verdict == "holds"
+    assert b.P.shape == (model.N, model.N)
+
+
+def test_region_map_reuses_certificates_and_every_holds_reverifies():
+    spec = load_example("ugv")
+    design = build_observer(spec.system, {"kind": "elastic_net", "gain": "deadbeat", "step": 0.1,
+                                          "threshold": 0.1, "shrink": 0.5})
+    rm = region_map(design, [0.3, 0.5, 0.7, 1.0], [0.05, 0.1, 0.2])
+    assert rm.verdicts.shape == (4, 3)
+    assert rm.reused >= 1
+    assert all(v == "inconclusive" for v in rm.verdicts[-1])  # shrink 1 on a plant with eigenvalue 1
+    for i, q in enumerate(rm.shrinks):
+        for j, nu in enumerate(rm.steps):
+            if rm.verdicts[i, j] == "holds":
+                model = LureModel.from_design(replace(design, shrink=float(q), step=float(nu)))
+                assert circle_certificate(model).verdict == "holds"

@@ -1,0 +1,69 @@
+"""The thesis's assumptions, decided on instances."""
+
+import numpy as np
+import pytest
+
+from ssecert.design.observer import build_observer
+from ssecert.examples import load_example
+from ssecert.stability.thesis import pi_map, thesis_assumptions
+
+
+def items_of(design):
+    verdict, items = thesis_assumptions(design, observability_holds=True)
+    return verdict, {i.name: i for i in items}
+
+
+def test_deadbeat_gain_breaks_lemma_1():
+    spec = load_example("ugv")
+    verdict, items = items_of(build_observer(spec.system, spec.observer))
+    assert verdict == "fails"
+    assert items["lemma_1"].verdict == "fails" and "singular" in items["lemma_1"].reason
+    assert items["assumption_2"].verdict == "holds"
+    assert items["assumption_3"].verdict == "inconclusive"
+    assert items["epsilon_bound"].verdict == "inconclusive"
+
+
+@pytest.mark.parametrize("poles", [[0.5, 0.6], [0.9, 0.95]])
+def test_claimed_lipschitz_constant_has_a_verified_counterexample(poles):
+    spec = load_example("ugv")
+    design = build_observer(spec.system, {"kind": "elastic_net", "gain": "place", "poles": poles,
+                                          "step": 0.01, "threshold": 0.1, "shrink": 0.3})
+    _, items = items_of(design)
+    lemma = items["lemma_1"]
+    assert lemma.verdict == "fails"
+    a1, a2 = (np.asarray(lemma.details["counterexample"][k]) for k in ("a1", "a2"))
+    L1 = -design.gain.L
+    F = spec.system.A + L1 @ spec.system.C
+    Finv = np.linalg.inv(F)
+    ratio = (np.linalg.norm(pi_map(a1, Finv, L1, 0.3, 0.1) - pi_map(a2, Finv, L1, 0.3, 0.1))
+             / np.linalg.norm(a1 - a2))
+    claimed = np.linalg.norm(L1, 2) / abs(np.abs(np.linalg.eigvals(F)).max() - 0.3)
+    assert ratio > claimed
+    # the corrected bound still holds
+    assert ratio <= lemma.details["correct_bound"] * (1 + 1e-9)
+
+
+def test_pi_satisfies_equation_5_9():
+    spec = load_example("ugv")
+    design = build_observer(spec.system, {"kind": "elastic_net", "gain": "place",
+                                          "poles": [0.9, 0.95], "step": 0.01, "threshold": 0.1,
+                                          "shrink": 0.3})
+    L1 = -design.gain.L
+    F = spec.system.A + L1 @ spec.system.C
+    Finv = np.linalg.inv(F)
+    a = np.random.default_rng(0).standard_normal((50, 3))
+    psi = 0.3 * np.sign(a) * np.maximum(np.abs(a) - 0.1, 0)
+    lhs = F @ pi_map(a, Finv, L1, 0.3, 0.1).T + L1 @ a.T - pi_map(psi, Finv, L1, 0.3, 0.1).T
+    assert np.abs(lhs).max() < 1e-10
+
+
+def test_epsilon_bound_is_sufficient_not_necessary():
+    spec = load_example("ugv")
+    small = build_observer(spec.system, {"kind": "elastic_net", "gain": "place",
+                                         "poles": [0.9, 0.95], "step": 0.01, "threshold": 0.1,
+                                         "shrink": 0.3})
+    large = build_observer(spec.system, {"kind": "elastic_net", "gain": "place",
+                                         "poles": [0.9, 0.95], "step": 0.5, "threshold": 0.1,
+                                         "shrink": 0.3})
+    assert items_of(small)[1]["epsilon_bound"].verdict == "holds"
+    assert items_of(large)[1]["epsilon_bound"].verdict == "inconclusive"
