@@ -179,3 +179,20 @@ def test_region_map_reuses_certificates_and_every_holds_reverifies():
             if rm.verdicts[i, j] == "holds":
                 model = LureModel.from_design(replace(design, shrink=float(q), step=float(nu)))
                 assert circle_certificate(model).verdict == "holds"
+
+
+def test_iss_evidence_reverifies_without_the_solver():
+    spec = load_example("ugv")
+    checks = observer_checks(spec.system, {"kind": "elastic_net", "gain": "deadbeat", "step": 0.1,
+                                           "threshold": 0.1, "shrink": 0.5})
+    stability = next(c for c in checks if c.id == "observer_stability").to_dict()
+    iss = json.loads(json.dumps(next(c for c in checks if c.id == "iss_gain").to_dict()))
+    assert iss["verdict"] == "holds"
+    mo = stability["evidence"]["model"]
+    model = LureModel(*(np.array(mo[k], dtype=float) for k in ("A", "B", "Cw", "E", "Dw", "Ce")),
+                      mo["q"], mo["n_e"], mo["threshold"])
+    ev = iss["evidence"]
+    ok, _, _, problem = verify_certificate(model, np.array(ev["P"]), np.array(ev["multipliers_T"]),
+                                           kind="iss", alpha=ev["decay_alpha"],
+                                           g=ev["gamma"] ** 2)
+    assert ok, problem

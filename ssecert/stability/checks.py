@@ -38,6 +38,26 @@ def _lyapunov_evidence(cert) -> dict[str, Any]:
     }
 
 
+EXACT_LIMIT = 6  # largest n verified exactly in rational arithmetic
+
+
+def _exact_deadbeat(system: System) -> dict[str, Any]:
+    """The deadbeat construction redone in rationals on the exact values of the floats."""
+    from ..design.gains import exact_deadbeat_gain
+
+    try:
+        exact = exact_deadbeat_gain(system.A.tolist(), system.C.tolist())
+    except GainError as exc:
+        return {"verified": False, "reason": str(exc)}
+    return {
+        "verified": exact.verified,
+        "exact_index": exact.details["exact_index"],
+        "L_exact": exact.details["L_exact"],
+        "note": ("A and C taken as the exact rational values of their floating-point entries; "
+                 "F^k == 0 and F^(k-1) != 0 checked exactly"),
+    }
+
+
 def observer_gain_check(design: ObserverDesign) -> Check:
     """Is the gain what was asked for, and is the linear error matrix F = A - L S stable?"""
     gain = design.gain
@@ -48,6 +68,8 @@ def observer_gain_check(design: ObserverDesign) -> Check:
     evidence: dict[str, Any] = {"details": gain.details, "computed_eigenvalue_radius": computed_radius}
     if gain.method == "deadbeat":
         index = gain.details.get("nilpotency_index")
+        if design.system.n <= EXACT_LIMIT:
+            evidence["exact"] = _exact_deadbeat(design.system)
         fields["nilpotency_index"] = index
         fields["observability_index"] = gain.details.get("observability_index")
         if gain.verified:
@@ -58,7 +80,9 @@ def observer_gain_check(design: ObserverDesign) -> Check:
                     f"A - L C is nilpotent with index {index} (by matrix powers, not eigenvalues), "
                     f"the observability index: the error vanishes in {index} step"
                     f"{'s' if index != 1 else ''} without attack"
-                    + ("" if gain.details.get("minimal") else " (index not minimal)") + "."),
+                    + ("" if gain.details.get("minimal") else " (index not minimal)")
+                    + ("; confirmed exactly in rational arithmetic"
+                       if evidence.get("exact", {}).get("verified") else "") + "."),
                 value=index, margin=None, method="deadbeat (flag construction, power test)",
                 fields=fields, evidence=evidence,
                 tolerances={"deadbeat_rtol": 1e-8, "clear_factor": 100})

@@ -60,6 +60,9 @@ __all__ = [
 
 ETA = 1e-4  # margin imposed in the LMIs, relative to P >= I
 FULL_LIMIT = 80  # largest LMI dimension tried with a full P
+# Lyapunov structures, cheapest first: P = diag(P1, D) with D diagonal; the
+# same with a full cross block P12; a full P.
+STRUCTURES = ("block-diagonal", "cross", "full")
 
 
 @dataclass(frozen=True)
@@ -313,12 +316,15 @@ def _solve(
     N, m, r, n = model.N, model.m, model.r, model.n_e
     start = time.perf_counter()
     t = cp.Variable(m) if m else None
-    if structure == "block-diagonal":
+    if structure in ("block-diagonal", "cross") and N > n:
         P1 = cp.Variable((n, n), symmetric=True)
-        d = cp.Variable(N - n) if N > n else None
-        P = P1 if d is None else cp.bmat([[P1, np.zeros((n, N - n))],
-                                          [np.zeros((N - n, n)), cp.diag(d)]])
-        cons = [P1 >> np.eye(n)] + ([d >= 1] if d is not None else [])
+        d = cp.Variable(N - n)
+        P12 = cp.Variable((n, N - n)) if structure == "cross" else np.zeros((n, N - n))
+        P = cp.bmat([[P1, P12], [P12.T, cp.diag(d)]])
+        cons = [P >> np.eye(N)] if structure == "cross" else [P1 >> np.eye(n), d >= 1]
+    elif structure == "block-diagonal":
+        P = cp.Variable((n, n), symmetric=True)
+        cons = [P >> np.eye(n)]
     else:
         P = cp.Variable((N, N), symmetric=True)
         cons = [P >> np.eye(N)]
@@ -423,9 +429,10 @@ def circle_certificate(
     Parameters
     ----------
     model : LureModel
-    structure : {"auto", "block-diagonal", "full"}, default "auto"
-        ``auto`` tries the block-diagonal P first and a full P when that
-        fails and the LMI has at most 80 rows.
+    structure : {"auto", "block-diagonal", "cross", "full"}, default "auto"
+        ``auto`` tries, cheapest first, P = diag(P1, D) with D diagonal
+        (error and attack estimate decoupled), then the same with a full
+        cross block, then a full P when the LMI has at most 80 rows.
     solver_options : dict, optional
         Passed to Clarabel.
     clear : float, default 100
@@ -446,7 +453,7 @@ def circle_certificate(
         if ok:
             return _holds(model, P, t, margin, bound, "reused", {**details, "reused": True})
     attempts = []
-    structures = ["block-diagonal", "full"] if structure == "auto" else [structure]
+    structures = STRUCTURES if structure == "auto" else [structure]
     for st in structures:
         if st == "full" and structure == "auto" and model.N + model.m > FULL_LIMIT:
             attempts.append({"structure": "full", "status": f"skipped: LMI larger than {FULL_LIMIT}"})
@@ -507,7 +514,7 @@ def iss_certificate(
     if verdict:
         return LMICertificate(verdict, "iss", reason=reason, details=details)
     attempts = []
-    structures = ["block-diagonal", "full"] if structure == "auto" else [structure]
+    structures = STRUCTURES if structure == "auto" else [structure]
     for st in structures:
         if st == "full" and structure == "auto" and model.N + model.m + model.r > FULL_LIMIT:
             attempts.append({"structure": "full", "status": f"skipped: LMI larger than {FULL_LIMIT}"})
@@ -652,7 +659,8 @@ def region_map(
 
     The gain L of ``design`` is kept; at each grid point the circle
     criterion is first tried by re-verifying the certificates of already
-    certified neighbours (no solver), then by solving the structured LMI.
+    certified neighbours (no solver), then by solving the block-diagonal
+    LMI, then the LMI with cross terms.
     """
     start = time.perf_counter()
     shrinks = np.asarray(shrinks, dtype=float)
@@ -667,6 +675,9 @@ def region_map(
             neighbours = [found[k] for k in ((i - 1, j), (i, j - 1), (i - 1, j - 1)) if k in found]
             cert = circle_certificate(model, structure="block-diagonal",
                                       solver_options=solver_options, reuse=neighbours)
+            if cert.verdict == "inconclusive" and cert.details.get("attempts"):
+                cert = circle_certificate(model, structure="cross", solver_options=solver_options)
+                solves += 1
             if cert.details.get("reused"):
                 reused += 1
             elif cert.details.get("attempts"):
