@@ -255,9 +255,9 @@ def thesis_assumptions(
             den = float(a @ a)
             return 0.0 if den == 0 else -float(np.sum(g(a) ** 2)) / den
 
-        for start in np.argsort(ratios)[-3:]:
+        for start in np.argsort(ratios)[-1:]:
             res = minimize(neg_ratio, samples[start], method="Nelder-Mead",
-                           options={"maxiter": 1000, "xatol": 1e-10, "fatol": 1e-12})
+                           options={"maxiter": 400, "xatol": 1e-10, "fatol": 1e-12})
             if -res.fun > ratios[worst]:
                 samples = np.vstack([samples, res.x])
                 ratios = np.append(ratios, -res.fun)
