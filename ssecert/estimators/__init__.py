@@ -1,0 +1,1 @@
+"""Estimators: shrinkage operators, static decoders and dynamic observers."""
