@@ -12,7 +12,7 @@ import time
 import traceback
 from collections.abc import Sequence
 from pathlib import Path
-from typing import NoReturn, TextIO
+from typing import Any, NoReturn, TextIO
 
 from . import __version__
 
@@ -116,6 +116,31 @@ def _build_parser() -> argparse.ArgumentParser:
     analyze.add_argument("--seed", type=_nonnegative_int, default=0, metavar="N",
                          help="seed of the simulated stealthy-attack check (default 0)")
 
+    simulate = sub.add_parser(
+        "simulate",
+        help="simulate the spec's observer under each of its attack scenarios",
+        description=(
+            "Monte Carlo simulation of the [observer] of SPEC under each [[scenario]]: final "
+            "relative state error, support error and detection delay, with per-step series in "
+            "the JSON."
+        ),
+    )
+    simulate.add_argument("spec", metavar="SPEC", help="spec file or packaged example name")
+    simulate.add_argument("--json", metavar="PATH", dest="json_path",
+                          help="write the results as JSON to PATH ('-' for stdout)")
+    simulate.add_argument("--seed", type=_nonnegative_int, metavar="N",
+                          help="replace every scenario's seed")
+    simulate.add_argument("--runs", type=_positive_int, metavar="N",
+                          help="runs per scenario (default: the spec's)")
+    simulate.add_argument("--steps", type=_positive_int, metavar="N",
+                          help="steps per run (default: the spec's)")
+    simulate.add_argument("--max-attacked", type=_nonnegative_int, metavar="S",
+                          help="number of attacked sensors s (required for .npz/.mat)")
+    simulate.add_argument("--scheduler", metavar="ADDRESS",
+                          help="run on an existing Dask scheduler (needs the dist extra)")
+    simulate.add_argument("--workers", type=_positive_int, metavar="N",
+                          help="run on a local Dask cluster of N worker processes")
+
     examples = sub.add_parser("examples", help="list the packaged examples or print one",
                               description="List packaged example specs, or print one.")
     examples.add_argument("name", nargs="?", help="example to print")
@@ -172,6 +197,70 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     return cert.exit_code
 
 
+def _cmd_simulate(args: argparse.Namespace) -> int:
+    import contextlib
+    import json
+
+    from .results import to_jsonable
+    from .simulation.engine import simulate_spec
+    from .spec import load_spec
+    from ._io import atomic_write_text
+
+    target = None
+    if args.json_path and args.json_path != "-":
+        target = Path(args.json_path)
+        if target.is_dir() or not target.parent.exists():
+            raise UsageError(f"--json {args.json_path}: expected a file path in an existing folder")
+    spec = load_spec(_resolve_spec(args.spec), max_attacked=args.max_attacked)
+    if spec.observer is None or not spec.scenarios:
+        raise UsageError(f"{spec.source}: simulate needs an [observer] section and at least one "
+                         f"[[scenario]]")
+    context: Any = contextlib.nullcontext(None)
+    if args.scheduler or args.workers:
+        from .parallel import dask_client
+
+        context = dask_client(args.scheduler, workers=args.workers)
+    with context as client:
+        results = simulate_spec(spec, seed=args.seed, runs=args.runs, steps=args.steps,
+                                client=client)
+    human = sys.stderr if args.json_path == "-" else sys.stdout
+    human.write(_simulation_table(spec, results["scenarios"]))
+    document = {"ssecert_version": __version__, "system": spec.system.to_dict(),
+                "scenarios": {name: (r.to_dict() if hasattr(r, "to_dict") else r)
+                              for name, r in results["scenarios"].items()}}
+    text = json.dumps(to_jsonable(document), indent=2, allow_nan=False) + "\n"
+    if args.json_path == "-":
+        sys.stdout.write(text)
+    elif target is not None:
+        atomic_write_text(target, text)
+        human.write(f"JSON written to {target}\n")
+    return 0
+
+
+def _simulation_table(spec: Any, scenarios: dict[str, Any]) -> str:
+    rows = [("scenario", "attack", "runs", "steps", "rel. error mean", "q90", "support error",
+             "delay (median)")]
+    notes = []
+    for name, res in scenarios.items():
+        if isinstance(res, dict):
+            rows.append((name, "-", "-", "-", "skipped", "", "", ""))
+            notes.append(f"{name}: {res['skipped']}")
+            continue
+        f = res.final()
+        fmt = lambda v: "-" if v is None else f"{v:.3g}"  # noqa: E731
+        rows.append((name, res.attack, str(res.runs), str(res.steps),
+                     fmt(f["relative_error_mean"]), fmt(f["relative_error_q90"]),
+                     fmt(f["support_error_mean"]), fmt(f.get("detection_delay_median"))))
+    widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
+    lines = [f"ssecert simulate: {spec.name} ({spec.observer['kind']} observer), final step", ""]
+    for j, row in enumerate(rows):
+        lines.append("  ".join(c.ljust(w) for c, w in zip(row, widths)).rstrip())
+        if j == 0:
+            lines.append("  ".join("-" * w for w in widths))
+    lines.extend(["", *notes] if notes else [])
+    return "\n".join(lines) + "\n"
+
+
 def _cmd_examples(args: argparse.Namespace) -> int:
     from .examples import example_path, list_examples
 
@@ -201,6 +290,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _cmd_analyze(args)
         if args.command == "examples":
             return _cmd_examples(args)
+        if args.command == "simulate":
+            return _cmd_simulate(args)
         raise UsageError(f"unknown command {args.command!r}")  # pragma: no cover
     except (UsageError, SpecError) as exc:
         sys.stderr.write(f"ssecert: error: {exc}\n")

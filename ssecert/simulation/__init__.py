@@ -1,0 +1,1 @@
+"""Attack scenarios, Monte Carlo simulation and metrics."""

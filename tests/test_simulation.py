@@ -1,0 +1,169 @@
+"""Observers, scenarios, metrics and the Monte Carlo engine."""
+
+import json
+
+import numpy as np
+import pytest
+
+from ssecert import System
+from ssecert.cli import main
+from ssecert.design.gains import deadbeat_gain
+from ssecert.design.observer import build_observer
+from ssecert.estimators.observers import LinearObserver, SparseSoftObserver, WindowSSO
+from ssecert.examples import load_example
+from ssecert.simulation.engine import grid_search, simulate_scenario, stealthy_replay
+from ssecert.simulation.metrics import detection_delay, relative_error, support_error
+from ssecert.simulation.scenarios import generate
+
+
+def random_plant(seed, n=4, p=6):
+    rng = np.random.default_rng(seed)
+    A = rng.standard_normal((n, n))
+    return System(A / np.abs(np.linalg.eigvals(A)).max(), rng.standard_normal((p, n)))
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_run_equals_repeated_step(seed):
+    system = random_plant(seed)
+    rng = np.random.default_rng(seed)
+    y = rng.standard_normal((25, 7, system.p))
+    L = deadbeat_gain(system).L
+    for obs in (LinearObserver(system.A, system.C, L),
+                SparseSoftObserver(system.A, system.C, L, step=0.2, threshold=0.05, shrink=0.7),
+                WindowSSO(system.A, system.C, step=0.05, threshold=0.05, window=3, inner_steps=2)):
+        traj = obs.run(y)
+        state = obs.initial_state(7)
+        for k in range(25):
+            state = obs.step(state, y[k])
+            x, a = obs.estimate(state)
+            np.testing.assert_allclose(traj.x_hat[k + 1], x, rtol=1e-12, atol=1e-12)
+
+
+def test_window_one_sso_equals_the_sparse_soft_observer():
+    system = random_plant(1)
+    y = np.random.default_rng(0).standard_normal((30, 5, system.p))
+    a = WindowSSO(system.A, system.C, step=0.05, threshold=0.02).run(y)
+    L = 0.05 * system.A @ system.C.T
+    b = SparseSoftObserver(system.A, system.C, L, step=0.05, threshold=0.02).run(y)
+    np.testing.assert_allclose(a.x_hat, b.x_hat, atol=1e-12)
+    np.testing.assert_allclose(a.a_hat, b.a_hat, atol=1e-12)
+
+
+def test_deadbeat_luenberger_is_exact_after_the_observability_index():
+    system = random_plant(2, n=5, p=2)
+    gain = deadbeat_gain(system)
+    x = np.random.default_rng(1).standard_normal((3, 5))
+    ys = []
+    for _ in range(10):
+        ys.append(x @ system.C.T)
+        x = x @ system.A.T
+    traj = LinearObserver(system.A, system.C, gain.L).run(np.array(ys))
+    k = gain.details["nilpotency_index"]
+    xs = np.random.default_rng(1).standard_normal((3, 5))
+    for _ in range(k):
+        xs = xs @ system.A.T
+    np.testing.assert_allclose(traj.x_hat[k], xs, atol=1e-8)
+
+
+def test_runs_are_reproducible_whatever_the_batch():
+    system = random_plant(3)
+    for attack in ("constant", "switching", "sinusoidal", "random"):
+        sc = {"attack": attack, "count": 2, "magnitude": (4.0, 5.0), "period": 7, "noise": 0.1}
+        full = generate(system, sc, range(10), 20, seed=5)
+        part = generate(system, sc, [7, 3], 20, seed=5)
+        np.testing.assert_array_equal(full.x0[[7, 3]], part.x0)
+        np.testing.assert_array_equal(full.attack[:, [7, 3]], part.attack)
+        np.testing.assert_array_equal(full.noise[:, [7, 3]], part.noise)
+        assert np.all(np.count_nonzero(full.attack, axis=2) <= 2)
+        assert np.abs(full.noise).max() <= 0.1
+
+
+def test_switching_support_changes_with_the_period():
+    system = random_plant(4, p=10)
+    sc = {"attack": "switching", "count": 3, "magnitude": (4.0, 5.0), "period": 5, "noise": 0.0}
+    data = generate(system, sc, [0], 20, seed=1)
+    supports = [tuple(np.flatnonzero(data.attack[k, 0])) for k in range(20)]
+    assert all(supports[k] == supports[k - 1] for k in range(1, 20) if k % 5)
+    assert len({supports[k] for k in range(0, 20, 5)}) > 1
+
+
+def test_metrics_follow_the_design_definitions():
+    assert support_error(np.zeros((1, 1, 3)), np.array([[[0, 4.0, 0]]]))[0, 0] == 1.0
+    assert support_error(np.zeros((1, 1, 3)), np.zeros((1, 1, 3)))[0, 0] == 0.0
+    est = np.array([[[1.0, 1.0, 0.0]]])
+    true = np.array([[[0.0, 4.0, 4.0]]])
+    assert support_error(est, true)[0, 0] == pytest.approx(2 / 3)
+    x = np.array([3.0, 4.0])
+    assert relative_error(x + [0.0, 5.0], x, x) == pytest.approx(1.0)
+    a = np.zeros((6, 1, 2)); a[2:, 0, 1] = 4.0
+    found_then_lost = np.zeros((6, 1, 2)); found_then_lost[2:4, 0, 1] = 1.0
+    assert np.isnan(detection_delay(found_then_lost, a)[0])
+
+
+def test_stealthy_replay_is_indistinguishable():
+    spec = load_example("ugv")
+    replay = stealthy_replay(spec.system, 1)
+    assert replay is not None and replay.sensors == (0,)
+    sc = {"attack": "stealthy", "magnitude": (4.0, 5.0), "noise": 0.0}
+    data = generate(spec.system, sc, [0, 1], 30, seed=0, replay=replay)
+    A, C = spec.system.A, spec.system.C
+    for j in range(2):
+        scale = data.attack[0, j, 0] / (C @ replay.z)[0]
+        xa, xb = data.x0[j].copy(), data.x0[j] + scale * replay.z
+        for k in range(30):
+            np.testing.assert_allclose(C @ xa + data.attack[k, j], C @ xb, atol=1e-12)
+            xa, xb = A @ xa, A @ xb
+
+
+def test_dask_and_in_process_runs_are_bitwise_identical():
+    pytest.importorskip("dask.distributed")
+    from ssecert.parallel import dask_client
+
+    spec = load_example("ugv")
+    design = build_observer(spec.system, spec.observer)
+    local = simulate_scenario(design, spec.scenarios[0], runs=150, steps=40)
+    with dask_client(workers=2) as client:
+        remote = simulate_scenario(design, spec.scenarios[0], runs=150, steps=40, client=client)
+        grid_remote = grid_search(spec.system, spec.observer, spec.scenarios[0],
+                                  {"step": [0.3, 0.7]}, runs=20, steps=30, client=client)
+    for name in ("relative_error", "mse", "support_error", "detection_delay"):
+        assert np.array_equal(getattr(local, name), getattr(remote, name), equal_nan=True), name
+    grid_local = grid_search(spec.system, spec.observer, spec.scenarios[0], {"step": [0.3, 0.7]},
+                             runs=20, steps=30)
+    assert grid_local.points == grid_remote.points
+
+
+def test_grid_search_picks_the_lowest_cost():
+    spec = load_example("ugv")
+    result = grid_search(spec.system, spec.observer, spec.scenarios[0],
+                         {"step": [0.2, 0.7], "threshold": [0.05, 0.1]}, runs=10, steps=60)
+    assert len(result.points) == 4
+    assert result.best["cost"] == min(p["cost"] for p in result.points)
+
+
+def test_attack_free_observer_converges():
+    spec = load_example("ugv")
+    design = build_observer(spec.system, spec.observer)
+    res = simulate_scenario(design, {"name": "none", "attack": "none", "noise": 0.0},
+                            runs=10, steps=150)
+    # the first residual is the whole output, so a_hat(1) is nonzero and disturbs the
+    # estimate before it decays
+    assert res.relative_error.mean(axis=1).max() > 1e-6
+    assert res.final()["relative_error_mean"] < 1e-12
+    assert res.final()["support_error_mean"] == 0.0
+
+
+def test_simulate_command(capsys, tmp_path):
+    code = main(["simulate", "ugv", "--runs", "6", "--steps", "40", "--json", "-"])
+    out = capsys.readouterr()
+    data = json.loads(out.out)
+    assert code == 0
+    scen = data["scenarios"]["constant-velocity-a"]
+    assert scen["runs"] == 6 and scen["steps"] == 40
+    assert set(scen["final"]) >= {"relative_error_mean", "relative_error_q90", "support_error_mean"}
+    assert len(scen["series"]["relative_error"]["mean"]) == 41
+    assert "stealthy" in out.err
+    spec = tmp_path / "plain.toml"
+    spec.write_text('name = "plain"\n[system]\nA = [[1.0]]\nC = [[1.0]]\n[attack]\nmax_attacked = 0\n')
+    assert main(["simulate", str(spec)]) == 2
+    assert "needs an [observer]" in capsys.readouterr().err
