@@ -29,3 +29,8 @@ def test_weighted_soft_threshold_broadcasts_per_component():
     x = np.ones((3, 2))
     out = weighted_soft_threshold(x, 0.5, np.array([0.0, 4.0]))
     assert out.shape == (3, 2) and np.all(out[:, 0] == 1.0) and np.all(out[:, 1] == 0.0)
+
+
+def test_negative_threshold_is_refused():
+    with pytest.raises(ValueError, match="threshold"):
+        soft_threshold([1.0], -0.1)

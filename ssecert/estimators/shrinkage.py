@@ -29,8 +29,15 @@ def soft_threshold(x: np.ndarray, threshold: float | np.ndarray) -> np.ndarray:
     --------
     >>> soft_threshold([-3.0, -0.5, 0.2, 2.0], 1.0).tolist()
     [-2.0, -0.0, 0.0, 1.0]
+
+    Raises
+    ------
+    ValueError
+        If a threshold is negative (it would enlarge values, not shrink them).
     """
     x = np.asarray(x, dtype=float)
+    if np.any(np.asarray(threshold) < 0):
+        raise ValueError(f"threshold must be >= 0, got {np.min(threshold)}")
     return np.sign(x) * np.maximum(np.abs(x) - threshold, 0.0)
 
 
