@@ -167,3 +167,36 @@ def test_simulate_command(capsys, tmp_path):
     spec.write_text('name = "plain"\n[system]\nA = [[1.0]]\nC = [[1.0]]\n[attack]\nmax_attacked = 0\n')
     assert main(["simulate", str(spec)]) == 2
     assert "needs an [observer]" in capsys.readouterr().err
+
+
+def test_sso_with_identity_dynamics_is_ista():
+    """The SSO of a static plant (A = I) is ISTA on the partial Lasso, step for step."""
+    from ssecert.estimators.decoders import ista
+
+    rng = np.random.default_rng(0)
+    C = rng.standard_normal((8, 3))
+    y = C @ rng.standard_normal(3) + np.array([0, 5.0, 0, 0, 0, 0, -4.0, 0])
+    nu = 0.9 / np.linalg.norm(np.hstack([C, np.eye(8)]), 2) ** 2
+    lam = 0.2
+    for k in (1, 7, 40):
+        obs = SparseSoftObserver(np.eye(3), C, nu * C.T, step=nu, threshold=nu * lam)
+        traj = obs.run(np.tile(y, (k, 1, 1)))
+        ref = ista(C, y, lam, step=nu, iterations=k, tol=0.0)
+        np.testing.assert_allclose(traj.x_hat[-1, 0], ref.x, rtol=1e-10, atol=1e-12)
+        np.testing.assert_allclose(traj.a_hat[-1, 0], ref.a, rtol=1e-10, atol=1e-12)
+
+
+def test_dsso_with_identity_dynamics_and_pinv_gain_is_ijam():
+    """The D-SSO with A = I and L = C^+ is IJAM, step for step."""
+    from ssecert.estimators.decoders import ijam
+
+    rng = np.random.default_rng(1)
+    C = rng.standard_normal((8, 3))
+    y = C @ rng.standard_normal(3) + np.array([0, 0, 6.0, 0, 0, 0, 0, 0])
+    nu, lam = 0.9, 0.3
+    for k in (1, 5, 30):
+        obs = SparseSoftObserver(np.eye(3), C, np.linalg.pinv(C), step=nu, threshold=nu * lam)
+        traj = obs.run(np.tile(y, (k, 1, 1)))
+        ref = ijam(C, y, lam, nu=nu, iterations=k, tol=0.0)
+        np.testing.assert_allclose(traj.x_hat[-1, 0], ref.x, rtol=1e-10, atol=1e-12)
+        np.testing.assert_allclose(traj.a_hat[-1, 0], ref.a, rtol=1e-10, atol=1e-12)
