@@ -93,6 +93,37 @@ def _build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"ssecert {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
 
+    certify = sub.add_parser(
+        "certify",
+        help="the main job: every check, the simulations, an HTML report and a JSON certificate",
+        description=(
+            "Run every analysis that applies to SPEC (structure, gains, certificates, simulations "
+            "of its scenarios and of the stealthy attack when one exists), write DIR/NAME.html "
+            "and DIR/NAME.json and print a compact verdict table. Without SPEC, certify the "
+            "packaged UGV example (which fails by design: its position sensor is a single point "
+            "of failure)."
+        ),
+    )
+    certify.add_argument("spec", metavar="SPEC", nargs="?", default="ugv",
+                         help="spec file or packaged example name (default: ugv)")
+    certify.add_argument("--out", metavar="DIR", default="reports",
+                         help="folder for NAME.html and NAME.json (default ./reports)")
+    certify.add_argument("--json", metavar="PATH", dest="json_path",
+                         help="also write the JSON certificate to PATH ('-' for stdout)")
+    certify.add_argument("--seed", type=_nonnegative_int, metavar="N",
+                         help="replace every scenario's seed")
+    certify.add_argument("--no-sim", action="store_true", help="skip the simulations")
+    certify.add_argument("--runs", type=_positive_int, metavar="N",
+                         help="runs per scenario (default: the spec's)")
+    certify.add_argument("--max-attacked", type=_nonnegative_int, metavar="S",
+                         help="number of attacked sensors s (required for .npz/.mat)")
+    certify.add_argument("--horizon", type=_positive_int, metavar="T",
+                         help="stacked horizon tau (default: the spec's, else n)")
+    certify.add_argument("--max-sets", type=_positive_int, metavar="N", default=50_000_000,
+                         help="enumeration budget in sets (default 5e7)")
+    certify.add_argument("--method", choices=("auto", "enumeration", "eigenspace"),
+                         default="auto", help="sparse-observability method (default auto)")
+
     analyze = sub.add_parser(
         "analyze",
         help="run every structural check of a design (no simulations, no report)",
@@ -197,6 +228,52 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     return cert.exit_code
 
 
+def _cmd_certify(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
+    import json
+
+    from .certify import certify
+    from .report.html import render_report
+    from .report.table import render_table
+    from .spec import load_spec
+    from ._io import atomic_write_text
+
+    out_dir = Path(args.out)
+    if out_dir.exists() and not out_dir.is_dir():
+        raise UsageError(f"--out {args.out}: exists and is not a folder")
+    target = None
+    if args.json_path and args.json_path != "-":
+        target = Path(args.json_path)
+        if target.is_dir() or not target.parent.exists():
+            raise UsageError(f"--json {args.json_path}: expected a file path in an existing folder")
+    spec = load_spec(_resolve_spec(args.spec), max_attacked=args.max_attacked,
+                     horizon=args.horizon)
+    human = sys.stderr if args.json_path == "-" else sys.stdout
+    tty = sys.stderr.isatty()
+
+    def say(message: str) -> None:
+        if tty:
+            sys.stderr.write(f"ssecert: {message}...\n")
+            sys.stderr.flush()
+
+    words = ["ssecert", "certify", *(list(argv) if argv is not None else sys.argv[2:])]
+    command = " ".join(words if argv is not None else ["ssecert", *sys.argv[1:]])
+    result = certify(spec, seed=args.seed, simulate=not args.no_sim, runs=args.runs,
+                     method=args.method, max_sets=args.max_sets, progress=say, command=command)
+    say("writing the report")
+    html = render_report(result)
+    document = json.dumps(result.to_dict(), indent=2, allow_nan=False) + "\n"
+    out_dir.mkdir(parents=True, exist_ok=True)
+    html_path = atomic_write_text(out_dir / f"{spec.name}.html", html)
+    json_path = atomic_write_text(out_dir / f"{spec.name}.json", document)
+    human.write(render_table(result.certificate, compact=True))
+    human.write(f"report: {html_path}\ncertificate: {json_path}\n")
+    if args.json_path == "-":
+        sys.stdout.write(document)
+    elif target is not None:
+        atomic_write_text(target, document)
+    return result.exit_code
+
+
 def _cmd_simulate(args: argparse.Namespace) -> int:
     import contextlib
     import json
@@ -284,10 +361,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         args = parser.parse_args(argv)
         if args.command is None:
-            raise UsageError("no command given; use 'ssecert analyze SPEC' or "
-                             "'ssecert examples' (see 'ssecert --help')")
+            raise UsageError("no command given; use 'ssecert certify [SPEC]', "
+                             "'ssecert analyze SPEC' or 'ssecert examples' "
+                             "(see 'ssecert --help')")
         if args.command == "analyze":
             return _cmd_analyze(args)
+        if args.command == "certify":
+            return _cmd_certify(args, argv[1:] if argv is not None else None)
         if args.command == "examples":
             return _cmd_examples(args)
         if args.command == "simulate":

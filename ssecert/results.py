@@ -116,6 +116,11 @@ class Check:
     def __post_init__(self) -> None:
         object.__setattr__(self, "verdict", Verdict(self.verdict))
 
+    def _repr_html_(self) -> str:
+        from .report.html import check_fragment
+
+        return check_fragment(self)
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary with the check-specific fields at top level."""
         out: dict[str, Any] = {
@@ -180,6 +185,11 @@ class Certificate:
 
     def __contains__(self, check_id: object) -> bool:
         return any(c.id == check_id for c in self.checks)
+
+    def _repr_html_(self) -> str:
+        from .report.html import certificate_fragment
+
+        return certificate_fragment(self)
 
     @property
     def verdict(self) -> Verdict:

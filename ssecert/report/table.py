@@ -34,7 +34,7 @@ def _sensor_list(check: Check, names: tuple[str, ...], key: str) -> str:
     return ", ".join(f"{names[i]} ({i})" for i in indices)
 
 
-def render_table(certificate: Certificate, *, width: int = 100) -> str:
+def render_table(certificate: Certificate, *, width: int = 100, compact: bool = False) -> str:
     """Plain-text table of checks, with each check's finding underneath.
 
     Parameters
@@ -42,6 +42,8 @@ def render_table(certificate: Certificate, *, width: int = 100) -> str:
     certificate : Certificate
     width : int, default 100
         Line width for wrapped sentences.
+    compact : bool, default False
+        Only the table and the findings of required checks that do not hold.
 
     Returns
     -------
@@ -72,6 +74,13 @@ def render_table(certificate: Certificate, *, width: int = 100) -> str:
             lines.append("  ".join("-" * w for w in widths))
     lines.append("* advisory: reported, does not change the exit status")
     lines.append("")
+    if compact:
+        for check in certificate.checks:
+            if check.required and check.verdict is not Verdict.HOLDS:
+                lines.append(textwrap.fill(f"{check.id}: {check.summary}", width=width,
+                                           subsequent_indent="  "))
+        lines.append(f"verdict: {_MARK[certificate.verdict]} (exit status {certificate.exit_code})")
+        return "\n".join(lines) + "\n"
     for check in certificate.checks:
         lines.append(f"{check.id}: {_MARK[check.verdict]}")
         body = textwrap.fill(check.summary, width=width - 2, initial_indent="  ",

@@ -1,0 +1,265 @@
+"""``ssecert certify``: every check, the simulations and the report data of a design.
+
+Spec -> analyze (structure, gains, certificates) -> simulations of the
+spec's scenarios, plus the stealthy attack when the plant has one -> the
+stealthy attack's demonstration trajectories and, for sparse observers,
+the certified (shrink, step) region -> ``CertifyResult``, which renders to
+JSON, HTML and the terminal.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import shlex
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from .analyze import analyze
+from .results import Certificate, to_jsonable
+from .spec import SCENARIO_DEFAULTS, Spec
+
+__all__ = ["CertifyResult", "certify", "REGION_LIMIT"]
+
+REGION_LIMIT = 40  # largest Lur'e state + nonlinearity size mapped by default
+STEALTHY_DEMO_STEPS = 60
+
+Progress = Callable[[str], None]
+
+
+@dataclass(frozen=True)
+class CertifyResult:
+    """Everything ``ssecert certify`` reports about one design.
+
+    Attributes
+    ----------
+    spec : Spec
+    certificate : Certificate
+        The checks and the overall verdict (the exit status follows it).
+    simulations : dict
+        Scenario name -> ``ScenarioResult``, or ``{"skipped": reason}``.
+    stealthy : dict or None
+        Demonstration of the stealthy attack: the state trajectories from
+        x0 and x0 + z and their common output.
+    region : RegionMap or None
+        Certified (shrink, step) region of a sparse observer.
+    seed : int
+    command : str
+        The command that reproduces the report.
+    notes : tuple of str
+    """
+
+    spec: Spec
+    certificate: Certificate
+    simulations: dict[str, Any] = field(default_factory=dict)
+    stealthy: dict[str, Any] | None = None
+    region: Any | None = None
+    seed: int = 0
+    command: str = ""
+    notes: tuple[str, ...] = ()
+
+    @property
+    def exit_code(self) -> int:
+        return self.certificate.exit_code
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON certificate: DESIGN.md's fields plus simulations and the region."""
+        out = self.certificate.to_dict()
+        out["simulations"] = {
+            name: (res.to_dict() if hasattr(res, "to_dict") else res)
+            for name, res in self.simulations.items()
+        }
+        if self.region is not None:
+            out["certified_region"] = to_jsonable(self.region.to_dict())
+        out["reproduce"] = self.command
+        out["seed"] = self.seed
+        if self.notes:
+            out["notes"] = list(self.notes)
+        return to_jsonable(out)
+
+    def _repr_html_(self) -> str:
+        from .report.html import render_fragment
+
+        return render_fragment(self)
+
+
+def _stealthy_demo(spec: Spec, witness: dict[str, Any], seed: int) -> dict[str, Any]:
+    """Long enough trajectories of the stealthy attack for a plot."""
+    from .structure.attacks import stealthy_attack
+
+    system = spec.system
+    breaking = sorted(set(witness["sensors_a"]) | set(witness["sensors_b"]))
+    z = np.asarray(witness["z"], dtype=float)
+    demo = stealthy_attack(system, breaking, z, spec.max_attacked,
+                           horizon=max(STEALTHY_DEMO_STEPS, spec.horizon), seed=seed)
+    steps = demo.attack_a.shape[0]
+    xa = np.empty((steps, system.n))
+    xb = np.empty((steps, system.n))
+    a, b = demo.x0.copy(), demo.x0 + demo.z
+    for k in range(steps):
+        xa[k], xb[k] = a, b
+        a, b = system.A @ a, system.A @ b
+    attacked = list(demo.sensors_a) or list(range(system.p))
+    return {
+        "states_a": xa,
+        "states_b": xb,
+        "outputs": demo.outputs_a,
+        "outputs_b": demo.outputs_b,
+        "residual": demo.residual,
+        "component": int(np.argmax(np.abs(demo.z))),
+        "sensor": int(attacked[0]),
+        "sensors_a": list(demo.sensors_a),
+        "sensors_b": list(demo.sensors_b),
+        "z": demo.z,
+    }
+
+
+def certify(
+    spec: Spec,
+    *,
+    seed: int | None = None,
+    simulate: bool = True,
+    runs: int | None = None,
+    steps: int | None = None,
+    region: bool = True,
+    method: str = "auto",
+    max_sets: int | None = None,
+    client: Any | None = None,
+    progress: Progress | None = None,
+    command: str | None = None,
+) -> CertifyResult:
+    """Certify a design: every check, the simulations and the report data.
+
+    Parameters
+    ----------
+    spec : Spec
+    seed : int, optional
+        Replaces every scenario's seed (and seeds the stealthy-attack check).
+    simulate : bool, default True
+        Run the scenarios (``--no-sim`` turns this off).
+    runs, steps : int, optional
+        Override the scenarios' values.
+    region : bool, default True
+        Map the certified (shrink, step) region of a sparse observer when its
+        Lur'e model is small enough (state plus nonlinearities <= 40).
+    method : str, default "auto"
+        Sparse-observability method.
+    max_sets : int, optional
+        Enumeration budget.
+    client : dask.distributed.Client, optional
+        Spread the simulation runs over Dask workers.
+    progress : callable, optional
+        ``progress(message)`` before each long stage.
+    command : str, optional
+        The command line to show in the report's reproduce section.
+
+    Returns
+    -------
+    CertifyResult
+
+    Examples
+    --------
+    >>> from ssecert.examples import load_example
+    >>> result = certify(load_example("notes-example-1"), simulate=False)
+    >>> result.certificate.verdict.value, result.stealthy["sensors_a"]
+    ('fails', [2])
+    """
+    say = progress or (lambda message: None)
+    base_seed = 0 if seed is None else int(seed)
+    kwargs: dict[str, Any] = {"method": method, "seed": base_seed}
+    if max_sets is not None:
+        kwargs["max_sets"] = max_sets
+    say("structural checks and certificates")
+    cert = analyze(spec, **kwargs)
+    notes: list[str] = []
+    sparse = cert["sparse_observability"]
+    witness = sparse.witness if sparse.verdict.value == "fails" else None
+    stealthy = None
+    if witness is not None and witness.get("verified"):
+        stealthy = _stealthy_demo(spec, witness, base_seed)
+    simulations: dict[str, Any] = {}
+    if simulate and spec.observer is not None:
+        from .design.observer import build_observer
+        from .design.gains import GainError
+        from .simulation.engine import simulate_scenario
+
+        try:
+            design = build_observer(spec.system, spec.observer)
+        except GainError as exc:
+            design = None
+            notes.append(f"no simulation: the observer gain cannot be computed ({exc})")
+        scenarios = list(spec.scenarios)
+        if design is not None and stealthy is not None and not any(
+            sc["attack"] == "stealthy" for sc in scenarios
+        ):
+            scenarios.append({**SCENARIO_DEFAULTS, "name": "stealthy (automatic)",
+                              "attack": "stealthy"})
+        for scenario in scenarios if design is not None else []:
+            say(f"simulating scenario {scenario['name']}")
+            try:
+                simulations[scenario["name"]] = simulate_scenario(
+                    design, scenario, runs=runs, steps=steps, seed=seed,
+                    max_attacked=spec.max_attacked, client=client)
+            except ValueError as exc:
+                simulations[scenario["name"]] = {"skipped": str(exc)}
+    elif simulate and spec.observer is None:
+        notes.append("no simulations: the spec has no [observer] section")
+    elif not simulate:
+        notes.append("simulations skipped (--no-sim)")
+    region_map = None
+    if region and spec.observer is not None and spec.observer["kind"] in ("sso", "dsso",
+                                                                          "elastic_net"):
+        region_map = _region(spec, notes, say)
+    return CertifyResult(spec=spec, certificate=cert, simulations=simulations,
+                         stealthy=stealthy, region=region_map, seed=base_seed,
+                         command=command or _command(spec, seed, simulate), notes=tuple(notes))
+
+
+def _region(spec: Spec, notes: list[str], say: Progress) -> Any | None:
+    from .design.gains import GainError
+    from .design.observer import build_observer
+    from .stability.lmi import region_map
+
+    try:
+        design = build_observer(spec.system, spec.observer)
+    except GainError:
+        return None
+    m = design.sensing.shape[0]
+    if design.inner_steps > 1:
+        return None
+    if spec.system.n + 2 * m > REGION_LIMIT:
+        notes.append(f"certified region not mapped: the LMI has {spec.system.n + 2 * m} rows "
+                     f"(the report maps up to {REGION_LIMIT}; use ssecert.stability.lmi."
+                     f"region_map for larger plants)")
+        return None
+    say("mapping the certified (shrink, step) region")
+    step = float(design.step)
+    steps = np.unique(np.round(step * np.geomspace(0.1, 2.0, 6), 12))
+    shrinks = np.array([0.2, 0.4, 0.6, 0.8, 0.9, 1.0])
+    if design.kind == "elastic_net" and not np.any(np.isclose(shrinks, design.shrink)):
+        shrinks = np.sort(np.append(shrinks, design.shrink))
+    if not np.any(np.isclose(steps, step)):
+        steps = np.sort(np.append(steps, step))
+    return region_map(replace(design, kind="elastic_net"), shrinks, steps)
+
+
+def _command(spec: Spec, seed: int | None, simulate: bool) -> str:
+    from .examples import example_path, list_examples
+
+    target = spec.source
+    for name in list_examples():
+        if str(example_path(name)) == spec.source:
+            target = name
+    parts = ["ssecert", "certify", target]
+    if seed is not None:
+        parts += ["--seed", str(seed)]
+    if not simulate:
+        parts.append("--no-sim")
+    return " ".join(shlex.quote(p) for p in parts)
+
+
+def generated_at() -> str:
+    """UTC timestamp used in reports."""
+    return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")

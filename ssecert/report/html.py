@@ -1,0 +1,296 @@
+"""Single-file HTML reports (jinja2 template, inline CSS and SVG, no scripts, no network)."""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from markupsafe import Markup, escape
+
+from .._io import atomic_write_text
+from ..results import Certificate, Check, to_jsonable
+
+__all__ = ["render_report", "render_fragment", "write_report", "certificate_fragment",
+           "check_fragment"]
+
+CSS = """
+.ssecert-report{font-family:system-ui,-apple-system,'Segoe UI',sans-serif;color:#1d1d1f;
+ max-width:1100px;margin:0 auto;padding:1rem 1.5rem;line-height:1.45}
+.ssecert-report h1{margin:.2rem 0;font-size:1.7rem}.ssecert-report h2{margin-top:2rem;
+ border-bottom:1px solid #ddd;padding-bottom:.2rem}.ssecert-report h3{margin-bottom:.3rem}
+.ssecert-report .eyebrow{text-transform:uppercase;font-size:.75rem;letter-spacing:.08em;color:#666}
+.ssecert-report .head{border-left:8px solid #999;padding:.6rem 1rem;background:#f7f7f8}
+.ssecert-report .head.holds{border-color:#1b7f3b}.ssecert-report .head.fails{border-color:#b3261e}
+.ssecert-report .head.inconclusive{border-color:#a36b00}
+.ssecert-report .badge{display:inline-block;padding:.08rem .55rem;border-radius:999px;
+ font-size:.8rem;font-weight:600;color:#fff;vertical-align:middle}
+.ssecert-report .badge.holds{background:#1b7f3b}.ssecert-report .badge.fails{background:#b3261e}
+.ssecert-report .badge.inconclusive{background:#a36b00}
+.ssecert-report table{border-collapse:collapse;margin:.5rem 0;font-size:.9rem}
+.ssecert-report th,.ssecert-report td{border:1px solid #e1e1e4;padding:.25rem .5rem;
+ text-align:left;vertical-align:top}
+.ssecert-report th{background:#f2f2f4}.ssecert-report td.num{text-align:right;
+ font-variant-numeric:tabular-nums;white-space:nowrap}
+.ssecert-report td.finding{max-width:480px}.ssecert-report table.identity{font-size:.8rem}
+.ssecert-report table.matrix td{font-family:ui-monospace,monospace;font-size:.75rem;text-align:right}
+.ssecert-report figure{margin:.8rem 0}.ssecert-report figure svg{max-width:100%;height:auto}
+.ssecert-report figcaption{font-size:.8rem;color:#555}
+.ssecert-report details{margin:.4rem 0}.ssecert-report summary{cursor:pointer;color:#1f5fa8}
+.ssecert-report .sensor-list li.breaking{color:#b3261e}
+.ssecert-report pre{background:#f2f2f4;padding:.6rem;overflow-x:auto}
+.ssecert-report article.check{border-top:1px solid #eee;padding-top:.4rem}
+"""
+
+MAX_ROWS = 14
+MAX_COLS = 14
+
+
+def _template(name: str) -> Any:
+    from jinja2 import Environment, select_autoescape
+
+    text = resources.files("ssecert.report").joinpath("templates", name).read_text()
+    env = Environment(autoescape=select_autoescape(default=True, default_for_string=True),
+                      trim_blocks=True, lstrip_blocks=True)
+    return env.from_string(text)
+
+
+def _fmt(value: Any) -> str:
+    if value is None:
+        return "-"
+    if isinstance(value, str):
+        return value
+    if isinstance(value, bool):
+        return str(value)
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    if isinstance(value, (float, np.floating)):
+        v = float(value)
+        if math.isnan(v):
+            return "-"
+        if math.isinf(v):
+            return "inf" if v > 0 else "-inf"
+        return f"{v:.6g}"
+    if isinstance(value, (complex, np.complexfloating)):
+        return f"{value.real:.6g}{value.imag:+.6g}j"
+    if isinstance(value, Mapping) and set(value) == {"re", "im"}:
+        return _fmt(complex(value["re"], value["im"]))
+    return str(value)
+
+
+def _render(value: Any, depth: int = 0) -> str:
+    """HTML for an evidence value: scalars inline, arrays as tables, mappings nested."""
+    if isinstance(value, Mapping) and set(value) == {"re", "im"}:
+        return escape(_fmt(value))
+    if isinstance(value, Mapping):
+        if not value:
+            return "-"
+        rows = "".join(f"<tr><th>{escape(str(k))}</th><td>{_render(v, depth + 1)}</td></tr>"
+                       for k, v in value.items())
+        return f"<table class='kv'>{rows}</table>"
+    if isinstance(value, (list, tuple, np.ndarray)):
+        arr = None
+        try:
+            arr = np.asarray(value)
+        except (ValueError, TypeError):
+            arr = None
+        if arr is not None and arr.dtype.kind in "biufc" and arr.ndim in (1, 2) and arr.size:
+            return _matrix(arr)
+        items = list(value)
+        if not items:
+            return "[]"
+        if all(isinstance(it, Mapping) for it in items):
+            keys = list(dict.fromkeys(k for it in items for k in it))
+            head = "".join(f"<th>{escape(k)}</th>" for k in keys)
+            body = "".join("<tr>" + "".join(f"<td>{_render(it.get(k), depth + 1)}</td>"
+                                            for k in keys) + "</tr>" for it in items[:MAX_ROWS])
+            more = (f"<p>... {len(items) - MAX_ROWS} more rows in the JSON</p>"
+                    if len(items) > MAX_ROWS else "")
+            return f"<table class='kv'><tr>{head}</tr>{body}</table>{more}"
+        return escape(", ".join(_fmt(it) for it in items[:50])
+                      + (" ..." if len(items) > 50 else ""))
+    return escape(_fmt(value))
+
+
+def _matrix(arr: np.ndarray) -> str:
+    if arr.ndim == 1:
+        arr = arr[None, :]
+    r, c = arr.shape
+    shown = arr[:MAX_ROWS, :MAX_COLS]
+    rows = "".join("<tr>" + "".join(f"<td>{escape(_fmt(v))}</td>" for v in row) + "</tr>"
+                   for row in shown)
+    note = ""
+    if r > MAX_ROWS or c > MAX_COLS:
+        note = f"<p>{r} x {c}; the first {min(r, MAX_ROWS)} x {min(c, MAX_COLS)} shown, all in the JSON</p>"
+    table = f"<table class='matrix'>{rows}</table>{note}"
+    if r * c > 12:
+        return f"<details><summary>{r} x {c} matrix</summary>{table}</details>"
+    return table
+
+
+def _check_context(check: Check) -> dict[str, Any]:
+    data = to_jsonable(check.to_dict())
+    skip = {"verdict", "title", "summary", "required", "value", "margin", "method", "evidence",
+            "tolerances", "witness"}
+    fields = [(k, Markup(_render(v))) for k, v in data.items() if k not in skip]
+    return {
+        "id": check.id,
+        "title": check.title,
+        "verdict": check.verdict.value,
+        "value": _fmt(check.value),
+        "margin": _fmt(check.margin),
+        "required": check.required,
+        "method": check.method,
+        "summary": check.summary,
+        "fields": fields,
+        "tolerances": [(k, _fmt(v)) for k, v in (data.get("tolerances") or {}).items()],
+        "evidence": Markup(_render(data.get("evidence") or {})),
+        "witness": Markup(_render(data["witness"])) if data.get("witness") else None,
+    }
+
+
+def _slug(text: str) -> str:
+    return re.sub(r"[^a-z0-9]+", "-", text.lower()).strip("-") or "scenario"
+
+
+def _context(result: Any, *, fragment: bool) -> dict[str, Any]:
+    from .plots import region_plot, sensor_plot, simulation_plot, stealthy_plot
+
+    cert: Certificate = result.certificate
+    spec = result.spec
+    system = spec.system
+    meta = dict(cert.meta or {})
+    versions = meta.get("versions", {})
+    identity = [
+        ("design", f"{spec.name}: n = {system.n} states, p = {system.p} sensors, "
+                   f"s = {spec.max_attacked} attacked, horizon {spec.horizon}"),
+        ("spec file", spec.source),
+        ("spec sha256", spec.sha256 or "-"),
+        ("seed", str(result.seed)),
+        ("date", meta.get("date", "-")),
+        ("versions", ", ".join(f"{k} {v}" for k, v in versions.items())),
+    ]
+    checks = [_check_context(c) for c in cert.checks]
+    verdict = cert.verdict.value
+    failing = [c for c in cert.checks if c.required and c.verdict.value == "fails"]
+    undecided = [c for c in cert.checks if c.required and c.verdict.value == "inconclusive"]
+    if failing:
+        headline = failing[0].summary
+    elif undecided:
+        headline = undecided[0].summary
+    else:
+        headline = "Every required check holds."
+    ctx: dict[str, Any] = {
+        "fragment": fragment, "css": Markup(CSS), "name": spec.name, "verdict": verdict,
+        "exit_code": cert.exit_code, "headline": headline, "identity": identity,
+        "checks": checks, "notes": list(result.notes) + list(meta.get("notes", [])),
+        "command": result.command,
+    }
+    sparse = cert["sparse_observability"] if "sparse_observability" in cert else None
+    breaking = (sparse.fields.get("breaking_set") if sparse is not None else None) or []
+    if sparse is not None and sparse.verdict.value == "fails":
+        ctx["sensors_svg"] = Markup(sensor_plot(system.sensors, breaking))
+        ctx["breaking_names"] = ", ".join(system.sensors[i] for i in breaking) or "none"
+        ctx["sensor_rows"] = [{"name": nm, "index": i, "breaking": i in set(breaking)}
+                              for i, nm in enumerate(system.sensors)]
+        ctx["why_sentence"] = _why(system, spec.max_attacked, sparse)
+    if result.stealthy is not None:
+        ctx["stealthy_svg"] = Markup(stealthy_plot(system, result.stealthy))
+        ctx["stealthy_residual"] = _fmt(result.stealthy["residual"])
+        ctx["stealthy_text"] = _stealthy_text(system, result.stealthy)
+    sims = []
+    for name, res in result.simulations.items():
+        if isinstance(res, Mapping):
+            sims.append({"name": name, "attack": "-", "runs": "-", "steps": "-", "rel": "-",
+                         "q90": "-", "support": "-", "delay": "-", "svg": None,
+                         "skipped": res.get("skipped", ""), "slug": _slug(name)})
+            continue
+        final = res.final()
+        slug = _slug(name)
+        sims.append({
+            "name": name, "attack": res.attack, "runs": res.runs, "steps": res.steps,
+            "rel": _fmt(final["relative_error_mean"]), "q90": _fmt(final["relative_error_q90"]),
+            "support": _fmt(final["support_error_mean"]),
+            "delay": _fmt(final.get("detection_delay_median")),
+            "svg": Markup(simulation_plot(name, res, gid=f"sim-{slug}")), "slug": slug,
+        })
+    ctx["simulations"] = sims
+    if result.region is not None:
+        obs = spec.observer or {}
+        point = None
+        if "step" in obs:
+            point = (float(obs.get("shrink", 1.0)), float(obs["step"]))
+        ctx["region_svg"] = Markup(region_plot(result.region, point))
+    return ctx
+
+
+def _why(system: Any, s: int, check: Check) -> str:
+    breaking = check.fields.get("breaking_set") or []
+    names = ", ".join(system.sensors[i] for i in breaking)
+    mr = check.fields.get("max_removable")
+    if mr == -1:
+        return ("The plant is not observable even with every sensor intact, so no number of "
+                "attacked sensors can be corrected.")
+    plural = "sensor" if s == 1 else "sensors"
+    if len(breaking) <= s:
+        return (f"{s} attacked {plural} cannot be corrected because removing {names} leaves "
+                f"the plant unobservable: an attacker who controls {names} can make the state "
+                f"look like a different one, and no estimator can tell them apart.")
+    return (f"{s} attacked {plural} cannot be corrected because removing the {len(breaking)} "
+            f"sensors {names} leaves the plant unobservable: split into two groups of at most "
+            f"{s}, they give two attacks that make two different states produce the same "
+            f"outputs.")
+
+
+def _stealthy_text(system: Any, demo: Mapping[str, Any]) -> str:
+    a = ", ".join(system.sensors[i] for i in demo["sensors_a"]) or "no sensor"
+    b = ", ".join(system.sensors[i] for i in demo["sensors_b"])
+    if b:
+        return (f"One plant starts at x0 with an attack on {a}; another starts at x0 + z with an "
+                f"attack on {b}. Their outputs coincide at every step.")
+    return (f"The plant starts at x0 and the attacker corrupts {a} only; the outputs are exactly "
+            f"those of the unattacked plant started at x0 + z. The attack is undetectable.")
+
+
+def render_report(result: Any) -> str:
+    """The complete single-file HTML report of a ``CertifyResult``."""
+    return _template("report.html.j2").render(**_context(result, fragment=False))
+
+
+def render_fragment(result: Any) -> str:
+    """The report's body as an HTML fragment with its own style (Jupyter)."""
+    return _template("report.html.j2").render(**_context(result, fragment=True))
+
+
+def write_report(result: Any, path: str | Path) -> Path:
+    """Write the HTML report atomically."""
+    return atomic_write_text(path, render_report(result))
+
+
+def check_fragment(check: Check) -> str:
+    """A small HTML card for one check (Jupyter)."""
+    c = _check_context(check)
+    return (f"<div class='ssecert-report'><style>{CSS}</style><h3>{escape(c['title'])} "
+            f"<span class='badge {c['verdict']}'>{c['verdict']}</span></h3>"
+            f"<p>{escape(c['summary'])}</p><table class='kv'><tr><th>value</th>"
+            f"<td>{escape(c['value'])}</td></tr><tr><th>margin</th><td>{escape(c['margin'])}"
+            f"</td></tr><tr><th>method</th><td>{escape(c['method'])}</td></tr></table>"
+            f"<details><summary>evidence</summary>{c['evidence']}</details></div>")
+
+
+def certificate_fragment(cert: Certificate) -> str:
+    """The summary table of a Certificate as an HTML fragment (Jupyter)."""
+    rows = "".join(
+        f"<tr><td>{escape(c.id)}</td><td><span class='badge {c.verdict.value}'>"
+        f"{c.verdict.value}</span></td><td>{escape(_fmt(c.value))}</td>"
+        f"<td>{escape(_fmt(c.margin))}</td><td>{escape(c.summary)}</td></tr>"
+        for c in cert.checks)
+    verdict = cert.verdict.value
+    return (f"<div class='ssecert-report'><style>{CSS}</style><h3>{escape(cert.system.name)} "
+            f"<span class='badge {verdict}'>{verdict}</span></h3><table class='checks'><tr>"
+            f"<th>check</th><th>verdict</th><th>value</th><th>margin</th><th>finding</th></tr>"
+            f"{rows}</table></div>")

@@ -1,0 +1,151 @@
+"""Plots for the HTML report, rendered by matplotlib to inline SVG.
+
+No pyplot global state is used (figures are built with ``matplotlib.figure``),
+text stays text (``svg.fonttype = "none"``) so a browser can search it, and
+the artists a reader looks for carry stable SVG ids (``gid``).
+"""
+
+from __future__ import annotations
+
+import io
+import re
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+__all__ = ["svg_figure", "simulation_plot", "stealthy_plot", "region_plot", "sensor_plot"]
+
+PALETTE = {"holds": "#1b7f3b", "fails": "#b3261e", "inconclusive": "#a36b00",
+           "a": "#1f5fa8", "b": "#c2410c", "output": "#333333", "band": "#9ec5ee"}
+
+
+def svg_figure(fig: Any, *, title: str = "") -> str:
+    """The SVG text of a matplotlib Figure, ready to inline in HTML."""
+    import matplotlib
+
+    buf = io.StringIO()
+    with matplotlib.rc_context({"svg.fonttype": "none"}):
+        fig.savefig(buf, format="svg", bbox_inches="tight")
+    text = buf.getvalue()
+    text = re.sub(r"<\?xml[^>]*\?>\s*", "", text)
+    text = re.sub(r"<!DOCTYPE[^>]*>\s*", "", text)
+    if title:
+        text = text.replace("<svg ", f'<svg role="img" aria-label="{title}" ', 1)
+    return text
+
+
+def _figure(width: float, height: float, rows: int = 1, cols: int = 1) -> tuple[Any, Any]:
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width, height), layout="constrained")
+    axes = fig.subplots(rows, cols, squeeze=False)
+    return fig, axes
+
+
+def simulation_plot(name: str, result: Any, *, gid: str) -> str:
+    """Relative error and support error over time: Monte Carlo mean and 10-90% band."""
+    has_support = result.support_error is not None
+    fig, axes = _figure(7.5, 2.8, 1, 2 if has_support else 1)
+    k = np.arange(result.relative_error.shape[0])
+    panels = [("relative state error", result.relative_error, True)]
+    if has_support:
+        panels.append(("support error (Jaccard)", result.support_error, False))
+    for ax, (label, data, log) in zip(axes[0], panels):
+        mean = np.nanmean(data, axis=1)
+        lo, hi = np.nanquantile(data, 0.1, axis=1), np.nanquantile(data, 0.9, axis=1)
+        if log:
+            floor = 1e-17
+            mean, lo, hi = (np.maximum(v, floor) for v in (mean, lo, hi))
+            ax.set_yscale("log")
+        band = ax.fill_between(k, lo, hi, color=PALETTE["band"], alpha=0.6, linewidth=0,
+                               label="10-90% of runs")
+        band.set_gid(f"{gid}-{'error' if log else 'support'}-band")
+        (line,) = ax.plot(k, mean, color=PALETTE["a"], linewidth=1.5, label="mean")
+        line.set_gid(f"{gid}-{'error' if log else 'support'}-mean")
+        ax.set_xlabel("step k")
+        ax.set_title(label, fontsize=10)
+        ax.grid(True, alpha=0.3)
+    axes[0][0].legend(fontsize=8, loc="best")
+    fig.suptitle(f"{name}: {result.runs} runs, {result.attack} attack", fontsize=10)
+    return svg_figure(fig, title=f"simulation {name}")
+
+
+def stealthy_plot(system: Any, demo: dict[str, Any], *, gid: str = "stealthy") -> str:
+    """Two state trajectories (from x0 and x0 + z) that give one and the same output."""
+    xa, xb, y = demo["states_a"], demo["states_b"], demo["outputs"]
+    k = np.arange(xa.shape[0])
+    comp = int(demo["component"])
+    sensor = int(demo["sensor"])
+    fig, axes = _figure(7.5, 2.8, 1, 2)
+    ax = axes[0][0]
+    (la,) = ax.plot(k, xa[:, comp], color=PALETTE["a"], linewidth=1.8,
+                    label="plant from x0, attacked")
+    (lb,) = ax.plot(k, xb[:, comp], color=PALETTE["b"], linewidth=1.8, linestyle="--",
+                    label="plant from x0 + z")
+    la.set_gid(f"{gid}-trajectory-a")
+    lb.set_gid(f"{gid}-trajectory-b")
+    ax.set_title(f"two state trajectories (state {comp + 1})", fontsize=10)
+    ax.set_xlabel("step k")
+    ax.legend(fontsize=8)
+    ax.grid(True, alpha=0.3)
+    ax = axes[0][1]
+    (lo,) = ax.plot(k, y[:, sensor], color=PALETTE["output"], linewidth=1.8,
+                    label=f"output of {system.sensors[sensor]} (both plants)")
+    lo.set_gid(f"{gid}-output")
+    ax.set_title("one output: the sensors cannot tell them apart", fontsize=10)
+    ax.set_xlabel("step k")
+    ax.legend(fontsize=8)
+    ax.grid(True, alpha=0.3)
+    return svg_figure(fig, title="stealthy attack")
+
+
+def region_plot(region: Any, design_point: tuple[float, float] | None = None) -> str:
+    """Certified region over (shrink, step): verdict of the circle criterion per grid point."""
+    fig, axes = _figure(5.0, 3.6)
+    ax = axes[0][0]
+    codes = {"holds": 2, "inconclusive": 1, "fails": 0}
+    grid = np.vectorize(lambda v: codes.get(v, 1))(region.verdicts).astype(float)
+    from matplotlib.colors import ListedColormap
+
+    cmap = ListedColormap([PALETTE["fails"], PALETTE["inconclusive"], PALETTE["holds"]])
+    mesh = ax.pcolormesh(np.arange(region.steps.size + 1), np.arange(region.shrinks.size + 1),
+                         grid, cmap=cmap, vmin=0, vmax=2, edgecolors="white", linewidth=0.5)
+    mesh.set_gid("region-map")
+    ax.set_xticks(np.arange(region.steps.size) + 0.5)
+    ax.set_xticklabels([f"{s:.3g}" for s in region.steps], rotation=45, fontsize=7)
+    ax.set_yticks(np.arange(region.shrinks.size) + 0.5)
+    ax.set_yticklabels([f"{q:.3g}" for q in region.shrinks], fontsize=7)
+    ax.set_xlabel("step")
+    ax.set_ylabel("shrink q")
+    if design_point is not None:
+        q, nu = design_point
+        i = int(np.argmin(np.abs(region.shrinks - q)))
+        j = int(np.argmin(np.abs(region.steps - nu)))
+        (mark,) = ax.plot([j + 0.5], [i + 0.5], marker="*", markersize=14, color="white",
+                          markeredgecolor="black", linestyle="none", label="this design")
+        mark.set_gid("region-design")
+        ax.legend(fontsize=8, loc="upper right")
+    ax.set_title("circle criterion: green certified, amber no certificate, red unstable",
+                 fontsize=8)
+    return svg_figure(fig, title="certified region")
+
+
+def sensor_plot(sensors: Sequence[str], breaking: Sequence[int]) -> str:
+    """The sensors as a row of boxes, the breaking set highlighted."""
+    fig, axes = _figure(max(3.0, 0.9 * len(sensors)), 1.1)
+    ax = axes[0][0]
+    broken = set(breaking)
+    for i, name in enumerate(sensors):
+        color = PALETTE["fails"] if i in broken else "#d9e7d9"
+        box = ax.add_patch(__import__("matplotlib.patches", fromlist=["FancyBboxPatch"])
+                           .FancyBboxPatch((i + 0.05, 0.1), 0.9, 0.8,
+                                           boxstyle="round,pad=0.02", facecolor=color,
+                                           edgecolor="#444"))
+        box.set_gid(f"sensor-{i}{'-breaking' if i in broken else ''}")
+        ax.text(i + 0.5, 0.5, name, ha="center", va="center", fontsize=8,
+                color="white" if i in broken else "black")
+    ax.set_xlim(0, len(sensors))
+    ax.set_ylim(0, 1)
+    ax.axis("off")
+    return svg_figure(fig, title="sensors and breaking set")
