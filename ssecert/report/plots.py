@@ -30,6 +30,7 @@ def svg_figure(fig: Any, *, title: str = "") -> str:
     text = buf.getvalue()
     text = re.sub(r"<\?xml[^>]*\?>\s*", "", text)
     text = re.sub(r"<!DOCTYPE[^>]*>\s*", "", text)
+    text = re.sub(r"<metadata>.*?</metadata>\s*", "", text, flags=re.S)  # RDF, creation date
     if title:
         text = text.replace("<svg ", f'<svg role="img" aria-label="{title}" ', 1)
     return text

@@ -1,0 +1,28 @@
+"""Regenerating the packaged examples' reports gives the committed verdicts."""
+
+import json
+from pathlib import Path
+
+import pytest
+
+from ssecert.certify import certify
+from ssecert.examples import list_examples, load_example
+
+REPORTS = Path(__file__).resolve().parents[1] / "reports"
+
+
+def test_every_packaged_example_has_a_report():
+    for name in list_examples():
+        assert (REPORTS / f"{name}.html").is_file(), name
+        assert (REPORTS / f"{name}.json").is_file(), name
+    assert (REPORTS / "README.md").is_file()
+
+
+@pytest.mark.parametrize("name", list_examples())
+def test_regenerating_gives_the_same_verdicts(name):
+    committed = json.loads((REPORTS / f"{name}.json").read_text())
+    result = certify(load_example(name), seed=0, simulate=False, region=False)
+    fresh = result.to_dict()
+    assert fresh["verdict"] == committed["verdict"]
+    assert {k: v["verdict"] for k, v in fresh["checks"].items()} == {
+        k: v["verdict"] for k, v in committed["checks"].items()}
