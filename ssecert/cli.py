@@ -85,6 +85,18 @@ def _positive_int(text: str) -> int:
     return value
 
 
+def _add_analysis_options(parser: argparse.ArgumentParser) -> None:
+    """Options shared by ``certify`` and ``analyze``."""
+    parser.add_argument("--max-attacked", type=_nonnegative_int, metavar="S",
+                        help="number of attacked sensors s (required for .npz/.mat)")
+    parser.add_argument("--horizon", type=_positive_int, metavar="T",
+                        help="stacked horizon tau (default: the spec's, else n)")
+    parser.add_argument("--max-sets", type=_positive_int, metavar="N", default=50_000_000,
+                        help="enumeration budget in sets (default 5e7)")
+    parser.add_argument("--method", choices=("auto", "enumeration", "eigenspace"),
+                        default="auto", help="sparse-observability method (default auto)")
+
+
 def _build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="ssecert",
@@ -115,14 +127,7 @@ def _build_parser() -> argparse.ArgumentParser:
     certify.add_argument("--no-sim", action="store_true", help="skip the simulations")
     certify.add_argument("--runs", type=_positive_int, metavar="N",
                          help="runs per scenario (default: the spec's)")
-    certify.add_argument("--max-attacked", type=_nonnegative_int, metavar="S",
-                         help="number of attacked sensors s (required for .npz/.mat)")
-    certify.add_argument("--horizon", type=_positive_int, metavar="T",
-                         help="stacked horizon tau (default: the spec's, else n)")
-    certify.add_argument("--max-sets", type=_positive_int, metavar="N", default=50_000_000,
-                         help="enumeration budget in sets (default 5e7)")
-    certify.add_argument("--method", choices=("auto", "enumeration", "eigenspace"),
-                         default="auto", help="sparse-observability method (default auto)")
+    _add_analysis_options(certify)
 
     analyze = sub.add_parser(
         "analyze",
@@ -136,14 +141,7 @@ def _build_parser() -> argparse.ArgumentParser:
     analyze.add_argument("spec", metavar="SPEC", help="spec file or packaged example name")
     analyze.add_argument("--json", metavar="PATH", dest="json_path",
                          help="write the JSON certificate to PATH ('-' for stdout)")
-    analyze.add_argument("--max-attacked", type=_nonnegative_int, metavar="S",
-                         help="number of attacked sensors s (required for .npz/.mat)")
-    analyze.add_argument("--horizon", type=_positive_int, metavar="T",
-                         help="stacked horizon tau (default: the spec's, else n)")
-    analyze.add_argument("--max-sets", type=_positive_int, metavar="N", default=50_000_000,
-                         help="enumeration budget in sets (default 5e7)")
-    analyze.add_argument("--method", choices=("auto", "enumeration", "eigenspace"),
-                         default="auto", help="sparse-observability method (default auto)")
+    _add_analysis_options(analyze)
     analyze.add_argument("--seed", type=_nonnegative_int, default=0, metavar="N",
                          help="seed of the simulated stealthy-attack check (default 0)")
 
