@@ -74,11 +74,32 @@ def test_methods_agree_with_planted_truth(seed):
         assert tuple(check.fields["breaking_set"]) == pl.breaking_set, (seed, method)
 
 
+def _never_wrong(pl, seed, method):
+    """A method may be inconclusive (borderline in floating point) but never wrong."""
+    system = System(pl.A, pl.C)
+    decided = True
+    for s in (0, 1, 2):
+        check = sparse_observability(system, s, method=method)
+        if check.verdict.value == "inconclusive":
+            decided = False
+            continue
+        assert check.fields["max_removable"] == pl.max_removable, (seed, pl.description, method)
+        assert check.verdict.value == ("holds" if 2 * s <= pl.max_removable else "fails")
+    return decided
+
+
 @given(seed=st.integers(0, 2**32 - 1), kind=st.sampled_from(KINDS), integer=st.booleans())
 def test_methods_agree_property(seed, kind, integer):
+    """Neither method is ever wrong, at least one decides, and auto always decides.
+
+    With a floating-point similarity (integer=False) A = Q M Q^T differs from
+    the planted M by about eps, so a Krylov residual can land in the
+    borderline band: the enumeration then says inconclusive, honestly.
+    """
     pl = planted(np.random.default_rng(seed), kind, integer=integer)
-    for method in ("enumeration", "eigenspace"):
-        _truth_check(pl, seed, method)
+    decided = [_never_wrong(pl, seed, m) for m in ("enumeration", "eigenspace")]
+    assert any(decided), (seed, pl.description)
+    _truth_check(pl, seed, "auto")
 
 
 def test_planted_breaking_sizes_are_varied():
