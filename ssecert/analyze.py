@@ -115,11 +115,7 @@ def analyze(
 
         checks.extend(observer_checks(system, spec.observer, observability=checks[0], seed=seed))
     notes = []
-    if spec.scenarios:
-        notes.append(
-            "The [[scenario]] sections were validated; simulations are not part of this version "
-            "of ssecert."
-        )
+
     meta: dict[str, Any] = {
         "spec": {"source": spec.source, "sha256": spec.sha256, "name": spec.name},
         "max_attacked": spec.max_attacked,

@@ -260,15 +260,18 @@ def _cmd_certify(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
     say("writing the report")
     html = render_report(result)
     document = json.dumps(result.to_dict(), indent=2, allow_nan=False) + "\n"
-    out_dir.mkdir(parents=True, exist_ok=True)
-    html_path = atomic_write_text(out_dir / f"{spec.name}.html", html)
-    json_path = atomic_write_text(out_dir / f"{spec.name}.json", document)
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        html_path = atomic_write_text(out_dir / f"{spec.name}.html", html)
+        json_path = atomic_write_text(out_dir / f"{spec.name}.json", document)
+        if target is not None:
+            atomic_write_text(target, document)
+    except OSError as exc:
+        raise UsageError(f"cannot write the report: {exc.strerror or exc}") from None
     human.write(render_table(result.certificate, compact=True))
     human.write(f"report: {html_path}\ncertificate: {json_path}\n")
     if args.json_path == "-":
         sys.stdout.write(document)
-    elif target is not None:
-        atomic_write_text(target, document)
     return result.exit_code
 
 
@@ -307,7 +310,11 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     if args.json_path == "-":
         sys.stdout.write(text)
     elif target is not None:
-        atomic_write_text(target, text)
+        try:
+            atomic_write_text(target, text)
+        except OSError as exc:
+            raise UsageError(f"--json {args.json_path}: cannot write: "
+                             f"{exc.strerror or exc}") from None
         human.write(f"JSON written to {target}\n")
     return 0
 
@@ -353,6 +360,7 @@ def _cmd_examples(args: argparse.Namespace) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``ssecert`` command; returns the exit status."""
+    from .design.gains import GainError
     from .spec import SpecError
 
     parser = _build_parser()
@@ -373,6 +381,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         raise UsageError(f"unknown command {args.command!r}")  # pragma: no cover
     except (UsageError, SpecError) as exc:
         sys.stderr.write(f"ssecert: error: {exc}\n")
+        return EXIT_BAD_INPUT
+    except GainError as exc:
+        sys.stderr.write(f"ssecert: error: the spec's observer gain cannot be computed: {exc}\n")
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         sys.stderr.write("ssecert: interrupted\n")

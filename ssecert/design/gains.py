@@ -58,14 +58,17 @@ class GainError(ValueError):
 class Nilpotency:
     """Floating-point nilpotency test by matrix powers.
 
-    ``index`` is the smallest k with ``||F^k|| <= rtol * max(1, ||A||)^k``;
-    the test is conclusive when ``||F^(k-1)||`` is clearly above its own
-    threshold (``clear`` times it).
+    With s the scale of the data (||A|| for an observer of A),
+    ``index`` is the smallest k with ``||(F / s)^k|| <= rtol``, i.e.
+    ``||F^k|| <= rtol s^k``; the test is conclusive when ``||(F / s)^(k-1)||``
+    is clearly above rtol (``clear`` times it).  ``norms`` are the scaled
+    norms ``||(F / s)^k||``.
     """
 
     index: int | None
     norms: tuple[float, ...]
-    thresholds: tuple[float, ...]
+    rtol: float
+    scale: float
     conclusive: bool
     reason: str = ""
 
@@ -75,15 +78,20 @@ def nilpotency(
 ) -> Nilpotency:
     """Decide whether F is nilpotent, and its index, from the norms of its powers.
 
+    The rule is ``||F^k|| <= rtol * s^k`` with ``||F^(k-1)||`` clearly above
+    ``rtol * s^(k-1)``.  DESIGN.md writes s = max(1, ||A||); that is not
+    invariant under rescaling the plant (for ||A|| < 1 it becomes an
+    absolute threshold and declares fast-decaying, non-nilpotent powers
+    zero), so s is the data's own scale.  Powers of F / s are computed,
+    which cannot overflow.
+
     Parameters
     ----------
     F : ndarray, shape (n, n)
     scale : float, optional
-        max(1, ||A||) of the plant the matrix comes from (default max(1, ||F||)).
+        s; ||A|| for an observer of A (default ||F||).
     rtol : float, default 1e-8
-        ``||F^k||`` counts as zero below ``rtol * scale^k``.
     clear : float, default 100
-        ``||F^(k-1)||`` must exceed ``clear * rtol * scale^(k-1)``.
 
     Returns
     -------
@@ -94,27 +102,30 @@ def nilpotency(
     >>> import numpy as np
     >>> nilpotency(np.diag([1.0, 1.0], 1)).index
     3
+    >>> nilpotency(0.002 * np.diag([1.0, 1.0], 1)).index   # the same, rescaled
+    3
     """
     F = np.asarray(F, dtype=float)
     n = F.shape[0]
-    s = max(1.0, float(np.linalg.norm(F, 2)) if scale is None else float(scale))
-    norms, thresholds = [], []
+    s = float(np.linalg.norm(F, 2)) if scale is None else float(scale)
+    if not np.isfinite(s) or s <= 0:
+        s = 1.0
+    G = F / s
+    norms: list[float] = []
     power = np.eye(n)
     for k in range(1, n + 1):
-        power = power @ F
+        power = power @ G
         norms.append(float(np.linalg.norm(power, 2)))
-        thresholds.append(rtol * s**k)
-        if norms[-1] <= thresholds[-1]:
+        if norms[-1] <= rtol:
             previous = norms[-2] if k > 1 else 1.0
-            prev_thr = thresholds[-2] if k > 1 else rtol
-            ok = previous > clear * prev_thr
+            ok = previous > clear * rtol
             reason = "" if ok else (
-                f"||F^{k - 1}|| = {previous:.2e} is not clearly above its threshold "
-                f"{prev_thr:.2e}"
+                f"||(F/s)^{k - 1}|| = {previous:.2e} is not clearly above {rtol:.0e} "
+                f"(s = {s:.3g})"
             )
-            return Nilpotency(k, tuple(norms), tuple(thresholds), ok, reason)
-    return Nilpotency(None, tuple(norms), tuple(thresholds), True,
-                      f"||F^{n}|| = {norms[-1]:.2e} exceeds {thresholds[-1]:.2e}")
+            return Nilpotency(k, tuple(norms), rtol, s, ok, reason)
+    return Nilpotency(None, tuple(norms), rtol, s, True,
+                      f"||(F/s)^{n}|| = {norms[-1]:.2e} exceeds {rtol:.0e} (s = {s:.3g})")
 
 
 @dataclass(frozen=True)
@@ -262,8 +273,14 @@ def deadbeat_gain(
     from ..structure._linalg import staircase
 
     index = staircase(A, C, tolerances=tol).index
-    test = nilpotency(F, scale=max(1.0, float(np.linalg.norm(A, 2))))
-    verified = test.index is not None and test.conclusive
+    # s = ||A||: scaling the plant by alpha scales a deadbeat F by alpha; for ||A|| >= 1 this is
+    # DESIGN.md's max(1, ||A||), for ||A|| < 1 it keeps the test invariant under rescaling
+    test = nilpotency(F, scale=max(float(np.linalg.norm(A, 2)), np.finfo(float).tiny))
+    problem = test.reason
+    if test.index is not None and test.index < index:  # impossible: rounding fooled the test
+        problem = (f"the power test gives index {test.index}, below the observability index "
+                   f"{index}, which no gain can reach")
+    verified = test.index is not None and test.conclusive and test.index >= index
     return Gain(
         L=L,
         method="deadbeat",
@@ -273,11 +290,11 @@ def deadbeat_gain(
             "nilpotency_index": test.index,
             "observability_index": index,
             "minimal": test.index == index,
-            "power_norms": list(test.norms),
-            "power_thresholds": list(test.thresholds),
+            "scaled_power_norms": list(test.norms),
+            "scale": test.scale,
             "kernel_dimensions": dims,
-            "test": "||F^k|| <= 1e-8 max(1, ||A||)^k with ||F^(k-1)|| clearly above",
-            "problem": test.reason,
+            "test": "||F^k|| <= 1e-8 ||A||^k with ||F^(k-1)|| clearly above",
+            "problem": problem,
         },
     )
 

@@ -72,7 +72,12 @@ class ObserverDesign:
 
     @property
     def error_matrix(self) -> np.ndarray:
-        """F = A - L S, the linear error dynamics."""
+        """The linear error dynamics: F = A - L S, or, for an SSO with m inner ISTA steps per
+        sample, A (I - step S^T S)^m (the dynamics while the attack estimate is zero)."""
+        if self.kind == "sso" and self.inner_steps > 1:
+            n = self.system.n
+            inner = np.eye(n) - self.step * self.sensing.T @ self.sensing
+            return self.system.A @ np.linalg.matrix_power(inner, self.inner_steps)
         return self.system.A - self.gain.L @ self.sensing
 
     @property
@@ -142,6 +147,8 @@ def build_observer(system: System, spec: Mapping[str, Any]) -> ObserverDesign:
                 gain = place_gain(system, spec["poles"])
             elif choice == "pinv":
                 gain = pinv_gain(system)
+            elif choice == "ogd":
+                gain = ogd_gain(system, step)
             else:  # pragma: no cover - the spec validator refuses others
                 raise GainError(f"unknown gain {choice!r}")
         else:

@@ -394,10 +394,15 @@ def _prechecks(model: LureModel) -> tuple[str, str, dict[str, Any]]:
     if rho_F >= 1 - 1e-12:
         witness = instability_witness(F)
         details["witness"] = witness
-        return "fails", (
-            f"the linear error matrix F = A - L C has spectral radius {rho_F:.6g} >= 1; near the "
-            f"origin the soft threshold is zero (dead zone), so the error follows e+ = F e and the "
-            f"origin is not asymptotically stable"), details
+        where = ("near the origin the soft threshold is zero (dead zone), so the error follows "
+                 "e+ = F e and " if model.m else "")
+        if witness is not None and witness["verified"]:
+            return "fails", (
+                f"the linear error matrix F = A - L C has spectral radius {rho_F:.6g} >= 1 "
+                f"(confirmed); {where}the origin is not asymptotically stable"), details
+        return "inconclusive", (
+            f"the computed spectral radius of F = A - L C is {rho_F:.12g}, too close to 1 to "
+            f"decide in floating point; no certificate is attempted"), details
     if model.m:
         rho_q = float(np.abs(np.linalg.eigvals(model.vertex(model.q))).max())
         details["spectral_radius_at_sector_vertex"] = rho_q
@@ -641,11 +646,16 @@ class RegionMap:
     solves: int
     reused: int
     seconds: float
+    certificates: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = field(
+        default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
         return {"shrinks": self.shrinks, "steps": self.steps, "verdicts": self.verdicts.tolist(),
                 "margins": self.margins, "solves": self.solves, "reused": self.reused,
-                "seconds": self.seconds}
+                "seconds": self.seconds,
+                "certificates": [{"shrink": float(self.shrinks[i]), "step": float(self.steps[j]),
+                                  "P": P, "multipliers_T": t}
+                                 for (i, j), (P, t) in sorted(self.certificates.items())]}
 
 
 def region_map(
@@ -687,4 +697,4 @@ def region_map(
                 margins[i, j] = cert.margin
                 found[(i, j)] = (cert.P, cert.multipliers)
     return RegionMap(shrinks, steps, verdicts, margins, solves, reused,
-                     time.perf_counter() - start)
+                     time.perf_counter() - start, dict(found))

@@ -65,24 +65,54 @@ class LyapunovCertificate:
     witness: dict[str, Any] | None = field(default=None)
 
 
-def instability_witness(F: np.ndarray, *, steps: int = 60) -> dict[str, Any] | None:
-    """A real initial error that does not decay under F, if |lambda| >= 1 - 1e-12.
+def instability_witness(F: np.ndarray, *, steps: int = 2000) -> dict[str, Any] | None:
+    """A real initial error that does not decay under F, when the computed spectral
+    radius is at least 1 - 1e-12, with how far that is verified.
 
-    Returns the direction, the eigenvalue and the simulated norms ||F^k z||.
+    The trajectory is simulated with renormalisation (log-norms, so nothing
+    overflows).  ``verified`` is True when the error grows by a factor 2
+    within ``steps``, or when the dominant eigenvalue exceeds 1 by more than
+    its first-order error bound n eps ||F|| kappa; rounding alone can put a
+    stable eigenvalue above 1 (a defective one especially), so nothing less
+    counts as proof.
     """
-    lam, vecs = np.linalg.eig(F)
+    import scipy.linalg
+
+    n = F.shape[0]
+    lam, vl, vr = scipy.linalg.eig(F, left=True, right=True)
     j = int(np.argmax(np.abs(lam)))
     if abs(lam[j]) < 1 - 1e-12:
         return None
-    v = vecs[:, j]
+    v = vr[:, j]
     z = v.real if np.linalg.norm(v.real) >= np.linalg.norm(v.imag) else v.imag
     z = np.real(z) / np.linalg.norm(z)
-    norms = []
+    y = vl[:, j] / np.linalg.norm(vl[:, j])
+    dot = abs(np.vdot(y, vr[:, j] / np.linalg.norm(vr[:, j])))
+    kappa = 1.0 / dot if dot > 0 else np.inf
+    bound = n * EPS * float(np.linalg.norm(F, 2)) * kappa
+    log_norms = [0.0]
     w = z.copy()
+    total = 0.0
     for _ in range(steps):
-        norms.append(float(np.linalg.norm(w)))
         w = F @ w
-    return {"eigenvalue": complex(lam[j]), "initial_error": z, "norms": norms}
+        size = float(np.linalg.norm(w))
+        if size == 0.0 or not np.isfinite(size):
+            break
+        total += np.log(size)
+        w /= size
+        log_norms.append(total)
+        if total >= np.log(2.0):
+            break
+    grows = max(log_norms) >= np.log(2.0)
+    clear = abs(lam[j]) - bound > 1 + 1e-9
+    return {
+        "eigenvalue": complex(lam[j]),
+        "eigenvalue_error_bound": float(bound),
+        "initial_error": z,
+        "log_norms": log_norms[:: max(1, len(log_norms) // 200)],
+        "grows_by_factor_2": bool(grows),
+        "verified": bool(grows or clear),
+    }
 
 
 def lyapunov_certificate(
@@ -124,7 +154,7 @@ def lyapunov_certificate(
         P = np.asarray(control.dlyap(F.T, Q), dtype=float)
     except Exception as exc:  # singular Lyapunov operator (lambda_i lambda_j = 1)
         witness = instability_witness(F)
-        verdict = "fails" if witness is not None else "inconclusive"
+        verdict = "fails" if witness is not None and witness["verified"] else "inconclusive"
         return LyapunovCertificate(verdict, None, None, None, 0.0, None, None, None, rho,
                                    f"the Lyapunov equation has no unique solution ({exc})",
                                    witness)
@@ -151,15 +181,23 @@ def lyapunov_certificate(
             return LyapunovCertificate("holds", P, decrease, dec_min, bound, contraction,
                                        condition, residual, rho)
     witness = instability_witness(F)
-    if witness is not None and rho > 1 + 1e-9:
-        return LyapunovCertificate("fails", P, decrease, dec_min, bound, None, condition,
+    margin = min(dec_min, p_min)  # negative when P or the decrease is indefinite
+    if witness is not None and witness["verified"]:
+        how = ("an initial error along its eigenvector grows by a factor 2 in simulation"
+               if witness["grows_by_factor_2"] else
+               f"the eigenvalue exceeds 1 by more than its error bound "
+               f"{witness['eigenvalue_error_bound']:.1e}")
+        return LyapunovCertificate("fails", P, decrease, margin, bound, None, condition,
                                    residual, rho,
-                                   f"F has an eigenvalue of modulus {rho:.6g} > 1", witness)
+                                   f"F has an eigenvalue of modulus {rho:.6g} >= 1 ({how})",
+                                   witness)
     if witness is not None:
         return LyapunovCertificate(
-            "inconclusive", P, decrease, dec_min, bound, None, condition, residual, rho,
-            f"F has an eigenvalue of modulus {rho:.12g}, within 1e-9 of 1", witness)
+            "inconclusive", P, decrease, margin, bound, None, condition, residual, rho,
+            f"the computed spectral radius of F is {rho:.12g}, but neither growth nor an "
+            f"eigenvalue clear of its error bound {witness['eigenvalue_error_bound']:.1e} "
+            f"confirms instability", witness)
     return LyapunovCertificate(
-        "inconclusive", P, decrease, dec_min, bound, None, condition, residual, rho,
+        "inconclusive", P, decrease, margin, bound, None, condition, residual, rho,
         f"the Lyapunov solution cannot be verified with a margin (smallest decrease "
         f"{dec_min:.2e}, smallest eigenvalue of P {p_min:.2e}, error bound {bound:.2e})")

@@ -119,6 +119,22 @@ def _eigen_condition(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return w, kappa
 
 
+def _compatible(dist: np.ndarray, delta: np.ndarray, tight: float) -> bool:
+    """Whether the pairs i, j with |lambda_i - lambda_j| <= 2 (delta_i + delta_j) (or equal to
+    rounding) connect every member of a group."""
+    m = dist.shape[0]
+    link = (dist <= 2.0 * (delta[:, None] + delta[None, :])) | (dist <= tight)
+    seen = {0}
+    frontier = [0]
+    while frontier:
+        i = frontier.pop()
+        for j in np.flatnonzero(link[i]):
+            if int(j) not in seen:
+                seen.add(int(j))
+                frontier.append(int(j))
+    return len(seen) == m
+
+
 def eigen_clusters(A: np.ndarray, *, tolerances: Tolerances | None = None) -> EigenAnalysis:
     """Group the eigenvalues of ``A`` and compute each group's eigenspace.
 
@@ -192,11 +208,20 @@ def eigen_clusters(A: np.ndarray, *, tolerances: Tolerances | None = None) -> Ei
         comp = members_of[find(i)]
         if len(set(labels[comp].tolist())) == 1:
             continue
-        diameter = float(dist[np.ix_(comp, comp)].max())
+        sub = dist[np.ix_(comp, comp)]
+        diameter = float(sub.max())
         m = len(comp)
-        if diameter <= tight or (
-            diameter <= norm * wide ** (1.0 / m) and singular_at(comp)
-        ):
+        if diameter <= tight:
+            labels[comp] = labels[comp[0]]
+            continue
+        # Beyond rounding, a group is one eigenvalue only if its members are
+        # linked by pairs whose first-order error bounds cover their distance
+        # (perturbed copies of a defective eigenvalue have huge condition
+        # numbers); well-conditioned distinct eigenvalues are never merged,
+        # however close: a symmetric triple lambda - d, lambda, lambda + d is
+        # singular at its mean, so that test alone is not enough.
+        if (_compatible(sub, delta[comp], tight) and diameter <= norm * wide ** (1.0 / m)
+                and singular_at(comp)):
             labels[comp] = labels[comp[0]]
 
     groups = [np.nonzero(labels == g)[0] for g in np.unique(labels)]

@@ -175,6 +175,10 @@ def stealthy_attack(
     attack_a = np.empty((H, p))
     attack_b = np.empty((H, p))
     w = z.copy()
+    # unstable plants can overflow over long horizons: the mismatch is then
+    # not finite and the witness simply fails verification
+    errstate = np.errstate(over="ignore", invalid="ignore")
+    errstate.__enter__()
     for k in range(H):
         y = C @ w
         attack_a[k] = mask_a * y
@@ -200,6 +204,9 @@ def stealthy_attack(
         max(np.abs(outputs_a).max(initial=0.0), 1.0)
     )
     residual = diff / max(scale, floor, np.finfo(float).tiny)
+    errstate.__exit__(None, None, None)
+    if not np.isfinite(residual):
+        residual = float("inf")
     return StealthyAttack(
         z=z,
         sensors_a=sensors_a,

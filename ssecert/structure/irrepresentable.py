@@ -124,7 +124,8 @@ def irrepresentable(
     n, p = system.n, system.p
     items = p if mode == "block" else p * tau
     k = as_int_option(support_size, "support_size", min_value=0)
-    O = system.observability_matrix(tau)  # row t * p + i: sensor i at step t
+    with np.errstate(over="ignore", invalid="ignore"):
+        O = system.observability_matrix(tau)  # row t * p + i: sensor i at step t
     if mode == "block":
         rows_of = np.array([[t * p + i for t in range(tau)] for i in range(p)], dtype=np.int64)
     else:
@@ -167,7 +168,15 @@ def irrepresentable(
             tolerances=tol_out,
         )
 
+    if not np.all(np.isfinite(O)):
+        return make(Verdict.INCONCLUSIVE, math.nan, None,
+                    f"The stacked observability matrix overflows over {tau} steps.")
     if k == 0:
+        sc0 = staircase(system.A, system.C, max_steps=tau, tolerances=tol)
+        if sc0.rank < n and not sc0.problem:
+            return make(Verdict.FAILS, math.inf, (),
+                        f"O_tau (horizon {tau}) has rank {sc0.rank} < n = {n}: even without "
+                        f"attack the state is not determined, so rho is inf.")
         return make(Verdict.HOLDS, 0.0, (), "With no attacked entries there is nothing to misidentify.",
                     margin=1.0)
     if k > items:

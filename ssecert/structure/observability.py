@@ -2,7 +2,7 @@
 
 The rank of the stacked observability matrix is not a reliable test: for
 ``A = diag(linspace(0.1, 0.95, 20))`` and ``C = ones((1, 20))`` the pair is
-observable with a PBH margin of 0.02, yet ``numpy.linalg.matrix_rank``
+observable with a smallest PBH singular value of 0.023, yet ``numpy.linalg.matrix_rank``
 reports rank 18 for O_20, whose monomial rows are nearly parallel.  Two
 backward-stable methods are used instead and must agree:
 

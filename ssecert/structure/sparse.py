@@ -194,11 +194,14 @@ def _scan_level(
     errors: np.ndarray | None = None,
 ) -> _Level:
     """Check every removal of ``full`` plus k sensors of ``rest``."""
-    if errors is None:
-        errors = np.zeros(rest.size)
     q = rest.size
     n = proj.shape[-1]
-    shift = tol.screen_rtol * max(q, 1)
+    if errors is None:
+        errors = np.zeros(q)
+    # A set that is rank deficient in exact arithmetic shows a smallest
+    # eigenvalue up to about sum(err_i^2) <= (sum err_i)^2 when the sensors'
+    # bases carry errors err_i: screen at least that far from zero.
+    shift = max(tol.screen_rtol * max(q, 1), 10.0 * float(np.sum(errors)) ** 2)
     total = math.comb(q, k)
     level = _Level()
     candidates: list[tuple[float, tuple[int, ...]]] = []
@@ -345,9 +348,9 @@ def _refine(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Exact rank decision for the kept sensors of each removed subset.
 
-    The tolerance adds the largest basis error of the kept sensors: a sum
-    of subspaces that is rank deficient in exact arithmetic shows a
-    smallest singular value of about that size.
+    The tolerance adds the basis errors of the kept sensors: a sum of
+    subspaces that is rank deficient in exact arithmetic shows a smallest
+    singular value up to about their sum.
     """
     n = P.shape[-1]
     codes = np.empty(removed.shape[0], dtype=np.int8)
@@ -368,7 +371,7 @@ def _refine(
         stacks[idx < 0] = 0.0
         stacks = stacks.reshape(len(chunk), width * n, n)
         rows = int(max(ranks[k].sum() for k in kept))
-        data_error = np.array([errors[k].max(initial=0.0) for k in kept])
+        data_error = np.array([errors[k].sum() for k in kept])
         c, r, z = stacked_rank(stacks, tolerances=tol, rows=max(rows, 1), data_error=data_error)
         codes[start : start + len(chunk)] = c
         rel[start : start + len(chunk)] = r
@@ -650,7 +653,47 @@ def _recheck_holds(
                 f"re-check of kept sensors {list(kept)} does not confirm observability "
                 f"(PBH full rank: {pbh_ok}, staircase full rank: {stair_ok})"
             )
+    # Independently of any grouping: at every computed eigenvalue, remove the
+    # 2s sensors that see its (numerical) eigenvector best and test PBH there.
+    if not problem:
+        raw_margin, raw_problem = _recheck_raw_eigenvalues(system, s_of(outcome), tol)
+        if raw_margin is not None:
+            margin = raw_margin if margin is None else min(margin, raw_margin)
+        problem = raw_problem
     return margin, records, problem
+
+
+def s_of(outcome: _Outcome) -> int:
+    return int(outcome.details.get("max_attacked", 0))
+
+
+def _recheck_raw_eigenvalues(
+    system: System, s: int, tol: Tolerances
+) -> tuple[float | None, str]:
+    """PBH at each computed eigenvalue after removing the 2s sensors that see it best."""
+    A, C = system.A, system.C
+    n, p = system.n, system.p
+    if 2 * s >= p:
+        return None, ""
+    lam = np.linalg.eigvals(A)
+    norms = np.linalg.norm(C, axis=1)
+    safe = np.where(norms > 0, norms, 1.0)
+    worst = None
+    for value in lam[lam.imag >= 0]:
+        shift = value.real if value.imag == 0 else value
+        _, _, vh = np.linalg.svd(A - shift * np.eye(n))
+        v = vh[-1].conj()
+        seen = np.abs(C @ v) / safe
+        kept = np.sort(np.argsort(-seen, kind="stable")[2 * s:])
+        m, codes = pbh_margins(A, C[kept], np.array([value]), tolerances=tol)
+        worst = float(m[0]) if worst is None else min(worst, float(m[0]))
+        if codes[0] != NONZERO:
+            return worst, (
+                f"the PBH test at the computed eigenvalue {value:.6g}, after removing the "
+                f"{2 * s} sensors that see its eigenvector best, is "
+                f"{'rank deficient' if codes[0] == ZERO else 'borderline'}"
+            )
+    return worst, ""
 
 
 def sparse_observability(
@@ -715,6 +758,7 @@ def sparse_observability(
     H = system.n if horizon is None else as_int_option(horizon, "horizon", min_value=1)
     eig = eigen if eigen is not None else eigen_clusters(system.A, tolerances=tol)
     outcome, tried, estimates = _run(system, s, method, max_sets, tol, progress, eig)
+    outcome.details["max_attacked"] = s
 
     p = system.p
     evidence: dict[str, Any] = {
@@ -785,7 +829,10 @@ def sparse_observability(
             " over the kept-sensor sets T that come closest to breaking"
         )
         if problem:
-            summary = f"The {outcome.method} method finds max_removable = {mr}, but {problem}."
+            evidence["disputed_max_removable"] = mr
+            return make(Verdict.INCONCLUSIVE,
+                        f"The {outcome.method} method finds max_removable = {mr}, but {problem}.",
+                        None, fields(None, False, None), margin=margin)
         else:
             summary = (
                 f"Removing any {mr} of the {p} sensors keeps the plant observable, so up to "
