@@ -9,7 +9,6 @@ JSON, HTML and the terminal.
 
 from __future__ import annotations
 
-import datetime as _dt
 import shlex
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
@@ -179,17 +178,19 @@ def certify(
     stealthy = None
     if witness is not None and witness.get("verified"):
         stealthy = _stealthy_demo(spec, witness, base_seed)
-    simulations: dict[str, Any] = {}
-    if simulate and spec.observer is not None:
-        from .design.observer import build_observer
+    design = None
+    if spec.observer is not None:
         from .design.gains import GainError
-        from .simulation.engine import simulate_scenario
+        from .design.observer import build_observer
 
         try:
             design = build_observer(spec.system, spec.observer)
         except GainError as exc:
-            design = None
-            notes.append(f"no simulation: the observer gain cannot be computed ({exc})")
+            notes.append(f"no simulation or region: the observer gain cannot be computed ({exc})")
+    simulations: dict[str, Any] = {}
+    if simulate and spec.observer is not None:
+        from .simulation.engine import simulate_scenario
+
         scenarios = list(spec.scenarios)
         if design is not None and stealthy is not None and not any(
             sc["attack"] == "stealthy" for sc in scenarios
@@ -209,28 +210,22 @@ def certify(
     elif not simulate:
         notes.append("simulations skipped (--no-sim)")
     region_map = None
-    if region and spec.observer is not None and spec.observer["kind"] in ("sso", "dsso",
-                                                                          "elastic_net"):
-        region_map = _region(spec, notes, say)
+    if region and design is not None and design.sparse:
+        region_map = _region(design, notes, say)
     return CertifyResult(spec=spec, certificate=cert, simulations=simulations,
                          stealthy=stealthy, region=region_map, seed=base_seed,
                          command=command or _command(spec, seed, simulate), notes=tuple(notes))
 
 
-def _region(spec: Spec, notes: list[str], say: Progress) -> Any | None:
-    from .design.gains import GainError
-    from .design.observer import build_observer
+def _region(design: Any, notes: list[str], say: Progress) -> Any | None:
     from .stability.lmi import region_map
 
-    try:
-        design = build_observer(spec.system, spec.observer)
-    except GainError:
-        return None
     m = design.sensing.shape[0]
+    n = design.system.n
     if design.inner_steps > 1:
         return None
-    if spec.system.n + 2 * m > REGION_LIMIT:
-        notes.append(f"certified region not mapped: the LMI has {spec.system.n + 2 * m} rows "
+    if n + 2 * m > REGION_LIMIT:
+        notes.append(f"certified region not mapped: the LMI has {n + 2 * m} rows "
                      f"(the report maps up to {REGION_LIMIT}; use ssecert.stability.lmi."
                      f"region_map for larger plants)")
         return None
@@ -258,8 +253,3 @@ def _command(spec: Spec, seed: int | None, simulate: bool) -> str:
     if not simulate:
         parts.append("--no-sim")
     return " ".join(shlex.quote(p) for p in parts)
-
-
-def generated_at() -> str:
-    """UTC timestamp used in reports."""
-    return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")

@@ -336,9 +336,7 @@ def _solve(
         G = np.hstack([model.A, model.B])
         M = G.T @ P @ G
         Z = np.zeros
-        M = M - cp.bmat([[P, Z((N, m))], [Z((m, N)), Z((m, m))]]) * 1.0
-        if alpha:
-            M = M + alpha * cp.bmat([[P, Z((N, m))], [Z((m, N)), Z((m, m))]])
+        M = M - (1.0 - alpha) * cp.bmat([[P, Z((N, m))], [Z((m, N)), Z((m, m))]])
         if m:
             qCT = model.q * model.Cw.T @ T
             M = M + cp.bmat([[Z((N, N)), qCT], [qCT.T, -2 * T]])
@@ -574,9 +572,8 @@ def iss_from_circle(
     P, t = circle.P, circle.multipliers if circle.multipliers is not None else np.zeros(0)
     alpha = 0.5 * float(circle.decay or 0.0)
     N, m = model.N, model.m
-    base = iss_matrix(model, P, t, alpha, 0.0) - iss_matrix(model, np.zeros_like(P),
-                                                           np.zeros_like(t), alpha, 0.0)
     perf = iss_matrix(model, np.zeros_like(P), np.zeros_like(t), alpha, 0.0)  # |e|^2 only
+    base = iss_matrix(model, P, t, alpha, 0.0) - perf
     k = N + m
 
     def gain(log_kappa: float) -> float:
@@ -597,15 +594,11 @@ def iss_from_circle(
     values = np.array([gain(x) for x in grid])
     best = int(np.argmin(values))
     a, b = grid[max(best - 1, 0)], grid[min(best + 1, grid.size - 1)]
-    for _ in range(40):  # golden-section refinement
-        c1, c2 = b - 0.618 * (b - a), a + 0.618 * (b - a)
-        if gain(c1) < gain(c2):
-            b = c2
-        else:
-            a = c1
-    x = 0.5 * (a + b)
-    g = min(gain(x), values[best])
-    x = x if gain(x) <= values[best] else grid[best]
+    from scipy.optimize import minimize_scalar
+
+    refined = minimize_scalar(gain, bounds=(a, b), method="bounded")
+    x, g = (float(refined.x), float(refined.fun)) if refined.fun <= values[best] else (
+        float(grid[best]), float(values[best]))
     if not np.isfinite(g):
         return LMICertificate("inconclusive", "iss", reason="no finite gain from the circle certificate")
     kappa = float(np.exp(x))

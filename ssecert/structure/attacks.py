@@ -172,41 +172,39 @@ def stealthy_attack(
     mask_a[list(sensors_a)] = 1.0
     mask_b = np.zeros(p)
     mask_b[list(sensors_b)] = 1.0
-    attack_a = np.empty((H, p))
-    attack_b = np.empty((H, p))
-    w = z.copy()
     # unstable plants can overflow over long horizons: the mismatch is then
     # not finite and the witness simply fails verification
-    errstate = np.errstate(over="ignore", invalid="ignore")
-    errstate.__enter__()
-    for k in range(H):
-        y = C @ w
-        attack_a[k] = mask_a * y
-        attack_b[k] = -mask_b * y
-        w = A @ w
+    with np.errstate(over="ignore", invalid="ignore"):
+        attack_a = np.empty((H, p))
+        attack_b = np.empty((H, p))
+        w = z.copy()
+        for k in range(H):
+            y = C @ w
+            attack_a[k] = mask_a * y
+            attack_b[k] = -mask_b * y
+            w = A @ w
 
-    # independent simulation of the two explanations
-    rng = np.random.default_rng(seed)
-    x0 = initial_state(system.n, rng)
-    xa, xb = x0.copy(), x0 + z
-    outputs_a = np.empty((H, p))
-    outputs_b = np.empty((H, p))
-    scale = 0.0
-    normC = float(np.linalg.norm(C, 2))
-    for k in range(H):
-        outputs_a[k] = C @ xa + attack_a[k]
-        outputs_b[k] = C @ xb + attack_b[k]
-        scale = max(scale, normC * float(np.linalg.norm(xb - xa)))
-        xa, xb = A @ xa, A @ xb
-    diff = float(np.max(np.linalg.norm(outputs_a - outputs_b, axis=1)))
-    # rounding in the simulated states themselves is of order eps * ||x||
-    floor = np.finfo(float).eps * normC * float(
-        max(np.abs(outputs_a).max(initial=0.0), 1.0)
-    )
-    residual = diff / max(scale, floor, np.finfo(float).tiny)
-    errstate.__exit__(None, None, None)
-    if not np.isfinite(residual):
-        residual = float("inf")
+        # independent simulation of the two explanations
+        rng = np.random.default_rng(seed)
+        x0 = initial_state(system.n, rng)
+        xa, xb = x0.copy(), x0 + z
+        outputs_a = np.empty((H, p))
+        outputs_b = np.empty((H, p))
+        scale = 0.0
+        normC = float(np.linalg.norm(C, 2))
+        for k in range(H):
+            outputs_a[k] = C @ xa + attack_a[k]
+            outputs_b[k] = C @ xb + attack_b[k]
+            scale = max(scale, normC * float(np.linalg.norm(xb - xa)))
+            xa, xb = A @ xa, A @ xb
+        diff = float(np.max(np.linalg.norm(outputs_a - outputs_b, axis=1)))
+        # rounding in the simulated states themselves is of order eps * ||x||
+        floor = np.finfo(float).eps * normC * float(
+            max(np.abs(outputs_a).max(initial=0.0), 1.0)
+        )
+        residual = diff / max(scale, floor, np.finfo(float).tiny)
+        if not np.isfinite(residual):
+            residual = float("inf")
     return StealthyAttack(
         z=z,
         sensors_a=sensors_a,

@@ -517,19 +517,31 @@ def _hyperplanes(
         use = independent == NONZERO
         if np.any(independent == BORDERLINE) or np.any(codes[use] == BORDERLINE):
             return [], [], "a hyperplane through its sensor rows is borderline", total
-        sizes = np.count_nonzero(codes == NONZERO, axis=1)
-        for j in np.flatnonzero(use):
-            size = int(sizes[j])
-            if best_size is None or size <= best_size:
-                support = tuple(int(i) for i in np.flatnonzero(codes[j] == NONZERO))
-                if best_size is None or size < best_size:
-                    candidates = []
-                    best_size = size
-                candidates.append((size, support, V @ u[j]))
-            order = np.argsort(-mags[j], kind="stable")
-            critical.append(_critical_entry(mags[j], order, s, p))
-        critical.sort()
-        critical = critical[:_CRITICAL]
+        used = np.flatnonzero(use)
+        if used.size:
+            seen = codes[used] == NONZERO  # (N, p) supports
+            sizes = np.count_nonzero(seen, axis=1)
+            low = int(sizes.min())
+            if best_size is None or low <= best_size:
+                if best_size is None or low < best_size:
+                    candidates, best_size = [], low
+                ties = np.flatnonzero(sizes == low)
+                # among supports of equal size, the lexicographically first index
+                # tuple is the lexicographically largest boolean row
+                keys = [~seen[ties, c] for c in range(p - 1, -1, -1)]
+                j = ties[np.lexsort(keys)[0]]
+                support = tuple(int(i) for i in np.flatnonzero(seen[j]))
+                candidates.append((low, support, V @ u[used[j]]))
+            # the hyperplanes whose (2s+1)-th strongest sensor sees them least
+            if 2 * s < p:
+                remaining = -np.partition(-mags[used], 2 * s, axis=1)[:, 2 * s]
+            else:
+                remaining = np.zeros(used.size)
+            for j in used[np.argsort(remaining, kind="stable")[:_CRITICAL]]:
+                order = np.argsort(-mags[j], kind="stable")
+                critical.append(_critical_entry(mags[j], order, s, p))
+            critical.sort()
+            critical = critical[:_CRITICAL]
     if not candidates:  # every (g-1)-subset dependent: only possible if rows.size < g - 1
         u = vh[-1].conj()
         support = tuple(int(i) for i in rows)
@@ -612,6 +624,7 @@ def _recheck_holds(
     outcome: _Outcome,
     eig: EigenAnalysis,
     tol: Tolerances,
+    s: int,
 ) -> tuple[float | None, list[dict[str, Any]], str]:
     """Independent re-check of the sets closest to breaking.
 
@@ -656,26 +669,21 @@ def _recheck_holds(
     # Independently of any grouping: at every computed eigenvalue, remove the
     # 2s sensors that see its (numerical) eigenvector best and test PBH there.
     if not problem:
-        raw_margin, raw_problem = _recheck_raw_eigenvalues(system, s_of(outcome), tol)
+        raw_margin, raw_problem = _recheck_raw_eigenvalues(system, s, tol, eig.eigenvalues)
         if raw_margin is not None:
             margin = raw_margin if margin is None else min(margin, raw_margin)
         problem = raw_problem
     return margin, records, problem
 
 
-def s_of(outcome: _Outcome) -> int:
-    return int(outcome.details.get("max_attacked", 0))
-
-
 def _recheck_raw_eigenvalues(
-    system: System, s: int, tol: Tolerances
+    system: System, s: int, tol: Tolerances, lam: np.ndarray
 ) -> tuple[float | None, str]:
     """PBH at each computed eigenvalue after removing the 2s sensors that see it best."""
     A, C = system.A, system.C
     n, p = system.n, system.p
     if 2 * s >= p:
         return None, ""
-    lam = np.linalg.eigvals(A)
     norms = np.linalg.norm(C, axis=1)
     safe = np.where(norms > 0, norms, 1.0)
     worst = None
@@ -758,7 +766,6 @@ def sparse_observability(
     H = system.n if horizon is None else as_int_option(horizon, "horizon", min_value=1)
     eig = eigen if eigen is not None else eigen_clusters(system.A, tolerances=tol)
     outcome, tried, estimates = _run(system, s, method, max_sets, tol, progress, eig)
-    outcome.details["max_attacked"] = s
 
     p = system.p
     evidence: dict[str, Any] = {
@@ -822,7 +829,7 @@ def sparse_observability(
             verdict, summary, witness = _failure(system, s, outcome, H, seed, tol, evidence)
             return make(verdict, summary, mr, fields(mr, False, outcome.breaking_set),
                         witness=witness)
-        margin, records, problem = _recheck_holds(system, outcome, eig, tol)
+        margin, records, problem = _recheck_holds(system, outcome, eig, tol, s)
         evidence["recheck"] = records
         evidence["margin_definition"] = (
             "smallest relative PBH singular value sigma_min([A - lambda I; C_T]) / ||[A; C]||"
@@ -844,7 +851,7 @@ def sparse_observability(
     if outcome.status == "lower_bound" and outcome.max_removable is not None:
         mr = outcome.max_removable
         if mr >= 2 * s:
-            margin, records, problem = _recheck_holds(system, outcome, eig, tol)
+            margin, records, problem = _recheck_holds(system, outcome, eig, tol, s)
             evidence["recheck"] = records
             if problem:
                 summary = f"Lower bound max_removable >= {mr}, but {problem}."
