@@ -44,6 +44,8 @@ __all__ = [
     "pinv_gain",
     "nilpotency",
     "Nilpotency",
+    "verify_deadbeat",
+    "DeadbeatCheck",
     "DEADBEAT_RTOL",
 ]
 
@@ -126,6 +128,149 @@ def nilpotency(
             return Nilpotency(k, tuple(norms), rtol, s, ok, reason)
     return Nilpotency(None, tuple(norms), rtol, s, True,
                       f"||(F/s)^{n}|| = {norms[-1]:.2e} exceeds {rtol:.0e} (s = {s:.3g})")
+
+
+@dataclass(frozen=True)
+class DeadbeatCheck:
+    """Deadbeat test of the exact matrix F = A - L C of a printed gain.
+
+    F is formed exactly from the floats of A, L and C and its powers are
+    computed in integers, so every number here is about the gain as printed
+    (and as a user would implement it), not about an exact gain it rounds.
+
+    Attributes
+    ----------
+    index : int or None
+        Smallest k with ``||F^k||_2 <= rtol ||A||_2^k``, the spectral norm of
+        the exact power bounded above by ``sqrt(||F^k||_1 ||F^k||_inf)``.
+    relative_norms : tuple of float
+        Those upper bounds on ``||F^k||_2 / ||A||_2^k``, k = 1, 2, ...
+    conclusive : bool
+        ``||F^(k-1)||_2`` is clearly (``clear`` times) above the threshold,
+        by its exact lower bound ``||F^(k-1)||_inf / sqrt(n)``.
+    exactly_nilpotent : bool
+        Some power of the printed F is exactly zero.
+    radius_upper, radius_lower : float
+        Certified bounds on the spectral radius of the printed F.
+    verified : bool
+        ``index`` found, conclusive, and ``radius_upper < 1``: the printed
+        gain is stable and its error shrinks by ``rtol`` (relative to the
+        plant's scale) in ``index`` steps.
+    reason : str
+        Why it is not verified (empty when it is).
+    """
+
+    index: int | None
+    relative_norms: tuple[float, ...]
+    conclusive: bool
+    exactly_nilpotent: bool
+    radius_upper: float
+    radius_lower: float
+    rtol: float
+    verified: bool
+    reason: str = ""
+    radius_power: int = 0
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "index": self.index,
+            "relative_power_norms": list(self.relative_norms),
+            "conclusive": self.conclusive,
+            "exactly_nilpotent": self.exactly_nilpotent,
+            "spectral_radius_upper_bound": self.radius_upper,
+            "spectral_radius_lower_bound": self.radius_lower,
+            "upper_bound_power": self.radius_power,
+            "rtol": self.rtol,
+            "verified": self.verified,
+            "reason": self.reason,
+            "test": ("F = A - L C formed exactly from the printed floats; ||F^k||_2 <= rtol "
+                     "||A||_2^k with ||F^(k-1)||_2 clearly above (exact bounds "
+                     "||X||_inf / sqrt(n) <= ||X||_2 <= sqrt(||X||_1 ||X||_inf)), and "
+                     "rho(F) <= ||F^m||_inf^(1/m) < 1 for an exact power m"),
+        }
+
+
+def verify_deadbeat(
+    A: Any, L: Any, C: Any, *, rtol: float = DEADBEAT_RTOL, clear: float = 100.0
+) -> DeadbeatCheck:
+    """Is the printed gain L deadbeat for (A, C)?  Decided on exact powers.
+
+    Parameters
+    ----------
+    A : array_like, shape (n, n)
+    L : array_like, shape (n, p)
+    C : array_like, shape (p, n)
+    rtol : float, default 1e-8
+        ``||F^k|| <= rtol ||A||^k`` counts as zero (relative to the plant's
+        scale, so the test does not change when the plant is rescaled).
+    clear : float, default 100
+        ``||F^(k-1)||`` must exceed ``clear * rtol ||A||^(k-1)``.
+
+    Returns
+    -------
+    DeadbeatCheck
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> check = verify_deadbeat([[1.0, 1.0], [0.0, 1.0]], [[2.0], [1.0]], [[1.0, 0.0]])
+    >>> check.verified, check.index, check.exactly_nilpotent
+    (True, 2, True)
+    >>> A = 1e6 * np.roll(np.eye(3), 1, axis=0)   # a gain that rounding made unstable
+    >>> L = [[388888.88888888893], [-277777.77777777775], [55555.555555555555]]
+    >>> check = verify_deadbeat(A, L, [[1.0, 2.0, 3.0]])
+    >>> check.verified, check.radius_lower > 4
+    (False, True)
+    """
+    from .._exact import exact_error_matrix, spectral_radius_bound
+
+    A = np.asarray(as_real_matrix(A, "A"), dtype=float)
+    n = A.shape[0]
+    C = np.asarray(as_real_matrix(C, "C", shape=(None, n), shape_hint="the number of states"),
+                   dtype=float)
+    L = np.asarray(as_real_matrix(L, "L", shape=(n, C.shape[0]),
+                                  shape_hint="n x p: states by sensors"), dtype=float)
+    F = exact_error_matrix(A, L, C)
+    powers = spectral_radius_bound(F, consecutive=n, squarings=8, target=1.0)
+    scale = float(np.linalg.norm(A, 2))
+    if not np.isfinite(scale) or scale <= 0:
+        scale = 1.0
+    log_s = math.log2(scale)
+    upper = [hi - (k + 1) * log_s for k, (_, hi) in enumerate(powers.log2_two_norms)]
+    lower = [lo - (k + 1) * log_s for k, (lo, _) in enumerate(powers.log2_two_norms)]
+    relative = tuple(0.0 if r == -math.inf else 2.0 ** min(r, 1e4) for r in upper)
+    threshold = math.log2(rtol)
+    index = next((k + 1 for k, r in enumerate(upper) if r <= threshold), None)
+    conclusive = index is not None and (index == 1 or lower[index - 2] > threshold
+                                        + math.log2(clear))
+    reasons = []
+    if index is None:
+        reasons.append(
+            f"||F^k|| / ||A||^k stays above {rtol:.0e} up to k = {len(rel)}"
+            + (f" (smallest {min(relative):.2e})" if relative else "")
+            + ("" if powers.complete else "; the exact powers stopped at their budget"))
+    elif not conclusive:
+        reasons.append(f"||F^{index - 1}|| / ||A||^{index - 1} = {relative[index - 2]:.2e} is "
+                       f"not clearly above {rtol:.0e}")
+    if powers.radius_bound >= 1:
+        if powers.radius_lower > 1:
+            reasons.append(f"the printed gain is unstable: exact traces of powers of "
+                           f"A - L C prove spectral radius >= {powers.radius_lower:.6g}")
+        else:
+            reasons.append(f"the spectral radius of the printed A - L C is not certified below 1 "
+                           f"(exact bound {powers.radius_bound:.6g})")
+    return DeadbeatCheck(
+        index=index,
+        relative_norms=relative,
+        conclusive=bool(conclusive),
+        exactly_nilpotent=powers.nilpotent_index is not None,
+        radius_upper=float(powers.radius_bound),
+        radius_lower=float(powers.radius_lower),
+        rtol=rtol,
+        verified=bool(index is not None and conclusive and powers.radius_bound < 1),
+        reason="; ".join(reasons),
+        radius_power=powers.radius_power,
+    )
 
 
 @dataclass(frozen=True)
@@ -216,11 +361,55 @@ def deadbeat_gain(
     >>> g.verified, g.details["nilpotency_index"]
     (True, 3)
     """
+    from .._exact import pow2_row_scaling, pow2_scale
+
     if system is not None:
         A, C = system.A, system.C
     A = np.asarray(as_real_matrix(A, "A"), dtype=float)
     C = np.asarray(as_real_matrix(C, "C", shape=(None, A.shape[0])), dtype=float)
     tol = tolerances or Tolerances()
+    # Units: the construction runs on alpha A and D C with powers of two alpha
+    # and D (exact), so that no sensor's units or the plant's scale decide a
+    # rank; L = L_n D / alpha maps the gain back exactly.
+    alpha = pow2_scale(float(np.max(np.abs(A)))) if np.any(A) else 1.0
+    D = pow2_row_scaling(C)
+    L_n, dims = _deadbeat_construction(alpha * A, D[:, None] * C, tol)
+    L = (L_n * D[None, :]) / alpha
+    F = A - L @ C
+    from ..structure._linalg import staircase
+
+    index = staircase(alpha * A, D[:, None] * C, tolerances=tol).index
+    test = verify_deadbeat(A, L, C)
+    problem = test.reason
+    if test.index is not None and test.index < index:  # impossible: rounding fooled the test
+        problem = (f"the power test gives index {test.index}, below the observability index "
+                   f"{index}, which no gain can reach")
+    verified = test.verified and test.index is not None and test.index >= index
+    return Gain(
+        L=L,
+        method="deadbeat",
+        error_matrix=F,
+        verified=verified,
+        details={
+            "nilpotency_index": test.index,
+            "observability_index": index,
+            "minimal": test.index == index,
+            "relative_power_norms": list(test.relative_norms),
+            "exactly_nilpotent": test.exactly_nilpotent,
+            "spectral_radius_upper_bound": test.radius_upper,
+            "spectral_radius_lower_bound": test.radius_lower,
+            "upper_bound_power": test.radius_power,
+            "kernel_dimensions": dims,
+            "test": test.to_dict()["test"],
+            "problem": problem,
+        },
+    )
+
+
+def _deadbeat_construction(
+    A: np.ndarray, C: np.ndarray, tol: Tolerances
+) -> tuple[np.ndarray, list[int]]:
+    """The flag construction of ``deadbeat_gain`` on (A, C); returns L and the flag dimensions."""
     n, p = A.shape[0], C.shape[0]
     # absolute rank threshold scaled by the data (a subspace that already
     # spans everything leaves a projection that is zero up to rounding)
@@ -268,35 +457,7 @@ def deadbeat_gain(
     # top rows: UB^T (A + B F) X = UB^T W  ->  minimum-norm F
     rhs = UB.T @ (W - Ad @ X) @ X.T
     Fd = np.linalg.pinv(UB.T @ Bd) @ rhs
-    L = -Fd.T
-    F = A - L @ C
-    from ..structure._linalg import staircase
-
-    index = staircase(A, C, tolerances=tol).index
-    # s = ||A||: scaling the plant by alpha scales a deadbeat F by alpha; for ||A|| >= 1 this is
-    # DESIGN.md's max(1, ||A||), for ||A|| < 1 it keeps the test invariant under rescaling
-    test = nilpotency(F, scale=max(float(np.linalg.norm(A, 2)), np.finfo(float).tiny))
-    problem = test.reason
-    if test.index is not None and test.index < index:  # impossible: rounding fooled the test
-        problem = (f"the power test gives index {test.index}, below the observability index "
-                   f"{index}, which no gain can reach")
-    verified = test.index is not None and test.conclusive and test.index >= index
-    return Gain(
-        L=L,
-        method="deadbeat",
-        error_matrix=F,
-        verified=verified,
-        details={
-            "nilpotency_index": test.index,
-            "observability_index": index,
-            "minimal": test.index == index,
-            "scaled_power_norms": list(test.norms),
-            "scale": test.scale,
-            "kernel_dimensions": dims,
-            "test": "||F^k|| <= 1e-8 ||A||^k with ||F^(k-1)|| clearly above",
-            "problem": problem,
-        },
-    )
+    return -Fd.T, dims
 
 
 def exact_deadbeat_gain(A: Sequence[Sequence[Any]], C: Sequence[Sequence[Any]]) -> Gain:

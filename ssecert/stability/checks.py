@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from ..design.gains import GainError
+from ..design.gains import DEADBEAT_RTOL, GainError
 from ..design.observer import ObserverDesign, build_observer
 from ..results import Check, Verdict
 from ..system import System
@@ -34,7 +34,11 @@ def _lyapunov_evidence(cert) -> dict[str, Any]:
         "contraction": cert.contraction,
         "condition_number_P": cert.condition,
         "residual": cert.residual,
-        "margin_definition": "lambda_min(P - F'PF) / ||P||, recomputed from P",
+        "margin_definition": ("lambda_min(P - F'PF) / ||P||, recomputed from P"
+                              if cert.method == "lyapunov" else
+                              "1 - (certified upper bound on the spectral radius of the exact F)"),
+        "certificate": cert.method,
+        "exact_decision": cert.proof,
     }
 
 
@@ -59,45 +63,31 @@ def _exact_deadbeat(system: System) -> dict[str, Any]:
 
 
 def observer_gain_check(design: ObserverDesign) -> Check:
-    """Is the gain what was asked for, and is the linear error matrix F = A - L S stable?"""
+    """Is the gain what was asked for, and is the linear error matrix F = A - L S stable?
+
+    Every number is about the gain as printed: F is formed exactly from the
+    floats of A, L and S.  For a deadbeat gain on a small plant the exact
+    rational gain is also computed; it is evidence about the plant, and the
+    verdict never rests on it.
+    """
     gain = design.gain
     F = design.error_matrix
+    parts = _parts(design)
     computed_radius = float(np.abs(np.linalg.eigvals(F)).max())
     fields: dict[str, Any] = {"L": gain.L, "gain_method": gain.method, "kind": design.kind}
     title = f"Observer gain ({gain.method})"
-    evidence: dict[str, Any] = {"details": gain.details, "computed_eigenvalue_radius": computed_radius}
+    evidence: dict[str, Any] = {"details": gain.details,
+                                "computed_eigenvalue_radius": computed_radius}
     if gain.method == "deadbeat":
-        index = gain.details.get("nilpotency_index")
-        if design.system.n <= EXACT_LIMIT:
-            evidence["exact"] = _exact_deadbeat(design.system)
-        fields["nilpotency_index"] = index
-        fields["observability_index"] = gain.details.get("observability_index")
-        if gain.verified:
-            fields["spectral_radius"] = 0.0
-            return Check(
-                id="observer_gain", title=title, verdict=Verdict.HOLDS,
-                summary=(
-                    f"A - L C is nilpotent with index {index} (by matrix powers, not eigenvalues), "
-                    f"the observability index: the error vanishes in {index} step"
-                    f"{'s' if index != 1 else ''} without attack"
-                    + ("" if gain.details.get("minimal") else " (index not minimal)")
-                    + ("; confirmed exactly in rational arithmetic"
-                       if evidence.get("exact", {}).get("verified") else "") + "."),
-                value=index, margin=None, method="deadbeat (flag construction, power test)",
-                fields=fields, evidence=evidence,
-                tolerances={"deadbeat_rtol": 1e-8, "clear_factor": 100})
-        fields["spectral_radius"] = computed_radius
-        return Check(
-            id="observer_gain", title=title, verdict=Verdict.INCONCLUSIVE,
-            summary=("The deadbeat gain could not be verified nilpotent: "
-                     + (gain.details.get("problem") or "the power test did not conclude") + "."),
-            value=index, method="deadbeat (flag construction, power test)", fields=fields,
-            evidence=evidence)
-    cert = lyapunov_certificate(F)
+        return _deadbeat_check(design, fields, evidence, title)
+    cert = lyapunov_certificate(F, parts=parts)
     fields["spectral_radius"] = cert.spectral_radius
     evidence.update(_lyapunov_evidence(cert))
     verdict = Verdict(cert.verdict)
-    if verdict is Verdict.HOLDS:
+    if verdict is Verdict.HOLDS and cert.method == "exact powers":
+        fields["spectral_radius"] = cert.contraction
+        summary = (f"The linear error dynamics e+ = (A - L C) e are stable: {cert.reason}.")
+    elif verdict is Verdict.HOLDS:
         summary = (f"The linear error dynamics e+ = (A - L C) e are stable (spectral radius "
                    f"{cert.spectral_radius:.4g}), certified by a Lyapunov matrix P: the error "
                    f"contracts at least by {cert.contraction:.4g} per step in the P-norm.")
@@ -107,10 +97,74 @@ def observer_gain_check(design: ObserverDesign) -> Check:
     else:
         summary = f"The stability of A - L C could not be certified: {cert.reason}."
     return Check(id="observer_gain", title=title, verdict=verdict, summary=summary,
-                 value=cert.spectral_radius, margin=cert.margin, method="discrete Lyapunov (dlyap)",
+                 value=fields["spectral_radius"], margin=cert.margin,
+                 method="discrete Lyapunov (dlyap)" if cert.method == "lyapunov"
+                 else "exact powers of A - L C",
                  fields=fields, evidence=evidence,
                  witness=cert.witness if verdict is Verdict.FAILS else None,
                  tolerances={"error_bound": cert.error_bound, "clear_factor": 100})
+
+
+def _parts(design: ObserverDesign) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """(A, L, S) whose exact combination A - L S is the error matrix, when it is one."""
+    if design.kind == "sso" and design.inner_steps > 1:
+        return None
+    return design.system.A, design.gain.L, design.sensing
+
+
+def _deadbeat_check(design: ObserverDesign, fields: dict[str, Any], evidence: dict[str, Any],
+                    title: str) -> Check:
+    gain = design.gain
+    details = gain.details
+    index = details.get("nilpotency_index")
+    upper = details.get("spectral_radius_upper_bound")
+    lower = details.get("spectral_radius_lower_bound")
+    exact_note = ""
+    if design.system.n <= EXACT_LIMIT:
+        evidence["exact"] = _exact_deadbeat(design.system)
+        if evidence["exact"].get("verified"):
+            exact_note = (f" In exact arithmetic the rational gain L_exact (evidence) is nilpotent "
+                          f"with index {evidence['exact']['exact_index']}.")
+    fields["nilpotency_index"] = index
+    fields["observability_index"] = details.get("observability_index")
+    fields["spectral_radius"] = upper
+    fields["spectral_radius_lower_bound"] = lower
+    method = "deadbeat (flag construction; exact powers of the printed A - L C)"
+    tolerances = {"deadbeat_rtol": DEADBEAT_RTOL, "clear_factor": 100}
+    if gain.verified:
+        rel = details["relative_power_norms"][index - 1]
+        exactly = details.get("exactly_nilpotent")
+        summary = (
+            (f"A - L C with the printed L is exactly nilpotent with index {index}: the error "
+             f"vanishes in {index} step{'s' if index != 1 else ''} without attack."
+             if exactly else
+             f"With the printed L, ||(A - L C)^{index}|| <= {rel:.1e} ||A||^{index} (powers "
+             f"computed exactly from the floats): the error vanishes to rounding in {index} "
+             f"step{'s' if index != 1 else ''} without attack, the observability index"
+             f"{'' if details.get('minimal') else ' (index not minimal)'}, and the spectral "
+             f"radius is certified <= {upper:.3g}.")
+            + exact_note)
+        return Check(id="observer_gain", title=title, verdict=Verdict.HOLDS, summary=summary,
+                     value=index, margin=1.0 - upper, method=method, fields=fields,
+                     evidence=evidence, tolerances=tolerances)
+    problem = details.get("problem") or "the power test did not conclude"
+    if lower is not None and lower > 1:
+        from .lyapunov import instability_witness
+
+        witness = instability_witness(design.error_matrix, parts=_parts(design))
+        if witness is not None and witness["verified"]:
+            return Check(
+                id="observer_gain", title=title, verdict=Verdict.FAILS,
+                summary=(f"The deadbeat construction's printed gain is not deadbeat: {problem}. "
+                         f"Rounding L to floats destroys the nilpotency of this plant's "
+                         f"deadbeat loop." + exact_note),
+                value=index, margin=None, method=method, fields=fields, evidence=evidence,
+                witness=witness, tolerances=tolerances)
+    return Check(
+        id="observer_gain", title=title, verdict=Verdict.INCONCLUSIVE,
+        summary=f"The deadbeat gain could not be verified for the printed L: {problem}."
+                + exact_note,
+        value=index, method=method, fields=fields, evidence=evidence, tolerances=tolerances)
 
 
 def observer_stability_check(design: ObserverDesign) -> tuple[Check, Any]:
@@ -120,9 +174,11 @@ def observer_stability_check(design: ObserverDesign) -> tuple[Check, Any]:
     """
     title = f"Observer stability ({design.kind})"
     if not design.sparse:
-        cert = lyapunov_certificate(design.error_matrix)
+        cert = lyapunov_certificate(design.error_matrix, parts=_parts(design))
         verdict = Verdict(cert.verdict)
-        if verdict is Verdict.HOLDS:
+        if verdict is Verdict.HOLDS and cert.method == "exact powers":
+            summary = f"The error dynamics are linear and stable: {cert.reason}."
+        elif verdict is Verdict.HOLDS:
             summary = (f"The error dynamics are linear and certified stable by a Lyapunov matrix "
                        f"(contraction {cert.contraction:.4g} per step).")
         elif verdict is Verdict.FAILS:
@@ -130,7 +186,9 @@ def observer_stability_check(design: ObserverDesign) -> tuple[Check, Any]:
         else:
             summary = f"Stability could not be certified: {cert.reason}."
         return Check(id="observer_stability", title=title, verdict=verdict, summary=summary,
-                     value=cert.contraction, margin=cert.margin, method="discrete Lyapunov",
+                     value=cert.contraction, margin=cert.margin,
+                     method="discrete Lyapunov" if cert.method == "lyapunov"
+                     else "exact powers of A - L C",
                      fields={"decay_rate": None if cert.contraction is None
                              else 1 - cert.contraction},
                      evidence=_lyapunov_evidence(cert),

@@ -390,17 +390,22 @@ def _prechecks(model: LureModel) -> tuple[str, str, dict[str, Any]]:
     rho_F = float(np.abs(np.linalg.eigvals(F)).max()) if n else 0.0
     details["spectral_radius_F"] = rho_F
     if rho_F >= 1 - 1e-12:
-        witness = instability_witness(F)
-        details["witness"] = witness
-        where = ("near the origin the soft threshold is zero (dead zone), so the error follows "
-                 "e+ = F e and " if model.m else "")
-        if witness is not None and witness["verified"]:
-            return "fails", (
-                f"the linear error matrix F = A - L C has spectral radius {rho_F:.6g} >= 1 "
-                f"(confirmed); {where}the origin is not asymptotically stable"), details
-        return "inconclusive", (
-            f"the computed spectral radius of F = A - L C is {rho_F:.12g}, too close to 1 to "
-            f"decide in floating point; no certificate is attempted"), details
+        from .spectral import schur_decision
+
+        decision = schur_decision(F)
+        details["exact_decision"] = decision.to_dict()
+        if decision.state != "stable":
+            witness = instability_witness(F, decision=decision)
+            details["witness"] = witness
+            where = ("near the origin the soft threshold is zero (dead zone), so the error "
+                     "follows e+ = F e and " if model.m else "")
+            if witness is not None and witness["verified"]:
+                return "fails", (
+                    f"the linear error matrix F = A - L C is not stable: {decision.reason}; "
+                    f"{where}the origin is not asymptotically stable"), details
+            return "inconclusive", (
+                f"the computed spectral radius of F = A - L C is {rho_F:.12g}, and its stability "
+                f"cannot be decided: {decision.reason}; no certificate is attempted"), details
     if model.m:
         rho_q = float(np.abs(np.linalg.eigvals(model.vertex(model.q))).max())
         details["spectral_radius_at_sector_vertex"] = rho_q

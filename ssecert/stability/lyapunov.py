@@ -9,6 +9,7 @@ with a margin above a floating-point error bound.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -50,6 +51,13 @@ class LyapunovCertificate:
         Of F (reported, not used to decide).
     reason : str
     witness : dict or None
+    method : str
+        ``"lyapunov"`` (P verified in floating point with a margin) or
+        ``"exact powers"`` (no verified P, but rho(F) <= ||F^m||^(1/m) < 1 on
+        the exact F; ``contraction`` is then that bound on the asymptotic
+        rate, not a per-step factor).
+    proof : dict or None
+        The exact decision (``schur_decision``) when one was needed.
     """
 
     verdict: str
@@ -63,33 +71,51 @@ class LyapunovCertificate:
     spectral_radius: float
     reason: str = ""
     witness: dict[str, Any] | None = field(default=None)
+    method: str = "lyapunov"
+    proof: dict[str, Any] | None = field(default=None)
 
 
-def instability_witness(F: np.ndarray, *, steps: int = 2000) -> dict[str, Any] | None:
-    """A real initial error that does not decay under F, when the computed spectral
-    radius is at least 1 - 1e-12, with how far that is verified.
+def instability_witness(
+    F: np.ndarray,
+    *,
+    steps: int = 2000,
+    parts: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+    decision: Any = None,
+) -> dict[str, Any] | None:
+    """A real initial error that does not decay under F, when F is not shown stable.
 
-    The trajectory is simulated with renormalisation (log-norms, so nothing
-    overflows).  ``verified`` is True when the error grows by a factor 2
-    within ``steps``, or when the dominant eigenvalue exceeds 1 by more than
-    its first-order error bound n eps ||F|| kappa; rounding alone can put a
-    stable eigenvalue above 1 (a defective one especially), so nothing less
-    counts as proof.
+    ``verified`` is True only when ``schur_decision`` proves F unstable on
+    its exact value (exact traces of powers, an exact eigenvalue on the unit
+    circle) or the dominant eigenvalue exceeds 1 by more than its
+    first-order error bound.  The trajectory from the dominant eigenvector is
+    simulated with renormalisation (log-norms, so nothing overflows) and
+    reported so the witness can be replayed; growth alone proves nothing,
+    since a stable non-normal F can amplify an error for many steps first.
+    Returns None when F is proven stable.
+
+    Parameters
+    ----------
+    F : ndarray, shape (n, n)
+    steps : int, default 2000
+        Length of the replayed trajectory (it stops once the error doubled).
+    parts : (A, L, C), optional
+        Decide on F = A - L C formed exactly from these floats.
+    decision : SchurDecision, optional
+        A decision already made for this F.
     """
-    import scipy.linalg
+    from .spectral import schur_decision
 
-    n = F.shape[0]
-    lam, vl, vr = scipy.linalg.eig(F, left=True, right=True)
-    j = int(np.argmax(np.abs(lam)))
-    if abs(lam[j]) < 1 - 1e-12:
+    if decision is None:
+        decision = schur_decision(F, parts=parts)
+    if decision.state == "stable":
         return None
+    n = F.shape[0]
+    lam, vr = np.linalg.eig(F)
+    j = int(np.argmax(np.abs(lam)))
     v = vr[:, j]
     z = v.real if np.linalg.norm(v.real) >= np.linalg.norm(v.imag) else v.imag
-    z = np.real(z) / np.linalg.norm(z)
-    y = vl[:, j] / np.linalg.norm(vl[:, j])
-    dot = abs(np.vdot(y, vr[:, j] / np.linalg.norm(vr[:, j])))
-    kappa = 1.0 / dot if dot > 0 else np.inf
-    bound = n * EPS * float(np.linalg.norm(F, 2)) * kappa
+    norm_z = float(np.linalg.norm(z))
+    z = np.real(z) / norm_z if norm_z > 0 else np.eye(n)[0]
     log_norms = [0.0]
     w = z.copy()
     total = 0.0
@@ -103,22 +129,31 @@ def instability_witness(F: np.ndarray, *, steps: int = 2000) -> dict[str, Any] |
         log_norms.append(total)
         if total >= np.log(2.0):
             break
-    grows = max(log_norms) >= np.log(2.0)
-    clear = abs(lam[j]) - bound > 1 + 1e-9
     return {
         "eigenvalue": complex(lam[j]),
-        "eigenvalue_error_bound": float(bound),
+        "eigenvalue_error_bound": decision.details.get("first_order_error_bound"),
         "initial_error": z,
         "log_norms": log_norms[:: max(1, len(log_norms) // 200)],
-        "grows_by_factor_2": bool(grows),
-        "verified": bool(grows or clear),
+        "grows_by_factor_2": bool(max(log_norms) >= np.log(2.0)),
+        "verified": decision.state == "unstable",
+        "proof": decision.to_dict(),
     }
 
 
 def lyapunov_certificate(
-    F: np.ndarray, Q: np.ndarray | None = None, *, clear: float = 100.0
+    F: np.ndarray,
+    Q: np.ndarray | None = None,
+    *,
+    clear: float = 100.0,
+    parts: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
 ) -> LyapunovCertificate:
     """Certify that e(k+1) = F e(k) is asymptotically stable, or show it is not.
+
+    A Lyapunov matrix P (``control.dlyap``) is the certificate when it
+    verifies in floating point with a margin.  Otherwise the exact F decides
+    (``schur_decision``): stable by exact powers, unstable by exact traces or
+    an exact eigenvalue on the unit circle (with the dominant direction as a
+    replayable witness), or inconclusive.
 
     Parameters
     ----------
@@ -127,6 +162,9 @@ def lyapunov_certificate(
         Positive definite right-hand side (default identity); symmetrised.
     clear : float, default 100
         The decrease must exceed ``clear`` times the error bound.
+    parts : (A, L, C), optional
+        The floats F was formed from (F = A - L C); exact decisions are then
+        made on the matrix of the printed gain.
 
     Returns
     -------
@@ -143,21 +181,42 @@ def lyapunov_certificate(
     """
     import control
 
+    from .spectral import schur_decision
+
     F = np.asarray(as_real_matrix(F, "F"), dtype=float)
     n = F.shape[0]
     Q = np.eye(n) if Q is None else np.asarray(as_real_matrix(Q, "Q", shape=(n, n)))
     Q = 0.5 * (Q + Q.T)
     rho = float(np.abs(np.linalg.eigvals(F)).max()) if n else 0.0
     normF = float(np.linalg.norm(F, 2))
-    witness = None
-    try:
-        P = np.asarray(control.dlyap(F.T, Q), dtype=float)
-    except Exception as exc:  # singular Lyapunov operator (lambda_i lambda_j = 1)
-        witness = instability_witness(F)
-        verdict = "fails" if witness is not None and witness["verified"] else "inconclusive"
-        return LyapunovCertificate(verdict, None, None, None, 0.0, None, None, None, rho,
-                                   f"the Lyapunov equation has no unique solution ({exc})",
-                                   witness)
+
+    def exact_fallback(why: str, P: np.ndarray | None = None, decrease: np.ndarray | None = None,
+                       margin: float | None = None, bound: float = 0.0,
+                       condition: float | None = None,
+                       residual: float | None = None) -> LyapunovCertificate:
+        decision = schur_decision(F, parts=parts)
+        proof = decision.to_dict()
+        if decision.state == "stable":
+            upper = float(decision.radius_upper)
+            return LyapunovCertificate(
+                "holds", None, None, 1.0 - upper, 0.0, upper, None, None, rho,
+                f"{why}; instead, {decision.reason}", None, "exact powers", proof)
+        witness = instability_witness(F, parts=parts, decision=decision)
+        if decision.state == "unstable":
+            return LyapunovCertificate("fails", P, decrease, margin, bound, None, condition,
+                                       residual, rho, decision.reason, witness, "lyapunov", proof)
+        return LyapunovCertificate("inconclusive", P, decrease, margin, bound, None, condition,
+                                   residual, rho, f"{why}; {decision.reason}", witness,
+                                   "lyapunov", proof)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # an ill-conditioned solve is judged below, not trusted
+        try:
+            P = np.asarray(control.dlyap(F.T, Q), dtype=float)
+        except Exception as exc:  # singular Lyapunov operator (lambda_i lambda_j = 1)
+            return exact_fallback(f"the Lyapunov equation has no unique solution ({exc})")
+    if not np.all(np.isfinite(P)):
+        return exact_fallback("the Lyapunov solution is not finite")
     P = 0.5 * (P + P.T)
     normP = max(float(np.linalg.norm(P, 2)), np.finfo(float).tiny)
     residual = float(np.linalg.norm(F.T @ P @ F - P + Q, 2)) / max(float(np.linalg.norm(Q, 2)),
@@ -180,24 +239,8 @@ def lyapunov_certificate(
             contraction = float(np.sqrt(max(0.0, 1.0 - dec_min * normP / p_eigs[-1])))
             return LyapunovCertificate("holds", P, decrease, dec_min, bound, contraction,
                                        condition, residual, rho)
-    witness = instability_witness(F)
     margin = min(dec_min, p_min)  # negative when P or the decrease is indefinite
-    if witness is not None and witness["verified"]:
-        how = ("an initial error along its eigenvector grows by a factor 2 in simulation"
-               if witness["grows_by_factor_2"] else
-               f"the eigenvalue exceeds 1 by more than its error bound "
-               f"{witness['eigenvalue_error_bound']:.1e}")
-        return LyapunovCertificate("fails", P, decrease, margin, bound, None, condition,
-                                   residual, rho,
-                                   f"F has an eigenvalue of modulus {rho:.6g} >= 1 ({how})",
-                                   witness)
-    if witness is not None:
-        return LyapunovCertificate(
-            "inconclusive", P, decrease, margin, bound, None, condition, residual, rho,
-            f"the computed spectral radius of F is {rho:.12g}, but neither growth nor an "
-            f"eigenvalue clear of its error bound {witness['eigenvalue_error_bound']:.1e} "
-            f"confirms instability", witness)
-    return LyapunovCertificate(
-        "inconclusive", P, decrease, margin, bound, None, condition, residual, rho,
+    return exact_fallback(
         f"the Lyapunov solution cannot be verified with a margin (smallest decrease "
-        f"{dec_min:.2e}, smallest eigenvalue of P {p_min:.2e}, error bound {bound:.2e})")
+        f"{dec_min:.2e}, smallest eigenvalue of P {p_min:.2e}, error bound {bound:.2e})",
+        P, decrease, margin, bound, condition, residual)

@@ -1,0 +1,653 @@
+"""Exact arithmetic on the floating-point data a user gives.
+
+Every float is a dyadic rational m 2^e, so a float matrix is exactly an
+integer matrix times a power of two.  Two kinds of exact decision are built
+on that:
+
+* **powers of a float matrix** (``exact_power_norms``,
+  ``spectral_radius_bound``): F = A - L C formed exactly from the floats of
+  A, L and C, its powers computed in integers, and
+  rho(F) <= ||F^m||_inf^(1/m) for any m: a certified bound on the spectral
+  radius of the very matrix a report prints, which no eigenvalue solver
+  gives for a nearly nilpotent F;
+* **observability of the exact data** (``exact_observability``): the
+  Krylov rank of (A, C) modulo a prime bounds the rank over the rationals
+  from below, so full rank modulo a prime proves observability; an exact
+  rational kernel vector z with C A^k z = 0 for k < n, re-checked in
+  integers, proves the opposite.  A decision that floating point makes but
+  the exact data contradicts hinged on digits below the data's precision.
+
+Both are affordable for the plant sizes of this field (tens of states);
+callers pass budgets and get ``None`` or ``"unknown"`` beyond them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = [
+    "Dyadic",
+    "dyadic",
+    "exact_error_matrix",
+    "PowerBound",
+    "spectral_radius_bound",
+    "ExactObservability",
+    "exact_observability",
+    "pow2_row_scaling",
+    "pow2_scale",
+    "ExactPlant",
+]
+
+# primes just below 2^26: products of two residues stay below 2^52, so a dot
+# product of up to 2^11 terms fits in int64 without overflow
+_PRIMES = (67108859, 67108837, 67108819)
+_MAX_MOD_N = 2048
+
+
+@dataclass(frozen=True)
+class Dyadic:
+    """An exact matrix ``ints * 2**exponent`` (``ints`` of Python integers)."""
+
+    ints: np.ndarray  # object array of int
+    exponent: int
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return self.ints.shape
+
+    def bits(self) -> int:
+        """Largest bit length of an entry."""
+        return max((abs(int(x)).bit_length() for x in self.ints.flat), default=0)
+
+    def __matmul__(self, other: Dyadic) -> Dyadic:
+        return Dyadic(self.ints.dot(other.ints), self.exponent + other.exponent)
+
+    def inf_norm_log2(self) -> float:
+        """log2 of the exact infinity norm (max absolute row sum); -inf for zero.
+
+        Rounded up by a relative 1e-12, so that 2 ** value bounds the norm
+        from above.
+        """
+        if self.ints.size == 0:
+            return -math.inf
+        sums = [sum(abs(int(x)) for x in row) for row in self.ints]
+        top = max(sums)
+        if top == 0:
+            return -math.inf
+        value = math.log2(top)
+        return value + 1e-12 * max(1.0, abs(value)) + self.exponent
+
+    def two_norm_log2_bounds(self) -> tuple[float, float]:
+        """log2 of exact bounds on the spectral norm: ||X||_inf / sqrt(n) <= ||X||_2 <=
+        sqrt(||X||_1 ||X||_inf) (-inf for zero)."""
+        inf = self.inf_norm_log2()
+        if inf == -math.inf:
+            return -math.inf, -math.inf
+        one = Dyadic(self.ints.T, self.exponent).inf_norm_log2()
+        n = self.ints.shape[1]
+        lower = inf - 1e-12 * max(1.0, abs(inf)) * 2 - 0.5 * math.log2(n)
+        return lower, 0.5 * (inf + one)
+
+    def to_float(self) -> np.ndarray:
+        """Nearest floats (entries beyond the float range become inf)."""
+        out = np.empty(self.ints.shape)
+        for index, x in np.ndenumerate(self.ints):
+            try:
+                out[index] = math.ldexp(float(int(x)), self.exponent)
+            except OverflowError:
+                out[index] = math.copysign(math.inf, int(x))
+        return out
+
+
+def dyadic(M: np.ndarray) -> Dyadic:
+    """The exact value of a finite float matrix as integers times a power of two.
+
+    Examples
+    --------
+    >>> d = dyadic(np.array([[0.5, 3.0]]))
+    >>> d.ints.tolist(), d.exponent
+    ([[1, 6]], -1)
+    """
+    M = np.asarray(M, dtype=np.float64)
+    if not np.all(np.isfinite(M)):
+        raise ValueError("dyadic: the matrix has non-finite entries")
+    mant, expo = np.frexp(M)
+    ints = (mant * 2.0**53).astype(np.int64)  # exact: |mant| < 1
+    expo = expo.astype(np.int64) - 53
+    nonzero = ints != 0
+    if not nonzero.any():
+        return Dyadic(np.zeros(M.shape, dtype=object), 0)
+    # strip common trailing zero bits to keep the integers small
+    tz = np.zeros(M.shape, dtype=np.int64)
+    vals = np.abs(ints[nonzero])
+    tz_nz = np.zeros(vals.shape, dtype=np.int64)
+    work = vals.copy()
+    while True:
+        even = (work & 1) == 0
+        if not even.any():
+            break
+        tz_nz[even] += 1
+        work[even] >>= 1
+    tz[nonzero] = tz_nz
+    ints = np.where(nonzero, ints >> np.where(nonzero, tz, 0), 0)
+    expo = expo + tz
+    low = int(expo[nonzero].min())
+    out = np.empty(M.shape, dtype=object)
+    for index in np.ndindex(M.shape):
+        v = int(ints[index])
+        out[index] = v << int(expo[index] - low) if v else 0
+    return Dyadic(out, low)
+
+
+def _align(a: Dyadic, b: Dyadic) -> tuple[np.ndarray, np.ndarray, int]:
+    e = min(a.exponent, b.exponent)
+    sa, sb = a.exponent - e, b.exponent - e
+    ia = a.ints * (1 << sa) if sa else a.ints
+    ib = b.ints * (1 << sb) if sb else b.ints
+    return ia, ib, e
+
+
+def exact_error_matrix(A: np.ndarray, L: np.ndarray, C: np.ndarray) -> Dyadic:
+    """F = A - L C computed exactly from the floats of A, L and C."""
+    LC = dyadic(L) @ dyadic(C)
+    ia, ib, e = _align(dyadic(A), LC)
+    return Dyadic(ia - ib, e)
+
+
+@dataclass(frozen=True)
+class PowerBound:
+    """Certified facts about the powers of an exact matrix F.
+
+    Attributes
+    ----------
+    log2_norms : tuple of float
+        log2 ||F^k||_inf for k = 1, ..., len (upper bounds, exact data).
+    log2_two_norms : tuple of (float, float)
+        log2 of a lower and an upper bound on ||F^k||_2, k = 1, ..., len.
+    nilpotent_index : int or None
+        Smallest k with F^k exactly zero, if found.
+    radius_bound : float
+        Certified upper bound on the spectral radius: min over the powers m
+        computed of ||F^m||_inf^(1/m).
+    radius_power : int
+        The power m that gave the bound.
+    powers : tuple of int
+        Every power whose exact norm was computed.
+    complete : bool
+        False when the bit budget stopped the computation early.
+    radius_lower : float
+        Certified lower bound on the spectral radius: max over the powers m
+        of (|trace F^m| / n)^(1/m), since |trace F^m| <= n rho^m.
+    lower_power : int
+        The power that gave the lower bound (0 if none).
+    """
+
+    log2_norms: tuple[float, ...]
+    log2_two_norms: tuple[tuple[float, float], ...]
+    nilpotent_index: int | None
+    radius_bound: float
+    radius_power: int
+    powers: tuple[int, ...]
+    complete: bool
+    radius_lower: float = 0.0
+    lower_power: int = 0
+
+
+def spectral_radius_bound(
+    F: Dyadic,
+    *,
+    consecutive: int | None = None,
+    squarings: int = 6,
+    target: float | None = 1.0,
+    max_work: float = 3e8,
+) -> PowerBound:
+    """Exact norms of F, F^2, ..., F^consecutive, then of repeated squares.
+
+    rho(F) <= ||F^m||^(1/m) for every m and every induced norm, so each
+    exact power gives a certified bound; squaring F^m tightens it (the bound
+    tends to rho(F)).  Squaring stops once the bound is below ``target``.
+
+    Parameters
+    ----------
+    F : Dyadic, shape (n, n)
+    consecutive : int, optional
+        Powers 1..consecutive computed one by one (default n).
+    squarings : int, default 6
+        Further squarings of the last power.
+    target : float or None, default 1
+        Stop squaring when the bound is below this value.
+    max_work : float, default 3e8
+        Budget in word operations (n^3 times the words of the entries to the
+        power 1.6, Karatsuba); beyond it the result is marked incomplete.
+
+    Returns
+    -------
+    PowerBound
+    """
+    n = F.shape[0]
+    k_max = n if consecutive is None else max(1, int(consecutive))
+    log2_norms: list[float] = []
+    log2_two: list[tuple[float, float]] = []
+    powers: list[int] = []
+    best, best_m = math.inf, 0
+    nil = None
+    complete = True
+
+    def cost(a: Dyadic, b: Dyadic) -> float:
+        words = (a.bits() + b.bits()) / 64.0 + 1.0
+        return float(n) ** 3 * words**1.6
+
+    lower, lower_m = 0.0, 0
+
+    def record(m: int, P: Dyadic) -> float:
+        nonlocal best, best_m, lower, lower_m
+        value = P.inf_norm_log2()
+        powers.append(m)
+        bound = 0.0 if value == -math.inf else 2.0 ** min(value / m, 1e4)
+        if bound < best:
+            best, best_m = bound, m
+        trace = abs(sum(int(P.ints[i, i]) for i in range(n)))
+        if trace:
+            # rounded down: log2 of an int is within a few ulps
+            log_t = math.log2(trace) - 1e-12 * max(1.0, abs(math.log2(trace))) + P.exponent
+            low = 2.0 ** max(min((log_t - math.log2(n)) / m, 1e4), -1e4)
+            if low > lower:
+                lower, lower_m = low, m
+        return value
+
+    work = 0.0
+    P = F
+    for k in range(1, k_max + 1):
+        if k > 1:
+            c = cost(P, F)
+            if work + c > max_work:
+                complete = False
+                break
+            work += c
+            P = P @ F
+        value = record(k, P)
+        log2_norms.append(value)
+        log2_two.append(P.two_norm_log2_bounds())
+        if value == -math.inf:
+            nil = k
+            break
+    m = powers[-1] if powers else 1
+    if nil is None and complete:
+        for _ in range(squarings):
+            if target is not None and (best < target or lower > target):
+                break
+            c = cost(P, P)
+            if work + c > max_work:
+                complete = False
+                break
+            work += c
+            P = P @ P
+            m *= 2
+            if record(m, P) == -math.inf:
+                break
+    return PowerBound(tuple(log2_norms), tuple(log2_two), nil, best, best_m, tuple(powers), complete, lower,
+                      lower_m)
+
+
+# ---------------------------------------------------------------------------
+# exact observability
+
+
+def pow2_scale(x: float) -> float:
+    """The power of two nearest to 1 / x (exact rescaling), 1 for x = 0 or non-finite."""
+    if not np.isfinite(x) or x <= 0:
+        return 1.0
+    return math.ldexp(1.0, -math.frexp(x)[1] + 1)
+
+
+def pow2_row_scaling(M: np.ndarray) -> np.ndarray:
+    """Powers of two d_i with d_i ||M_i|| in [1, 2) (1 for zero rows): exact row units.
+
+    Scaling a sensor's row by a power of two changes no rounding, so
+    decisions made on the scaled rows are exactly those of any other
+    power-of-two choice of units, and within a factor 2 of any unit at all.
+    """
+    M = np.asarray(M, dtype=float)
+    with np.errstate(over="ignore"):
+        norms = np.max(np.abs(M), axis=1) if M.size else np.zeros(M.shape[0])
+    out = np.ones(M.shape[0])
+    for i, v in enumerate(norms):
+        out[i] = pow2_scale(float(v))
+    return out
+
+
+@dataclass(frozen=True)
+class ExactObservability:
+    """The observability of the exact data (A, C).
+
+    Attributes
+    ----------
+    state : str
+        ``"observable"`` (Krylov rank n modulo a prime: a proof),
+        ``"unobservable"`` (an exact kernel vector, re-checked in integers)
+        or ``"unknown"`` (beyond the budget, or rank deficient modulo the
+        primes without an exact kernel vector).
+    rank_mod_p : int or None
+        Krylov rank modulo the prime (a lower bound on the exact rank).
+    z : ndarray or None
+        A unit-norm float rounding of the exact unobservable direction.
+    z_exact : list of int or None
+        The exact integer direction.
+    prime : int or None
+    reason : str
+    """
+
+    state: str
+    rank_mod_p: int | None = None
+    z: np.ndarray | None = None
+    z_exact: list[int] | None = None
+    prime: int | None = None
+    reason: str = ""
+
+    def to_dict(self) -> dict:
+        out: dict = {"state": self.state, "rank_mod_p": self.rank_mod_p, "prime": self.prime}
+        if self.z_exact is not None:
+            out["z_exact_integers"] = [str(v) for v in self.z_exact]
+        if self.reason:
+            out["reason"] = self.reason
+        return out
+
+
+def _integer_data(A: np.ndarray, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Integer matrices with the same Krylov structure as (A, C).
+
+    Scaling A or C by a nonzero constant changes no observable subspace, so
+    the dyadic mantissas can be used directly.
+    """
+    return dyadic(A).ints, dyadic(C).ints
+
+
+def _mod(M: np.ndarray, prime: int) -> np.ndarray:
+    return np.array([[int(x) % prime for x in row] for row in M], dtype=np.int64).reshape(
+        M.shape)
+
+
+def _rank_mod_p(Aint: np.ndarray, Cint: np.ndarray, prime: int) -> int:
+    """Krylov rank of (A, C) modulo ``prime``: the dimension of span{C A^k} over GF(prime).
+
+    The basis is kept in reduced echelon form with unit pivots, so a row is
+    reduced against all of it by one vector operation; residues are below
+    2^26, so every dot product of up to 2^11 terms fits in int64.
+    """
+    return _rank_mod_p_residues(_mod(Aint, prime), _mod(Cint, prime), prime)
+
+
+def _rank_mod_p_residues(Am: np.ndarray, Cm: np.ndarray, prime: int) -> int:
+    """``_rank_mod_p`` on residues already reduced modulo ``prime``."""
+    n = Am.shape[0]
+    basis = np.zeros((0, n), dtype=np.int64)
+    pivots: list[int] = []
+    frontier = list(Cm)
+    while frontier and len(pivots) < n:
+        added = []
+        for r in frontier:
+            if pivots:
+                r = (r - (r[pivots] @ basis) % prime) % prime
+            nz = np.flatnonzero(r)
+            if nz.size == 0:
+                continue
+            pc = int(nz[0])
+            r = (r * pow(int(r[pc]), -1, prime)) % prime
+            if basis.shape[0]:
+                basis = (basis - (basis[:, [pc]] * r[None, :]) % prime) % prime
+            basis = np.vstack([basis, r[None, :]])
+            pivots.append(pc)
+            added.append(r)
+        frontier = [(r @ Am) % prime for r in added]
+    return len(pivots)
+
+
+def _exact_kernel_vector(Aint: np.ndarray, Cint: np.ndarray, max_bits: int) -> list[int] | None:
+    """An integer z != 0 orthogonal to every row C A^k, or None (full rank or budget)."""
+    n = Aint.shape[0]
+    A_rows = [[int(x) for x in row] for row in Aint]
+    basis: list[list[int]] = []  # fraction-free reduced rows
+    pivots: list[int] = []
+
+    def primitive(r: list[int]) -> list[int]:
+        g = 0
+        for x in r:
+            g = math.gcd(g, x)
+        if g > 1:
+            r = [x // g for x in r]
+        lead = next(x for x in r if x)
+        return [-x for x in r] if lead < 0 else r
+
+    def reduce(r: list[int]) -> list[int]:
+        for b, pc in zip(basis, pivots):
+            if r[pc]:
+                f, g = b[pc], r[pc]
+                d = math.gcd(f, g)
+                f, g = f // d, g // d
+                r = [f * x - g * y for x, y in zip(r, b)]
+        return r
+
+    def times_A(r: list[int]) -> list[int]:
+        return [sum(r[i] * A_rows[i][j] for i in range(n) if r[i]) for j in range(n)]
+
+    frontier = [[int(x) for x in row] for row in Cint]
+    for _ in range(n + 1):
+        added = []
+        for r in frontier:
+            r = reduce(r)
+            if not any(r):
+                continue
+            r = primitive(r)
+            if max(abs(x).bit_length() for x in r) > max_bits:
+                return None
+            pc = next(j for j, x in enumerate(r) if x)
+            # clear the new pivot from earlier rows
+            for i, b in enumerate(basis):
+                if b[pc]:
+                    f, g = r[pc], b[pc]
+                    d = math.gcd(f, g)
+                    basis[i] = primitive([(f // d) * x - (g // d) * y for x, y in zip(b, r)])
+            basis.append(r)
+            pivots.append(pc)
+            added.append(r)
+        if not added or len(pivots) == n:
+            break
+        frontier = [times_A(r) for r in added]
+    if len(pivots) == n:
+        return None
+    free = next(j for j in range(n) if j not in set(pivots))
+    # z_free = D, z_pivot(i) = -b_i[free] * D / b_i[pc_i], D = lcm of pivots
+    D = 1
+    for b, pc in zip(basis, pivots):
+        D = D * abs(b[pc]) // math.gcd(D, abs(b[pc]))
+    z = [0] * n
+    z[free] = D
+    for b, pc in zip(basis, pivots):
+        z[pc] = -b[free] * D // b[pc]
+    g = 0
+    for x in z:
+        g = math.gcd(g, x)
+    return [x // g for x in z] if g > 1 else z
+
+
+def _verify_kernel(Aint: np.ndarray, Cint: np.ndarray, z: list[int]) -> bool:
+    """C A^k z == 0 exactly for k < n (integers)."""
+    n = Aint.shape[0]
+    A_rows = [[int(x) for x in row] for row in Aint]
+    C_rows = [[int(x) for x in row] for row in Cint]
+    w = list(z)
+    for _ in range(n):
+        if not any(w):
+            break
+        for row in C_rows:
+            if sum(a * b for a, b in zip(row, w)):
+                return False
+        w = [sum(A_rows[i][j] * w[j] for j in range(n) if w[j]) for i in range(n)]
+    return any(z)
+
+
+def exact_observability(
+    A: np.ndarray,
+    C: np.ndarray,
+    *,
+    max_n: int = 60,
+    max_bits: int = 200_000,
+) -> ExactObservability:
+    """Decide observability of the exact data (A, C) (floats taken as rationals).
+
+    Parameters
+    ----------
+    A : ndarray, shape (n, n)
+    C : ndarray, shape (q, n)
+        May have no rows (then every state is unobservable).
+    max_n : int, default 60
+        Largest n decided exactly.
+    max_bits : int, default 200000
+        Bit budget of the exact kernel computation.
+
+    Returns
+    -------
+    ExactObservability
+
+    Examples
+    --------
+    >>> exact_observability(np.eye(2), np.array([[1.0, 0.0]])).state
+    'unobservable'
+    >>> exact_observability(np.array([[1.0, 1.0], [0.0, 1.0]]), np.array([[1.0, 0.0]])).state
+    'observable'
+    """
+    A = np.asarray(A, dtype=float)
+    C = np.asarray(C, dtype=float).reshape(-1, A.shape[0])
+    n = A.shape[0]
+    if n > max_n or n > _MAX_MOD_N:
+        return ExactObservability("unknown", reason=f"n = {n} exceeds the exact limit {max_n}")
+    if not (np.all(np.isfinite(A)) and np.all(np.isfinite(C))):
+        return ExactObservability("unknown", reason="non-finite data")
+    if C.shape[0] == 0 or not np.any(C):
+        z = np.zeros(n)
+        z[0] = 1.0
+        zi = [0] * n
+        zi[0] = 1
+        return ExactObservability("unobservable", 0, z, zi, None,
+                                  "no sensor output: every state is unobservable")
+    Aint, Cint = _integer_data(A, C)
+    rank = 0
+    prime = _PRIMES[0]
+    for prime in _PRIMES[:2]:
+        rank = _rank_mod_p(Aint, Cint, prime)
+        if rank == n:
+            return ExactObservability("observable", rank, prime=prime)
+    z = _exact_kernel_vector(Aint, Cint, max_bits)
+    if z is None:
+        return ExactObservability(
+            "unknown", rank, prime=prime,
+            reason="rank deficient modulo two primes, but the exact kernel computation exceeded "
+                   "its budget or found full rank")
+    if not _verify_kernel(Aint, Cint, z):  # pragma: no cover - would be a bug above
+        return ExactObservability("unknown", rank, prime=prime,
+                                  reason="the exact kernel vector did not verify")
+    zf = _scaled_floats(z)
+    return ExactObservability("unobservable", rank, zf / np.linalg.norm(zf), z, prime)
+
+
+def _scaled_floats(z: list[int]) -> np.ndarray:
+    """The integers z divided by a common power of two, as floats without overflow."""
+    top = max(abs(x) for x in z)
+    shift = max(top.bit_length() - 60, 0)
+    return np.array([float(v >> shift) if v >= 0 else -float((-v) >> shift) for v in z])
+
+
+def shift_identity(F: Dyadic, value: int) -> Dyadic:
+    """F - value I, exactly."""
+    n = F.shape[0]
+    ints = F.ints.copy()
+    if F.exponent <= 0:
+        step = value << (-F.exponent)
+        for i in range(n):
+            ints[i, i] = int(ints[i, i]) - step
+        return Dyadic(ints, F.exponent)
+    ints = ints * (1 << F.exponent)
+    for i in range(n):
+        ints[i, i] = int(ints[i, i]) - value
+    return Dyadic(ints, 0)
+
+
+def exact_kernel_vector(M: Dyadic, *, max_bits: int = 200_000) -> list[int] | None:
+    """An integer vector z != 0 with M z = 0 exactly (re-checked), or None."""
+    n = M.shape[1]
+    zero = np.zeros((n, n), dtype=object)
+    z = _exact_kernel_vector(zero, M.ints, max_bits)
+    if z is None or not _verify_kernel(zero, M.ints, z):
+        return None
+    return z
+
+
+class ExactPlant:
+    """Exact observability decisions for many sensor subsets of one plant.
+
+    The integer data and their residues are computed once; each subset then
+    costs one Krylov rank modulo a prime (a proof when it is full) and, only
+    when that is deficient, an exact kernel vector re-checked in integers.
+
+    Parameters
+    ----------
+    A : ndarray, shape (n, n)
+    C : ndarray, shape (p, n)
+    max_n : int, default 60
+        Larger plants are not decided exactly (every answer is "unknown").
+    """
+
+    def __init__(self, A: np.ndarray, C: np.ndarray, *, max_n: int = 60) -> None:
+        A = np.asarray(A, dtype=float)
+        C = np.asarray(C, dtype=float)
+        self.n = A.shape[0]
+        self.enabled = (self.n <= max_n and bool(np.all(np.isfinite(A)))
+                        and bool(np.all(np.isfinite(C))))
+        self._cache: dict[tuple[int, ...], ExactObservability] = {}
+        if self.enabled:
+            self.Aint = dyadic(A).ints
+            # each sensor's row scaled on its own: row scaling changes no subspace
+            self.Cint = np.empty(C.shape, dtype=object)
+            for i in range(C.shape[0]):
+                self.Cint[i] = dyadic(C[i : i + 1]).ints[0]
+            self.prime = _PRIMES[0]
+            self.Am = _mod(self.Aint, self.prime)
+            self.Cm = _mod(self.Cint, self.prime)
+
+    def observability(self, kept: tuple[int, ...] | list[int]) -> ExactObservability:
+        """Exact observability of (A, C[kept])."""
+        key = tuple(int(i) for i in kept)
+        if key in self._cache:
+            return self._cache[key]
+        if not self.enabled:
+            result = ExactObservability("unknown", reason="beyond the exact limits")
+        elif not key:
+            z = np.zeros(self.n)
+            z[0] = 1.0
+            result = ExactObservability("unobservable", 0, z, [1] + [0] * (self.n - 1), None,
+                                        "no sensor kept")
+        else:
+            rank = _rank_mod_p_residues(self.Am, self.Cm[list(key)], self.prime)
+            if rank == self.n:
+                result = ExactObservability("observable", rank, prime=self.prime)
+            else:
+                Csub = self.Cint[list(key)]
+                rank2 = _rank_mod_p(self.Aint, Csub, _PRIMES[1])
+                if rank2 == self.n:
+                    result = ExactObservability("observable", rank2, prime=_PRIMES[1])
+                else:
+                    z = _exact_kernel_vector(self.Aint, Csub, 200_000)
+                    if z is not None and _verify_kernel(self.Aint, Csub, z):
+                        zf = _scaled_floats(z)
+                        result = ExactObservability("unobservable", rank, zf / np.linalg.norm(zf),
+                                                    z, self.prime)
+                    else:
+                        result = ExactObservability(
+                            "unknown", rank, prime=self.prime,
+                            reason="rank deficient modulo two primes, but no exact kernel vector "
+                                   "within the budget")
+        self._cache[key] = result
+        return result

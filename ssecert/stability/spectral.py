@@ -1,0 +1,176 @@
+"""Is e(k+1) = F e(k) asymptotically stable?  Decided on the exact matrix.
+
+Eigenvalue solvers cannot decide this for the matrices observers produce: a
+deadbeat F is nearly nilpotent, its computed eigenvalues are off by
+eps^(1/n) and can land outside the unit circle (or inside it, for a printed
+gain that rounding made unstable), and a simulated trajectory that grows for
+a while proves nothing about a non-normal F.  ``schur_decision`` works on the
+exact value of F (from the floats of A, L and C when given, so it is the
+matrix of the printed gain):
+
+* **stable** when rho(F) <= ||F^m||_inf^(1/m) < 1 for an exact power m;
+* **unstable** when rho(F) >= (|trace F^m| / n)^(1/m) > 1 for an exact power
+  m, or when F - I or F + I has an exact kernel vector (an eigenvalue on the
+  unit circle: not asymptotically stable);
+* otherwise a dominant eigenvalue that exceeds 1 by more than its
+  first-order error bound n eps ||F|| kappa is reported as unstable, with
+  the method saying so; anything else is undecided.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .._exact import (
+    Dyadic,
+    dyadic,
+    exact_error_matrix,
+    exact_kernel_vector,
+    shift_identity,
+    spectral_radius_bound,
+)
+from ..tolerances import EPS
+
+__all__ = ["SchurDecision", "schur_decision", "EXACT_SCHUR_LIMIT"]
+
+EXACT_SCHUR_LIMIT = 80  # largest n whose powers are computed exactly
+
+
+@dataclass(frozen=True)
+class SchurDecision:
+    """Outcome of ``schur_decision``.
+
+    Attributes
+    ----------
+    state : str
+        ``"stable"``, ``"unstable"`` or ``"unknown"``.
+    radius_upper, radius_lower : float or None
+        Certified bounds on the spectral radius of the exact F.
+    method : str
+        How the state was decided.
+    eigenvalue : complex
+        Dominant computed eigenvalue (floating point, reported only).
+    rigorous : bool
+        True when the decision rests on exact arithmetic only.
+    reason : str
+    details : dict
+    """
+
+    state: str
+    radius_upper: float | None
+    radius_lower: float | None
+    method: str
+    eigenvalue: complex
+    rigorous: bool
+    reason: str
+    details: dict[str, Any] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "state": self.state,
+            "spectral_radius_upper_bound": self.radius_upper,
+            "spectral_radius_lower_bound": self.radius_lower,
+            "method": self.method,
+            "rigorous": self.rigorous,
+            "computed_dominant_eigenvalue": self.eigenvalue,
+            "reason": self.reason,
+            **self.details,
+        }
+
+
+def _first_order(F: np.ndarray) -> tuple[complex, float]:
+    """Dominant computed eigenvalue and its first-order error bound."""
+    import scipy.linalg
+
+    n = F.shape[0]
+    lam, vl, vr = scipy.linalg.eig(F, left=True, right=True)
+    j = int(np.argmax(np.abs(lam)))
+    y = vl[:, j] / np.linalg.norm(vl[:, j])
+    x = vr[:, j] / np.linalg.norm(vr[:, j])
+    dot = abs(np.vdot(y, x))
+    kappa = 1.0 / dot if dot > 0 else np.inf
+    return complex(lam[j]), float(n * EPS * np.linalg.norm(F, 2) * kappa)
+
+
+def schur_decision(
+    F: np.ndarray,
+    *,
+    parts: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+    max_work: float = 3e8,
+) -> SchurDecision:
+    """Decide whether every eigenvalue of the exact F lies inside the unit circle.
+
+    Parameters
+    ----------
+    F : ndarray, shape (n, n)
+        The matrix, or its floating-point rounding when ``parts`` is given.
+    parts : (A, L, C), optional
+        Decide F = A - L C formed exactly from these floats instead: the
+        matrix of the gain as printed, not its rounded product.
+    max_work : float, default 3e8
+        Budget of the exact powers (word operations).
+
+    Returns
+    -------
+    SchurDecision
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> schur_decision(np.array([[0.5, 100.0], [0.0, 0.5]])).state
+    'stable'
+    >>> d = schur_decision(np.array([[0.0, 1.0], [-1.0, 0.0]]))
+    >>> d.state, d.radius_upper < 1.0001
+    ('unknown', True)
+    >>> schur_decision(np.eye(2)).state
+    'unstable'
+    """
+    F = np.asarray(F, dtype=float)
+    n = F.shape[0]
+    if not np.all(np.isfinite(F)):
+        return SchurDecision("unknown", None, None, "none", complex(np.nan), False,
+                             "F has non-finite entries")
+    try:
+        lam, bound = _first_order(F)
+    except (np.linalg.LinAlgError, ValueError):
+        lam, bound = complex(np.nan), np.inf
+    upper = lower = None
+    details: dict[str, Any] = {"first_order_error_bound": bound}
+    if n <= EXACT_SCHUR_LIMIT:
+        exact: Dyadic = exact_error_matrix(*parts) if parts is not None else dyadic(F)
+        powers = spectral_radius_bound(exact, squarings=8, target=1.0, max_work=max_work)
+        upper, lower = powers.radius_bound, powers.radius_lower
+        details.update(upper_bound_power=powers.radius_power, lower_bound_power=powers.lower_power,
+                       exactly_nilpotent_index=powers.nilpotent_index,
+                       exact_powers_complete=powers.complete)
+        source = "of the printed gain (F = A - L C from its floats)" if parts else "of F"
+        if upper < 1.0:
+            return SchurDecision(
+                "stable", upper, lower, f"exact powers: rho <= ||F^{powers.radius_power}||^(1/"
+                f"{powers.radius_power})", lam, True,
+                f"the exact powers {source} bound its spectral radius by {upper:.6g} < 1", details)
+        if lower > 1.0:
+            return SchurDecision(
+                "unstable", upper, lower, f"exact traces: rho >= (|tr F^{powers.lower_power}| / n)"
+                f"^(1/{powers.lower_power})", lam, True,
+                f"the exact traces of the powers {source} bound its spectral radius below by "
+                f"{lower:.6g} > 1", details)
+        for value in (1, -1):
+            if n <= 40 and exact_kernel_vector(shift_identity(exact, value)) is not None:
+                return SchurDecision(
+                    "unstable", upper, max(lower, 1.0), f"exact eigenvalue {value}", lam, True,
+                    f"F has the eigenvalue {value} exactly (F - ({value}) I has an exact kernel "
+                    f"vector): the error along it never decays", details)
+    if np.isfinite(abs(lam)) and abs(lam) - bound > 1 + 1e-9:
+        return SchurDecision(
+            "unstable", upper, lower, "first-order eigenvalue bound", lam, False,
+            f"the dominant eigenvalue {lam:.6g} exceeds 1 in modulus by more than its first-order "
+            f"error bound {bound:.1e}", details)
+    return SchurDecision(
+        "unknown", upper, lower, "none", lam, False,
+        "neither exact powers nor traces nor a clear eigenvalue decide it"
+        + (f" (certified {lower:.6g} <= rho <= {upper:.6g})" if upper is not None else ""),
+        details)
