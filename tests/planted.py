@@ -209,3 +209,60 @@ def planted(rng: np.random.Generator, kind: str, *, integer: bool = True) -> Pla
         breaking_set=min(supports),
         description=f"{kind}: blocks {blocks}, p = {p}",
     )
+
+
+def hidden_jordan(rng: np.random.Generator) -> Planted | None:
+    """Jordan blocks up to size 4, eigenvalues repeated across blocks, hidden by an
+    ill-conditioned integer similarity (the data stay exact integers, so the planted
+    truth is the truth).  None when the entries would exceed 2^50."""
+    p = int(rng.integers(3, 11))
+    n_target = int(rng.integers(3, 10))
+    blocks: list[tuple[int, int]] = []
+    size = 0
+    values = [int(v) for v in rng.permutation(np.arange(-3, 4))]
+    while size < n_target:
+        m = int(rng.integers(1, 5))
+        if rng.random() < 0.5 or len(values) < 2:
+            lam = values[0]
+        else:
+            lam = values.pop(0)
+        blocks.append((m, lam))
+        size += m
+    n = size
+    M = np.zeros((n, n), dtype=np.int64)
+    Cm = rng.integers(-3, 4, size=(p, n))
+    eig_cols: dict[int, list[int]] = {}
+    start = 0
+    for m, lam in blocks:
+        M[start : start + m, start : start + m] = lam * np.eye(m, dtype=np.int64) + np.diag(
+            np.ones(m - 1, dtype=np.int64), 1)
+        eig_cols.setdefault(lam, []).append(start)
+        start += m
+    for cols in eig_cols.values():
+        for c in cols:
+            seen = set(rng.choice(p, int(rng.integers(1, p + 1)), replace=False).tolist())
+            for i in range(p):
+                if i in seen:
+                    while Cm[i, c] == 0:
+                        Cm[i, c] = rng.integers(-3, 4)
+                else:
+                    Cm[i, c] = 0
+    best, supports = None, []
+    for cols in eig_cols.values():
+        size_, sup = exact_min_supports([[int(Cm[i, c]) for c in cols] for i in range(p)])
+        if best is None or size_ < best:
+            best, supports = size_, list(sup)
+        elif size_ == best:
+            supports.extend(sup)
+    T = np.eye(n, dtype=np.int64)
+    for _ in range(int(rng.integers(n, 4 * n))):
+        i, j = rng.choice(n, 2, replace=False)
+        T[i] += int(rng.choice([-2, -1, 1, 2])) * T[j]
+    Tinv = np.round(np.linalg.inv(T)).astype(np.int64)
+    if not np.array_equal(T @ Tinv, np.eye(n, dtype=np.int64)):
+        return None
+    A, C = T @ M @ Tinv, Cm @ Tinv
+    if np.abs(A).max() > 2**50 or np.abs(C).max() > 2**50:
+        return None
+    return Planted(A=A.astype(float), C=C.astype(float), max_removable=best - 1,
+                   breaking_set=min(supports), description=f"hidden jordan {blocks}, p = {p}")

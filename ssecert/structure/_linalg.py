@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg
 
+from ..system import System
 from ..tolerances import BORDERLINE, EPS, NONZERO, ZERO, Tolerances, classify
 
 try:  # the gufunc behind numpy.linalg.cholesky: NaN instead of an exception
@@ -38,7 +39,31 @@ __all__ = [
     "screen_positive_definite",
     "stacked_rank",
     "matrix_norm",
+    "unit_normalized",
 ]
+
+
+def unit_normalized(system: System) -> tuple[System, float]:
+    """The plant in exact power-of-two units: alpha A and D C, with alpha and D powers of two.
+
+    Observability and every sensor-wise question are unchanged by scaling A
+    by a nonzero constant and each sensor's row by its own: the Krylov
+    subspaces of all sensor sets are the same.  Powers of two change no
+    rounding, so the decisions are exactly those of the user's data, but no
+    sensor's units (1e-8 or 1e8) and no overall scale (entries near the
+    float range) can tip a rank threshold.  Returns the scaled plant and
+    alpha (eigenvalues of the scaled A are alpha times those of A).
+    """
+    from .._exact import pow2_row_scaling, pow2_scale
+
+    A, C = system.A, system.C
+    with np.errstate(over="ignore"):
+        top = float(np.max(np.abs(A))) if A.size else 0.0
+    alpha = pow2_scale(top) if top > 0 else 1.0
+    D = pow2_row_scaling(C)
+    if alpha == 1.0 and np.all(D == 1.0):
+        return system, 1.0
+    return System(alpha * A, D[:, None] * C, sensors=system.sensors, name=system.name), alpha
 
 
 def matrix_norm(M: np.ndarray) -> float:

@@ -119,11 +119,16 @@ def observability(
     >>> check.verdict.value, check.fields["observability_index"]
     ('holds', 20)
     """
+    from .._exact import ExactPlant
+    from ._linalg import unit_normalized
+
     tol = tolerances or Tolerances()
-    A, C = system.A, system.C
+    work, alpha = unit_normalized(system)
+    A, C = work.A, work.C
     n = system.n
     eig = eigen if eigen is not None else eigen_clusters(A, tolerances=tol)
     sc = staircase(A, C, tolerances=tol)
+    exact = ExactPlant(system.A, system.C).observability(tuple(range(system.p)))
 
     centers = np.array([c.center for c in eig.clusters], dtype=complex)
     margins, codes = pbh_margins(A, C, centers, tolerances=tol)
@@ -147,10 +152,10 @@ def observability(
         stair_state, stair_note = ("observable" if sc.rank == n else "unobservable"), ""
 
     evidence = {
-        "eigenvalues": eig.eigenvalues,
+        "eigenvalues": eig.eigenvalues / alpha,
         "pbh": [
             {
-                "eigenvalue": c.center,
+                "eigenvalue": c.center / alpha,
                 "algebraic_multiplicity": c.algebraic,
                 "geometric_multiplicity": c.geometric,
                 "pbh_margin": float(m),
@@ -165,10 +170,15 @@ def observability(
         "observable_dimension": sc.rank,
         "pbh_state": pbh_state,
         "staircase_state": stair_state,
-        "margin_definition": "min over eigenvalues of sigma_min([A - lambda I; C]) / ||[A; C]||_2",
+        "exact": exact.to_dict(),
+        "margin_definition": ("min over eigenvalues of sigma_min([A - lambda I; C]) / ||[A; C]||_2,"
+                              " in units where ||A||_max and every sensor row are within a factor "
+                              "2 of 1 (powers of two, exact)"),
         "method_detail": (
             "PBH test at grouped eigenvalues, re-checked by the orthogonal observability "
-            "staircase; an unobservable direction is verified by simulating C A^k z"
+            "staircase; an unobservable direction is verified by simulating C A^k z; the exact "
+            "data (floats as rationals) decide by the Krylov rank modulo a prime (full rank "
+            "proves observability) or an exact kernel vector (proves the opposite)"
         ),
     }
     tolerances_out = {
@@ -196,6 +206,35 @@ def observability(
             tolerances=tolerances_out,
         )
 
+    if exact.state == "unobservable" and not (pbh_state == "unobservable"
+                                              or stair_state == "unobservable"):
+        # floating point was fooled (error amplification); the exact direction is the proof
+        witness = {
+            "z": exact.z,
+            "z_exact_integers": [str(v) for v in exact.z_exact or []],
+            "unobservable_dimension": None,
+            "unobservable_eigenvalues": [],
+            "residual": unobservable_residual(A, C, exact.z),
+            "meaning": "C A^k z = 0 exactly for every k (z_exact, checked in integer arithmetic): "
+                       "x0 and x0 + z give identical outputs",
+        }
+        return check(
+            Verdict.FAILS,
+            "(A, C) is not observable: exact arithmetic on the data finds a state direction that "
+            "produces no output (floating point could not resolve it).",
+            None, None, witness,
+        )
+    if exact.state == "observable" and (pbh_state == "unobservable"
+                                        or stair_state == "unobservable"):
+        evidence["distance_to_unobservability"] = margin
+        return check(
+            Verdict.INCONCLUSIVE,
+            f"In floating point (A, C) looks unobservable, but the exact data are observable "
+            f"(Krylov rank {n} modulo a prime): the plant is within a relative distance "
+            f"{margin:.1e} of an unobservable one, below the precision of its data, so the answer "
+            f"depends on digits the data do not have.",
+            None, None,
+        )
     if pbh_state == "observable" and stair_state == "observable":
         return check(
             Verdict.HOLDS,
@@ -209,7 +248,7 @@ def observability(
     candidates: list[tuple[np.ndarray, str, list]] = []
     if pbh_state == "unobservable":
         unobservable = [
-            {"eigenvalue": c.center, "pbh_margin": float(m)}
+            {"eigenvalue": c.center / alpha, "pbh_margin": float(m)}
             for c, m, code in zip(eig.clusters, margins, codes)
             if code == ZERO
         ]
@@ -232,7 +271,12 @@ def observability(
                 "residual": residual,
                 "meaning": "C A^k z = 0 for every k: x0 and x0 + z give identical outputs",
             }
+            if exact.state == "unobservable":
+                witness["z_exact_integers"] = [str(v) for v in exact.z_exact or []]
+                witness["exact_check"] = "an exact unobservable direction, checked in integers"
             note = "" if stair_state == "unobservable" else " (confirmed by simulation)"
+            if exact.state == "unobservable":
+                note += " and in exact arithmetic"
             return check(
                 Verdict.FAILS,
                 f"(A, C) is not observable: a {unobs}-dimensional subspace of states produces "

@@ -45,11 +45,13 @@ from ..tolerances import BORDERLINE, EPS, NONZERO, ZERO, Tolerances, classify
 from ._combinatorics import colex_blocks, count_subsets
 from ._linalg import (
     EigenAnalysis,
+    unit_normalized,
     SensorSubspaces,
     eigen_clusters,
     sensor_subspaces,
     stacked_rank,
 )
+from .._exact import ExactPlant
 from .attacks import stealthy_attack
 from .observability import pbh_margins
 
@@ -95,6 +97,8 @@ def _enumeration(
     tol: Tolerances,
     progress: Progress | None,
     subspaces: SensorSubspaces | None = None,
+    eig: EigenAnalysis | None = None,
+    exact: ExactPlant | None = None,
 ) -> _Outcome:
     A, C = system.A, system.C
     n, p = system.n, system.p
@@ -150,25 +154,118 @@ def _enumeration(
         out.checked += level.checked
         if level.critical:
             best_critical = level.critical
-        if level.failures:
-            first = min(level.failures)
+        first, z_first, within = _resolve_failures(system, level.failures, eig, tol, exact, out)
+        if first is not None:
             out.status = "exact"
             out.max_removable = full.size + k - 1
             out.breaking_set = first
-            out.z = level.failures[first]
-            if level.borderline:
-                out.details["borderline_sets_at_breaking_size"] = level.borderline
+            out.z = z_first
+            if level.borderline or within:
+                out.details["borderline_sets_at_breaking_size"] = level.borderline + len(within)
             break
-        if level.borderline:
+        if level.borderline or within:
             out.status = "lower_bound"
             out.max_removable = full.size + k - 1
-            out.problems.append(
-                f"{level.borderline} set(s) of {full.size + k} sensors have a borderline "
-                f"rank decision"
-            )
+            if level.borderline:
+                out.problems.append(
+                    f"{level.borderline} set(s) of {full.size + k} sensors have a borderline "
+                    f"rank decision"
+                )
+            if within:
+                out.details["within_precision_of_breaking"] = [list(w) for w in within[:8]]
+                distance = out.details.get("distance_to_breaking")
+                out.problems.append(
+                    f"removing sensors {list(within[0])}"
+                    + (f" (and {len(within) - 1} other set(s) of that size)" if len(within) > 1
+                       else "")
+                    + " leaves a plant that is observable in exact arithmetic but within "
+                    "floating-point precision of an unobservable one"
+                    + (f" (relative distance {distance:.1e})" if distance is not None else "")
+                    + ": the answer depends on digits the data do not have"
+                )
             break
     out.critical = [kept for _, kept in best_critical]
     return out
+
+
+def _clearly_observable(
+    system: System, kept: tuple[int, ...], eig: EigenAnalysis | None, tol: Tolerances
+) -> bool:
+    """Float evidence, independent of the Krylov screening, that (A, C_kept) is observable
+    with a margin beyond the borderline band (PBH at every eigenvalue group and the
+    conservative staircase)."""
+    from ._linalg import staircase
+
+    if eig is None or eig.problems or not kept:
+        return False
+    Ck = system.C[list(kept)]
+    centers = np.array([c.center for c in eig.clusters], dtype=complex)
+    _, codes = pbh_margins(system.A, Ck, centers, tolerances=tol)
+    if not np.all(codes == NONZERO):
+        return False
+    sc = staircase(system.A, Ck, tolerances=tol, error_model="compound")
+    return sc.rank == system.n and not sc.problem
+
+
+def _distance(system: System, kept: tuple[int, ...], eig: EigenAnalysis | None,
+              tol: Tolerances) -> float | None:
+    """Smallest relative PBH singular value of (A, C_kept) over the eigenvalue groups and the
+    computed eigenvalues: how far the kept sensors are from losing observability."""
+    if not kept:
+        return 0.0
+    Ck = system.C[list(kept)]
+    points = [c.center for c in eig.clusters] if eig is not None else []
+    lam = np.linalg.eigvals(system.A)
+    points.extend(lam[lam.imag >= 0])
+    m, _ = pbh_margins(system.A, Ck, np.array(points, dtype=complex), tolerances=tol)
+    return float(m.min()) if m.size else None
+
+
+def _resolve_failures(
+    system: System,
+    failures: dict[tuple[int, ...], np.ndarray],
+    eig: EigenAnalysis | None,
+    tol: Tolerances,
+    exact: ExactPlant | None,
+    out: _Outcome,
+) -> tuple[tuple[int, ...] | None, np.ndarray | None, list[tuple[int, ...]]]:
+    """Confirm the float failures of a level on the exact data, in lexicographic order.
+
+    Returns the first breaking set that survives (exactly unobservable, or
+    undecidable exactly and kept on the float evidence) with its direction,
+    and the sets that are exactly observable but within floating-point
+    precision of unobservable.  Sets that are exactly observable with a clear
+    margin were float mistakes (basis errors amplified by defective
+    eigenvalues) and are dropped, counted in ``out.details``.
+    """
+    p = system.p
+    within: list[tuple[int, ...]] = []
+    for removed in sorted(failures):
+        if exact is None:
+            return removed, failures[removed], within
+        if out.details.get("float_failures_refuted_exactly", 0) >= REFUTATION_LIMIT:
+            # the float screening is wrong too often on this plant to be worth confirming
+            # set by set; what is left counts as undecided
+            out.details["refutation_limit_reached"] = True
+            within.append(removed)
+            continue
+        gone = set(removed)
+        kept = tuple(i for i in range(p) if i not in gone)
+        decision = exact.observability(kept)
+        if decision.state == "unobservable":
+            out.details["breaking_set_exact"] = True
+            return removed, decision.z, within
+        if decision.state == "unknown":
+            out.details["breaking_set_exact"] = False
+            return removed, failures[removed], within
+        if _clearly_observable(system, kept, eig, tol):
+            out.details["float_failures_refuted_exactly"] = (
+                out.details.get("float_failures_refuted_exactly", 0) + 1)
+        else:
+            within.append(removed)
+            if len(within) == 1:
+                out.details["distance_to_breaking"] = _distance(system, kept, eig, tol)
+    return None, None, within
 
 
 @dataclass
@@ -389,6 +486,7 @@ def _eigenspace(
     max_sets: int,
     tol: Tolerances,
     eig: EigenAnalysis,
+    exact: ExactPlant | None = None,
 ) -> _Outcome:
     out = _Outcome(method="eigenspace", status="inconclusive")
     if eig.problems:
@@ -447,13 +545,29 @@ def _eigenspace(
         out.status = "inconclusive" if out.status != "budget" else "budget"
         return out
     assert best is not None and best_z is not None
-    out.status = "exact"
-    out.max_removable = best[0] - 1
-    out.breaking_set = best[1]
     z = best_z
     if np.iscomplexobj(z):
         z = z.real if np.linalg.norm(z.real) >= np.linalg.norm(z.imag) else z.imag
-    out.z = np.real(z)
+    z = np.real(z)
+    if exact is not None:
+        gone = set(best[1])
+        decision = exact.observability(tuple(i for i in range(p) if i not in gone))
+        if decision.state == "observable":
+            kept = tuple(i for i in range(p) if i not in gone)
+            distance = _distance(system, kept, eig, tol)
+            out.details["distance_to_breaking"] = distance
+            out.problems.append(
+                f"its smallest support, sensors {list(best[1])}, does not break the exact data "
+                f"(relative distance {distance:.1e} to a plant it breaks: the data are within "
+                f"precision of one, or its eigenvectors are too ill-conditioned to trust)")
+            return out
+        out.details["breaking_set_exact"] = decision.state == "unobservable"
+        if decision.state == "unobservable":
+            z = decision.z
+    out.status = "exact"
+    out.max_removable = best[0] - 1
+    out.breaking_set = best[1]
+    out.z = z
     critical.sort()
     out.critical = [kept for _, kept in critical[:_CRITICAL]]
     return out
@@ -583,6 +697,7 @@ def _run(
     tol: Tolerances,
     progress: Progress | None,
     eig: EigenAnalysis,
+    exact: ExactPlant | None = None,
 ) -> tuple[_Outcome, list[_Outcome], dict[str, float]]:
     n, p = system.n, system.p
     sub: SensorSubspaces | None = None
@@ -605,9 +720,16 @@ def _run(
         if name == "enumeration":
             if sub is None:
                 sub = sensor_subspaces(system.A, system.C, tolerances=tol)
-            outcome = _enumeration(system, s, max_sets, tol, progress, sub)
+            outcome = _enumeration(system, s, max_sets, tol, progress, sub, eig, exact)
         else:
-            outcome = _eigenspace(system, s, max_sets, tol, eig)
+            outcome = _eigenspace(system, s, max_sets, tol, eig, exact)
+            if outcome.status == "exact":
+                if sub is None:
+                    sub = sensor_subspaces(system.A, system.C, tolerances=tol)
+                checked = _cross_check(system, s, outcome, tol, eig, exact, sub)
+                if checked is not outcome:
+                    tried.append(outcome)
+                    outcome = checked
         tried.append(outcome)
         if outcome.status == "exact":
             return outcome, tried, estimates
@@ -617,6 +739,71 @@ def _run(
             if outcome.max_removable >= 2 * s:
                 return outcome, tried, estimates
     return tried[0], tried, estimates
+
+
+CROSS_CHECK_SETS = 200_000  # enumeration that confirms an eigenspace answer when this cheap
+REFUTATION_LIMIT = 5_000  # float failures confirmed exactly per enumeration (about 1 ms each)
+
+
+def _cross_check(
+    system: System,
+    s: int,
+    outcome: _Outcome,
+    tol: Tolerances,
+    eig: EigenAnalysis,
+    exact: ExactPlant | None,
+    sub: SensorSubspaces,
+) -> _Outcome:
+    """Confirm an eigenspace answer by enumerating every set up to its breaking-set size.
+
+    The eigenspace method's minimality rests on the computed eigenvalue
+    groups, which ill-conditioned or hidden defective eigenvalues can merge
+    or split; the enumeration does not use them.  Agreement keeps the
+    answer (with the enumeration's lexicographically first breaking set); a
+    smaller breaking set or a smaller set within precision of breaking
+    replaces it; an enumeration that misses the eigenspace method's exactly
+    confirmed set makes the answer disputed.
+    """
+    assert outcome.breaking_set is not None and outcome.max_removable is not None
+    n = system.n
+    full = int(np.count_nonzero(sub.ranks == n))
+    q = system.p - full
+    size = len(outcome.breaking_set)
+    needed = count_subsets(q, range(0, max(size - full, 0) + 1))
+    if needed > CROSS_CHECK_SETS:
+        outcome.details["cross_check"] = {"status": "not run", "sets_needed": needed,
+                                          "limit": CROSS_CHECK_SETS}
+        return outcome
+    enum = _enumeration(system, s, CROSS_CHECK_SETS, tol, None, sub, eig, exact)
+    record = {"status": enum.status, "max_removable": enum.max_removable,
+              "breaking_set": list(enum.breaking_set) if enum.breaking_set is not None else None,
+              "sets_checked": enum.checked}
+    mr = outcome.max_removable
+    if enum.max_removable is not None and enum.max_removable < mr:
+        outcome.problems.append(
+            f"the enumeration finds {'a breaking set' if enum.status == 'exact' else 'a set within precision of breaking'} of "
+            f"{enum.max_removable + 1} sensors, smaller than the eigenspace method's {size} (its "
+            f"eigenvalue groups missed it)")
+        outcome.status = "inconclusive"
+        enum.details["cross_check_of_eigenspace"] = {"max_removable": mr,
+                                                      "breaking_set": list(outcome.breaking_set)}
+        return enum
+    if enum.status == "exact" and enum.max_removable == mr:
+        record["agrees"] = True
+        outcome.breaking_set = enum.breaking_set
+        outcome.z = enum.z
+        outcome.details["breaking_set_exact"] = enum.details.get(
+            "breaking_set_exact", outcome.details.get("breaking_set_exact"))
+    elif outcome.details.get("breaking_set_exact") and enum.max_removable is not None and (
+            enum.max_removable >= size):
+        record["agrees"] = False
+        outcome.problems.append(
+            f"the enumeration finds no breaking set of {size} sensors, although sensors "
+            f"{list(outcome.breaking_set)} break the exact data: the enumeration's decisions "
+            f"are unreliable on this plant")
+        outcome.status = "inconclusive"
+    outcome.details["cross_check"] = record
+    return outcome
 
 
 def _recheck_holds(
@@ -764,8 +951,15 @@ def sparse_observability(
     method = as_choice(method, "method", METHODS)
     max_sets = as_int_option(max_sets, "max_sets", min_value=1)
     H = system.n if horizon is None else as_int_option(horizon, "horizon", min_value=1)
-    eig = eigen if eigen is not None else eigen_clusters(system.A, tolerances=tol)
-    outcome, tried, estimates = _run(system, s, method, max_sets, tol, progress, eig)
+    # decisions in power-of-two units (no sensor's units can tip a rank threshold), confirmed
+    # on the user's exact data; the witness is built in the user's units
+    work, alpha = unit_normalized(system)
+    eig = eigen if eigen is not None else eigen_clusters(work.A, tolerances=tol)
+    exact = ExactPlant(system.A, system.C)
+    outcome, tried, estimates = _run(work, s, method, max_sets, tol, progress, eig, exact)
+    for o in tried:
+        for item in o.details.get("eigenvalues", []):
+            item["eigenvalue"] = item["eigenvalue"] / alpha
 
     p = system.p
     evidence: dict[str, Any] = {
@@ -826,10 +1020,11 @@ def sparse_observability(
         mr = outcome.max_removable
         assert mr is not None and outcome.breaking_set is not None and outcome.z is not None
         if 2 * s > mr:
-            verdict, summary, witness = _failure(system, s, outcome, H, seed, tol, evidence)
+            verdict, summary, witness = _failure(system, work, s, outcome, H, seed, tol,
+                                                 evidence, exact)
             return make(verdict, summary, mr, fields(mr, False, outcome.breaking_set),
                         witness=witness)
-        margin, records, problem = _recheck_holds(system, outcome, eig, tol, s)
+        margin, records, problem = _recheck_holds(work, outcome, eig, tol, s)
         evidence["recheck"] = records
         evidence["margin_definition"] = (
             "smallest relative PBH singular value sigma_min([A - lambda I; C_T]) / ||[A; C]||"
@@ -851,7 +1046,7 @@ def sparse_observability(
     if outcome.status == "lower_bound" and outcome.max_removable is not None:
         mr = outcome.max_removable
         if mr >= 2 * s:
-            margin, records, problem = _recheck_holds(system, outcome, eig, tol, s)
+            margin, records, problem = _recheck_holds(work, outcome, eig, tol, s)
             evidence["recheck"] = records
             if problem:
                 summary = f"Lower bound max_removable >= {mr}, but {problem}."
@@ -878,10 +1073,14 @@ def sparse_observability(
 
 
 def _failure(
-    system: System, s: int, outcome: _Outcome, H: int, seed: int, tol: Tolerances,
-    evidence: dict[str, Any],
+    system: System, work: System, s: int, outcome: _Outcome, H: int, seed: int, tol: Tolerances,
+    evidence: dict[str, Any], exact: ExactPlant,
 ) -> tuple[Verdict, str, dict[str, Any]]:
-    """Verdict, summary and stealthy-attack witness of a failing check."""
+    """Verdict, summary and stealthy-attack witness of a failing check.
+
+    ``work`` is the plant in power-of-two units used for float decisions;
+    the witness is built on the user's ``system``.
+    """
     from ._linalg import staircase
 
     mr = outcome.max_removable
@@ -891,21 +1090,36 @@ def _failure(
     # independent confirmation that the kept sensors do not observe the plant
     kept = [i for i in range(system.p) if i not in set(B)]
     sc_rank = (
-        staircase(system.A, system.C[kept], tolerances=tol, error_model="compound").rank
+        staircase(work.A, work.C[kept], tolerances=tol, error_model="compound").rank
         if kept else 0
     )
+    decision = exact.observability(tuple(kept))
     evidence["breaking_set_check"] = {
         "kept_sensors": kept,
         "kept_observable_dimension": sc_rank,
         "unobservable": sc_rank < system.n,
+        "exact": decision.to_dict(),
     }
+    if decision.state == "observable":
+        return Verdict.INCONCLUSIVE, (
+            f"The {outcome.method} method finds breaking set {list(B)}, but without those sensors "
+            f"the exact data are observable (Krylov rank {system.n} modulo a prime): the plant is "
+            f"within floating-point precision of one they break, and the answer depends on digits "
+            f"the data do not have."
+        ), None
     witness = stealthy_attack(system, B, outcome.z, s, horizon=H, seed=seed, tolerances=tol)
-    if not witness.verified or (kept and sc_rank >= system.n):
+    witness_out = witness.to_dict()
+    if decision.state == "unobservable":
+        witness_out["exact_check"] = ("removing the breaking set leaves the exact data "
+                                      "unobservable: z_exact_integers (up to scale) satisfies "
+                                      "C_i A^k z = 0 exactly for every kept sensor i")
+        witness_out["z_exact_integers"] = [str(v) for v in decision.z_exact or []]
+    if decision.state != "unobservable" and (not witness.verified or (kept and sc_rank >= system.n)):
         return Verdict.INCONCLUSIVE, (
             f"The {outcome.method} method finds breaking set {list(B)}, but the stealthy attack "
             f"built from it does not verify (output mismatch {witness.residual:.2e}, kept sensors "
             f"observable dimension {sc_rank})."
-        ), witness.to_dict()
+        ), witness_out
     if mr == -1:
         what = "(A, C) itself is not observable: some states produce no output at all."
     elif len(B) <= s:
@@ -925,4 +1139,4 @@ def _failure(
         f"max_removable = {mr} < 2s = {2 * s}: {s} attacked sensor{'s' if s != 1 else ''} "
         f"cannot be corrected. {what}"
     )
-    return Verdict.FAILS, summary, witness.to_dict()
+    return Verdict.FAILS, summary, witness_out
