@@ -9,7 +9,7 @@ from typing import Any
 
 from .results import Certificate, Check
 from .spec import Spec
-from .structure._linalg import eigen_clusters
+from .structure._linalg import eigen_clusters, unit_normalized
 from .structure.irrepresentable import irrepresentable
 from .structure.observability import observability
 from .structure.sparse import DEFAULT_MAX_SETS, sparse_observability
@@ -81,7 +81,8 @@ def analyze(
     """
     tol = tolerances or Tolerances()
     system = spec.system
-    eig = eigen_clusters(system.A, tolerances=tol)
+    # shared by the structural checks, which decide in power-of-two units
+    eig = eigen_clusters(unit_normalized(system)[0].A, tolerances=tol)
 
     def relay(check_id: str) -> Callable[[int, int], None] | None:
         if progress is None:

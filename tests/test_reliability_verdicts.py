@@ -302,3 +302,20 @@ def test_eigenvalue_exactly_on_the_unit_circle_is_not_asymptotically_stable():
     d = schur_decision(np.array([[1.0, 0.5], [0.0, 0.3]]))
     assert d.state == "unstable" and d.rigorous and "eigenvalue 1" in d.method
     assert math.isfinite(d.radius_upper)
+
+
+def test_analyze_agrees_with_the_checks_run_alone_in_any_units():
+    """analyze shares one eigenvalue analysis between checks: it must be of the same units."""
+    A = 1e6 * np.diag([1.0, 2.0, 3.0])
+    C = np.array([[1e-8, 0, 0], [0, 1e8, 0], [0, 0, 3.0], [1.0, 1.0, 1.0]])
+    spec = spec_from_dict({"name": "u", "system": {"A": A.tolist(), "C": C.tolist()},
+                           "attack": {"max_attacked": 1}})
+    cert = analyze(spec)
+    alone = (observability(System(A, C)), sparse_observability(System(A, C), 1))
+    for check in alone:
+        together = cert[check.id]
+        assert (together.verdict, together.value, together.fields.get("breaking_set")) == (
+            check.verdict, check.value, check.fields.get("breaking_set"))
+    assert cert["observability"].verdict.value == "holds"
+    np.testing.assert_allclose(sorted(np.real(cert["observability"].evidence["eigenvalues"])),
+                               [1e6, 2e6, 3e6])

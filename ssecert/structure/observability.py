@@ -100,7 +100,8 @@ def observability(
     system : System
     tolerances : Tolerances, optional
     eigen : EigenAnalysis, optional
-        Precomputed eigenvalue groups of ``system.A``.
+        Precomputed eigenvalue groups of the plant in power-of-two units
+        (``unit_normalized(system)[0].A``).
 
     Returns
     -------

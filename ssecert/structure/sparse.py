@@ -926,7 +926,8 @@ def sparse_observability(
     progress : callable, optional
         ``progress(done, total)`` called during enumeration.
     eigen : EigenAnalysis, optional
-        Precomputed eigenvalue groups of ``system.A``.
+        Precomputed eigenvalue groups of the plant in power-of-two units
+        (``unit_normalized(system)[0].A``).
 
     Returns
     -------
