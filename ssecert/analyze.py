@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import datetime as _dt
 import platform
+from dataclasses import replace
 from collections.abc import Callable
 from typing import Any
 
-from .results import Certificate, Check
+from .results import Certificate, Check, Verdict
 from .spec import Spec
 from .structure._linalg import eigen_clusters, unit_normalized
 from .structure.irrepresentable import irrepresentable
@@ -15,7 +16,59 @@ from .structure.observability import observability
 from .structure.sparse import DEFAULT_MAX_SETS, sparse_observability
 from .tolerances import Tolerances
 
-__all__ = ["analyze", "environment"]
+__all__ = ["analyze", "environment", "reconcile"]
+
+
+def _contradictions(by_id: dict[str, Check]) -> list[tuple[str, str, str]]:
+    """Pairs of checks whose verdicts cannot both be right, with why."""
+    out = []
+    obs, sparse = by_id.get("observability"), by_id.get("sparse_observability")
+    if obs is not None and sparse is not None:
+        mr = sparse.fields.get("max_removable")
+        lower = sparse.fields.get("max_removable_is_lower_bound")
+        if obs.verdict is Verdict.HOLDS and mr == -1 and not lower:
+            out.append(("observability", "sparse_observability",
+                        "one finds (A, C) observable, the other max_removable = -1"))
+        if obs.verdict is Verdict.FAILS and mr is not None and mr >= 0:
+            out.append(("observability", "sparse_observability",
+                        f"one finds (A, C) unobservable, the other max_removable = {mr} >= 0"))
+    gain, stab = by_id.get("observer_gain"), by_id.get("observer_stability")
+    if gain is not None and stab is not None:
+        linear = gain.fields.get("kind") in ("luenberger", "ogd")
+        if linear and {gain.verdict, stab.verdict} == {Verdict.HOLDS, Verdict.FAILS}:
+            out.append(("observer_gain", "observer_stability",
+                        "both decide the stability of the same linear error matrix A - L C"))
+        if gain.verdict is Verdict.FAILS and stab.verdict is Verdict.HOLDS and (
+                gain.witness is not None):
+            out.append(("observer_gain", "observer_stability",
+                        "an unstable A - L C (proved by the gain check) rules out a stable "
+                        "observer: near e = 0 the error follows e+ = (A - L C) e"))
+    return out
+
+
+def reconcile(checks: list[Check]) -> tuple[list[Check], list[str]]:
+    """Make sure no two checks of one certificate contradict each other.
+
+    Verdicts that imply each other (observability and max_removable >= 0;
+    the gain's and the observer's stability of the same linear error
+    matrix) are compared; a contradicting pair becomes inconclusive, each
+    naming the other, so that a defect shows as an open question and never
+    as a confident answer.  Returns the checks and notes for the report.
+    """
+    by_id = {c.id: c for c in checks}
+    notes: list[str] = []
+    for first, second, why in _contradictions(by_id):
+        for this, other in ((first, second), (second, first)):
+            c = by_id[this]
+            by_id[this] = replace(
+                c, verdict=Verdict.INCONCLUSIVE,
+                summary=(f"Withdrawn: this check said {c.verdict.value} but contradicts "
+                         f"{other} ({why}); please report this plant. Original: {c.summary}"),
+                evidence={**c.evidence, "withdrawn_verdict": c.verdict.value,
+                          "contradicts": other})
+        notes.append(f"{first} and {second} contradicted each other ({why}); both are reported "
+                     f"inconclusive")
+    return [by_id[c.id] for c in checks], notes
 
 
 def environment() -> dict[str, str]:
@@ -115,7 +168,7 @@ def analyze(
         from .stability.checks import observer_checks
 
         checks.extend(observer_checks(system, spec.observer, observability=checks[0], seed=seed))
-    notes = []
+    checks, notes = reconcile(checks)
 
     meta: dict[str, Any] = {
         "spec": {"source": spec.source, "sha256": spec.sha256, "name": spec.name},

@@ -319,3 +319,24 @@ def test_analyze_agrees_with_the_checks_run_alone_in_any_units():
     assert cert["observability"].verdict.value == "holds"
     np.testing.assert_allclose(sorted(np.real(cert["observability"].evidence["eigenvalues"])),
                                [1e6, 2e6, 3e6])
+
+
+def test_contradicting_checks_are_withdrawn_not_reported():
+    from dataclasses import replace
+
+    from ssecert.analyze import reconcile
+    from ssecert.examples import load_example
+
+    cert = analyze(load_example("notes-example-3"))
+    checks = list(cert.checks)
+    i = [c.id for c in checks].index("sparse_observability")
+    checks[i] = replace(checks[i], fields={**checks[i].fields, "max_removable": -1,
+                                           "max_removable_is_lower_bound": False})
+    fixed, notes = reconcile(checks)
+    by_id = {c.id: c for c in fixed}
+    assert by_id["observability"].verdict.value == "inconclusive"
+    assert by_id["sparse_observability"].verdict.value == "inconclusive"
+    assert "contradicts sparse_observability" in by_id["observability"].summary
+    assert notes and by_id["irrepresentable"] == cert["irrepresentable"]
+    untouched, none = reconcile(list(cert.checks))
+    assert none == [] and [c.verdict for c in untouched] == [c.verdict for c in cert.checks]
