@@ -237,9 +237,10 @@ def observability(
             None, None,
         )
     if pbh_state == "observable" and stair_state == "observable":
+        confirmed = " (confirmed in exact arithmetic)" if exact.state == "observable" else ""
         return check(
             Verdict.HOLDS,
-            f"(A, C) is observable: x(0) is determined by {sc.index} "
+            f"(A, C) is observable{confirmed}: x(0) is determined by {sc.index} "
             f"step{'s' if sc.index != 1 else ''} of output; PBH margin {margin:.3g}.",
             sc.index, 0,
         )

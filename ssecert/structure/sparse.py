@@ -812,8 +812,12 @@ def _recheck_holds(
     eig: EigenAnalysis,
     tol: Tolerances,
     s: int,
+    exact: ExactPlant | None = None,
 ) -> tuple[float | None, list[dict[str, Any]], str]:
     """Independent re-check of the sets closest to breaking.
+
+    Each is also decided on the exact data when affordable: a set the exact
+    data prove unobservable withdraws the holds.
 
     Enumeration results are re-checked by the PBH test at the eigenvalues;
     eigenspace results by the Krylov staircase of the kept sensors.  Returns
@@ -837,14 +841,19 @@ def _recheck_holds(
         value = float(m.min()) if m.size else None
         if value is not None:
             margin = value if margin is None else min(margin, value)
+        exact_state = exact.observability(kept).state if exact is not None else "unknown"
         records.append(
             {
                 "kept_sensors": list(kept),
                 "pbh_margin": value,
                 "pbh_full_rank": pbh_ok,
                 "staircase_full_rank": stair_ok,
+                "exact": exact_state,
             }
         )
+        if exact_state == "unobservable" and not problem:
+            problem = (f"without sensors outside {list(kept)} the exact data are unobservable "
+                       f"(an exact kernel vector), which floating point missed")
         checker_ok = pbh_ok if outcome.method == "enumeration" else stair_ok
         if eig.problems and outcome.method == "enumeration":
             checker_ok = stair_ok
@@ -1025,7 +1034,7 @@ def sparse_observability(
                                                  evidence, exact)
             return make(verdict, summary, mr, fields(mr, False, outcome.breaking_set),
                         witness=witness)
-        margin, records, problem = _recheck_holds(work, outcome, eig, tol, s)
+        margin, records, problem = _recheck_holds(work, outcome, eig, tol, s, exact)
         evidence["recheck"] = records
         evidence["margin_definition"] = (
             "smallest relative PBH singular value sigma_min([A - lambda I; C_T]) / ||[A; C]||"
@@ -1047,7 +1056,7 @@ def sparse_observability(
     if outcome.status == "lower_bound" and outcome.max_removable is not None:
         mr = outcome.max_removable
         if mr >= 2 * s:
-            margin, records, problem = _recheck_holds(work, outcome, eig, tol, s)
+            margin, records, problem = _recheck_holds(work, outcome, eig, tol, s, exact)
             evidence["recheck"] = records
             if problem:
                 summary = f"Lower bound max_removable >= {mr}, but {problem}."
