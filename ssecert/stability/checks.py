@@ -129,7 +129,7 @@ def _deadbeat_check(design: ObserverDesign, fields: dict[str, Any], evidence: di
     fields["observability_index"] = details.get("observability_index")
     fields["spectral_radius"] = upper
     fields["spectral_radius_lower_bound"] = lower
-    method = "deadbeat (flag construction; exact powers of the printed A - L C)"
+    method = "deadbeat (exact powers of the printed A - L C)"
     tolerances = {"deadbeat_rtol": DEADBEAT_RTOL, "clear_factor": 100}
     if gain.verified:
         rel = details["relative_power_norms"][index - 1]
