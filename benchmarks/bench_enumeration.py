@@ -42,26 +42,34 @@ def reference(system: System, sets: list[tuple[int, ...]]) -> list[tuple[int, ..
 
 
 def structured_plant(seed: int = 0, n_rot: int = 7, p: int = 30) -> System:
-    """n = 15 plant with many breaking sets of 6 sensors and a well-conditioned O_n.
+    """n = 15 plant with many breaking sets of 6 sensors, exact in floating point.
 
-    Rotation blocks (eigenvalues on the unit circle) plus one eigenvalue 1,
-    under a random orthogonal similarity, so the reference's matrix_rank is
-    trustworthy; each sensor sees each mode with probability 0.2.
+    Integer blocks [[a, -b], [b, a]] (distinct complex eigenvalue pairs) plus
+    one eigenvalue 1, under an integer similarity with an integer inverse, so
+    that A and C are exact integers: the sensor sets that break the plant
+    break its exact data, and the reference's matrix_rank and ssecert's exact
+    confirmation can agree.  Each sensor sees each mode with probability 0.2.
     """
     from scipy.linalg import block_diag
 
     rng = np.random.default_rng(seed)
-    angles = np.linspace(0.3, 2.8, n_rot)
-    blocks = [np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]]) for a in angles]
+    pairs = [(1, 1), (1, 2), (2, 1), (0, 1), (0, 2), (-1, 1), (-1, 2)][:n_rot]
+    blocks = [np.array([[a, -b], [b, a]], dtype=float) for a, b in pairs]
     M = block_diag(*blocks, [[1.0]])
     n = M.shape[0]
-    Cm = rng.standard_normal((p, n))
+    Cm = rng.integers(-3, 4, size=(p, n)).astype(float)
+    Cm[Cm == 0] = 1.0
     sees = rng.random((p, n_rot + 1)) < 0.2
     for j in range(n_rot):
         Cm[~sees[:, j], 2 * j : 2 * j + 2] = 0.0
     Cm[~sees[:, n_rot], -1] = 0.0
-    Q, _ = np.linalg.qr(rng.standard_normal((n, n)))
-    return System(Q @ M @ Q.T, Cm @ Q.T, name="structured-n15-p30")
+    T = np.eye(n)
+    for _ in range(n):
+        i, j = rng.choice(n, 2, replace=False)
+        T[i] += rng.choice([-1.0, 1.0]) * T[j]
+    T_inv = np.round(np.linalg.inv(T))
+    assert np.array_equal(T @ T_inv, np.eye(n))
+    return System(T @ M @ T_inv, Cm @ T_inv, name="structured-n15-p30")
 
 
 def compare(system: System, size: int, sample_size: int, repeat: int, label: str) -> float:

@@ -614,14 +614,21 @@ class ExactPlant:
             for i in range(C.shape[0]):
                 self.Cint[i] = dyadic(C[i : i + 1]).ints[0]
             self.prime = _PRIMES[0]
-            self.Am = _mod(self.Aint, self.prime)
-            self.Cm = _mod(self.Cint, self.prime)
+            self.residues = [(q, _mod(self.Aint, q), _mod(self.Cint, q)) for q in _PRIMES[:2]]
 
-    def observability(self, kept: tuple[int, ...] | list[int]) -> ExactObservability:
-        """Exact observability of (A, C[kept])."""
+    def observability(self, kept: tuple[int, ...] | list[int], *,
+                      proof: bool = True) -> ExactObservability:
+        """Exact observability of (A, C[kept]).
+
+        With ``proof=False`` a Krylov rank below n modulo two primes is
+        reported as unobservable without computing the exact kernel vector
+        (``z`` is then None); full rank modulo a prime is always a proof.
+        """
         key = tuple(int(i) for i in kept)
-        if key in self._cache:
-            return self._cache[key]
+        cached = self._cache.get(key)
+        if cached is not None and (cached.z_exact is not None or not proof
+                                   or cached.state != "unobservable"):
+            return cached
         if not self.enabled:
             result = ExactObservability("unknown", reason="beyond the exact limits")
         elif not key:
@@ -630,24 +637,27 @@ class ExactPlant:
             result = ExactObservability("unobservable", 0, z, [1] + [0] * (self.n - 1), None,
                                         "no sensor kept")
         else:
-            rank = _rank_mod_p_residues(self.Am, self.Cm[list(key)], self.prime)
+            rank = self.n
+            for q, Am, Cm in self.residues:
+                rank = _rank_mod_p_residues(Am, Cm[list(key)], q)
+                if rank == self.n:
+                    break
             if rank == self.n:
-                result = ExactObservability("observable", rank, prime=self.prime)
+                result = ExactObservability("observable", rank, prime=q)
+            elif not proof:
+                result = ExactObservability("unobservable", rank, prime=q,
+                                            reason="Krylov rank below n modulo two primes")
             else:
                 Csub = self.Cint[list(key)]
-                rank2 = _rank_mod_p(self.Aint, Csub, _PRIMES[1])
-                if rank2 == self.n:
-                    result = ExactObservability("observable", rank2, prime=_PRIMES[1])
+                z = _exact_kernel_vector(self.Aint, Csub, 200_000)
+                if z is not None and _verify_kernel(self.Aint, Csub, z):
+                    zf = _scaled_floats(z)
+                    result = ExactObservability("unobservable", rank, zf / np.linalg.norm(zf),
+                                                z, q)
                 else:
-                    z = _exact_kernel_vector(self.Aint, Csub, 200_000)
-                    if z is not None and _verify_kernel(self.Aint, Csub, z):
-                        zf = _scaled_floats(z)
-                        result = ExactObservability("unobservable", rank, zf / np.linalg.norm(zf),
-                                                    z, self.prime)
-                    else:
-                        result = ExactObservability(
-                            "unknown", rank, prime=self.prime,
-                            reason="rank deficient modulo two primes, but no exact kernel vector "
-                                   "within the budget")
+                    result = ExactObservability(
+                        "unknown", rank, prime=q,
+                        reason="rank deficient modulo two primes, but no exact kernel vector "
+                               "within the budget")
         self._cache[key] = result
         return result

@@ -128,3 +128,12 @@ def test_ogd_and_pinv_gains():
     np.testing.assert_allclose(p.error_matrix, 0.0, atol=1e-12)
     with pytest.raises(GainError, match="full column rank"):
         pinv_gain(System(np.eye(2), [[1.0, 0.0]]))
+
+
+def test_place_with_dependent_sensor_rows():
+    """Two sensors read the same combination: place on one, zero gain on the other."""
+    system = System([[0.5, 1.0], [0.0, 0.9]], [[1.0, 0.5], [2.0, 1.0]])
+    gain = place_gain(system, [0.1, 0.2])
+    assert gain.verified and len(gain.details["sensors_used"]) == 1
+    np.testing.assert_allclose(sorted(np.linalg.eigvals(gain.error_matrix).real), [0.1, 0.2],
+                               atol=1e-10)

@@ -619,13 +619,17 @@ def place_gain(system: System, poles: Sequence[complex]) -> Gain:
     poles = np.asarray(poles, dtype=complex)
     if poles.shape != (system.n,):
         raise GainError(f"poles: expected {system.n} poles (one per state), got {poles.size}")
+    # place_poles needs B = C^T of full column rank: place with an independent subset of
+    # sensors (pivoted QR) and give the others zero gain; the poles are re-checked below
+    rows = _independent_rows(system.C)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
-            K = control.place(system.A.T, system.C.T, poles)
+            K = control.place(system.A.T, system.C[rows].T, poles)
         except Exception as exc:  # control raises ValueError/ControlDimension/...
             raise GainError(f"control.place refused: {exc}") from None
-    L = np.asarray(K, dtype=float).T
+    L = np.zeros((system.n, system.p))
+    L[:, rows] = np.asarray(K, dtype=float).T
     F = system.A - L @ system.C
     got = np.linalg.eigvals(F)
     scale = max(1.0, float(np.linalg.norm(system.A, 2)), float(np.abs(poles).max(initial=0.0)))
@@ -645,10 +649,23 @@ def place_gain(system: System, poles: Sequence[complex]) -> Gain:
         details={
             "requested_poles": poles,
             "achieved_poles": got,
+            "sensors_used": rows,
             "max_pole_error": float(dist.max()),
             "warnings": notes,
         },
     )
+
+
+def _independent_rows(C: np.ndarray) -> list[int]:
+    """Sensors whose rows of C are linearly independent and span the row space (pivoted QR)."""
+    import scipy.linalg
+
+    _, R, piv = scipy.linalg.qr(C.T, mode="economic", pivoting=True)
+    diag = np.abs(np.diag(R))
+    if diag.size == 0 or diag[0] == 0:
+        return list(range(C.shape[0]))
+    rank = int(np.count_nonzero(diag > Tolerances().rtol(*C.shape) * diag[0]))
+    return sorted(int(i) for i in piv[: max(rank, 1)])
 
 
 def ogd_gain(system: System, step: float) -> Gain:

@@ -36,6 +36,13 @@ from ..tolerances import EPS
 
 __all__ = ["SchurDecision", "schur_decision", "EXACT_SCHUR_LIMIT"]
 
+
+def _fmt(x: float) -> str:
+    """A radius with enough digits to show on which side of 1 it lies."""
+    if x != 1.0 and abs(x - 1.0) < 1e-5:
+        return f"{x:.15g}"
+    return f"{x:.6g}"
+
 EXACT_SCHUR_LIMIT = 80  # largest n whose powers are computed exactly
 
 
@@ -151,13 +158,13 @@ def schur_decision(
             return SchurDecision(
                 "stable", upper, lower, f"exact powers: rho <= ||F^{powers.radius_power}||^(1/"
                 f"{powers.radius_power})", lam, True,
-                f"the exact powers {source} bound its spectral radius by {upper:.6g} < 1", details)
+                f"the exact powers {source} bound its spectral radius by {_fmt(upper)} < 1", details)
         if lower > 1.0:
             return SchurDecision(
                 "unstable", upper, lower, f"exact traces: rho >= (|tr F^{powers.lower_power}| / n)"
                 f"^(1/{powers.lower_power})", lam, True,
                 f"the exact traces of the powers {source} bound its spectral radius below by "
-                f"{lower:.6g} > 1", details)
+                f"{_fmt(lower)} > 1", details)
         for value in (1, -1):
             if n <= 40 and exact_kernel_vector(shift_identity(exact, value)) is not None:
                 return SchurDecision(
