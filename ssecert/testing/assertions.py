@@ -121,21 +121,25 @@ def _stealthy_brief(system: System, check: Check) -> list[str]:
                    f"NOT verified: output mismatch {w.get('residual', float('nan')):.2e}")
         size_a = float(np.abs(a).max(initial=0.0))
         size_b = float(np.abs(b).max(initial=0.0))
+        direction = f"z = {_vector(z)} (||z|| = {_num(np.linalg.norm(z))})"
+        head = f"Stealthy attack over {steps} step{'s' if steps != 1 else ''} ({checked}): "
         if not w.get("sensors_a") and not w.get("sensors_b"):
-            what = "no attack is needed: x0 and x0 + z give identical outputs"
+            lines.append(f"{head}no attack is needed: x0 and x0 + z give identical outputs for "
+                         f"{direction}.")
         elif not w.get("sensors_b"):
-            what = (f"an attacker on {_sensors(system, w.get('sensors_a', []))} makes x0 look "
-                    f"exactly like x0 + z, undetectably; largest |attack| {_num(size_a)}")
+            lines.append(
+                f"{head}an attacker on {_sensors(system, w['sensors_a'])} makes x0 look exactly "
+                f"like x0 + z, undetectably. With {direction} the largest |attack| entry is "
+                f"{_num(size_a)}; the attack scales with z, so it can be as large as desired."
+            )
         else:
-            what = (f"the plant from x0 under attack_a on {_sensors(system, w['sensors_a'])} and "
-                    f"from x0 + z under attack_b on {_sensors(system, w['sensors_b'])} give "
-                    f"identical outputs; largest |entry| {_num(size_a)} (attack_a), "
-                    f"{_num(size_b)} (attack_b)")
-        lines.append(
-            f"Stealthy attack over {steps} step{'s' if steps != 1 else ''} ({checked}): {what}; "
-            f"||z|| = {_num(np.linalg.norm(z))}, z = {_vector(z)}. The attack scales with z, "
-            f"so it can be made as large as desired."
-        )
+            lines.append(
+                f"{head}the plant from x0 under attack_a on {_sensors(system, w['sensors_a'])} "
+                f"and from x0 + z under attack_b on {_sensors(system, w['sensors_b'])} give "
+                f"identical outputs. With {direction} the largest |entry| is {_num(size_a)} in "
+                f"attack_a and {_num(size_b)} in attack_b; the attacks scale with z, so they can "
+                f"be as large as desired."
+            )
     return lines
 
 
@@ -210,6 +214,7 @@ def assert_observable(system: System) -> Check:
     ...
     AssertionError: system 'system' (n = 2, p = 1) is not observable: a 1-dimensional ...
     """
+    __tracebackhide__ = True  # pytest shows the caller's line, not ours
     from ..structure.observability import observability
 
     system = _require_system(system)
@@ -276,6 +281,7 @@ def assert_sparse_observable(
     ...
     AssertionError: system 'ugv' (n = 2, p = 3) is not 1-sparse observable: 1 attacked sensor ...
     """
+    __tracebackhide__ = True  # pytest shows the caller's line, not ours
     from ..structure.sparse import DEFAULT_MAX_SETS, sparse_observability
 
     system = _require_system(system)
@@ -342,6 +348,7 @@ def assert_deadbeat(A: Any, L: Any, C: Any) -> int:
     >>> assert_deadbeat(plant.A, deadbeat_gain(plant).L, plant.C)
     2
     """
+    __tracebackhide__ = True  # pytest shows the caller's line, not ours
     A = as_real_matrix(A, "A")
     n = A.shape[0]
     if A.shape[1] != n:
@@ -411,6 +418,7 @@ def assert_schur(M: Any) -> Any:
     ...
     AssertionError: M is not Schur stable: eigenvalue 1.1 has modulus 1.1 >= 1 ...
     """
+    __tracebackhide__ = True  # pytest shows the caller's line, not ours
     from ..stability.lyapunov import lyapunov_certificate
 
     M = as_real_matrix(M, "M")
@@ -468,6 +476,7 @@ def assert_certified(design: Spec, *, method: str = "auto") -> Certificate:
     >>> assert_certified(design).verdict.value
     'holds'
     """
+    __tracebackhide__ = True  # pytest shows the caller's line, not ours
     from ..analyze import analyze
 
     design = _require_spec(design)
@@ -572,6 +581,7 @@ def assert_recovers(
     >>> result.runs
     3
     """
+    __tracebackhide__ = True  # pytest shows the caller's line, not ours
     from ..design.gains import GainError
     from ..design.observer import build_observer
     from ..simulation.engine import simulate_scenario

@@ -109,18 +109,29 @@ def _choices(value: Any, name: str, allowed: Sequence[str]) -> tuple[str, ...]:
 # plants
 
 
-def _spectrum(draw: Any, n: int, radius: float, *, pairs: bool = True) -> list[tuple[float, float]]:
+def _distinct(draw: Any, items: Sequence[Any], k: int) -> list[Any]:
+    """k distinct items, drawn without replacement (no rejected draws)."""
+    remaining = list(items)
+    return [remaining.pop(draw(st.integers(0, len(remaining) - 1))) for _ in range(k)]
+
+
+def _spectrum(draw: Any, n: int, radius: float, *, pairs: bool = True,
+              dyadic: bool = False) -> list[tuple[float, float]]:
     """n eigenvalues: reals (re, 0) and complex pairs (a, b), b > 0, counted twice.
 
-    They lie on a grid of spacing radius / K (K = max(6, n)) inside the
-    closed disc of that radius, so any two differ by at least radius / K.
+    They lie on a grid of spacing radius / K inside the closed disc of that
+    radius, so any two differ by at least radius / K; K = max(6, n), or the
+    next power of two (at least 8) with ``dyadic``, so that the grid values
+    are exact binary fractions.
     """
-    K = max(6, n)
+    K = max(6, n) if not dyadic else 2 ** max(3, math.ceil(math.log2(max(n, 1))))
     count = draw(st.integers(0, n // 2)) if pairs else 0
-    reals = draw(st.lists(st.integers(-K, K), min_size=n - 2 * count, max_size=n - 2 * count,
-                          unique=True))
-    grid = [(a, b) for a in range(-K, K + 1) for b in range(1, K + 1) if a * a + b * b <= K * K]
-    complex_ = draw(st.lists(st.sampled_from(grid), min_size=count, max_size=count, unique=True))
+    # ordered so that draws shrink towards small eigenvalues
+    values = sorted(range(-K, K + 1), key=lambda k: (abs(k), k))
+    grid = sorted(((a, b) for a in range(-K, K + 1) for b in range(1, K + 1)
+                   if a * a + b * b <= K * K), key=lambda ab: (ab[0] ** 2 + ab[1] ** 2, ab))
+    reals = _distinct(draw, values, n - 2 * count)
+    complex_ = _distinct(draw, grid, count)
     return ([(radius * k / K, 0.0) for k in reals]
             + [(radius * a / K, radius * b / K) for a, b in complex_])
 
@@ -144,13 +155,15 @@ def _modal_blocks(spectrum: list[tuple[float, float]]) -> tuple[np.ndarray, list
 
 
 def _modal_outputs(rng: np.random.Generator, p: int, columns: list[list[int]],
-                   support_sizes: list[int], fixed: int | None = None) -> np.ndarray:
+                   support_sizes: list[int], fixed: int | None = None,
+                   dyadic: bool = False) -> np.ndarray:
     """C_modal: the eigenvalue with columns ``cols`` is seen by ``size`` sensors.
 
     Nonzero entries have magnitudes in [0.5, 2] with random signs; a sensor
     sees a complex pair through both columns of its block.  A sensor left
     seeing nothing is added to a random eigenvalue other than ``fixed`` (whose
-    support size must stay as drawn), when there is one.
+    support size must stay as drawn), when there is one.  With ``dyadic`` the
+    magnitudes are multiples of 1/64 (exact binary fractions).
     """
     n = sum(len(c) for c in columns)
     supports = [set(rng.choice(p, size, replace=False).tolist()) for size in support_sizes]
@@ -162,7 +175,10 @@ def _modal_outputs(rng: np.random.Generator, p: int, columns: list[list[int]],
     for cols, support in zip(columns, supports):
         rows = sorted(support)
         shape = (len(rows), len(cols))
-        Cm[np.ix_(rows, cols)] = rng.uniform(*_MAGNITUDE, shape) * rng.choice([-1.0, 1.0], shape)
+        magnitudes = rng.uniform(*_MAGNITUDE, shape)
+        if dyadic:
+            magnitudes = np.round(magnitudes * 64) / 64
+        Cm[np.ix_(rows, cols)] = magnitudes * rng.choice([-1.0, 1.0], shape)
     return Cm
 
 
@@ -171,27 +187,58 @@ def _orthogonal(rng: np.random.Generator, n: int) -> np.ndarray:
     return Q * np.where(np.diag(R) < 0, -1.0, 1.0)
 
 
+def _exact_similarity(rng: np.random.Generator, M: np.ndarray,
+                      Cm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A = T M T^-1 and C = C_modal T^-1 computed without rounding.
+
+    T is a permutation times elementary operations (row i += c row j,
+    c in {+-1/2, +-1}), whose inverses are exact; with binary-fraction data
+    every product is exact too, which is checked (A T == T M and C T ==
+    C_modal bit for bit).  If a long product would round, fewer operations
+    are used; a permutation alone is always exact.
+    """
+    n = M.shape[0]
+    for operations in (2 * n, n, n // 2, 0):
+        T, T_inv = np.eye(n), np.eye(n)
+        for _ in range(operations if n > 1 else 0):
+            i, j = rng.choice(n, 2, replace=False)
+            c = float(rng.choice([-1.0, -0.5, 0.5, 1.0]))
+            T[:, j] += c * T[:, i]  # T <- T (I + c e_i e_j^T)
+            T_inv[i, :] -= c * T_inv[j, :]  # T^-1 <- (I - c e_i e_j^T) T^-1
+        perm = rng.permutation(n)
+        T, T_inv = T[perm], T_inv[:, perm]
+        A, C = T @ M @ T_inv, Cm @ T_inv
+        if (np.array_equal(T @ T_inv, np.eye(n)) and np.array_equal(A @ T, T @ M)
+                and np.array_equal(C @ T, Cm)):
+            return A, C
+    raise AssertionError("a permutation similarity cannot round")  # pragma: no cover
+
+
 @st.composite
 def _modal_plant(draw: Any, n: SearchStrategy[int], p: SearchStrategy[int],
                  max_removable: SearchStrategy[int] | None, name: str) -> System:
     n_ = draw(n)
     p_ = draw(p)
+    exact = max_removable is not None
     if max_removable is None:
         low = 0
     else:
         low = draw(max_removable)
         if low > p_ - 1:
             reject()  # this p is too small for the requested max_removable
-    spectrum = _spectrum(draw, n_, 1.0)
+    spectrum = _spectrum(draw, n_, 1.0, dyadic=exact)
     M, columns = _modal_blocks(spectrum)
     sizes = [draw(st.integers(low + 1, p_)) for _ in columns]
     weakest = None
-    if max_removable is not None:
+    if exact:
         # the weakest eigenvalue is seen by exactly max_removable + 1 sensors
         weakest = draw(st.integers(0, len(columns) - 1))
         sizes[weakest] = low + 1
     rng = np.random.default_rng(draw(_SEEDS))
-    Cm = _modal_outputs(rng, p_, columns, sizes, weakest)
+    Cm = _modal_outputs(rng, p_, columns, sizes, weakest, dyadic=exact)
+    if exact:
+        A, C = _exact_similarity(rng, M, Cm)
+        return System(A, C, name=name)
     Q = _orthogonal(rng, n_)
     # C v = C_modal e for the eigenvector v = Q e: the sensor pattern survives the similarity
     return System(Q @ M @ Q.T, Cm @ Q.T, name=name)
@@ -248,15 +295,24 @@ def sparse_observable_systems(
 
     max_removable is the largest k such that removing any k sensors keeps
     (A, C) observable; a plant tolerates s attacked sensors iff
-    2 s <= max_removable.  The plant is built as in ``observable_systems``
-    (distinct eigenvalues, orthogonal similarity, so that C v_i = C_modal e_i
-    for each eigenvector v_i); each eigenvalue is seen by at least
-    ``max_removable + 1`` sensors and one eigenvalue by exactly that many.
+    2 s <= max_removable.  In modal coordinates A is block diagonal M
+    (distinct real eigenvalues and complex pairs in the closed unit disc, on
+    a grid of spacing at least 1/8 for n <= 8) and each eigenvalue is seen
+    by at least ``max_removable + 1`` sensors, one eigenvalue by exactly
+    that many (nonzero entries of C_modal of magnitude in [0.5, 2]).
     Removing those sensors hides its eigenvector, and no smaller set hides
     any, so max_removable = min over eigenvalues of (sensors seeing it) - 1.
     Every sensor sees some eigenvalue, except when A has a single real
     eigenvalue or a single complex pair (it is seen by exactly
     max_removable + 1 sensors; the others see nothing).
+
+    The structure holds exactly in floating point, not only up to
+    rounding: eigenvalues and C_modal are binary fractions and A = T M T^-1,
+    C = C_modal T^-1 with T a permutation times elementary operations whose
+    products are exact (A T == T M and C T == C_modal, checked bit for bit).
+    The data thus carries no rounding error that could push a rank decision
+    into a tolerance's borderline band; only the analyses' own arithmetic
+    rounds.
 
     Parameters
     ----------
