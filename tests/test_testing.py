@@ -303,12 +303,16 @@ def test_assert_schur():
     assert assert_schur([[0.5, 1.0], [0.0, 0.2]]).verdict == "holds"
     with pytest.raises(AssertionError) as info:
         assert_schur(np.diag([0.5, -1.25]))
-    assert "M is not Schur stable: eigenvalue -1.25 has modulus 1.25 >= 1" in str(info.value)
+    message = str(info.value)
+    assert "M is not Schur stable: eigenvalue -1.25 has modulus 1.25 >= 1" in message
+    assert "(confirmed: an initial state along its eigenvector grows by a factor 2" in message
     with pytest.raises(AssertionError) as info:
         assert_schur([[0.0, -1.0], [1.0, 0.0]])
     message = str(info.value)
     assert "could not be certified Schur stable (inconclusive)" in message
-    assert "has modulus 1;" in message
+    assert "eigenvalue 0+1j has modulus 1;" in message
+    with pytest.raises(AssertionError, match=r"eigenvalue 1\.000000001 has modulus 1\.000000001"):
+        assert_schur([[1.0 + 1e-9]])  # enough digits to see the eigenvalue is not 1
 
 
 def _luenberger_design(C, s):

@@ -34,15 +34,15 @@ __all__ = [
 # formatting
 
 
-def _num(x: Any) -> str:
-    """A number in at most 4 significant digits (complex as a + bj)."""
+def _num(x: Any, digits: int = 4) -> str:
+    """A number in at most ``digits`` significant digits (complex as a+bj)."""
     x = complex(x) if np.iscomplexobj(x) else float(x)
     x = x + 0  # no "-0"
     if isinstance(x, complex):
         if abs(x.imag) <= 1e-12 * max(abs(x), 1e-300):
-            return f"{x.real:.4g}"
-        return f"{x.real:.4g}{'+' if x.imag >= 0 else '-'}{abs(x.imag):.4g}j"
-    return f"{x:.4g}"
+            return f"{x.real:.{digits}g}"
+        return f"{x.real:.{digits}g}{'+' if x.imag >= 0 else '-'}{abs(x.imag):.{digits}g}j"
+    return f"{x:.{digits}g}"
 
 
 def _vector(v: Any, limit: int = 8) -> str:
@@ -431,9 +431,16 @@ def assert_schur(M: Any) -> Any:
     worst = complex(eigenvalues[int(np.argmax(np.abs(eigenvalues)))])
     if cert.witness is not None and "eigenvalue" in cert.witness:
         worst = complex(cert.witness["eigenvalue"])
-    where = f"eigenvalue {_num(worst)} has modulus {abs(worst):.6g}"
+    # enough digits to tell 1 + 1e-9 from 1
+    where = f"eigenvalue {_num(worst, 12)} has modulus {abs(worst):.12g}"
     if cert.verdict == "fails":
-        raise AssertionError(f"M is not Schur stable: {where} >= 1 ({cert.reason}).")
+        w = cert.witness or {}
+        if w.get("grows_by_factor_2"):
+            how = "an initial state along its eigenvector grows by a factor 2 in simulation"
+        else:
+            how = (f"the modulus exceeds 1 by more than its rounding error bound "
+                   f"{w.get('eigenvalue_error_bound', float('nan')):.1e}")
+        raise AssertionError(f"M is not Schur stable: {where} >= 1 (confirmed: {how}).")
     raise AssertionError(f"M could not be certified Schur stable (inconclusive): {where}; "
                          f"{cert.reason}.")
 
@@ -534,7 +541,8 @@ def assert_recovers(
     The observer is simulated with ``ssecert.simulation.engine.simulate_scenario``
     (vectorised over runs; run r draws x0, the attack and the noise from
     ``numpy.random.default_rng([seed, r])``).  Every run must end with a
-    relative state error ||x_hat - x|| / ||x|| <= tol.
+    relative state error ||x_hat - x|| / max(||x||, 1e-9 ||x0||) <= tol
+    (ssecert's metric; see ``ssecert.simulation.metrics``).
 
     Parameters
     ----------
