@@ -69,6 +69,14 @@ def register_profiles() -> bool:
     -------
     bool
         False when hypothesis is not installed (nothing registered).
+
+    Examples
+    --------
+    >>> from hypothesis import settings
+    >>> register_profiles()
+    True
+    >>> settings.get_profile("ssecert-quick").max_examples
+    40
     """
     try:
         from hypothesis import HealthCheck, settings
