@@ -473,6 +473,21 @@ def test_an_explicit_hypothesis_profile_is_respected(pytester):
                                  "choose the hypothesis profile; give only one"])
 
 
+def test_hypothesis_verbosity_keeps_the_ssecert_profile(pytester):
+    pytester.makepyfile(test_counting=COUNTING)
+    drawn, result, after = _run(pytester, "--hypothesis-verbosity", "verbose")
+    result.assert_outcomes(passed=1)
+    assert len(drawn) == QUICK_EXAMPLES
+    result.stdout.fnmatch_lines(["ssecert: hypothesis profile "
+                                 "'ssecert-quick-with-verbose-verbosity' (default)"])
+    # the verbosity was kept, and so were the quick profile's settings
+    header = next(line for line in result.outlines if line.startswith("hypothesis profile "))
+    for setting in ("deadline=None", f"max_examples={QUICK_EXAMPLES}", "derandomize=True",
+                    "verbosity=Verbosity.verbose"):
+        assert setting in header, header
+    assert after == "default-with-verbose-verbosity"  # what hypothesis's plugin had loaded
+
+
 def test_ini_option_and_project_profiles(pytester):
     pytester.makepyfile(test_counting=COUNTING)
     pytester.makeini("[pytest]\nssecert_profile = thorough\n")

@@ -35,7 +35,9 @@ Which profile is active:
    profile;
 4. otherwise, if nothing has chosen a profile (the active one is still
    hypothesis's ``default``, or the ``ci`` profile it loads on CI
-   services), ``ssecert-quick`` is loaded: plain ``pytest`` is
+   services, possibly with ``--hypothesis-verbosity`` or
+   ``--hypothesis-explain`` applied), ``ssecert-quick`` is loaded, keeping
+   those two options: plain ``pytest`` is
    deterministic and has no deadline, which ssecert's checks (tens of
    milliseconds each) would otherwise exceed now and then.  A profile your
    own ``conftest.py`` loaded at import is left alone.
@@ -126,9 +128,28 @@ def _choose(config: pytest.Config) -> tuple[str | None, str]:
     from hypothesis import settings
 
     current = settings.get_current_profile_name()
-    if current in _UNCHOSEN:
+    if _base(current) in _UNCHOSEN:
         return "quick", "default"
     return None, f"profile {current!r} loaded by the project"
+
+
+def _base(name: str) -> str:
+    """The profile hypothesis's own options derived ``name`` from (``X-with-verbose-verbosity``)."""
+    return name.split("-with-")[0]
+
+
+def _load(key: str) -> None:
+    """Load our profile, keeping the verbosity and phases that hypothesis's options set."""
+    from hypothesis import settings
+
+    ours = PROFILES[key]
+    current = settings.get_current_profile_name()
+    suffix = current[len(_base(current)):]
+    if suffix:  # --hypothesis-verbosity / --hypothesis-explain were given
+        active = settings.default
+        settings.register_profile(ours + suffix, parent=settings.get_profile(ours),
+                                  verbosity=active.verbosity, phases=active.phases)
+    settings.load_profile(ours + suffix)
 
 
 @pytest.hookimpl(trylast=True)
@@ -145,7 +166,7 @@ def pytest_configure(config: pytest.Config) -> None:
     key, why = _choose(config)
     previous = settings.get_current_profile_name()
     if key is not None:
-        settings.load_profile(PROFILES[key])
+        _load(key)
     config.stash[_STATE] = {"previous": previous, "loaded": key is not None, "why": why}
 
 
