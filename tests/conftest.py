@@ -1,23 +1,34 @@
-"""Shared test configuration: deterministic hypothesis profiles.
+"""Shared test configuration: the hypothesis profiles of ssecert's pytest plugin.
 
-HYPOTHESIS_PROFILE=thorough runs many more examples (on demand, not in CI).
+The plugin (``ssecert.testing.plugin``, loaded once ssecert is installed)
+registers ``ssecert-quick`` and ``ssecert-thorough``.  The suite runs with
+``ssecert-quick`` (40 derandomized examples, no deadline: deterministic, for
+CI).  For a thorough run on demand (1000 random examples per property)::
+
+    python -m pytest --ssecert-profile thorough
+    HYPOTHESIS_PROFILE=thorough python -m pytest      # the same
+
+``pytester`` lets the plugin's own tests run small test files.
 """
 
 import os
 
-from hypothesis import HealthCheck, settings
+import pytest
 
-settings.register_profile(
-    "ci",
-    max_examples=40,
-    derandomize=True,
-    deadline=None,
-    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
-)
-settings.register_profile(
-    "thorough",
-    max_examples=2000,
-    deadline=None,
-    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
-)
-settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
+pytest_plugins = ["pytester"]
+
+_ENVIRONMENT_PROFILES = {"thorough": "thorough", "quick": "quick", "ci": "quick"}
+
+
+def pytest_configure(config):
+    # runs before the plugin's pytest_configure (trylast), which loads the profile
+    name = os.environ.get("HYPOTHESIS_PROFILE")
+    if not name or config.getoption("ssecert_profile", default=None) or config.getoption(
+        "hypothesis_profile", default=None
+    ):
+        return
+    if name not in _ENVIRONMENT_PROFILES:
+        raise pytest.UsageError(
+            f"HYPOTHESIS_PROFILE must be one of {', '.join(_ENVIRONMENT_PROFILES)}; got {name!r}"
+        )
+    config.option.ssecert_profile = _ENVIRONMENT_PROFILES[name]

@@ -1,0 +1,626 @@
+"""Assertions for pytest suites: each passes only on a ``holds`` verdict.
+
+Every assertion runs one of ssecert's analyses and raises ``AssertionError``
+unless the answer is ``holds``.  A ``fails`` verdict gives the witness in
+terms a user can act on (sensor names with their 0-based indices, the
+offending eigenvalue, the stealthy attack and its size); an
+``inconclusive`` verdict says what could not be decided and why.  On
+success each assertion returns the result it checked.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from .._validation import as_float_option, as_int_option, as_real_matrix, describe
+from ..results import Certificate, Check, Verdict
+from ..spec import Spec
+from ..system import System
+
+__all__ = [
+    "assert_observable",
+    "assert_sparse_observable",
+    "assert_deadbeat",
+    "assert_schur",
+    "assert_certified",
+    "assert_recovers",
+]
+
+
+# ---------------------------------------------------------------------------
+# formatting
+
+
+def _num(x: Any, digits: int = 4) -> str:
+    """A number in at most ``digits`` significant digits (complex as a+bj)."""
+    x = complex(x) if np.iscomplexobj(x) else float(x)
+    x = x + 0  # no "-0"
+    if isinstance(x, complex):
+        if abs(x.imag) <= 1e-12 * max(abs(x), 1e-300):
+            return f"{x.real:.{digits}g}"
+        return f"{x.real:.{digits}g}{'+' if x.imag >= 0 else '-'}{abs(x.imag):.{digits}g}j"
+    return f"{x:.{digits}g}"
+
+
+def _vector(v: Any, limit: int = 8) -> str:
+    """[a, b, ...]: a short vector in full, a long one cut after ``limit`` entries."""
+    arr = np.asarray(v).ravel()
+    items = [_num(x) for x in arr[:limit]]
+    if arr.size > limit:
+        items.append(f"... ({arr.size} entries)")
+    return "[" + ", ".join(items) + "]"
+
+
+def _sensor(system: System, index: int) -> str:
+    return f"{system.sensors[index]} (index {index})"
+
+
+def _sensors(system: System, indices: Sequence[int]) -> str:
+    return ", ".join(_sensor(system, int(i)) for i in indices) or "no sensor"
+
+
+def _label(system: System) -> str:
+    return f"system {system.name!r} (n = {system.n}, p = {system.p})"
+
+
+def _require_system(system: Any, name: str = "system") -> System:
+    if not isinstance(system, System):
+        hint = " (a design's plant is design.system)" if isinstance(system, Spec) else ""
+        raise TypeError(f"{name} must be a ssecert.System{hint}, got {describe(system)}")
+    return system
+
+
+def _require_spec(design: Any) -> Spec:
+    if not isinstance(design, Spec):
+        raise TypeError(
+            f"design must be a ssecert.Spec (load_spec, spec_from_dict or the ssecert_example "
+            f"fixture), got {describe(design)}"
+        )
+    return design
+
+
+# ---------------------------------------------------------------------------
+# witnesses in brief
+
+
+def _unobservable_brief(check: Check) -> str:
+    w = check.witness or {}
+    dim = w.get("unobservable_dimension", check.fields.get("unobservable_dimension"))
+    text = f"a {dim}-dimensional unobservable subspace"
+    if "z" in w:
+        text += f", direction z = {_vector(w['z'])} (C A^k z = 0 for every k)"
+    eigs = [e.get("eigenvalue") for e in w.get("unobservable_eigenvalues", []) or []]
+    if eigs:
+        text += f", at eigenvalue{'s' if len(eigs) > 1 else ''} {', '.join(_num(e) for e in eigs)}"
+    return text
+
+
+def _stealthy_brief(system: System, check: Check) -> list[str]:
+    """Breaking set, max_removable vs 2s, and the stealthy attack with its size."""
+    f, w = check.fields, check.witness or {}
+    s = f.get("max_attacked")
+    mr = f.get("max_removable")
+    breaking = list(f.get("breaking_set") or [])
+    lines = []
+    if mr == -1:
+        lines.append("(A, C) itself is not observable: every sensor set is a breaking set, "
+                     "and no attack is needed to hide the direction z.")
+    else:
+        lines.append(f"max_removable = {mr} < 2s = {2 * s}.")
+        lines.append(f"Breaking sensor set: {_sensors(system, breaking)}; removing "
+                     f"{'it' if len(breaking) == 1 else 'them'} leaves the plant unobservable.")
+    if "attack_a" in w:
+        a = np.asarray(w["attack_a"], dtype=float)
+        b = np.asarray(w["attack_b"], dtype=float)
+        z = np.asarray(w["z"], dtype=float)
+        steps = a.shape[0]
+        checked = ("verified by simulation" if w.get("verified") else
+                   f"NOT verified: output mismatch {w.get('residual', float('nan')):.2e}")
+        size_a = float(np.abs(a).max(initial=0.0))
+        size_b = float(np.abs(b).max(initial=0.0))
+        direction = f"z = {_vector(z)} (||z|| = {_num(np.linalg.norm(z))})"
+        head = f"Stealthy attack over {steps} step{'s' if steps != 1 else ''} ({checked}): "
+        if not w.get("sensors_a") and not w.get("sensors_b"):
+            lines.append(f"{head}no attack is needed: x0 and x0 + z give identical outputs for "
+                         f"{direction}.")
+        elif not w.get("sensors_b"):
+            lines.append(
+                f"{head}an attacker on {_sensors(system, w['sensors_a'])} makes x0 look exactly "
+                f"like x0 + z, undetectably. With {direction} the largest |attack| entry is "
+                f"{_num(size_a)}; the attack scales with z, so it can be as large as desired."
+            )
+        else:
+            lines.append(
+                f"{head}the plant from x0 under attack_a on {_sensors(system, w['sensors_a'])} "
+                f"and from x0 + z under attack_b on {_sensors(system, w['sensors_b'])} give "
+                f"identical outputs. With {direction} the largest |entry| is {_num(size_a)} in "
+                f"attack_a and {_num(size_b)} in attack_b; the attacks scale with z, so they can "
+                f"be as large as desired."
+            )
+    return lines
+
+
+def _instability_brief(w: Mapping[str, Any]) -> str:
+    """Eigenvalue and growing initial error of an instability witness."""
+    parts = []
+    if "kind" in w:
+        parts.append(str(w["kind"]))
+    if "eigenvalue" in w:
+        lam = complex(w["eigenvalue"]) if not isinstance(w["eigenvalue"], Mapping) else complex(
+            w["eigenvalue"]["re"], w["eigenvalue"]["im"])
+        parts.append(f"eigenvalue {_num(lam)} of modulus {abs(lam):.6g}")
+    for key in ("initial_error", "e0"):
+        if key in w:
+            parts.append(f"initial error {_vector(w[key])}")
+    if "a_hat0" in w:
+        parts.append(f"initial attack estimate {_vector(w['a_hat0'])}")
+    if w.get("grows_by_factor_2"):
+        parts.append("grows by a factor 2 in simulation")
+    if "steps" in w:
+        parts.append(f"over {w['steps']} steps")
+    for key in ("growth", "residual"):
+        if key in w and not isinstance(w[key], (list, tuple, np.ndarray)):
+            parts.append(f"{key} {_num(w[key])}")
+    return "; ".join(parts)
+
+
+def _witness_brief(system: System, check: Check) -> list[str]:
+    if check.verdict is not Verdict.FAILS or not check.witness:
+        return []
+    if check.id == "observability":
+        return [_unobservable_brief(check)]
+    if check.id == "sparse_observability":
+        return _stealthy_brief(system, check)
+    brief = _instability_brief(check.witness)
+    return [brief] if brief else []
+
+
+# ---------------------------------------------------------------------------
+# assertions
+
+
+def assert_observable(system: System) -> Check:
+    """Assert that (A, C) is observable (``ssecert.observability`` holds).
+
+    Parameters
+    ----------
+    system : System
+
+    Returns
+    -------
+    Check
+        The ``observability`` check (index in ``fields["observability_index"]``).
+
+    Raises
+    ------
+    AssertionError
+        If the plant is not observable (the message gives the dimension of
+        the unobservable subspace and a direction z that no sensor sees) or
+        observability could not be decided (the message says why).
+    TypeError
+        If ``system`` is not a System.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from ssecert import System
+    >>> assert_observable(System([[1.0, 0.0099], [0.0, 0.9876]], [[1, 0]])).value
+    2
+    >>> assert_observable(System(np.eye(2), [[1, 0]]))
+    Traceback (most recent call last):
+    ...
+    AssertionError: system 'system' (n = 2, p = 1) is not observable: a 1-dimensional ...
+    """
+    __tracebackhide__ = True  # pytest shows the caller's line, not ours
+    from ..structure.observability import observability
+
+    system = _require_system(system)
+    check = observability(system)
+    if check.verdict is Verdict.HOLDS:
+        return check
+    if check.verdict is Verdict.FAILS:
+        raise AssertionError(f"{_label(system)} is not observable: {_unobservable_brief(check)}. "
+                             f"{check.summary}")
+    raise AssertionError(f"observability of {_label(system)} could not be decided "
+                         f"(inconclusive): {check.summary}")
+
+
+def assert_sparse_observable(
+    system: System,
+    s: int,
+    *,
+    method: str = "auto",
+    max_sets: int | None = None,
+    horizon: int | None = None,
+) -> Check:
+    """Assert that the plant tolerates s attacked sensors: 2 s <= max_removable.
+
+    Parameters
+    ----------
+    system : System
+    s : int
+        Number of attacked sensors (>= 0).
+    method : {"auto", "enumeration", "eigenspace"}, default "auto"
+        Sparse-observability method.
+    max_sets : int, optional
+        Enumeration budget (default that of ``sparse_observability``).
+    horizon : int, optional
+        Steps of the stealthy-attack witness (default n).
+
+    Returns
+    -------
+    Check
+        The ``sparse_observability`` check.
+
+    Raises
+    ------
+    AssertionError
+        If s attacked sensors cannot be corrected: the message names the
+        breaking sensor set by name and 0-based index, compares
+        max_removable with 2s, and gives the stealthy attack (its sensors,
+        its largest entry, the indistinguishable direction z and the number
+        of steps it was verified over).  Also when the check is
+        inconclusive, with the reason.
+    TypeError
+        If ``system`` is not a System.
+    ValueError
+        If s, method, max_sets or horizon is out of range.
+
+    Examples
+    --------
+    >>> from ssecert import System
+    >>> ugv = System([[1.0, 0.0099], [0.0, 0.9876]], [[1, 0], [0, 1], [0, 1]],
+    ...              sensors=["position", "velocity-a", "velocity-b"], name="ugv")
+    >>> assert_sparse_observable(ugv, 0).fields["max_removable"]
+    0
+    >>> assert_sparse_observable(ugv, 1)
+    Traceback (most recent call last):
+    ...
+    AssertionError: system 'ugv' (n = 2, p = 3) is not 1-sparse observable: 1 attacked sensor ...
+    """
+    __tracebackhide__ = True  # pytest shows the caller's line, not ours
+    from ..structure.sparse import DEFAULT_MAX_SETS, sparse_observability
+
+    system = _require_system(system)
+    s = as_int_option(s, "s", min_value=0)
+    check = sparse_observability(system, s, method=method,
+                                 max_sets=DEFAULT_MAX_SETS if max_sets is None else max_sets,
+                                 horizon=horizon)
+    if check.verdict is Verdict.HOLDS:
+        return check
+    if check.verdict is Verdict.FAILS:
+        lines = [f"{_label(system)} is not {s}-sparse observable: {s} attacked sensor"
+                 f"{'s' if s != 1 else ''} cannot be corrected."]
+        lines += _stealthy_brief(system, check)
+        raise AssertionError("\n".join(lines))
+    raise AssertionError(f"{s}-sparse observability of {_label(system)} could not be decided "
+                         f"(inconclusive): {check.summary}")
+
+
+def _nilpotency_test(F: np.ndarray, A: np.ndarray) -> Any:
+    """The floating-point nilpotency test of A - L C, relative to ||A||.
+
+    Kept in one place: an exactly verified test replaces it later.
+    """
+    from ..design.gains import nilpotency
+
+    scale = max(float(np.linalg.norm(A, 2)), np.finfo(float).tiny)
+    return nilpotency(F, scale=scale)
+
+
+def assert_deadbeat(A: Any, L: Any, C: Any) -> int:
+    """Assert that the observer error matrix A - L C is nilpotent (a deadbeat observer).
+
+    Observers are written x_hat+ = A x_hat + L (y - C x_hat), so the error
+    obeys e+ = (A - L C) e and vanishes in k steps iff (A - L C)^k = 0.  In
+    floating point: ||F^k|| <= 1e-8 ||A||^k with ||F^(k-1)|| clearly above
+    1e-8 ||A||^(k-1) (by matrix powers, never by eigenvalues).
+
+    Parameters
+    ----------
+    A : array_like, shape (n, n)
+    L : array_like, shape (n, p)
+    C : array_like, shape (p, n)
+
+    Returns
+    -------
+    int
+        The nilpotency index k: the error vanishes after k steps.
+
+    Raises
+    ------
+    AssertionError
+        If A - L C is not nilpotent (the message gives the power k = n and
+        the residual ||F^k|| / ||A||^k) or the test cannot conclude (it gives
+        both powers); also says when A + L C is nilpotent, i.e. when L has
+        the opposite sign convention (the thesis's L1 = -L).
+    ValueError
+        If the matrices have inconsistent shapes or non-finite entries.
+
+    Examples
+    --------
+    >>> from ssecert import System
+    >>> from ssecert.design.gains import deadbeat_gain
+    >>> plant = System([[1.0, 0.0099], [0.0, 0.9876]], [[1, 0]])
+    >>> assert_deadbeat(plant.A, deadbeat_gain(plant).L, plant.C)
+    2
+    """
+    __tracebackhide__ = True  # pytest shows the caller's line, not ours
+    A = as_real_matrix(A, "A")
+    n = A.shape[0]
+    if A.shape[1] != n:
+        raise ValueError(f"A must be square, got shape {A.shape}")
+    C = as_real_matrix(C, "C", shape=(None, n), shape_hint="the number of states, from A")
+    L = as_real_matrix(L, "L", shape=(n, C.shape[0]), shape_hint="n x p: states by sensors")
+    test = _nilpotency_test(A - L @ C, A)
+    if test.index is not None and test.conclusive:
+        return int(test.index)
+    norms = test.norms
+    if test.index is None:
+        k = len(norms)
+        problem = (f"A - L C is not nilpotent: ||F^{k}|| / ||A||^{k} = {norms[-1]:.3g} at the "
+                   f"power k = n = {k}, where a nilpotent F has reached 0 (needs <= "
+                   f"{test.rtol:.0e}; F = A - L C, ||A|| = {test.scale:.4g})")
+    else:
+        k = test.index
+        previous = norms[k - 2] if k > 1 else 1.0
+        problem = (f"the nilpotency test cannot conclude: ||F^{k}|| / ||A||^{k} = "
+                   f"{norms[k - 1]:.3g} <= {test.rtol:.0e}, but ||F^{k - 1}|| / ||A||^{k - 1} = "
+                   f"{previous:.3g} is not clearly above it (F = A - L C, ||A|| = "
+                   f"{test.scale:.4g})")
+    flipped = _nilpotency_test(A + L @ C, A)
+    if flipped.index is not None and flipped.conclusive:
+        problem += (f". A + L C is nilpotent (index {flipped.index}): L has the opposite sign "
+                    f"convention; ssecert writes x_hat+ = A x_hat + L (y - C x_hat), the thesis's "
+                    f"L1 is -L")
+    radius = float(np.abs(np.linalg.eigvals(A - L @ C)).max())
+    raise AssertionError(f"{problem}. Spectral radius of A - L C (computed): {radius:.3g}. "
+                         f"Scaled norms ||(F/||A||)^k||, k = 1..{len(norms)}: "
+                         f"{_vector(norms)}.")
+
+
+def assert_schur(M: Any) -> Any:
+    """Assert that every eigenvalue of M lies strictly inside the unit circle, certified.
+
+    The certificate is a Lyapunov matrix P with M^T P M - P < 0, recomputed
+    and checked against a floating-point error bound
+    (``ssecert.stability.lyapunov.lyapunov_certificate``); a computed
+    spectral radius below 1 alone is not accepted.
+
+    Parameters
+    ----------
+    M : array_like, shape (n, n)
+
+    Returns
+    -------
+    LyapunovCertificate
+        With P, the contraction factor and the margin.
+
+    Raises
+    ------
+    AssertionError
+        If M has an eigenvalue of modulus >= 1 (the message gives that
+        eigenvalue, its modulus and how instability was confirmed) or the
+        certificate cannot be verified (it gives the eigenvalue of largest
+        modulus and the reason).
+    ValueError
+        If M is not square or has non-finite entries.
+
+    Examples
+    --------
+    >>> assert_schur([[0.5, 1.0], [0.0, 0.2]]).contraction < 1
+    True
+    >>> assert_schur([[0.5, 0.0], [0.0, 1.1]])
+    Traceback (most recent call last):
+    ...
+    AssertionError: M is not Schur stable: eigenvalue 1.1 has modulus 1.1 >= 1 ...
+    """
+    __tracebackhide__ = True  # pytest shows the caller's line, not ours
+    from ..stability.lyapunov import lyapunov_certificate
+
+    M = as_real_matrix(M, "M")
+    if M.shape[0] != M.shape[1]:
+        raise ValueError(f"M must be square, got shape {M.shape}")
+    cert = lyapunov_certificate(M)
+    if cert.verdict == "holds":
+        return cert
+    eigenvalues = np.linalg.eigvals(M)
+    worst = complex(eigenvalues[int(np.argmax(np.abs(eigenvalues)))])
+    if cert.witness is not None and "eigenvalue" in cert.witness:
+        worst = complex(cert.witness["eigenvalue"])
+    # enough digits to tell 1 + 1e-9 from 1
+    where = f"eigenvalue {_num(worst, 12)} has modulus {abs(worst):.12g}"
+    if cert.verdict == "fails":
+        w = cert.witness or {}
+        if w.get("grows_by_factor_2"):
+            how = "an initial state along its eigenvector grows by a factor 2 in simulation"
+        else:
+            how = (f"the modulus exceeds 1 by more than its rounding error bound "
+                   f"{w.get('eigenvalue_error_bound', float('nan')):.1e}")
+        raise AssertionError(f"M is not Schur stable: {where} >= 1 (confirmed: {how}).")
+    raise AssertionError(f"M could not be certified Schur stable (inconclusive): {where}; "
+                         f"{cert.reason}.")
+
+
+def assert_certified(design: Spec, *, method: str = "auto") -> Certificate:
+    """Assert that every required check of a design holds (``ssecert.analyze``, no simulations).
+
+    Required checks: observability, sparse_observability and, with an
+    ``[observer]`` section, observer_gain and observer_stability.  Advisory
+    checks (irrepresentable, iss_gain, thesis_assumptions) do not count.
+
+    Parameters
+    ----------
+    design : Spec
+        A validated design (``load_spec``, ``spec_from_dict``, the
+        ``ssecert_example`` fixture or ``strategies.observer_designs``).
+    method : {"auto", "enumeration", "eigenspace"}, default "auto"
+        Sparse-observability method.
+
+    Returns
+    -------
+    Certificate
+
+    Raises
+    ------
+    AssertionError
+        Listing every required check that fails or is inconclusive, with its
+        summary and its witness in brief (breaking sensor set by name and
+        index, unobservable direction, growing initial error, ...).
+    TypeError
+        If ``design`` is not a Spec.
+
+    Examples
+    --------
+    >>> from ssecert import spec_from_dict
+    >>> design = spec_from_dict({"name": "three-sensors",
+    ...                          "system": {"A": [[0.5]], "C": [[1.0], [1.0], [1.0]]},
+    ...                          "attack": {"max_attacked": 1},
+    ...                          "observer": {"kind": "luenberger", "gain": "deadbeat"}})
+    >>> assert_certified(design).verdict.value
+    'holds'
+    """
+    __tracebackhide__ = True  # pytest shows the caller's line, not ours
+    from ..analyze import analyze
+
+    design = _require_spec(design)
+    cert = analyze(design, method=method)
+    bad = [c for c in cert.checks if c.required and c.verdict is not Verdict.HOLDS]
+    if not bad:
+        return cert
+    required = sum(1 for c in cert.checks if c.required)
+    lines = [f"design {design.name!r} ({design.source}) is not certified: {len(bad)} of "
+             f"{required} required checks do not hold."]
+    for check in bad:
+        verdict = "FAILS" if check.verdict is Verdict.FAILS else "inconclusive"
+        lines.append(f"- {check.id} {verdict}: {check.summary}")
+        lines += [f"    {line}" for line in _witness_brief(design.system, check)]
+    raise AssertionError("\n".join(lines))
+
+
+def _scenario(design: Spec, scenario: str | Mapping[str, Any]) -> dict[str, Any]:
+    """The named [[scenario]] of the design, or a mapping validated as the spec loader does."""
+    if isinstance(scenario, str):
+        for table in design.scenarios:
+            if table["name"] == scenario:
+                return dict(table)
+        names = ", ".join(repr(t["name"]) for t in design.scenarios) or "none"
+        raise ValueError(f"scenario {scenario!r} is not a [[scenario]] of design "
+                         f"{design.name!r}; its scenarios: {names}")
+    if not isinstance(scenario, Mapping):
+        raise TypeError(f"scenario must be the name of one of the design's scenarios or a "
+                        f"mapping with the keys of a [[scenario]] table, got {describe(scenario)}")
+    from ..spec import spec_from_dict
+
+    table = {"name": "custom", **scenario}
+    system = design.system
+    checked = spec_from_dict(
+        {"name": design.name,
+         "system": {"A": system.A.tolist(), "C": system.C.tolist(),
+                    "sensors": list(system.sensors)},
+         "attack": {"max_attacked": design.max_attacked},
+         "scenario": [table]},
+        source="assert_recovers(scenario=...)")
+    return dict(checked.scenarios[0])
+
+
+def assert_recovers(
+    design: Spec,
+    scenario: str | Mapping[str, Any],
+    tol: float,
+    *,
+    runs: int | None = None,
+    steps: int | None = None,
+    seed: int | None = None,
+) -> Any:
+    """Assert that the design's observer recovers the state in every run of a scenario.
+
+    The observer is simulated with ``ssecert.simulation.engine.simulate_scenario``
+    (vectorised over runs; run r draws x0, the attack and the noise from
+    ``numpy.random.default_rng([seed, r])``).  Every run must end with a
+    relative state error ||x_hat - x|| / max(||x||, 1e-9 ||x0||) <= tol
+    (ssecert's metric; see ``ssecert.simulation.metrics``).
+
+    Parameters
+    ----------
+    design : Spec
+        A design with an ``[observer]`` section.
+    scenario : str or mapping
+        The name of one of the design's ``[[scenario]]`` sections, or a
+        mapping with the keys of a ``[[scenario]]`` table (``attack``,
+        ``sensors`` or ``count``, ``magnitude``, ``period``, ``noise``,
+        ``steps``, ``runs``, ``seed``; ``name`` defaults to ``"custom"``),
+        validated as the spec loader validates it.
+    tol : float
+        Largest acceptable final relative error (>= 0).
+    runs, steps, seed : int, optional
+        Override the scenario's values.
+
+    Returns
+    -------
+    ScenarioResult
+        Per-run, per-step metrics.
+
+    Raises
+    ------
+    AssertionError
+        If some run ends above tol: the message gives the number of such
+        runs, the worst run's index and final error, the mean, and the
+        scenario (attack kind, sensors, seed, runs, steps) to reproduce it.
+        Also when the observer gain cannot be computed.
+    TypeError
+        If design is not a Spec or scenario is neither a name nor a mapping.
+    ValueError
+        If the design has no observer, the scenario is unknown or invalid
+        (``ssecert.SpecError`` names the key), tol is negative, or a
+        stealthy scenario is asked of a plant that has no stealthy attack.
+
+    Examples
+    --------
+    >>> from ssecert import spec_from_dict
+    >>> design = spec_from_dict({"name": "three-sensors",
+    ...                          "system": {"A": [[0.5]], "C": [[1.0], [1.0], [1.0]]},
+    ...                          "attack": {"max_attacked": 0},
+    ...                          "observer": {"kind": "luenberger", "gain": "deadbeat"}})
+    >>> result = assert_recovers(design, {"attack": "none", "steps": 5, "runs": 3}, 1e-12)
+    >>> result.runs
+    3
+    """
+    __tracebackhide__ = True  # pytest shows the caller's line, not ours
+    from ..design.gains import GainError
+    from ..design.observer import build_observer
+    from ..simulation.engine import simulate_scenario
+
+    design = _require_spec(design)
+    tol = as_float_option(tol, "tol", min_value=0.0)
+    if design.observer is None:
+        raise ValueError(f"design {design.name!r} has no [observer] section to simulate")
+    table = _scenario(design, scenario)
+    try:
+        observer = build_observer(design.system, design.observer)
+    except GainError as exc:
+        raise AssertionError(f"the observer of design {design.name!r} cannot be built: the gain "
+                             f"cannot be computed ({exc})") from None
+    result = simulate_scenario(observer, table, runs=runs, steps=steps, seed=seed,
+                               max_attacked=design.max_attacked)
+    final = np.asarray(result.relative_error[-1], dtype=float)
+    bad = ~(final <= tol)  # NaN (a diverged run) counts as failing
+    if not bad.any():
+        return result
+    ranked = np.where(np.isnan(final), np.inf, final)
+    worst = int(np.argmax(ranked))
+    where = ", ".join(f"{key} = {table[key]}" for key in ("sensors", "count", "magnitude",
+                                                         "period", "noise") if key in table)
+    raise AssertionError(
+        f"the {observer.kind} observer of design {design.name!r} does not recover under scenario "
+        f"{table['name']!r}: {int(bad.sum())} of {result.runs} runs end with a relative state "
+        f"error above tol = {tol:g} after {result.steps} steps.\n"
+        f"worst run: index {worst}, final relative error {_num(final[worst])}; mean "
+        f"{_num(np.mean(final))}.\n"
+        f"scenario: attack {table['attack']!r}" + (f" ({where})" if where else "")
+        + f", seed {result.seed}, runs {result.runs}, steps {result.steps}; run r draws from "
+        f"numpy.random.default_rng([{result.seed}, r])."
+    )
