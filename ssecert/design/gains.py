@@ -145,6 +145,8 @@ class DeadbeatCheck:
         the exact power bounded above by ``sqrt(||F^k||_1 ||F^k||_inf)``.
     relative_norms : tuple of float
         Those upper bounds on ``||F^k||_2 / ||A||_2^k``, k = 1, 2, ...
+    relative_lower : tuple of float
+        Exact lower bounds on the same ratios.
     conclusive : bool
         ``||F^(k-1)||_2`` is clearly (``clear`` times) above the threshold,
         by its exact lower bound ``||F^(k-1)||_inf / sqrt(n)``.
@@ -170,11 +172,13 @@ class DeadbeatCheck:
     verified: bool
     reason: str = ""
     radius_power: int = 0
+    relative_lower: tuple[float, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         return {
             "index": self.index,
             "relative_power_norms": list(self.relative_norms),
+            "relative_power_norms_lower": list(self.relative_lower),
             "conclusive": self.conclusive,
             "exactly_nilpotent": self.exactly_nilpotent,
             "spectral_radius_upper_bound": self.radius_upper,
@@ -246,7 +250,7 @@ def verify_deadbeat(
     reasons = []
     if index is None:
         reasons.append(
-            f"||F^k|| / ||A||^k stays above {rtol:.0e} up to k = {len(rel)}"
+            f"||F^k|| / ||A||^k stays above {rtol:.0e} up to k = {len(upper)}"
             + (f" (smallest {min(relative):.2e})" if relative else "")
             + ("" if powers.complete else "; the exact powers stopped at their budget"))
     elif not conclusive:
@@ -270,6 +274,7 @@ def verify_deadbeat(
         verified=bool(index is not None and conclusive and powers.radius_bound < 1),
         reason="; ".join(reasons),
         radius_power=powers.radius_power,
+        relative_lower=tuple(0.0 if r == -math.inf else 2.0 ** min(r, 1e4) for r in lower),
     )
 
 

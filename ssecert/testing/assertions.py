@@ -300,24 +300,16 @@ def assert_sparse_observable(
                          f"(inconclusive): {check.summary}")
 
 
-def _nilpotency_test(F: np.ndarray, A: np.ndarray) -> Any:
-    """The floating-point nilpotency test of A - L C, relative to ||A||.
-
-    Kept in one place: an exactly verified test replaces it later.
-    """
-    from ..design.gains import nilpotency
-
-    scale = max(float(np.linalg.norm(A, 2)), np.finfo(float).tiny)
-    return nilpotency(F, scale=scale)
-
-
 def assert_deadbeat(A: Any, L: Any, C: Any) -> int:
     """Assert that the observer error matrix A - L C is nilpotent (a deadbeat observer).
 
     Observers are written x_hat+ = A x_hat + L (y - C x_hat), so the error
-    obeys e+ = (A - L C) e and vanishes in k steps iff (A - L C)^k = 0.  In
-    floating point: ||F^k|| <= 1e-8 ||A||^k with ||F^(k-1)|| clearly above
-    1e-8 ||A||^(k-1) (by matrix powers, never by eigenvalues).
+    obeys e+ = (A - L C) e and vanishes in k steps iff (A - L C)^k = 0.  The
+    test is on the gain as given: F = A - L C is formed exactly from the
+    floats of A, L and C and its powers computed in integers
+    (``ssecert.design.gains.verify_deadbeat``): ||F^k|| <= 1e-8 ||A||^k with
+    ||F^(k-1)|| clearly above, and a certified spectral radius below 1 (a
+    gain that rounding made unstable fails, however small its powers look).
 
     Parameters
     ----------
@@ -328,15 +320,17 @@ def assert_deadbeat(A: Any, L: Any, C: Any) -> int:
     Returns
     -------
     int
-        The nilpotency index k: the error vanishes after k steps.
+        The nilpotency index k: the error vanishes (to rounding) after k steps.
 
     Raises
     ------
     AssertionError
         If A - L C is not nilpotent (the message gives the power k = n and
-        the residual ||F^k|| / ||A||^k) or the test cannot conclude (it gives
-        both powers); also says when A + L C is nilpotent, i.e. when L has
-        the opposite sign convention (the thesis's L1 = -L).
+        the residual ||F^k|| / ||A||^k), the test cannot conclude (it gives
+        both powers), or the gain as given is not certified stable (it gives
+        the certified bounds on the spectral radius); also says when A + L C
+        is nilpotent, i.e. when L has the opposite sign convention (the
+        thesis's L1 = -L).
     ValueError
         If the matrices have inconsistent shapes or non-finite entries.
 
@@ -355,31 +349,38 @@ def assert_deadbeat(A: Any, L: Any, C: Any) -> int:
         raise ValueError(f"A must be square, got shape {A.shape}")
     C = as_real_matrix(C, "C", shape=(None, n), shape_hint="the number of states, from A")
     L = as_real_matrix(L, "L", shape=(n, C.shape[0]), shape_hint="n x p: states by sensors")
-    test = _nilpotency_test(A - L @ C, A)
-    if test.index is not None and test.conclusive:
+    from ..design.gains import verify_deadbeat
+
+    test = verify_deadbeat(A, L, C)
+    if test.verified:
         return int(test.index)
-    norms = test.norms
+    norms, lower = test.relative_norms, test.relative_lower
+
     if test.index is None:
         k = len(norms)
-        problem = (f"A - L C is not nilpotent: ||F^{k}|| / ||A||^{k} = {norms[-1]:.3g} at the "
-                   f"power k = n = {k}, where a nilpotent F has reached 0 (needs <= "
-                   f"{test.rtol:.0e}; F = A - L C, ||A|| = {test.scale:.4g})")
+        problem = (f"A - L C is not nilpotent: ||F^{k}|| / ||A||^{k} >= {lower[-1]:.3g} at the "
+                   f"power k = n = {k} (exactly between {lower[-1]:.3g} and {norms[-1]:.3g}), "
+                   f"where a nilpotent F has reached 0 (needs <= {test.rtol:.0e}; F = A - L C "
+                   f"formed exactly from the given floats)")
+    elif not test.conclusive:
+        k = test.index
+        previous = f">= {lower[k - 2]:.3g} only" if k > 1 else "= 1"
+        problem = (f"the nilpotency test cannot conclude: ||F^{k}|| / ||A||^{k} <= "
+                   f"{norms[k - 1]:.3g} <= {test.rtol:.0e}, but ||F^{k - 1}|| / ||A||^{k - 1} "
+                   f"{previous}, not clearly above it (F = A - L C)")
     else:
         k = test.index
-        previous = norms[k - 2] if k > 1 else 1.0
-        problem = (f"the nilpotency test cannot conclude: ||F^{k}|| / ||A||^{k} = "
-                   f"{norms[k - 1]:.3g} <= {test.rtol:.0e}, but ||F^{k - 1}|| / ||A||^{k - 1} = "
-                   f"{previous:.3g} is not clearly above it (F = A - L C, ||A|| = "
-                   f"{test.scale:.4g})")
-    flipped = _nilpotency_test(A + L @ C, A)
-    if flipped.index is not None and flipped.conclusive:
+        problem = (f"||F^{k}|| / ||A||^{k} <= {norms[k - 1]:.3g} looks deadbeat, but the gain as "
+                   f"given is not certified stable: {test.reason}")
+    flipped = verify_deadbeat(A, -np.asarray(L), C)
+    if flipped.verified:
         problem += (f". A + L C is nilpotent (index {flipped.index}): L has the opposite sign "
                     f"convention; ssecert writes x_hat+ = A x_hat + L (y - C x_hat), the thesis's "
                     f"L1 is -L")
-    radius = float(np.abs(np.linalg.eigvals(A - L @ C)).max())
-    raise AssertionError(f"{problem}. Spectral radius of A - L C (computed): {radius:.3g}. "
-                         f"Scaled norms ||(F/||A||)^k||, k = 1..{len(norms)}: "
-                         f"{_vector(norms)}.")
+    raise AssertionError(
+        f"{problem}. Spectral radius of A - L C: certified between {test.radius_lower:.4g} and "
+        f"{test.radius_upper:.4g}. Relative norms ||F^k|| / ||A||^k, k = 1..{len(norms)}: "
+        f"{_vector(norms)}.")
 
 
 def assert_schur(M: Any) -> Any:
