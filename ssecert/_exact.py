@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -380,15 +381,21 @@ def _rank_mod_p(Aint: np.ndarray, Cint: np.ndarray, prime: int) -> int:
     return _rank_mod_p_residues(_mod(Aint, prime), _mod(Cint, prime), prime)
 
 
-def _rank_mod_p_residues(Am: np.ndarray, Cm: np.ndarray, prime: int) -> int:
-    """``_rank_mod_p`` on residues already reduced modulo ``prime``."""
+def _rank_mod_p_residues(Am: np.ndarray, Cm: Any, prime: int) -> int:
+    """``_rank_mod_p`` on residues already reduced modulo ``prime``.
+
+    ``Cm`` may be any iterable of residue rows; it is consumed only until the
+    rank reaches n.
+    """
     n = Am.shape[0]
     basis = np.zeros((0, n), dtype=np.int64)
     pivots: list[int] = []
-    frontier = list(Cm)
-    while frontier and len(pivots) < n:
+    frontier: Any = iter(Cm)
+    while len(pivots) < n:
         added = []
         for r in frontier:
+            if len(pivots) == n:
+                break
             if pivots:
                 r = (r - (r[pivots] @ basis) % prime) % prime
             nz = np.flatnonzero(r)
@@ -401,6 +408,8 @@ def _rank_mod_p_residues(Am: np.ndarray, Cm: np.ndarray, prime: int) -> int:
             basis = np.vstack([basis, r[None, :]])
             pivots.append(pc)
             added.append(r)
+        if not added:
+            break
         frontier = [(r @ Am) % prime for r in added]
     return len(pivots)
 
@@ -609,12 +618,18 @@ class ExactPlant:
         self._cache: dict[tuple[int, ...], ExactObservability] = {}
         if self.enabled:
             self.Aint = dyadic(A).ints
-            # each sensor's row scaled on its own: row scaling changes no subspace
-            self.Cint = np.empty(C.shape, dtype=object)
-            for i in range(C.shape[0]):
-                self.Cint[i] = dyadic(C[i : i + 1]).ints[0]
+            self.C = C
             self.prime = _PRIMES[0]
-            self.residues = [(q, _mod(self.Aint, q), _mod(self.Cint, q)) for q in _PRIMES[:2]]
+            self.A_residues = [(q, _mod(self.Aint, q)) for q in _PRIMES[:2]]
+            self._rows: dict[int, tuple[np.ndarray, list[np.ndarray]]] = {}
+
+    def _row(self, i: int) -> tuple[np.ndarray, list[np.ndarray]]:
+        """Sensor i's row as integers (scaled on its own: row scaling changes no subspace)
+        and its residues, converted when first needed."""
+        if i not in self._rows:
+            ints = dyadic(self.C[i : i + 1]).ints[0]
+            self._rows[i] = (ints, [_mod(ints[None, :], q)[0] for q, _ in self.A_residues])
+        return self._rows[i]
 
     def observability(self, kept: tuple[int, ...] | list[int], *,
                       proof: bool = True) -> ExactObservability:
@@ -638,8 +653,8 @@ class ExactPlant:
                                         "no sensor kept")
         else:
             rank = self.n
-            for q, Am, Cm in self.residues:
-                rank = _rank_mod_p_residues(Am, Cm[list(key)], q)
+            for j, (q, Am) in enumerate(self.A_residues):
+                rank = _rank_mod_p_residues(Am, (self._row(i)[1][j] for i in key), q)
                 if rank == self.n:
                     break
             if rank == self.n:
@@ -648,7 +663,7 @@ class ExactPlant:
                 result = ExactObservability("unobservable", rank, prime=q,
                                             reason="Krylov rank below n modulo two primes")
             else:
-                Csub = self.Cint[list(key)]
+                Csub = np.array([self._row(i)[0] for i in key], dtype=object)
                 z = _exact_kernel_vector(self.Aint, Csub, 200_000)
                 if z is not None and _verify_kernel(self.Aint, Csub, z):
                     zf = _scaled_floats(z)
