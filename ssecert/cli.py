@@ -321,9 +321,11 @@ class _WarningLog:
         for (category, text), (count, origin) in self.seen.items():
             if besides is not None and (category, text) in besides.seen:
                 continue
-            where = f" in {origin}" if origin else ""
-            times = f" ({count} times)" if count > 1 else ""
-            notes.append(one_line(f"{category}{where}: {text}{times}"))
+            where = [f"in {origin}"] if origin else []
+            where += [f"{count} times"] if count > 1 else []
+            kind = "" if category in ("RuntimeWarning", "UserWarning") else f"{category}: "
+            place = f" ({', '.join(where)})" if where else ""
+            notes.append(one_line(f"{kind}{text}{place}"))
         return notes
 
 
