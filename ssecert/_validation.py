@@ -49,8 +49,12 @@ def show_int(value: int) -> str:
     """
     if -10**20 < value < 10**20:
         return str(value)
-    digits = int(abs(value).bit_length() * 0.30102999566398120) + 1
-    return f"{'-' if value < 0 else ''}an integer of about {digits} digits"
+    sign = "-" if value < 0 else ""
+    try:
+        return f"{sign}an integer of {len(str(abs(value))):,} digits"
+    except ValueError:  # beyond the conversion limit: estimate
+        digits = int(abs(value).bit_length() * 0.30102999566398120) + 1
+        return f"{sign}an integer of about {digits:,} digits"
 
 
 def describe(value: Any) -> str:

@@ -247,45 +247,56 @@ def _check_document(source: str, data: Mapping[str, Any]) -> None:
 
     Refuses, naming the key: integers outside the 64-bit range TOML allows
     (also in JSON, so that both formats mean the same), text with control
-    characters or invalid Unicode, and nesting deeper than MAX_NESTING (which
-    also stops on self-containing Python lists).  Iterative: no recursion.
+    characters or invalid Unicode, lists longer than MAX_MATRIX_DIM (no list
+    of a spec may be longer than a matrix may be tall or wide) and nesting
+    deeper than MAX_NESTING (which also stops on self-containing Python
+    lists).  Iterative, and key paths are built only for messages: a large
+    document costs one quick pass.
     """
-    stack: list[tuple[Any, str, int]] = [(data, "", 0)]
+    # (container, its parent's path, its key in the parent, depth)
+    stack: list[tuple[Any, str, Any, int]] = [(data, "", None, 0)]
     while stack:
-        container, path, depth = stack.pop()
+        container, parent, name, depth = stack.pop()
+        path = _path(parent, name)
         if depth > MAX_NESTING:
             raise _err(source, path or None,
                        f"nested more than {MAX_NESTING} levels deep (a spec needs at most 4)")
-        if isinstance(container, Mapping):
-            entries: Any = container.items()
-        else:
-            entries = enumerate(container)
         is_table = isinstance(container, Mapping)
-
-        def where(key: Any) -> str:
-            if is_table:
-                return f"{path}.{key}" if path else str(key)
-            return f"{path}[{key}]"
-
+        if not is_table and len(container) > MAX_MATRIX_DIM:
+            raise _err(source, path or None,
+                       f"a list of {len(container):,} entries: more rows, columns or items than "
+                       f"the limit of {MAX_MATRIX_DIM:,}")
+        entries: Any = container.items() if is_table else enumerate(container)
         children = []
         for key, item in entries:
             if is_table and isinstance(key, str):
                 _check_text(source, path, key, f"the key {key[:40]!r}")
             if isinstance(item, (bool, float)):
                 continue
+            index = key if is_table else [key]
             if isinstance(item, (Mapping, list, tuple)):
-                children.append((item, where(key), depth + 1))
+                children.append((item, path, index, depth + 1))
             elif isinstance(item, _TooLongInteger):
-                raise _err(source, where(key), f"an integer of {item.digits:,} digits is out of "
-                           f"range: spec integers must fit in 64 bits (-2^63 to 2^63 - 1)")
+                raise _err(source, _path(path, index),
+                           f"an integer of {item.digits:,} digits is out of range: spec "
+                           f"integers must fit in 64 bits (-2^63 to 2^63 - 1)")
             elif isinstance(item, int) and not _INT64_MIN <= item <= _INT64_MAX:
                 text = show_int(item)
                 text = text if "digits" in text else f"the integer {text}"
-                raise _err(source, where(key), f"{text} is out of range: spec integers must "
-                           f"fit in 64 bits (-2^63 to 2^63 - 1)")
+                raise _err(source, _path(path, index), f"{text} is out of range: spec integers "
+                           f"must fit in 64 bits (-2^63 to 2^63 - 1)")
             elif isinstance(item, str):
-                _check_text(source, where(key), item, "the text")
+                _check_text(source, _path(path, index), item, "the text")
         stack.extend(reversed(children))
+
+
+def _path(parent: str, key: Any) -> str:
+    """'system.A[0]': a table key as [key], a list index as a one-item list."""
+    if key is None:
+        return parent
+    if isinstance(key, list):
+        return f"{parent}[{key[0]}]"
+    return f"{parent}.{key}" if parent else str(key)
 
 
 def _check_name(source: str, key: str, value: Any, what: str) -> str:
@@ -863,6 +874,8 @@ def _read_file(path: Path, source: str, suffix: str) -> bytes:
 def _parse_text(raw: bytes, suffix: str, source: str) -> dict[str, Any]:
     """Parse a TOML or JSON spec: a table at the top level, or SpecError."""
     fmt = "TOML" if suffix == ".toml" else "JSON"
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
+        raise SpecError(f"{source}: not a UTF-8 text file: it is UTF-16 text; save it as UTF-8")
     if b"\x00" in raw:
         raise SpecError(f"{source}: not a {fmt} text file: it contains NUL bytes (a binary "
                         f"file?)")
