@@ -16,6 +16,7 @@ import tempfile
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
 __all__ = ["atomic_write_text", "write_files"]
 
@@ -111,7 +112,8 @@ def write_files(files: Mapping[str | Path, str]) -> list[Path]:
     """
     targets = [(Path(path), text) for path, text in files.items()]
     staged: list[tuple[str, Path]] = []
-    backups: list[tuple[str | None, Path, bool]] = []  # (copy of the old file, path, existed)
+    # (copy of the old file, path, existed, renamed yet)
+    backups: list[list[Any]] = []
     try:
         streams = []
         for path, text in targets:
@@ -132,10 +134,13 @@ def write_files(files: Mapping[str | Path, str]) -> list[Path]:
                     os.link(final, backup)
                 except OSError:  # no hard links here: the old file cannot be put back
                     backup = None
+            backups.append([backup, final, existed, False])
             os.replace(tmp, final)
-            backups.append((backup, final, existed))
+            backups[-1][3] = True
     except BaseException:
-        for backup, final, existed in reversed(backups):  # undo the renames already done
+        for backup, final, existed, renamed in reversed(backups):  # undo the renames done
+            if not renamed:
+                continue
             try:
                 if backup is not None:
                     os.replace(backup, final)
@@ -147,7 +152,7 @@ def write_files(files: Mapping[str | Path, str]) -> list[Path]:
             _unlink(tmp)
         raise
     finally:
-        for backup, _, _ in backups:
+        for backup, *_ in backups:
             if backup is not None:
                 _unlink(backup)
     return [path for path, _ in targets]

@@ -39,7 +39,8 @@ import numpy as np
 import pytest
 import scipy.io
 
-import ssecert
+import ssecert.certify  # noqa: F401 - patched below through sys.modules
+import ssecert.simulation.engine  # noqa: F401
 from ssecert import (
     SpecError,
     System,
@@ -844,3 +845,222 @@ def test_mat_sizes_are_checked_before_loading(tmp_path, monkeypatch):
                         lambda *a, **k: pytest.fail("loaded before the size was checked"))
     with pytest.raises(SpecError, match="12,000 rows"):
         load_spec(path, max_attacked=1)
+
+
+# ---------------------------------------------------------------------------
+# output paths: checked before the run, errors name the path, nothing written
+# ---------------------------------------------------------------------------
+
+
+def listing(folder: Path) -> list[str]:
+    """Every file and folder under ``folder``, hidden temporary files included."""
+    return sorted(str(p.relative_to(folder)) for p in folder.rglob("*"))
+
+
+def test_out_under_a_regular_file(tmp_path, capsys):
+    (tmp_path / "file").write_text("x")
+    before = listing(tmp_path)
+    assert_refused(*cli(capsys, "certify", "ugv", "--no-sim", "--out", f"{tmp_path}/file/sub"),
+                   f"{tmp_path}/file/sub", "is a file")
+    assert listing(tmp_path) == before
+
+
+def test_out_that_is_a_file(tmp_path, capsys):
+    (tmp_path / "file").write_text("x")
+    assert_refused(*cli(capsys, "certify", "ugv", "--no-sim", "--out", str(tmp_path / "file")),
+                   "exists and is not a folder")
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="no /proc here")
+@pytest.mark.parametrize("option", ["--out", "--json"])
+def test_an_impossible_output_path(tmp_path, capsys, option):
+    argv = ["certify", "ugv", "--no-sim", "--out", str(tmp_path / "out")]
+    argv += [option, "/proc/ssecert-test/x"] if option == "--out" else [option, "/proc/x.json"]
+    err = assert_refused(*cli(capsys, *argv))
+    assert ("/proc/ssecert-test" if option == "--out" else "/proc/x.json") in err
+    assert not (tmp_path / "out").exists()
+    assert not os.path.exists("/proc/ssecert-test")
+
+
+@pytest.mark.skipif(hasattr(os, "geteuid") and os.geteuid() == 0,
+                    reason="root writes into read-only folders")
+def test_a_read_only_folder(tmp_path, capsys):
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    folder.chmod(0o555)
+    try:
+        err = assert_refused(*cli(capsys, "certify", "ugv", "--no-sim", "--out", str(folder)))
+        assert str(folder) in err and "permission denied" in err
+        err = assert_refused(*cli(capsys, "analyze", "ugv", "--json", str(folder / "a.json")))
+        assert str(folder) in err
+    finally:
+        folder.chmod(0o755)
+    assert listing(folder) == []
+
+
+def test_a_folder_that_refuses_files(tmp_path, capsys, monkeypatch):
+    # what a read-only folder does when the check before the run cannot see it
+    # (root, network file systems): the write fails, the message names the file
+    import tempfile
+
+    def refuse(*args, **kwargs):
+        raise PermissionError(errno.EACCES, "Permission denied", kwargs.get("dir"))
+
+    monkeypatch.setattr(tempfile, "mkstemp", refuse)
+    out = tmp_path / "out"
+    err = assert_refused(*cli(capsys, "certify", "ugv", "--no-sim", "--out", str(out)),
+                         "Permission denied")
+    assert f"{out}/ugv.html" in err and ".tmp" not in err
+    assert not out.exists()  # the folder made for the report is removed again
+    err = assert_refused(*cli(capsys, "analyze", "ugv", "--json", str(tmp_path / "a.json")))
+    assert f"{tmp_path}/a.json" in err and listing(tmp_path) == []
+
+
+@pytest.mark.parametrize("argv, fragment", [
+    (["analyze", "ugv", "--json", "{tmp}"], "is a folder"),
+    (["analyze", "ugv", "--json", "{tmp}/no/such/a.json"], "does not exist"),
+    (["analyze", "ugv", "--json", ""], "empty path"),
+    (["certify", "ugv", "--out", ""], "empty path"),
+    (["simulate", "ugv", "--json", "{tmp}"], "is a folder"),
+    (["certify", "ugv", "--out", "{tmp}/out", "--json", "{tmp}"], "is a folder"),
+])
+def test_bad_output_paths_are_refused_before_the_run(tmp_path, capsys, monkeypatch, argv,
+                                                     fragment):
+    def too_early(*args, **kwargs):
+        pytest.fail("the run started before the paths were checked")
+
+    for module, name in (("ssecert.analyze", "analyze"), ("ssecert.certify", "analyze"),
+                         ("ssecert.simulation.engine", "simulate_spec")):
+        monkeypatch.setattr(sys.modules[module], name, too_early)
+    argv = [a.replace("{tmp}", str(tmp_path)) for a in argv]
+    assert_refused(*cli(capsys, *argv), fragment)
+    assert listing(tmp_path) == []
+
+
+def test_an_existing_report_folder_name(tmp_path, capsys):
+    (tmp_path / "ugv.html").mkdir()
+    assert_refused(*cli(capsys, "certify", "ugv", "--no-sim", "--out", str(tmp_path)),
+                   "ugv.html is a folder")
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no named pipes here")
+def test_json_into_a_named_pipe_is_written_in_place(tmp_path, capsys):
+    import threading
+
+    pipe = tmp_path / "pipe"
+    os.mkfifo(pipe)
+    received: list[str] = []
+    reader = threading.Thread(target=lambda: received.append(pipe.read_text()))
+    reader.start()
+    status, out, err = cli(capsys, "analyze", "ugv", "--json", str(pipe))
+    reader.join(timeout=60)
+    assert status == 1, err
+    assert json.loads(received[0])["system"]["name"] == "ugv"
+    assert pipe.is_fifo() and listing(tmp_path) == ["pipe"]
+
+
+def test_json_through_a_symbolic_link_keeps_the_link(tmp_path, capsys):
+    real = tmp_path / "real.json"
+    real.write_text("{}")
+    link = tmp_path / "link.json"
+    link.symlink_to(real)
+    assert cli(capsys, "analyze", "ugv", "--json", str(link))[0] == 1
+    assert link.is_symlink() and json.loads(real.read_text())["system"]["name"] == "ugv"
+
+
+# ---------------------------------------------------------------------------
+# interrupted runs: no partial report, no temporary file, no new folder
+# ---------------------------------------------------------------------------
+
+
+@pytest.fixture()
+def old_reports(tmp_path):
+    """An --out folder that already holds a report: it must survive a failed run."""
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "ugv.html").write_text("old html")
+    (out / "ugv.json").write_text("old json")
+    return out
+
+
+def assert_old_reports_intact(out: Path) -> None:
+    assert listing(out) == ["ugv.html", "ugv.json"]
+    assert (out / "ugv.html").read_text() == "old html"
+    assert (out / "ugv.json").read_text() == "old json"
+
+
+def test_interrupt_while_rendering(tmp_path, capsys, monkeypatch, old_reports):
+    import ssecert.report.html as html
+
+    def interrupted(result):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(html, "render_report", interrupted)
+    status, out, err = cli(capsys, "certify", "ugv", "--no-sim", "--out", str(old_reports))
+    assert status == 130 and "interrupted" in err
+    assert_old_reports_intact(old_reports)
+    status, _, _ = cli(capsys, "certify", "ugv", "--no-sim", "--out", str(tmp_path / "new"))
+    assert status == 130 and not (tmp_path / "new").exists()
+
+
+def test_renderer_failing_half_way(tmp_path, capsys, monkeypatch, old_reports):
+    import ssecert.report.json as json_report
+
+    def broken(result):
+        raise RuntimeError("renderer broke")
+
+    monkeypatch.setattr(json_report, "certify_json", broken)
+    status, out, err = cli(capsys, "certify", "ugv", "--no-sim", "--out", str(old_reports),
+                           "--json", str(tmp_path / "copy.json"))
+    assert status == 4 and "internal error" in err  # a bug: reported as one
+    assert_old_reports_intact(old_reports)
+    assert not (tmp_path / "copy.json").exists()
+
+
+@pytest.mark.parametrize("fail_at", [1, 2, 3])
+def test_disk_full_while_writing(tmp_path, capsys, monkeypatch, old_reports, fail_at):
+    calls = []
+    real_fsync = os.fsync
+
+    def fsync(fd):
+        calls.append(fd)
+        if len(calls) == fail_at:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        real_fsync(fd)
+
+    monkeypatch.setattr(os, "fsync", fsync)
+    status, out, err = cli(capsys, "certify", "ugv", "--no-sim", "--out", str(old_reports),
+                           "--json", str(tmp_path / "copy.json"))
+    assert_refused(status, out, err, "No space left on device")
+    assert_old_reports_intact(old_reports)
+    assert not (tmp_path / "copy.json").exists()
+
+
+@pytest.mark.parametrize("failure", [KeyboardInterrupt, OSError])
+def test_failure_between_renames_restores_the_old_files(tmp_path, capsys, monkeypatch,
+                                                        old_reports, failure):
+    calls = []
+    real_replace = os.replace
+
+    def replace(src, dst):
+        calls.append(dst)
+        if len(calls) == 2:
+            raise failure(errno.EIO, "I/O error") if failure is OSError else failure()
+        real_replace(src, dst)
+
+    import ssecert._io as io_module
+
+    monkeypatch.setattr(io_module.os, "replace", replace)
+    status, out, err = cli(capsys, "certify", "ugv", "--no-sim", "--out", str(old_reports))
+    assert status == (130 if failure is KeyboardInterrupt else 2), err
+    monkeypatch.undo()
+    assert_old_reports_intact(old_reports)
+
+
+def test_interrupted_analyze_leaves_no_json(tmp_path, capsys, monkeypatch):
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(sys.modules["ssecert.analyze"], "analyze", interrupted)
+    status, _, err = cli(capsys, "analyze", "ugv", "--json", str(tmp_path / "a.json"))
+    assert status == 130 and listing(tmp_path) == []
