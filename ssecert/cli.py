@@ -264,11 +264,11 @@ def _write(files: Mapping[Path, str]) -> None:
 
     created: list[Path] = []
     try:
-        for folder in {path.parent for path in files}:
+        for parent in dict.fromkeys(path.parent for path in files):  # in order
             missing = []
-            while not folder.exists() and folder != folder.parent:
-                missing.append(folder)
-                folder = folder.parent
+            while not parent.exists() and parent != parent.parent:
+                missing.append(parent)
+                parent = parent.parent
             for folder in reversed(missing):
                 folder.mkdir()
                 created.append(folder)

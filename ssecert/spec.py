@@ -33,7 +33,7 @@ wrong or hostile file costs a message and not a frozen machine:
   ``MAX_MATRIX_ENTRIES`` (10,000,000) entries;
 - the horizon: at most ``MAX_HORIZON`` (10,000) steps;
 - integers: the 64-bit range TOML allows (-2^63 to 2^63 - 1), also in JSON;
-- nesting: ``MAX_NESTING`` (16) levels of tables and lists (a spec needs 5);
+- nesting: ``MAX_NESTING`` (16) levels of tables and lists (a spec needs 4);
 - names (the spec's, sensors', scenarios'): at most ``MAX_NAME_LENGTH``
   (128) characters; no text may hold control characters or invalid Unicode.
 """
