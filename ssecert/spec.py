@@ -26,11 +26,13 @@ validated and unknown keys are refused; errors name the file and the key.
 Limits, checked before a file is parsed or an array is built, so that a
 wrong or hostile file costs a message and not a frozen machine:
 
-- TOML and JSON files: at most ``MAX_TEXT_BYTES`` (16 MiB, about a 1000 x
-  1000 matrix written in full); .npz and .mat files: ``MAX_BINARY_BYTES``
-  (256 MiB);
+- TOML and JSON files: at most ``MAX_TEXT_BYTES`` (16 MiB: an 800 x 800
+  matrix at full precision; TOML is parsed at a few MB/s and every number
+  becomes a Python object), .npz and .mat files ``MAX_BINARY_BYTES``
+  (256 MiB), the place for larger plants;
 - every matrix: at most ``MAX_MATRIX_DIM`` (10,000) rows and columns and
-  ``MAX_MATRIX_ENTRIES`` (10,000,000) entries;
+  ``MAX_MATRIX_ENTRIES`` (10,000,000) entries; every list at most
+  ``MAX_MATRIX_DIM`` items;
 - the horizon: at most ``MAX_HORIZON`` (10,000) steps;
 - integers: the 64-bit range TOML allows (-2^63 to 2^63 - 1), also in JSON;
 - nesting: ``MAX_NESTING`` (16) levels of tables and lists (a spec needs 4);
