@@ -7,6 +7,7 @@ kinds raise ``TypeError``; wrong values raise ``ValueError``.
 
 from __future__ import annotations
 
+import math
 import numbers
 from collections.abc import Sequence
 from typing import Any
@@ -14,17 +15,54 @@ from typing import Any
 import numpy as np
 
 __all__ = [
+    "MAX_MATRIX_DIM",
+    "MAX_MATRIX_ENTRIES",
     "as_real_matrix",
     "as_int_option",
     "as_float_option",
     "as_choice",
     "as_index_list",
+    "check_size",
     "describe",
+    "show_int",
 ]
+
+
+#: Default limits of ``as_real_matrix(..., limits=True)``: spec files and other
+#: untrusted input are refused above them before any array is built.
+MAX_MATRIX_DIM = 10_000
+MAX_MATRIX_ENTRIES = 10_000_000
+
+_FLOAT_MAX = float(np.finfo(np.float64).max)
+
+
+def _is_time(value: Any) -> bool:
+    """numpy dates and durations: numpy registers timedelta64 as an integer."""
+    return isinstance(value, (np.datetime64, np.timedelta64))
+
+
+def show_int(value: int) -> str:
+    """An integer for a message: in full when short, else its number of digits.
+
+    ``str`` refuses integers of more than 4300 digits, and a 300-digit number
+    is no help in a one-line message.
+    """
+    if -10**20 < value < 10**20:
+        return str(value)
+    sign = "-" if value < 0 else ""
+    try:
+        return f"{sign}an integer of {len(str(abs(value))):,} digits"
+    except ValueError:  # beyond the conversion limit: estimate
+        digits = int(abs(value).bit_length() * 0.30102999566398120) + 1
+        return f"{sign}an integer of about {digits:,} digits"
 
 
 def describe(value: Any) -> str:
     """Short description of a received value for error messages."""
+    if isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)):
+        if _is_time(value):
+            return f"the {type(value).__name__} value {value}"
+        return f"{type(value).__name__} {show_int(int(value))}"
     if isinstance(value, np.ndarray):
         return f"an array of shape {value.shape} and dtype {value.dtype}"
     if isinstance(value, bool):
@@ -36,23 +74,78 @@ def describe(value: Any) -> str:
         return f"a {type(value).__name__} of length {len(value)}"
     if value is None:
         return "nothing (None)"
-    return f"{type(value).__name__} {value!r}"
+    text = repr(value)
+    if len(text) > 60:
+        text = text[:57] + "..."
+    return f"{type(value).__name__} {text}"
 
 
-def _nested_shape(value: Any, name: str) -> tuple[int, ...]:
-    """Shape of a nested list, refusing ragged rows with a precise message."""
-    if isinstance(value, (list, tuple)):
-        if len(value) == 0:
-            return (0,)
-        shapes = [_nested_shape(item, f"{name}[{i}]") for i, item in enumerate(value)]
-        first = shapes[0]
-        for i, shape in enumerate(shapes[1:], start=1):
-            if shape != first:
-                raise ValueError(
-                    f"{name} is ragged: row {i} has shape {shape}, row 0 has shape {first}"
-                )
-        return (len(value),) + first
-    return ()
+def _ndim_text(ndim: int) -> str:
+    return {1: "a 1-D array", 2: "a 2-D array (a list of rows)"}.get(ndim, f"{ndim}-D")
+
+
+def check_size(name: str, shape: tuple[int, ...], max_dim: int | None,
+                max_entries: int | None) -> None:
+    """Refuse a shape beyond the limits, before any array of it is built.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name``, the offending size and the limits.
+    """
+    limits = "; ".join(
+        text for text in (
+            f"at most {max_dim:,} rows and columns" if max_dim is not None else "",
+            f"{max_entries:,} entries" if max_entries is not None else "",
+        ) if text
+    )
+    if max_dim is not None:
+        for axis, size in enumerate(shape):
+            if size > max_dim:
+                part = {0: "rows", 1: "columns"}.get(axis, f"entries along axis {axis}")
+                raise ValueError(f"{name} is too large: {size:,} {part} (the limit is {limits})")
+    if max_entries is not None:
+        total = math.prod(shape)
+        if total > max_entries:
+            dims = " x ".join(f"{d:,}" for d in shape)
+            raise ValueError(f"{name} is too large: {dims} = {total:,} entries "
+                             f"(the limit is {limits})")
+
+
+def _nested_shape(value: Any, name: str, ndim: int, max_dim: int | None,
+                  max_entries: int | None) -> tuple[int, ...]:
+    """Shape of nested lists of at most ``ndim`` levels, refusing ragged rows.
+
+    Lists too long or nested too deep are refused as soon as they are seen,
+    so a huge or deeply nested document costs neither time nor recursion.
+    """
+    shape: list[int] = []
+    level = [value]
+    for axis in range(ndim + 1):
+        lists = [isinstance(item, (list, tuple)) for item in level]
+        if not any(lists):
+            return tuple(shape)
+        if axis == ndim:
+            raise ValueError(f"{name} must be {_ndim_text(ndim)}, got lists nested more than "
+                             f"{ndim} deep")
+        if not all(lists):
+            i = lists.index(not lists[0])
+            raise ValueError(f"{name} is ragged: row {i} is "
+                             f"{'a list' if lists[i] else 'a number'}, row 0 is "
+                             f"{'a list' if lists[0] else 'a number'}")
+        lengths = {len(item) for item in level}
+        if len(lengths) > 1:
+            first = len(level[0])
+            i = next(j for j, item in enumerate(level) if len(item) != first)
+            raise ValueError(f"{name} is ragged: row {i} has {len(level[i])} entries, "
+                             f"row 0 has {first}")
+        size = lengths.pop()
+        shape.append(size)
+        check_size(name, tuple(shape), max_dim, max_entries)
+        if size == 0:
+            return tuple(shape)
+        level = [sub for item in level for sub in item]
+    return tuple(shape)  # pragma: no cover - the loop returns or raises
 
 
 def as_real_matrix(
@@ -63,6 +156,8 @@ def as_real_matrix(
     ndim: int = 2,
     shape_hint: str | None = None,
     allow_empty: bool = False,
+    max_dim: int | None = None,
+    max_entries: int | None = None,
 ) -> np.ndarray:
     """Convert ``value`` to a finite real float64 array, read-only.
 
@@ -81,6 +176,10 @@ def as_real_matrix(
         shape errors.
     allow_empty : bool, default False
         Accept arrays with a zero dimension.
+    max_dim, max_entries : int, optional
+        Refuse more rows or columns than ``max_dim``, or more entries than
+        ``max_entries``, before building the array (untrusted input; see
+        ``MAX_MATRIX_DIM`` and ``MAX_MATRIX_ENTRIES``).
 
     Returns
     -------
@@ -90,40 +189,49 @@ def as_real_matrix(
     Raises
     ------
     TypeError
-        If the entries are not real numbers (strings, booleans, complex).
+        If the entries are not real numbers (strings, booleans, complex,
+        dates and durations).
     ValueError
-        If the array is ragged, has the wrong shape, or has NaN or inf entries.
+        If the array is ragged, has the wrong shape or size, or has entries
+        that are NaN, inf or too large for a float64.
     """
     if isinstance(value, (list, tuple)):
-        nested = _nested_shape(value, name)
-        flat: list[Any] = []
-
-        def _flatten(item: Any) -> None:
-            if isinstance(item, (list, tuple)):
-                for sub in item:
-                    _flatten(sub)
-            else:
-                flat.append(item)
-
-        _flatten(value)
+        nested = _nested_shape(value, name, ndim, max_dim, max_entries)
+        if len(nested) != ndim:
+            raise ValueError(f"{name} must be {_ndim_text(ndim)}, got an array of shape {nested}")
+        flat: list[Any] = [value]
+        for _ in range(ndim):
+            flat = [sub for item in flat for sub in item]
         for item in flat:
-            if isinstance(item, (bool, np.bool_)) or not isinstance(item, numbers.Number):
+            if (isinstance(item, (bool, np.bool_)) or _is_time(item)
+                    or not isinstance(item, numbers.Number)):
                 raise TypeError(f"{name} must contain real numbers, got {describe(item)}")
             if isinstance(item, numbers.Complex) and not isinstance(item, numbers.Real):
                 raise TypeError(f"{name} must be real, got the complex entry {item!r}")
+            if isinstance(item, numbers.Integral) and not -_FLOAT_MAX <= item <= _FLOAT_MAX:
+                raise ValueError(f"{name} has an entry too large for a float64: "
+                                 f"{show_int(int(item))}")
         array = np.array(flat, dtype=np.float64).reshape(nested) if flat else np.zeros(nested)
     else:
         array = np.asarray(value)
-        if array.dtype == object or array.dtype.kind in "USV":
-            raise TypeError(f"{name} must be a numeric array, got {describe(array)}")
-        if array.dtype.kind == "b":
+        kind = array.dtype.kind
+        if kind == "b":
             raise TypeError(f"{name} must contain real numbers, got a boolean array")
-        if array.dtype.kind == "c":
+        if kind == "c":
             raise TypeError(f"{name} must be real, got a complex array")
-        array = np.array(array, dtype=np.float64)
+        if kind in "mM":
+            what = "datetime64" if kind == "M" else "timedelta64"
+            raise TypeError(f"{name} must contain real numbers, got a {what} array "
+                            f"(dates or durations)")
+        if kind not in "iuf":
+            raise TypeError(f"{name} must be a numeric array, got {describe(array)}")
+        if array.ndim == ndim:
+            check_size(name, array.shape, max_dim, max_entries)
+        with np.errstate(over="ignore"):  # float128 beyond float64: inf, refused below
+            array = np.array(array, dtype=np.float64)
     if array.ndim != ndim:
-        what = {1: "a 1-D array", 2: "a 2-D array (a list of rows)"}.get(ndim, f"{ndim}-D")
-        raise ValueError(f"{name} must be {what}, got an array of shape {array.shape}")
+        raise ValueError(f"{name} must be {_ndim_text(ndim)}, got an array of shape "
+                         f"{array.shape}")
     if shape is not None:
         for axis, (got, want) in enumerate(zip(array.shape, shape)):
             if want is not None and got != want:
@@ -152,16 +260,17 @@ def as_int_option(
     max_value: int | None = None,
 ) -> int:
     """Convert an integer option, refusing booleans and non-integral floats."""
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (numbers.Integral, float)):
+    if (isinstance(value, (bool, np.bool_)) or _is_time(value)
+            or not isinstance(value, (numbers.Integral, float, np.floating))):
         raise TypeError(f"{name} must be an integer, got {describe(value)}")
-    if isinstance(value, float):
+    if isinstance(value, (float, np.floating)):
         if not np.isfinite(value) or value != int(value):
             raise TypeError(f"{name} must be an integer, got {value!r}")
     result = int(value)
     if min_value is not None and result < min_value:
-        raise ValueError(f"{name} must be >= {min_value}, got {result}")
+        raise ValueError(f"{name} must be >= {min_value}, got {show_int(result)}")
     if max_value is not None and result > max_value:
-        raise ValueError(f"{name} must be <= {max_value}, got {result}")
+        raise ValueError(f"{name} must be <= {max_value:,}, got {show_int(result)}")
     return result
 
 
@@ -175,8 +284,11 @@ def as_float_option(
     max_inclusive: bool = True,
 ) -> float:
     """Convert a finite real option within optional bounds."""
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+    if (isinstance(value, (bool, np.bool_)) or _is_time(value)
+            or not isinstance(value, numbers.Real)):
         raise TypeError(f"{name} must be a real number, got {describe(value)}")
+    if isinstance(value, numbers.Integral) and not -_FLOAT_MAX <= value <= _FLOAT_MAX:
+        raise ValueError(f"{name} must be finite, got {show_int(int(value))}")
     result = float(value)
     if not np.isfinite(result):
         raise ValueError(f"{name} must be finite, got {result}")
@@ -213,7 +325,7 @@ def as_index_list(value: Any, name: str, *, upper: int, what: str = "sensor") ->
         index = as_int_option(item, f"{name}[{i}]", min_value=0)
         if index >= upper:
             raise ValueError(
-                f"{name}[{i}] = {index} is out of range: {what} indices are 0-based and "
+                f"{name}[{i}] = {show_int(index)} is out of range: {what} indices are 0-based and "
                 f"must be < {upper}"
             )
         result.append(index)

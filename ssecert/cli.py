@@ -1,16 +1,29 @@
 """The ``ssecert`` command.
 
 Exit status: 0 every required check holds; 1 a required check fails; 3 none
-fails but one is inconclusive; 2 bad input or usage; 4 internal error.
+fails but one is inconclusive; 2 bad input or usage (one line on stderr, no
+traceback); 4 internal error.
+
+Output paths are checked before the checks run, so a typo costs seconds, not
+the whole run; reports are written all or nothing (``ssecert._io``).  Python
+warnings raised by the numerical code while a command runs do not reach the
+terminal as such: each distinct one becomes a one-line note in the output and
+in the report (where it was raised and how often), because a floating-point
+overflow may explain an inconclusive verdict; deprecation warnings of the
+libraries, which say nothing about the design, are dropped.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import os
 import sys
 import time
 import traceback
-from collections.abc import Sequence
+import warnings
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, NoReturn, TextIO
 
@@ -20,6 +33,8 @@ __all__ = ["main"]
 
 EXIT_BAD_INPUT = 2
 EXIT_INTERNAL = 4
+EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE, what a shell reports for a closed pipe
+_INT64_MAX = 2**63 - 1
 
 
 class UsageError(Exception):
@@ -59,19 +74,16 @@ class _Progress:
             self.stream.flush()
 
 
-def _nonnegative_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {value}")
-    return value
+def _shown(text: str) -> str:
+    return repr(text if len(text) <= 40 else text[:37] + "...")
 
 
-def _positive_int(text: str) -> int:
+def _integer(text: str, minimum: int, *, scientific: bool = False) -> int:
+    """An integer option in [minimum, 2^63 - 1]; ``5e7`` too when ``scientific``."""
     try:
-        if "e" in text.lower():  # 5e7
+        if len(text) > 40:
+            raise ValueError(text)
+        if scientific and "e" in text.lower():  # 5e7
             number = float(text)
             if not number.is_integer():  # also refuses inf and nan
                 raise ValueError(text)
@@ -79,10 +91,21 @@ def _positive_int(text: str) -> int:
         else:
             value = int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {value}")
+        raise argparse.ArgumentTypeError(f"expected an integer, got {_shown(text)}") from None
+    if value < minimum:
+        raise argparse.ArgumentTypeError(f"expected an integer >= {minimum}, got {value}")
+    if value > _INT64_MAX:
+        raise argparse.ArgumentTypeError(f"expected an integer <= {_INT64_MAX:,} (64 bits), "
+                                         f"got {_shown(text)}")
     return value
+
+
+def _nonnegative_int(text: str) -> int:
+    return _integer(text, 0)
+
+
+def _positive_int(text: str) -> int:
+    return _integer(text, 1, scientific=True)
 
 
 def _add_analysis_options(parser: argparse.ArgumentParser) -> None:
@@ -176,75 +199,195 @@ def _build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _resolve_spec(text: str) -> Path:
-    from .examples import example_path, list_examples
+def _load(text: str, **overrides: Any) -> Any:
+    """The spec named on the command line: a file as typed, or a packaged example.
 
+    Reports name the file exactly as typed (``../specs/x.toml`` stays
+    relative) and a packaged example by its name, never by the absolute path
+    of the machine that ran the command.
+    """
+    from .examples import example_path, list_examples
+    from .spec import load_spec
+
+    if not text:
+        raise UsageError("SPEC is empty; give a spec file or a packaged example name")
     path = Path(text)
-    if path.exists() or path.suffix:
-        return path
-    if text in list_examples():
-        return example_path(text)
-    raise UsageError(
-        f"{text}: no such file, and no packaged example of that name "
-        f"(available: {', '.join(list_examples())})"
-    )
+    if not (os.path.lexists(text) or path.suffix) and "\x00" not in text:
+        if text in list_examples():
+            return load_spec(example_path(text), source=text, **overrides)
+        raise UsageError(
+            f"{text}: no such file, and no packaged example of that name "
+            f"(available: {', '.join(list_examples())})"
+        )
+    return load_spec(text, **overrides)
+
+
+def _output_folder(option: str, text: str) -> Path:
+    """A folder to write into: it exists or can be created, before any work is done."""
+    if not text:
+        raise UsageError(f"{option}: empty path; give a folder")
+    path = Path(text)
+    if path.exists() and not path.is_dir():
+        raise UsageError(f"{option} {text}: exists and is not a folder")
+    ancestor = path
+    while not ancestor.exists() and ancestor != ancestor.parent:
+        ancestor = ancestor.parent
+    if not ancestor.is_dir():
+        raise UsageError(f"{option} {text}: cannot create a folder there: {ancestor} is a file")
+    if not os.access(ancestor, os.W_OK | os.X_OK):
+        raise UsageError(f"{option} {text}: cannot write in {ancestor}: permission denied")
+    return path
+
+
+def _output_file(option: str, text: str | None) -> Path | None:
+    """A file to write (None for no file or '-'), checked before any work is done."""
+    if text is None or text == "-":
+        return None
+    if not text:
+        raise UsageError(f"{option}: empty path; give a file path or '-' for stdout")
+    path = Path(text)
+    if path.is_dir():
+        raise UsageError(f"{option} {text}: is a folder, expected a file path")
+    parent = path.parent
+    if not parent.exists():
+        raise UsageError(f"{option} {text}: folder {parent} does not exist")
+    if not parent.is_dir():
+        raise UsageError(f"{option} {text}: {parent} is not a folder")
+    if not path.exists() and not os.access(parent, os.W_OK | os.X_OK):
+        raise UsageError(f"{option} {text}: cannot write in {parent}: permission denied")
+    return path
+
+
+def _write(files: Mapping[Path, str]) -> None:
+    """Write the files all or nothing, creating their folders; UsageError naming the path."""
+    from ._io import write_files
+
+    created: list[Path] = []
+    try:
+        for parent in dict.fromkeys(path.parent for path in files):  # in order
+            missing = []
+            while not parent.exists() and parent != parent.parent:
+                missing.append(parent)
+                parent = parent.parent
+            for folder in reversed(missing):
+                folder.mkdir()
+                created.append(folder)
+        write_files(files)
+    except BaseException as exc:
+        for folder in reversed(created):  # leave no empty folder behind
+            try:
+                folder.rmdir()
+            except OSError:
+                pass
+        if isinstance(exc, OSError):
+            where = exc.filename if exc.filename is not None else ", ".join(map(str, files))
+            raise UsageError(f"cannot write {where}: {exc.strerror or exc}") from None
+        raise
+
+
+class _WarningLog:
+    """Python warnings raised during a command, as one-line notes (see the module doc)."""
+
+    DROPPED = (DeprecationWarning, PendingDeprecationWarning, FutureWarning)
+
+    def __init__(self) -> None:
+        self.seen: dict[tuple[str, str], list[Any]] = {}
+
+    def show(self, message: Any, category: type[Warning], filename: str, lineno: int,
+             file: Any = None, line: Any = None) -> None:
+        text = str(message).strip().splitlines()[0] if str(message).strip() else ""
+        key = (category.__name__, text[:200])
+        if key in self.seen:
+            self.seen[key][0] += 1
+        else:
+            self.seen[key] = [1, self._origin()]
+
+    @staticmethod
+    def _origin() -> str | None:
+        """The innermost ssecert module (not the CLI) on the stack."""
+        root = os.path.dirname(os.path.abspath(__file__))
+        for frame in reversed(traceback.extract_stack()):
+            name = os.path.abspath(frame.filename)
+            if name.startswith(root + os.sep) and name != os.path.abspath(__file__):
+                module = os.path.relpath(name, os.path.dirname(root))
+                return module[: -len(".py")].replace(os.sep, ".")
+        return None
+
+    def notes(self, *, besides: _WarningLog | None = None) -> list[str]:
+        """One line per distinct warning (those of ``besides`` left out)."""
+        from .spec import one_line
+
+        notes = []
+        for (category, text), (count, origin) in self.seen.items():
+            if besides is not None and (category, text) in besides.seen:
+                continue
+            where = [f"in {origin}"] if origin else []
+            where += [f"{count} times"] if count > 1 else []
+            kind = "" if category in ("RuntimeWarning", "UserWarning") else f"{category}: "
+            place = f" ({', '.join(where)})" if where else ""
+            notes.append(one_line(f"{kind}{text}{place}"))
+        return notes
+
+
+@contextmanager
+def _warnings_as_notes() -> Iterator[_WarningLog]:
+    log = _WarningLog()
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        for category in _WarningLog.DROPPED:
+            warnings.simplefilter("ignore", category)
+        warnings.showwarning = log.show
+        yield log
 
 
 def _cmd_analyze(args: argparse.Namespace) -> int:
     from .analyze import analyze
-    from .report.json import certificate_json, write_json
+    from .report.json import certificate_json
     from .report.table import render_table
-    from .spec import load_spec
 
-    target = None
-    if args.json_path and args.json_path != "-":
-        target = Path(args.json_path)
-        if target.is_dir():
-            raise UsageError(f"--json {args.json_path}: is a folder, expected a file path")
-        if not target.parent.exists():
-            raise UsageError(f"--json {args.json_path}: folder {target.parent} does not exist")
-    spec = load_spec(_resolve_spec(args.spec), max_attacked=args.max_attacked,
-                     horizon=args.horizon)
+    target = _output_file("--json", args.json_path)
+    spec = _load(args.spec, max_attacked=args.max_attacked, horizon=args.horizon)
     to_stdout_json = args.json_path == "-"
     human = sys.stderr if to_stdout_json else sys.stdout
     progress = _Progress(sys.stderr)
     try:
-        cert = analyze(spec, method=args.method, max_sets=args.max_sets, seed=args.seed,
-                       progress=progress)
+        with _warnings_as_notes() as log:
+            cert = analyze(spec, method=args.method, max_sets=args.max_sets, seed=args.seed,
+                           progress=progress)
     finally:
         progress.close()
-    human.write(render_table(cert))
+    if log.notes():
+        meta = dict(cert.meta or {})
+        meta["notes"] = [*meta.get("notes", []), *log.notes()]
+        cert = dataclasses.replace(cert, meta=meta)
+    with _warnings_as_notes() as render_log:
+        document = certificate_json(cert)
+        table = render_table(cert)
+    if target is not None:
+        _write({target: document})
+    human.write(table)
+    for note in render_log.notes(besides=log):
+        human.write(f"note: {note}\n")
     if to_stdout_json:
-        sys.stdout.write(certificate_json(cert))
+        sys.stdout.write(document)
     elif target is not None:
-        try:
-            write_json(cert, target)
-        except OSError as exc:
-            raise UsageError(f"--json {args.json_path}: cannot write: "
-                             f"{exc.strerror or exc}") from None
-        human.write(f"JSON written to {target}\n")
+        human.write(f"JSON written to {args.json_path}\n")
     return cert.exit_code
 
 
 def _cmd_certify(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
-    import json
-
     from .certify import certify
     from .report.html import render_report
+    from .report.json import certify_json
     from .report.table import render_table
-    from .spec import load_spec
-    from ._io import atomic_write_text
 
-    out_dir = Path(args.out)
-    if out_dir.exists() and not out_dir.is_dir():
-        raise UsageError(f"--out {args.out}: exists and is not a folder")
-    target = None
-    if args.json_path and args.json_path != "-":
-        target = Path(args.json_path)
-        if target.is_dir() or not target.parent.exists():
-            raise UsageError(f"--json {args.json_path}: expected a file path in an existing folder")
-    spec = load_spec(_resolve_spec(args.spec), max_attacked=args.max_attacked,
-                     horizon=args.horizon)
+    out_dir = _output_folder("--out", args.out)
+    target = _output_file("--json", args.json_path)
+    spec = _load(args.spec, max_attacked=args.max_attacked, horizon=args.horizon)
+    html_path, json_path = out_dir / f"{spec.name}.html", out_dir / f"{spec.name}.json"
+    for path in (html_path, json_path):
+        if path.is_dir():
+            raise UsageError(f"--out {args.out}: {path} is a folder; the report needs that name")
     human = sys.stderr if args.json_path == "-" else sys.stdout
     tty = sys.stderr.isatty()
 
@@ -255,20 +398,25 @@ def _cmd_certify(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
 
     words = ["ssecert", "certify", *(list(argv) if argv is not None else sys.argv[2:])]
     command = " ".join(words if argv is not None else ["ssecert", *sys.argv[1:]])
-    result = certify(spec, seed=args.seed, simulate=not args.no_sim, runs=args.runs,
-                     method=args.method, max_sets=args.max_sets, progress=say, command=command)
+    with _warnings_as_notes() as log:
+        result = certify(spec, seed=args.seed, simulate=not args.no_sim, runs=args.runs,
+                         method=args.method, max_sets=args.max_sets, progress=say,
+                         command=command)
+        result.to_dict()  # simulation metrics are computed here: their warnings are notes too
+    notes = log.notes()
+    if notes:
+        result = dataclasses.replace(result, notes=(*result.notes, *notes))
     say("writing the report")
-    html = render_report(result)
-    document = json.dumps(result.to_dict(), indent=2, allow_nan=False) + "\n"
-    try:
-        out_dir.mkdir(parents=True, exist_ok=True)
-        html_path = atomic_write_text(out_dir / f"{spec.name}.html", html)
-        json_path = atomic_write_text(out_dir / f"{spec.name}.json", document)
-        if target is not None:
-            atomic_write_text(target, document)
-    except OSError as exc:
-        raise UsageError(f"cannot write the report: {exc.strerror or exc}") from None
+    with _warnings_as_notes() as render_log:
+        html = render_report(result)
+        document = certify_json(result)
+    files = {html_path: html, json_path: document}
+    if target is not None:
+        files[target] = document
+    _write(files)
     human.write(render_table(result.certificate, compact=True))
+    for note in [*notes, *render_log.notes(besides=log)]:
+        human.write(f"note: {note}\n")
     human.write(f"report: {html_path}\ncertificate: {json_path}\n")
     if args.json_path == "-":
         sys.stdout.write(document)
@@ -281,15 +429,9 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
     from .results import to_jsonable
     from .simulation.engine import simulate_spec
-    from .spec import load_spec
-    from ._io import atomic_write_text
 
-    target = None
-    if args.json_path and args.json_path != "-":
-        target = Path(args.json_path)
-        if target.is_dir() or not target.parent.exists():
-            raise UsageError(f"--json {args.json_path}: expected a file path in an existing folder")
-    spec = load_spec(_resolve_spec(args.spec), max_attacked=args.max_attacked)
+    target = _output_file("--json", args.json_path)
+    spec = _load(args.spec, max_attacked=args.max_attacked)
     if spec.observer is None or not spec.scenarios:
         raise UsageError(f"{spec.source}: simulate needs an [observer] section and at least one "
                          f"[[scenario]]")
@@ -298,24 +440,27 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         from .parallel import dask_client
 
         context = dask_client(args.scheduler, workers=args.workers)
-    with context as client:
-        results = simulate_spec(spec, seed=args.seed, runs=args.runs, steps=args.steps,
-                                client=client)
+    with _warnings_as_notes() as log:
+        with context as client:
+            results = simulate_spec(spec, seed=args.seed, runs=args.runs, steps=args.steps,
+                                    client=client)
+        document = {"ssecert_version": __version__, "system": spec.system.to_dict(),
+                    "scenarios": {name: (r.to_dict() if hasattr(r, "to_dict") else r)
+                                  for name, r in results["scenarios"].items()}}
+        table = _simulation_table(spec, results["scenarios"])
     human = sys.stderr if args.json_path == "-" else sys.stdout
-    human.write(_simulation_table(spec, results["scenarios"]))
-    document = {"ssecert_version": __version__, "system": spec.system.to_dict(),
-                "scenarios": {name: (r.to_dict() if hasattr(r, "to_dict") else r)
-                              for name, r in results["scenarios"].items()}}
+    if log.notes():
+        document["notes"] = log.notes()
     text = json.dumps(to_jsonable(document), indent=2, allow_nan=False) + "\n"
+    if target is not None:
+        _write({target: text})
+    human.write(table)
+    for note in log.notes():
+        human.write(f"note: {note}\n")
     if args.json_path == "-":
         sys.stdout.write(text)
     elif target is not None:
-        try:
-            atomic_write_text(target, text)
-        except OSError as exc:
-            raise UsageError(f"--json {args.json_path}: cannot write: "
-                             f"{exc.strerror or exc}") from None
-        human.write(f"JSON written to {target}\n")
+        human.write(f"JSON written to {args.json_path}\n")
     return 0
 
 
@@ -361,7 +506,7 @@ def _cmd_examples(args: argparse.Namespace) -> int:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``ssecert`` command; returns the exit status."""
     from .design.gains import GainError
-    from .spec import SpecError
+    from .spec import SpecError, one_line
 
     parser = _build_parser()
     try:
@@ -380,16 +525,27 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _cmd_simulate(args)
         raise UsageError(f"unknown command {args.command!r}")  # pragma: no cover
     except (UsageError, SpecError) as exc:
-        sys.stderr.write(f"ssecert: error: {exc}\n")
+        sys.stderr.write(f"ssecert: error: {one_line(str(exc))}\n")
         return EXIT_BAD_INPUT
     except GainError as exc:
-        sys.stderr.write(f"ssecert: error: the spec's observer gain cannot be computed: {exc}\n")
+        sys.stderr.write(f"ssecert: error: the spec's observer gain cannot be computed: "
+                         f"{one_line(str(exc))}\n")
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         sys.stderr.write("ssecert: interrupted\n")
         return 130
-    except BrokenPipeError:  # pragma: no cover - e.g. piping into head
-        return 0
+    except BrokenPipeError:  # e.g. piping into head: stop quietly
+        try:  # and keep the interpreter from complaining when it flushes stdout at exit
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())
+        except (OSError, ValueError):
+            pass
+        return EXIT_BROKEN_PIPE
+    except MemoryError as exc:
+        detail = f" ({one_line(str(exc))})" if str(exc) else ""
+        sys.stderr.write(f"ssecert: error: out of memory{detail}; the problem is too large for "
+                         f"this machine (if the spec is small, please report this as a bug)\n")
+        return EXIT_BAD_INPUT
     except Exception as exc:  # noqa: BLE001 - report, ask for a bug report
         sys.stderr.write(
             f"ssecert: internal error: {type(exc).__name__}: {exc}\n"

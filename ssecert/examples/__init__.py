@@ -48,7 +48,7 @@ def example_path(name: str) -> Path:
 
 
 def load_example(name: str):
-    """Load a packaged example as a validated Spec."""
+    """Load a packaged example as a validated Spec, named by ``name`` in reports."""
     from ..spec import load_spec
 
-    return load_spec(example_path(name))
+    return load_spec(example_path(name), source=name)

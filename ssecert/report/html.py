@@ -203,14 +203,19 @@ def _context(result: Any, *, fragment: bool) -> dict[str, Any]:
         ctx["stealthy_residual"] = _fmt(result.stealthy["residual"])
         ctx["stealthy_text"] = _stealthy_text(system, result.stealthy)
     sims = []
+    slugs: set[str] = set()
     for name, res in result.simulations.items():
+        slug = _slug(name)
+        if slug in slugs:  # names differing only in punctuation: ids stay unique
+            slug = next(f"{slug}-{i}" for i in range(2, len(slugs) + 3)
+                        if f"{slug}-{i}" not in slugs)
+        slugs.add(slug)
         if isinstance(res, Mapping):
             sims.append({"name": name, "attack": "-", "runs": "-", "steps": "-", "rel": "-",
                          "q90": "-", "support": "-", "delay": "-", "svg": None,
-                         "skipped": res.get("skipped", ""), "slug": _slug(name)})
+                         "skipped": res.get("skipped", ""), "slug": slug})
             continue
         final = res.final()
-        slug = _slug(name)
         sims.append({
             "name": name, "attack": res.attack, "runs": res.runs, "steps": res.steps,
             "rel": _fmt(final["relative_error_mean"]), "q90": _fmt(final["relative_error_q90"]),

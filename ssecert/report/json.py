@@ -4,11 +4,15 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 from .._io import atomic_write_text
 from ..results import Certificate
 
-__all__ = ["certificate_json", "write_json"]
+__all__ = ["certificate_json", "write_json", "certify_json"]
+
+#: keys holding measured wall-clock durations
+TIMING_KEYS = ("seconds",)
 
 
 def certificate_json(certificate: Certificate, *, indent: int | None = 2) -> str:
@@ -19,3 +23,32 @@ def certificate_json(certificate: Certificate, *, indent: int | None = 2) -> str
 def write_json(certificate: Certificate, path: str | Path) -> Path:
     """Write the certificate's JSON atomically to ``path``."""
     return atomic_write_text(path, certificate_json(certificate))
+
+
+def certify_json(result: Any, *, indent: int | None = 2) -> str:
+    """The JSON certificate of ``ssecert certify`` (a ``CertifyResult``).
+
+    Measured durations (``seconds`` of solver runs and simulations) are moved
+    from where they were measured to ``meta.timings``, keyed by that place:
+    with ``meta.date`` they are the only fields that change when a report is
+    regenerated from the same spec, seed and version.
+    """
+    document = result.to_dict()
+    timings: dict[str, Any] = {}
+    _move_timings(document, "", timings)
+    if timings:
+        meta = document.setdefault("meta", {})
+        meta["timings"] = timings
+    return json.dumps(document, indent=indent, allow_nan=False) + "\n"
+
+
+def _move_timings(node: Any, path: str, timings: dict[str, Any]) -> None:
+    if isinstance(node, dict):
+        for key in TIMING_KEYS:
+            if key in node and isinstance(node[key], (int, float)):
+                timings[f"{path}.{key}" if path else key] = node.pop(key)
+        for key, value in node.items():
+            _move_timings(value, f"{path}.{key}" if path else str(key), timings)
+    elif isinstance(node, list):
+        for i, value in enumerate(node):
+            _move_timings(value, f"{path}[{i}]", timings)

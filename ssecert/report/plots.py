@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import io
 import re
+import warnings
 from collections.abc import Sequence
 from typing import Any
 
@@ -20,19 +21,39 @@ PALETTE = {"holds": "#1b7f3b", "fails": "#b3261e", "inconclusive": "#a36b00",
            "a": "#1f5fa8", "b": "#c2410c", "output": "#333333", "band": "#9ec5ee"}
 
 
+def plain(text: str, limit: int = 40) -> str:
+    """User text (sensor and scenario names) as matplotlib shows it: literally.
+
+    Matplotlib reads text between two ``$`` as mathematics, and a name such
+    as ``$\\frac{$`` would make it raise; long names are shortened (the full
+    names are in the report's tables).
+    """
+    if len(text) > limit:
+        text = text[: limit - 1] + "\u2026"
+    return text.replace("$", r"\$")
+
+
 def svg_figure(fig: Any, *, title: str = "") -> str:
-    """The SVG text of a matplotlib Figure, ready to inline in HTML."""
+    """The SVG text of a matplotlib Figure, ready to inline in HTML.
+
+    The ids matplotlib gives clip paths come from ``svg.hashsalt``, random by
+    default; a salt from the title makes the same figure give the same SVG.
+    """
     import matplotlib
 
     buf = io.StringIO()
-    with matplotlib.rc_context({"svg.fonttype": "none"}):
+    with matplotlib.rc_context({"svg.fonttype": "none", "svg.hashsalt": f"ssecert {title}"}), \
+            warnings.catch_warnings():
+        # text stays text in the SVG and the browser draws it with its own fonts
+        warnings.filterwarnings("ignore", message="Glyph .* missing from font")
         fig.savefig(buf, format="svg", bbox_inches="tight")
     text = buf.getvalue()
     text = re.sub(r"<\?xml[^>]*\?>\s*", "", text)
     text = re.sub(r"<!DOCTYPE[^>]*>\s*", "", text)
     text = re.sub(r"<metadata>.*?</metadata>\s*", "", text, flags=re.S)  # RDF, creation date
     if title:
-        text = text.replace("<svg ", f'<svg role="img" aria-label="{title}" ', 1)
+        label = title.replace("&", "&amp;").replace('"', "&quot;").replace("<", "&lt;")
+        text = text.replace("<svg ", f'<svg role="img" aria-label="{label}" ', 1)
     return text
 
 
@@ -53,8 +74,11 @@ def simulation_plot(name: str, result: Any, *, gid: str) -> str:
     if has_support:
         panels.append(("support error (Jaccard)", result.support_error, False))
     for ax, (label, data, log) in zip(axes[0], panels):
-        mean = np.nanmean(data, axis=1)
-        lo, hi = np.nanquantile(data, 0.1, axis=1), np.nanquantile(data, 0.9, axis=1)
+        with warnings.catch_warnings():  # steps where every run diverged: NaN, drawn as a gap
+            warnings.filterwarnings("ignore", "Mean of empty slice", RuntimeWarning)
+            warnings.filterwarnings("ignore", "All-NaN slice encountered", RuntimeWarning)
+            mean = np.nanmean(data, axis=1)
+            lo, hi = np.nanquantile(data, 0.1, axis=1), np.nanquantile(data, 0.9, axis=1)
         if log:
             floor = 1e-17
             mean, lo, hi = (np.maximum(v, floor) for v in (mean, lo, hi))
@@ -68,7 +92,7 @@ def simulation_plot(name: str, result: Any, *, gid: str) -> str:
         ax.set_title(label, fontsize=10)
         ax.grid(True, alpha=0.3)
     axes[0][0].legend(fontsize=8, loc="best")
-    fig.suptitle(f"{name}: {result.runs} runs, {result.attack} attack", fontsize=10)
+    fig.suptitle(f"{plain(name)}: {result.runs} runs, {result.attack} attack", fontsize=10)
     return svg_figure(fig, title=f"simulation {name}")
 
 
@@ -92,7 +116,7 @@ def stealthy_plot(system: Any, demo: dict[str, Any], *, gid: str = "stealthy") -
     ax.grid(True, alpha=0.3)
     ax = axes[0][1]
     (lo,) = ax.plot(k, y[:, sensor], color=PALETTE["output"], linewidth=1.8,
-                    label=f"output of {system.sensors[sensor]} (both plants)")
+                    label=f"output of {plain(system.sensors[sensor])} (both plants)")
     lo.set_gid(f"{gid}-output")
     ax.set_title("one output: the sensors cannot tell them apart", fontsize=10)
     ax.set_xlabel("step k")
@@ -144,7 +168,7 @@ def sensor_plot(sensors: Sequence[str], breaking: Sequence[int]) -> str:
                                            boxstyle="round,pad=0.02", facecolor=color,
                                            edgecolor="#444"))
         box.set_gid(f"sensor-{i}{'-breaking' if i in broken else ''}")
-        ax.text(i + 0.5, 0.5, name, ha="center", va="center", fontsize=8,
+        ax.text(i + 0.5, 0.5, plain(name, 14), ha="center", va="center", fontsize=8,
                 color="white" if i in broken else "black")
     ax.set_xlim(0, len(sensors))
     ax.set_ylim(0, 1)
