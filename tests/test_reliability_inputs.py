@@ -462,12 +462,25 @@ def test_analyses_refuse_what_is_not_a_system():
             call([[1.0]], 1)
 
 
-@pytest.mark.xfail(strict=True, raises=AttributeError,
-                   reason="observability() does not check its argument (ssecert/structure/, "
-                          "not validated at its entry yet): AttributeError instead of TypeError")
 def test_observability_refuses_what_is_not_a_system():
-    with pytest.raises(TypeError, match="system must be a System"):
-        observability([[1.0]])
+    from ssecert import observability_index
+
+    for call in (observability, observability_index):
+        with pytest.raises(TypeError, match="system must be a System"):
+            call([[1.0]])
+
+
+@pytest.mark.parametrize("seed, error", [(-1, ValueError), ("a", TypeError), (1.5, TypeError)])
+def test_sparse_observability_names_a_bad_seed(seed, error):
+    with pytest.raises(error, match="seed"):
+        sparse_observability(System([[1.0]], [[1.0]]), 0, seed=seed)
+
+
+def test_analyses_name_bad_tolerances():
+    with pytest.raises(TypeError, match="tolerances must be a Tolerances"):
+        sparse_observability(System([[1.0]], [[1.0]]), 0, tolerances="x")
+    with pytest.raises(TypeError, match="tolerances must be a Tolerances"):
+        observability(System([[1.0]], [[1.0]]), tolerances="x")
 
 
 # ---------------------------------------------------------------------------
@@ -1114,15 +1127,8 @@ def test_packaged_examples_raise_no_warning(tmp_path, capsys, name):
     assert status in (0, 1, 3) and "note:" not in out
 
 
-_THESIS_CRASH = pytest.mark.xfail(
-    strict=True, reason="ssecert/stability/thesis.py: pi_map raises ArithmeticError ('the series "
-                        "for Pi did not terminate') out of thesis_assumptions for a D-SSO on a "
-                        "plant with entries 1e300: exit 4 instead of an inconclusive check")
-
-
 @pytest.mark.parametrize("name, observer", [
-    pytest.param(name, k, id=f"{name}-{o['kind']}",
-                 marks=[_THESIS_CRASH] if (name, o["kind"]) == ("huge", "dsso") else [])
+    pytest.param(name, k, id=f"{name}-{o['kind']}")
     for name in _DEGENERATE for k, o in enumerate(_OBSERVERS)
 ])
 def test_degenerate_plants_raise_no_warning(tmp_path, capsys, name, observer):
@@ -1140,7 +1146,9 @@ def test_degenerate_plants_raise_no_warning(tmp_path, capsys, name, observer):
 def test_what_the_warnings_said_is_kept(tmp_path, capsys):
     path = degenerate_spec(tmp_path, "huge", 0)
     status, out, _ = run_quietly(capsys, "analyze", str(path), "--json", str(tmp_path / "a.json"))
-    assert status == 3
+    # decided (sensors 0 and 2 are the only ones that see the Jordan block's eigenvector e1,
+    # so max_removable = 1 < 2s) or inconclusive, never exit 4
+    assert status in (1, 3)
     assert re.search(r"note: overflow encountered in \w+ \(in ssecert\.\w+", out), out
     notes = json.loads((tmp_path / "a.json").read_text())["meta"]["notes"]
     assert any("overflow encountered" in note for note in notes)
@@ -1157,7 +1165,7 @@ def test_no_warning_reaches_stderr_of_a_fresh_interpreter(tmp_path):
     done = subprocess.run([sys.executable, "-m", "ssecert", "certify", str(path), "--out",
                            str(tmp_path / "out"), "--json", "-"], capture_output=True, text=True,
                           env=env, timeout=300)
-    assert done.returncode == 3, done.stderr
+    assert done.returncode in (1, 3), done.stderr
     assert "Warning" not in done.stderr and "Traceback" not in done.stderr, done.stderr
     json.loads(done.stdout)
 

@@ -147,7 +147,7 @@ def stealthy_attack(
     >>> w.verified, w.undetectable
     (True, True)
     """
-    tol = tolerances or Tolerances()
+    tol = Tolerances.check(tolerances)
     s = as_int_option(max_attacked, "max_attacked", min_value=0)
     B = sorted(as_index_list(breaking_set, "breaking_set", upper=system.p))
     if len(B) > 2 * s and B:

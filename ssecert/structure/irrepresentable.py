@@ -115,7 +115,7 @@ def irrepresentable(
     >>> check.verdict.value, round(check.value, 12), check.fields["worst_support"]
     ('holds', 0.5, [0])
     """
-    tol = tolerances or Tolerances()
+    tol = Tolerances.check(tolerances)
     if not isinstance(system, System):
         raise TypeError(f"system must be a System, got {type(system).__name__}")
     mode = as_choice(mode, "mode", MODES)

@@ -81,7 +81,9 @@ def observability_index(system: System, *, tolerances: Tolerances | None = None)
     >>> observability_index(System([[1.0, 0.0099], [0.0, 0.9876]], [[1, 0]]))
     2
     """
-    sc = staircase(system.A, system.C, tolerances=tolerances)
+    if not isinstance(system, System):
+        raise TypeError(f"system must be a System, got {type(system).__name__}")
+    sc = staircase(system.A, system.C, tolerances=Tolerances.check(tolerances))
     if sc.problem or sc.rank < system.n:
         return None
     return sc.index
@@ -123,7 +125,9 @@ def observability(
     from .._exact import ExactPlant
     from ._linalg import unit_normalized
 
-    tol = tolerances or Tolerances()
+    if not isinstance(system, System):
+        raise TypeError(f"system must be a System, got {type(system).__name__}")
+    tol = Tolerances.check(tolerances)
     work, alpha = unit_normalized(system)
     A, C = work.A, work.C
     n = system.n

@@ -394,7 +394,7 @@ def scan_removals(
     >>> scan_removals(ex2, 2).breaking_sets
     ((0, 2),)
     """
-    tol = tolerances or Tolerances()
+    tol = Tolerances.check(tolerances)
     size = as_int_option(size, "size", min_value=0, max_value=system.p)
     original = system
     system, _ = unit_normalized(system)
@@ -973,9 +973,10 @@ def sparse_observability(
     >>> check.verdict.value, check.fields["max_removable"], check.fields["breaking_set"]
     ('fails', 0, [0])
     """
-    tol = tolerances or Tolerances()
     if not isinstance(system, System):
         raise TypeError(f"system must be a System, got {type(system).__name__}")
+    tol = Tolerances.check(tolerances)
+    seed = as_int_option(seed, "seed", min_value=0)
     s = as_int_option(max_attacked, "max_attacked", min_value=0)
     method = as_choice(method, "method", METHODS)
     max_sets = as_int_option(max_sets, "max_sets", min_value=1)
