@@ -260,14 +260,21 @@ def spectral_radius_bound(
         return value
 
     work = 0.0
+
+    def affordable(a: Dyadic, b: Dyadic) -> bool:
+        nonlocal work
+        c = cost(a, b)
+        if work + c > max_work:
+            return False
+        work += c
+        return True
+
     P = F
     for k in range(1, k_max + 1):
         if k > 1:
-            c = cost(P, F)
-            if work + c > max_work:
+            if not affordable(P, F):
                 complete = False
                 break
-            work += c
             P = P @ F
         value = record(k, P)
         log2_norms.append(value)
@@ -280,16 +287,15 @@ def spectral_radius_bound(
         for _ in range(squarings):
             if target is not None and (best < target or lower > target):
                 break
-            c = cost(P, P)
-            if work + c > max_work:
+            if not affordable(P, P):
                 complete = False
                 break
-            work += c
             P = P @ P
             m *= 2
             if record(m, P) == -math.inf:
                 break
-    return PowerBound(tuple(log2_norms), tuple(log2_two), nil, best, best_m, tuple(powers), complete, lower,
+    return PowerBound(tuple(log2_norms), tuple(log2_two), nil, best, best_m, tuple(powers),
+                      complete, lower,
                       lower_m)
 
 

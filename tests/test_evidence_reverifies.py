@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from planted import exact_rank as _rank
 
 from ssecert import System, analyze, spec_from_dict
 from ssecert.design.gains import deadbeat_gain, verify_deadbeat
@@ -29,22 +30,6 @@ def _q(M):
 def _mul(X, Y):
     return [[sum(X[i][k] * Y[k][j] for k in range(len(Y))) for j in range(len(Y[0]))]
             for i in range(len(X))]
-
-
-def _rank(rows):
-    M = [list(r) for r in rows]
-    rank, cols = 0, len(M[0]) if M else 0
-    for c in range(cols):
-        pivot = next((r for r in range(rank, len(M)) if M[r][c] != 0), None)
-        if pivot is None:
-            continue
-        M[rank], M[pivot] = M[pivot], M[rank]
-        for r in range(len(M)):
-            if r != rank and M[r][c] != 0:
-                f = M[r][c] / M[rank][c]
-                M[r] = [a - f * b for a, b in zip(M[r], M[rank])]
-        rank += 1
-    return rank
 
 
 def _obsv_rank(A, C, steps):
