@@ -85,6 +85,30 @@ def _positive_int(text: str) -> int:
     return value
 
 
+def _add_budget_options(parser: argparse.ArgumentParser) -> None:
+    from .budget import parse_bytes, parse_operations
+
+    def checked(parse: Any) -> Any:
+        def convert(text: str) -> Any:
+            try:
+                return parse(text)
+            except ValueError as exc:
+                raise argparse.ArgumentTypeError(str(exc)) from None
+        return convert
+
+    parser.add_argument("--memory-budget", type=checked(parse_bytes), metavar="SIZE",
+                        help="memory per analysis step, e.g. 512M or 8G (default 2G)")
+    parser.add_argument("--work-budget", type=checked(parse_operations), metavar="FLOPS",
+                        help="floating-point operations per analysis step (default 1e12)")
+
+
+def _budget(args: argparse.Namespace) -> Any:
+    from .budget import Budget
+
+    return Budget(**{key: value for key, value in (("memory", args.memory_budget),
+                                                   ("work", args.work_budget)) if value})
+
+
 def _add_analysis_options(parser: argparse.ArgumentParser) -> None:
     """Options shared by ``certify`` and ``analyze``."""
     parser.add_argument("--max-attacked", type=_nonnegative_int, metavar="S",
@@ -95,6 +119,7 @@ def _add_analysis_options(parser: argparse.ArgumentParser) -> None:
                         help="enumeration budget in sets (default 5e7)")
     parser.add_argument("--method", choices=("auto", "enumeration", "eigenspace"),
                         default="auto", help="sparse-observability method (default auto)")
+    _add_budget_options(parser)
 
 
 def _build_parser() -> argparse.ArgumentParser:
@@ -169,6 +194,7 @@ def _build_parser() -> argparse.ArgumentParser:
                           help="run on an existing Dask scheduler (needs the dist extra)")
     simulate.add_argument("--workers", type=_positive_int, metavar="N",
                           help="run on a local Dask cluster of N worker processes")
+    _add_budget_options(simulate)
 
     examples = sub.add_parser("examples", help="list the packaged examples or print one",
                               description="List packaged example specs, or print one.")
@@ -210,7 +236,7 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     progress = _Progress(sys.stderr)
     try:
         cert = analyze(spec, method=args.method, max_sets=args.max_sets, seed=args.seed,
-                       progress=progress)
+                       progress=progress, budget=_budget(args))
     finally:
         progress.close()
     human.write(render_table(cert))
@@ -256,7 +282,8 @@ def _cmd_certify(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
     words = ["ssecert", "certify", *(list(argv) if argv is not None else sys.argv[2:])]
     command = " ".join(words if argv is not None else ["ssecert", *sys.argv[1:]])
     result = certify(spec, seed=args.seed, simulate=not args.no_sim, runs=args.runs,
-                     method=args.method, max_sets=args.max_sets, progress=say, command=command)
+                     method=args.method, max_sets=args.max_sets, progress=say, command=command,
+                     budget=_budget(args))
     say("writing the report")
     html = render_report(result)
     document = json.dumps(result.to_dict(), indent=2, allow_nan=False) + "\n"
@@ -300,7 +327,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         context = dask_client(args.scheduler, workers=args.workers)
     with context as client:
         results = simulate_spec(spec, seed=args.seed, runs=args.runs, steps=args.steps,
-                                client=client)
+                                client=client, budget=_budget(args))
     human = sys.stderr if args.json_path == "-" else sys.stdout
     human.write(_simulation_table(spec, results["scenarios"]))
     document = {"ssecert_version": __version__, "system": spec.system.to_dict(),
@@ -360,6 +387,7 @@ def _cmd_examples(args: argparse.Namespace) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``ssecert`` command; returns the exit status."""
+    from .budget import ResourceLimitError
     from .design.gains import GainError
     from .spec import SpecError
 
@@ -379,7 +407,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command == "simulate":
             return _cmd_simulate(args)
         raise UsageError(f"unknown command {args.command!r}")  # pragma: no cover
-    except (UsageError, SpecError) as exc:
+    except (UsageError, SpecError, ResourceLimitError) as exc:
         sys.stderr.write(f"ssecert: error: {exc}\n")
         return EXIT_BAD_INPUT
     except GainError as exc:

@@ -32,7 +32,14 @@ from .._validation import as_index_list, as_int_option, as_real_matrix
 from ..system import System
 from ..tolerances import Tolerances
 
-__all__ = ["StealthyAttack", "stealthy_attack", "initial_state"]
+__all__ = ["StealthyAttack", "stealthy_attack", "initial_state", "WITNESS_MAX_STEPS",
+           "WITNESS_MAX_ENTRIES"]
+
+# The witness is simulated and reported over at most this many steps (and
+# steps x p entries): beyond n steps it adds nothing, since C_i A^k z = 0 for
+# k < n implies it for every k (Cayley-Hamilton).
+WITNESS_MAX_STEPS = 10_000
+WITNESS_MAX_ENTRIES = 1_000_000
 
 
 def initial_state(n: int, rng: np.random.Generator) -> np.ndarray:
@@ -61,6 +68,10 @@ class StealthyAttack:
         ``max_k ||outputs_a[k] - outputs_b[k]|| / max_k ||C|| ||A^k z||``.
     verified : bool
         ``residual <= witness_rtol``.
+    rtol : float
+    horizon : int
+        Steps requested; the arrays cover the first ``attack_a.shape[0]`` of
+        them (fewer when the horizon exceeds ``WITNESS_MAX_STEPS``).
     """
 
     z: np.ndarray
@@ -74,6 +85,7 @@ class StealthyAttack:
     residual: float
     verified: bool
     rtol: float
+    horizon: int | None = None
 
     @property
     def undetectable(self) -> bool:
@@ -82,7 +94,7 @@ class StealthyAttack:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON fields of the witness."""
-        return {
+        out: dict[str, Any] = {
             "z": self.z,
             "sensors_a": list(self.sensors_a),
             "sensors_b": list(self.sensors_b),
@@ -98,6 +110,16 @@ class StealthyAttack:
                 + ("; attack_a alone is undetectable" if self.undetectable else "")
             ),
         }
+        steps = int(self.attack_a.shape[0])
+        out["steps"] = steps
+        if self.horizon is not None and self.horizon > steps:
+            out["horizon"] = self.horizon
+            out["truncated"] = (
+                f"shown and verified over the first {steps:,} of the {self.horizon:,} steps of "
+                f"the horizon; attack_a(k) = P_a C A^k z continues in the same way, and the "
+                f"outputs coincide at every later step too, because C_i A^k z = 0 for k < n "
+                f"implies it for every k (Cayley-Hamilton)")
+        return out
 
 
 def stealthy_attack(
@@ -124,7 +146,9 @@ def stealthy_attack(
     max_attacked : int
         s, the number of sensors each attack may use.
     horizon : int, optional
-        Number of simulated steps (default n).
+        Number of simulated steps (default n); at most ``WITNESS_MAX_STEPS``
+        and ``WITNESS_MAX_ENTRIES / p`` (but at least n) are simulated and
+        returned, which decides the witness for every horizon.
     seed : int, default 0
         Seed of the simulated initial state x0.
     tolerances : Tolerances, optional
@@ -162,7 +186,8 @@ def stealthy_attack(
     first = np.flatnonzero(np.abs(z) > 1e-12)
     if first.size and z[first[0]] < 0:
         z = -z
-    H = system.n if horizon is None else as_int_option(horizon, "horizon", min_value=1)
+    requested = system.n if horizon is None else as_int_option(horizon, "horizon", min_value=1)
+    H = min(requested, max(system.n, min(WITNESS_MAX_STEPS, WITNESS_MAX_ENTRIES // system.p)))
     sensors_a = tuple(B[:s]) if B else ()
     sensors_b = tuple(B[s:]) if B else ()
 
@@ -217,4 +242,5 @@ def stealthy_attack(
         residual=residual,
         verified=bool(residual <= tol.witness_rtol),
         rtol=tol.witness_rtol,
+        horizon=requested,
     )
