@@ -133,13 +133,14 @@ class ScenarioResult:
     def final(self) -> dict[str, float | None]:
         """Aggregates at the last step."""
         rel = self.relative_error[-1]
-        out: dict[str, float | None] = {
-            "relative_error_mean": float(np.mean(rel)),
-            "relative_error_q90": float(np.quantile(rel, 0.9)),
-            "mse_mean": float(np.mean(self.mse[-1])),
-            "support_error_mean": (None if self.support_error is None
-                                   else float(np.mean(self.support_error[-1]))),
-        }
+        with np.errstate(over="ignore", invalid="ignore"):  # diverged runs: inf or NaN
+            out: dict[str, float | None] = {
+                "relative_error_mean": float(np.mean(rel)),
+                "relative_error_q90": float(np.quantile(rel, 0.9)),
+                "mse_mean": float(np.mean(self.mse[-1])),
+                "support_error_mean": (None if self.support_error is None
+                                       else float(np.mean(self.support_error[-1]))),
+            }
         if self.detection_delay is not None:
             delays = self.detection_delay[np.isfinite(self.detection_delay)]
             out["detection_delay_median"] = float(np.median(delays)) if delays.size else None
@@ -170,7 +171,13 @@ def stealthy_replay(system: System, max_attacked: int) -> StealthyReplay | None:
 
 def _chunk(args: tuple) -> dict[str, np.ndarray]:
     """Simulate one chunk of runs (top level, so Dask can pickle it)."""
-    design, scenario, runs, steps, seed, replay = args
+    # an unstable plant or a diverging observer overflows: the metrics then say so (inf)
+    with np.errstate(over="ignore", invalid="ignore"):
+        return _simulate_chunk(*args)
+
+
+def _simulate_chunk(design: ObserverDesign, scenario: Mapping[str, Any], runs: list[int],
+                    steps: int, seed: int, replay: StealthyReplay | None) -> dict[str, np.ndarray]:
     system = design.system
     data = generate(system, scenario, runs, steps, seed=seed, replay=replay)
     A_T, C_T = system.A.T, system.C.T
@@ -264,11 +271,17 @@ def simulate_scenario(
                replay) for r0 in range(0, runs, chunk_runs)]
     parts = map_ordered(_chunk, chunks, client)
     merged = {key: np.concatenate([p[key] for p in parts], axis=-1) for key in parts[0]}
+    notes = []
+    overflowed = int(np.count_nonzero(~np.all(np.isfinite(merged["relative_error"]), axis=0)))
+    if overflowed:
+        notes.append(f"the plant state or its estimate overflows in floating point in "
+                     f"{overflowed} of {runs} runs (their errors are reported as inf or NaN)")
     return ScenarioResult(
         name=str(scenario.get("name", "scenario")), attack=scenario["attack"], observer=design.kind,
         runs=runs, steps=steps, seed=seed, relative_error=merged["relative_error"],
         mse=merged["mse"], support_error=merged.get("support_error"),
-        detection_delay=merged.get("detection_delay"), seconds=time.perf_counter() - start)
+        detection_delay=merged.get("detection_delay"), seconds=time.perf_counter() - start,
+        notes=tuple(notes))
 
 
 @dataclass(frozen=True)

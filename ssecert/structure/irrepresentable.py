@@ -39,7 +39,6 @@ __all__ = ["irrepresentable", "irrepresentable_constant", "MODES"]
 MODES = ("block", "entrywise")
 _SUB = 128  # largest number of supports per dense product
 _LISTED = 10_000  # largest support listed in full in a result
-_COLEX_BYTES = DEFAULT_MEMORY + DEFAULT_CHUNK_BYTES  # partial sums of the colex engine
 
 
 def irrepresentable_constant(
@@ -205,7 +204,8 @@ def irrepresentable(
                              "support_names": describe_support(tuple(range(items))),
                              "reason": "O_Sbar lacks full column rank"})
     h = k * tau if mode == "block" else k
-    nbytes, flops, per_support = _cost(n, p, tau, items, h, total, mode)
+    colex_memory = int(min(DEFAULT_MEMORY, budget.memory // 8))
+    nbytes, flops, per_support = _cost(n, p, tau, items, h, total, mode, colex_memory)
     evidence["estimate"] = {"bytes": nbytes, "flops": flops, "bytes_per_support": per_support}
     refusal = budget.refusal(
         f"the irrepresentable enumeration ({format_count(total)} supports of {h:,} rows of the "
@@ -253,7 +253,7 @@ def irrepresentable(
     n_inf = 0
     borderline = 0
     done = 0
-    for block in colex_blocks(G, base, k):
+    for block in colex_blocks(G, base, k, memory=colex_memory):
         subsets = block.subsets()
         ok = screen_positive_definite(block.matrices, shift)
         rho = np.full(len(block), np.nan)
@@ -329,7 +329,7 @@ def irrepresentable(
 
 
 def _cost(n: int, p: int, tau: int, items: int, h: int, supports: int,
-          mode: str) -> tuple[float, float, float]:
+          mode: str, colex_memory: int) -> tuple[float, float, float]:
     """Peak bytes, operations and bytes per support of the enumeration, from the shapes.
 
     Peak: O_tau and its QR factor (4 copies of p tau x n), the per-item
@@ -341,7 +341,8 @@ def _cost(n: int, p: int, tau: int, items: int, h: int, supports: int,
     """
     M = p * tau
     per_support = 8.0 * (2 * M * h + 3 * h * n + M)
-    nbytes = (8.0 * (4 * M * n + M + items * n * n) + _COLEX_BYTES + per_support
+    colex = min(colex_memory + DEFAULT_CHUNK_BYTES, 2 * 8.0 * supports * n * n)
+    nbytes = (8.0 * (4 * M * n + M + items * n * n) + colex + per_support
               + 8.0 * (2 * M * n + M * h))
     flops = 4.0 * M * n * n + 2.0 * M * n * n + supports * (
         2.0 * M * n * h + 3.0 * M * h + n**3 + 2.0 * n * n * h)
