@@ -341,6 +341,13 @@ def test_astronomically_many_supports_respect_the_budget():
     assert check.evidence["supports"] is None and check.evidence["supports_log10"] > 119
     entrywise = irrepresentable(plant, 10**6, horizon=10**6, mode="entrywise")
     assert entrywise.verdict.value == "inconclusive"
+    # 499,500 supports are countable but too much work (about 5 minutes): refused at once
+    wide = System(0.5 * np.eye(5), rng.standard_normal((1000, 5)))
+    start = time.perf_counter()
+    work = irrepresentable(wide, 2)
+    assert time.perf_counter() - start < 2
+    assert work.verdict.value == "inconclusive" and "499,500 supports" in work.summary
+    assert "over the work budget of 1e+12" in work.summary
 
 
 def test_irrepresentable_stays_within_a_small_memory_budget():

@@ -337,15 +337,18 @@ def _cost(n: int, p: int, tau: int, items: int, h: int, supports: int,
     (2 copies of p tau x h, the rows of O_tau outside and inside it), and the
     direct pinv recomputation of the worst support.  Work: the QR, the Gramians
     and, per support, the p tau x n x h product, its absolute row sums and an
-    n x n factorisation.
+    n x n factorisation; calibrated so that 1e12 is one to three minutes on
+    one core.
     """
     M = p * tau
     per_support = 8.0 * (2 * M * h + 3 * h * n + M)
     colex = min(colex_memory + DEFAULT_CHUNK_BYTES, 2 * 8.0 * supports * n * n)
     nbytes = (8.0 * (4 * M * n + M + items * n * n) + colex + per_support
               + 8.0 * (2 * M * n + M * h))
+    # the elementwise passes over the p tau x h product (absolute value, sums, the
+    # memory traffic) cost far more than their count: 60 per entry, measured
     flops = 4.0 * M * n * n + 2.0 * M * n * n + supports * (
-        2.0 * M * n * h + 3.0 * M * h + n**3 + 2.0 * n * n * h)
+        2.0 * M * n * h + 60.0 * M * h + n**3 + 2.0 * n * n * h)
     return nbytes, flops, per_support
 
 
@@ -357,8 +360,11 @@ def _rho_batch(
     rows = rows_of[subsets].reshape(N, -1)  # (N, h)
     QS = Q[rows]  # (N, h, n)
     X = np.linalg.solve(M, QS.transpose(0, 2, 1))  # (N, n, h)
-    full = np.einsum("rn,Nnh->Nrh", Q, X)  # (N, p tau, h)
-    sums = np.abs(full).sum(axis=2)
+    h = X.shape[2]
+    # one product for the whole batch: (p tau, n) x (n, N h)
+    full = Q @ X.transpose(1, 0, 2).reshape(Q.shape[1], N * h)
+    np.abs(full, out=full)
+    sums = full.reshape(Q.shape[0], N, h).sum(axis=2).T  # (N, p tau)
     np.put_along_axis(sums, rows, 0.0, axis=1)  # keep only rows outside S
     return sums.max(axis=1)
 
