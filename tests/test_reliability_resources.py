@@ -411,7 +411,7 @@ def test_sso_window_too_large_to_build_is_inconclusive_not_allocated(tmp_path):
     checks = {c.id: c for c in observer_checks(spec.system, spec.observer)}
     assert time.perf_counter() - start < 2
     assert checks["observer_gain"].verdict.value == "inconclusive"
-    assert "observer.window = 1000000" in checks["observer_gain"].summary
+    assert "observer.window = 1,000,000" in checks["observer_gain"].summary
     assert "TiB" in checks["observer_gain"].summary
     result = certify(spec, simulate=False)
     assert any("observer was not built" in note for note in result.notes)
@@ -476,6 +476,12 @@ def test_simulate_refuses_runs_times_steps_up_front(tmp_path, capsys):
     small = _write(tmp_path, SCENARIO_SPEC.format(runs=2, steps=10), "small.toml")
     code, out, err = _run(capsys, "simulate", small, "--steps", "1000000000")
     assert code == 2 and "--steps" in err and "scenario[0].runs" in err
+    window = _write(tmp_path, SCENARIO_SPEC.format(runs=2, steps=10).replace(
+        'kind = "elastic_net"\ngain = "pinv"', 'kind = "sso"').replace(
+        "shrink = 0.5", "window = 1000000"), "window.toml")
+    code, out, err = _run(capsys, "simulate", window)
+    assert code == 2 and err.count("\n") == 1
+    assert "window.toml: observer.window = 1,000,000" in err and "TiB" in err
 
 
 def test_certify_skips_a_scenario_over_the_budget(tmp_path):
@@ -490,10 +496,10 @@ def test_certify_skips_a_scenario_over_the_budget(tmp_path):
 def test_simulation_chunks_fit_a_small_memory_budget(tmp_path):
     from ssecert import load_spec
 
-    spec = load_spec(_write(tmp_path, SCENARIO_SPEC.format(runs=64, steps=3000)))
+    spec = load_spec(_write(tmp_path, SCENARIO_SPEC.format(runs=64, steps=1500)))
     design = build_observer(spec.system, spec.observer)
     full = simulate_scenario(design, spec.scenarios[0])
-    small = Budget(memory=12 * 2**20)
+    small = Budget(memory=8 * 2**20)
     tracemalloc.start()
     bounded = simulate_scenario(design, spec.scenarios[0], budget=small)
     _, peak = tracemalloc.get_traced_memory()

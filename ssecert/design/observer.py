@@ -140,8 +140,8 @@ def build_observer(
     if window > 1:
         n, m = system.n, system.p * window
         (budget or Budget()).require(
-            f"observer.window = {window}: the SSO's stacked O_tau ({m} x {n}) with its gain and "
-            f"{m} x {m} L2",
+            f"observer.window = {window:,}: the SSO's stacked O_tau ({m:,} x {n}) with its gain "
+            f"and {m:,} x {m:,} L2",
             nbytes=8.0 * (3 * m * n + m * m + 2 * n * m))
         with np.errstate(over="ignore", invalid="ignore"):
             sensing = system.observability_matrix(window)

@@ -405,7 +405,10 @@ def simulate_spec(
     if not spec.scenarios:
         raise ValueError(f"{spec.source}: the spec has no [[scenario]] section")
     budget = budget or Budget()
-    design = build_observer(spec.system, spec.observer, budget=budget)
+    try:
+        design = build_observer(spec.system, spec.observer, budget=budget)
+    except ResourceLimitError as exc:
+        raise ResourceLimitError(f"{spec.source}: {exc}") from None
     for index, scenario in enumerate(spec.scenarios):
         count = int(scenario.get("runs", 50) if runs is None else runs)
         length = int(scenario.get("steps", 300) if steps is None else steps)

@@ -211,8 +211,8 @@ def irrepresentable(
         f"the irrepresentable enumeration ({format_count(total)} supports of {h:,} rows of the "
         f"{p * tau:,} x {n} matrix O_tau, horizon {tau:,})", nbytes=nbytes, flops=flops)
     if refusal:
-        return make(Verdict.INCONCLUSIVE, math.nan, None,
-                    f"Not attempted: {refusal}; a shorter horizon (--horizon) makes it smaller.")
+        hint = "; a shorter horizon (--horizon) makes it smaller" if tau > n else ""
+        return make(Verdict.INCONCLUSIVE, math.nan, None, f"Not attempted: {refusal}{hint}.")
     batch = int(max(1, min(_SUB, (budget.memory // 4) // per_support)))
 
     with np.errstate(over="ignore", invalid="ignore"):
