@@ -523,3 +523,16 @@ def test_budget_options_on_the_command_line(tmp_path, capsys):
     assert parse_bytes("8G") == 8 * 2**30
     assert bounded_comb(10**12, 10**6, 10**9) is None and bounded_comb(6, 3, 100) == 20
     assert math.isfinite(Budget().memory)
+
+
+def test_long_horizon_on_an_unstable_plant_does_not_change_the_sparse_verdict():
+    """The witness of an unstable plant overflows after a few hundred steps; the steps
+    before the overflow (at least n) decide it, so the verdict does not depend on tau."""
+    plant = System([[3.0, 0.0], [0.0, 0.5]], [[1, 0], [0, 1], [0, 1]])
+    short = sparse_observability(plant, 1, horizon=2)
+    long = sparse_observability(plant, 1, horizon=700)
+    assert short.verdict.value == long.verdict.value == "fails"
+    witness = long.witness
+    assert witness["verified"] and witness["steps"] < 700
+    assert "overflow in floating point" in witness["truncated"]
+    assert np.all(np.isfinite(np.asarray(witness["attack_a"], dtype=float)))

@@ -72,6 +72,9 @@ class StealthyAttack:
     horizon : int
         Steps requested; the arrays cover the first ``attack_a.shape[0]`` of
         them (fewer when the horizon exceeds ``WITNESS_MAX_STEPS``).
+    overflow_at : int or None
+        First step at which the simulation of an unstable plant overflows,
+        when that is after n steps: the arrays stop there.
     """
 
     z: np.ndarray
@@ -86,6 +89,7 @@ class StealthyAttack:
     verified: bool
     rtol: float
     horizon: int | None = None
+    overflow_at: int | None = None
 
     @property
     def undetectable(self) -> bool:
@@ -113,12 +117,15 @@ class StealthyAttack:
         steps = int(self.attack_a.shape[0])
         out["steps"] = steps
         if self.horizon is not None and self.horizon > steps:
+            why = (f"the simulated states overflow in floating point at step {self.overflow_at:,}"
+                   if self.overflow_at is not None else
+                   f"longer witnesses are cut at {WITNESS_MAX_STEPS:,} steps")
             out["horizon"] = self.horizon
             out["truncated"] = (
                 f"shown and verified over the first {steps:,} of the {self.horizon:,} steps of "
-                f"the horizon; attack_a(k) = P_a C A^k z continues in the same way, and the "
-                f"outputs coincide at every later step too, because C_i A^k z = 0 for k < n "
-                f"implies it for every k (Cayley-Hamilton)")
+                f"the horizon ({why}); attack_a(k) = P_a C A^k z continues in the same way, "
+                f"and the outputs coincide at every later step too, because C_i A^k z = 0 for "
+                f"k < n implies it for every k (Cayley-Hamilton)")
         return out
 
 
@@ -215,19 +222,31 @@ def stealthy_attack(
         xa, xb = x0.copy(), x0 + z
         outputs_a = np.empty((H, p))
         outputs_b = np.empty((H, p))
-        scale = 0.0
+        scales = np.empty(H)
         normC = float(np.linalg.norm(C, 2))
         for k in range(H):
             outputs_a[k] = C @ xa + attack_a[k]
             outputs_b[k] = C @ xb + attack_b[k]
-            scale = max(scale, normC * float(np.linalg.norm(xb - xa)))
+            scales[k] = normC * float(np.linalg.norm(xb - xa))
             xa, xb = A @ xa, A @ xb
+        # an unstable plant overflows after enough steps; the steps before the first
+        # overflow decide the witness when they are at least n (Cayley-Hamilton)
+        finite = (np.all(np.isfinite(attack_a), axis=1) & np.all(np.isfinite(attack_b), axis=1)
+                  & np.all(np.isfinite(outputs_a), axis=1)
+                  & np.all(np.isfinite(outputs_b), axis=1) & np.isfinite(scales))
+        overflow_at = None
+        if not finite.all():
+            first = int(np.argmin(finite))
+            if first >= system.n:
+                overflow_at = first
+                attack_a, attack_b = attack_a[:first], attack_b[:first]
+                outputs_a, outputs_b, scales = outputs_a[:first], outputs_b[:first], scales[:first]
         diff = float(np.max(np.linalg.norm(outputs_a - outputs_b, axis=1)))
         # rounding in the simulated states themselves is of order eps * ||x||
         floor = np.finfo(float).eps * normC * float(
             max(np.abs(outputs_a).max(initial=0.0), 1.0)
         )
-        residual = diff / max(scale, floor, np.finfo(float).tiny)
+        residual = diff / max(float(scales.max()), floor, np.finfo(float).tiny)
         if not np.isfinite(residual):
             residual = float("inf")
     return StealthyAttack(
@@ -243,4 +262,5 @@ def stealthy_attack(
         verified=bool(residual <= tol.witness_rtol),
         rtol=tol.witness_rtol,
         horizon=requested,
+        overflow_at=overflow_at,
     )
