@@ -8,6 +8,7 @@ from dataclasses import replace
 from collections.abc import Callable
 from typing import Any
 
+from .budget import Budget
 from .results import Certificate, Check, Verdict
 from .spec import Spec
 from .structure._linalg import eigen_clusters, unit_normalized
@@ -100,6 +101,7 @@ def analyze(
     seed: int = 0,
     tolerances: Tolerances | None = None,
     progress: Callable[[str, int, int], None] | None = None,
+    budget: Budget | None = None,
 ) -> Certificate:
     """Run the structural checks of a design.
 
@@ -116,6 +118,10 @@ def analyze(
     tolerances : Tolerances, optional
     progress : callable, optional
         ``progress(check_id, done, total)`` during long enumerations.
+    budget : Budget, optional
+        Memory and work allowed for each analysis step (default ``Budget()``:
+        2 GiB, 1e12 operations); a step that does not fit is inconclusive
+        with its estimate.
 
     Returns
     -------
@@ -162,12 +168,14 @@ def analyze(
             max_sets=max_sets,
             tolerances=tol,
             progress=relay("irrepresentable"),
+            budget=budget,
         ),
     ]
     if spec.observer is not None:
         from .stability.checks import observer_checks
 
-        checks.extend(observer_checks(system, spec.observer, observability=checks[0], seed=seed))
+        checks.extend(observer_checks(system, spec.observer, observability=checks[0], seed=seed,
+                                      budget=budget))
     checks, notes = reconcile(checks)
 
     meta: dict[str, Any] = {
@@ -175,6 +183,7 @@ def analyze(
         "max_attacked": spec.max_attacked,
         "horizon": spec.horizon,
         "seed": seed,
+        "budget": (budget or Budget()).to_dict(),
         "date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
         "versions": environment(),
         "notes": notes,

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from .analyze import analyze
+from .budget import Budget, ResourceLimitError
 from .results import Certificate, to_jsonable
 from .spec import SCENARIO_DEFAULTS, Spec
 
@@ -24,6 +25,7 @@ __all__ = ["CertifyResult", "certify", "REGION_LIMIT"]
 
 REGION_LIMIT = 40  # largest Lur'e state + nonlinearity size mapped by default
 STEALTHY_DEMO_STEPS = 60
+STEALTHY_DEMO_MAX_STEPS = 1000  # the demonstration is a plot: longer horizons are cut here
 
 Progress = Callable[[str], None]
 
@@ -91,8 +93,8 @@ def _stealthy_demo(spec: Spec, witness: dict[str, Any], seed: int) -> dict[str, 
     system = spec.system
     breaking = sorted(set(witness["sensors_a"]) | set(witness["sensors_b"]))
     z = np.asarray(witness["z"], dtype=float)
-    demo = stealthy_attack(system, breaking, z, spec.max_attacked,
-                           horizon=max(STEALTHY_DEMO_STEPS, spec.horizon), seed=seed)
+    steps = max(STEALTHY_DEMO_STEPS, min(spec.horizon, STEALTHY_DEMO_MAX_STEPS))
+    demo = stealthy_attack(system, breaking, z, spec.max_attacked, horizon=steps, seed=seed)
     steps = demo.attack_a.shape[0]
     xa = np.empty((steps, system.n))
     xb = np.empty((steps, system.n))
@@ -128,6 +130,7 @@ def certify(
     client: Any | None = None,
     progress: Progress | None = None,
     command: str | None = None,
+    budget: Budget | None = None,
 ) -> CertifyResult:
     """Certify a design: every check, the simulations and the report data.
 
@@ -153,6 +156,11 @@ def certify(
         ``progress(message)`` before each long stage.
     command : str, optional
         The command line to show in the report's reproduce section.
+    budget : Budget, optional
+        Memory and work allowed for each analysis step, each simulated
+        scenario and each LMI of the region map (default ``Budget()``: 2 GiB,
+        1e12 operations).  What does not fit is inconclusive (checks) or
+        skipped (simulations, region), with the estimate in the reason.
 
     Returns
     -------
@@ -167,7 +175,8 @@ def certify(
     """
     say = progress or (lambda message: None)
     base_seed = 0 if seed is None else int(seed)
-    kwargs: dict[str, Any] = {"method": method, "seed": base_seed}
+    budget = budget or Budget()
+    kwargs: dict[str, Any] = {"method": method, "seed": base_seed, "budget": budget}
     if max_sets is not None:
         kwargs["max_sets"] = max_sets
     say("structural checks and certificates")
@@ -184,9 +193,11 @@ def certify(
         from .design.observer import build_observer
 
         try:
-            design = build_observer(spec.system, spec.observer)
+            design = build_observer(spec.system, spec.observer, budget=budget)
         except GainError as exc:
             notes.append(f"no simulation or region: the observer gain cannot be computed ({exc})")
+        except ResourceLimitError as exc:
+            notes.append(f"no simulation or region: the observer was not built ({exc})")
     simulations: dict[str, Any] = {}
     if simulate and spec.observer is not None:
         from .simulation.engine import simulate_scenario
@@ -202,8 +213,8 @@ def certify(
             try:
                 simulations[scenario["name"]] = simulate_scenario(
                     design, scenario, runs=runs, steps=steps, seed=seed,
-                    max_attacked=spec.max_attacked, client=client)
-            except ValueError as exc:
+                    max_attacked=spec.max_attacked, client=client, budget=budget)
+            except ValueError as exc:  # no stealthy attack to replay, or over the budget
                 simulations[scenario["name"]] = {"skipped": str(exc)}
     elif simulate and spec.observer is None:
         notes.append("no simulations: the spec has no [observer] section")
@@ -211,14 +222,14 @@ def certify(
         notes.append("simulations skipped (--no-sim)")
     region_map = None
     if region and design is not None and design.sparse:
-        region_map = _region(design, notes, say)
+        region_map = _region(design, notes, say, budget)
     return CertifyResult(spec=spec, certificate=cert, simulations=simulations,
                          stealthy=stealthy, region=region_map, seed=base_seed,
                          command=command or _command(spec, seed, simulate), notes=tuple(notes))
 
 
-def _region(design: Any, notes: list[str], say: Progress) -> Any | None:
-    from .stability.lmi import region_map
+def _region(design: Any, notes: list[str], say: Progress, budget: Budget) -> Any | None:
+    from .stability.lmi import LureModel, lmi_cost, region_map
 
     m = design.sensing.shape[0]
     n = design.system.n
@@ -237,7 +248,18 @@ def _region(design: Any, notes: list[str], say: Progress) -> Any | None:
         shrinks = np.sort(np.append(shrinks, design.shrink))
     if not np.any(np.isclose(steps, step)):
         steps = np.sort(np.append(steps, step))
-    return region_map(replace(design, kind="elastic_net"), shrinks, steps)
+    target = replace(design, kind="elastic_net")
+    # every grid point may need a block-diagonal and a cross-term solve
+    model = LureModel.from_design(target)
+    costs = [lmi_cost(model, "circle", st) for st in ("block-diagonal", "cross")]
+    refusal = budget.refusal(
+        f"the {shrinks.size} x {steps.size} region map ({n + 2 * m} LMI rows per point)",
+        nbytes=max(c[0] for c in costs),
+        flops=shrinks.size * steps.size * sum(c[1] for c in costs))
+    if refusal:
+        notes.append(f"certified region not mapped: {refusal}")
+        return None
+    return region_map(target, shrinks, steps, budget=budget)
 
 
 def _command(spec: Spec, seed: int | None, simulate: bool) -> str:

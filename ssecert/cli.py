@@ -108,6 +108,30 @@ def _positive_int(text: str) -> int:
     return _integer(text, 1, scientific=True)
 
 
+def _add_budget_options(parser: argparse.ArgumentParser) -> None:
+    from .budget import parse_bytes, parse_operations
+
+    def checked(parse: Any) -> Any:
+        def convert(text: str) -> Any:
+            try:
+                return parse(text)
+            except ValueError as exc:
+                raise argparse.ArgumentTypeError(str(exc)) from None
+        return convert
+
+    parser.add_argument("--memory-budget", type=checked(parse_bytes), metavar="SIZE",
+                        help="memory per analysis step, e.g. 512M or 8G (default 2G)")
+    parser.add_argument("--work-budget", type=checked(parse_operations), metavar="FLOPS",
+                        help="floating-point operations per analysis step (default 1e12)")
+
+
+def _budget(args: argparse.Namespace) -> Any:
+    from .budget import Budget
+
+    return Budget(**{key: value for key, value in (("memory", args.memory_budget),
+                                                   ("work", args.work_budget)) if value})
+
+
 def _add_analysis_options(parser: argparse.ArgumentParser) -> None:
     """Options shared by ``certify`` and ``analyze``."""
     parser.add_argument("--max-attacked", type=_nonnegative_int, metavar="S",
@@ -118,6 +142,7 @@ def _add_analysis_options(parser: argparse.ArgumentParser) -> None:
                         help="enumeration budget in sets (default 5e7)")
     parser.add_argument("--method", choices=("auto", "enumeration", "eigenspace"),
                         default="auto", help="sparse-observability method (default auto)")
+    _add_budget_options(parser)
 
 
 def _build_parser() -> argparse.ArgumentParser:
@@ -192,6 +217,7 @@ def _build_parser() -> argparse.ArgumentParser:
                           help="run on an existing Dask scheduler (needs the dist extra)")
     simulate.add_argument("--workers", type=_positive_int, metavar="N",
                           help="run on a local Dask cluster of N worker processes")
+    _add_budget_options(simulate)
 
     examples = sub.add_parser("examples", help="list the packaged examples or print one",
                               description="List packaged example specs, or print one.")
@@ -353,7 +379,7 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     try:
         with _warnings_as_notes() as log:
             cert = analyze(spec, method=args.method, max_sets=args.max_sets, seed=args.seed,
-                           progress=progress)
+                           progress=progress, budget=_budget(args))
     finally:
         progress.close()
     if log.notes():
@@ -401,7 +427,7 @@ def _cmd_certify(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
     with _warnings_as_notes() as log:
         result = certify(spec, seed=args.seed, simulate=not args.no_sim, runs=args.runs,
                          method=args.method, max_sets=args.max_sets, progress=say,
-                         command=command)
+                         command=command, budget=_budget(args))
         result.to_dict()  # simulation metrics are computed here: their warnings are notes too
     notes = log.notes()
     if notes:
@@ -443,7 +469,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     with _warnings_as_notes() as log:
         with context as client:
             results = simulate_spec(spec, seed=args.seed, runs=args.runs, steps=args.steps,
-                                    client=client)
+                                    client=client, budget=_budget(args))
         document = {"ssecert_version": __version__, "system": spec.system.to_dict(),
                     "scenarios": {name: (r.to_dict() if hasattr(r, "to_dict") else r)
                                   for name, r in results["scenarios"].items()}}
@@ -505,6 +531,7 @@ def _cmd_examples(args: argparse.Namespace) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``ssecert`` command; returns the exit status."""
+    from .budget import ResourceLimitError
     from .design.gains import GainError
     from .spec import SpecError, one_line
 
@@ -524,7 +551,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command == "simulate":
             return _cmd_simulate(args)
         raise UsageError(f"unknown command {args.command!r}")  # pragma: no cover
-    except (UsageError, SpecError) as exc:
+    except (UsageError, SpecError, ResourceLimitError) as exc:
         sys.stderr.write(f"ssecert: error: {one_line(str(exc))}\n")
         return EXIT_BAD_INPUT
     except GainError as exc:

@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from ..budget import Budget
 from ..system import System
 from .gains import Gain, GainError, deadbeat_gain, ogd_gain, pinv_gain, place_gain
 
@@ -97,7 +98,9 @@ class ObserverDesign:
         return out
 
 
-def build_observer(system: System, spec: Mapping[str, Any]) -> ObserverDesign:
+def build_observer(
+    system: System, spec: Mapping[str, Any], *, budget: Budget | None = None
+) -> ObserverDesign:
     """Build an observer from a validated ``[observer]`` section.
 
     Parameters
@@ -105,6 +108,10 @@ def build_observer(system: System, spec: Mapping[str, Any]) -> ObserverDesign:
     system : System
     spec : mapping
         As validated by ``ssecert.spec`` (``Spec.observer``).
+    budget : Budget, optional
+        Memory allowed for the observer's matrices (default ``Budget()``,
+        2 GiB): an SSO with window tau stacks O_tau (p tau x n) and an
+        identity L2 of size p tau.
 
     Returns
     -------
@@ -114,7 +121,11 @@ def build_observer(system: System, spec: Mapping[str, Any]) -> ObserverDesign:
     ------
     GainError
         If the requested gain cannot be computed (not observable for a
-        deadbeat gain, C not of full column rank for pinv, placement missed).
+        deadbeat gain, C not of full column rank for pinv, placement missed,
+        O_tau or the gain overflows).
+    ResourceLimitError
+        If the matrices of an SSO window would exceed the memory budget (the
+        message gives the estimate).
 
     Examples
     --------
@@ -126,7 +137,19 @@ def build_observer(system: System, spec: Mapping[str, Any]) -> ObserverDesign:
     """
     kind = spec["kind"]
     window = int(spec.get("window", 1))
-    sensing = system.C if window == 1 else system.observability_matrix(window)
+    if window > 1:
+        n, m = system.n, system.p * window
+        (budget or Budget()).require(
+            f"observer.window = {window:,}: the SSO's stacked O_tau ({m:,} x {n}) with its gain "
+            f"and {m:,} x {m:,} L2",
+            nbytes=8.0 * (3 * m * n + m * m + 2 * n * m))
+        with np.errstate(over="ignore", invalid="ignore"):
+            sensing = system.observability_matrix(window)
+        if not np.all(np.isfinite(sensing)):
+            raise GainError(f"the stacked observability matrix O_tau overflows for the window "
+                            f"tau = {window} (C A^k is not finite in floating point)")
+    else:
+        sensing = system.C
     step = spec.get("step")
     if kind in ("ogd", "sso"):
         if kind == "sso" and window > 1:
@@ -155,6 +178,9 @@ def build_observer(system: System, spec: Mapping[str, Any]) -> ObserverDesign:
             L = np.asarray(choice, dtype=float)
             gain = Gain(L=L, method="matrix", error_matrix=system.A - L @ system.C,
                         verified=True, details={})
+    if not (np.all(np.isfinite(gain.L)) and np.all(np.isfinite(gain.error_matrix))):
+        raise GainError("the gain L or the error matrix A - L C has entries that overflow "
+                        "in floating point")
     if kind in SPARSE_KINDS:
         m = sensing.shape[0]
         L2 = np.asarray(spec["L2"], dtype=float) if spec.get("L2") is not None else np.eye(m)

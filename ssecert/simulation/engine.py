@@ -3,6 +3,14 @@
 Runs are simulated together, vectorised across runs (arrays of shape
 runs x n), in chunks of ``CHUNK_RUNS`` runs; the same chunks are computed
 in-process or on Dask workers, so both give bitwise-identical results.
+
+Before anything is allocated, the memory of the per-step results (three
+steps x runs series) and of one chunk's trajectories, and the work of the
+whole scenario, are estimated from the shapes (``scenario_cost``).  Chunks
+get fewer runs when a chunk of ``CHUNK_RUNS`` would not fit the memory
+budget; a scenario that does not fit even with one run per chunk, or whose
+work exceeds the budget, is refused with the estimate
+(``ResourceLimitError``).
 """
 
 from __future__ import annotations
@@ -14,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from ..budget import Budget, ResourceLimitError
 from ..design.observer import ObserverDesign, build_observer
 from ..estimators.observers import observer_from_design
 from ..parallel import map_ordered
@@ -22,9 +31,75 @@ from .metrics import detection_delay, mse, relative_error, summarize, support_er
 from .scenarios import StealthyReplay, generate
 
 __all__ = ["ScenarioResult", "simulate_scenario", "simulate_spec", "GridResult", "grid_search",
-           "CHUNK_RUNS", "stealthy_replay"]
+           "CHUNK_RUNS", "stealthy_replay", "scenario_cost"]
 
 CHUNK_RUNS = 64
+# operations charged for one pass of a Python-level loop (about 10 us), so that
+# the work estimate also bounds loops over steps, chunks and random supports
+_LOOP_COST = 1e5
+
+
+def scenario_cost(
+    design: ObserverDesign, scenario: Mapping[str, Any], runs: int, steps: int, chunk_runs: int
+) -> tuple[float, float, float]:
+    """Estimated bytes of the results, bytes per run of one chunk, and operations.
+
+    Parameters
+    ----------
+    design : ObserverDesign
+    scenario : mapping
+    runs, steps, chunk_runs : int
+
+    Returns
+    -------
+    result_bytes : float
+        The relative error, MSE and support error series (steps + 1 x runs
+        each), twice (the chunks and their concatenation).
+    chunk_bytes_per_run : float
+        Trajectories of one run in a chunk: plant states and outputs, attack
+        and noise, the observer's stacked estimates and the metrics'
+        temporaries, plus the observer's matrices shared by the chunk.
+    flops : float
+        Matrix products of the plant and the observer over runs x steps, plus
+        the Python-level loops (per step and chunk, and per step and run for
+        random and switching supports).
+    """
+    n, p = design.system.n, design.system.p
+    m = design.sensing.shape[0] if design.sparse else 0
+    rs = float(runs) * float(steps + 1)
+    result_bytes = 2 * 3 * 8.0 * rs
+    per_run = 8.0 * (steps + 1) * (8 * p + 6 * n + 3 * (n + m))
+    fixed = 8.0 * (4 * (n + m) ** 2 + 2 * m * n)
+    if design.kind == "sso" and (design.window > 1 or design.inner_steps > 1):
+        step_flops = design.inner_steps * 2.0 * (n + m) ** 2 + 2.0 * (n + m) * m
+    else:
+        step_flops = 2.0 * (n + m) * (n + 2 * m + p)
+    flops = rs * (step_flops + 2.0 * n * (n + p) + 20.0 * (n + p + m))
+    chunks = -(-int(runs) // max(int(chunk_runs), 1))
+    flops += float(steps) * chunks * _LOOP_COST + float(runs) * _LOOP_COST
+    kind = scenario.get("attack")
+    if kind == "random":
+        flops += rs * _LOOP_COST
+    elif kind == "switching":
+        flops += float(runs) * (steps / max(int(scenario.get("period", 1)), 1) + 1) * _LOOP_COST
+    return result_bytes, per_run + fixed / max(int(chunk_runs), 1), flops
+
+
+def _plan(
+    design: ObserverDesign, scenario: Mapping[str, Any], runs: int, steps: int, chunk_runs: int,
+    budget: Budget,
+) -> int:
+    """Runs per chunk within the memory budget; raises ResourceLimitError with the estimate."""
+    what = (f"scenario {scenario.get('name', 'scenario')!r} ({runs:,} runs x {steps:,} steps "
+            f"of the {design.kind} observer)")
+    result_bytes, per_run, flops = scenario_cost(design, scenario, runs, steps, chunk_runs)
+    chunk = max(1, min(int(chunk_runs), runs))
+    room = budget.memory - result_bytes
+    if room < per_run * chunk:
+        chunk = int(max(1, room // per_run)) if room > 0 else 1
+    result_bytes, per_run, flops = scenario_cost(design, scenario, runs, steps, chunk)
+    budget.require(what, nbytes=result_bytes + per_run * chunk, flops=flops)
+    return chunk
 
 
 @dataclass(frozen=True)
@@ -58,13 +133,14 @@ class ScenarioResult:
     def final(self) -> dict[str, float | None]:
         """Aggregates at the last step."""
         rel = self.relative_error[-1]
-        out: dict[str, float | None] = {
-            "relative_error_mean": float(np.mean(rel)),
-            "relative_error_q90": float(np.quantile(rel, 0.9)),
-            "mse_mean": float(np.mean(self.mse[-1])),
-            "support_error_mean": (None if self.support_error is None
-                                   else float(np.mean(self.support_error[-1]))),
-        }
+        with np.errstate(over="ignore", invalid="ignore"):  # diverged runs: inf or NaN
+            out: dict[str, float | None] = {
+                "relative_error_mean": float(np.mean(rel)),
+                "relative_error_q90": float(np.quantile(rel, 0.9)),
+                "mse_mean": float(np.mean(self.mse[-1])),
+                "support_error_mean": (None if self.support_error is None
+                                       else float(np.mean(self.support_error[-1]))),
+            }
         if self.detection_delay is not None:
             delays = self.detection_delay[np.isfinite(self.detection_delay)]
             out["detection_delay_median"] = float(np.median(delays)) if delays.size else None
@@ -95,7 +171,13 @@ def stealthy_replay(system: System, max_attacked: int) -> StealthyReplay | None:
 
 def _chunk(args: tuple) -> dict[str, np.ndarray]:
     """Simulate one chunk of runs (top level, so Dask can pickle it)."""
-    design, scenario, runs, steps, seed, replay = args
+    # an unstable plant or a diverging observer overflows: the metrics then say so (inf)
+    with np.errstate(over="ignore", invalid="ignore"):
+        return _simulate_chunk(*args)
+
+
+def _simulate_chunk(design: ObserverDesign, scenario: Mapping[str, Any], runs: list[int],
+                    steps: int, seed: int, replay: StealthyReplay | None) -> dict[str, np.ndarray]:
     system = design.system
     data = generate(system, scenario, runs, steps, seed=seed, replay=replay)
     A_T, C_T = system.A.T, system.C.T
@@ -132,6 +214,7 @@ def simulate_scenario(
     max_attacked: int | None = None,
     client: Any | None = None,
     chunk_runs: int = CHUNK_RUNS,
+    budget: Budget | None = None,
 ) -> ScenarioResult:
     """Simulate a design under a scenario for many runs at once.
 
@@ -148,11 +231,23 @@ def simulate_scenario(
         Spread the chunks of runs over its workers (bitwise-identical
         results to the in-process path).
     chunk_runs : int, default 64
-        Runs per chunk.
+        Runs per chunk (fewer when a chunk would not fit the memory budget).
+    budget : Budget, optional
+        Memory and work allowed (default ``Budget()``: 2 GiB, 1e12
+        operations), estimated by ``scenario_cost`` before anything is
+        allocated.
 
     Returns
     -------
     ScenarioResult
+
+    Raises
+    ------
+    ResourceLimitError
+        (a ``ValueError``) when the scenario does not fit the budget; the
+        message gives the estimate.
+    ValueError
+        For a stealthy scenario on a plant that has no stealthy attack.
 
     Examples
     --------
@@ -168,6 +263,7 @@ def simulate_scenario(
     runs = int(scenario.get("runs", 50) if runs is None else runs)
     steps = int(scenario.get("steps", 300) if steps is None else steps)
     seed = int(scenario.get("seed", 0) if seed is None else seed)
+    chunk_runs = _plan(design, scenario, runs, steps, chunk_runs, budget or Budget())
     replay = None
     if scenario["attack"] == "stealthy":
         replay = stealthy_replay(design.system, int(max_attacked or 0))
@@ -175,11 +271,17 @@ def simulate_scenario(
                replay) for r0 in range(0, runs, chunk_runs)]
     parts = map_ordered(_chunk, chunks, client)
     merged = {key: np.concatenate([p[key] for p in parts], axis=-1) for key in parts[0]}
+    notes = []
+    overflowed = int(np.count_nonzero(~np.all(np.isfinite(merged["relative_error"]), axis=0)))
+    if overflowed:
+        notes.append(f"the plant state or its estimate overflows in floating point in "
+                     f"{overflowed} of {runs} runs (their errors are reported as inf or NaN)")
     return ScenarioResult(
         name=str(scenario.get("name", "scenario")), attack=scenario["attack"], observer=design.kind,
         runs=runs, steps=steps, seed=seed, relative_error=merged["relative_error"],
         mse=merged["mse"], support_error=merged.get("support_error"),
-        detection_delay=merged.get("detection_delay"), seconds=time.perf_counter() - start)
+        detection_delay=merged.get("detection_delay"), seconds=time.perf_counter() - start,
+        notes=tuple(notes))
 
 
 @dataclass(frozen=True)
@@ -201,9 +303,10 @@ class GridResult:
 
 
 def _grid_point(args: tuple) -> dict[str, Any]:
-    system, observer, params, scenario, runs, steps, seed, s = args
-    design = build_observer(system, {**observer, **params})
-    res = simulate_scenario(design, scenario, runs=runs, steps=steps, seed=seed, max_attacked=s)
+    system, observer, params, scenario, runs, steps, seed, s, budget = args
+    design = build_observer(system, {**observer, **params}, budget=budget)
+    res = simulate_scenario(design, scenario, runs=runs, steps=steps, seed=seed, max_attacked=s,
+                            budget=budget)
     return res.final()
 
 
@@ -219,6 +322,7 @@ def grid_search(
     alpha: float = 0.5,
     max_attacked: int | None = None,
     client: Any | None = None,
+    budget: Budget | None = None,
 ) -> GridResult:
     """Evaluate an observer over a grid of hyperparameters under a scenario.
 
@@ -236,6 +340,8 @@ def grid_search(
     max_attacked : int, optional
     client : dask.distributed.Client, optional
         Evaluate grid points on its workers.
+    budget : Budget, optional
+        Bounds each grid point's simulation (see ``simulate_scenario``).
 
     Returns
     -------
@@ -245,7 +351,7 @@ def grid_search(
 
     keys = list(grid)
     combos = [dict(zip(keys, values)) for values in itertools.product(*(grid[k] for k in keys))]
-    tasks = [(system, dict(observer), c, dict(scenario), runs, steps, seed, max_attacked)
+    tasks = [(system, dict(observer), c, dict(scenario), runs, steps, seed, max_attacked, budget)
              for c in combos]
     finals = map_ordered(_grid_point, tasks, client)
     points = []
@@ -264,6 +370,7 @@ def simulate_spec(
     runs: int | None = None,
     steps: int | None = None,
     client: Any | None = None,
+    budget: Budget | None = None,
 ) -> dict[str, Any]:
     """Simulate every ``[[scenario]]`` of a spec with its ``[observer]``.
 
@@ -275,6 +382,9 @@ def simulate_spec(
     runs, steps : int, optional
         Override every scenario's values.
     client : dask.distributed.Client, optional
+    budget : Budget, optional
+        Memory and work allowed per scenario (default ``Budget()``: 2 GiB,
+        1e12 operations).
 
     Returns
     -------
@@ -285,18 +395,38 @@ def simulate_spec(
     ------
     ValueError
         If the spec has no observer or no scenario.
+    ResourceLimitError
+        Before anything is simulated, if a scenario does not fit the budget
+        (the message names the scenario's keys and gives the estimate), or
+        if the observer's matrices do not.
     """
     if spec.observer is None:
         raise ValueError(f"{spec.source}: the spec has no [observer] section to simulate")
     if not spec.scenarios:
         raise ValueError(f"{spec.source}: the spec has no [[scenario]] section")
-    design = build_observer(spec.system, spec.observer)
+    budget = budget or Budget()
+    try:
+        design = build_observer(spec.system, spec.observer, budget=budget)
+    except ResourceLimitError as exc:
+        raise ResourceLimitError(f"{spec.source}: {exc}") from None
+    for index, scenario in enumerate(spec.scenarios):
+        count = int(scenario.get("runs", 50) if runs is None else runs)
+        length = int(scenario.get("steps", 300) if steps is None else steps)
+        try:
+            _plan(design, scenario, count, length, CHUNK_RUNS, budget)
+        except ResourceLimitError as exc:
+            keys = " and ".join(
+                f"--{key}" if override is not None else f"scenario[{index}].{key}"
+                for key, override in (("runs", runs), ("steps", steps)))
+            raise ResourceLimitError(f"{spec.source}: {exc}; lower {keys}") from None
     out: dict[str, Any] = {}
     for scenario in spec.scenarios:
         try:
             out[scenario["name"]] = simulate_scenario(
                 design, scenario, runs=runs, steps=steps, seed=seed,
-                max_attacked=spec.max_attacked, client=client)
+                max_attacked=spec.max_attacked, client=client, budget=budget)
+        except ResourceLimitError:
+            raise
         except ValueError as exc:  # a stealthy scenario on a sparse-observable plant
             out[scenario["name"]] = {"skipped": str(exc)}
     return {"scenarios": out}

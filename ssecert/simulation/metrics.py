@@ -16,6 +16,7 @@ Definitions (DESIGN.md):
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import numpy as np
@@ -106,8 +107,11 @@ def detection_delay(a_hat: np.ndarray, a: np.ndarray) -> np.ndarray:
 
 
 def summarize(series: np.ndarray, *, quantiles: tuple[float, ...] = (0.1, 0.5, 0.9)) -> dict[str, Any]:
-    """Mean and quantiles over runs of a (steps, runs) array, per step."""
-    out: dict[str, Any] = {"mean": np.nanmean(series, axis=1)}
-    for q in quantiles:
-        out[f"q{int(round(q * 100)):02d}"] = np.nanquantile(series, q, axis=1)
+    """Mean and quantiles over runs of a (steps, runs) array, per step (NaN where no run
+    has a value, inf where runs diverged)."""
+    with warnings.catch_warnings(), np.errstate(over="ignore", invalid="ignore"):
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN steps give NaN, as intended
+        out: dict[str, Any] = {"mean": np.nanmean(series, axis=1)}
+        for q in quantiles:
+            out[f"q{int(round(q * 100)):02d}"] = np.nanquantile(series, q, axis=1)
     return out

@@ -11,11 +11,12 @@ from typing import Any
 
 import numpy as np
 
+from ..budget import Budget, ResourceLimitError
 from ..design.gains import DEADBEAT_RTOL, GainError
 from ..design.observer import ObserverDesign, build_observer
 from ..results import Check, Verdict
 from ..system import System
-from .lmi import LureModel, circle_certificate, iss_certificate, iss_from_circle
+from .lmi import LureModel, circle_certificate, iss_certificate, iss_from_circle, lure_model_cost
 from .lyapunov import lyapunov_certificate
 from .thesis import thesis_assumptions
 
@@ -167,10 +168,12 @@ def _deadbeat_check(design: ObserverDesign, fields: dict[str, Any], evidence: di
         value=index, method=method, fields=fields, evidence=evidence, tolerances=tolerances)
 
 
-def observer_stability_check(design: ObserverDesign) -> tuple[Check, Any]:
+def observer_stability_check(design: ObserverDesign, *,
+                             budget: Budget | None = None) -> tuple[Check, Any]:
     """Global asymptotic stability of the observer's error dynamics without attack.
 
     Returns the Check and the underlying certificate (for the ISS check).
+    ``budget`` bounds the Lur'e model and each LMI solve (default ``Budget()``).
     """
     title = f"Observer stability ({design.kind})"
     if not design.sparse:
@@ -200,8 +203,16 @@ def observer_stability_check(design: ObserverDesign) -> tuple[Check, Any]:
             summary=(f"Certificates for an SSO with {design.inner_steps} inner steps per sample "
                      f"are not implemented (the Lur'e model covers one step)."),
             method="circle criterion", fields={}), None
+    refusal = (budget or Budget()).refusal(
+        f"the Lur'e model of the {design.kind} observer",
+        nbytes=lure_model_cost(design.system.n, design.sensing.shape[0],
+                               design.sensing.shape[0])[0])
+    if refusal:
+        return Check(id="observer_stability", title=title, verdict=Verdict.INCONCLUSIVE,
+                     summary=f"No stability certificate: not attempted: {refusal}.",
+                     method="circle criterion (LMI, Clarabel)", fields={}), None
     model = LureModel.from_design(design)
-    cert = circle_certificate(model)
+    cert = circle_certificate(model, budget=budget)
     verdict = Verdict(cert.verdict)
     fields = {"decay_rate": cert.decay, "structure": cert.structure, "shrink": design.shrink,
               "step": design.step, "threshold": design.threshold}
@@ -230,14 +241,15 @@ def observer_stability_check(design: ObserverDesign) -> tuple[Check, Any]:
                              "lmi_eta": 1e-4}), (model, cert)
 
 
-def iss_gain_check(design: ObserverDesign, stability: Any) -> Check:
+def iss_gain_check(design: ObserverDesign, stability: Any, *,
+                   budget: Budget | None = None) -> Check:
     """l2 gain from attack to estimation error (and ISS decay), advisory."""
     title = "ISS gain from attack to estimation error"
     norm = ("l2 gain: sum_k |e(k)|^2 <= gamma^2 sum_k |a(k)|^2 + V(xi(0)), with a the "
             + ("stacked " if design.window > 1 else "") + "attack and e the state estimation error")
     if not design.sparse:
         model = LureModel.linear(design.error_matrix, design.gain.L)
-        cert = iss_certificate(model, alpha=0.0)
+        cert = iss_certificate(model, alpha=0.0, budget=budget)
     else:
         if stability is None or stability[1].verdict != "holds":
             return Check(id="iss_gain", title=title, verdict=Verdict.INCONCLUSIVE, required=False,
@@ -246,7 +258,7 @@ def iss_gain_check(design: ObserverDesign, stability: Any) -> Check:
         model, circle = stability
         cert = iss_from_circle(model, circle)
         if model.N + model.m + model.r <= ISS_OPTIMIZE_LIMIT:
-            direct = iss_certificate(model, alpha=0.5 * float(circle.decay or 0.0))
+            direct = iss_certificate(model, alpha=0.5 * float(circle.decay or 0.0), budget=budget)
             if direct.verdict == "holds" and (cert.gamma is None or direct.gamma < cert.gamma):
                 cert = direct
     verdict = Verdict(cert.verdict)
@@ -266,10 +278,11 @@ def iss_gain_check(design: ObserverDesign, stability: Any) -> Check:
 
 
 def thesis_assumptions_check(design: ObserverDesign, observability: Check | None,
-                             *, seed: int = 0) -> Check:
+                             *, seed: int = 0, budget: Budget | None = None) -> Check:
     """The thesis's Assumptions 1-3, Lemma 1 and epsilon bound (5.20), advisory."""
     holds = None if observability is None else observability.verdict is Verdict.HOLDS
-    verdict, items = thesis_assumptions(design, observability_holds=holds, seed=seed)
+    verdict, items = thesis_assumptions(design, observability_holds=holds, seed=seed,
+                                        budget=budget)
     failing = [i.name for i in items if i.verdict == "fails"]
     open_ = [i.name for i in items if i.verdict == "inconclusive"]
     if verdict == "holds":
@@ -278,7 +291,9 @@ def thesis_assumptions_check(design: ObserverDesign, observability: Check | None
         summary = ("The thesis's stability proof does not apply to this design: "
                    + "; ".join(f"{i.name}: {i.reason}" for i in items if i.verdict == "fails")[:600])
     else:
-        summary = f"Not all assumptions could be decided ({', '.join(open_)})."
+        summary = ("Not all assumptions could be decided: "
+                   + "; ".join(f"{i.name}: {i.reason}" for i in items
+                               if i.verdict == "inconclusive")[:600])
     return Check(
         id="thesis_assumptions", title="Thesis assumptions (Ch. 5)", verdict=Verdict(verdict),
         summary=summary, required=False, value=len(failing), method="proof or counterexample search",
@@ -293,6 +308,7 @@ def observer_checks(
     *,
     observability: Check | None = None,
     seed: int = 0,
+    budget: Budget | None = None,
 ) -> list[Check]:
     """All observer checks of a spec's ``[observer]`` section.
 
@@ -305,6 +321,10 @@ def observer_checks(
         The plant's observability check (decides Assumption 1, and whether
         a failing gain is the plant's fault).
     seed : int, default 0
+    budget : Budget, optional
+        Memory and work allowed for the observer's matrices and each LMI
+        (default ``Budget()``: 2 GiB, 1e12 operations); what does not fit is
+        inconclusive with the estimate.
 
     Returns
     -------
@@ -322,7 +342,17 @@ def observer_checks(
      ('iss_gain', 'inconclusive'), ('thesis_assumptions', 'fails')]
     """
     try:
-        design = build_observer(system, observer)
+        design = build_observer(system, observer, budget=budget)
+    except ResourceLimitError as exc:
+        gain = Check(id="observer_gain", title="Observer gain", verdict=Verdict.INCONCLUSIVE,
+                     summary=f"The observer was not built: {exc}.",
+                     method=str(observer.get("gain", observer["kind"])),
+                     fields={"L": None, "spectral_radius": None, "kind": observer["kind"]})
+        stab = Check(id="observer_stability", title="Observer stability",
+                     verdict=Verdict.INCONCLUSIVE,
+                     summary=f"No stability analysis: the observer was not built ({exc}).",
+                     method="", fields={})
+        return [gain, stab]
     except GainError as exc:
         unobservable = observability is not None and observability.verdict is Verdict.FAILS
         verdict = Verdict.FAILS if unobservable else Verdict.INCONCLUSIVE
@@ -335,9 +365,9 @@ def observer_checks(
                      method="", fields={})
         return [gain, stab]
     checks = [observer_gain_check(design)]
-    stability, cert = observer_stability_check(design)
+    stability, cert = observer_stability_check(design, budget=budget)
     checks.append(stability)
-    checks.append(iss_gain_check(design, cert))
+    checks.append(iss_gain_check(design, cert, budget=budget))
     if design.sparse:
-        checks.append(thesis_assumptions_check(design, observability, seed=seed))
+        checks.append(thesis_assumptions_check(design, observability, seed=seed, budget=budget))
     return checks

@@ -42,6 +42,7 @@ from typing import Any
 
 import numpy as np
 
+from ..budget import Budget
 from ..design.observer import ObserverDesign
 from ..tolerances import EPS
 
@@ -56,6 +57,8 @@ __all__ = [
     "verify_certificate",
     "RegionMap",
     "region_map",
+    "lmi_cost",
+    "lure_model_cost",
 ]
 
 ETA = 1e-4  # margin imposed in the LMIs, relative to P >= I
@@ -63,6 +66,37 @@ FULL_LIMIT = 80  # largest LMI dimension tried with a full P
 # Lyapunov structures, cheapest first: P = diag(P1, D) with D diagonal; the
 # same with a full cross block P12; a full P.
 STRUCTURES = ("block-diagonal", "cross", "full")
+
+
+def lure_model_cost(n: int, m: int, r: int) -> tuple[float, float]:
+    """Bytes and operations of a Lur'e model with n error states, m nonlinearities and r
+    attack inputs: its matrices, and the eigenvalues of its N x N closed loops (N = n + m)."""
+    N = n + m
+    nbytes = 8.0 * (3 * N * N + 2 * N * m + 2 * N * r + m * r + n * N + 2 * m * m)
+    return nbytes, 30.0 * N**3
+
+
+def lmi_cost(model: LureModel, kind: str, structure: str) -> tuple[float, float]:
+    """Estimated peak bytes and operations of solving one LMI with cvxpy and Clarabel.
+
+    Fitted to measurements (2 cores, Clarabel 0.x) of circle and ISS LMIs of
+    24 to 312 rows: with T = size (size + 1) / 2 entries in the semidefinite
+    cone, the block-diagonal structure keeps the problem sparse (memory and
+    time grow like T * size), while a cross block or a full P makes the
+    factorised system dense in T plus the number of variables v (memory like
+    (T + v)^2, time like (T + v)^3).  The estimates err on the high side.
+    """
+    N, m, r, n = model.N, model.m, model.r, model.n_e
+    size = N + m + (r if kind == "iss" else 0)
+    T = size * (size + 1) / 2
+    if structure == "block-diagonal":
+        factor = 2.0 if kind == "iss" else 1.0
+        return 64 * 2**20 + factor * 450.0 * T * size, factor * 3e5 * T * size
+    if structure == "cross":
+        v = n * (n + 1) / 2 + n * (N - n) + (N - n) + m
+    else:
+        v = N * (N + 1) / 2 + m
+    return 64 * 2**20 + 48.0 * (T + v) ** 2, 10.0 * (T + v) ** 3
 
 
 @dataclass(frozen=True)
@@ -283,6 +317,8 @@ def verify_certificate(
     """
     P = 0.5 * (np.asarray(P, dtype=float) + np.asarray(P, dtype=float).T)
     t = np.asarray(t, dtype=float)
+    if not (np.all(np.isfinite(P)) and np.all(np.isfinite(t))):
+        return False, float("nan"), 0.0, "the certificate has non-finite entries"
     if model.m and t.min(initial=0.0) < 0:
         return False, float("nan"), 0.0, f"a multiplier is negative ({t.min():.2e})"
     M = circle_matrix(model, P, t, alpha) if kind == "circle" else iss_matrix(model, P, t, alpha, g)
@@ -370,14 +406,34 @@ def _solve(
             warnings.simplefilter("ignore", UserWarning)  # verified below, not trusted
             problem.solve(solver=cp.CLARABEL, **options)
     except Exception as exc:  # solver failure is an answer: inconclusive
-        info.update(status=f"solver error: {exc}", seconds=time.perf_counter() - start)
+        info.update(status=f"solver error: {type(exc).__name__}: {exc}".rstrip(": "),
+                    seconds=time.perf_counter() - start)
         return None, None, None, info
-    info.update(status=problem.status, seconds=time.perf_counter() - start)
+    info.update(status=str(problem.status), seconds=time.perf_counter() - start)
     if problem.status not in ("optimal", "optimal_inaccurate"):
         return None, None, None, info
-    Pv = np.asarray(P.value, dtype=float)
-    tv = np.asarray(t.value, dtype=float) if m else np.zeros(0)
-    return 0.5 * (Pv + Pv.T), tv, (float(g.value) if g is not None else None), info
+    values = [P.value, t.value if m else np.zeros(0), g.value if g is not None else 0.0]
+    if any(v is None for v in values) or not all(
+            np.all(np.isfinite(np.asarray(v, dtype=float))) for v in values):
+        info["status"] = f"{problem.status}, but the solver returned no finite values"
+        return None, None, None, info
+    Pv = np.asarray(values[0], dtype=float)
+    tv = np.asarray(values[1], dtype=float).reshape(-1)
+    return 0.5 * (Pv + Pv.T), tv, (float(values[2]) if g is not None else None), info
+
+
+def _model_refusal(model: LureModel, budget: Budget) -> str:
+    """Why the structural pre-checks (eigenvalues of N x N closed loops) are not affordable."""
+    nbytes, flops = lure_model_cost(model.n_e, model.m, model.r)
+    return budget.refusal(f"the Lur'e model with {model.N} states and {model.m} "
+                          f"nonlinearities", nbytes=nbytes, flops=flops)
+
+
+def _solve_refusal(model: LureModel, kind: str, structure: str, budget: Budget) -> str:
+    nbytes, flops = lmi_cost(model, kind, structure)
+    size = model.N + model.m + (model.r if kind == "iss" else 0)
+    return budget.refusal(f"the {structure} LMI with {size} rows (cvxpy and Clarabel)",
+                          nbytes=nbytes, flops=flops)
 
 
 def _prechecks(model: LureModel) -> tuple[str, str, dict[str, Any]]:
@@ -431,6 +487,7 @@ def circle_certificate(
     solver_options: dict[str, Any] | None = None,
     clear: float = 100.0,
     reuse: Sequence[tuple[np.ndarray, np.ndarray]] = (),
+    budget: Budget | None = None,
 ) -> LMICertificate:
     """Circle-criterion certificate of global asymptotic stability without attack.
 
@@ -448,11 +505,20 @@ def circle_certificate(
     reuse : sequence of (P, t)
         Candidate certificates (for example from a neighbouring design)
         tried by verification alone before any solve.
+    budget : Budget, optional
+        Memory and work allowed for one solve (default ``Budget()``: 2 GiB,
+        1e12 operations); a structure whose estimated cost (``lmi_cost``)
+        exceeds it is skipped, with the estimate in the reason.
 
     Returns
     -------
     LMICertificate
     """
+    budget = budget or Budget()
+    refusal = _model_refusal(model, budget)
+    if refusal:
+        return LMICertificate("inconclusive", "circle", reason=f"not attempted: {refusal}",
+                              details={"budget": budget.to_dict()})
     verdict, reason, details = _prechecks(model)
     if verdict:
         return LMICertificate(verdict, "circle", reason=reason, details=details)
@@ -465,6 +531,10 @@ def circle_certificate(
     for st in structures:
         if st == "full" and structure == "auto" and model.N + model.m > FULL_LIMIT:
             attempts.append({"structure": "full", "status": f"skipped: LMI larger than {FULL_LIMIT}"})
+            continue
+        skip = _solve_refusal(model, "circle", st, budget)
+        if skip:
+            attempts.append({"structure": st, "status": f"skipped: {skip}"})
             continue
         P, t, _, info = _solve(model, "circle", st, 0.0, solver_options or {})
         attempts.append(info)
@@ -501,6 +571,7 @@ def iss_certificate(
     structure: str = "auto",
     solver_options: dict[str, Any] | None = None,
     clear: float = 100.0,
+    budget: Budget | None = None,
 ) -> LMICertificate:
     """Dissipation certificate V+ - V <= -alpha V - |e|^2 + gamma^2 |a|^2.
 
@@ -509,7 +580,7 @@ def iss_certificate(
     model : LureModel
     alpha : float, default 0
         Decay to keep (for example half the circle certificate's).
-    structure, solver_options, clear
+    structure, solver_options, clear, budget
         As in ``circle_certificate``.
 
     Returns
@@ -518,6 +589,11 @@ def iss_certificate(
         ``gamma`` is the verified l2 gain from attack to estimation error;
         with ``alpha > 0`` the error dynamics are also input-to-state stable.
     """
+    budget = budget or Budget()
+    refusal = _model_refusal(model, budget)
+    if refusal:
+        return LMICertificate("inconclusive", "iss", reason=f"not attempted: {refusal}",
+                              details={"budget": budget.to_dict()})
     verdict, reason, details = _prechecks(model)
     if verdict:
         return LMICertificate(verdict, "iss", reason=reason, details=details)
@@ -526,6 +602,10 @@ def iss_certificate(
     for st in structures:
         if st == "full" and structure == "auto" and model.N + model.m + model.r > FULL_LIMIT:
             attempts.append({"structure": "full", "status": f"skipped: LMI larger than {FULL_LIMIT}"})
+            continue
+        skip = _solve_refusal(model, "iss", st, budget)
+        if skip:
+            attempts.append({"structure": st, "status": f"skipped: {skip}"})
             continue
         P, t, g, info = _solve(model, "iss", st, alpha, solver_options or {})
         attempts.append(info)
@@ -582,14 +662,21 @@ def iss_from_circle(
     k = N + m
 
     def gain(log_kappa: float) -> float:
-        kappa = float(np.exp(log_kappa))
-        M = kappa * base + perf
-        Z, X, Y = M[:k, :k], M[:k, k:], M[k:, k:]
-        zmax = float(np.linalg.eigvalsh(Z)[-1])
-        if zmax >= 0:
+        with np.errstate(over="ignore", invalid="ignore"):
+            kappa = float(np.exp(log_kappa))
+            M = kappa * base + perf
+        if not np.all(np.isfinite(M)):
             return np.inf
-        S = Y - X.T @ np.linalg.solve(Z, X)
-        return float(np.linalg.eigvalsh(0.5 * (S + S.T))[-1])
+        Z, X, Y = M[:k, :k], M[:k, k:], M[k:, k:]
+        try:
+            zmax = float(np.linalg.eigvalsh(Z)[-1])
+            if zmax >= 0:
+                return np.inf
+            S = Y - X.T @ np.linalg.solve(Z, X)
+            value = float(np.linalg.eigvalsh(0.5 * (S + S.T))[-1])
+        except np.linalg.LinAlgError:  # singular Z: this kappa gives no gain
+            return np.inf
+        return value if np.isfinite(value) else np.inf
 
     # kappa must make Z negative definite: Z = kappa Zc + diag(Ce'Ce, 0)
     zc = float(np.linalg.eigvalsh(base[:k, :k])[-1])
@@ -601,11 +688,16 @@ def iss_from_circle(
     a, b = grid[max(best - 1, 0)], grid[min(best + 1, grid.size - 1)]
     from scipy.optimize import minimize_scalar
 
-    refined = minimize_scalar(gain, bounds=(a, b), method="bounded")
-    x, g = (float(refined.x), float(refined.fun)) if refined.fun <= values[best] else (
-        float(grid[best]), float(values[best]))
+    if np.isfinite(values[best]):
+        refined = minimize_scalar(gain, bounds=(a, b), method="bounded")
+        x, g = (float(refined.x), float(refined.fun)) if refined.fun <= values[best] else (
+            float(grid[best]), float(values[best]))
+    else:
+        x, g = float(grid[best]), float(values[best])
     if not np.isfinite(g):
-        return LMICertificate("inconclusive", "iss", reason="no finite gain from the circle certificate")
+        return LMICertificate("inconclusive", "iss", reason=(
+            "no finite gain from the circle certificate (the Schur complement in the attack "
+            "is not defined for any scaling tried)"))
     kappa = float(np.exp(x))
     g_cert = max(g, 0.0) * (1 + 1e-6) + 1e-9
     ok, margin, bound, problem = verify_certificate(model, kappa * P, kappa * t, kind="iss",
@@ -662,13 +754,16 @@ def region_map(
     steps: Sequence[float],
     *,
     solver_options: dict[str, Any] | None = None,
+    budget: Budget | None = None,
 ) -> RegionMap:
     """Certified region of a sparse observer over (shrink, step).
 
     The gain L of ``design`` is kept; at each grid point the circle
     criterion is first tried by re-verifying the certificates of already
     certified neighbours (no solver), then by solving the block-diagonal
-    LMI, then the LMI with cross terms.
+    LMI, then the LMI with cross terms.  ``budget`` (default ``Budget()``)
+    bounds each solve, as in ``circle_certificate``: a point whose LMIs do
+    not fit is inconclusive.
     """
     start = time.perf_counter()
     shrinks = np.asarray(shrinks, dtype=float)
@@ -682,9 +777,11 @@ def region_map(
             model = LureModel.from_design(replace(design, shrink=float(q), step=float(nu)))
             neighbours = [found[k] for k in ((i - 1, j), (i, j - 1), (i - 1, j - 1)) if k in found]
             cert = circle_certificate(model, structure="block-diagonal",
-                                      solver_options=solver_options, reuse=neighbours)
+                                      solver_options=solver_options, reuse=neighbours,
+                                      budget=budget)
             if cert.verdict == "inconclusive" and cert.details.get("attempts"):
-                cert = circle_certificate(model, structure="cross", solver_options=solver_options)
+                cert = circle_certificate(model, structure="cross", solver_options=solver_options,
+                                          budget=budget)
                 solves += 1
             if cert.details.get("reused"):
                 reused += 1

@@ -27,6 +27,8 @@ DEFAULT_CHUNK_BYTES = 4 * 2**20  # measured best for 15 x 15 Gramians
 
 def count_subsets(q: int, sizes: range | list[int]) -> int:
     """Number of subsets of q items with sizes in ``sizes``."""
+    if isinstance(sizes, range) and sizes.step == 1:  # a huge range (s >> p) costs O(q)
+        sizes = range(max(sizes.start, 0), min(sizes.stop, q + 1))
     return sum(math.comb(q, k) for k in sizes if 0 <= k <= q)
 
 

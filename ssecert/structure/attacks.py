@@ -32,7 +32,14 @@ from .._validation import as_index_list, as_int_option, as_real_matrix
 from ..system import System
 from ..tolerances import Tolerances
 
-__all__ = ["StealthyAttack", "stealthy_attack", "initial_state"]
+__all__ = ["StealthyAttack", "stealthy_attack", "initial_state", "WITNESS_MAX_STEPS",
+           "WITNESS_MAX_ENTRIES"]
+
+# The witness is simulated and reported over at most this many steps (and
+# steps x p entries): beyond n steps it adds nothing, since C_i A^k z = 0 for
+# k < n implies it for every k (Cayley-Hamilton).
+WITNESS_MAX_STEPS = 10_000
+WITNESS_MAX_ENTRIES = 1_000_000
 
 
 def initial_state(n: int, rng: np.random.Generator) -> np.ndarray:
@@ -62,6 +69,13 @@ class StealthyAttack:
         first n steps (exact agreement there implies it at every step).
     verified : bool
         ``residual <= witness_rtol``.
+    rtol : float
+    horizon : int
+        Steps requested; the arrays cover the first ``attack_a.shape[0]`` of
+        them (fewer when the horizon exceeds ``WITNESS_MAX_STEPS``).
+    overflow_at : int or None
+        First step at which the simulation of an unstable plant overflows,
+        when that is after n steps: the arrays stop there.
     """
 
     z: np.ndarray
@@ -75,6 +89,8 @@ class StealthyAttack:
     residual: float
     verified: bool
     rtol: float
+    horizon: int | None = None
+    overflow_at: int | None = None
 
     @property
     def undetectable(self) -> bool:
@@ -83,7 +99,7 @@ class StealthyAttack:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON fields of the witness."""
-        return {
+        out: dict[str, Any] = {
             "z": self.z,
             "sensors_a": list(self.sensors_a),
             "sensors_b": list(self.sensors_b),
@@ -99,6 +115,19 @@ class StealthyAttack:
                 + ("; attack_a alone is undetectable" if self.undetectable else "")
             ),
         }
+        steps = int(self.attack_a.shape[0])
+        out["steps"] = steps
+        if self.horizon is not None and self.horizon > steps:
+            why = (f"the simulated states overflow in floating point at step {self.overflow_at:,}"
+                   if self.overflow_at is not None else
+                   f"longer witnesses are cut at {WITNESS_MAX_STEPS:,} steps")
+            out["horizon"] = self.horizon
+            out["truncated"] = (
+                f"shown and verified over the first {steps:,} of the {self.horizon:,} steps of "
+                f"the horizon ({why}); attack_a(k) = P_a C A^k z continues in the same way, "
+                f"and the outputs coincide at every later step too, because C_i A^k z = 0 for "
+                f"k < n implies it for every k (Cayley-Hamilton)")
+        return out
 
 
 def stealthy_attack(
@@ -125,7 +154,9 @@ def stealthy_attack(
     max_attacked : int
         s, the number of sensors each attack may use.
     horizon : int, optional
-        Number of simulated steps (default n).
+        Number of simulated steps (default n); at most ``WITNESS_MAX_STEPS``
+        and ``WITNESS_MAX_ENTRIES / p`` (but at least n) are simulated and
+        returned, which decides the witness for every horizon.
     seed : int, default 0
         Seed of the simulated initial state x0.
     tolerances : Tolerances, optional
@@ -163,7 +194,8 @@ def stealthy_attack(
     first = np.flatnonzero(np.abs(z) > 1e-12)
     if first.size and z[first[0]] < 0:
         z = -z
-    H = system.n if horizon is None else as_int_option(horizon, "horizon", min_value=1)
+    requested = system.n if horizon is None else as_int_option(horizon, "horizon", min_value=1)
+    H = min(requested, max(system.n, min(WITNESS_MAX_STEPS, WITNESS_MAX_ENTRIES // system.p)))
     sensors_a = tuple(B[:s]) if B else ()
     sensors_b = tuple(B[s:]) if B else ()
 
@@ -185,32 +217,41 @@ def stealthy_attack(
             attack_b[k] = -mask_b * y
             w = A @ w
 
-        # independent simulation of the two explanations; the mismatch is measured over the
-        # first n steps only: C_i A^k z = 0 for k < n implies it for every k (Cayley-Hamilton),
-        # and later steps would only measure rounding growing with unstable modes, which would
-        # make the verdict depend on the horizon
+        # independent simulation of the two explanations
         rng = np.random.default_rng(seed)
         x0 = initial_state(system.n, rng)
         xa, xb = x0.copy(), x0 + z
         outputs_a = np.empty((H, p))
         outputs_b = np.empty((H, p))
+        scales = np.empty(H)
+        normC = float(np.linalg.norm(C, 2))
         for k in range(H):
             outputs_a[k] = C @ xa + attack_a[k]
             outputs_b[k] = C @ xb + attack_b[k]
+            scales[k] = normC * float(np.linalg.norm(xb - xa))
             xa, xb = A @ xa, A @ xb
-        window = min(H, system.n)
-        normC = float(np.linalg.norm(C, 2))
-        w = z.copy()
-        scale = 0.0
-        for k in range(window):
-            scale = max(scale, normC * float(np.linalg.norm(w)))
-            w = A @ w
+        # an unstable plant overflows after enough steps; the steps before the first
+        # overflow decide the witness when they are at least n (Cayley-Hamilton)
+        finite = (np.all(np.isfinite(attack_a), axis=1) & np.all(np.isfinite(attack_b), axis=1)
+                  & np.all(np.isfinite(outputs_a), axis=1)
+                  & np.all(np.isfinite(outputs_b), axis=1) & np.isfinite(scales))
+        overflow_at = None
+        if not finite.all():
+            first = int(np.argmin(finite))
+            if first >= system.n:
+                overflow_at = first
+                attack_a, attack_b = attack_a[:first], attack_b[:first]
+                outputs_a, outputs_b, scales = outputs_a[:first], outputs_b[:first], scales[:first]
+        # the mismatch is measured over the first n steps only: C_i A^k z = 0 for k < n
+        # implies it for every k (Cayley-Hamilton), and later steps would only measure
+        # rounding growing with unstable modes, making the verdict depend on the horizon
+        window = min(outputs_a.shape[0], system.n)
         diff = float(np.max(np.linalg.norm(outputs_a[:window] - outputs_b[:window], axis=1)))
         # rounding in the simulated states themselves is of order eps * ||x||
         floor = np.finfo(float).eps * normC * float(
             max(np.abs(outputs_a[:window]).max(initial=0.0), 1.0)
         )
-        residual = diff / max(scale, floor, np.finfo(float).tiny)
+        residual = diff / max(float(scales[:window].max()), floor, np.finfo(float).tiny)
         if not np.isfinite(residual):
             residual = float("inf")
     return StealthyAttack(
@@ -225,4 +266,6 @@ def stealthy_attack(
         residual=residual,
         verified=bool(residual <= tol.witness_rtol),
         rtol=tol.witness_rtol,
+        horizon=requested,
+        overflow_at=overflow_at,
     )

@@ -29,14 +29,16 @@ from .._validation import as_choice, as_int_option
 from ..results import Check, Verdict
 from ..system import System
 from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances
-from ._combinatorics import colex_blocks
+from ..budget import Budget, bounded_comb, format_count, log10_comb
+from ._combinatorics import DEFAULT_CHUNK_BYTES, DEFAULT_MEMORY, colex_blocks
 from ._linalg import screen_positive_definite, stacked_rank, staircase
 from .sparse import DEFAULT_MAX_SETS
 
 __all__ = ["irrepresentable", "irrepresentable_constant", "MODES"]
 
 MODES = ("block", "entrywise")
-_SUB = 128  # supports per dense product, to bound memory
+_SUB = 128  # largest number of supports per dense product
+_LISTED = 10_000  # largest support listed in full in a result
 
 
 def irrepresentable_constant(
@@ -84,6 +86,7 @@ def irrepresentable(
     max_sets: int = DEFAULT_MAX_SETS,
     tolerances: Tolerances | None = None,
     progress: Callable[[int, int], None] | None = None,
+    budget: Budget | None = None,
 ) -> Check:
     """Worst irrepresentable constant over all attack supports of a given size.
 
@@ -100,6 +103,12 @@ def irrepresentable(
         Budget of supports; beyond it the check is inconclusive.
     tolerances : Tolerances, optional
     progress : callable, optional
+    budget : Budget, optional
+        Memory and work allowed (default ``Budget()``: 2 GiB, 1e12
+        operations).  Both are estimated from p, tau, n and the number of
+        supports before anything is allocated; beyond them the check is
+        inconclusive with the estimate.  Supports are processed in batches
+        sized to the memory budget.
 
     Returns
     -------
@@ -116,6 +125,7 @@ def irrepresentable(
     ('holds', 0.5, [0])
     """
     tol = Tolerances.check(tolerances)
+    budget = budget or Budget()
     if not isinstance(system, System):
         raise TypeError(f"system must be a System, got {type(system).__name__}")
     mode = as_choice(mode, "mode", MODES)
@@ -124,23 +134,21 @@ def irrepresentable(
     n, p = system.n, system.p
     items = p if mode == "block" else p * tau
     k = as_int_option(support_size, "support_size", min_value=0)
-    with np.errstate(over="ignore", invalid="ignore"):
-        O = system.observability_matrix(tau)  # row t * p + i: sensor i at step t
-    if mode == "block":
-        rows_of = np.array([[t * p + i for t in range(tau)] for i in range(p)], dtype=np.int64)
-    else:
-        rows_of = np.arange(p * tau, dtype=np.int64)[:, None]
     fields: dict[str, Any] = {"support_size": k, "horizon": tau, "mode": mode}
     title = "Irrepresentable condition (Lasso support recovery)"
     method = "enumeration"
+    total = bounded_comb(items, k, max_sets)
     evidence: dict[str, Any] = {
         "method_detail": (
             "every support enumerated; rho from the QR-whitened stacked observability matrix; "
             "worst support recomputed with numpy.linalg.pinv"
         ),
         "definition": "rho(S) = || O_Sbar (O_Sbar^T O_Sbar)^-1 O_S^T ||_inf (largest row sum)",
-        "supports": math.comb(items, k) if k <= items else 0,
+        "supports": total,
+        "budget": budget.to_dict(),
     }
+    if total is None:
+        evidence["supports_log10"] = log10_comb(items, k)
     tol_out = {"irrepresentable_rtol": tol.irrepresentable_rtol, **tol.to_dict()}
 
     def describe_support(support: tuple[int, ...]) -> list[Any]:
@@ -168,11 +176,8 @@ def irrepresentable(
             tolerances=tol_out,
         )
 
-    if not np.all(np.isfinite(O)):
-        return make(Verdict.INCONCLUSIVE, math.nan, None,
-                    f"The stacked observability matrix overflows over {tau} steps.")
     if k == 0:
-        sc0 = staircase(system.A, system.C, max_steps=tau, tolerances=tol)
+        sc0 = staircase(system.A, system.C, max_steps=min(tau, n), tolerances=tol)
         if sc0.rank < n and not sc0.problem:
             return make(Verdict.FAILS, math.inf, (),
                         f"O_tau (horizon {tau}) has rank {sc0.rank} < n = {n}: even without "
@@ -180,13 +185,46 @@ def irrepresentable(
         return make(Verdict.HOLDS, 0.0, (), "With no attacked entries there is nothing to misidentify.",
                     margin=1.0)
     if k > items:
-        return make(Verdict.FAILS, math.inf, tuple(range(items)),
-                    f"The support size {k} exceeds the {items} available items.")
-    total = math.comb(items, k)
-    if total > max_sets:
+        every = tuple(range(items)) if items <= _LISTED else None
+        return make(Verdict.FAILS, math.inf, every,
+                    f"The support size {k:,} exceeds the {items:,} available "
+                    f"{'sensors' if mode == 'block' else 'entries'}: an attack on all of them "
+                    f"leaves nothing to estimate the state from.")
+    if total is None:
         return make(Verdict.INCONCLUSIVE, math.nan, None,
-                    f"{total:,} supports exceed the budget of {max_sets:,}; raise it with "
-                    f"--max-sets (max_sets=...).")
+                    f"C({items:,}, {k:,}) = {format_count(10 ** min(log10_comb(items, k), 308))} "
+                    f"supports exceed the budget of {max_sets:,}; raise it with --max-sets "
+                    f"(max_sets=...).")
+    if k == items:
+        return make(Verdict.FAILS, math.inf, tuple(range(items)),
+                    f"With all {items} {'sensors' if mode == 'block' else 'entries'} attacked, "
+                    f"O_Sbar is empty and lacks full column rank (Theorem 1's assumption), so "
+                    f"rho is inf.",
+                    witness={"support": list(range(items)),
+                             "support_names": describe_support(tuple(range(items))),
+                             "reason": "O_Sbar lacks full column rank"})
+    h = k * tau if mode == "block" else k
+    colex_memory = int(min(DEFAULT_MEMORY, budget.memory // 8))
+    nbytes, flops, per_support = _cost(n, p, tau, items, h, total, mode, colex_memory)
+    evidence["estimate"] = {"bytes": nbytes, "flops": flops, "bytes_per_support": per_support}
+    refusal = budget.refusal(
+        f"the irrepresentable enumeration ({format_count(total)} supports of {h:,} rows of the "
+        f"{p * tau:,} x {n} matrix O_tau, horizon {tau:,})", nbytes=nbytes, flops=flops)
+    if refusal:
+        hint = "; a shorter horizon (--horizon) makes it smaller" if tau > n else ""
+        return make(Verdict.INCONCLUSIVE, math.nan, None, f"Not attempted: {refusal}{hint}.")
+    batch = int(max(1, min(_SUB, (budget.memory // 4) // per_support)))
+
+    with np.errstate(over="ignore", invalid="ignore"):
+        O = system.observability_matrix(tau)  # row t * p + i: sensor i at step t
+    if mode == "block":
+        rows_of = (np.arange(tau, dtype=np.int64)[None, :] * p
+                   + np.arange(p, dtype=np.int64)[:, None])
+    else:
+        rows_of = np.arange(p * tau, dtype=np.int64)[:, None]
+    if not np.all(np.isfinite(O)):
+        return make(Verdict.INCONCLUSIVE, math.nan, None,
+                    f"The stacked observability matrix overflows over {tau} steps.")
 
     sc = staircase(system.A, system.C, max_steps=tau, tolerances=tol)
     evidence["rank_O_tau"] = sc.rank
@@ -215,13 +253,13 @@ def irrepresentable(
     n_inf = 0
     borderline = 0
     done = 0
-    for block in colex_blocks(G, base, k):
+    for block in colex_blocks(G, base, k, memory=colex_memory):
         subsets = block.subsets()
         ok = screen_positive_definite(block.matrices, shift)
         rho = np.full(len(block), np.nan)
         good = np.flatnonzero(ok)
-        for start in range(0, good.size, _SUB):
-            sel = good[start : start + _SUB]
+        for start in range(0, good.size, batch):
+            sel = good[start : start + batch]
             rho[sel] = _rho_batch(Q, rows_of, block.matrices[sel], subsets[sel])
         bad = np.flatnonzero(~ok)
         if bad.size:
@@ -290,6 +328,30 @@ def irrepresentable(
                 f"The worst constant {worst:.12g} is within {band:g} of 1.", margin=margin)
 
 
+def _cost(n: int, p: int, tau: int, items: int, h: int, supports: int,
+          mode: str, colex_memory: int) -> tuple[float, float, float]:
+    """Peak bytes, operations and bytes per support of the enumeration, from the shapes.
+
+    Peak: O_tau and its QR factor (4 copies of p tau x n), the per-item
+    Gramians, the colex engine's partial sums, one support's dense products
+    (2 copies of p tau x h, the rows of O_tau outside and inside it), and the
+    direct pinv recomputation of the worst support.  Work: the QR, the Gramians
+    and, per support, the p tau x n x h product, its absolute row sums and an
+    n x n factorisation; calibrated so that 1e12 is one to three minutes on
+    one core.
+    """
+    M = p * tau
+    per_support = 8.0 * (2 * M * h + 3 * h * n + M)
+    colex = min(colex_memory + DEFAULT_CHUNK_BYTES, 2 * 8.0 * supports * n * n)
+    nbytes = (8.0 * (4 * M * n + M + items * n * n) + colex + per_support
+              + 8.0 * (2 * M * n + M * h))
+    # the elementwise passes over the p tau x h product (absolute value, sums, the
+    # memory traffic) cost far more than their count: 60 per entry, measured
+    flops = 4.0 * M * n * n + 2.0 * M * n * n + supports * (
+        2.0 * M * n * h + 60.0 * M * h + n**3 + 2.0 * n * n * h)
+    return nbytes, flops, per_support
+
+
 def _rho_batch(
     Q: np.ndarray, rows_of: np.ndarray, M: np.ndarray, subsets: np.ndarray
 ) -> np.ndarray:
@@ -298,8 +360,11 @@ def _rho_batch(
     rows = rows_of[subsets].reshape(N, -1)  # (N, h)
     QS = Q[rows]  # (N, h, n)
     X = np.linalg.solve(M, QS.transpose(0, 2, 1))  # (N, n, h)
-    full = np.einsum("rn,Nnh->Nrh", Q, X)  # (N, p tau, h)
-    sums = np.abs(full).sum(axis=2)
+    h = X.shape[2]
+    # one product for the whole batch: (p tau, n) x (n, N h)
+    full = Q @ X.transpose(1, 0, 2).reshape(Q.shape[1], N * h)
+    np.abs(full, out=full)
+    sums = full.reshape(Q.shape[0], N, h).sum(axis=2).T  # (N, p tau)
     np.put_along_axis(sums, rows, 0.0, axis=1)  # keep only rows outside S
     return sums.max(axis=1)
 

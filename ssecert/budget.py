@@ -1,0 +1,202 @@
+"""Memory and work budgets: estimate from the shapes, then run or refuse.
+
+Every analysis whose cost grows with an option (the horizon tau, the SSO
+window, the number of attack supports, the runs and steps of a scenario)
+estimates its peak memory in bytes and its work in floating-point operations
+from the shapes alone, before allocating anything, and compares them with a
+``Budget``.  What does not fit is not attempted: a check becomes inconclusive,
+a simulation is refused, and the message states the estimate and the budget.
+
+Defaults: 2 GiB of memory (``--memory-budget``) and 1e12 floating-point
+operations per analysis step (``--work-budget``; about one to two minutes of
+one core).  Estimates are upper bounds of the dominant arrays and operation
+counts, not measurements.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+
+__all__ = [
+    "Budget",
+    "ResourceLimitError",
+    "DEFAULT_MEMORY",
+    "DEFAULT_WORK",
+    "format_bytes",
+    "format_count",
+    "parse_bytes",
+    "parse_operations",
+    "bounded_comb",
+    "log10_comb",
+]
+
+DEFAULT_MEMORY = 2 * 2**30  # bytes
+DEFAULT_WORK = 1e12  # floating-point operations
+
+
+class ResourceLimitError(ValueError):
+    """A request whose estimated memory or work exceeds the budget.
+
+    The message names what was requested, the estimate and the budget.
+    """
+
+
+def format_bytes(size: float) -> str:
+    """``6.39 PiB``-style size, binary prefixes.
+
+    Examples
+    --------
+    >>> format_bytes(2 * 2**30), format_bytes(1536)
+    ('2 GiB', '1.5 KiB')
+    """
+    size = float(size)
+    if not math.isfinite(size):
+        return "an unbounded amount of memory"
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"):
+        if abs(size) < 1024 or unit == "EiB":
+            text = f"{size:.3g}"
+            return f"{text} {unit}"
+        size /= 1024
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+def format_count(value: float) -> str:
+    """An exact count below 1e9 (``12,345``), a rounded power of ten above.
+
+    Examples
+    --------
+    >>> format_count(12345), format_count(2.7e299)
+    ('12,345', 'about 2.7e+299')
+    """
+    if isinstance(value, int) and value < 10**9:
+        return f"{value:,}"
+    value = float(value)
+    if value < 1e9:
+        return f"{int(value):,}"
+    return f"about {value:.2g}"
+
+
+_SIZE_RE = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][+-]?[0-9]+)?)\s*([KMGTP]?)(i?B?)\s*$", re.I)
+
+
+def parse_bytes(text: str) -> int:
+    """Parse ``"512M"``, ``"2G"``, ``"2GiB"``, ``"1.5e9"`` (bytes; K, M, G are powers of 1024).
+
+    Raises
+    ------
+    ValueError
+        With the accepted forms, for anything else or for a size below 1 MiB.
+
+    Examples
+    --------
+    >>> parse_bytes("2G"), parse_bytes("512MiB"), parse_bytes("3e9")
+    (2147483648, 536870912, 3000000000)
+    """
+    match = _SIZE_RE.match(str(text))
+    if not match:
+        raise ValueError(f"expected a size such as 512M, 2G or 2GiB, got {text!r}")
+    number, prefix = float(match.group(1)), match.group(2).upper()
+    size = number * 1024 ** "KMGTP".find(prefix) * 1024 if prefix else number
+    if not math.isfinite(size) or size < 2**20:
+        raise ValueError(f"expected a size of at least 1M, got {text!r}")
+    return int(size)
+
+
+def parse_operations(text: str) -> float:
+    """Parse a number of floating-point operations such as ``1e12`` (at least 1e6).
+
+    Raises
+    ------
+    ValueError
+        For anything else.
+
+    Examples
+    --------
+    >>> parse_operations("5e11")
+    500000000000.0
+    """
+    try:
+        value = float(text)
+    except ValueError:
+        raise ValueError(f"expected a number of operations such as 1e12, got {text!r}") from None
+    if not (value >= 1e6 and math.isfinite(value)):
+        raise ValueError(f"expected a finite number of operations >= 1e6, got {text!r}")
+    return value
+
+
+def bounded_comb(n: int, k: int, cap: int) -> int | None:
+    """C(n, k) when it is at most ``cap``, else None, in time independent of n and k.
+
+    Examples
+    --------
+    >>> bounded_comb(10, 3, 1000), bounded_comb(10**12, 10**6, 10**9)
+    (120, None)
+    """
+    if k < 0 or k > n:
+        return 0
+    k = min(k, n - k)
+    value = 1
+    for j in range(1, k + 1):
+        value = value * (n - k + j) // j
+        if value > cap:
+            return None
+    return value
+
+
+def log10_comb(n: int, k: int) -> float:
+    """log10 C(n, k) from log-gamma, for counts too large to form."""
+    if k < 0 or k > n:
+        return -math.inf
+    return (math.lgamma(n + 1) - math.lgamma(k + 1) - math.lgamma(n - k + 1)) / math.log(10)
+
+
+@dataclass(frozen=True)
+class Budget:
+    """Largest memory and work an analysis step may use.
+
+    Parameters
+    ----------
+    memory : int, default 2 GiB
+        Bytes for the arrays of one analysis step (estimated before they are
+        allocated).
+    work : float, default 1e12
+        Floating-point operations of one analysis step (one LMI solve, one
+        enumeration, one scenario's simulation).
+
+    Examples
+    --------
+    >>> Budget().refusal("O_tau", nbytes=6.39 * 2**50)[:39]
+    'O_tau needs about 6.39 PiB of memory, o'
+    >>> Budget().refusal("a small product", nbytes=800, flops=1e3)
+    ''
+    """
+
+    memory: int = DEFAULT_MEMORY
+    work: float = DEFAULT_WORK
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.memory, (int, float)) and self.memory > 0):
+            raise ValueError(f"memory must be a positive number of bytes, got {self.memory!r}")
+        if not (isinstance(self.work, (int, float)) and self.work > 0):
+            raise ValueError(f"work must be a positive number of operations, got {self.work!r}")
+
+    def refusal(self, what: str, *, nbytes: float = 0.0, flops: float = 0.0) -> str:
+        """Empty when ``what`` fits; otherwise the reason, with estimate and budget."""
+        if nbytes > self.memory:
+            return (f"{what} needs about {format_bytes(nbytes)} of memory, over the memory "
+                    f"budget of {format_bytes(self.memory)} (--memory-budget)")
+        if flops > self.work:
+            return (f"{what} needs about {flops:.2g} floating-point operations, over the work "
+                    f"budget of {self.work:.2g} (--work-budget)")
+        return ""
+
+    def require(self, what: str, *, nbytes: float = 0.0, flops: float = 0.0) -> None:
+        """Raise ``ResourceLimitError`` with the reason when ``what`` does not fit."""
+        reason = self.refusal(what, nbytes=nbytes, flops=flops)
+        if reason:
+            raise ResourceLimitError(reason)
+
+    def to_dict(self) -> dict[str, float]:
+        return {"memory_bytes": self.memory, "work_flops": self.work}
