@@ -270,7 +270,8 @@ def test_the_answer_does_not_depend_on_the_horizon():
         answers.add((check.verdict.value, check.fields["max_removable"],
                      tuple(check.fields["breaking_set"])))
         assert check.witness["verified"]
-        assert len(check.witness["attack_a"]) == horizon
+        # cut at the first overflow of the eigenvalue-3 mode, never below n steps
+        assert 3 <= len(check.witness["attack_a"]) <= horizon
     assert answers == {("fails", 0, (2,))}
 
 
