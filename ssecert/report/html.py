@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 from markupsafe import Markup, escape
 
+from .._format import sig
 from .._io import atomic_write_text
 from ..results import Certificate, Check, to_jsonable
 
@@ -74,7 +75,7 @@ def _fmt(value: Any) -> str:
             return "-"
         if math.isinf(v):
             return "inf" if v > 0 else "-inf"
-        return f"{v:.6g}"
+        return sig(v, 6)
     if isinstance(value, (complex, np.complexfloating)):
         return f"{value.real:.6g}{value.imag:+.6g}j"
     if isinstance(value, Mapping) and set(value) == {"re", "im"}:

@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from .._format import sig
 from ..results import Certificate, Check, Verdict
 
 __all__ = ["render_table"]
@@ -23,7 +24,7 @@ def _fmt(value: Any) -> str:
             return "-"
         if math.isinf(value):
             return "inf"
-        return f"{value:.4g}"
+        return sig(value)
     return str(value)
 
 

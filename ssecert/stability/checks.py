@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from .._format import sig
 from ..budget import Budget, ResourceLimitError
 from ..design.gains import DEADBEAT_RTOL, GainError
 from ..design.observer import ObserverDesign, build_observer
@@ -90,8 +91,8 @@ def observer_gain_check(design: ObserverDesign) -> Check:
         summary = (f"The linear error dynamics e+ = (A - L C) e are stable: {cert.reason}.")
     elif verdict is Verdict.HOLDS:
         summary = (f"The linear error dynamics e+ = (A - L C) e are stable (spectral radius "
-                   f"{cert.spectral_radius:.4g}), certified by a Lyapunov matrix P: the error "
-                   f"contracts at least by {cert.contraction:.4g} per step in the P-norm.")
+                   f"{sig(cert.spectral_radius)}), certified by a Lyapunov matrix P: the error "
+                   f"contracts at least by {sig(cert.contraction)} per step in the P-norm.")
     elif verdict is Verdict.FAILS:
         summary = (f"A - L C is not stable: {cert.reason}. With this gain the error does not "
                    f"vanish even without attack.")
@@ -183,7 +184,7 @@ def observer_stability_check(design: ObserverDesign, *,
             summary = f"The error dynamics are linear and stable: {cert.reason}."
         elif verdict is Verdict.HOLDS:
             summary = (f"The error dynamics are linear and certified stable by a Lyapunov matrix "
-                       f"(contraction {cert.contraction:.4g} per step).")
+                       f"(contraction {sig(cert.contraction)} per step).")
         elif verdict is Verdict.FAILS:
             summary = f"The error dynamics are unstable: {cert.reason}."
         else:

@@ -32,6 +32,7 @@ from .._exact import (
     shift_identity,
     spectral_radius_bound,
 )
+from .._format import sig
 from ..tolerances import EPS
 
 __all__ = ["SchurDecision", "schur_decision", "EXACT_SCHUR_LIMIT"]
@@ -39,9 +40,7 @@ __all__ = ["SchurDecision", "schur_decision", "EXACT_SCHUR_LIMIT"]
 
 def _fmt(x: float) -> str:
     """A radius with enough digits to show on which side of 1 it lies."""
-    if x != 1.0 and abs(x - 1.0) < 1e-5:
-        return f"{x:.15g}"
-    return f"{x:.6g}"
+    return sig(x, 6)
 
 EXACT_SCHUR_LIMIT = 80  # largest n whose powers are computed exactly
 

@@ -34,6 +34,7 @@ from typing import Any
 
 import numpy as np
 
+from .._format import sig
 from ..budget import Budget
 from ..design.observer import ObserverDesign
 from ..tolerances import EPS
@@ -611,11 +612,11 @@ def thesis_assumptions(
             if best_par is not None and eps <= best_eps:
                 items.append(AssumptionResult(
                     "epsilon_bound", "holds",
-                    f"step = {eps:g} <= epsilon* = {best_eps:.4g} (corrected constants)", details))
+                    f"step = {eps:g} <= epsilon* = {sig(best_eps, versus=eps)} (corrected constants)", details))
             else:
                 items.append(AssumptionResult(
                     "epsilon_bound", "inconclusive",
-                    f"step = {eps:g} exceeds epsilon* = {best_eps:.4g}; the bound is sufficient, "
+                    f"step = {eps:g} exceeds epsilon* = {sig(best_eps, versus=eps)}; the bound is sufficient, "
                     f"not necessary", details))
 
     return _overall(items), items

@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from .._format import sig
 from .._validation import as_choice, as_int_option
 from ..results import Check, Verdict
 from ..system import System
@@ -315,12 +316,12 @@ def irrepresentable(
     band = tol.irrepresentable_rtol
     if worst < 1.0 - band:
         return make(Verdict.HOLDS, worst, worst_support,
-                    f"The worst irrepresentable constant is {worst:.4g} < 1 (support {label}): "
+                    f"The worst irrepresentable constant is {sig(worst)} < 1 (support {label}): "
                     f"Lasso identifies every attack on {k} {'sensors' if mode == 'block' else 'entries'}"
                     f" for small enough lambda.", margin=margin)
     if worst > 1.0 + band:
         return make(Verdict.FAILS, worst, worst_support,
-                    f"The irrepresentable constant reaches {worst:.4g} >= 1 on support {label}: "
+                    f"The irrepresentable constant reaches {sig(worst)} >= 1 on support {label}: "
                     f"Lasso's support recovery is not guaranteed there.", margin=margin,
                     witness={"support": list(worst_support), "support_names": names,
                              "value": worst})

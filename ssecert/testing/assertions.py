@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from .._format import sig
 from .._validation import as_float_option, as_int_option, as_real_matrix, describe
 from ..results import Certificate, Check, Verdict
 from ..spec import Spec
@@ -378,8 +379,8 @@ def assert_deadbeat(A: Any, L: Any, C: Any) -> int:
                     f"convention; ssecert writes x_hat+ = A x_hat + L (y - C x_hat), the thesis's "
                     f"L1 is -L")
     raise AssertionError(
-        f"{problem}. Spectral radius of A - L C: certified between {test.radius_lower:.4g} and "
-        f"{test.radius_upper:.4g}. Relative norms ||F^k|| / ||A||^k, k = 1..{len(norms)}: "
+        f"{problem}. Spectral radius of A - L C: certified between {sig(test.radius_lower)} and "
+        f"{sig(test.radius_upper)}. Relative norms ||F^k|| / ||A||^k, k = 1..{len(norms)}: "
         f"{_vector(norms)}.")
 
 
