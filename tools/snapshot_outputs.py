@@ -1,0 +1,49 @@
+"""Write what a user sees for every packaged example, with run times and dates removed.
+
+    python tools/snapshot_outputs.py DIR
+    diff -r BEFORE AFTER
+
+For each example: the certificate JSON, the HTML report, and the terminal
+output of ``ssecert analyze`` and ``ssecert simulate``.  Two snapshots of the
+same version, spec and seed are identical; a refactoring that changes nothing
+a user sees leaves ``diff -r`` empty.
+"""
+
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+from ssecert.certify import certify
+from ssecert.examples import list_examples, load_example
+from ssecert.report.html import render_report
+from ssecert.report.json import certify_json
+
+_DATE = re.compile(r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d[+\-Z0-9:]*")
+_SECONDS = re.compile(r"\b\d+(\.\d+)? ?(s|ms|seconds)\b")
+
+
+def _without_times(text: str) -> str:
+    return _SECONDS.sub("<time>", _DATE.sub("<date>", text))
+
+
+def main(out: Path) -> None:
+    out.mkdir(parents=True, exist_ok=True)
+    for name in list_examples():
+        result = certify(load_example(name), seed=0, command=f"ssecert certify {name} --seed 0")
+        doc = json.loads(certify_json(result))
+        doc["meta"].pop("timings", None)
+        doc["meta"].pop("date", None)
+        (out / f"{name}.json").write_text(json.dumps(doc, indent=1, sort_keys=True))
+        (out / f"{name}.html").write_text(_without_times(render_report(result)))
+        for command in ("analyze", "simulate"):
+            run = subprocess.run([sys.executable, "-m", "ssecert", command, name, "--seed", "0"],
+                                 capture_output=True, text=True, check=False)
+            (out / f"{name}.{command}.txt").write_text(
+                f"exit {run.returncode}\n{_without_times(run.stdout)}{_without_times(run.stderr)}")
+        print(name, result.certificate.verdict.value)
+
+
+if __name__ == "__main__":
+    main(Path(sys.argv[1]))
