@@ -91,20 +91,27 @@ def compare(system: System, size: int, sample_size: int, repeat: int, label: str
     ours_on_sample = sorted(set(scan.breaking_sets) & set(sample))
     agree = ours_on_sample == sorted(ref_breaking)
     print(f"{label}: {total:,} sets of {size} removed sensors")
-    print(f"  {'reference: matrix_rank per set (sampled)':<46} {ref * 1e6:9.2f} us/set "
-          f"{1 / ref:12,.0f} sets/s")
-    print(f"  {'ssecert enumeration (every set, no pruning)':<46} {ours * 1e6:9.2f} us/set "
-          f"{1 / ours:12,.0f} sets/s")
-    print(f"  speed-up per set: {ref / ours:.1f}x (target >= 30x); breaking sets: "
-          f"{len(scan.breaking_sets):,} of {total:,} (sample: {len(ref_breaking)} by the "
-          f"reference, {len(ours_on_sample)} by ssecert); decisions agree: {agree}")
+    print(
+        f"  {'reference: matrix_rank per set (sampled)':<46} {ref * 1e6:9.2f} us/set "
+        f"{1 / ref:12,.0f} sets/s"
+    )
+    print(
+        f"  {'ssecert enumeration (every set, no pruning)':<46} {ours * 1e6:9.2f} us/set "
+        f"{1 / ours:12,.0f} sets/s"
+    )
+    print(
+        f"  speed-up per set: {ref / ours:.1f}x (target >= 30x); breaking sets: "
+        f"{len(scan.breaking_sets):,} of {total:,} (sample: {len(ref_breaking)} by the "
+        f"reference, {len(ours_on_sample)} by ssecert); decisions agree: {agree}"
+    )
     return ref / ours
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--sample", type=int, default=20000,
-                        help="sets timed for the reference (default 20000)")
+    parser.add_argument(
+        "--sample", type=int, default=20000, help="sets timed for the reference (default 20000)"
+    )
     parser.add_argument("--repeat", type=int, default=3, help="timing repetitions (best of)")
     args = parser.parse_args()
 
@@ -112,14 +119,21 @@ def main() -> None:
     system, s = spec.system, spec.max_attacked
     size = 2 * s
     compare(system, size, args.sample, args.repeat, f"{spec.name} (n = 15, p = 30, s = {s})")
-    compare(structured_plant(), size, args.sample, args.repeat,
-            "structured-n15-p30 (rotations, sparse sensor patterns)")
+    compare(
+        structured_plant(),
+        size,
+        args.sample,
+        args.repeat,
+        "structured-n15-p30 (rotations, sparse sensor patterns)",
+    )
 
     t0 = time.perf_counter()
     check = sparse_observability(system, s)
     t_auto = time.perf_counter() - t0
-    print(f"sparse_observability(auto) on this plant: {check.verdict.value}, max_removable = "
-          f"{check.fields['max_removable']}, method {check.method}, {t_auto * 1e3:.1f} ms")
+    print(
+        f"sparse_observability(auto) on this plant: {check.verdict.value}, max_removable = "
+        f"{check.fields['max_removable']}, method {check.method}, {t_auto * 1e3:.1f} ms"
+    )
 
     rng = np.random.default_rng(1)
     big = System(rng.standard_normal((50, 50)), rng.standard_normal((1000, 50)))
@@ -128,8 +142,10 @@ def main() -> None:
         t0 = time.perf_counter()
         check = sparse_observability(big, 3, method="eigenspace")
         times.append(time.perf_counter() - t0)
-    print(f"eigenspace method, generic n = 50, p = 1000, s = 3: {check.verdict.value}, "
-          f"max_removable = {check.fields['max_removable']}, {min(times):.3f} s (target < 1 s)")
+    print(
+        f"eigenspace method, generic n = 50, p = 1000, s = 3: {check.verdict.value}, "
+        f"max_removable = {check.fields['max_removable']}, {min(times):.3f} s (target < 1 s)"
+    )
 
 
 if __name__ == "__main__":

@@ -40,15 +40,15 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("MKL_NUM_THREADS", "1")
 
-import argparse  # noqa: E402
-import math  # noqa: E402
-import time  # noqa: E402
+import argparse
+import math
+import time
 
-import numpy as np  # noqa: E402
+import numpy as np
 
-from ssecert import System  # noqa: E402
-from ssecert.estimators.decoders import fista, partial_lasso_cvxpy  # noqa: E402
-from ssecert.estimators.shrinkage import soft_threshold  # noqa: E402
+from ssecert import System
+from ssecert.estimators.decoders import fista, partial_lasso_cvxpy
+from ssecert.estimators.shrinkage import soft_threshold
 
 TARGET = 1e-6
 VARIANTS = {
@@ -77,8 +77,10 @@ def instance(seed: int, *, stacked: bool, n: int = 20, p: int = 30, s: int = 6):
 
 
 def error(x, a, x_ref, a_ref) -> float:
-    return max(np.linalg.norm(x - x_ref) / np.linalg.norm(x_ref),
-               np.linalg.norm(a - a_ref) / np.linalg.norm(a_ref))
+    return max(
+        np.linalg.norm(x - x_ref) / np.linalg.norm(x_ref),
+        np.linalg.norm(a - a_ref) / np.linalg.norm(a_ref),
+    )
 
 
 def iterations_to_reach(
@@ -88,7 +90,7 @@ def iterations_to_reach(
     to_x = lambda u: u  # noqa: E731
     if orthonormalize:
         U, sv, Vt = np.linalg.svd(M, full_matrices=False)
-        M, to_x = U, lambda u: Vt.T @ (u / sv)  # noqa: E731
+        M, to_x = U, lambda u: Vt.T @ (u / sv)
     n = M.shape[1]
     nu = 1.0 / (np.linalg.norm(M, 2) ** 2 + 1.0)
     z = w = np.zeros(n + M.shape[0])
@@ -124,9 +126,7 @@ def measure(M, y, x_true, lam, repeat, limit):
         if K is None:
             row[label] = (None, math.nan, math.nan)
             continue
-        seconds, sol = best_time(
-            lambda: fista(M, y, lam, iterations=K, tol=0.0, **options), repeat
-        )
+        seconds, sol = best_time(lambda: fista(M, y, lam, iterations=K, tol=0.0, **options), repeat)
         reached = error(sol.x, sol.a, x_ref, a_ref)
         assert reached <= TARGET, (label, K, reached)
         row[label] = (K, seconds, reached)
@@ -159,8 +159,10 @@ def report(title: str, rows_by_lam: dict[float, list[dict]]) -> None:
     print(head)
     print("-" * len(head))
     for lam, rows in rows_by_lam.items():
-        line = (f"{lam:7.0e} {median([r['cvxpy'] for r in rows]) * 1e3:9.2f} "
-                f"{median([r['clarabel'] for r in rows]) * 1e3:10.2f}")
+        line = (
+            f"{lam:7.0e} {median([r['cvxpy'] for r in rows]) * 1e3:9.2f} "
+            f"{median([r['clarabel'] for r in rows]) * 1e3:10.2f}"
+        )
         for label in VARIANTS:
             Ks = [r[label][0] for r in rows]
             missing = sum(K is None for K in Ks)
@@ -169,8 +171,10 @@ def report(title: str, rows_by_lam: dict[float, list[dict]]) -> None:
             ratio = median([r["cvxpy"] / r[label][1] for r in rows if r[label][0] is not None])
             line += f" | {K:>19} {ms:7.2f} {ratio:7.2f}"
         own = [r["own-rule"] for r in rows]
-        line += (f" | {median([o[0] for o in own]):11.0f} "
-                 f"{median([o[1] for o in own]) * 1e3:7.2f} {max(o[2] for o in own):7.1e}")
+        line += (
+            f" | {median([o[0] for o in own]):11.0f} "
+            f"{median([o[1] for o in own]) * 1e3:7.2f} {max(o[2] for o in own):7.1e}"
+        )
         line += f" | {median([r['state error'] for r in rows]):7.1e}"
         print(line)
     print()
@@ -198,10 +202,12 @@ def main() -> None:
             for seed in range(args.instances):
                 M, y, x_true, _ = instance(seed, stacked=stacked)
                 rows_by_lam[lam].append(measure(M, y, x_true, lam, args.repeat, args.limit))
-        report(f"{name}: M is {M.shape[0]} x 20 ({'O_tau, tau = 20' if stacked else 'M = C'}), "
-               f"s = 6 attacked sensors, {args.instances} instances, medians; "
-               f"K = iterations to reach {TARGET:g} of cvxpy; cvxpy/F > 1 means FISTA is faster",
-               rows_by_lam)
+        report(
+            f"{name}: M is {M.shape[0]} x 20 ({'O_tau, tau = 20' if stacked else 'M = C'}), "
+            f"s = 6 attacked sensors, {args.instances} instances, medians; "
+            f"K = iterations to reach {TARGET:g} of cvxpy; cvxpy/F > 1 means FISTA is faster",
+            rows_by_lam,
+        )
 
 
 if __name__ == "__main__":

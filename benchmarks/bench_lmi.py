@@ -55,12 +55,21 @@ def random_plant(n: int, p: int, seed: int = 0) -> System:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--skip-plain", action="store_true", help="do not time the plain formulation")
+    parser.add_argument(
+        "--skip-plain", action="store_true", help="do not time the plain formulation"
+    )
     args = parser.parse_args()
-    observer = {"kind": "elastic_net", "gain": "deadbeat", "step": 0.05, "threshold": 0.1,
-                "shrink": 0.5}
-    plants = [("random n=10, p=15", random_plant(10, 15)),
-              ("thesis-sized n=15, p=30 (random-n15-p30)", load_example("random-n15-p30").system)]
+    observer = {
+        "kind": "elastic_net",
+        "gain": "deadbeat",
+        "step": 0.05,
+        "threshold": 0.1,
+        "shrink": 0.5,
+    }
+    plants = [
+        ("random n=10, p=15", random_plant(10, 15)),
+        ("thesis-sized n=15, p=30 (random-n15-p30)", load_example("random-n15-p30").system),
+    ]
     print(f"{'plant':<42} {'plain (s)':>10} {'ssecert (s)':>12} {'ratio':>7}  verdicts")
     for label, system in plants:
         model = LureModel.from_design(build_observer(system, observer))
@@ -71,16 +80,20 @@ def main() -> None:
             print(f"{label:<42} {'-':>10} {ours:12.2f} {'-':>7}  ssecert {cert.verdict}")
             continue
         status, seconds, ok = plain(model)
-        print(f"{label:<42} {seconds:10.2f} {ours:12.2f} {seconds / ours:6.1f}x  plain {status}"
-              f"{' (verified)' if ok else ''}, ssecert {cert.verdict} ({cert.structure}, margin "
-              f"{cert.margin:.2e})")
+        print(
+            f"{label:<42} {seconds:10.2f} {ours:12.2f} {seconds / ours:6.1f}x  plain {status}"
+            f"{' (verified)' if ok else ''}, ssecert {cert.verdict} ({cert.structure}, margin "
+            f"{cert.margin:.2e})"
+        )
     system = load_example("random-n15-p30").system
     design = build_observer(system, observer)
     rm = region_map(design, np.linspace(0.1, 0.9, 10), np.linspace(0.01, 0.3, 10))
     certified = int(np.count_nonzero(rm.verdicts == "holds"))
-    print(f"10 x 10 (shrink, step) map on the thesis-sized plant: {rm.seconds:.1f} s "
-          f"(target < 120 s); {certified} certified, {rm.solves} LMI solves, {rm.reused} "
-          f"certificates re-verified from a neighbour")
+    print(
+        f"10 x 10 (shrink, step) map on the thesis-sized plant: {rm.seconds:.1f} s "
+        f"(target < 120 s); {certified} certified, {rm.solves} LMI solves, {rm.reused} "
+        f"certificates re-verified from a neighbour"
+    )
 
 
 if __name__ == "__main__":

@@ -72,8 +72,10 @@ def main() -> None:
     print(f"{'method':<40} {'us per run-step':>16}")
     print(f"{'reference: Python loop over runs':<40} {per_r:16.3f}")
     print(f"{'ssecert: batched over runs':<40} {per_b:16.3f}")
-    print(f"speed-up: {per_r / per_b:.1f}x (target >= 20x); batched cost {per_b:.3f} us per "
-          f"run-step (target < 1 us; the Lasso paper reports 4 us per step in MATLAB)")
+    print(
+        f"speed-up: {per_r / per_b:.1f}x (target >= 20x); batched cost {per_b:.3f} us per "
+        f"run-step (target < 1 us; the Lasso paper reports 4 us per step in MATLAB)"
+    )
 
 
 if __name__ == "__main__":

@@ -35,14 +35,14 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("MKL_NUM_THREADS", "1")
 
-import argparse  # noqa: E402
-import math  # noqa: E402
-import time  # noqa: E402
+import argparse
+import math
+import time
 
-import numpy as np  # noqa: E402
+import numpy as np
 
-from ssecert import System  # noqa: E402
-from ssecert.estimators.decoders import fista, l0_decoder, l1_decoder  # noqa: E402
+from ssecert import System
+from ssecert.estimators.decoders import fista, l0_decoder, l1_decoder
 
 N_STATES = 20
 NOISE_BOUND = 1e-4
@@ -75,16 +75,14 @@ def run_decoders(O, sensors, y, x0, p, args) -> tuple[dict[str, tuple[float, flo
     if args.plain_fista:
         sol = fista(O, y, args.lam, iterations=args.iterations)
     else:
-        sol = fista(O, y, args.lam, iterations=args.iterations, restart=True,
-                    orthonormalize=True)
+        sol = fista(O, y, args.lam, iterations=args.iterations, restart=True, orthonormalize=True)
     out["Lasso"] = (time.perf_counter() - t0, sol.x)
     t0 = time.perf_counter()
     x_l1 = l1_decoder(O, y)
     out["l1"] = (time.perf_counter() - t0, x_l1)
     if l0_supports(p) <= args.l0_max_supports:
         t0 = time.perf_counter()
-        sol0 = l0_decoder(O, y, p // 5, sensors_of_row=sensors,
-                          max_supports=args.l0_max_supports)
+        sol0 = l0_decoder(O, y, p // 5, sensors_of_row=sensors, max_supports=args.l0_max_supports)
         out["l0"] = (time.perf_counter() - t0, sol0.x)
     norm = np.linalg.norm(x0)
     errors = {k: (float(np.linalg.norm(x - x0) / norm), t) for k, (t, x) in out.items()}
@@ -97,10 +95,17 @@ def main() -> None:
     parser.add_argument("--ps", default="20,30,40,60,80", help="comma-separated sensor counts")
     parser.add_argument("--lam", type=float, default=1e-2, help="Lasso weight lambda")
     parser.add_argument("--iterations", type=int, default=20_000, help="FISTA budget")
-    parser.add_argument("--plain-fista", action="store_true",
-                        help="plain Beck-Teboulle FISTA (slower, same minimiser)")
-    parser.add_argument("--l0-max-supports", type=int, default=100_000,
-                        help="largest l0 search run (p = 30 needs 768,212)")
+    parser.add_argument(
+        "--plain-fista",
+        action="store_true",
+        help="plain Beck-Teboulle FISTA (slower, same minimiser)",
+    )
+    parser.add_argument(
+        "--l0-max-supports",
+        type=int,
+        default=100_000,
+        help="largest l0 search run (p = 30 needs 768,212)",
+    )
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
     ps = [int(v) for v in args.ps.split(",")]
@@ -125,9 +130,11 @@ def main() -> None:
     total = time.perf_counter() - started
 
     variant = "plain FISTA" if args.plain_fista else "FISTA, restart, orthonormal coordinates"
-    print(f"Sec. 5.1 experiment: n = {N_STATES}, tau = n, s = p/5, {args.runs} runs per p, "
-          f"Lasso lambda = {args.lam:g} ({variant}; {unconverged} runs hit the "
-          f"{args.iterations} iteration budget); {total:.0f} s in all")
+    print(
+        f"Sec. 5.1 experiment: n = {N_STATES}, tau = n, s = p/5, {args.runs} runs per p, "
+        f"Lasso lambda = {args.lam:g} ({variant}; {unconverged} runs hit the "
+        f"{args.iterations} iteration budget); {total:.0f} s in all"
+    )
     print("mean relative state error ||x_hat - x|| / ||x||  and  mean run time [ms]")
     for label, by_p in results.items():
         print(f"\n{label}")
@@ -176,8 +183,11 @@ def verdict(results) -> str:
     lines.append(
         f"Lasso's mean error ranges {min(lasso_free):.1e}-{max(lasso_free):.1e} noise-free and "
         f"{min(lasso_noisy):.1e}-{max(lasso_noisy):.1e} with noise, "
-        + ("so it is robust to small noise, as in the paper" if lasso_robust
-           else "so, unlike the paper, noise degrades it noticeably")
+        + (
+            "so it is robust to small noise, as in the paper"
+            if lasso_robust
+            else "so, unlike the paper, noise degrades it noticeably"
+        )
         + "; its error is the lambda bias of the partial Lasso (it scales with lambda). "
     )
     if l0_ps:
@@ -186,13 +196,15 @@ def verdict(results) -> str:
             f"{', '.join(map(str, l0_ps))}) "
             + ("as in the paper" if l0_exact else "- unlike the paper, not exact")
             + f"; with noise its mean error is {max(l0_noisy):.1e}, "
-            + ("worse than Lasso, as in the paper."
-               if l0_degrades else
-               "no worse than Lasso: this disagrees with the paper's Imhotep-SMT. Our l0 "
-               "decoder falls back to the support of s sensors with the least residual when no "
-               "support explains y exactly, which is robust; Imhotep-SMT's sensitivity "
-               "presumably comes from how it accepts a support by a residual tolerance (not "
-               "checked here), not from the l0 formulation itself.")
+            + (
+                "worse than Lasso, as in the paper."
+                if l0_degrades
+                else "no worse than Lasso: this disagrees with the paper's Imhotep-SMT. Our l0 "
+                "decoder falls back to the support of s sensors with the least residual when no "
+                "support explains y exactly, which is robust; Imhotep-SMT's sensitivity "
+                "presumably comes from how it accepts a support by a residual tolerance (not "
+                "checked here), not from the l0 formulation itself."
+            )
             + " Its exhaustive search is tractable only for the smallest p (Imhotep-SMT prunes "
             "with a SAT solver), so its times are not comparable beyond that. "
         )

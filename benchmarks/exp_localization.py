@@ -37,23 +37,25 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("MKL_NUM_THREADS", "1")
 
-import argparse  # noqa: E402
-import textwrap  # noqa: E402
-import time  # noqa: E402
+import argparse
+import textwrap
+import time
 
-import numpy as np  # noqa: E402
+import numpy as np
 
-from ssecert.estimators.localization import (  # noqa: E402
+from ssecert.estimators.localization import (
     elastic_net_localization,
     localization_scenario,
     rss_dictionary,
 )
 
 DECODERS = {
-    "A": dict(normalize=False, common_offset=False, method="ista", N=1000, rtol=0.0,
-              q_x=0.999, q_a=0.999),
-    "B": dict(normalize=True, common_offset=False, method="ista", N=1000, rtol=0.0,
-              q_x=0.999, q_a=0.999),
+    "A": dict(
+        normalize=False, common_offset=False, method="ista", N=1000, rtol=0.0, q_x=0.999, q_a=0.999
+    ),
+    "B": dict(
+        normalize=True, common_offset=False, method="ista", N=1000, rtol=0.0, q_x=0.999, q_a=0.999
+    ),
     "C": dict(),
     "D": dict(q_x=0.999, q_a=0.999),
 }
@@ -62,14 +64,17 @@ DECODERS = {
 def evaluate(attacked, *, runs, dictionaries, xi_std, seed, sign=None):
     """Success counts of every decoder for `attacked` attacked sensors."""
     per = [runs // dictionaries + (i < runs % dictionaries) for i in range(dictionaries)]
-    stats = {name: {"cell": 0, "set": 0, "both": 0, "dist": [], "conv": 0, "sec": 0.0}
-             for name in (*DECODERS, "kNN")}
+    stats = {
+        name: {"cell": 0, "set": 0, "both": 0, "dist": [], "conv": 0, "sec": 0.0}
+        for name in (*DECODERS, "kNN")
+    }
     for i, count in enumerate(per):
         if count == 0:
             continue
         dic = rss_dictionary(seed=seed + i)
-        sc = localization_scenario(dic, runs=count, attacked=attacked, xi_std=xi_std,
-                                   seed=10_000 + seed + i)
+        sc = localization_scenario(
+            dic, runs=count, attacked=attacked, xi_std=xi_std, seed=10_000 + seed + i
+        )
         y = sc.y if sign is None else dic.D[:, sc.cell].T + sign * np.abs(sc.attack) + sc.noise
         for name, options in DECODERS.items():
             t0 = time.perf_counter()
@@ -82,22 +87,26 @@ def evaluate(attacked, *, runs, dictionaries, xi_std, seed, sign=None):
             st["set"] += int(set_ok.sum())
             st["both"] += int((cell_ok & set_ok).sum())
             st["conv"] += int(res.converged.sum())
-            st["dist"].extend(np.linalg.norm(dic.cell_centers[res.cell]
-                                             - dic.cell_centers[sc.cell], axis=1))
+            st["dist"].extend(
+                np.linalg.norm(dic.cell_centers[res.cell] - dic.cell_centers[sc.cell], axis=1)
+            )
         knn = np.argmin(((dic.D.T[None, :, :] - y[:, None, :]) ** 2).sum(axis=2), axis=1)
         stats["kNN"]["cell"] += int((knn == sc.cell).sum())
-        stats["kNN"]["dist"].extend(np.linalg.norm(dic.cell_centers[knn]
-                                                   - dic.cell_centers[sc.cell], axis=1))
+        stats["kNN"]["dist"].extend(
+            np.linalg.norm(dic.cell_centers[knn] - dic.cell_centers[sc.cell], axis=1)
+        )
     return stats
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=100, help="snapshots per row (100)")
-    parser.add_argument("--dictionaries", type=int, default=10,
-                        help="random sensor deployments (10)")
-    parser.add_argument("--attacked", default="0,1,2,3,5,8",
-                        help="numbers of attacked sensors (0,1,2,3,5,8)")
+    parser.add_argument(
+        "--dictionaries", type=int, default=10, help="random sensor deployments (10)"
+    )
+    parser.add_argument(
+        "--attacked", default="0,1,2,3,5,8", help="numbers of attacked sensors (0,1,2,3,5,8)"
+    )
     parser.add_argument("--xi-std", type=float, default=0.0, help="RSS noise std in dB (0)")
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
@@ -105,43 +114,67 @@ def main() -> None:
         parser.error("--dictionaries must be between 1 and --runs")
     counts = [int(v) for v in args.attacked.split(",")]
 
-    print(f"Localization, 10 x 10 cells of 1 m, q = 20 sensors (uniform), {args.runs} runs "
-          f"on {args.dictionaries} deployments per row, xi std {args.xi_std} dB")
+    print(
+        f"Localization, 10 x 10 cells of 1 m, q = 20 sensors (uniform), {args.runs} runs "
+        f"on {args.dictionaries} deployments per row, xi std {args.xi_std} dB"
+    )
     print("entries: cell found % / attacked set exactly found %   (k-NN: cell % only)")
-    head = (f"{'attacked':>8}  {'A printed':>11} {'B unit cols':>11} {'C default':>11} "
-            f"{'D q=0.999':>11} {'k-NN':>6}   {'C both':>6} {'C err m':>7} {'C conv':>6}")
+    head = (
+        f"{'attacked':>8}  {'A printed':>11} {'B unit cols':>11} {'C default':>11} "
+        f"{'D q=0.999':>11} {'k-NN':>6}   {'C both':>6} {'C err m':>7} {'C conv':>6}"
+    )
     print(head)
     print("-" * len(head))
     table = {}
     t0 = time.perf_counter()
     for s in counts:
-        st = evaluate(s, runs=args.runs, dictionaries=args.dictionaries, xi_std=args.xi_std,
-                      seed=args.seed)
+        st = evaluate(
+            s, runs=args.runs, dictionaries=args.dictionaries, xi_std=args.xi_std, seed=args.seed
+        )
         table[s] = st
         R = args.runs
-        cells = "".join(f" {100 * st[k]['cell'] / R:>5.0f}/{100 * st[k]['set'] / R:<5.0f}"
-                        for k in DECODERS)
-        print(f"{s:>8} {cells} {100 * st['kNN']['cell'] / R:>6.0f}   "
-              f"{100 * st['C']['both'] / R:>6.0f} {np.mean(st['C']['dist']):>7.2f} "
-              f"{100 * st['C']['conv'] / R:>5.0f}%")
-    print(f"(C both: cell and attacked set right; C err m: mean distance between estimated and "
-          f"true cell centres; C conv: runs converged; {time.perf_counter() - t0:.1f} s)")
+        cells = "".join(
+            f" {100 * st[k]['cell'] / R:>5.0f}/{100 * st[k]['set'] / R:<5.0f}" for k in DECODERS
+        )
+        print(
+            f"{s:>8} {cells} {100 * st['kNN']['cell'] / R:>6.0f}   "
+            f"{100 * st['C']['both'] / R:>6.0f} {np.mean(st['C']['dist']):>7.2f} "
+            f"{100 * st['C']['conv'] / R:>5.0f}%"
+        )
+    print(
+        f"(C both: cell and attacked set right; C err m: mean distance between estimated and "
+        f"true cell centres; C conv: runs converged; {time.perf_counter() - t0:.1f} s)"
+    )
     print()
     sign_rows = {}
     sign_counts = [s for s in (1, 5) if s in counts] or counts[:1]
     print("decoder C by attack sign (attacker raises or lowers the readings)")
     print(f"{'attacked':>8} {'raised: both %':>15} {'lowered: both %':>16}")
     for s in sign_counts:
-        up = evaluate(s, runs=args.runs, dictionaries=args.dictionaries, xi_std=args.xi_std,
-                      seed=args.seed, sign=1.0)["C"]["both"]
-        down = evaluate(s, runs=args.runs, dictionaries=args.dictionaries, xi_std=args.xi_std,
-                        seed=args.seed, sign=-1.0)["C"]["both"]
+        up = evaluate(
+            s,
+            runs=args.runs,
+            dictionaries=args.dictionaries,
+            xi_std=args.xi_std,
+            seed=args.seed,
+            sign=1.0,
+        )["C"]["both"]
+        down = evaluate(
+            s,
+            runs=args.runs,
+            dictionaries=args.dictionaries,
+            xi_std=args.xi_std,
+            seed=args.seed,
+            sign=-1.0,
+        )["C"]["both"]
         sign_rows[s] = (100 * up / args.runs, 100 * down / args.runs)
         print(f"{s:>8} {sign_rows[s][0]:>15.0f} {sign_rows[s][1]:>16.0f}")
     print()
     conv = ista_convergence(seed=args.seed)
-    print("Algorithm 3's iteration (ISTA, unit columns, common offset) on 10 snapshots with 5 "
-          "attacked sensors: distance to the minimiser (FISTA, checked against cvxpy in the tests)")
+    print(
+        "Algorithm 3's iteration (ISTA, unit columns, common offset) on 10 snapshots with 5 "
+        "attacked sensors: distance to the minimiser (FISTA, checked against cvxpy in the tests)"
+    )
     print(f"{'N':>8} {'max |z - z*| / |z*|':>20} {'same cell':>10} {'same attacked set':>18}")
     for N, dist, cell, att in conv:
         print(f"{N:>8} {dist:>20.2e} {cell:>9.0%} {att:>18.0%}")
@@ -160,8 +193,14 @@ def ista_convergence(*, seed, Ns=(1000, 10_000, 100_000)):
         res = elastic_net_localization(dic.D, sc.y, method="ista", N=N, rtol=0.0)
         z = np.hstack([res.x_hat, res.a_hat])
         dist = np.max(np.abs(z - zref).max(axis=1) / np.abs(zref).max(axis=1))
-        rows.append((N, dist, np.mean(res.cell == ref.cell),
-                     np.mean(np.all(res.attacked == ref.attacked, axis=1))))
+        rows.append(
+            (
+                N,
+                dist,
+                np.mean(res.cell == ref.cell),
+                np.mean(np.all(res.attacked == ref.attacked, axis=1)),
+            )
+        )
     return rows
 
 
@@ -186,8 +225,12 @@ def paragraph(table, sign_rows, runs, conv) -> str:
     ]
     if small:
         text.append(
-            "and in " + ", ".join(f"{pct(s, 'C', 'cell'):.0f}% / {pct(s, 'C', 'set'):.0f}% "
-                                  f"with {s}" for s in small) + ". ")
+            "and in "
+            + ", ".join(
+                f"{pct(s, 'C', 'cell'):.0f}% / {pct(s, 'C', 'set'):.0f}% with {s}" for s in small
+            )
+            + ". "
+        )
     else:
         text.append(". ")
     lo, hi = min(pct(s, "C", "conv") for s in table), max(pct(s, "C", "conv") for s in table)

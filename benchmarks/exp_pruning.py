@@ -202,9 +202,7 @@ def main() -> None:
         if args.prior_model == "paper"
         else "published code's model (p_i >= 0.5 w.p. T_r, prior right iff p_i > 0.5)"
     )
-    print(
-        f"prior: T_r = {args.true_rate}, {prior}; eta = {args.reliability}, omega = {args.omega}"
-    )
+    print(f"prior: T_r = {args.true_rate}, {prior}; eta = {args.reliability}, omega = {args.omega}")
     print(
         f"attack (8), detector-safe, eps = {args.eps_rel} ||H x||_1, same sensors over the "
         f"window; success: ||x_hat - x|| < {args.tol:g} ||x||"

@@ -34,13 +34,13 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("MKL_NUM_THREADS", "1")
 
-import argparse  # noqa: E402
-import textwrap  # noqa: E402
-import time  # noqa: E402
+import argparse
+import textwrap
+import time
 
-import numpy as np  # noqa: E402
+import numpy as np
 
-from ssecert.estimators.sise import SISE, OracleSISE  # noqa: E402
+from ssecert.estimators.sise import SISE, OracleSISE
 
 
 def simulate_plant(rng, n, m, p, runs, steps, amplitude):
@@ -65,7 +65,7 @@ def experiment(n, m, p, *, runs, plants, steps, seed, amplitude, lasso_rtol):
     rng = np.random.default_rng(seed)
     per = [runs // plants + (i < runs % plants) for i in range(plants)]
     out = {"sise": ([], []), "oracle": ([], [])}
-    hits = []   # one (steps - 1, runs of the plant) array per plant
+    hits = []  # one (steps - 1, runs of the plant) array per plant
     Q, R = 0.01 * np.eye(n), 0.01 * np.eye(m)
     t0 = time.perf_counter()
     for count in per:
@@ -81,19 +81,24 @@ def experiment(n, m, p, *, runs, plants, steps, seed, amplitude, lasso_rtol):
             x_err, u_err, hit = [], [], []
             for k in range(steps):
                 state = est.step(state, ys[k])
-                x_err.append(np.linalg.norm(state["x_hat"] - xs[k], axis=1)
-                             / np.linalg.norm(xs[k], axis=1))
-                if k >= 1:   # u_hat from y(k) estimates u(k - 1)
-                    u_err.append(np.linalg.norm(state["u_hat"] - u[k - 1], axis=1)
-                                 / np.linalg.norm(u[k - 1], axis=1))
+                x_err.append(
+                    np.linalg.norm(state["x_hat"] - xs[k], axis=1) / np.linalg.norm(xs[k], axis=1)
+                )
+                if k >= 1:  # u_hat from y(k) estimates u(k - 1)
+                    u_err.append(
+                        np.linalg.norm(state["u_hat"] - u[k - 1], axis=1)
+                        / np.linalg.norm(u[k - 1], axis=1)
+                    )
                     hit.append(np.all(state["support"] == (u[k - 1] != 0), axis=1))
             out[name][0].append(np.array(x_err))
             out[name][1].append(np.array(u_err))
             if name == "sise":
                 hits.append(np.array(hit))
     seconds = time.perf_counter() - t0
-    errors = {name: (np.concatenate(xe, axis=1), np.concatenate(ue, axis=1))
-              for name, (xe, ue) in out.items()}
+    errors = {
+        name: (np.concatenate(xe, axis=1), np.concatenate(ue, axis=1))
+        for name, (xe, ue) in out.items()
+    }
     return errors, np.concatenate(hits, axis=1), seconds
 
 
@@ -102,13 +107,21 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=100, help="runs per experiment (100)")
     parser.add_argument("--plants", type=int, default=10, help="random plants (10)")
     parser.add_argument("--steps", type=int, default=100, help="measurements per run (100)")
-    parser.add_argument("--transient", type=int, default=20,
-                        help="errors averaged over k >= this (20)")
+    parser.add_argument(
+        "--transient", type=int, default=20, help="errors averaged over k >= this (20)"
+    )
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--no-extras", action="store_true",
-                        help="skip experiment 2 (m = 30) and experiment 1 with |u| = 1")
-    parser.add_argument("--lasso-rtol", type=float, default=1e-8,
-                        help="FISTA stopping tolerance of the support detection (1e-8)")
+    parser.add_argument(
+        "--no-extras",
+        action="store_true",
+        help="skip experiment 2 (m = 30) and experiment 1 with |u| = 1",
+    )
+    parser.add_argument(
+        "--lasso-rtol",
+        type=float,
+        default=1e-8,
+        help="FISTA stopping tolerance of the support detection (1e-8)",
+    )
     args = parser.parse_args()
     if not 1 <= args.plants <= args.runs:
         parser.error("--plants must be between 1 and --runs")
@@ -124,36 +137,70 @@ def main() -> None:
     T = args.transient
     rows, series = [], []
     for label, n, m, amplitude in cases:
-        errors, hit, seconds = experiment(n, m, p, runs=args.runs, plants=args.plants,
-                                          steps=args.steps, seed=args.seed,
-                                          amplitude=amplitude, lasso_rtol=args.lasso_rtol)
+        errors, hit, seconds = experiment(
+            n,
+            m,
+            p,
+            runs=args.runs,
+            plants=args.plants,
+            steps=args.steps,
+            seed=args.seed,
+            amplitude=amplitude,
+            lasso_rtol=args.lasso_rtol,
+        )
         (sx, su), (ox, ou) = errors["sise"], errors["oracle"]
         # x errors are indexed by k, u errors by k - 1 (u_hat(k - 1) comes with y(k))
-        row = dict(label=label, n=n, m=m, amp=amplitude,
-                   sx=sx[T:].mean(), ox=ox[T:].mean(), su=su[T - 1:].mean(), ou=ou[T - 1:].mean(),
-                   sx_med=np.median(sx[T:].mean(axis=0)), su_med=np.median(su[T - 1:].mean(axis=0)),
-                   ou_med=np.median(ou[T - 1:].mean(axis=0)),
-                   hit=hit[T - 1:].mean(), runs_ok=np.mean(hit[T - 1:].mean(axis=0) > 0.95),
-                   seconds=seconds)
+        row = dict(
+            label=label,
+            n=n,
+            m=m,
+            amp=amplitude,
+            sx=sx[T:].mean(),
+            ox=ox[T:].mean(),
+            su=su[T - 1 :].mean(),
+            ou=ou[T - 1 :].mean(),
+            sx_med=np.median(sx[T:].mean(axis=0)),
+            su_med=np.median(su[T - 1 :].mean(axis=0)),
+            ou_med=np.median(ou[T - 1 :].mean(axis=0)),
+            hit=hit[T - 1 :].mean(),
+            runs_ok=np.mean(hit[T - 1 :].mean(axis=0) > 0.95),
+            seconds=seconds,
+        )
         rows.append(row)
-        series.append((label, sx.mean(axis=1), ox.mean(axis=1), su.mean(axis=1), ou.mean(axis=1),
-                       hit.mean(axis=1)))
+        series.append(
+            (
+                label,
+                sx.mean(axis=1),
+                ox.mean(axis=1),
+                su.mean(axis=1),
+                ou.mean(axis=1),
+                hit.mean(axis=1),
+            )
+        )
 
-    print(f"SISE vs oracle, p = {p}, s = 1, Q = R = 0.01 I, lambda = 1, {args.runs} runs on "
-          f"{args.plants} plants, {args.steps} steps, means over k >= {T}")
-    head = (f"{'exp':<11} {'n':>3} {'m':>3} {'|u|':>5}  {'x SISE':>8} {'x oracle':>8}  "
-            f"{'u SISE':>8} {'u oracle':>8}  {'med x':>7} {'med u':>7} {'med u or':>8}  "
-            f"{'supp ok':>7} {'runs ok':>7} {'time':>6}")
+    print(
+        f"SISE vs oracle, p = {p}, s = 1, Q = R = 0.01 I, lambda = 1, {args.runs} runs on "
+        f"{args.plants} plants, {args.steps} steps, means over k >= {T}"
+    )
+    head = (
+        f"{'exp':<11} {'n':>3} {'m':>3} {'|u|':>5}  {'x SISE':>8} {'x oracle':>8}  "
+        f"{'u SISE':>8} {'u oracle':>8}  {'med x':>7} {'med u':>7} {'med u or':>8}  "
+        f"{'supp ok':>7} {'runs ok':>7} {'time':>6}"
+    )
     print(head)
     print("-" * len(head))
     for r in rows:
-        print(f"{r['label']:<11} {r['n']:>3} {r['m']:>3} {r['amp']:>5.2f}  {r['sx']:>8.2e} "
-              f"{r['ox']:>8.2e}  {r['su']:>8.2e} {r['ou']:>8.2e}  {r['sx_med']:>7.1e} "
-              f"{r['su_med']:>7.1e} {r['ou_med']:>8.1e}  {r['hit']:>7.1%} {r['runs_ok']:>7.0%} "
-              f"{r['seconds']:>5.1f}s")
-    print("(x, u: mean relative errors; med: median over runs of the per-run mean; supp ok: "
-          "fraction of (run, k) with SISE's support right; runs ok: runs with it right in > 95% "
-          "of the steps)")
+        print(
+            f"{r['label']:<11} {r['n']:>3} {r['m']:>3} {r['amp']:>5.2f}  {r['sx']:>8.2e} "
+            f"{r['ox']:>8.2e}  {r['su']:>8.2e} {r['ou']:>8.2e}  {r['sx_med']:>7.1e} "
+            f"{r['su_med']:>7.1e} {r['ou_med']:>8.1e}  {r['hit']:>7.1%} {r['runs_ok']:>7.0%} "
+            f"{r['seconds']:>5.1f}s"
+        )
+    print(
+        "(x, u: mean relative errors; med: median over runs of the per-run mean; supp ok: "
+        "fraction of (run, k) with SISE's support right; runs ok: runs with it right in > 95% "
+        "of the steps)"
+    )
     print()
     ks = [k for k in (1, 2, 5, 10, 20, 50, 99, 199) if k < args.steps]
     print("mean relative errors against k (x(k); u(k - 1) estimated from y(k))")
@@ -186,28 +233,41 @@ def paragraph(rows, transient) -> str:
         f"error is {r1['su']:.1e} (oracle {r1['ou']:.1e}) and state error {r1['sx']:.1e} "
         f"(oracle {r1['ox']:.1e}); the support is right in {r1['hit']:.0%} of the (run, k) pairs "
         f"and in more than 95% of the steps for {r1['runs_ok']:.0%} of the runs. ",
-        ("This agrees with the paper: errors of order 1e-%d for the input, SISE close to the "
-         "oracle, the support right almost always. " % -order(r1["su"]))
-        if close and order(r1["su"]) == -2 else
-        ("This does not match the paper's order 1e-2 / 'very close to the oracle': input "
-         f"error of order 1e{order(r1['su'])}. "),
-        (f"The means are pulled up by the few runs whose support SISE keeps missing (median "
-         f"per-run input error {r1['su_med']:.1e} against the oracle's {r1['ou_med']:.1e}); the "
-         "paper's 'almost all runs' says the same. " if r1["su"] > 1.2 * r1["su_med"] else ""),
+        (
+            "This agrees with the paper: errors of order 1e-%d for the input, SISE close to the "
+            "oracle, the support right almost always. " % -order(r1["su"])
+        )
+        if close and order(r1["su"]) == -2
+        else (
+            "This does not match the paper's order 1e-2 / 'very close to the oracle': input "
+            f"error of order 1e{order(r1['su'])}. "
+        ),
+        (
+            f"The means are pulled up by the few runs whose support SISE keeps missing (median "
+            f"per-run input error {r1['su_med']:.1e} against the oracle's {r1['ou_med']:.1e}); the "
+            "paper's 'almost all runs' says the same. "
+            if r1["su"] > 1.2 * r1["su_med"]
+            else ""
+        ),
         "The state error is relative to a state that "
         "grows (A has spectral radius about 1 and is driven by the input), so it keeps "
         "decreasing with k and its value depends on the horizon. ",
         f"Experiment 3 (n = 70): input error {r3['su']:.1e} (oracle {r3['ou']:.1e}), state "
         f"error {r3['sx']:.1e} (oracle {r3['ox']:.1e}), support right {r3['hit']:.0%}: "
-        + ("less accurate than experiment 1, as in Fig. 3. "
-           if r3["su"] > r1["su"] or r3["sx"] > r1["sx"] else
-           "not less accurate than experiment 1, unlike Fig. 3's caption. "),
+        + (
+            "less accurate than experiment 1, as in Fig. 3. "
+            if r3["su"] > r1["su"] or r3["sx"] > r1["sx"]
+            else "not less accurate than experiment 1, unlike Fig. 3's caption. "
+        ),
     ]
     if r2 is not None:
         text.append(
             f"Experiment 2 (m = 30): support right {r2['hit']:.1%} of the time"
-            + (", perfect as in Fig. 2. " if r2["hit"] > 0.999 else
-               ", not quite the paper's 100%. ")
+            + (
+                ", perfect as in Fig. 2. "
+                if r2["hit"] > 0.999
+                else ", not quite the paper's 100%. "
+            )
         )
     if alt is not None:
         text.append(

@@ -69,11 +69,21 @@ def main() -> None:
             est = np.abs(traj.a_hat[-1, 0]) > 1e-9 * 5
             sup_count.append(int(np.count_nonzero(est != (np.abs(a_true) > 0))))
             sup_jac.append(float(support_error(traj.a_hat[-1:, :1], a_true[None, None])[0, 0]))
-        rows.append((tau, inner, np.mean(rel_final), np.mean(sup_count), np.mean(sup_jac),
-                     seconds / (runs * steps)))
+        rows.append(
+            (
+                tau,
+                inner,
+                np.mean(rel_final),
+                np.mean(sup_count),
+                np.mean(sup_jac),
+                seconds / (runs * steps),
+            )
+        )
     print(f"SSO, n = {n}, p = {p}, s = {s}, {steps} steps, {runs} runs (one run at a time)")
-    print(f"{'tau':>4} {'inner':>6} {'rel. error':>11} {'support err (count)':>19} "
-          f"{'support err (Jaccard)':>22} {'s per step':>11} {'paper s/step':>13}")
+    print(
+        f"{'tau':>4} {'inner':>6} {'rel. error':>11} {'support err (count)':>19} "
+        f"{'support err (Jaccard)':>22} {'s per step':>11} {'paper s/step':>13}"
+    )
     for (tau, inner, rel, cnt, jac, sec), paper in zip(rows, ("4e-6", "4e-4")):
         print(f"{tau:>4} {inner:>6} {rel:11.2e} {cnt:19.2f} {jac:22.3f} {sec:11.1e} {paper:>13}")
     print()
@@ -89,6 +99,7 @@ def main() -> None:
         "observer costs about 0.2 us per run-step: benchmarks/bench_observers.py). The figures' "
         "exact end values cannot be read from the text, so the agreement is qualitative."
     )
+
 
 if __name__ == "__main__":
     main()

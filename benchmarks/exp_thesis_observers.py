@@ -41,7 +41,9 @@ def no_attack(design, runs: int, steps: int, seed: int) -> tuple[float, float]:
     obs = observer_from_design(design)
     state = obs.initial_state(runs)
     rng = np.random.default_rng(seed)
-    state["a_hat"] = rng.uniform(-5, 5, state["a_hat"].shape) * (rng.random(state["a_hat"].shape) < 0.1)
+    state["a_hat"] = rng.uniform(-5, 5, state["a_hat"].shape) * (
+        rng.random(state["a_hat"].shape) < 0.1
+    )
     traj = obs.run(np.array(ys), state)
     final_mse = float(np.mean(mse(traj.x_hat[-1], xs[-1])))
     support = float(np.mean(np.any(np.abs(traj.a_hat[-1]) > 1e-9, axis=1)))  # any false alarm
@@ -57,15 +59,21 @@ def main() -> None:
     system = spec.system
     base = {"attack": "constant", "count": 3, "magnitude": (4.0, 5.0), "noise": 0.0, "seed": 0}
     dsso = {"kind": "dsso", "gain": "deadbeat", "step": 0.7, "threshold": 0.1, "shrink": 1.0}
-    en = {"kind": "elastic_net", "gain": "deadbeat", "step": 0.3, "threshold": 0.1,
-          "shrink": 0.95}
-    grid = grid_search(system, en, {**base, "name": "tuning"},
-                       {"step": [0.1, 0.3, 0.7], "threshold": [0.05, 0.1, 0.2],
-                        "shrink": [0.9, 0.95, 0.99]},
-                       runs=max(10, args.runs // 5), steps=400, seed=1)
+    en = {"kind": "elastic_net", "gain": "deadbeat", "step": 0.3, "threshold": 0.1, "shrink": 0.95}
+    grid = grid_search(
+        system,
+        en,
+        {**base, "name": "tuning"},
+        {"step": [0.1, 0.3, 0.7], "threshold": [0.05, 0.1, 0.2], "shrink": [0.9, 0.95, 0.99]},
+        runs=max(10, args.runs // 5),
+        steps=400,
+        seed=1,
+    )
     en = {**en, **grid.best["params"]}
-    print(f"elastic-net parameters from the grid search: {grid.best['params']} "
-          f"(cost {grid.best['cost']:.3g})")
+    print(
+        f"elastic-net parameters from the grid search: {grid.best['params']} "
+        f"(cost {grid.best['cost']:.3g})"
+    )
     scenarios = {
         "constant": base,
         "switching (every 400)": {**base, "attack": "switching", "period": 400},
@@ -81,8 +89,9 @@ def main() -> None:
     for name, sc in scenarios.items():
         for label, obs in (("D-SSO", dsso), ("elastic net", en)):
             design = build_observer(system, obs)
-            res = simulate_scenario(design, {**sc, "name": name}, runs=args.runs,
-                                    steps=args.steps, max_attacked=3)
+            res = simulate_scenario(
+                design, {**sc, "name": name}, runs=args.runs, steps=args.steps, max_attacked=3
+            )
             f = res.final()
             results.setdefault(name, {})[label] = f
             print(f"{name:<24} {label:<12} {f['mse_mean']:12.3e} {f['support_error_mean']:14.3f}")
@@ -90,8 +99,7 @@ def main() -> None:
     for name, pair in results.items():
         d, e = pair["D-SSO"], pair["elastic net"]
         better_mse = "elastic net" if e["mse_mean"] < d["mse_mean"] else "D-SSO"
-        better_sup = ("elastic net" if e["support_error_mean"] < d["support_error_mean"]
-                      else "D-SSO")
+        better_sup = "elastic net" if e["support_error_mean"] < d["support_error_mean"] else "D-SSO"
         print(f"{name}: lower MSE: {better_mse}; lower support error: {better_sup}")
     print()
     print(

@@ -294,9 +294,17 @@ def spectral_radius_bound(
             m *= 2
             if record(m, P) == -math.inf:
                 break
-    return PowerBound(tuple(log2_norms), tuple(log2_two), nil, best, best_m, tuple(powers),
-                      complete, lower,
-                      lower_m)
+    return PowerBound(
+        tuple(log2_norms),
+        tuple(log2_two),
+        nil,
+        best,
+        best_m,
+        tuple(powers),
+        complete,
+        lower,
+        lower_m,
+    )
 
 
 # ---------------------------------------------------------------------------
@@ -373,8 +381,7 @@ def _integer_data(A: np.ndarray, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]
 
 
 def _mod(M: np.ndarray, prime: int) -> np.ndarray:
-    return np.array([[int(x) % prime for x in row] for row in M], dtype=np.int64).reshape(
-        M.shape)
+    return np.array([[int(x) % prime for x in row] for row in M], dtype=np.int64).reshape(M.shape)
 
 
 def _rank_mod_p(Aint: np.ndarray, Cint: np.ndarray, prime: int) -> int:
@@ -546,8 +553,9 @@ def exact_observability(
         z[0] = 1.0
         zi = [0] * n
         zi[0] = 1
-        return ExactObservability("unobservable", 0, z, zi, None,
-                                  "no sensor output: every state is unobservable")
+        return ExactObservability(
+            "unobservable", 0, z, zi, None, "no sensor output: every state is unobservable"
+        )
     Aint, Cint = _integer_data(A, C)
     rank = 0
     prime = _PRIMES[0]
@@ -558,12 +566,16 @@ def exact_observability(
     z = _exact_kernel_vector(Aint, Cint, max_bits)
     if z is None:
         return ExactObservability(
-            "unknown", rank, prime=prime,
+            "unknown",
+            rank,
+            prime=prime,
             reason="rank deficient modulo two primes, but the exact kernel computation exceeded "
-                   "its budget or found full rank")
+            "its budget or found full rank",
+        )
     if not _verify_kernel(Aint, Cint, z):  # pragma: no cover - would be a bug above
-        return ExactObservability("unknown", rank, prime=prime,
-                                  reason="the exact kernel vector did not verify")
+        return ExactObservability(
+            "unknown", rank, prime=prime, reason="the exact kernel vector did not verify"
+        )
     zf = _scaled_floats(z)
     return ExactObservability("unobservable", rank, zf / np.linalg.norm(zf), z, prime)
 
@@ -619,8 +631,9 @@ class ExactPlant:
         A = np.asarray(A, dtype=float)
         C = np.asarray(C, dtype=float)
         self.n = A.shape[0]
-        self.enabled = (self.n <= max_n and bool(np.all(np.isfinite(A)))
-                        and bool(np.all(np.isfinite(C))))
+        self.enabled = (
+            self.n <= max_n and bool(np.all(np.isfinite(A))) and bool(np.all(np.isfinite(C)))
+        )
         self._cache: dict[tuple[int, ...], ExactObservability] = {}
         if self.enabled:
             self.Aint = dyadic(A).ints
@@ -637,8 +650,9 @@ class ExactPlant:
             self._rows[i] = (ints, [_mod(ints[None, :], q)[0] for q, _ in self.A_residues])
         return self._rows[i]
 
-    def observability(self, kept: tuple[int, ...] | list[int], *,
-                      proof: bool = True) -> ExactObservability:
+    def observability(
+        self, kept: tuple[int, ...] | list[int], *, proof: bool = True
+    ) -> ExactObservability:
         """Exact observability of (A, C[kept]).
 
         With ``proof=False`` a Krylov rank below n modulo two primes is
@@ -647,16 +661,18 @@ class ExactPlant:
         """
         key = tuple(int(i) for i in kept)
         cached = self._cache.get(key)
-        if cached is not None and (cached.z_exact is not None or not proof
-                                   or cached.state != "unobservable"):
+        if cached is not None and (
+            cached.z_exact is not None or not proof or cached.state != "unobservable"
+        ):
             return cached
         if not self.enabled:
             result = ExactObservability("unknown", reason="beyond the exact limits")
         elif not key:
             z = np.zeros(self.n)
             z[0] = 1.0
-            result = ExactObservability("unobservable", 0, z, [1] + [0] * (self.n - 1), None,
-                                        "no sensor kept")
+            result = ExactObservability(
+                "unobservable", 0, z, [1] + [0] * (self.n - 1), None, "no sensor kept"
+            )
         else:
             rank = self.n
             for j, (q, Am) in enumerate(self.A_residues):
@@ -666,19 +682,22 @@ class ExactPlant:
             if rank == self.n:
                 result = ExactObservability("observable", rank, prime=q)
             elif not proof:
-                result = ExactObservability("unobservable", rank, prime=q,
-                                            reason="Krylov rank below n modulo two primes")
+                result = ExactObservability(
+                    "unobservable", rank, prime=q, reason="Krylov rank below n modulo two primes"
+                )
             else:
                 Csub = np.array([self._row(i)[0] for i in key], dtype=object)
                 z = _exact_kernel_vector(self.Aint, Csub, 200_000)
                 if z is not None and _verify_kernel(self.Aint, Csub, z):
                     zf = _scaled_floats(z)
-                    result = ExactObservability("unobservable", rank, zf / np.linalg.norm(zf),
-                                                z, q)
+                    result = ExactObservability("unobservable", rank, zf / np.linalg.norm(zf), z, q)
                 else:
                     result = ExactObservability(
-                        "unknown", rank, prime=q,
+                        "unknown",
+                        rank,
+                        prime=q,
                         reason="rank deficient modulo two primes, but no exact kernel vector "
-                               "within the budget")
+                        "within the budget",
+                    )
         self._cache[key] = result
         return result

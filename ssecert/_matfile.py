@@ -42,9 +42,22 @@ _INT32_TYPES = frozenset({5, 6})  # miINT32, miUINT32
 _NAME_TYPES = frozenset({1, 16})  # miINT8, miUTF8
 
 CLASS_NAMES = {
-    1: "cell array", 2: "struct", 3: "object", 4: "char array", 5: "sparse matrix",
-    6: "double", 7: "single", 8: "int8", 9: "uint8", 10: "int16", 11: "uint16",
-    12: "int32", 13: "uint32", 14: "int64", 15: "uint64", 16: "function handle",
+    1: "cell array",
+    2: "struct",
+    3: "object",
+    4: "char array",
+    5: "sparse matrix",
+    6: "double",
+    7: "single",
+    8: "int8",
+    9: "uint8",
+    10: "int16",
+    11: "uint16",
+    12: "int32",
+    13: "uint32",
+    14: "int64",
+    15: "uint64",
+    16: "function handle",
     17: "opaque object",
 }
 # cell, char and numeric arrays: all a plant file needs; SciPy's struct reader trusts
@@ -99,8 +112,9 @@ class _Walker:
             )
         return first, second, data, data + second
 
-    def matrix(self, buf: bytes, start: int, end: int, depth: int, name_out: list[str]) -> tuple[
-            int, tuple[int, ...], bool]:
+    def matrix(
+        self, buf: bytes, start: int, end: int, depth: int, name_out: list[str]
+    ) -> tuple[int, tuple[int, ...], bool]:
         """Check one miMATRIX body ``buf[start:end]``; return class, shape, logical."""
         if depth > MAX_NESTING:
             raise MatFormatError(f"cell arrays nested more than {MAX_NESTING} deep")
@@ -125,13 +139,15 @@ class _Walker:
         entries = math.prod(shape)
         if entries > self.max_entries:
             dims = " x ".join(f"{d:,}" for d in shape)
-            raise MatFormatError(f"an array of {dims} = {entries:,} entries is larger than "
-                                 f"the limit of {self.max_entries:,} entries")
+            raise MatFormatError(
+                f"an array of {dims} = {entries:,} entries is larger than "
+                f"the limit of {self.max_entries:,} entries"
+            )
         pos = _pad(nxt, start)
         mdtype, nbytes, data, nxt = self.tag(buf, pos, end)
         if mdtype not in _NAME_TYPES:
             raise MatFormatError(f"malformed array name at byte {pos}")
-        name = buf[data:data + nbytes].decode("latin1")
+        name = buf[data : data + nbytes].decode("latin1")
         name_out.append(name)
         if class_id not in _SUPPORTED:
             raise _unsupported(class_id, name if depth == 0 else None)
@@ -160,8 +176,9 @@ class _Walker:
 def _unsupported(class_id: int, name: str | None) -> MatFormatError:
     what = CLASS_NAMES.get(class_id, f"array of unknown class {class_id}")
     where = f"variable {name!r} is" if name is not None else "a cell array holds"
-    return MatFormatError(f"{where} a MATLAB {what}; only numeric and char arrays (and cell "
-                          f"arrays of them) are read")
+    return MatFormatError(
+        f"{where} a MATLAB {what}; only numeric and char arrays (and cell arrays of them) are read"
+    )
 
 
 def _pad(pos: int, start: int) -> int:
@@ -208,7 +225,8 @@ def variables(raw: bytes, *, max_entries: int, max_bytes: int) -> list[MatVariab
                 raise MatFormatError(f"corrupt compressed variable at byte {pos}: {exc}") from None
             if len(body) > max_bytes:
                 raise MatFormatError(
-                    f"a compressed variable at byte {pos} expands beyond {max_bytes:,} bytes")
+                    f"a compressed variable at byte {pos} expands beyond {max_bytes:,} bytes"
+                )
             inner, size, inner_data, inner_end = walker.tag(body, 0, len(body))
             if inner != MI_MATRIX:
                 raise MatFormatError(f"expected an array in the compressed element at byte {pos}")

@@ -47,7 +47,7 @@ def show_int(value: int) -> str:
     ``str`` refuses integers of more than 4300 digits, and a 300-digit number
     is no help in a one-line message.
     """
-    if -10**20 < value < 10**20:
+    if -(10**20) < value < 10**20:
         return str(value)
     sign = "-" if value < 0 else ""
     try:
@@ -84,8 +84,9 @@ def _ndim_text(ndim: int) -> str:
     return {1: "a 1-D array", 2: "a 2-D array (a list of rows)"}.get(ndim, f"{ndim}-D")
 
 
-def check_size(name: str, shape: tuple[int, ...], max_dim: int | None,
-                max_entries: int | None) -> None:
+def check_size(
+    name: str, shape: tuple[int, ...], max_dim: int | None, max_entries: int | None
+) -> None:
     """Refuse a shape beyond the limits, before any array of it is built.
 
     Raises
@@ -94,10 +95,12 @@ def check_size(name: str, shape: tuple[int, ...], max_dim: int | None,
         Naming ``name``, the offending size and the limits.
     """
     limits = "; ".join(
-        text for text in (
+        text
+        for text in (
             f"at most {max_dim:,} rows and columns" if max_dim is not None else "",
             f"{max_entries:,} entries" if max_entries is not None else "",
-        ) if text
+        )
+        if text
     )
     if max_dim is not None:
         for axis, size in enumerate(shape):
@@ -108,12 +111,14 @@ def check_size(name: str, shape: tuple[int, ...], max_dim: int | None,
         total = math.prod(shape)
         if total > max_entries:
             dims = " x ".join(f"{d:,}" for d in shape)
-            raise ValueError(f"{name} is too large: {dims} = {total:,} entries "
-                             f"(the limit is {limits})")
+            raise ValueError(
+                f"{name} is too large: {dims} = {total:,} entries (the limit is {limits})"
+            )
 
 
-def _nested_shape(value: Any, name: str, ndim: int, max_dim: int | None,
-                  max_entries: int | None) -> tuple[int, ...]:
+def _nested_shape(
+    value: Any, name: str, ndim: int, max_dim: int | None, max_entries: int | None
+) -> tuple[int, ...]:
     """Shape of nested lists of at most ``ndim`` levels, refusing ragged rows.
 
     Lists too long or nested too deep are refused as soon as they are seen,
@@ -126,19 +131,23 @@ def _nested_shape(value: Any, name: str, ndim: int, max_dim: int | None,
         if not any(lists):
             return tuple(shape)
         if axis == ndim:
-            raise ValueError(f"{name} must be {_ndim_text(ndim)}, got lists nested more than "
-                             f"{ndim} deep")
+            raise ValueError(
+                f"{name} must be {_ndim_text(ndim)}, got lists nested more than {ndim} deep"
+            )
         if not all(lists):
             i = lists.index(not lists[0])
-            raise ValueError(f"{name} is ragged: row {i} is "
-                             f"{'a list' if lists[i] else 'a number'}, row 0 is "
-                             f"{'a list' if lists[0] else 'a number'}")
+            raise ValueError(
+                f"{name} is ragged: row {i} is "
+                f"{'a list' if lists[i] else 'a number'}, row 0 is "
+                f"{'a list' if lists[0] else 'a number'}"
+            )
         lengths = {len(item) for item in level}
         if len(lengths) > 1:
             first = len(level[0])
             i = next(j for j, item in enumerate(level) if len(item) != first)
-            raise ValueError(f"{name} is ragged: row {i} has {len(level[i])} entries, "
-                             f"row 0 has {first}")
+            raise ValueError(
+                f"{name} is ragged: row {i} has {len(level[i])} entries, row 0 has {first}"
+            )
         size = lengths.pop()
         shape.append(size)
         check_size(name, tuple(shape), max_dim, max_entries)
@@ -203,14 +212,18 @@ def as_real_matrix(
         for _ in range(ndim):
             flat = [sub for item in flat for sub in item]
         for item in flat:
-            if (isinstance(item, (bool, np.bool_)) or _is_time(item)
-                    or not isinstance(item, numbers.Number)):
+            if (
+                isinstance(item, (bool, np.bool_))
+                or _is_time(item)
+                or not isinstance(item, numbers.Number)
+            ):
                 raise TypeError(f"{name} must contain real numbers, got {describe(item)}")
             if isinstance(item, numbers.Complex) and not isinstance(item, numbers.Real):
                 raise TypeError(f"{name} must be real, got the complex entry {item!r}")
             if isinstance(item, numbers.Integral) and not -_FLOAT_MAX <= item <= _FLOAT_MAX:
-                raise ValueError(f"{name} has an entry too large for a float64: "
-                                 f"{show_int(int(item))}")
+                raise ValueError(
+                    f"{name} has an entry too large for a float64: {show_int(int(item))}"
+                )
         array = np.array(flat, dtype=np.float64).reshape(nested) if flat else np.zeros(nested)
     else:
         array = np.asarray(value)
@@ -221,8 +234,9 @@ def as_real_matrix(
             raise TypeError(f"{name} must be real, got a complex array")
         if kind in "mM":
             what = "datetime64" if kind == "M" else "timedelta64"
-            raise TypeError(f"{name} must contain real numbers, got a {what} array "
-                            f"(dates or durations)")
+            raise TypeError(
+                f"{name} must contain real numbers, got a {what} array (dates or durations)"
+            )
         if kind not in "iuf":
             raise TypeError(f"{name} must be a numeric array, got {describe(array)}")
         if array.ndim == ndim:
@@ -230,8 +244,7 @@ def as_real_matrix(
         with np.errstate(over="ignore"):  # float128 beyond float64: inf, refused below
             array = np.array(array, dtype=np.float64)
     if array.ndim != ndim:
-        raise ValueError(f"{name} must be {_ndim_text(ndim)}, got an array of shape "
-                         f"{array.shape}")
+        raise ValueError(f"{name} must be {_ndim_text(ndim)}, got an array of shape {array.shape}")
     if shape is not None:
         for axis, (got, want) in enumerate(zip(array.shape, shape)):
             if want is not None and got != want:
@@ -260,8 +273,11 @@ def as_int_option(
     max_value: int | None = None,
 ) -> int:
     """Convert an integer option, refusing booleans and non-integral floats."""
-    if (isinstance(value, (bool, np.bool_)) or _is_time(value)
-            or not isinstance(value, (numbers.Integral, float, np.floating))):
+    if (
+        isinstance(value, (bool, np.bool_))
+        or _is_time(value)
+        or not isinstance(value, (numbers.Integral, float, np.floating))
+    ):
         raise TypeError(f"{name} must be an integer, got {describe(value)}")
     if isinstance(value, (float, np.floating)):
         if not np.isfinite(value) or value != int(value):
@@ -284,8 +300,11 @@ def as_float_option(
     max_inclusive: bool = True,
 ) -> float:
     """Convert a finite real option within optional bounds."""
-    if (isinstance(value, (bool, np.bool_)) or _is_time(value)
-            or not isinstance(value, numbers.Real)):
+    if (
+        isinstance(value, (bool, np.bool_))
+        or _is_time(value)
+        or not isinstance(value, numbers.Real)
+    ):
         raise TypeError(f"{name} must be a real number, got {describe(value)}")
     if isinstance(value, numbers.Integral) and not -_FLOAT_MAX <= value <= _FLOAT_MAX:
         raise ValueError(f"{name} must be finite, got {show_int(int(value))}")

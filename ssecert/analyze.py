@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import datetime as _dt
 import platform
-from dataclasses import replace
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
 from .budget import Budget
@@ -28,22 +28,45 @@ def _contradictions(by_id: dict[str, Check]) -> list[tuple[str, str, str]]:
         mr = sparse.fields.get("max_removable")
         lower = sparse.fields.get("max_removable_is_lower_bound")
         if obs.verdict is Verdict.HOLDS and mr == -1 and not lower:
-            out.append(("observability", "sparse_observability",
-                        "one finds (A, C) observable, the other max_removable = -1"))
+            out.append(
+                (
+                    "observability",
+                    "sparse_observability",
+                    "one finds (A, C) observable, the other max_removable = -1",
+                )
+            )
         if obs.verdict is Verdict.FAILS and mr is not None and mr >= 0:
-            out.append(("observability", "sparse_observability",
-                        f"one finds (A, C) unobservable, the other max_removable = {mr} >= 0"))
+            out.append(
+                (
+                    "observability",
+                    "sparse_observability",
+                    f"one finds (A, C) unobservable, the other max_removable = {mr} >= 0",
+                )
+            )
     gain, stab = by_id.get("observer_gain"), by_id.get("observer_stability")
     if gain is not None and stab is not None:
         linear = gain.fields.get("kind") in ("luenberger", "ogd")
         if linear and {gain.verdict, stab.verdict} == {Verdict.HOLDS, Verdict.FAILS}:
-            out.append(("observer_gain", "observer_stability",
-                        "both decide the stability of the same linear error matrix A - L C"))
-        if gain.verdict is Verdict.FAILS and stab.verdict is Verdict.HOLDS and (
-                gain.witness is not None):
-            out.append(("observer_gain", "observer_stability",
-                        "an unstable A - L C (proved by the gain check) rules out a stable "
-                        "observer: near e = 0 the error follows e+ = (A - L C) e"))
+            out.append(
+                (
+                    "observer_gain",
+                    "observer_stability",
+                    "both decide the stability of the same linear error matrix A - L C",
+                )
+            )
+        if (
+            gain.verdict is Verdict.FAILS
+            and stab.verdict is Verdict.HOLDS
+            and (gain.witness is not None)
+        ):
+            out.append(
+                (
+                    "observer_gain",
+                    "observer_stability",
+                    "an unstable A - L C (proved by the gain check) rules out a stable "
+                    "observer: near e = 0 the error follows e+ = (A - L C) e",
+                )
+            )
     return out
 
 
@@ -62,13 +85,17 @@ def reconcile(checks: list[Check]) -> tuple[list[Check], list[str]]:
         for this, other in ((first, second), (second, first)):
             c = by_id[this]
             by_id[this] = replace(
-                c, verdict=Verdict.INCONCLUSIVE,
-                summary=(f"Withdrawn: this check said {c.verdict.value} but contradicts "
-                         f"{other} ({why}); please report this plant. Original: {c.summary}"),
-                evidence={**c.evidence, "withdrawn_verdict": c.verdict.value,
-                          "contradicts": other})
-        notes.append(f"{first} and {second} contradicted each other ({why}); both are reported "
-                     f"inconclusive")
+                c,
+                verdict=Verdict.INCONCLUSIVE,
+                summary=(
+                    f"Withdrawn: this check said {c.verdict.value} but contradicts "
+                    f"{other} ({why}); please report this plant. Original: {c.summary}"
+                ),
+                evidence={**c.evidence, "withdrawn_verdict": c.verdict.value, "contradicts": other},
+            )
+        notes.append(
+            f"{first} and {second} contradicted each other ({why}); both are reported inconclusive"
+        )
     return [by_id[c.id] for c in checks], notes
 
 
@@ -174,8 +201,11 @@ def analyze(
     if spec.observer is not None:
         from .stability.checks import observer_checks
 
-        checks.extend(observer_checks(system, spec.observer, observability=checks[0], seed=seed,
-                                      budget=budget))
+        checks.extend(
+            observer_checks(
+                system, spec.observer, observability=checks[0], seed=seed, budget=budget
+            )
+        )
     checks, notes = reconcile(checks)
 
     meta: dict[str, Any] = {
@@ -184,7 +214,7 @@ def analyze(
         "horizon": spec.horizon,
         "seed": seed,
         "budget": (budget or Budget()).to_dict(),
-        "date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+        "date": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
         "versions": environment(),
         "notes": notes,
     }

@@ -185,11 +185,15 @@ class Budget:
     def refusal(self, what: str, *, nbytes: float = 0.0, flops: float = 0.0) -> str:
         """Empty when ``what`` fits; otherwise the reason, with estimate and budget."""
         if nbytes > self.memory:
-            return (f"{what} needs about {format_bytes(nbytes)} of memory, over the memory "
-                    f"budget of {format_bytes(self.memory)} (--memory-budget)")
+            return (
+                f"{what} needs about {format_bytes(nbytes)} of memory, over the memory "
+                f"budget of {format_bytes(self.memory)} (--memory-budget)"
+            )
         if flops > self.work:
-            return (f"{what} needs about {flops:.2g} floating-point operations, over the work "
-                    f"budget of {self.work:.2g} (--work-budget)")
+            return (
+                f"{what} needs about {flops:.2g} floating-point operations, over the work "
+                f"budget of {self.work:.2g} (--work-budget)"
+            )
         return ""
 
     def require(self, what: str, *, nbytes: float = 0.0, flops: float = 0.0) -> None:

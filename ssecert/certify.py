@@ -203,17 +203,27 @@ def certify(
         from .simulation.engine import simulate_scenario
 
         scenarios = list(spec.scenarios)
-        if design is not None and stealthy is not None and not any(
-            sc["attack"] == "stealthy" for sc in scenarios
+        if (
+            design is not None
+            and stealthy is not None
+            and not any(sc["attack"] == "stealthy" for sc in scenarios)
         ):
-            scenarios.append({**SCENARIO_DEFAULTS, "name": "stealthy (automatic)",
-                              "attack": "stealthy"})
+            scenarios.append(
+                {**SCENARIO_DEFAULTS, "name": "stealthy (automatic)", "attack": "stealthy"}
+            )
         for scenario in scenarios if design is not None else []:
             say(f"simulating scenario {scenario['name']}")
             try:
                 simulations[scenario["name"]] = simulate_scenario(
-                    design, scenario, runs=runs, steps=steps, seed=seed,
-                    max_attacked=spec.max_attacked, client=client, budget=budget)
+                    design,
+                    scenario,
+                    runs=runs,
+                    steps=steps,
+                    seed=seed,
+                    max_attacked=spec.max_attacked,
+                    client=client,
+                    budget=budget,
+                )
             except ValueError as exc:  # no stealthy attack to replay, or over the budget
                 simulations[scenario["name"]] = {"skipped": str(exc)}
     elif simulate and spec.observer is None:
@@ -223,9 +233,16 @@ def certify(
     region_map = None
     if region and design is not None and design.sparse:
         region_map = _region(design, notes, say, budget)
-    return CertifyResult(spec=spec, certificate=cert, simulations=simulations,
-                         stealthy=stealthy, region=region_map, seed=base_seed,
-                         command=command or _command(spec, seed, simulate), notes=tuple(notes))
+    return CertifyResult(
+        spec=spec,
+        certificate=cert,
+        simulations=simulations,
+        stealthy=stealthy,
+        region=region_map,
+        seed=base_seed,
+        command=command or _command(spec, seed, simulate),
+        notes=tuple(notes),
+    )
 
 
 def _region(design: Any, notes: list[str], say: Progress, budget: Budget) -> Any | None:
@@ -236,9 +253,11 @@ def _region(design: Any, notes: list[str], say: Progress, budget: Budget) -> Any
     if design.inner_steps > 1:
         return None
     if n + 2 * m > REGION_LIMIT:
-        notes.append(f"certified region not mapped: the LMI has {n + 2 * m} rows "
-                     f"(the report maps up to {REGION_LIMIT}; use ssecert.stability.lmi."
-                     f"region_map for larger plants)")
+        notes.append(
+            f"certified region not mapped: the LMI has {n + 2 * m} rows "
+            f"(the report maps up to {REGION_LIMIT}; use ssecert.stability.lmi."
+            f"region_map for larger plants)"
+        )
         return None
     say("mapping the certified (shrink, step) region")
     step = float(design.step)
@@ -255,7 +274,8 @@ def _region(design: Any, notes: list[str], say: Progress, budget: Budget) -> Any
     refusal = budget.refusal(
         f"the {shrinks.size} x {steps.size} region map ({n + 2 * m} LMI rows per point)",
         nbytes=max(c[0] for c in costs),
-        flops=shrinks.size * steps.size * sum(c[1] for c in costs))
+        flops=shrinks.size * steps.size * sum(c[1] for c in costs),
+    )
     if refusal:
         notes.append(f"certified region not mapped: {refusal}")
         return None

@@ -95,8 +95,9 @@ def _integer(text: str, minimum: int, *, scientific: bool = False) -> int:
     if value < minimum:
         raise argparse.ArgumentTypeError(f"expected an integer >= {minimum}, got {value}")
     if value > _INT64_MAX:
-        raise argparse.ArgumentTypeError(f"expected an integer <= {_INT64_MAX:,} (64 bits), "
-                                         f"got {_shown(text)}")
+        raise argparse.ArgumentTypeError(
+            f"expected an integer <= {_INT64_MAX:,} (64 bits), got {_shown(text)}"
+        )
     return value
 
 
@@ -117,31 +118,62 @@ def _add_budget_options(parser: argparse.ArgumentParser) -> None:
                 return parse(text)
             except ValueError as exc:
                 raise argparse.ArgumentTypeError(str(exc)) from None
+
         return convert
 
-    parser.add_argument("--memory-budget", type=checked(parse_bytes), metavar="SIZE",
-                        help="memory per analysis step, e.g. 512M or 8G (default 2G)")
-    parser.add_argument("--work-budget", type=checked(parse_operations), metavar="FLOPS",
-                        help="floating-point operations per analysis step (default 1e12)")
+    parser.add_argument(
+        "--memory-budget",
+        type=checked(parse_bytes),
+        metavar="SIZE",
+        help="memory per analysis step, e.g. 512M or 8G (default 2G)",
+    )
+    parser.add_argument(
+        "--work-budget",
+        type=checked(parse_operations),
+        metavar="FLOPS",
+        help="floating-point operations per analysis step (default 1e12)",
+    )
 
 
 def _budget(args: argparse.Namespace) -> Any:
     from .budget import Budget
 
-    return Budget(**{key: value for key, value in (("memory", args.memory_budget),
-                                                   ("work", args.work_budget)) if value})
+    return Budget(
+        **{
+            key: value
+            for key, value in (("memory", args.memory_budget), ("work", args.work_budget))
+            if value
+        }
+    )
 
 
 def _add_analysis_options(parser: argparse.ArgumentParser) -> None:
     """Options shared by ``certify`` and ``analyze``."""
-    parser.add_argument("--max-attacked", type=_nonnegative_int, metavar="S",
-                        help="number of attacked sensors s (required for .npz/.mat)")
-    parser.add_argument("--horizon", type=_positive_int, metavar="T",
-                        help="stacked horizon tau (default: the spec's, else n)")
-    parser.add_argument("--max-sets", type=_positive_int, metavar="N", default=50_000_000,
-                        help="enumeration budget in sets (default 5e7)")
-    parser.add_argument("--method", choices=("auto", "enumeration", "eigenspace"),
-                        default="auto", help="sparse-observability method (default auto)")
+    parser.add_argument(
+        "--max-attacked",
+        type=_nonnegative_int,
+        metavar="S",
+        help="number of attacked sensors s (required for .npz/.mat)",
+    )
+    parser.add_argument(
+        "--horizon",
+        type=_positive_int,
+        metavar="T",
+        help="stacked horizon tau (default: the spec's, else n)",
+    )
+    parser.add_argument(
+        "--max-sets",
+        type=_positive_int,
+        metavar="N",
+        default=50_000_000,
+        help="enumeration budget in sets (default 5e7)",
+    )
+    parser.add_argument(
+        "--method",
+        choices=("auto", "enumeration", "eigenspace"),
+        default="auto",
+        help="sparse-observability method (default auto)",
+    )
     _add_budget_options(parser)
 
 
@@ -164,17 +196,32 @@ def _build_parser() -> argparse.ArgumentParser:
             "of failure)."
         ),
     )
-    certify.add_argument("spec", metavar="SPEC", nargs="?", default="ugv",
-                         help="spec file or packaged example name (default: ugv)")
-    certify.add_argument("--out", metavar="DIR", default="reports",
-                         help="folder for NAME.html and NAME.json (default ./reports)")
-    certify.add_argument("--json", metavar="PATH", dest="json_path",
-                         help="also write the JSON certificate to PATH ('-' for stdout)")
-    certify.add_argument("--seed", type=_nonnegative_int, metavar="N",
-                         help="replace every scenario's seed")
+    certify.add_argument(
+        "spec",
+        metavar="SPEC",
+        nargs="?",
+        default="ugv",
+        help="spec file or packaged example name (default: ugv)",
+    )
+    certify.add_argument(
+        "--out",
+        metavar="DIR",
+        default="reports",
+        help="folder for NAME.html and NAME.json (default ./reports)",
+    )
+    certify.add_argument(
+        "--json",
+        metavar="PATH",
+        dest="json_path",
+        help="also write the JSON certificate to PATH ('-' for stdout)",
+    )
+    certify.add_argument(
+        "--seed", type=_nonnegative_int, metavar="N", help="replace every scenario's seed"
+    )
     certify.add_argument("--no-sim", action="store_true", help="skip the simulations")
-    certify.add_argument("--runs", type=_positive_int, metavar="N",
-                         help="runs per scenario (default: the spec's)")
+    certify.add_argument(
+        "--runs", type=_positive_int, metavar="N", help="runs per scenario (default: the spec's)"
+    )
     _add_analysis_options(certify)
 
     analyze = sub.add_parser(
@@ -187,11 +234,20 @@ def _build_parser() -> argparse.ArgumentParser:
         ),
     )
     analyze.add_argument("spec", metavar="SPEC", help="spec file or packaged example name")
-    analyze.add_argument("--json", metavar="PATH", dest="json_path",
-                         help="write the JSON certificate to PATH ('-' for stdout)")
+    analyze.add_argument(
+        "--json",
+        metavar="PATH",
+        dest="json_path",
+        help="write the JSON certificate to PATH ('-' for stdout)",
+    )
     _add_analysis_options(analyze)
-    analyze.add_argument("--seed", type=_nonnegative_int, default=0, metavar="N",
-                         help="seed of the simulated stealthy-attack check (default 0)")
+    analyze.add_argument(
+        "--seed",
+        type=_nonnegative_int,
+        default=0,
+        metavar="N",
+        help="seed of the simulated stealthy-attack check (default 0)",
+    )
 
     simulate = sub.add_parser(
         "simulate",
@@ -203,24 +259,45 @@ def _build_parser() -> argparse.ArgumentParser:
         ),
     )
     simulate.add_argument("spec", metavar="SPEC", help="spec file or packaged example name")
-    simulate.add_argument("--json", metavar="PATH", dest="json_path",
-                          help="write the results as JSON to PATH ('-' for stdout)")
-    simulate.add_argument("--seed", type=_nonnegative_int, metavar="N",
-                          help="replace every scenario's seed")
-    simulate.add_argument("--runs", type=_positive_int, metavar="N",
-                          help="runs per scenario (default: the spec's)")
-    simulate.add_argument("--steps", type=_positive_int, metavar="N",
-                          help="steps per run (default: the spec's)")
-    simulate.add_argument("--max-attacked", type=_nonnegative_int, metavar="S",
-                          help="number of attacked sensors s (required for .npz/.mat)")
-    simulate.add_argument("--scheduler", metavar="ADDRESS",
-                          help="run on an existing Dask scheduler (needs the dist extra)")
-    simulate.add_argument("--workers", type=_positive_int, metavar="N",
-                          help="run on a local Dask cluster of N worker processes")
+    simulate.add_argument(
+        "--json",
+        metavar="PATH",
+        dest="json_path",
+        help="write the results as JSON to PATH ('-' for stdout)",
+    )
+    simulate.add_argument(
+        "--seed", type=_nonnegative_int, metavar="N", help="replace every scenario's seed"
+    )
+    simulate.add_argument(
+        "--runs", type=_positive_int, metavar="N", help="runs per scenario (default: the spec's)"
+    )
+    simulate.add_argument(
+        "--steps", type=_positive_int, metavar="N", help="steps per run (default: the spec's)"
+    )
+    simulate.add_argument(
+        "--max-attacked",
+        type=_nonnegative_int,
+        metavar="S",
+        help="number of attacked sensors s (required for .npz/.mat)",
+    )
+    simulate.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="run on an existing Dask scheduler (needs the dist extra)",
+    )
+    simulate.add_argument(
+        "--workers",
+        type=_positive_int,
+        metavar="N",
+        help="run on a local Dask cluster of N worker processes",
+    )
     _add_budget_options(simulate)
 
-    examples = sub.add_parser("examples", help="list the packaged examples or print one",
-                              description="List packaged example specs, or print one.")
+    examples = sub.add_parser(
+        "examples",
+        help="list the packaged examples or print one",
+        description="List packaged example specs, or print one.",
+    )
     examples.add_argument("name", nargs="?", help="example to print")
     return parser
 
@@ -319,8 +396,15 @@ class _WarningLog:
     def __init__(self) -> None:
         self.seen: dict[tuple[str, str], list[Any]] = {}
 
-    def show(self, message: Any, category: type[Warning], filename: str, lineno: int,
-             file: Any = None, line: Any = None) -> None:
+    def show(
+        self,
+        message: Any,
+        category: type[Warning],
+        filename: str,
+        lineno: int,
+        file: Any = None,
+        line: Any = None,
+    ) -> None:
         text = str(message).strip().splitlines()[0] if str(message).strip() else ""
         key = (category.__name__, text[:200])
         if key in self.seen:
@@ -378,8 +462,14 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     progress = _Progress(sys.stderr)
     try:
         with _warnings_as_notes() as log:
-            cert = analyze(spec, method=args.method, max_sets=args.max_sets, seed=args.seed,
-                           progress=progress, budget=_budget(args))
+            cert = analyze(
+                spec,
+                method=args.method,
+                max_sets=args.max_sets,
+                seed=args.seed,
+                progress=progress,
+                budget=_budget(args),
+            )
     finally:
         progress.close()
     if log.notes():
@@ -425,9 +515,17 @@ def _cmd_certify(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
     words = ["ssecert", "certify", *(list(argv) if argv is not None else sys.argv[2:])]
     command = " ".join(words if argv is not None else ["ssecert", *sys.argv[1:]])
     with _warnings_as_notes() as log:
-        result = certify(spec, seed=args.seed, simulate=not args.no_sim, runs=args.runs,
-                         method=args.method, max_sets=args.max_sets, progress=say,
-                         command=command, budget=_budget(args))
+        result = certify(
+            spec,
+            seed=args.seed,
+            simulate=not args.no_sim,
+            runs=args.runs,
+            method=args.method,
+            max_sets=args.max_sets,
+            progress=say,
+            command=command,
+            budget=_budget(args),
+        )
         result.to_dict()  # simulation metrics are computed here: their warnings are notes too
     notes = log.notes()
     if notes:
@@ -459,8 +557,9 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     target = _output_file("--json", args.json_path)
     spec = _load(args.spec, max_attacked=args.max_attacked)
     if spec.observer is None or not spec.scenarios:
-        raise UsageError(f"{spec.source}: simulate needs an [observer] section and at least one "
-                         f"[[scenario]]")
+        raise UsageError(
+            f"{spec.source}: simulate needs an [observer] section and at least one [[scenario]]"
+        )
     context: Any = contextlib.nullcontext(None)
     if args.scheduler or args.workers:
         from .parallel import dask_client
@@ -468,11 +567,22 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         context = dask_client(args.scheduler, workers=args.workers)
     with _warnings_as_notes() as log:
         with context as client:
-            results = simulate_spec(spec, seed=args.seed, runs=args.runs, steps=args.steps,
-                                    client=client, budget=_budget(args))
-        document = {"ssecert_version": __version__, "system": spec.system.to_dict(),
-                    "scenarios": {name: (r.to_dict() if hasattr(r, "to_dict") else r)
-                                  for name, r in results["scenarios"].items()}}
+            results = simulate_spec(
+                spec,
+                seed=args.seed,
+                runs=args.runs,
+                steps=args.steps,
+                client=client,
+                budget=_budget(args),
+            )
+        document = {
+            "ssecert_version": __version__,
+            "system": spec.system.to_dict(),
+            "scenarios": {
+                name: (r.to_dict() if hasattr(r, "to_dict") else r)
+                for name, r in results["scenarios"].items()
+            },
+        }
         table = _simulation_table(spec, results["scenarios"])
     human = sys.stderr if args.json_path == "-" else sys.stdout
     if log.notes():
@@ -491,8 +601,18 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
 
 def _simulation_table(spec: Any, scenarios: dict[str, Any]) -> str:
-    rows = [("scenario", "attack", "runs", "steps", "rel. error mean", "q90", "support error",
-             "delay (median)")]
+    rows = [
+        (
+            "scenario",
+            "attack",
+            "runs",
+            "steps",
+            "rel. error mean",
+            "q90",
+            "support error",
+            "delay (median)",
+        )
+    ]
     notes = []
     for name, res in scenarios.items():
         if isinstance(res, dict):
@@ -501,9 +621,18 @@ def _simulation_table(spec: Any, scenarios: dict[str, Any]) -> str:
             continue
         f = res.final()
         fmt = lambda v: "-" if v is None else f"{v:.3g}"  # noqa: E731
-        rows.append((name, res.attack, str(res.runs), str(res.steps),
-                     fmt(f["relative_error_mean"]), fmt(f["relative_error_q90"]),
-                     fmt(f["support_error_mean"]), fmt(f.get("detection_delay_median"))))
+        rows.append(
+            (
+                name,
+                res.attack,
+                str(res.runs),
+                str(res.steps),
+                fmt(f["relative_error_mean"]),
+                fmt(f["relative_error_q90"]),
+                fmt(f["support_error_mean"]),
+                fmt(f.get("detection_delay_median")),
+            )
+        )
     widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
     lines = [f"ssecert simulate: {spec.name} ({spec.observer['kind']} observer), final step", ""]
     for j, row in enumerate(rows):
@@ -539,9 +668,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         args = parser.parse_args(argv)
         if args.command is None:
-            raise UsageError("no command given; use 'ssecert certify [SPEC]', "
-                             "'ssecert analyze SPEC' or 'ssecert examples' "
-                             "(see 'ssecert --help')")
+            raise UsageError(
+                "no command given; use 'ssecert certify [SPEC]', "
+                "'ssecert analyze SPEC' or 'ssecert examples' "
+                "(see 'ssecert --help')"
+            )
         if args.command == "analyze":
             return _cmd_analyze(args)
         if args.command == "certify":
@@ -555,8 +686,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         sys.stderr.write(f"ssecert: error: {one_line(str(exc))}\n")
         return EXIT_BAD_INPUT
     except GainError as exc:
-        sys.stderr.write(f"ssecert: error: the spec's observer gain cannot be computed: "
-                         f"{one_line(str(exc))}\n")
+        sys.stderr.write(
+            f"ssecert: error: the spec's observer gain cannot be computed: {one_line(str(exc))}\n"
+        )
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         sys.stderr.write("ssecert: interrupted\n")
@@ -570,10 +702,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_BROKEN_PIPE
     except MemoryError as exc:
         detail = f" ({one_line(str(exc))})" if str(exc) else ""
-        sys.stderr.write(f"ssecert: error: out of memory{detail}; the problem is too large for "
-                         f"this machine (if the spec is small, please report this as a bug)\n")
+        sys.stderr.write(
+            f"ssecert: error: out of memory{detail}; the problem is too large for "
+            f"this machine (if the spec is small, please report this as a bug)\n"
+        )
         return EXIT_BAD_INPUT
-    except Exception as exc:  # noqa: BLE001 - report, ask for a bug report
+    except Exception as exc:
         sys.stderr.write(
             f"ssecert: internal error: {type(exc).__name__}: {exc}\n"
             "This is a bug in ssecert; please report it with the command and spec file that "

@@ -37,8 +37,9 @@ def dask_client(address: str | None = None, *, workers: int | None = None) -> It
         finally:
             client.close()
         return
-    cluster = LocalCluster(n_workers=workers or 2, threads_per_worker=1, processes=True,
-                           dashboard_address=None)
+    cluster = LocalCluster(
+        n_workers=workers or 2, threads_per_worker=1, processes=True, dashboard_address=None
+    )
     client = Client(cluster)
     try:
         yield client
@@ -47,7 +48,9 @@ def dask_client(address: str | None = None, *, workers: int | None = None) -> It
         cluster.close()
 
 
-def map_ordered(func: Callable[..., Any], items: Sequence[Any], client: Any | None = None) -> list[Any]:
+def map_ordered(
+    func: Callable[..., Any], items: Sequence[Any], client: Any | None = None
+) -> list[Any]:
     """[func(item) for item in items], on Dask workers when a client is given."""
     if client is None:
         return [func(item) for item in items]

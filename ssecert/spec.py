@@ -114,7 +114,16 @@ _TOP_KEYS = ("name", "system", "attack", "observer", "scenario")
 _SYSTEM_KEYS = ("A", "C", "sensors")
 _ATTACK_KEYS = ("max_attacked", "horizon")
 _SCENARIO_KEYS = (
-    "name", "attack", "sensors", "count", "magnitude", "period", "noise", "steps", "runs", "seed",
+    "name",
+    "attack",
+    "sensors",
+    "count",
+    "magnitude",
+    "period",
+    "noise",
+    "steps",
+    "runs",
+    "seed",
 )
 # observer keys allowed per kind (DESIGN.md table)
 _OBSERVER_KEYS = {
@@ -204,9 +213,7 @@ def _check_keys(source: str, prefix: str, table: Any, allowed: tuple[str, ...]) 
         if key not in allowed:
             hint = _suggest(key, allowed)
             full = f"{prefix}.{key}" if prefix else str(key)
-            raise _err(
-                source, full, f"unknown key{hint}; allowed here: {', '.join(allowed)}"
-            )
+            raise _err(source, full, f"unknown key{hint}; allowed here: {', '.join(allowed)}")
 
 
 def _convert(source: str, key: str, func: Any, *args: Any, **kwargs: Any) -> Any:
@@ -234,14 +241,20 @@ def _check_text(source: str, path: str, text: str, what: str) -> None:
     try:
         text.encode("utf-8")
     except UnicodeEncodeError as exc:
-        raise _err(source, path or None,
-                   f"{what} is not valid Unicode (a lone surrogate "
-                   f"{ascii(text[exc.start])} at position {exc.start})") from None
+        raise _err(
+            source,
+            path or None,
+            f"{what} is not valid Unicode (a lone surrogate "
+            f"{text[exc.start]!a} at position {exc.start})",
+        ) from None
     bad = _UNPRINTABLE.search(text)
     if bad:
-        raise _err(source, path or None,
-                   f"{what} contains the control character {ascii(bad.group())} at position "
-                   f"{bad.start()}; text in a spec must be printable on one line")
+        raise _err(
+            source,
+            path or None,
+            f"{what} contains the control character {bad.group()!a} at position "
+            f"{bad.start()}; text in a spec must be printable on one line",
+        )
 
 
 def _check_document(source: str, data: Mapping[str, Any]) -> None:
@@ -261,13 +274,19 @@ def _check_document(source: str, data: Mapping[str, Any]) -> None:
         container, parent, name, depth = stack.pop()
         path = _path(parent, name)
         if depth > MAX_NESTING:
-            raise _err(source, path or None,
-                       f"nested more than {MAX_NESTING} levels deep (a spec needs at most 4)")
+            raise _err(
+                source,
+                path or None,
+                f"nested more than {MAX_NESTING} levels deep (a spec needs at most 4)",
+            )
         is_table = isinstance(container, Mapping)
         if not is_table and len(container) > MAX_MATRIX_DIM:
-            raise _err(source, path or None,
-                       f"a list of {len(container):,} entries: more rows, columns or items than "
-                       f"the limit of {MAX_MATRIX_DIM:,}")
+            raise _err(
+                source,
+                path or None,
+                f"a list of {len(container):,} entries: more rows, columns or items than "
+                f"the limit of {MAX_MATRIX_DIM:,}",
+            )
         entries: Any = container.items() if is_table else enumerate(container)
         children = []
         for key, item in entries:
@@ -279,14 +298,21 @@ def _check_document(source: str, data: Mapping[str, Any]) -> None:
             if isinstance(item, (Mapping, list, tuple)):
                 children.append((item, path, index, depth + 1))
             elif isinstance(item, _TooLongInteger):
-                raise _err(source, _path(path, index),
-                           f"an integer of {item.digits:,} digits is out of range: spec "
-                           f"integers must fit in 64 bits (-2^63 to 2^63 - 1)")
+                raise _err(
+                    source,
+                    _path(path, index),
+                    f"an integer of {item.digits:,} digits is out of range: spec "
+                    f"integers must fit in 64 bits (-2^63 to 2^63 - 1)",
+                )
             elif isinstance(item, int) and not _INT64_MIN <= item <= _INT64_MAX:
                 text = show_int(item)
                 text = text if "digits" in text else f"the integer {text}"
-                raise _err(source, _path(path, index), f"{text} is out of range: spec integers "
-                           f"must fit in 64 bits (-2^63 to 2^63 - 1)")
+                raise _err(
+                    source,
+                    _path(path, index),
+                    f"{text} is out of range: spec integers "
+                    f"must fit in 64 bits (-2^63 to 2^63 - 1)",
+                )
             elif isinstance(item, str):
                 _check_text(source, _path(path, index), item, "the text")
         stack.extend(reversed(children))
@@ -305,8 +331,9 @@ def _check_name(source: str, key: str, value: Any, what: str) -> str:
     if not isinstance(value, str) or not value.strip():
         raise _err(source, key, f"expected a non-empty string, got {describe(value)}")
     if len(value) > MAX_NAME_LENGTH:
-        raise _err(source, key, f"{what} has {len(value):,} characters; the limit is "
-                   f"{MAX_NAME_LENGTH}")
+        raise _err(
+            source, key, f"{what} has {len(value):,} characters; the limit is {MAX_NAME_LENGTH}"
+        )
     return value
 
 
@@ -364,27 +391,44 @@ def spec_from_dict(
         raise _err(source, "name", "missing (required)")
     if not isinstance(name, str) or not _NAME_RE.match(name):
         raise _err(
-            source, "name",
+            source,
+            "name",
             f"expected a name of letters, digits, '.', '_' or '-' (it names the report files), "
             f"got {describe(name)}",
         )
     _check_name(source, "name", name, "the name")
     system_table = _require(source, data, "system", "")
     _check_keys(source, "system", system_table, _SYSTEM_KEYS)
-    A = _convert(source, "system.A", as_real_matrix, _require(source, system_table, "A", "system"),
-                 "A", **_MATRIX_LIMITS)
+    A = _convert(
+        source,
+        "system.A",
+        as_real_matrix,
+        _require(source, system_table, "A", "system"),
+        "A",
+        **_MATRIX_LIMITS,
+    )
     if A.shape[0] != A.shape[1]:
         raise _err(source, "system.A", f"expected a square matrix, got shape {A.shape}")
     n = A.shape[0]
-    C = _convert(source, "system.C", as_real_matrix, _require(source, system_table, "C", "system"),
-                 "C", shape=(None, n), shape_hint="the number of states, from A", **_MATRIX_LIMITS)
+    C = _convert(
+        source,
+        "system.C",
+        as_real_matrix,
+        _require(source, system_table, "C", "system"),
+        "C",
+        shape=(None, n),
+        shape_hint="the number of states, from A",
+        **_MATRIX_LIMITS,
+    )
     sensors = system_table.get("sensors")
     if isinstance(sensors, (list, tuple)) and len(sensors) == C.shape[0]:
         for i, label in enumerate(sensors):
             if isinstance(label, str) and len(label) > MAX_NAME_LENGTH:
-                raise _err(source, "system.sensors",
-                           f"sensors[{i}] has {len(label):,} characters; the limit is "
-                           f"{MAX_NAME_LENGTH}")
+                raise _err(
+                    source,
+                    "system.sensors",
+                    f"sensors[{i}] has {len(label):,} characters; the limit is {MAX_NAME_LENGTH}",
+                )
     try:
         system = System(A, C, sensors=sensors, name=name)
     except (TypeError, ValueError) as exc:
@@ -394,20 +438,44 @@ def spec_from_dict(
     attack_table = data.get("attack", {})
     _check_keys(source, "attack", attack_table, _ATTACK_KEYS)
     if max_attacked is not None:
-        s = _convert(source, "--max-attacked", _spec_int, max_attacked, "max_attacked",
-                     min_value=0, max_value=_INT64_MAX)
+        s = _convert(
+            source,
+            "--max-attacked",
+            _spec_int,
+            max_attacked,
+            "max_attacked",
+            min_value=0,
+            max_value=_INT64_MAX,
+        )
     elif "max_attacked" in attack_table:
-        s = _convert(source, "attack.max_attacked", _spec_int, attack_table["max_attacked"],
-                     "max_attacked", min_value=0)
+        s = _convert(
+            source,
+            "attack.max_attacked",
+            _spec_int,
+            attack_table["max_attacked"],
+            "max_attacked",
+            min_value=0,
+        )
     else:
-        raise _err(source, "attack.max_attacked",
-                   "missing (required): the number of attacked sensors s; or pass --max-attacked")
+        raise _err(
+            source,
+            "attack.max_attacked",
+            "missing (required): the number of attacked sensors s; or pass --max-attacked",
+        )
     if horizon is not None:
-        tau = _convert(source, "--horizon", _spec_int, horizon, "horizon", min_value=1,
-                       max_value=MAX_HORIZON)
+        tau = _convert(
+            source, "--horizon", _spec_int, horizon, "horizon", min_value=1, max_value=MAX_HORIZON
+        )
     elif "horizon" in attack_table:
-        tau = _convert(source, "attack.horizon", _spec_int, attack_table["horizon"],
-                       "horizon", min_value=1, max_value=MAX_HORIZON)
+        tau = _convert(
+            source,
+            "attack.horizon",
+            _spec_int,
+            attack_table["horizon"],
+            "horizon",
+            min_value=1,
+            max_value=MAX_HORIZON,
+        )
     else:
         tau = n
 
@@ -419,14 +487,18 @@ def spec_from_dict(
     if isinstance(raw_scenarios, Mapping):
         raw_scenarios = [raw_scenarios]
     if not isinstance(raw_scenarios, list):
-        raise _err(source, "scenario", f"expected a list of tables ([[scenario]]), "
-                   f"got {describe(raw_scenarios)}")
+        raise _err(
+            source,
+            "scenario",
+            f"expected a list of tables ([[scenario]]), got {describe(raw_scenarios)}",
+        )
     seen: set[str] = set()
     for index, table in enumerate(raw_scenarios):
         scenario = _scenario(source, f"scenario[{index}]", table, p)
         if scenario["name"] in seen:
-            raise _err(source, f"scenario[{index}].name",
-                       f"duplicate scenario name {scenario['name']!r}")
+            raise _err(
+                source, f"scenario[{index}].name", f"duplicate scenario name {scenario['name']!r}"
+            )
         seen.add(scenario["name"])
         scenarios.append(scenario)
     return Spec(
@@ -447,8 +519,9 @@ def _spec_int(value: Any, name: str, *, min_value: int, max_value: int = _INT64_
 
 
 def _positive(source: str, key: str, value: Any) -> float:
-    return _convert(source, key, as_float_option, value, key.split(".")[-1], min_value=0.0,
-                    min_inclusive=False)
+    return _convert(
+        source, key, as_float_option, value, key.split(".")[-1], min_value=0.0, min_inclusive=False
+    )
 
 
 def _poles(source: str, key: str, value: Any, n: int) -> list[complex]:
@@ -458,15 +531,20 @@ def _poles(source: str, key: str, value: Any, n: int) -> list[complex]:
         raise _err(source, key, f"expected {n} poles (one per state), got {len(value):,}")
     poles: list[complex] = []
     for i, item in enumerate(value):
-        if isinstance(item, list) and len(item) == 2 and all(
-            isinstance(x, numbers.Real) and not isinstance(x, bool) for x in item
+        if (
+            isinstance(item, list)
+            and len(item) == 2
+            and all(isinstance(x, numbers.Real) and not isinstance(x, bool) for x in item)
         ):
             pole = complex(float(item[0]), float(item[1]))
         elif isinstance(item, numbers.Real) and not isinstance(item, bool):
             pole = complex(float(item), 0.0)
         else:
-            raise _err(source, f"{key}[{i}]",
-                       f"expected a real number or a [re, im] pair, got {describe(item)}")
+            raise _err(
+                source,
+                f"{key}[{i}]",
+                f"expected a real number or a [re, im] pair, got {describe(item)}",
+            )
         if not (math.isfinite(pole.real) and math.isfinite(pole.imag)):
             raise _err(source, f"{key}[{i}]", f"must be finite, got {pole}")
         poles.append(pole)
@@ -485,8 +563,14 @@ def _poles(source: str, key: str, value: Any, n: int) -> list[complex]:
 def _observer(source: str, table: Any, n: int, p: int) -> dict[str, Any]:
     if not isinstance(table, Mapping):
         raise _err(source, "observer", f"expected a table, got {describe(table)}")
-    kind = _convert(source, "observer.kind", as_choice, _require(source, table, "kind", "observer"),
-                    "kind", OBSERVER_KINDS)
+    kind = _convert(
+        source,
+        "observer.kind",
+        as_choice,
+        _require(source, table, "kind", "observer"),
+        "kind",
+        OBSERVER_KINDS,
+    )
     _check_keys(source, "observer", table, _OBSERVER_KEYS[kind])
     out: dict[str, Any] = {"kind": kind}
     if kind != "sso":
@@ -496,115 +580,220 @@ def _observer(source: str, table: Any, n: int, p: int) -> dict[str, Any]:
                 kind, ("deadbeat", "place", "pinv") if kind == "luenberger" else GAIN_CHOICES
             )
             if kind == "ogd" and gain != "ogd":
-                raise _err(source, "observer.gain",
-                           f"the ogd observer's gain is fixed (L = step * A C^T); got {gain!r}")
+                raise _err(
+                    source,
+                    "observer.gain",
+                    f"the ogd observer's gain is fixed (L = step * A C^T); got {gain!r}",
+                )
             gain = _convert(source, "observer.gain", as_choice, gain, "gain", allowed)
         elif kind == "ogd":
-            raise _err(source, "observer.gain",
-                       "the ogd observer's gain is fixed (L = step * A C^T); remove this key")
+            raise _err(
+                source,
+                "observer.gain",
+                "the ogd observer's gain is fixed (L = step * A C^T); remove this key",
+            )
         else:
-            gain = _convert(source, "observer.gain", as_real_matrix, gain, "gain", shape=(n, p),
-                            shape_hint="n x p: states by sensors", **_MATRIX_LIMITS)
+            gain = _convert(
+                source,
+                "observer.gain",
+                as_real_matrix,
+                gain,
+                "gain",
+                shape=(n, p),
+                shape_hint="n x p: states by sensors",
+                **_MATRIX_LIMITS,
+            )
         out["gain"] = gain
         if isinstance(gain, str) and gain == "place":
-            out["poles"] = _poles(source, "observer.poles",
-                                  _require(source, table, "poles", "observer"), n)
+            out["poles"] = _poles(
+                source, "observer.poles", _require(source, table, "poles", "observer"), n
+            )
         elif "poles" in table:
-            raise _err(source, "observer.poles", "poles are only used with gain = \"place\"")
+            raise _err(source, "observer.poles", 'poles are only used with gain = "place"')
     if kind != "luenberger":
-        out["step"] = _positive(source, "observer.step", _require(source, table, "step", "observer"))
+        out["step"] = _positive(
+            source, "observer.step", _require(source, table, "step", "observer")
+        )
     if kind in ("sso", "dsso", "elastic_net"):
-        out["threshold"] = _positive(source, "observer.threshold",
-                                     _require(source, table, "threshold", "observer"))
+        out["threshold"] = _positive(
+            source, "observer.threshold", _require(source, table, "threshold", "observer")
+        )
     if kind in ("sso", "dsso"):
         if "shrink" in table:
             shrink = _convert(source, "observer.shrink", as_float_option, table["shrink"], "shrink")
             if shrink != 1.0:
-                raise _err(source, "observer.shrink",
-                           f"the {kind} observer has shrink = 1; use kind = \"elastic_net\" for "
-                           f"shrink < 1, got {shrink}")
+                raise _err(
+                    source,
+                    "observer.shrink",
+                    f'the {kind} observer has shrink = 1; use kind = "elastic_net" for '
+                    f"shrink < 1, got {shrink}",
+                )
         out["shrink"] = 1.0
     if kind == "elastic_net":
         out["shrink"] = _convert(
-            source, "observer.shrink", as_float_option,
-            _require(source, table, "shrink", "observer"), "shrink",
-            min_value=0.0, max_value=1.0, min_inclusive=False, max_inclusive=False,
+            source,
+            "observer.shrink",
+            as_float_option,
+            _require(source, table, "shrink", "observer"),
+            "shrink",
+            min_value=0.0,
+            max_value=1.0,
+            min_inclusive=False,
+            max_inclusive=False,
         )
         if "L2" in table:
-            out["L2"] = _convert(source, "observer.L2", as_real_matrix, table["L2"], "L2",
-                                 shape=(p, p), shape_hint="p x p: sensors by sensors",
-                                 **_MATRIX_LIMITS)
+            out["L2"] = _convert(
+                source,
+                "observer.L2",
+                as_real_matrix,
+                table["L2"],
+                "L2",
+                shape=(p, p),
+                shape_hint="p x p: sensors by sensors",
+                **_MATRIX_LIMITS,
+            )
     if kind == "sso":
-        out["window"] = _convert(source, "observer.window", _spec_int,
-                                 table.get("window", 1), "window", min_value=1)
-        out["inner_steps"] = _convert(source, "observer.inner_steps", _spec_int,
-                                      table.get("inner_steps", 1), "inner_steps", min_value=1)
+        out["window"] = _convert(
+            source, "observer.window", _spec_int, table.get("window", 1), "window", min_value=1
+        )
+        out["inner_steps"] = _convert(
+            source,
+            "observer.inner_steps",
+            _spec_int,
+            table.get("inner_steps", 1),
+            "inner_steps",
+            min_value=1,
+        )
     return out
 
 
 def _scenario(source: str, prefix: str, table: Any, p: int) -> dict[str, Any]:
     _check_keys(source, prefix, table, _SCENARIO_KEYS)
-    name = _check_name(source, f"{prefix}.name", _require(source, table, "name", prefix),
-                       "a scenario name")
-    attack = _convert(source, f"{prefix}.attack", as_choice,
-                      _require(source, table, "attack", prefix), "attack", ATTACK_KINDS)
+    name = _check_name(
+        source, f"{prefix}.name", _require(source, table, "name", prefix), "a scenario name"
+    )
+    attack = _convert(
+        source,
+        f"{prefix}.attack",
+        as_choice,
+        _require(source, table, "attack", prefix),
+        "attack",
+        ATTACK_KINDS,
+    )
     out: dict[str, Any] = {"name": name, "attack": attack}
     has_sensors, has_count = "sensors" in table, "count" in table
     if attack in ("none", "stealthy"):
         for key in ("sensors", "count"):
             if key in table:
-                raise _err(source, f"{prefix}.{key}",
-                           f"not used by attack = {attack!r}"
-                           + (" (the sensors come from the sparse-observability witness)"
-                              if attack == "stealthy" else ""))
+                raise _err(
+                    source,
+                    f"{prefix}.{key}",
+                    f"not used by attack = {attack!r}"
+                    + (
+                        " (the sensors come from the sparse-observability witness)"
+                        if attack == "stealthy"
+                        else ""
+                    ),
+                )
     elif attack in ("switching", "random"):
         if has_sensors:
-            raise _err(source, f"{prefix}.sensors",
-                       f"attack = {attack!r} draws its supports at random; give count instead")
-        out["count"] = _convert(source, f"{prefix}.count", _spec_int,
-                                _require(source, table, "count", prefix), "count",
-                                min_value=1, max_value=p)
+            raise _err(
+                source,
+                f"{prefix}.sensors",
+                f"attack = {attack!r} draws its supports at random; give count instead",
+            )
+        out["count"] = _convert(
+            source,
+            f"{prefix}.count",
+            _spec_int,
+            _require(source, table, "count", prefix),
+            "count",
+            min_value=1,
+            max_value=p,
+        )
     else:
         if has_sensors == has_count:
-            raise _err(source, f"{prefix}.sensors",
-                       f"attack = {attack!r} needs exactly one of sensors (0-based indices) or "
-                       f"count (a random support of that size)")
+            raise _err(
+                source,
+                f"{prefix}.sensors",
+                f"attack = {attack!r} needs exactly one of sensors (0-based indices) or "
+                f"count (a random support of that size)",
+            )
         if has_sensors:
-            sensors = _convert(source, f"{prefix}.sensors", as_index_list, table["sensors"],
-                               "sensors", upper=p)
+            sensors = _convert(
+                source, f"{prefix}.sensors", as_index_list, table["sensors"], "sensors", upper=p
+            )
             if not sensors:
                 raise _err(source, f"{prefix}.sensors", "expected at least one sensor")
             out["sensors"] = list(sensors)
         else:
-            out["count"] = _convert(source, f"{prefix}.count", _spec_int, table["count"],
-                                    "count", min_value=1, max_value=p)
+            out["count"] = _convert(
+                source,
+                f"{prefix}.count",
+                _spec_int,
+                table["count"],
+                "count",
+                min_value=1,
+                max_value=p,
+            )
     if attack in ("switching", "sinusoidal"):
-        out["period"] = _convert(source, f"{prefix}.period", _spec_int,
-                                 _require(source, table, "period", prefix), "period", min_value=1)
+        out["period"] = _convert(
+            source,
+            f"{prefix}.period",
+            _spec_int,
+            _require(source, table, "period", prefix),
+            "period",
+            min_value=1,
+        )
     elif "period" in table:
-        raise _err(source, f"{prefix}.period",
-                   f"only used by switching and sinusoidal attacks, not {attack!r}")
+        raise _err(
+            source,
+            f"{prefix}.period",
+            f"only used by switching and sinusoidal attacks, not {attack!r}",
+        )
     if "magnitude" in table:
         if attack == "none":
             raise _err(source, f"{prefix}.magnitude", "not used by attack = 'none'")
         mag = table["magnitude"]
         if isinstance(mag, numbers.Real) and not isinstance(mag, bool):
             mag = [mag, mag]
-        arr = _convert(source, f"{prefix}.magnitude", as_real_matrix, mag, "magnitude",
-                       shape=(2,), ndim=1)
+        arr = _convert(
+            source, f"{prefix}.magnitude", as_real_matrix, mag, "magnitude", shape=(2,), ndim=1
+        )
         if arr[0] < 0 or arr[0] > arr[1]:
-            raise _err(source, f"{prefix}.magnitude",
-                       f"expected [low, high] with 0 <= low <= high, got {arr.tolist()}")
+            raise _err(
+                source,
+                f"{prefix}.magnitude",
+                f"expected [low, high] with 0 <= low <= high, got {arr.tolist()}",
+            )
         out["magnitude"] = (float(arr[0]), float(arr[1]))
     else:
         out["magnitude"] = SCENARIO_DEFAULTS["magnitude"]
-    out["noise"] = _convert(source, f"{prefix}.noise", as_float_option,
-                            table.get("noise", SCENARIO_DEFAULTS["noise"]), "noise", min_value=0.0)
+    out["noise"] = _convert(
+        source,
+        f"{prefix}.noise",
+        as_float_option,
+        table.get("noise", SCENARIO_DEFAULTS["noise"]),
+        "noise",
+        min_value=0.0,
+    )
     for key in ("steps", "runs"):
-        out[key] = _convert(source, f"{prefix}.{key}", _spec_int,
-                            table.get(key, SCENARIO_DEFAULTS[key]), key, min_value=1)
-    out["seed"] = _convert(source, f"{prefix}.seed", _spec_int,
-                           table.get("seed", SCENARIO_DEFAULTS["seed"]), "seed", min_value=0)
+        out[key] = _convert(
+            source,
+            f"{prefix}.{key}",
+            _spec_int,
+            table.get(key, SCENARIO_DEFAULTS[key]),
+            key,
+            min_value=1,
+        )
+    out["seed"] = _convert(
+        source,
+        f"{prefix}.seed",
+        _spec_int,
+        table.get("seed", SCENARIO_DEFAULTS["seed"]),
+        "seed",
+        min_value=0,
+    )
     return out
 
 
@@ -614,20 +803,21 @@ _NPY_MAGIC = b"\x93NUMPY"
 def _read_npz(raw: bytes, source: str) -> dict[str, Any]:
     """Variables of an .npz archive: names, then headers (shape, dtype), then data."""
     if raw.startswith(_NPY_MAGIC):
-        raise SpecError(f"{source}: cannot read the .npz file: it is a single .npy array; "
-                        f"expected an .npz archive of named arrays (numpy.savez)")
+        raise SpecError(
+            f"{source}: cannot read the .npz file: it is a single .npy array; "
+            f"expected an .npz archive of named arrays (numpy.savez)"
+        )
     try:
         archive = zipfile.ZipFile(io.BytesIO(raw))
         members = archive.namelist()
-    except Exception as exc:  # noqa: BLE001 - any failure means an unreadable archive
+    except Exception as exc:
         raise SpecError(f"{source}: cannot read the .npz file: {_reason(exc)}") from None
     keys = []
     for member in members:
         key = member[:-4] if member.endswith(".npy") else member
         if key not in _SYSTEM_KEYS:
             hint = _suggest(key, _SYSTEM_KEYS)
-            raise _err(source, key,
-                       f"unknown variable{hint}; expected A, C and optionally sensors")
+            raise _err(source, key, f"unknown variable{hint}; expected A, C and optionally sensors")
         if key in keys:
             raise _err(source, key, "the archive holds this variable twice")
         keys.append(key)
@@ -646,7 +836,8 @@ def _read_npz(raw: bytes, source: str) -> dict[str, Any]:
                 raise SpecError(
                     f"{source}: cannot read the .npz file: variable {key!r} holds Python objects "
                     f"(dtype object), which are not loaded (unpickling can run code); expected "
-                    f"{'strings' if key == 'sensors' else 'real numbers'}")
+                    f"{'strings' if key == 'sensors' else 'real numbers'}"
+                )
             if key == "sensors":
                 limits = {"max_dim": MAX_MATRIX_DIM, "max_entries": MAX_MATRIX_DIM}
             else:
@@ -656,22 +847,33 @@ def _read_npz(raw: bytes, source: str) -> dict[str, Any]:
                 data[key] = np.lib.format.read_array(handle, allow_pickle=False)
         except SpecError:
             raise
-        except Exception as exc:  # noqa: BLE001 - any failure means an unreadable archive
-            raise SpecError(f"{source}: cannot read the .npz file: variable {key!r}: "
-                            f"{_reason(exc)}") from None
+        except Exception as exc:
+            raise SpecError(
+                f"{source}: cannot read the .npz file: variable {key!r}: {_reason(exc)}"
+            ) from None
     return data
 
 
-def _check_array_size(source: str, name: str, shape: tuple[int, ...], dtype: np.dtype, *,
-                      max_dim: int, max_entries: int) -> None:
+def _check_array_size(
+    source: str,
+    name: str,
+    shape: tuple[int, ...],
+    dtype: np.dtype,
+    *,
+    max_dim: int,
+    max_entries: int,
+) -> None:
     """Refuse an array by its header: the limits on rows, columns, entries and bytes."""
     try:
         check_size("the variable", shape, max_dim, max_entries)
     except ValueError as exc:
         raise _err(source, name, str(exc)) from None
     if math.prod(shape) * dtype.itemsize > 16 * max_entries:
-        raise _err(source, name, f"the variable is too large: {math.prod(shape):,} entries of "
-                   f"{dtype.itemsize:,} bytes")
+        raise _err(
+            source,
+            name,
+            f"the variable is too large: {math.prod(shape):,} entries of {dtype.itemsize:,} bytes",
+        )
 
 
 def _read_mat(raw: bytes, source: str) -> dict[str, Any]:
@@ -682,51 +884,65 @@ def _read_mat(raw: bytes, source: str) -> dict[str, Any]:
 
     try:
         major, _ = scipy.io.matlab.matfile_version(io.BytesIO(raw))
-    except Exception as exc:  # noqa: BLE001 - any failure means an unreadable file
+    except Exception as exc:
         raise SpecError(f"{source}: cannot read the .mat file: {_reason(exc)}") from None
     if major == 2:
-        raise SpecError(f"{source}: MATLAB v7.3 (HDF5) files are not supported; save with "
-                        f"save(file, 'A', 'C', '-v7')")
+        raise SpecError(
+            f"{source}: MATLAB v7.3 (HDF5) files are not supported; save with "
+            f"save(file, 'A', 'C', '-v7')"
+        )
     try:
         if major == 1:
-            found = [(v.name, v.class_name, v.shape)
-                     for v in variables(raw, max_entries=MAX_MATRIX_ENTRIES,
-                                        max_bytes=16 * MAX_MATRIX_ENTRIES + 2**20)]
+            found = [
+                (v.name, v.class_name, v.shape)
+                for v in variables(
+                    raw, max_entries=MAX_MATRIX_ENTRIES, max_bytes=16 * MAX_MATRIX_ENTRIES + 2**20
+                )
+            ]
         else:  # v4: read by SciPy in Python
-            found = [(name, cls, tuple(shape))
-                     for name, shape, cls in scipy.io.whosmat(io.BytesIO(raw))]
+            found = [
+                (name, cls, tuple(shape)) for name, shape, cls in scipy.io.whosmat(io.BytesIO(raw))
+            ]
     except MatFormatError as exc:
         raise SpecError(f"{source}: cannot read the .mat file: {exc}") from None
-    except Exception as exc:  # noqa: BLE001 - any failure means an unreadable file
+    except Exception as exc:
         raise SpecError(f"{source}: cannot read the .mat file: {_reason(exc)}") from None
     seen = set()
     for name, class_name, shape in found:
         if name not in _SYSTEM_KEYS:
             hint = _suggest(name, _SYSTEM_KEYS)
-            raise _err(source, name,
-                       f"unknown variable{hint}; expected A, C and optionally sensors")
+            raise _err(
+                source, name, f"unknown variable{hint}; expected A, C and optionally sensors"
+            )
         if name in seen:
             raise _err(source, name, "the file holds this variable twice")
         seen.add(name)
         numeric = class_name in ("double", "single") or class_name.startswith(("int", "uint"))
         if name != "sensors" and not numeric:
-            raise _err(source, f"system.{name}",
-                       f"must contain real numbers, got a MATLAB {class_name}")
-        limits = (_MATRIX_LIMITS if name != "sensors"
-                  else {"max_dim": MAX_MATRIX_DIM, "max_entries": MAX_MATRIX_ENTRIES})
+            raise _err(
+                source, f"system.{name}", f"must contain real numbers, got a MATLAB {class_name}"
+            )
+        limits = (
+            _MATRIX_LIMITS
+            if name != "sensors"
+            else {"max_dim": MAX_MATRIX_DIM, "max_entries": MAX_MATRIX_ENTRIES}
+        )
         _check_array_size(source, name, shape, np.dtype(np.float64), **limits)
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             raw_vars = scipy.io.loadmat(io.BytesIO(raw))
         for warning in caught:  # SciPy warns about what it could not read, and goes on
-            if not issubclass(warning.category, (DeprecationWarning, PendingDeprecationWarning,
-                                                 FutureWarning)):
+            if not issubclass(
+                warning.category, (DeprecationWarning, PendingDeprecationWarning, FutureWarning)
+            ):
                 raise ValueError(str(warning.message))
     except NotImplementedError:
-        raise SpecError(f"{source}: MATLAB v7.3 (HDF5) files are not supported; save with "
-                        f"save(file, 'A', 'C', '-v7')") from None
-    except Exception as exc:  # noqa: BLE001 - any failure means an unreadable file
+        raise SpecError(
+            f"{source}: MATLAB v7.3 (HDF5) files are not supported; save with "
+            f"save(file, 'A', 'C', '-v7')"
+        ) from None
+    except Exception as exc:
         raise SpecError(f"{source}: cannot read the .mat file: {_reason(exc)}") from None
     return {k: v for k, v in raw_vars.items() if not k.startswith("__")}
 
@@ -827,8 +1043,14 @@ def load_spec(
         data = _parse_text(raw, suffix, source)
         default = "spec"
     stem = re.sub(r"[^A-Za-z0-9._-]", "-", path.stem)[:MAX_NAME_LENGTH].lstrip("._-") or default
-    return spec_from_dict(data, source=source, max_attacked=max_attacked, horizon=horizon,
-                          sha256=digest, default_name=stem)
+    return spec_from_dict(
+        data,
+        source=source,
+        max_attacked=max_attacked,
+        horizon=horizon,
+        sha256=digest,
+        default_name=stem,
+    )
 
 
 def _read_file(path: Path, source: str, suffix: str) -> bytes:
@@ -846,8 +1068,9 @@ def _read_file(path: Path, source: str, suffix: str) -> bytes:
     if stat.S_ISDIR(info.st_mode):
         raise SpecError(f"{source}: is a directory, expected a spec file")
     if not stat.S_ISREG(info.st_mode):
-        raise SpecError(f"{source}: not a regular file (a device, pipe or socket); expected a "
-                        f"spec file")
+        raise SpecError(
+            f"{source}: not a regular file (a device, pipe or socket); expected a spec file"
+        )
     if suffix not in (".toml", ".json", ".npz", ".mat"):
         raise SpecError(
             f"{source}: unknown file type {suffix or '(none)'!r}; expected .toml, .json, .npz "
@@ -856,20 +1079,25 @@ def _read_file(path: Path, source: str, suffix: str) -> bytes:
     limit = MAX_TEXT_BYTES if suffix in (".toml", ".json") else MAX_BINARY_BYTES
     kind = "TOML and JSON specs" if suffix in (".toml", ".json") else ".npz and .mat files"
     if info.st_size > limit:
-        raise SpecError(f"{source}: the file has {info.st_size:,} bytes "
-                        f"({info.st_size / 2**20:.1f} MiB); {kind} are limited to "
-                        f"{limit // 2**20} MiB ({limit:,} bytes)")
+        raise SpecError(
+            f"{source}: the file has {info.st_size:,} bytes "
+            f"({info.st_size / 2**20:.1f} MiB); {kind} are limited to "
+            f"{limit // 2**20} MiB ({limit:,} bytes)"
+        )
     try:
         with open(path, "rb") as handle:
             raw = handle.read(limit + 1)
     except OSError as exc:
         raise SpecError(f"{source}: cannot read: {exc.strerror or exc}") from None
     if len(raw) > limit:  # grew since stat
-        raise SpecError(f"{source}: the file has more than {limit:,} bytes; {kind} are "
-                        f"limited to {limit // 2**20} MiB")
+        raise SpecError(
+            f"{source}: the file has more than {limit:,} bytes; {kind} are "
+            f"limited to {limit // 2**20} MiB"
+        )
     if not raw.strip():
-        raise SpecError(f"{source}: the file is empty; expected a spec (see 'ssecert examples "
-                        f"ugv' for one)")
+        raise SpecError(
+            f"{source}: the file is empty; expected a spec (see 'ssecert examples ugv' for one)"
+        )
     return raw
 
 
@@ -879,13 +1107,14 @@ def _parse_text(raw: bytes, suffix: str, source: str) -> dict[str, Any]:
     if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
         raise SpecError(f"{source}: not a UTF-8 text file: it is UTF-16 text; save it as UTF-8")
     if b"\x00" in raw:
-        raise SpecError(f"{source}: not a {fmt} text file: it contains NUL bytes (a binary "
-                        f"file?)")
+        raise SpecError(f"{source}: not a {fmt} text file: it contains NUL bytes (a binary file?)")
     try:
         text = raw.decode("utf-8-sig")  # a byte-order mark is not content
     except UnicodeDecodeError as exc:
-        raise SpecError(f"{source}: not a UTF-8 text file: invalid byte "
-                        f"0x{raw[exc.start]:02x} at offset {exc.start:,}") from None
+        raise SpecError(
+            f"{source}: not a UTF-8 text file: invalid byte "
+            f"0x{raw[exc.start]:02x} at offset {exc.start:,}"
+        ) from None
     try:
         if fmt == "TOML":
             data = tomllib.loads(text)
@@ -894,22 +1123,25 @@ def _parse_text(raw: bytes, suffix: str, source: str) -> dict[str, Any]:
     except (tomllib.TOMLDecodeError, json.JSONDecodeError) as exc:
         raise SpecError(f"{source}: invalid {fmt}: {exc}") from None
     except _DuplicateKey as exc:
-        raise SpecError(f"{source}: invalid JSON: the key {exc.key!r} appears twice in one "
-                        f"object") from None
+        raise SpecError(
+            f"{source}: invalid JSON: the key {exc.key!r} appears twice in one object"
+        ) from None
     except RecursionError:
-        raise SpecError(f"{source}: invalid {fmt}: nested too deeply to read (a spec needs at "
-                        f"most 4 levels)") from None
+        raise SpecError(
+            f"{source}: invalid {fmt}: nested too deeply to read (a spec needs at most 4 levels)"
+        ) from None
     except ValueError as exc:  # tomllib: an integer literal of more than 4300 digits
         match = re.search(r"[0-9_]{4300,}", text)
         if match is None:
             raise SpecError(f"{source}: invalid {fmt}: {_reason(exc)}") from None
         line = text.count("\n", 0, match.start()) + 1
         digits = len(match.group().replace("_", ""))
-        raise SpecError(f"{source}: line {line}: an integer of {digits:,} digits is out of range: "
-                        f"spec integers must fit in 64 bits (-2^63 to 2^63 - 1)") from None
+        raise SpecError(
+            f"{source}: line {line}: an integer of {digits:,} digits is out of range: "
+            f"spec integers must fit in 64 bits (-2^63 to 2^63 - 1)"
+        ) from None
     if not isinstance(data, dict):
-        raise SpecError(f"{source}: expected a JSON object at the top level, got "
-                        f"{describe(data)}")
+        raise SpecError(f"{source}: expected a JSON object at the top level, got {describe(data)}")
     return data
 
 

@@ -76,7 +76,9 @@ class System:
                 )
             for i, label in enumerate(sensors):
                 if not isinstance(label, str) or not label.strip():
-                    raise TypeError(f"sensors[{i}] must be a non-empty string, got {describe(label)}")
+                    raise TypeError(
+                        f"sensors[{i}] must be a non-empty string, got {describe(label)}"
+                    )
             seen: dict[str, int] = {}
             for i, label in enumerate(sensors):
                 if label in seen:

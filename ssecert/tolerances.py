@@ -114,13 +114,15 @@ class Tolerances:
     irrepresentable_rtol: float = 1e-9
 
     @staticmethod
-    def check(value: object, name: str = "tolerances") -> "Tolerances":
+    def check(value: object, name: str = "tolerances") -> Tolerances:
         """``value`` itself when it is a Tolerances (default one for None), else TypeError."""
         if value is None:
             return Tolerances()
         if not isinstance(value, Tolerances):
-            raise TypeError(f"{name} must be a Tolerances object or None, got "
-                            f"{type(value).__name__} {value!r:.40}")
+            raise TypeError(
+                f"{name} must be a Tolerances object or None, got "
+                f"{type(value).__name__} {value!r:.40}"
+            )
         return value
 
     def rtol(self, *dims: int) -> float:

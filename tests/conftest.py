@@ -23,8 +23,10 @@ _ENVIRONMENT_PROFILES = {"thorough": "thorough", "quick": "quick", "ci": "quick"
 def pytest_configure(config):
     # runs before the plugin's pytest_configure (trylast), which loads the profile
     name = os.environ.get("HYPOTHESIS_PROFILE")
-    if not name or config.getoption("ssecert_profile", default=None) or config.getoption(
-        "hypothesis_profile", default=None
+    if (
+        not name
+        or config.getoption("ssecert_profile", default=None)
+        or config.getoption("hypothesis_profile", default=None)
     ):
         return
     if name not in _ENVIRONMENT_PROFILES:

@@ -136,7 +136,9 @@ def planted(rng: np.random.Generator, kind: str, *, integer: bool = True) -> Pla
                 continue
             if kind in ("jordan", "mixed") and choice < 0.6:
                 m = int(rng.integers(1, 4))
-                lam = int(values[0]) if rng.random() < 0.5 or len(values) < 2 else int(values.pop(0))
+                lam = (
+                    int(values[0]) if rng.random() < 0.5 or len(values) < 2 else int(values.pop(0))
+                )
                 blocks.append(("jordan", m, lam, 0))
                 size += m
                 continue
@@ -235,7 +237,8 @@ def hidden_jordan(rng: np.random.Generator) -> Planted | None:
     start = 0
     for m, lam in blocks:
         M[start : start + m, start : start + m] = lam * np.eye(m, dtype=np.int64) + np.diag(
-            np.ones(m - 1, dtype=np.int64), 1)
+            np.ones(m - 1, dtype=np.int64), 1
+        )
         eig_cols.setdefault(lam, []).append(start)
         start += m
     for cols in eig_cols.values():
@@ -264,5 +267,10 @@ def hidden_jordan(rng: np.random.Generator) -> Planted | None:
     A, C = T @ M @ Tinv, Cm @ Tinv
     if np.abs(A).max() > 2**50 or np.abs(C).max() > 2**50:
         return None
-    return Planted(A=A.astype(float), C=C.astype(float), max_removable=best - 1,
-                   breaking_set=min(supports), description=f"hidden jordan {blocks}, p = {p}")
+    return Planted(
+        A=A.astype(float),
+        C=C.astype(float),
+        max_removable=best - 1,
+        breaking_set=min(supports),
+        description=f"hidden jordan {blocks}, p = {p}",
+    )

@@ -2,8 +2,6 @@
 
 import json
 
-import pytest
-
 from ssecert import analyze
 from ssecert.certify import certify
 from ssecert.cli import main
@@ -29,7 +27,9 @@ def test_certify_without_spec_writes_the_ugv_report(tmp_path, capsys, monkeypatc
     assert set(sims) == {"constant-velocity-a", "stealthy"}
     for sim in sims.values():
         assert {"observer", "runs", "steps", "final", "series"} <= set(sim)
-        assert {"relative_error_mean", "relative_error_q90", "support_error_mean"} <= set(sim["final"])
+        assert {"relative_error_mean", "relative_error_q90", "support_error_mean"} <= set(
+            sim["final"]
+        )
     assert data["reproduce"] == "ssecert certify"
     assert "verdict: FAILS (exit status 1)" in out and "reports/ugv.html" in out
     assert not list((tmp_path / "reports").glob("*.tmp"))

@@ -44,7 +44,11 @@ def run_process(args: list[str], cwd: Path | None = None) -> subprocess.Complete
     env.pop("PYTHONWARNINGS", None)
     return subprocess.run(
         [sys.executable, "-m", "ssecert", *args],
-        capture_output=True, text=True, timeout=120, cwd=cwd, env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=cwd,
+        env=env,
     )
 
 
@@ -86,8 +90,11 @@ def ugv_json() -> dict[str, Any]:
 def write_plant_npz(folder: Path, name: str = "plant.npz") -> Path:
     """An observable plant with n = 2 and p = 4 sensors."""
     path = folder / name
-    np.savez(path, A=np.array([[1.0, 0.1], [0.0, 0.9]]),
-             C=np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0], [1.0, -1.0]]))
+    np.savez(
+        path,
+        A=np.array([[1.0, 0.1], [0.0, 0.9]]),
+        C=np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0], [1.0, -1.0]]),
+    )
     return path
 
 
@@ -145,8 +152,12 @@ def test_analyze_a_user_toml_file(tmp_path, capsys):
     status, out, err = run(["analyze", str(path), "--json", "-"], capsys)
     assert status == 0, err
     doc = strict_json(out)
-    assert doc["system"] == {"name": "mine", "n": 2, "p": 5,
-                             "sensors": ["y1", "y2", "y3", "y4", "y5"]}
+    assert doc["system"] == {
+        "name": "mine",
+        "n": 2,
+        "p": 5,
+        "sensors": ["y1", "y2", "y3", "y4", "y5"],
+    }
     assert doc["verdict"] == "holds"
     assert doc["checks"]["sparse_observability"]["max_removable"] >= 2
 
@@ -154,8 +165,9 @@ def test_analyze_a_user_toml_file(tmp_path, capsys):
 def test_max_attacked_override(capsys):
     # every triple of rows of notes-example-3 is independent: max_removable = 2,
     # so s = 1 is correctable and s = 2 is not
-    status, out, _ = run(["analyze", "notes-example-3", "--max-attacked", "2", "--json", "-"],
-                         capsys)
+    status, out, _ = run(
+        ["analyze", "notes-example-3", "--max-attacked", "2", "--json", "-"], capsys
+    )
     assert status == 1
     doc = strict_json(out)
     sparse = doc["checks"]["sparse_observability"]
@@ -211,8 +223,12 @@ def test_json_to_stdout_is_the_only_stdout(capsys):
 def test_json_top_level(ugv_json):
     assert {"ssecert_version", "system", "verdict", "checks"} <= set(ugv_json)
     assert ugv_json["ssecert_version"] == ssecert.__version__
-    assert ugv_json["system"] == {"name": "ugv", "n": 2, "p": 3,
-                                  "sensors": ["position", "velocity-a", "velocity-b"]}
+    assert ugv_json["system"] == {
+        "name": "ugv",
+        "n": 2,
+        "p": 3,
+        "sensors": ["position", "velocity-a", "velocity-b"],
+    }
     assert ugv_json["verdict"] == "fails"
     assert {"observability", "sparse_observability", "irrepresentable"} <= set(ugv_json["checks"])
     for check_id, check in ugv_json["checks"].items():
@@ -260,8 +276,9 @@ def test_json_witness_of_ugv(ugv_json):
     A = np.array([[1.0, 0.0099], [0.0, 0.9876]])
     C = np.array([[1.0, 0.0], [0.0, 1.0], [0.0, 1.0]])
     for k in range(2):
-        np.testing.assert_allclose(attack_a[k] - attack_b[k],
-                                   C @ np.linalg.matrix_power(A, k) @ z, atol=1e-12)
+        np.testing.assert_allclose(
+            attack_a[k] - attack_b[k], C @ np.linalg.matrix_power(A, k) @ z, atol=1e-12
+        )
 
 
 def test_json_irrepresentable_of_ugv_is_infinity(ugv_json):
@@ -356,17 +373,20 @@ def test_bad_toml_file(tmp_path, capsys):
 
 def test_spec_with_an_unknown_key(tmp_path, capsys):
     path = tmp_path / "typo.toml"
-    path.write_text('name = "x"\n[system]\nA = [[1.0]]\nC = [[1.0], [2.0]]\n'
-                    "[attack]\nmax_atacked = 1\n")
+    path.write_text(
+        'name = "x"\n[system]\nA = [[1.0]]\nC = [[1.0], [2.0]]\n[attack]\nmax_atacked = 1\n'
+    )
     status, out, err = run(["analyze", str(path)], capsys)
-    assert_usage_error(status, out, err, str(path), "attack.max_atacked",
-                       "did you mean 'max_attacked'")
+    assert_usage_error(
+        status, out, err, str(path), "attack.max_atacked", "did you mean 'max_attacked'"
+    )
 
 
 def test_spec_with_nan(tmp_path, capsys):
     path = tmp_path / "nan.json"
-    path.write_text('{"name": "x", "system": {"A": [[NaN]], "C": [[1.0]]}, '
-                    '"attack": {"max_attacked": 0}}')
+    path.write_text(
+        '{"name": "x", "system": {"A": [[NaN]], "C": [[1.0]]}, "attack": {"max_attacked": 0}}'
+    )
     status, out, err = run(["analyze", str(path), "--json", "-"], capsys)
     assert_usage_error(status, out, err, str(path), "system.A", "finite")
 
@@ -431,12 +451,12 @@ def test_npz_with_max_attacked_runs(tmp_path, capsys):
     assert status in (0, 1), err
     assert "sparse_observability" in out
     assert "Traceback" not in err
-    status, out, err = run(["analyze", str(path), "--max-attacked", "1", "--horizon", "3",
-                            "--json", "-"], capsys)
+    status, out, err = run(
+        ["analyze", str(path), "--max-attacked", "1", "--horizon", "3", "--json", "-"], capsys
+    )
     assert status in (0, 1)
     doc = strict_json(out)
-    assert doc["system"] == {"name": "plant", "n": 2, "p": 4,
-                             "sensors": ["y1", "y2", "y3", "y4"]}
+    assert doc["system"] == {"name": "plant", "n": 2, "p": 4, "sensors": ["y1", "y2", "y3", "y4"]}
     assert doc["meta"]["horizon"] == 3
     assert doc["meta"]["max_attacked"] == 1
     assert doc["verdict"] == {0: "holds", 1: "fails"}[status]
@@ -448,9 +468,14 @@ def test_mat_with_max_attacked_runs(tmp_path, capsys):
     path = tmp_path / "ugv-copy.mat"
     cells = np.empty((1, 3), dtype=object)
     cells[0, :] = ["position", "velocity-a", "velocity-b"]
-    scipy.io.savemat(path, {"A": np.array([[1.0, 0.0099], [0.0, 0.9876]]),
-                            "C": np.array([[1.0, 0.0], [0.0, 1.0], [0.0, 1.0]]),
-                            "sensors": cells})
+    scipy.io.savemat(
+        path,
+        {
+            "A": np.array([[1.0, 0.0099], [0.0, 0.9876]]),
+            "C": np.array([[1.0, 0.0], [0.0, 1.0], [0.0, 1.0]]),
+            "sensors": cells,
+        },
+    )
     status, out, err = run(["analyze", str(path), "--max-attacked", "1", "--json", "-"], capsys)
     assert status == 1, err
     doc = strict_json(out)
@@ -477,8 +502,7 @@ def test_examples_lists_every_name(capsys):
     assert status == 0
     names = out.split()
     assert names == list_examples()
-    for name in ("ugv", "notes-example-0", "notes-example-3", "lasso-example-1",
-                 "random-n15-p30"):
+    for name in ("ugv", "notes-example-0", "notes-example-3", "lasso-example-1", "random-n15-p30"):
         assert name in names
 
 

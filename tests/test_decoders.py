@@ -426,8 +426,10 @@ def test_l1_decoder_matches_an_independent_linprog_with_dense_attacks():
     # epigraph form: min 1't, -t <= y - M x <= t
     res = linprog(
         np.r_[np.zeros(n), np.ones(m)],
-        A_ub=np.block([[-M, -np.eye(m)], [M, -np.eye(m)]]), b_ub=np.r_[-y, y],
-        bounds=[(None, None)] * n + [(0, None)] * m, method="highs",
+        A_ub=np.block([[-M, -np.eye(m)], [M, -np.eye(m)]]),
+        b_ub=np.r_[-y, y],
+        bounds=[(None, None)] * n + [(0, None)] * m,
+        method="highs",
     )
     assert res.status == 0
     assert np.abs(y - M @ x_hat).sum() == pytest.approx(res.fun, rel=1e-9)
@@ -472,10 +474,16 @@ Y0 = np.ones(6)
         (lambda: l0_decoder(M0, Y0, 6), ValueError, "s"),
         (lambda: l0_decoder(M0, Y0, True), TypeError, "s"),
         (lambda: l0_decoder(M0, Y0, 1, sensors_of_row=[0] * 5), ValueError, "sensors_of_row"),
-        (lambda: l0_decoder(M0, Y0, 1, sensors_of_row=[0, 1, 3, 0, 1, 3]), ValueError,
-         "sensors_of_row"),
-        (lambda: l0_decoder(M0, Y0, 1, sensors_of_row=[0, 1, 2, 0, 1, -1]), ValueError,
-         "sensors_of_row"),
+        (
+            lambda: l0_decoder(M0, Y0, 1, sensors_of_row=[0, 1, 3, 0, 1, 3]),
+            ValueError,
+            "sensors_of_row",
+        ),
+        (
+            lambda: l0_decoder(M0, Y0, 1, sensors_of_row=[0, 1, 2, 0, 1, -1]),
+            ValueError,
+            "sensors_of_row",
+        ),
         (lambda: l0_decoder(M0, Y0, 1, sensors_of_row="abcdef"), TypeError, "sensors_of_row"),
         (lambda: l0_decoder(M0, Y0, 1, sensors_of_row=[0.5] * 6), TypeError, "sensors_of_row"),
         (lambda: l0_decoder(M0, Y0, 1, max_supports=0), ValueError, "max_supports"),

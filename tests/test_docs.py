@@ -10,7 +10,8 @@ import pytest
 import ssecert
 
 MODULES = sorted(
-    m.name for m in pkgutil.walk_packages(ssecert.__path__, prefix="ssecert.")
+    m.name
+    for m in pkgutil.walk_packages(ssecert.__path__, prefix="ssecert.")
     if not m.name.endswith("__main__")
 )
 
@@ -23,8 +24,16 @@ def test_docstring_examples(name):
 
 
 def test_examples_exist_for_main_entry_points():
-    for name in ("analyze", "observability", "sparse_observability", "irrepresentable",
-                 "scan_removals", "stealthy_attack", "load_spec", "System"):
+    for name in (
+        "analyze",
+        "observability",
+        "sparse_observability",
+        "irrepresentable",
+        "scan_removals",
+        "stealthy_attack",
+        "load_spec",
+        "System",
+    ):
         assert ">>>" in (getattr(ssecert, name).__doc__ or ""), name
 
 
@@ -33,7 +42,7 @@ def test_public_arguments_are_documented(name):
     obj = getattr(ssecert, name)
     import enum
 
-    if not callable(obj) or isinstance(obj, type) and issubclass(obj, (BaseException, enum.Enum)):
+    if not callable(obj) or (isinstance(obj, type) and issubclass(obj, (BaseException, enum.Enum))):
         return
     doc = inspect.getdoc(obj) or ""
     if inspect.isclass(obj):

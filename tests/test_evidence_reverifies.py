@@ -28,8 +28,10 @@ def _q(M):
 
 
 def _mul(X, Y):
-    return [[sum(X[i][k] * Y[k][j] for k in range(len(Y))) for j in range(len(Y[0]))]
-            for i in range(len(X))]
+    return [
+        [sum(X[i][k] * Y[k][j] for k in range(len(Y))) for j in range(len(Y[0]))]
+        for i in range(len(X))
+    ]
 
 
 def _obsv_rank(A, C, steps):
@@ -67,7 +69,7 @@ def _reverify(document, A, C):
     if sparse["verdict"] == "holds":
         mr, s = sparse["max_removable"], sparse["max_attacked"]
         assert 2 * s <= mr
-        for size in range(0, mr + 1):
+        for size in range(mr + 1):
             for removed in itertools.combinations(range(p), size):
                 kept = [C[i] for i in range(p) if i not in removed]
                 assert _obsv_rank(A, kept, n) == n, removed
@@ -89,16 +91,22 @@ def _reverify(document, A, C):
             assert norm < 1  # rho(F)^m <= ||F^m||_inf < 1
         elif gain["evidence"].get("certificate") == "lyapunov":
             P = _q(gain["evidence"]["P"])
-            decrease = [[a - b for a, b in zip(ra, rb)]
-                        for ra, rb in zip(P, _mul(_mul(list(map(list, zip(*F))), P), F))]
+            decrease = [
+                [a - b for a, b in zip(ra, rb)]
+                for ra, rb in zip(P, _mul(_mul(list(map(list, zip(*F))), P), F))
+            ]
             assert _positive_definite(P) and _positive_definite(decrease)
         done.append("observer_gain")
     return done
 
 
 @pytest.mark.parametrize("gain", ["deadbeat", "place", "matrix"])
-@given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 4), extra=st.integers(0, 2),
-       s=st.integers(0, 1))
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    n=st.integers(1, 4),
+    extra=st.integers(0, 2),
+    s=st.integers(0, 1),
+)
 @settings(max_examples=max(5, settings.default.max_examples // 4))
 def test_holds_verdicts_reverify_from_json_in_exact_arithmetic(gain, seed, n, extra, s):
     rng = np.random.default_rng(seed)
@@ -113,8 +121,14 @@ def test_holds_verdicts_reverify_from_json_in_exact_arithmetic(gain, seed, n, ex
         observer["poles"] = list(np.round(np.linspace(-0.5, 0.5, n), 3))
     if gain == "matrix":
         observer["gain"] = (0.3 * rng.standard_normal((n, p))).tolist()
-    spec = spec_from_dict({"name": "r", "system": {"A": A.tolist(), "C": C.tolist()},
-                           "attack": {"max_attacked": s}, "observer": observer})
+    spec = spec_from_dict(
+        {
+            "name": "r",
+            "system": {"A": A.tolist(), "C": C.tolist()},
+            "attack": {"max_attacked": s},
+            "observer": observer,
+        }
+    )
     try:
         cert = analyze(spec)
     except Exception as exc:  # GainError is bad input for the CLI, not a verdict

@@ -135,5 +135,6 @@ def test_place_with_dependent_sensor_rows():
     system = System([[0.5, 1.0], [0.0, 0.9]], [[1.0, 0.5], [2.0, 1.0]])
     gain = place_gain(system, [0.1, 0.2])
     assert gain.verified and len(gain.details["sensors_used"]) == 1
-    np.testing.assert_allclose(sorted(np.linalg.eigvals(gain.error_matrix).real), [0.1, 0.2],
-                               atol=1e-10)
+    np.testing.assert_allclose(
+        sorted(np.linalg.eigvals(gain.error_matrix).real), [0.1, 0.2], atol=1e-10
+    )

@@ -32,8 +32,10 @@ def test_block_mode_matches_brute_force(seed):
     n, p, tau, s = 3, 6, 2, 2
     system = System(rng.standard_normal((n, n)) / 2, rng.standard_normal((p, n)))
     O = system.observability_matrix(tau)
-    values = {S: irrepresentable_constant(O, [t * p + i for i in S for t in range(tau)])
-              for S in itertools.combinations(range(p), s)}
+    values = {
+        S: irrepresentable_constant(O, [t * p + i for i in S for t in range(tau)])
+        for S in itertools.combinations(range(p), s)
+    }
     worst = max(values.values())
     first = min(S for S, v in values.items() if v >= worst * (1 - 1e-12))
     check = irrepresentable(system, s, horizon=tau)

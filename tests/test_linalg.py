@@ -31,8 +31,10 @@ def test_jordan_structure_is_recovered(seed, orthogonal):
     A = T @ B @ np.linalg.inv(T)
     eig = eigen_clusters(A)
     assert eig.ok, eig.problems
-    found = sorted((round(c.center.real, 5), round(abs(c.center.imag), 5), c.algebraic, c.geometric)
-                   for c in eig.clusters)
+    found = sorted(
+        (round(c.center.real, 5), round(abs(c.center.imag), 5), c.algebraic, c.geometric)
+        for c in eig.clusters
+    )
     assert found == [(-0.5, 0.0, 2, 1), (0.3, 0.8, 1, 1), (0.7, 0.0, 4, 2)]
     for c in eig.clusters:
         residual = np.linalg.norm(A @ c.basis - c.center * c.basis) / np.linalg.norm(A, 2)
@@ -96,8 +98,10 @@ def test_staircase_index_matches_rank_of_o_k_on_well_conditioned_plants(seed):
     A = np.linalg.qr(rng.standard_normal((n, n)))[0]  # orthogonal: O_k well conditioned
     C = rng.standard_normal((p, n))
     sc = staircase(A, C)
-    ranks = [np.linalg.matrix_rank(np.vstack([C @ np.linalg.matrix_power(A, j) for j in range(k)]))
-             for k in range(1, n + 1)]
+    ranks = [
+        np.linalg.matrix_rank(np.vstack([C @ np.linalg.matrix_power(A, j) for j in range(k)]))
+        for k in range(1, n + 1)
+    ]
     assert sc.rank == ranks[-1]
     assert sc.index == next(k for k, r in enumerate(ranks, start=1) if r == sc.rank)
     assert list(np.cumsum(sc.block_sizes)) == sorted(set(ranks))[: len(sc.block_sizes)]

@@ -31,8 +31,10 @@ def random_design(seed, *, shrink=None, step=None):
     C = rng.standard_normal((p, n))
     q = float(rng.uniform(0.2, 0.7)) if shrink is None else shrink
     nu = float(rng.uniform(0.005, 0.05)) if step is None else step
-    return build_observer(System(A, C), {"kind": "elastic_net", "gain": "deadbeat", "step": nu,
-                                         "threshold": 0.1, "shrink": q})
+    return build_observer(
+        System(A, C),
+        {"kind": "elastic_net", "gain": "deadbeat", "step": nu, "threshold": 0.1, "shrink": q},
+    )
 
 
 @pytest.mark.parametrize("seed", range(12))
@@ -48,7 +50,9 @@ def test_elastic_net_certificates_hold_along_simulated_trajectories(seed):
     V = np.einsum("kri,ij,krj->kr", traj, cert.P, traj)
     # the certified decrease holds at every step of every trajectory
     assert np.all(V[1:] <= (1 - cert.decay) * V[:-1] * (1 + 1e-9) + 1e-300)
-    assert np.all(np.linalg.norm(traj[-1], axis=1) <= 1e-6 * np.maximum(np.linalg.norm(xi0, axis=1), 1))
+    assert np.all(
+        np.linalg.norm(traj[-1], axis=1) <= 1e-6 * np.maximum(np.linalg.norm(xi0, axis=1), 1)
+    )
 
 
 @pytest.mark.parametrize("kind", ["sso", "dsso"])
@@ -78,8 +82,10 @@ def test_unstable_linear_error_matrix_is_never_certified(seed):
     if np.abs(np.linalg.eigvals(A - L @ C)).max() < 1.05:
         L = np.zeros((3, 4))
         A = A / np.abs(np.linalg.eigvals(A)).max() * 1.2
-    design = build_observer(System(A, C), {"kind": "elastic_net", "gain": L, "step": 0.01,
-                                           "threshold": 0.1, "shrink": 0.3})
+    design = build_observer(
+        System(A, C),
+        {"kind": "elastic_net", "gain": L, "step": 0.01, "threshold": 0.1, "shrink": 0.3},
+    )
     model = LureModel.from_design(design)
     cert = circle_certificate(model)
     assert cert.verdict == "fails"
@@ -92,15 +98,22 @@ def test_unstable_linear_error_matrix_is_never_certified(seed):
 
 def test_evidence_reverifies_without_the_solver():
     spec = load_example("ugv")
-    checks = observer_checks(spec.system, {"kind": "elastic_net", "gain": "deadbeat", "step": 0.1,
-                                           "threshold": 0.1, "shrink": 0.5})
-    stability = json.loads(json.dumps(next(c for c in checks if c.id == "observer_stability")
-                                      .to_dict()))
+    checks = observer_checks(
+        spec.system,
+        {"kind": "elastic_net", "gain": "deadbeat", "step": 0.1, "threshold": 0.1, "shrink": 0.5},
+    )
+    stability = json.loads(
+        json.dumps(next(c for c in checks if c.id == "observer_stability").to_dict())
+    )
     assert stability["verdict"] == "holds"
     ev = stability["evidence"]
     mo = ev["model"]
-    model = LureModel(*(np.array(mo[k], dtype=float) for k in ("A", "B", "Cw", "E", "Dw", "Ce")),
-                      mo["q"], mo["n_e"], mo["threshold"])
+    model = LureModel(
+        *(np.array(mo[k], dtype=float) for k in ("A", "B", "Cw", "E", "Dw", "Ce")),
+        mo["q"],
+        mo["n_e"],
+        mo["threshold"],
+    )
     P, t = np.array(ev["P"]), np.array(ev["multipliers_T"])
     M = circle_matrix(model, P, t)
     assert np.linalg.eigvalsh(M)[-1] < -50 * ev["error_bound"] * np.linalg.norm(P, 2)
@@ -151,7 +164,12 @@ def test_unverifiable_solution_is_inconclusive(monkeypatch):
     model = LureModel.from_design(design)
 
     def fake(model, kind, structure, alpha, options):
-        return np.eye(model.N), np.ones(model.m), None, {"structure": structure, "status": "optimal"}
+        return (
+            np.eye(model.N),
+            np.ones(model.m),
+            None,
+            {"structure": structure, "status": "optimal"},
+        )
 
     monkeypatch.setattr(lmi, "_solve", fake)
     cert = circle_certificate(model)
@@ -168,12 +186,16 @@ def test_full_structure_agrees_with_block_diagonal():
 
 def test_region_map_reuses_certificates_and_every_holds_reverifies():
     spec = load_example("ugv")
-    design = build_observer(spec.system, {"kind": "elastic_net", "gain": "deadbeat", "step": 0.1,
-                                          "threshold": 0.1, "shrink": 0.5})
+    design = build_observer(
+        spec.system,
+        {"kind": "elastic_net", "gain": "deadbeat", "step": 0.1, "threshold": 0.1, "shrink": 0.5},
+    )
     rm = region_map(design, [0.3, 0.5, 0.7, 1.0], [0.05, 0.1, 0.2])
     assert rm.verdicts.shape == (4, 3)
     assert rm.reused >= 1
-    assert all(v == "inconclusive" for v in rm.verdicts[-1])  # shrink 1 on a plant with eigenvalue 1
+    assert all(
+        v == "inconclusive" for v in rm.verdicts[-1]
+    )  # shrink 1 on a plant with eigenvalue 1
     for i, q in enumerate(rm.shrinks):
         for j, nu in enumerate(rm.steps):
             if rm.verdicts[i, j] == "holds":
@@ -209,16 +231,27 @@ def test_lure_model_matches_the_observer_simulator():
 
 def test_iss_evidence_reverifies_without_the_solver():
     spec = load_example("ugv")
-    checks = observer_checks(spec.system, {"kind": "elastic_net", "gain": "deadbeat", "step": 0.1,
-                                           "threshold": 0.1, "shrink": 0.5})
+    checks = observer_checks(
+        spec.system,
+        {"kind": "elastic_net", "gain": "deadbeat", "step": 0.1, "threshold": 0.1, "shrink": 0.5},
+    )
     stability = next(c for c in checks if c.id == "observer_stability").to_dict()
     iss = json.loads(json.dumps(next(c for c in checks if c.id == "iss_gain").to_dict()))
     assert iss["verdict"] == "holds"
     mo = stability["evidence"]["model"]
-    model = LureModel(*(np.array(mo[k], dtype=float) for k in ("A", "B", "Cw", "E", "Dw", "Ce")),
-                      mo["q"], mo["n_e"], mo["threshold"])
+    model = LureModel(
+        *(np.array(mo[k], dtype=float) for k in ("A", "B", "Cw", "E", "Dw", "Ce")),
+        mo["q"],
+        mo["n_e"],
+        mo["threshold"],
+    )
     ev = iss["evidence"]
-    ok, _, _, problem = verify_certificate(model, np.array(ev["P"]), np.array(ev["multipliers_T"]),
-                                           kind="iss", alpha=ev["decay_alpha"],
-                                           g=ev["gamma"] ** 2)
+    ok, _, _, problem = verify_certificate(
+        model,
+        np.array(ev["P"]),
+        np.array(ev["multipliers_T"]),
+        kind="iss",
+        alpha=ev["decay_alpha"],
+        g=ev["gamma"] ** 2,
+    )
     assert ok, problem

@@ -26,8 +26,8 @@ def test_path_loss_decays_monotonically_ten_alpha_db_per_decade():
     for alpha in (2.0, 3.5):
         rss = path_loss_rss(d, P_t=20.0, P_l=40.0, alpha=alpha, d0=1.0)
         far = d > 1.0
-        assert np.all(np.diff(rss[far]) < 0)             # strictly decreasing beyond d0
-        assert np.all(rss[~far] == rss[~far][0])         # saturated at RSS(d0) inside
+        assert np.all(np.diff(rss[far]) < 0)  # strictly decreasing beyond d0
+        assert np.all(rss[~far] == rss[~far][0])  # saturated at RSS(d0) inside
         assert rss[~far][0] == pytest.approx(20.0 - 40.0)
         ten = path_loss_rss(10 * d[far], P_t=20.0, P_l=40.0, alpha=alpha, d0=1.0)
         assert np.allclose(rss[far] - ten, 10 * alpha, rtol=0, atol=1e-12)
@@ -35,8 +35,9 @@ def test_path_loss_decays_monotonically_ten_alpha_db_per_decade():
 
 @pytest.mark.parametrize("deployment", ["random", "grid"])
 def test_dictionary_rows_decay_with_distance(deployment):
-    dic = rss_dictionary(grid=(6, 8), cell_size=0.5, q=12, deployment=deployment, seed=3,
-                         alpha=2.5, d0=0.3)
+    dic = rss_dictionary(
+        grid=(6, 8), cell_size=0.5, q=12, deployment=deployment, seed=3, alpha=2.5, d0=0.3
+    )
     assert dic.D.shape == (12, 48) and dic.n == 48 and dic.q == 12
     width, height = 8 * 0.5, 6 * 0.5
     assert np.all((dic.sensor_positions >= 0) & (dic.sensor_positions <= [width, height]))
@@ -49,8 +50,9 @@ def test_dictionary_rows_decay_with_distance(deployment):
         assert np.all(np.diff(rss) <= 0)
         strict = (dd[1:] > dd[:-1] * (1 + 1e-12)) & (dd[:-1] > 0.3)
         assert np.all(np.diff(rss)[strict] < 0)
-        assert np.allclose(dic.D[i], path_loss_rss(dist, P_t=dic.P_t, P_l=dic.P_l, alpha=2.5,
-                                                   d0=0.3))
+        assert np.allclose(
+            dic.D[i], path_loss_rss(dist, P_t=dic.P_t, P_l=dic.P_l, alpha=2.5, d0=0.3)
+        )
 
 
 def test_dictionary_is_reproducible_from_its_seed():
@@ -72,23 +74,28 @@ def preprocessed(D, y):
     return G / w, y - y.mean(), w
 
 
-@pytest.mark.parametrize("method, q_x, q_a", [("fista", 1.0, 1.0), ("fista", 0.99, 0.95),
-                                              ("ista", 0.98, 0.98)])
+@pytest.mark.parametrize(
+    "method, q_x, q_a", [("fista", 1.0, 1.0), ("fista", 0.99, 0.95), ("ista", 0.98, 0.98)]
+)
 def test_fixed_point_is_the_cvxpy_minimiser_of_the_reported_objective(method, q_x, q_a):
     dic = rss_dictionary(grid=(4, 4), q=8, seed=5)
     y = dic.D[:, 6] + 12.0 * np.eye(8)[2]
-    res = elastic_net_localization(dic.D, y, method=method, q_x=q_x, q_a=q_a, N=200000,
-                                   rtol=1e-13)
+    res = elastic_net_localization(dic.D, y, method=method, q_x=q_x, q_a=q_a, N=200000, rtol=1e-13)
     assert res.converged
     Gt, yt, w = preprocessed(dic.D, y)
     ob = res.objective
     n = dic.n
     z = cp.Variable(n + 8)
-    cost = (0.5 * cp.sum_squares(Gt @ z - yt) + ob["l1_x"] * cp.norm1(z[:n])
-            + ob["l1_a"] * cp.norm1(z[n:]) + 0.5 * ob["mu_x"] * cp.sum_squares(z[:n])
-            + 0.5 * ob["mu_a"] * cp.sum_squares(z[n:]))
-    cp.Problem(cp.Minimize(cost)).solve(solver="CLARABEL", tol_gap_abs=1e-12,
-                                        tol_gap_rel=1e-12, tol_feas=1e-12)
+    cost = (
+        0.5 * cp.sum_squares(Gt @ z - yt)
+        + ob["l1_x"] * cp.norm1(z[:n])
+        + ob["l1_a"] * cp.norm1(z[n:])
+        + 0.5 * ob["mu_x"] * cp.sum_squares(z[:n])
+        + 0.5 * ob["mu_a"] * cp.sum_squares(z[n:])
+    )
+    cp.Problem(cp.Minimize(cost)).solve(
+        solver="CLARABEL", tol_gap_abs=1e-12, tol_gap_rel=1e-12, tol_feas=1e-12
+    )
     ours = np.concatenate([res.x_hat, res.a_hat]) * w
     assert np.allclose(ours, z.value, rtol=0, atol=1e-6 * np.abs(z.value).max())
 
@@ -101,10 +108,10 @@ def test_finds_the_cell_and_a_spoofed_sensor_without_noise():
     for seed in range(10):
         dic = rss_dictionary(seed=seed)
         sc = localization_scenario(dic, runs=4, attacked=1, seed=seed)
-        y = dic.D[:, sc.cell].T + np.abs(sc.attack)   # the attacker raises one reading
+        y = dic.D[:, sc.cell].T + np.abs(sc.attack)  # the attacker raises one reading
         res = elastic_net_localization(dic.D, y)
         assert np.array_equal(res.cell, sc.cell), seed
-        assert np.all(res.attacked[sc.attacked]), seed   # no attacked sensor missed
+        assert np.all(res.attacked[sc.attacked]), seed  # no attacked sensor missed
         exact += int(np.sum(np.all(res.attacked == sc.attacked, axis=1)))
         total += 4
     assert exact >= 0.9 * total
@@ -127,7 +134,7 @@ def test_few_attacked_sensors_with_random_signs():
 def test_unknown_transmit_power_is_absorbed_by_the_common_offset():
     dic = rss_dictionary(seed=4)
     sc = localization_scenario(dic, runs=5, attacked=1, seed=4)
-    y = dic.D[:, sc.cell].T + np.abs(sc.attack) - 6.0    # the target transmits 6 dB weaker
+    y = dic.D[:, sc.cell].T + np.abs(sc.attack) - 6.0  # the target transmits 6 dB weaker
     res = elastic_net_localization(dic.D, y)
     assert np.array_equal(res.cell, sc.cell)
     assert np.all(np.abs(res.offset + 6.0) < 0.1)
@@ -161,8 +168,9 @@ def test_too_many_attacks_give_a_flagged_answer_not_a_crash():
 def test_thesis_literal_settings_run_and_stop_after_N_iterations():
     dic = rss_dictionary(seed=1)
     sc = localization_scenario(dic, runs=3, attacked=5, seed=1)
-    res = elastic_net_localization(dic.D, sc.y, normalize=False, common_offset=False,
-                                   method="ista", N=1000, rtol=0)
+    res = elastic_net_localization(
+        dic.D, sc.y, normalize=False, common_offset=False, method="ista", N=1000, rtol=0
+    )
     assert np.all(res.iterations == 1000) and not res.converged.any()
     assert np.all((res.cell >= 0) & (res.cell < dic.n))
     assert np.all(res.offset == 0)

@@ -20,8 +20,12 @@ def test_issue_example_is_observable_though_numpy_rank_says_18():
     # the margin is measured in power-of-two units (here A is doubled), see unit_normalized
     An = 2 * A
     assert check.margin == pytest.approx(
-        min(np.linalg.svd(np.vstack([An - lam * np.eye(20), np.ones((1, 20))]),
-                          compute_uv=False)[-1] for lam in np.diag(An))
+        min(
+            np.linalg.svd(np.vstack([An - lam * np.eye(20), np.ones((1, 20))]), compute_uv=False)[
+                -1
+            ]
+            for lam in np.diag(An)
+        )
         / np.linalg.norm(np.vstack([An, np.ones((1, 20))]), 2),
         rel=1e-6,
     )
@@ -35,8 +39,11 @@ def test_observability_matrix_matches_python_control():
 
 @pytest.mark.parametrize("seed", range(40))
 def test_verdict_matches_planted_truth(seed):
-    pl = planted(np.random.default_rng(seed), ("distinct", "jordan", "identity", "mixed")[seed % 4],
-                 integer=seed % 2 == 0)
+    pl = planted(
+        np.random.default_rng(seed),
+        ("distinct", "jordan", "identity", "mixed")[seed % 4],
+        integer=seed % 2 == 0,
+    )
     check = observability(System(pl.A, pl.C))
     if pl.max_removable < 0 and seed % 2 == 1:
         # an orthogonal similarity rounds the planted structure away: the exact data are

@@ -12,26 +12,43 @@ PLANT = {"A": [[0.9, 0.2], [0.0, 0.7]], "C": [[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]
 
 
 def spec_with(observer):
-    return spec_from_dict({"name": "demo", "system": PLANT, "attack": {"max_attacked": 0},
-                           "observer": observer})
+    return spec_from_dict(
+        {"name": "demo", "system": PLANT, "attack": {"max_attacked": 0}, "observer": observer}
+    )
 
 
-@pytest.mark.parametrize("observer, stability", [
-    ({"kind": "luenberger", "gain": "place", "poles": [0.1, 0.2]}, "holds"),
-    ({"kind": "luenberger", "gain": "deadbeat"}, "holds"),
-    ({"kind": "ogd", "step": 0.2}, "holds"),
-    ({"kind": "dsso", "gain": "pinv", "step": 0.1, "threshold": 0.1}, "holds"),
-    ({"kind": "sso", "step": 0.2, "threshold": 0.1}, "holds"),
-    ({"kind": "sso", "step": 0.2, "threshold": 0.1, "window": 2}, None),
-    ({"kind": "sso", "step": 0.2, "threshold": 0.1, "inner_steps": 3}, "inconclusive"),
-    ({"kind": "elastic_net", "gain": "deadbeat", "step": 0.05, "threshold": 0.1, "shrink": 0.5},
-     "holds"),
-])
+@pytest.mark.parametrize(
+    "observer, stability",
+    [
+        ({"kind": "luenberger", "gain": "place", "poles": [0.1, 0.2]}, "holds"),
+        ({"kind": "luenberger", "gain": "deadbeat"}, "holds"),
+        ({"kind": "ogd", "step": 0.2}, "holds"),
+        ({"kind": "dsso", "gain": "pinv", "step": 0.1, "threshold": 0.1}, "holds"),
+        ({"kind": "sso", "step": 0.2, "threshold": 0.1}, "holds"),
+        ({"kind": "sso", "step": 0.2, "threshold": 0.1, "window": 2}, None),
+        ({"kind": "sso", "step": 0.2, "threshold": 0.1, "inner_steps": 3}, "inconclusive"),
+        (
+            {
+                "kind": "elastic_net",
+                "gain": "deadbeat",
+                "step": 0.05,
+                "threshold": 0.1,
+                "shrink": 0.5,
+            },
+            "holds",
+        ),
+    ],
+)
 def test_every_kind_gets_its_checks(observer, stability):
     cert = analyze(spec_with(observer))
     ids = [c.id for c in cert.checks]
-    assert ids[:5] == ["observability", "sparse_observability", "irrepresentable",
-                       "observer_gain", "observer_stability"]
+    assert ids[:5] == [
+        "observability",
+        "sparse_observability",
+        "irrepresentable",
+        "observer_gain",
+        "observer_stability",
+    ]
     assert "iss_gain" in ids
     assert ("thesis_assumptions" in ids) == (observer["kind"] in ("sso", "dsso", "elastic_net"))
     assert cert["observer_gain"].required and cert["observer_stability"].required

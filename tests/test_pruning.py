@@ -64,8 +64,9 @@ def test_pmf_matches_enumeration(seed, size):
 @pytest.mark.parametrize("p", [0.0, 0.03, 0.5, 0.81, 1.0])
 def test_pmf_matches_binomial_for_equal_probabilities(size, p):
     pmf = poisson_binomial_pmf(np.full(size, p))
-    np.testing.assert_allclose(pmf, scipy.stats.binom.pmf(np.arange(size + 1), size, p),
-                               rtol=1e-9, atol=1e-15)
+    np.testing.assert_allclose(
+        pmf, scipy.stats.binom.pmf(np.arange(size + 1), size, p), rtol=1e-9, atol=1e-15
+    )
 
 
 @pytest.mark.parametrize("seed", SEEDS)
@@ -99,8 +100,9 @@ def test_reliable_count_is_the_largest_k_of_13(seed, reliability):
 def test_reliable_count_matches_binomial_quantile(size, p):
     reliability = 0.9
     # Pr{S >= k} = sf(k - 1); the largest k with sf(k - 1) >= eta.
-    expected = max(k for k in range(size + 1)
-                   if scipy.stats.binom.sf(k - 1, size, p) >= reliability)
+    expected = max(
+        k for k in range(size + 1) if scipy.stats.binom.sf(k - 1, size, p) >= reliability
+    )
     assert reliable_safe_count(np.full(size, p), reliability=reliability) == expected
 
 
@@ -348,12 +350,17 @@ BAD_INPUTS = [
     (lambda: weighted_l1_observer(M0, Y0, [], omega=0.0), ValueError, "omega"),
     (lambda: weighted_l1_observer(M0, Y0, [0.5]), TypeError, r"trusted\[0\]"),
     (lambda: pruned_weighted_l1_observer(M0, Y0, [0], P0[:4]), ValueError, "probs"),
-    (lambda: pruned_weighted_l1_window_observer(M0, Y0, [0], P0, sensors=4), ValueError,
-     "sensors = 4"),
-    (lambda: pruned_weighted_l1_window_observer(M0, Y0, [0], P0, sensors=0), ValueError,
-     "sensors"),
-    (lambda: pruned_weighted_l1_window_observer(M0, Y0[:3], [0], P0, sensors=3), ValueError,
-     "y_window"),
+    (
+        lambda: pruned_weighted_l1_window_observer(M0, Y0, [0], P0, sensors=4),
+        ValueError,
+        "sensors = 4",
+    ),
+    (lambda: pruned_weighted_l1_window_observer(M0, Y0, [0], P0, sensors=0), ValueError, "sensors"),
+    (
+        lambda: pruned_weighted_l1_window_observer(M0, Y0[:3], [0], P0, sensors=3),
+        ValueError,
+        "y_window",
+    ),
     (lambda: successful_attack(M0, [], 0.1), ValueError, "support"),
     (lambda: successful_attack(M0, [7], 0.1), ValueError, r"support\[0\]"),
     (lambda: successful_attack(M0, [0], -1.0), ValueError, "eps"),
@@ -361,10 +368,8 @@ BAD_INPUTS = [
     (lambda: successful_attack(M0, [0], 0.1, margin=1.0), ValueError, "margin"),
     (lambda: successful_attack(M0, [0], 0.1, max_shift=0), ValueError, "max_shift"),
     (lambda: successful_attack(np.ones((6, 2)), [0], 0.1), ValueError, "full column rank"),
-    (lambda: verify_successful_attack(M0, np.ones(2), np.ones(5), 0.1, 0.0), ValueError,
-     "attack"),
-    (lambda: verify_successful_attack(M0, np.ones(2), np.ones(6), 0.1, -1.0), ValueError,
-     "alpha"),
+    (lambda: verify_successful_attack(M0, np.ones(2), np.ones(5), 0.1, 0.0), ValueError, "attack"),
+    (lambda: verify_successful_attack(M0, np.ones(2), np.ones(6), 0.1, -1.0), ValueError, "alpha"),
 ]
 
 

@@ -27,17 +27,33 @@ def test_readme_example_runs_as_shown(tmp_path):
     # a user's shell: no pytest or hypothesis settings of this project
     env = {k: v for k, v in os.environ.items() if not k.startswith(("PYTEST_", "HYPOTHESIS_"))}
     run = subprocess.run(
-        [sys.executable, "-m", "pytest", "-q", "-rA", "-p", "no:cacheprovider",
-         "--rootdir", str(tmp_path), FILE],
-        cwd=tmp_path, env=env, capture_output=True, text=True, timeout=600,
+        [
+            sys.executable,
+            "-m",
+            "pytest",
+            "-q",
+            "-rA",
+            "-p",
+            "no:cacheprovider",
+            "--rootdir",
+            str(tmp_path),
+            FILE,
+        ],
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
     )
     out = run.stdout
     assert run.returncode == 1, out + run.stderr
     assert "1 failed, 3 passed" in out, out
     assert f"FAILED {FILE}::test_ugv_tolerates_one_attacked_sensor" in out
-    for name in ("test_ugv_observer_converges_without_attack",
-                 "test_two_removable_sensors_correct_one_attack",
-                 "test_deadbeat_observer_of_an_integrator"):
+    for name in (
+        "test_ugv_observer_converges_without_attack",
+        "test_two_removable_sensors_correct_one_attack",
+        "test_deadbeat_observer_of_an_integrator",
+    ):
         assert f"PASSED {FILE}::{name}" in out, out
     # the failing test's report names the breaking sensor set by name and index
     assert "Breaking sensor set: position (index 0)" in out

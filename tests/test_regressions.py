@@ -5,7 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ssecert import irrepresentable, load_spec, sparse_observability, System
+from ssecert import System, irrepresentable, load_spec, sparse_observability
 from ssecert.cli import main
 from ssecert.design.gains import deadbeat_gain
 
@@ -65,7 +65,8 @@ def test_gain_that_cannot_be_computed_is_bad_input_for_simulate(tmp_path, capsys
     spec.write_text(
         'name = "s"\n[system]\nA = [[0.5, 0.0], [0.0, 0.9]]\nC = [[1.0, 0.0]]\n'
         '[attack]\nmax_attacked = 0\n[observer]\nkind = "dsso"\ngain = "deadbeat"\n'
-        'step = 0.5\nthreshold = 0.1\n[[scenario]]\nname = "c"\nattack = "none"\n')
+        'step = 0.5\nthreshold = 0.1\n[[scenario]]\nname = "c"\nattack = "none"\n'
+    )
     assert main(["simulate", str(spec), "--runs", "2", "--steps", "5"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("ssecert: error:") and "Traceback" not in err
@@ -76,7 +77,8 @@ def test_elastic_net_with_ogd_gain_runs(tmp_path):
     spec.write_text(
         'name = "s"\n[system]\nA = [[0.5, 0.1], [0.0, 0.9]]\nC = [[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]\n'
         '[attack]\nmax_attacked = 0\n[observer]\nkind = "elastic_net"\ngain = "ogd"\n'
-        'step = 0.1\nthreshold = 0.1\nshrink = 0.5\n[[scenario]]\nname = "c"\nattack = "none"\n')
+        'step = 0.1\nthreshold = 0.1\nshrink = 0.5\n[[scenario]]\nname = "c"\nattack = "none"\n'
+    )
     assert main(["simulate", str(spec), "--runs", "2", "--steps", "5"]) == 0
 
 

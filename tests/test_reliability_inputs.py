@@ -19,15 +19,11 @@ README.md, "What ssecert refuses, and why", is this file as a table.
 
 from __future__ import annotations
 
-import contextlib
 import errno
-import io
 import json
 import math
 import os
 import re
-import shutil
-import struct
 import subprocess
 import sys
 import warnings
@@ -39,8 +35,8 @@ import numpy as np
 import pytest
 import scipy.io
 
-import ssecert.certify  # noqa: F401 - patched below through sys.modules
-import ssecert.simulation.engine  # noqa: F401
+import ssecert.certify
+import ssecert.simulation.engine
 from ssecert import (
     SpecError,
     System,
@@ -95,22 +91,29 @@ def toml_value(value: Any) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, float):
-        return "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf") \
-            if math.isinf(value) else repr(value)
+        return (
+            "nan"
+            if math.isnan(value)
+            else ("inf" if value > 0 else "-inf")
+            if math.isinf(value)
+            else repr(value)
+        )
     if isinstance(value, (int, str)):
         return json.dumps(value)
     if isinstance(value, list):
         return "[" + ", ".join(toml_value(v) for v in value) + "]"
     if isinstance(value, dict):
-        return "{" + ", ".join(f"{json.dumps(k)} = {toml_value(v)}"
-                               for k, v in value.items()) + "}"
+        return "{" + ", ".join(f"{json.dumps(k)} = {toml_value(v)}" for k, v in value.items()) + "}"
     raise TypeError(value)
 
 
 def to_toml(data: dict[str, Any]) -> str:
     """Spec dictionaries as TOML: top-level values, tables, arrays of tables."""
-    lines = [f"{json.dumps(k)} = {toml_value(v)}" for k, v in data.items()
-             if not isinstance(v, dict) and k != "scenario"]
+    lines = [
+        f"{json.dumps(k)} = {toml_value(v)}"
+        for k, v in data.items()
+        if not isinstance(v, dict) and k != "scenario"
+    ]
     for key, value in data.items():
         if isinstance(value, dict):
             lines.append(f"[{json.dumps(key)}]")
@@ -150,8 +153,9 @@ def assert_refused(status: int, out: str, err: str, *fragments: str) -> str:
     return err
 
 
-def refused_everywhere(capsys: Any, tmp_path: Path, spec: Path, *fragments: str,
-                       extra: tuple[str, ...] = ()) -> None:
+def refused_everywhere(
+    capsys: Any, tmp_path: Path, spec: Path, *fragments: str, extra: tuple[str, ...] = ()
+) -> None:
     """analyze, certify and simulate all refuse SPEC, and certify writes nothing."""
     out_dir = tmp_path / "reports-out"
     for command in COMMANDS:
@@ -201,10 +205,14 @@ MATRIX_ROWS = [
     ("empty-row", [[]], ValueError, "empty", None),
     ("not-square", [[1.0, 0.0]], ValueError, "square", None),
     ("one-dimensional", [1.0, 0.0], ValueError, "2-D", None),
-    ("three-dimensional", [[[1.0, 0.0], [0.0, 1.0]]], ValueError, "nested more than 2 deep",
-     None),
-    ("nested-too-deep", deep_list(5000), ValueError, "nested more than 2 deep",
-     "nested more than 16 levels"),
+    ("three-dimensional", [[[1.0, 0.0], [0.0, 1.0]]], ValueError, "nested more than 2 deep", None),
+    (
+        "nested-too-deep",
+        deep_list(5000),
+        ValueError,
+        "nested more than 2 deep",
+        "nested more than 16 levels",
+    ),
     ("string", "abc", TypeError, "numeric array", None),
     ("strings", [["1", "0"], ["0", "1"]], TypeError, "real numbers", None),
     ("boolean", True, TypeError, "boolean", None),
@@ -215,12 +223,21 @@ MATRIX_ROWS = [
     ("dict-entry", [[{"a": 1}, 0.0], [0.0, 1.0]], TypeError, "real numbers", None),
     ("datetime64", np.zeros((2, 2), dtype="datetime64[s]"), TypeError, "datetime64", None),
     ("timedelta64", np.ones((2, 2), dtype="timedelta64[s]"), TypeError, "timedelta64", None),
-    ("timedelta64-entries", [[np.timedelta64(1, "s"), 0.0], [0.0, 1.0]], TypeError,
-     "real numbers", None),
-    ("object-array", np.array([[1.0, 0.0], [0.0, 1.0]], dtype=object), TypeError,
-     "numeric array", None),
-    ("huge-integer", [[10**400, 0], [0, 1]], ValueError, "too large for a float64",
-     "64 bits"),
+    (
+        "timedelta64-entries",
+        [[np.timedelta64(1, "s"), 0.0], [0.0, 1.0]],
+        TypeError,
+        "real numbers",
+        None,
+    ),
+    (
+        "object-array",
+        np.array([[1.0, 0.0], [0.0, 1.0]], dtype=object),
+        TypeError,
+        "numeric array",
+        None,
+    ),
+    ("huge-integer", [[10**400, 0], [0, 1]], ValueError, "too large for a float64", "64 bits"),
 ]
 
 
@@ -406,9 +423,11 @@ HORIZON_ROWS = [
 @pytest.mark.parametrize("row", HORIZON_ROWS, ids=[r[0] for r in HORIZON_ROWS])
 def test_bad_horizon(row):
     _, horizon, exc, fragment = row
-    for call in (lambda: sparse_observability(PLANT, 1, horizon=horizon),
-                 lambda: irrepresentable(PLANT, 1, horizon=horizon),
-                 lambda: PLANT.observability_matrix(horizon)):
+    for call in (
+        lambda: sparse_observability(PLANT, 1, horizon=horizon),
+        lambda: irrepresentable(PLANT, 1, horizon=horizon),
+        lambda: PLANT.observability_matrix(horizon),
+    ):
         with pytest.raises(exc, match=f"horizon must be .*{re.escape(fragment)}"):
             call()
     spec_error(good(attack__horizon=horizon), fragment, key="attack.horizon")
@@ -416,14 +435,14 @@ def test_bad_horizon(row):
 
 
 def test_horizon_beyond_the_limit_in_specs():
-    spec_error(good(attack__horizon=MAX_HORIZON + 1), f"<= {MAX_HORIZON:,}",
-               key="attack.horizon")
+    spec_error(good(attack__horizon=MAX_HORIZON + 1), f"<= {MAX_HORIZON:,}", key="attack.horizon")
     assert spec_from_dict(good(attack__horizon=MAX_HORIZON)).horizon == MAX_HORIZON
 
 
 def test_s_beyond_64_bits_written_as_a_float():
-    spec_error(good(attack__max_attacked=1e300), "9,223,372,036,854,775,807",
-               key="attack.max_attacked")
+    spec_error(
+        good(attack__max_attacked=1e300), "9,223,372,036,854,775,807", key="attack.max_attacked"
+    )
 
 
 @pytest.mark.parametrize(
@@ -450,8 +469,9 @@ def test_bad_numbers_on_the_command_line(tmp_path, capsys, command, option, valu
     assert not (tmp_path / "out").exists()
 
 
-@pytest.mark.parametrize("option, value", [("--runs", "0"), ("--steps", "-1"),
-                                           ("--seed", "-1"), ("--runs", "9" * 30)])
+@pytest.mark.parametrize(
+    "option, value", [("--runs", "0"), ("--steps", "-1"), ("--seed", "-1"), ("--runs", "9" * 30)]
+)
 def test_bad_numbers_for_simulate(capsys, option, value):
     assert_refused(*cli(capsys, "simulate", "ugv", option, value), option)
 
@@ -525,8 +545,16 @@ def test_unknown_keys_suggest_the_right_one(tmp_path, capsys, row, fmt):
         (good(name=["plant"]), "name", "a list"),
         (good(system__A=DELETE), "system.A", "missing"),
     ],
-    ids=["system-list", "attack-number", "observer-list", "scenario-string",
-         "scenario-entry-list", "name-none", "name-list", "missing-A"],
+    ids=[
+        "system-list",
+        "attack-number",
+        "observer-list",
+        "scenario-string",
+        "scenario-entry-list",
+        "name-none",
+        "name-list",
+        "missing-A",
+    ],
 )
 def test_sections_of_the_wrong_kind(data, key, fragment):
     spec_error(data, fragment, key=key)
@@ -540,12 +568,15 @@ def test_duplicate_keys_in_json_are_refused(tmp_path, capsys):
     refused_everywhere(capsys, tmp_path, path, "appears twice")
 
 
-@pytest.mark.parametrize("text, fragment", [
-    ("[1, 2]", "a list of length 2"),
-    ('"spec"', "the string 'spec'"),
-    ("3", "int 3"),
-    ("null", "nothing (None)"),
-])
+@pytest.mark.parametrize(
+    "text, fragment",
+    [
+        ("[1, 2]", "a list of length 2"),
+        ('"spec"', "the string 'spec'"),
+        ("3", "int 3"),
+        ("null", "nothing (None)"),
+    ],
+)
 def test_json_whose_top_level_is_not_an_object(tmp_path, capsys, text, fragment):
     path = write(tmp_path, "top.json", text)
     with pytest.raises(SpecError, match="expected a JSON object at the top level"):
@@ -587,9 +618,16 @@ def test_a_missing_spec_file(tmp_path, capsys):
     assert_refused(*cli(capsys, "analyze", "no-such-example"), "no packaged example")
 
 
-@pytest.mark.parametrize("name, content", [("empty.toml", b""), ("empty.json", b""),
-                                           ("blank.toml", b"  \n\n"), ("empty.npz", b""),
-                                           ("empty.mat", b"")])
+@pytest.mark.parametrize(
+    "name, content",
+    [
+        ("empty.toml", b""),
+        ("empty.json", b""),
+        ("blank.toml", b"  \n\n"),
+        ("empty.npz", b""),
+        ("empty.mat", b""),
+    ],
+)
 def test_an_empty_file(tmp_path, capsys, name, content):
     path = write(tmp_path, name, content)
     with pytest.raises(SpecError, match="the file is empty"):
@@ -605,11 +643,15 @@ def test_a_binary_file_named_as_text(tmp_path, capsys, name):
     refused_everywhere(capsys, tmp_path, path, "not a", "text file")
 
 
-@pytest.mark.parametrize("name, content, fragment", [
-    ("latin1.toml", 'name = "caf\xe9"\n'.encode("latin-1"), "invalid byte 0xe9 at offset 11"),
-    ("utf16.json", json.dumps(GOOD).encode("utf-16"), "it is UTF-16 text"),
-    ("png.toml", b"\x89PNG\r\n\x1a\n" + b"x" * 50, "invalid byte 0x89"),
-], ids=["latin1", "utf16", "png"])
+@pytest.mark.parametrize(
+    "name, content, fragment",
+    [
+        ("latin1.toml", 'name = "caf\xe9"\n'.encode("latin-1"), "invalid byte 0xe9 at offset 11"),
+        ("utf16.json", json.dumps(GOOD).encode("utf-16"), "it is UTF-16 text"),
+        ("png.toml", b"\x89PNG\r\n\x1a\n" + b"x" * 50, "invalid byte 0x89"),
+    ],
+    ids=["latin1", "utf16", "png"],
+)
 def test_bytes_that_are_not_utf8(tmp_path, capsys, name, content, fragment):
     path = write(tmp_path, name, content)
     with pytest.raises(SpecError, match="not a UTF-8 text file"):
@@ -619,8 +661,11 @@ def test_bytes_that_are_not_utf8(tmp_path, capsys, name, content, fragment):
 
 @pytest.mark.parametrize("fmt", ["toml", "json"])
 def test_a_byte_order_mark_is_not_content(tmp_path, fmt):
-    path = write(tmp_path, f"bom.{fmt}", b"\xef\xbb\xbf" + (
-        to_toml(GOOD) if fmt == "toml" else json.dumps(GOOD)).encode())
+    path = write(
+        tmp_path,
+        f"bom.{fmt}",
+        b"\xef\xbb\xbf" + (to_toml(GOOD) if fmt == "toml" else json.dumps(GOOD)).encode(),
+    )
     assert load_spec(path).system.p == 3
 
 
@@ -644,9 +689,10 @@ def test_load_spec_takes_a_path():
         load_spec("a\x00b.toml")
 
 
-@pytest.mark.parametrize("name, limit", [("huge.toml", MAX_TEXT_BYTES),
-                                         ("huge.json", MAX_TEXT_BYTES),
-                                         ("huge.npz", MAX_BINARY_BYTES)])
+@pytest.mark.parametrize(
+    "name, limit",
+    [("huge.toml", MAX_TEXT_BYTES), ("huge.json", MAX_TEXT_BYTES), ("huge.npz", MAX_BINARY_BYTES)],
+)
 def test_a_file_above_the_size_limit_is_refused_before_reading(tmp_path, capsys, name, limit):
     path = tmp_path / name
     size = max(100 * 10**6, limit + 1)  # 100 MB, sparse: costs no disk
@@ -657,17 +703,22 @@ def test_a_file_above_the_size_limit_is_refused_before_reading(tmp_path, capsys,
     message = str(info.value)
     assert message.startswith(str(path))
     assert f"{size:,} bytes" in message and f"{limit // 2**20} MiB" in message
-    refused_everywhere(capsys, tmp_path, path, f"{size:,} bytes", f"{limit:,} bytes",
-                       extra=("--max-attacked", "1"))
+    refused_everywhere(
+        capsys, tmp_path, path, f"{size:,} bytes", f"{limit:,} bytes", extra=("--max-attacked", "1")
+    )
 
 
 @pytest.mark.parametrize("fmt", ["toml", "json"])
 def test_a_million_row_matrix_is_refused_before_building_arrays(tmp_path, capsys, fmt):
     rows = "[1]," * 10**6
     if fmt == "toml":
-        text = f'name = "tall"\n[system]\nA = [[1.0]]\nC = [{rows[:-1]}]\n[attack]\nmax_attacked = 1\n'
+        text = (
+            f'name = "tall"\n[system]\nA = [[1.0]]\nC = [{rows[:-1]}]\n[attack]\nmax_attacked = 1\n'
+        )
     else:
-        text = f'{{"system": {{"A": [[1.0]], "C": [{rows[:-1]}]}}, "attack": {{"max_attacked": 1}}}}'
+        text = (
+            f'{{"system": {{"A": [[1.0]], "C": [{rows[:-1]}]}}, "attack": {{"max_attacked": 1}}}}'
+        )
     path = write(tmp_path, f"tall.{fmt}", text)
     message = assert_refused(*cli(capsys, "analyze", str(path)), "1,000,000 entries")
     assert message.startswith(f"ssecert: error: {path}: key 'system.C'")
@@ -676,8 +727,9 @@ def test_a_million_row_matrix_is_refused_before_building_arrays(tmp_path, capsys
 
 def test_too_many_entries_is_refused_before_copying():
     square = np.zeros((3163, 3163))  # rows and columns within the limit, not the entries
-    message = spec_error(good(system__A=square), "3,163 x 3,163 = 10,004,569 entries",
-                         key="system.A")
+    message = spec_error(
+        good(system__A=square), "3,163 x 3,163 = 10,004,569 entries", key="system.A"
+    )
     assert f"{MAX_MATRIX_ENTRIES:,} entries" in message
 
 
@@ -698,8 +750,12 @@ NPZ_ROWS = [
     ("datetime64", {"A": np.zeros((2, 2), dtype="datetime64[s]")}, "system.A", "datetime64"),
     ("timedelta64", {"C": np.ones((3, 2), dtype="timedelta64[ms]")}, "system.C", "timedelta64"),
     ("complex", {"A": np.eye(2) * (1 + 1j)}, "system.A", "complex"),
-    ("object", {"A": np.array([[1.0, None], [0.0, 1.0]], dtype=object)}, "A",
-     "holds Python objects"),
+    (
+        "object",
+        {"A": np.array([[1.0, None], [0.0, 1.0]], dtype=object)},
+        "A",
+        "holds Python objects",
+    ),
     ("string", {"A": np.array([["1", "0"], ["0", "1"]])}, "system.A", "numeric array"),
     ("bytes", {"A": np.array([[b"1", b"0"], [b"0", b"1"]])}, "system.A", "numeric array"),
     ("bool", {"C": np.ones((3, 2), dtype=bool)}, "system.C", "boolean"),
@@ -709,8 +765,12 @@ NPZ_ROWS = [
     ("sensors-numbers", {"sensors": np.arange(3)}, "sensors", "strings"),
     ("sensors-duplicate", {"sensors": np.array(["a", "a", "b"])}, "system.sensors", "unique"),
     ("unknown-variable", {"B": np.eye(2)}, "B", "unknown variable"),
-    ("misspelt-variable", {"sensor": np.array(["a", "b", "c"])}, "sensor",
-     "did you mean 'sensors'"),
+    (
+        "misspelt-variable",
+        {"sensor": np.array(["a", "b", "c"])},
+        "sensor",
+        "did you mean 'sensors'",
+    ),
     ("missing-C", {"C": None}, "C", "missing"),
 ]
 
@@ -731,30 +791,38 @@ def _npz_with_header(path: Path, shape: tuple[int, ...]) -> Path:
     with zipfile.ZipFile(path, "w") as archive:
         with archive.open("A.npy", "w") as handle:
             np.lib.format.write_array_header_1_0(
-                handle, {"descr": "<f8", "fortran_order": False, "shape": shape})
+                handle, {"descr": "<f8", "fortran_order": False, "shape": shape}
+            )
             handle.write(b"\0" * 64)
         with archive.open("C.npy", "w") as handle:
             np.save(handle, np.ones((3, 1)))
     return path
 
 
-@pytest.mark.parametrize("shape, fragment", [
-    ((10**6, 1), "1,000,000 rows"),
-    ((4000, 4000), "16,000,000 entries"),
-    ((10**5, 10**5), "100,000 rows"),
-])
+@pytest.mark.parametrize(
+    "shape, fragment",
+    [
+        ((10**6, 1), "1,000,000 rows"),
+        ((4000, 4000), "16,000,000 entries"),
+        ((10**5, 10**5), "100,000 rows"),
+    ],
+)
 def test_npz_sizes_are_checked_on_the_header(tmp_path, capsys, monkeypatch, shape, fragment):
     path = _npz_with_header(tmp_path / "bomb.npz", shape)
-    monkeypatch.setattr(np.lib.format, "read_array",
-                        lambda *a, **k: pytest.fail("array read before its size was checked"))
+    monkeypatch.setattr(
+        np.lib.format,
+        "read_array",
+        lambda *a, **k: pytest.fail("array read before its size was checked"),
+    )
     with pytest.raises(SpecError, match=fragment):
         load_spec(path, max_attacked=1)
     monkeypatch.undo()
     refused_everywhere(capsys, tmp_path, path, fragment, extra=("--max-attacked", "1"))
 
 
-@pytest.mark.parametrize("content", [b"PK\x03\x04 truncated", b"\x93NUMPY\x01\x00 one array",
-                                     bytes(range(256))])
+@pytest.mark.parametrize(
+    "content", [b"PK\x03\x04 truncated", b"\x93NUMPY\x01\x00 one array", bytes(range(256))]
+)
 def test_corrupt_npz(tmp_path, capsys, content):
     path = write(tmp_path, "broken.npz", content)
     with pytest.raises(SpecError, match="cannot read the .npz file"):
@@ -783,20 +851,40 @@ MAT_ROWS = [
     ("no-expected-variables", {"B": np.eye(2), "D": np.zeros((3, 1))}, "B", "unknown variable"),
     ("only-A", {"A": np.array(A2)}, "C", "missing"),
     ("lower-case", {"a": np.array(A2), "c": np.array(C3)}, "a", "did you mean 'A'"),
-    ("extra-variables", {"A": np.array(A2), "C": np.array(C3), "Ts": 0.01}, "Ts",
-     "unknown variable"),
+    (
+        "extra-variables",
+        {"A": np.array(A2), "C": np.array(C3), "Ts": 0.01},
+        "Ts",
+        "unknown variable",
+    ),
     ("complex", {"A": np.array(A2) * 1j, "C": np.array(C3)}, "system.A", "complex"),
-    ("logical", {"A": np.eye(2, dtype=bool), "C": np.array(C3)}, "system.A",
-     "MATLAB logical array"),
+    (
+        "logical",
+        {"A": np.eye(2, dtype=bool), "C": np.array(C3)},
+        "system.A",
+        "MATLAB logical array",
+    ),
     ("char", {"A": "ab", "C": np.array(C3)}, "system.A", "MATLAB char array"),
     ("cell", {"A": _cells("x", "y"), "C": np.array(C3)}, "system.A", "MATLAB cell array"),
     ("struct", {"A": {"x": 1.0}, "C": np.array(C3)}, "A", "MATLAB struct"),
-    ("sparse", {"A": scipy.sparse.csc_matrix(np.array(A2)), "C": np.array(C3)}, "A",
-     "MATLAB sparse matrix"),
-    ("sensors-numbers", {"A": np.array(A2), "C": np.array(C3), "sensors": np.arange(3.0)},
-     "sensors", "strings"),
-    ("sensors-duplicate", {"A": np.array(A2), "C": np.array(C3),
-                           "sensors": _cells("a", "b", "a")}, "system.sensors", "unique"),
+    (
+        "sparse",
+        {"A": scipy.sparse.csc_matrix(np.array(A2)), "C": np.array(C3)},
+        "A",
+        "MATLAB sparse matrix",
+    ),
+    (
+        "sensors-numbers",
+        {"A": np.array(A2), "C": np.array(C3), "sensors": np.arange(3.0)},
+        "sensors",
+        "strings",
+    ),
+    (
+        "sensors-duplicate",
+        {"A": np.array(A2), "C": np.array(C3), "sensors": _cells("a", "b", "a")},
+        "system.sensors",
+        "unique",
+    ),
 ]
 
 
@@ -814,8 +902,15 @@ def test_mat_variables(tmp_path, capsys, row, compress):
 
 def test_mat_files_that_load(tmp_path):
     for compress in (False, True):
-        path = mat(tmp_path, {"A": np.array(A2), "C": np.array(C3).astype(np.int16),
-                              "sensors": _cells("p", "v", "w")}, do_compression=compress)
+        path = mat(
+            tmp_path,
+            {
+                "A": np.array(A2),
+                "C": np.array(C3).astype(np.int16),
+                "sensors": _cells("p", "v", "w"),
+            },
+            do_compression=compress,
+        )
         spec = load_spec(path, max_attacked=1)
         assert spec.system.sensors == ("p", "v", "w") and spec.system.p == 3
     path = mat(tmp_path, {"A": np.array(A2), "C": np.array(C3)}, format="4")
@@ -827,13 +922,18 @@ def _v73_header() -> bytes:
     return text.ljust(116, b" ") + b"\0" * 8 + b"\x00\x02IM"
 
 
-@pytest.mark.parametrize("content, fragment", [
-    (_v73_header() + b"\x89HDF\r\n\x1a\n" + b"\0" * 400, "v7.3 (HDF5)"),
-    (b"MATLAB 5.0 MAT-file".ljust(124, b" ") + b"\x00\x01IM" + b"\x0e\x00\x00\x00\xff\xff",
-     "cannot read"),
-    (b"definitely not a MATLAB file " * 8, "cannot read"),
-    (bytes(range(256)) * 4, "cannot read"),
-])
+@pytest.mark.parametrize(
+    "content, fragment",
+    [
+        (_v73_header() + b"\x89HDF\r\n\x1a\n" + b"\0" * 400, "v7.3 (HDF5)"),
+        (
+            b"MATLAB 5.0 MAT-file".ljust(124, b" ") + b"\x00\x01IM" + b"\x0e\x00\x00\x00\xff\xff",
+            "cannot read",
+        ),
+        (b"definitely not a MATLAB file " * 8, "cannot read"),
+        (bytes(range(256)) * 4, "cannot read"),
+    ],
+)
 def test_mat_files_that_cannot_be_read(tmp_path, capsys, content, fragment):
     path = write(tmp_path, "odd.mat", content)
     with pytest.raises(SpecError, match=re.escape(fragment)):
@@ -842,8 +942,9 @@ def test_mat_files_that_cannot_be_read(tmp_path, capsys, content, fragment):
 
 
 def test_truncated_mat_file(tmp_path, capsys):
-    whole = mat(tmp_path, {"A": np.random.default_rng(0).random((6, 6)),
-                           "C": np.ones((3, 6))}).read_bytes()
+    whole = mat(
+        tmp_path, {"A": np.random.default_rng(0).random((6, 6)), "C": np.ones((3, 6))}
+    ).read_bytes()
     for cut in (130, 200, len(whole) // 2, len(whole) - 3):
         path = write(tmp_path, "cut.mat", whole[:cut])
         with pytest.raises(SpecError, match="cannot read the .mat file"):
@@ -852,10 +953,10 @@ def test_truncated_mat_file(tmp_path, capsys):
 
 
 def test_mat_sizes_are_checked_before_loading(tmp_path, monkeypatch):
-    path = mat(tmp_path, {"A": np.zeros((1, 1)), "C": np.zeros((12_000, 1))},
-               do_compression=True)
-    monkeypatch.setattr(scipy.io, "loadmat",
-                        lambda *a, **k: pytest.fail("loaded before the size was checked"))
+    path = mat(tmp_path, {"A": np.zeros((1, 1)), "C": np.zeros((12_000, 1))}, do_compression=True)
+    monkeypatch.setattr(
+        scipy.io, "loadmat", lambda *a, **k: pytest.fail("loaded before the size was checked")
+    )
     with pytest.raises(SpecError, match="12,000 rows"):
         load_spec(path, max_attacked=1)
 
@@ -873,15 +974,20 @@ def listing(folder: Path) -> list[str]:
 def test_out_under_a_regular_file(tmp_path, capsys):
     (tmp_path / "file").write_text("x")
     before = listing(tmp_path)
-    assert_refused(*cli(capsys, "certify", "ugv", "--no-sim", "--out", f"{tmp_path}/file/sub"),
-                   f"{tmp_path}/file/sub", "is a file")
+    assert_refused(
+        *cli(capsys, "certify", "ugv", "--no-sim", "--out", f"{tmp_path}/file/sub"),
+        f"{tmp_path}/file/sub",
+        "is a file",
+    )
     assert listing(tmp_path) == before
 
 
 def test_out_that_is_a_file(tmp_path, capsys):
     (tmp_path / "file").write_text("x")
-    assert_refused(*cli(capsys, "certify", "ugv", "--no-sim", "--out", str(tmp_path / "file")),
-                   "exists and is not a folder")
+    assert_refused(
+        *cli(capsys, "certify", "ugv", "--no-sim", "--out", str(tmp_path / "file")),
+        "exists and is not a folder",
+    )
 
 
 @pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="no /proc here")
@@ -895,8 +1001,9 @@ def test_an_impossible_output_path(tmp_path, capsys, option):
     assert not os.path.exists("/proc/ssecert-test")
 
 
-@pytest.mark.skipif(hasattr(os, "geteuid") and os.geteuid() == 0,
-                    reason="root writes into read-only folders")
+@pytest.mark.skipif(
+    hasattr(os, "geteuid") and os.geteuid() == 0, reason="root writes into read-only folders"
+)
 def test_a_read_only_folder(tmp_path, capsys):
     folder = tmp_path / "ro"
     folder.mkdir()
@@ -921,29 +1028,35 @@ def test_a_folder_that_refuses_files(tmp_path, capsys, monkeypatch):
 
     monkeypatch.setattr(tempfile, "mkstemp", refuse)
     out = tmp_path / "out"
-    err = assert_refused(*cli(capsys, "certify", "ugv", "--no-sim", "--out", str(out)),
-                         "Permission denied")
+    err = assert_refused(
+        *cli(capsys, "certify", "ugv", "--no-sim", "--out", str(out)), "Permission denied"
+    )
     assert f"{out}/ugv.html" in err and ".tmp" not in err
     assert not out.exists()  # the folder made for the report is removed again
     err = assert_refused(*cli(capsys, "analyze", "ugv", "--json", str(tmp_path / "a.json")))
     assert f"{tmp_path}/a.json" in err and listing(tmp_path) == []
 
 
-@pytest.mark.parametrize("argv, fragment", [
-    (["analyze", "ugv", "--json", "{tmp}"], "is a folder"),
-    (["analyze", "ugv", "--json", "{tmp}/no/such/a.json"], "does not exist"),
-    (["analyze", "ugv", "--json", ""], "empty path"),
-    (["certify", "ugv", "--out", ""], "empty path"),
-    (["simulate", "ugv", "--json", "{tmp}"], "is a folder"),
-    (["certify", "ugv", "--out", "{tmp}/out", "--json", "{tmp}"], "is a folder"),
-])
-def test_bad_output_paths_are_refused_before_the_run(tmp_path, capsys, monkeypatch, argv,
-                                                     fragment):
+@pytest.mark.parametrize(
+    "argv, fragment",
+    [
+        (["analyze", "ugv", "--json", "{tmp}"], "is a folder"),
+        (["analyze", "ugv", "--json", "{tmp}/no/such/a.json"], "does not exist"),
+        (["analyze", "ugv", "--json", ""], "empty path"),
+        (["certify", "ugv", "--out", ""], "empty path"),
+        (["simulate", "ugv", "--json", "{tmp}"], "is a folder"),
+        (["certify", "ugv", "--out", "{tmp}/out", "--json", "{tmp}"], "is a folder"),
+    ],
+)
+def test_bad_output_paths_are_refused_before_the_run(tmp_path, capsys, monkeypatch, argv, fragment):
     def too_early(*args, **kwargs):
         pytest.fail("the run started before the paths were checked")
 
-    for module, name in (("ssecert.analyze", "analyze"), ("ssecert.certify", "analyze"),
-                         ("ssecert.simulation.engine", "simulate_spec")):
+    for module, name in (
+        ("ssecert.analyze", "analyze"),
+        ("ssecert.certify", "analyze"),
+        ("ssecert.simulation.engine", "simulate_spec"),
+    ):
         monkeypatch.setattr(sys.modules[module], name, too_early)
     argv = [a.replace("{tmp}", str(tmp_path)) for a in argv]
     assert_refused(*cli(capsys, *argv), fragment)
@@ -952,8 +1065,9 @@ def test_bad_output_paths_are_refused_before_the_run(tmp_path, capsys, monkeypat
 
 def test_an_existing_report_folder_name(tmp_path, capsys):
     (tmp_path / "ugv.html").mkdir()
-    assert_refused(*cli(capsys, "certify", "ugv", "--no-sim", "--out", str(tmp_path)),
-                   "ugv.html is a folder")
+    assert_refused(
+        *cli(capsys, "certify", "ugv", "--no-sim", "--out", str(tmp_path)), "ugv.html is a folder"
+    )
 
 
 @pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no named pipes here")
@@ -1023,8 +1137,16 @@ def test_renderer_failing_half_way(tmp_path, capsys, monkeypatch, old_reports):
         raise RuntimeError("renderer broke")
 
     monkeypatch.setattr(json_report, "certify_json", broken)
-    status, out, err = cli(capsys, "certify", "ugv", "--no-sim", "--out", str(old_reports),
-                           "--json", str(tmp_path / "copy.json"))
+    status, out, err = cli(
+        capsys,
+        "certify",
+        "ugv",
+        "--no-sim",
+        "--out",
+        str(old_reports),
+        "--json",
+        str(tmp_path / "copy.json"),
+    )
     assert status == 4 and "internal error" in err  # a bug: reported as one
     assert_old_reports_intact(old_reports)
     assert not (tmp_path / "copy.json").exists()
@@ -1042,16 +1164,25 @@ def test_disk_full_while_writing(tmp_path, capsys, monkeypatch, old_reports, fai
         real_fsync(fd)
 
     monkeypatch.setattr(os, "fsync", fsync)
-    status, out, err = cli(capsys, "certify", "ugv", "--no-sim", "--out", str(old_reports),
-                           "--json", str(tmp_path / "copy.json"))
+    status, out, err = cli(
+        capsys,
+        "certify",
+        "ugv",
+        "--no-sim",
+        "--out",
+        str(old_reports),
+        "--json",
+        str(tmp_path / "copy.json"),
+    )
     assert_refused(status, out, err, "No space left on device")
     assert_old_reports_intact(old_reports)
     assert not (tmp_path / "copy.json").exists()
 
 
 @pytest.mark.parametrize("failure", [KeyboardInterrupt, OSError])
-def test_failure_between_renames_restores_the_old_files(tmp_path, capsys, monkeypatch,
-                                                        old_reports, failure):
+def test_failure_between_renames_restores_the_old_files(
+    tmp_path, capsys, monkeypatch, old_reports, failure
+):
     calls = []
     real_replace = os.replace
 
@@ -1100,10 +1231,15 @@ _OBSERVERS = [
 
 def degenerate_spec(folder: Path, name: str, observer: int) -> Path:
     A, C = _DEGENERATE[name]
-    data = {"name": name, "system": {"A": A, "C": C}, "attack": {"max_attacked": 1},
-            "observer": _OBSERVERS[observer],
-            "scenario": [{"name": "constant", "attack": "constant", "sensors": [1],
-                          "steps": 40, "runs": 4}]}
+    data = {
+        "name": name,
+        "system": {"A": A, "C": C},
+        "attack": {"max_attacked": 1},
+        "observer": _OBSERVERS[observer],
+        "scenario": [
+            {"name": "constant", "attack": "constant", "sensors": [1], "steps": 40, "runs": 4}
+        ],
+    }
     return write(folder, f"{name}.toml", data)
 
 
@@ -1127,15 +1263,21 @@ def test_packaged_examples_raise_no_warning(tmp_path, capsys, name):
     assert status in (0, 1, 3) and "note:" not in out
 
 
-@pytest.mark.parametrize("name, observer", [
-    pytest.param(name, k, id=f"{name}-{o['kind']}")
-    for name in _DEGENERATE for k, o in enumerate(_OBSERVERS)
-])
+@pytest.mark.parametrize(
+    "name, observer",
+    [
+        pytest.param(name, k, id=f"{name}-{o['kind']}")
+        for name in _DEGENERATE
+        for k, o in enumerate(_OBSERVERS)
+    ],
+)
 def test_degenerate_plants_raise_no_warning(tmp_path, capsys, name, observer):
     path = degenerate_spec(tmp_path, name, observer)
     # certify runs every check of analyze, the simulations and the report
-    for argv in (["certify", str(path), "--out", str(tmp_path / "out"), "--json", "-"],
-                 ["simulate", str(path), "--json", "-"]):
+    for argv in (
+        ["certify", str(path), "--out", str(tmp_path / "out"), "--json", "-"],
+        ["simulate", str(path), "--json", "-"],
+    ):
         status, out, err = run_quietly(capsys, *argv)
         if status == 2:  # simulate without a gain: a refusal, on one line
             assert_refused(status, out, err, "observer gain cannot be computed")
@@ -1162,9 +1304,23 @@ def test_what_the_warnings_said_is_kept(tmp_path, capsys):
 def test_no_warning_reaches_stderr_of_a_fresh_interpreter(tmp_path):
     path = degenerate_spec(tmp_path, "huge", 2)
     env = {k: v for k, v in os.environ.items() if k != "PYTHONWARNINGS"}
-    done = subprocess.run([sys.executable, "-m", "ssecert", "certify", str(path), "--out",
-                           str(tmp_path / "out"), "--json", "-"], capture_output=True, text=True,
-                          env=env, timeout=300)
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "ssecert",
+            "certify",
+            str(path),
+            "--out",
+            str(tmp_path / "out"),
+            "--json",
+            "-",
+        ],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=300,
+    )
     assert done.returncode in (1, 3), done.stderr
     assert "Warning" not in done.stderr and "Traceback" not in done.stderr, done.stderr
     json.loads(done.stdout)
@@ -1179,8 +1335,9 @@ def _outputs(folder: Path, name: str) -> tuple[str, dict[str, Any]]:
     return (folder / f"{name}.html").read_text(), json.loads((folder / f"{name}.json").read_text())
 
 
-@pytest.mark.parametrize("typed", ["specs/plant.toml", "../specs/plant.toml",
-                                   "./specs/../specs/plant.toml"])
+@pytest.mark.parametrize(
+    "typed", ["specs/plant.toml", "../specs/plant.toml", "./specs/../specs/plant.toml"]
+)
 def test_reports_name_the_spec_as_typed(tmp_path, capsys, monkeypatch, typed):
     (tmp_path / "specs").mkdir()
     write(tmp_path / "specs", "plant.toml", GOOD)
@@ -1214,14 +1371,16 @@ def test_packaged_examples_are_named_by_name(tmp_path, capsys):
 def _masked(html: str, document: dict[str, Any]) -> tuple[str, str]:
     html = re.sub(r"<th>date</th><td>[^<]*</td>", "<th>date</th><td>DATE</td>", html)
     document["meta"]["date"] = "DATE"
-    document["meta"]["timings"] = {key: "SECONDS" for key in document["meta"].get("timings", {})}
+    document["meta"]["timings"] = dict.fromkeys(document["meta"].get("timings", {}), "SECONDS")
     return html, json.dumps(document, indent=1)  # keeps the order of the keys
 
 
 @pytest.mark.parametrize("simulate", [False, True], ids=["no-sim", "with-simulations"])
 def test_regenerating_a_report_changes_only_its_date(tmp_path, capsys, monkeypatch, simulate):
     monkeypatch.chdir(tmp_path)
-    argv = ["certify", "ugv", "--out", "reports", "--seed", "3"] + ([] if simulate else ["--no-sim"])
+    argv = ["certify", "ugv", "--out", "reports", "--seed", "3"] + (
+        [] if simulate else ["--no-sim"]
+    )
     runs = []
     for _ in range(2):
         assert cli(capsys, *argv)[0] == 1
@@ -1229,7 +1388,9 @@ def test_regenerating_a_report_changes_only_its_date(tmp_path, capsys, monkeypat
         assert listing(tmp_path / "reports") == ["ugv.html", "ugv.json"]  # no temporary file
     (html_1, doc_1), (html_2, doc_2) = runs
     if simulate:
-        assert doc_1["simulations"] and set(doc_1["meta"]["timings"]) == set(doc_2["meta"]["timings"])
+        assert doc_1["simulations"] and set(doc_1["meta"]["timings"]) == set(
+            doc_2["meta"]["timings"]
+        )
     first, second = _masked(html_1, doc_1), _masked(html_2, doc_2)
     assert first[0] == second[0], "the HTML changed beyond its date"
     assert first[1] == second[1], "the JSON changed beyond its date and timings"

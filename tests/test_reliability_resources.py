@@ -55,8 +55,9 @@ def random_design(seed, kind):
         A = rho * np.eye(n)
         for i in range(0, n - 1, 2):
             t = rng.uniform(0, np.pi)
-            A[i:i + 2, i:i + 2] = rho * np.array([[np.cos(t), -np.sin(t)],
-                                                  [np.sin(t), np.cos(t)]])
+            A[i : i + 2, i : i + 2] = rho * np.array(
+                [[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]]
+            )
     else:
         A = rho * np.eye(n) + np.diag(np.ones(n - 1), 1)
     C = rng.standard_normal((p, n)) * float(rng.choice([1e-3, 0.1, 1.0, 10.0, 1e3]))
@@ -65,8 +66,9 @@ def random_design(seed, kind):
     observer = {"kind": kind}
     if kind in ("luenberger", "dsso", "elastic_net"):
         gain = str(rng.choice(["deadbeat", "place", "pinv", "matrix"]))
-        observer["gain"] = ((rng.standard_normal((n, p)) * _number(rng)).tolist()
-                            if gain == "matrix" else gain)
+        observer["gain"] = (
+            (rng.standard_normal((n, p)) * _number(rng)).tolist() if gain == "matrix" else gain
+        )
         if gain == "place":
             observer["poles"] = [float(x) for x in rng.uniform(-0.9, 0.9, n)]
     if kind != "luenberger":
@@ -77,8 +79,12 @@ def random_design(seed, kind):
         observer["shrink"] = float(rng.choice([1e-8, 0.1, 0.5, 0.9, 1 - 1e-8]))
     if kind == "sso" and rng.random() < 0.5:
         observer["window"] = int(rng.integers(1, 4))
-    return {"name": f"random{seed}", "system": {"A": A.tolist(), "C": C.tolist()},
-            "attack": {"max_attacked": int(rng.integers(0, p + 1))}, "observer": observer}
+    return {
+        "name": f"random{seed}",
+        "system": {"A": A.tolist(), "C": C.tolist()},
+        "attack": {"max_attacked": int(rng.integers(0, p + 1))},
+        "observer": observer,
+    }
 
 
 def _write(tmp_path, text, name="spec.toml"):
@@ -137,8 +143,9 @@ def test_pi_map_reports_why_the_series_cannot_be_summed():
     assert np.all(np.isfinite(pi_map(np.array([[5.0]]), F_inv, L1, 1.0, 1.0)))
 
 
-SERIES_DESIGNS = json.loads((Path(__file__).parent / "data" /
-                             "thesis_series_designs.json").read_text())
+SERIES_DESIGNS = json.loads(
+    (Path(__file__).parent / "data" / "thesis_series_designs.json").read_text()
+)
 
 
 @pytest.mark.parametrize("index", range(len(SERIES_DESIGNS)))
@@ -151,8 +158,11 @@ def test_sso_designs_whose_thesis_search_once_raised(index):
     verdict, items = thesis_assumptions(design, observability_holds=True)
     assert time.perf_counter() - start < 20
     assert verdict in ("holds", "fails", "inconclusive")
-    failures = [d.get("first_failure") or d.get("search", {}).get("first_failure")
-                for d in (i.details for i in items) if isinstance(d, dict)]
+    failures = [
+        d.get("first_failure") or d.get("search", {}).get("first_failure")
+        for d in (i.details for i in items)
+        if isinstance(d, dict)
+    ]
     for reason in filter(None, failures):
         assert "terms" in reason or "overflow" in reason
 
@@ -176,9 +186,17 @@ def test_random_designs_of_every_kind_analyze_without_exception(seed):
 
 def _elastic_net_model():
     spec = load_example("ugv")
-    design = build_observer(spec.system, {"kind": "elastic_net", "gain": "place",
-                                          "poles": [0.5, 0.6], "step": 0.05,
-                                          "threshold": 0.1, "shrink": 0.5})
+    design = build_observer(
+        spec.system,
+        {
+            "kind": "elastic_net",
+            "gain": "place",
+            "poles": [0.5, 0.6],
+            "step": 0.05,
+            "threshold": 0.1,
+            "shrink": 0.5,
+        },
+    )
     return design, lmi.LureModel.from_design(design)
 
 
@@ -195,11 +213,13 @@ def _failing_solve(mode):
             return 0.0
         self._status = mode  # a status, and no values
         return None
+
     return solve
 
 
-@pytest.mark.parametrize("mode", ["raise", "infeasible_inaccurate", "solver_error",
-                                  "optimal", "nan"])
+@pytest.mark.parametrize(
+    "mode", ["raise", "infeasible_inaccurate", "solver_error", "optimal", "nan"]
+)
 def test_lmi_solver_failures_are_inconclusive(monkeypatch, mode):
     import cvxpy as cp
 
@@ -210,14 +230,28 @@ def test_lmi_solver_failures_are_inconclusive(monkeypatch, mode):
     iss = lmi.iss_certificate(model)
     for cert in (circle, iss):
         assert cert.verdict == "inconclusive"
-        expected = {"raise": "SolverError: Clarabel failed", "nan": "no finite values",
-                    "optimal": "no finite values"}.get(mode, mode)
+        expected = {
+            "raise": "SolverError: Clarabel failed",
+            "nan": "no finite values",
+            "optimal": "no finite values",
+        }.get(mode, mode)
         assert expected in cert.reason
     region = lmi.region_map(design, [0.5, 0.9], [0.05])
     assert set(region.verdicts.ravel()) == {"inconclusive"}
-    checks = {c.id: c for c in observer_checks(design.system, {
-        "kind": "elastic_net", "gain": "place", "poles": [0.5, 0.6], "step": 0.05,
-        "threshold": 0.1, "shrink": 0.5})}
+    checks = {
+        c.id: c
+        for c in observer_checks(
+            design.system,
+            {
+                "kind": "elastic_net",
+                "gain": "place",
+                "poles": [0.5, 0.6],
+                "step": 0.05,
+                "threshold": 0.1,
+                "shrink": 0.5,
+            },
+        )
+    }
     assert checks["observer_stability"].verdict.value == "inconclusive"
     assert "no circle-criterion certificate" in checks["observer_stability"].summary
     assert checks["iss_gain"].verdict.value == "inconclusive"
@@ -227,7 +261,9 @@ def test_solver_failure_in_the_cli_is_exit_3_not_4(monkeypatch, tmp_path, capsys
     import cvxpy as cp
 
     monkeypatch.setattr(cp.Problem, "solve", _failing_solve("raise"))
-    spec = _write(tmp_path, """name = "en"
+    spec = _write(
+        tmp_path,
+        """name = "en"
 [system]
 A = [[0.5, 0.1], [0.0, 0.6]]
 C = [[1, 0], [0, 1], [1, 1], [1, -1], [2, 1]]
@@ -239,7 +275,8 @@ gain = "pinv"
 step = 0.05
 threshold = 0.1
 shrink = 0.5
-""")
+""",
+    )
     code, out, err = _run(capsys, "analyze", spec, "--json", "-")
     assert code == 3, err
     stab = json.loads(out)["checks"]["observer_stability"]
@@ -249,8 +286,13 @@ shrink = 0.5
 def test_iss_gain_from_a_circle_certificate_survives_singular_schur_blocks():
     _, model = _elastic_net_model()
     circle = lmi.circle_certificate(model)
-    broken = lmi.LMICertificate("holds", "circle", P=np.zeros_like(circle.P),
-                                multipliers=circle.multipliers, decay=circle.decay)
+    broken = lmi.LMICertificate(
+        "holds",
+        "circle",
+        P=np.zeros_like(circle.P),
+        multipliers=circle.multipliers,
+        decay=circle.decay,
+    )
     cert = lmi.iss_from_circle(model, broken)
     assert cert.verdict == "inconclusive" and cert.reason
 
@@ -322,7 +364,9 @@ def test_s_far_above_p_returns_at_once(method):
 
 
 def test_s_far_above_p_through_analyze_and_certify(tmp_path, capsys):
-    spec = PLANT3.replace("max_attacked = 1", "max_attacked = 1000000000000") + """
+    spec = (
+        PLANT3.replace("max_attacked = 1", "max_attacked = 1000000000000")
+        + """
 [observer]
 kind = "elastic_net"
 gain = "pinv"
@@ -335,9 +379,11 @@ attack = "stealthy"
 steps = 20
 runs = 2
 """
+    )
     start = time.perf_counter()
-    code, out, err = _run(capsys, "certify", _write(tmp_path, spec), "--out", str(tmp_path),
-                          "--json", "-")
+    code, out, err = _run(
+        capsys, "certify", _write(tmp_path, spec), "--out", str(tmp_path), "--json", "-"
+    )
     assert time.perf_counter() - start < 60
     assert code == 1, err
     doc = json.loads(out)
@@ -401,10 +447,14 @@ def _window_spec(window):
     A = rng.standard_normal((12, 12))
     A *= 0.95 / np.abs(np.linalg.eigvals(A)).max()
     C = rng.standard_normal((3, 12))
-    return spec_from_dict({"name": "window", "system": {"A": A.tolist(), "C": C.tolist()},
-                           "attack": {"max_attacked": 1},
-                           "observer": {"kind": "sso", "step": 0.01, "threshold": 0.1,
-                                        "window": window}})
+    return spec_from_dict(
+        {
+            "name": "window",
+            "system": {"A": A.tolist(), "C": C.tolist()},
+            "attack": {"max_attacked": 1},
+            "observer": {"kind": "sso", "step": 0.01, "threshold": 0.1, "window": window},
+        }
+    )
 
 
 def test_sso_window_50_lmi_is_refused_with_the_estimate():
@@ -439,9 +489,17 @@ def test_small_budget_refuses_the_lure_model_and_the_region_map():
     assert "not attempted" in checks["observer_stability"].summary
     assert "1 MiB" in checks["observer_stability"].summary
     en = load_example("ugv")
-    design = build_observer(en.system, {"kind": "elastic_net", "gain": "place",
-                                        "poles": [0.5, 0.6], "step": 0.05, "threshold": 0.1,
-                                        "shrink": 0.5})
+    design = build_observer(
+        en.system,
+        {
+            "kind": "elastic_net",
+            "gain": "place",
+            "poles": [0.5, 0.6],
+            "step": 0.05,
+            "threshold": 0.1,
+            "shrink": 0.5,
+        },
+    )
     from ssecert.certify import _region
 
     notes = []
@@ -455,8 +513,9 @@ def test_thesis_checks_refuse_huge_attack_estimates():
     verdict, items = thesis_assumptions(design, budget=Budget(memory=2**20))
     reasons = {i.name: i.reason for i in items}
     assert verdict == "inconclusive"
-    assert "not attempted" in reasons["lemma_1"] and "30 attack-estimate entries" in reasons[
-        "lemma_1"]
+    assert (
+        "not attempted" in reasons["lemma_1"] and "30 attack-estimate entries" in reasons["lemma_1"]
+    )
 
 
 SCENARIO_SPEC = """name = "sim"
@@ -491,9 +550,13 @@ def test_simulate_refuses_runs_times_steps_up_front(tmp_path, capsys):
     small = _write(tmp_path, SCENARIO_SPEC.format(runs=2, steps=10), "small.toml")
     code, out, err = _run(capsys, "simulate", small, "--steps", "1000000000")
     assert code == 2 and "--steps" in err and "scenario[0].runs" in err
-    window = _write(tmp_path, SCENARIO_SPEC.format(runs=2, steps=10).replace(
-        'kind = "elastic_net"\ngain = "pinv"', 'kind = "sso"').replace(
-        "shrink = 0.5", "window = 1000000"), "window.toml")
+    window = _write(
+        tmp_path,
+        SCENARIO_SPEC.format(runs=2, steps=10)
+        .replace('kind = "elastic_net"\ngain = "pinv"', 'kind = "sso"')
+        .replace("shrink = 0.5", "window = 1000000"),
+        "window.toml",
+    )
     code, out, err = _run(capsys, "simulate", window)
     assert code == 2 and err.count("\n") == 1
     assert "window.toml: observer.window = 1,000,000" in err and "TiB" in err
@@ -520,8 +583,7 @@ def test_simulation_chunks_fit_a_small_memory_budget(tmp_path):
     _, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
     assert peak < small.memory
-    np.testing.assert_allclose(bounded.relative_error, full.relative_error, rtol=1e-12,
-                               atol=1e-12)
+    np.testing.assert_allclose(bounded.relative_error, full.relative_error, rtol=1e-12, atol=1e-12)
     with pytest.raises(ResourceLimitError, match="needs about"):
         simulate_spec(spec, steps=10**9)
 
@@ -530,8 +592,9 @@ def test_budget_options_on_the_command_line(tmp_path, capsys):
     path = _write(tmp_path, PLANT3)
     code, out, err = _run(capsys, "analyze", path, "--memory-budget", "lots")
     assert code == 2 and "--memory-budget" in err and "512M" in err
-    code, out, err = _run(capsys, "analyze", path, "--horizon", "3000", "--memory-budget", "8M",
-                          "--json", "-")
+    code, out, err = _run(
+        capsys, "analyze", path, "--horizon", "3000", "--memory-budget", "8M", "--json", "-"
+    )
     assert code in (0, 1, 3), err
     irr = json.loads(out)["checks"]["irrepresentable"]
     assert irr["verdict"] == "inconclusive" and "memory budget of 8 MiB" in irr["summary"]

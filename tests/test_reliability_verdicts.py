@@ -44,8 +44,10 @@ def _exact_power_inf_norm(A, L, C, m):
     shift = max(exponent(A), eL + eC)
     Ai, Li, Ci = ints(A, shift), ints(L, eL), ints(C, eC)
     Li = [[x * 2 ** (shift - eL - eC) for x in row] for row in Li]
-    F = [[Ai[i][j] - sum(Li[i][k] * Ci[k][j] for k in range(C.shape[0])) for j in range(n)]
-         for i in range(n)]  # F * 2^shift
+    F = [
+        [Ai[i][j] - sum(Li[i][k] * Ci[k][j] for k in range(C.shape[0])) for j in range(n)]
+        for i in range(n)
+    ]  # F * 2^shift
 
     def mul(X, Y):
         return [[sum(X[i][k] * Y[k][j] for k in range(n)) for j in range(n)] for i in range(n)]
@@ -65,9 +67,14 @@ def _exact_power_inf_norm(A, L, C, m):
 
 
 def _design(A, C, observer, s=0):
-    return spec_from_dict({"name": "t", "system": {"A": np.asarray(A).tolist(),
-                                                    "C": np.asarray(C).tolist()},
-                           "attack": {"max_attacked": s}, "observer": observer})
+    return spec_from_dict(
+        {
+            "name": "t",
+            "system": {"A": np.asarray(A).tolist(), "C": np.asarray(C).tolist()},
+            "attack": {"max_attacked": s},
+            "observer": observer,
+        }
+    )
 
 
 # ---------------------------------------------------------------------------
@@ -115,8 +122,12 @@ def test_verify_deadbeat_on_an_exact_integer_gain():
     assert check.radius_upper == 0.0
 
 
-@given(seed=st.integers(0, 2**32 - 1), n=st.integers(2, 7), p=st.integers(1, 3),
-       scale=st.sampled_from([1e-6, 1.0, 1e6]))
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    n=st.integers(2, 7),
+    p=st.integers(1, 3),
+    scale=st.sampled_from([1e-6, 1.0, 1e6]),
+)
 def test_observer_checks_never_contradict(seed, n, p, scale):
     """observer_gain and observer_stability of a linear observer decide the same matrix."""
     rng = np.random.default_rng(seed)
@@ -145,9 +156,12 @@ def test_sensor_units_do_not_change_verdicts():
     assert sparse.verdict.value == "holds" and sparse.fields["max_removable"] == 1
 
 
-@given(seed=st.integers(0, 2**32 - 1), kind=st.sampled_from(["distinct", "jordan", "mixed"]),
-       powers=st.lists(st.integers(-60, 60), min_size=1, max_size=8),
-       factors=st.lists(st.floats(1e-9, 1e9), min_size=1, max_size=8))
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    kind=st.sampled_from(["distinct", "jordan", "mixed"]),
+    powers=st.lists(st.integers(-60, 60), min_size=1, max_size=8),
+    factors=st.lists(st.floats(1e-9, 1e9), min_size=1, max_size=8),
+)
 def test_row_scaling_is_invisible(seed, kind, powers, factors):
     """Power-of-two units change nothing at all.  Other factors round each entry on its own,
     which can break structure that rests on cancellation (C v = 0 with nonzero entries) by
@@ -166,11 +180,16 @@ def test_row_scaling_is_invisible(seed, kind, powers, factors):
         b = sparse_observability(exact_units, s)
         c = sparse_observability(other_units, s)
         assert (a.verdict, a.fields["max_removable"], a.fields["breaking_set"]) == (
-            b.verdict, b.fields["max_removable"], b.fields["breaking_set"]), (seed, d2)
+            b.verdict,
+            b.fields["max_removable"],
+            b.fields["breaking_set"],
+        ), (seed, d2)
         assert {a.verdict.value, c.verdict.value} != {"holds", "fails"}, (seed, d)
     assert observability(base).verdict == observability(exact_units).verdict
-    assert {observability(base).verdict.value,
-            observability(other_units).verdict.value} != {"holds", "fails"}
+    assert {observability(base).verdict.value, observability(other_units).verdict.value} != {
+        "holds",
+        "fails",
+    }
 
 
 @pytest.mark.parametrize("factor", [1e-12, 1e-8, 0.3, 7.0, 1e8, 1e12])
@@ -185,7 +204,10 @@ def test_units_of_a_zero_pattern_plant_never_matter(factor):
             a = sparse_observability(System(A, C), s)
             b = sparse_observability(System(A, scaled), s)
             assert (a.verdict, a.fields["max_removable"], a.fields["breaking_set"]) == (
-                b.verdict, b.fields["max_removable"], b.fields["breaking_set"]), (i, s)
+                b.verdict,
+                b.fields["max_removable"],
+                b.fields["breaking_set"],
+            ), (i, s)
 
 
 def test_entries_near_the_float_range_give_answers_not_crashes():
@@ -217,8 +239,9 @@ def test_sub_precision_perturbations_are_not_degeneracies(where, exponent):
     assert check.verdict.value != "fails" or check.witness.get("z_exact_integers"), check.summary
     if check.verdict.value == "inconclusive":
         assert "precision" in check.summary
-    exact_degenerate = sparse_observability(System(np.eye(3), np.array(
-        [[1.0, 0, 0], [0, 1.0, 0], [1.0, 1.0, 0], [0, 0, 1.0]])), 1)
+    exact_degenerate = sparse_observability(
+        System(np.eye(3), np.array([[1.0, 0, 0], [0, 1.0, 0], [1.0, 1.0, 0], [0, 0, 1.0]])), 1
+    )
     assert exact_degenerate.verdict.value == "fails"
     assert exact_degenerate.witness["z_exact_integers"]
 
@@ -250,8 +273,9 @@ def test_hidden_jordan_structure_is_never_answered_wrongly(seed):
             context = (seed, method, s, pl.description, check.summary)
             if check.verdict.value == "inconclusive":
                 continue
-            assert check.verdict.value == ("holds" if 2 * s <= pl.max_removable else "fails"), \
+            assert check.verdict.value == ("holds" if 2 * s <= pl.max_removable else "fails"), (
                 context
+            )
             mr = check.fields["max_removable"]
             if check.fields["max_removable_is_lower_bound"]:
                 assert mr <= pl.max_removable, context
@@ -267,8 +291,13 @@ def test_the_answer_does_not_depend_on_the_horizon():
     answers = set()
     for horizon in (3, 4, 10, 200, 2000):
         check = sparse_observability(System(A, C), 1, horizon=horizon)
-        answers.add((check.verdict.value, check.fields["max_removable"],
-                     tuple(check.fields["breaking_set"])))
+        answers.add(
+            (
+                check.verdict.value,
+                check.fields["max_removable"],
+                tuple(check.fields["breaking_set"]),
+            )
+        )
         assert check.witness["verified"]
         # cut at the first overflow of the eigenvalue-3 mode, never below n steps
         assert 3 <= len(check.witness["attack_a"]) <= horizon
@@ -287,10 +316,17 @@ def test_transient_growth_is_not_instability():
 
 
 def test_nearly_nilpotent_large_matrix_is_decided_exactly():
-    gain = deadbeat_gain(System(np.diag(np.ones(5), 1) * 1e3 + np.diag(np.ones(5), -1) * 1e-3,
-                                np.eye(6)[:1]))
-    decision = schur_decision(gain.error_matrix, parts=(
-        np.diag(np.ones(5), 1) * 1e3 + np.diag(np.ones(5), -1) * 1e-3, gain.L, np.eye(6)[:1]))
+    gain = deadbeat_gain(
+        System(np.diag(np.ones(5), 1) * 1e3 + np.diag(np.ones(5), -1) * 1e-3, np.eye(6)[:1])
+    )
+    decision = schur_decision(
+        gain.error_matrix,
+        parts=(
+            np.diag(np.ones(5), 1) * 1e3 + np.diag(np.ones(5), -1) * 1e-3,
+            gain.L,
+            np.eye(6)[:1],
+        ),
+    )
     # whatever floats say about its eigenvalues, the decision is exact or honestly open
     assert decision.state in ("stable", "unstable", "unknown")
     if decision.state == "stable":
@@ -309,17 +345,22 @@ def test_analyze_agrees_with_the_checks_run_alone_in_any_units():
     """analyze shares one eigenvalue analysis between checks: it must be of the same units."""
     A = 1e6 * np.diag([1.0, 2.0, 3.0])
     C = np.array([[1e-8, 0, 0], [0, 1e8, 0], [0, 0, 3.0], [1.0, 1.0, 1.0]])
-    spec = spec_from_dict({"name": "u", "system": {"A": A.tolist(), "C": C.tolist()},
-                           "attack": {"max_attacked": 1}})
+    spec = spec_from_dict(
+        {"name": "u", "system": {"A": A.tolist(), "C": C.tolist()}, "attack": {"max_attacked": 1}}
+    )
     cert = analyze(spec)
     alone = (observability(System(A, C)), sparse_observability(System(A, C), 1))
     for check in alone:
         together = cert[check.id]
         assert (together.verdict, together.value, together.fields.get("breaking_set")) == (
-            check.verdict, check.value, check.fields.get("breaking_set"))
+            check.verdict,
+            check.value,
+            check.fields.get("breaking_set"),
+        )
     assert cert["observability"].verdict.value == "holds"
-    np.testing.assert_allclose(sorted(np.real(cert["observability"].evidence["eigenvalues"])),
-                               [1e6, 2e6, 3e6])
+    np.testing.assert_allclose(
+        sorted(np.real(cert["observability"].evidence["eigenvalues"])), [1e6, 2e6, 3e6]
+    )
 
 
 def test_contradicting_checks_are_withdrawn_not_reported():
@@ -331,8 +372,10 @@ def test_contradicting_checks_are_withdrawn_not_reported():
     cert = analyze(load_example("notes-example-3"))
     checks = list(cert.checks)
     i = [c.id for c in checks].index("sparse_observability")
-    checks[i] = replace(checks[i], fields={**checks[i].fields, "max_removable": -1,
-                                           "max_removable_is_lower_bound": False})
+    checks[i] = replace(
+        checks[i],
+        fields={**checks[i].fields, "max_removable": -1, "max_removable_is_lower_bound": False},
+    )
     fixed, notes = reconcile(checks)
     by_id = {c.id: c for c in fixed}
     assert by_id["observability"].verdict.value == "inconclusive"

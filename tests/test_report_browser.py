@@ -17,30 +17,46 @@ from ssecert.examples import load_example
 from ssecert.report.html import write_report
 
 ARTIFACTS = Path(__file__).resolve().parents[1] / "test-artifacts"
-CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser") or shutil.which("google-chrome")
+CHROMIUM = (
+    shutil.which("chromium") or shutil.which("chromium-browser") or shutil.which("google-chrome")
+)
 CHROMEDRIVER = shutil.which("chromedriver")
 
 
 def _browser():
-    missing = [name for name, path in (("chromium", CHROMIUM), ("chromedriver", CHROMEDRIVER))
-               if path is None]
+    missing = [
+        name
+        for name, path in (("chromium", CHROMIUM), ("chromedriver", CHROMEDRIVER))
+        if path is None
+    ]
     try:
         from selenium import webdriver
         from selenium.webdriver.chrome.service import Service
     except ImportError:
         missing.append("selenium")
     if missing:
-        reason = (f"no headless browser: {', '.join(missing)} not installed (Debian packages "
-                  f"chromium and chromium-driver, Python package selenium)")
+        reason = (
+            f"no headless browser: {', '.join(missing)} not installed (Debian packages "
+            f"chromium and chromium-driver, Python package selenium)"
+        )
         if os.environ.get("CI", "").lower() == "true":
             pytest.fail(reason)
         pytest.skip(reason)
     options = webdriver.ChromeOptions()
     options.binary_location = CHROMIUM
-    for flag in ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                 "--disable-background-networking", "--disable-component-update",
-                 "--disable-sync", "--disable-dev-shm-usage", "--window-size=1280,2400",
-                 f"--user-data-dir={tempfile.mkdtemp(prefix='ssecert-chromium-')}"):
+    for flag in (
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-quic",
+        "--no-first-run",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--disable-dev-shm-usage",
+        "--window-size=1280,2400",
+        f"--user-data-dir={tempfile.mkdtemp(prefix='ssecert-chromium-')}",
+    ):
         options.add_argument(flag)
     options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
     return webdriver.Chrome(service=Service(executable_path=CHROMEDRIVER), options=options)
@@ -82,10 +98,13 @@ def test_overall_verdict_and_summary_are_visible(ugv_page):
     assert badge.is_displayed() and badge.text == "fails"
     rows = ugv_page.find_elements(By.CSS_SELECTOR, "#summary tbody tr")
     ids = [r.find_element(By.TAG_NAME, "a").text for r in rows]
-    assert {"observability", "sparse_observability", "observer_gain",
-            "observer_stability"} <= set(ids)
-    verdicts = {r.find_element(By.TAG_NAME, "a").text:
-                r.find_element(By.CSS_SELECTOR, ".badge").text for r in rows}
+    assert {"observability", "sparse_observability", "observer_gain", "observer_stability"} <= set(
+        ids
+    )
+    verdicts = {
+        r.find_element(By.TAG_NAME, "a").text: r.find_element(By.CSS_SELECTOR, ".badge").text
+        for r in rows
+    }
     assert verdicts["sparse_observability"] == "fails"
     assert verdicts["observability"] == "holds"
 

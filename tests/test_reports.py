@@ -25,4 +25,5 @@ def test_regenerating_gives_the_same_verdicts(name):
     fresh = result.to_dict()
     assert fresh["verdict"] == committed["verdict"]
     assert {k: v["verdict"] for k, v in fresh["checks"].items()} == {
-        k: v["verdict"] for k, v in committed["checks"].items()}
+        k: v["verdict"] for k, v in committed["checks"].items()
+    }

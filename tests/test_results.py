@@ -31,8 +31,9 @@ def test_overall_verdict_and_exit_code(verdicts, overall, code):
 
 
 def test_advisory_checks_do_not_change_the_exit_status():
-    cert = Certificate(System([[1.0]], [[1.0]]),
-                       [_check("a", "holds"), _check("b", "fails", required=False)])
+    cert = Certificate(
+        System([[1.0]], [[1.0]]), [_check("a", "holds"), _check("b", "fails", required=False)]
+    )
     assert cert.verdict is Verdict.HOLDS and cert.exit_code == 0
 
 
@@ -42,16 +43,29 @@ def test_duplicate_ids_refused():
 
 
 def test_to_jsonable_handles_numpy_complex_and_non_finite():
-    out = to_jsonable({"a": np.arange(3), "b": np.float64(math.inf), "c": 1 + 2j,
-                       "d": np.nan, "e": (np.int64(3), np.bool_(True))})
-    assert out == {"a": [0, 1, 2], "b": "Infinity", "c": {"re": 1.0, "im": 2.0}, "d": "NaN",
-                   "e": [3, True]}
+    out = to_jsonable(
+        {
+            "a": np.arange(3),
+            "b": np.float64(math.inf),
+            "c": 1 + 2j,
+            "d": np.nan,
+            "e": (np.int64(3), np.bool_(True)),
+        }
+    )
+    assert out == {
+        "a": [0, 1, 2],
+        "b": "Infinity",
+        "c": {"re": 1.0, "im": 2.0},
+        "d": "NaN",
+        "e": [3, True],
+    }
     assert float(out["b"]) == math.inf
 
 
 def test_certificate_json_is_strict_and_written_atomically(tmp_path):
-    check = Check(id="x", title="x", verdict="fails", summary="s", value=math.inf,
-                  evidence={"m": np.eye(2)})
+    check = Check(
+        id="x", title="x", verdict="fails", summary="s", value=math.inf, evidence={"m": np.eye(2)}
+    )
     cert = Certificate(System([[1.0]], [[1.0]]), [check])
     text = certificate_json(cert)
     data = json.loads(text, parse_constant=lambda c: pytest.fail(f"non-strict literal {c}"))

@@ -21,8 +21,14 @@ def test_elastic_net_shrink_is_the_elastic_net_proximal_map():
     # argmin_z (1/2)||z - x||^2 + lam |z| + (delta/2) z^2 with delta = 1/q - 1 gives q S_lam(x)
     delta = 1 / q - 1
     grid = np.linspace(-6, 6, 120001)
-    obj = 0.5 * (grid[None] - x[:, None]) ** 2 + lam * np.abs(grid[None]) + 0.5 * delta * grid[None] ** 2
-    np.testing.assert_allclose(elastic_net_shrink(x, lam, q), grid[np.argmin(obj, axis=1)], atol=1e-4)
+    obj = (
+        0.5 * (grid[None] - x[:, None]) ** 2
+        + lam * np.abs(grid[None])
+        + 0.5 * delta * grid[None] ** 2
+    )
+    np.testing.assert_allclose(
+        elastic_net_shrink(x, lam, q), grid[np.argmin(obj, axis=1)], atol=1e-4
+    )
 
 
 def test_weighted_soft_threshold_broadcasts_per_component():

@@ -28,9 +28,11 @@ def test_run_equals_repeated_step(seed):
     rng = np.random.default_rng(seed)
     y = rng.standard_normal((25, 7, system.p))
     L = deadbeat_gain(system).L
-    for obs in (LinearObserver(system.A, system.C, L),
-                SparseSoftObserver(system.A, system.C, L, step=0.2, threshold=0.05, shrink=0.7),
-                WindowSSO(system.A, system.C, step=0.05, threshold=0.05, window=3, inner_steps=2)):
+    for obs in (
+        LinearObserver(system.A, system.C, L),
+        SparseSoftObserver(system.A, system.C, L, step=0.2, threshold=0.05, shrink=0.7),
+        WindowSSO(system.A, system.C, step=0.05, threshold=0.05, window=3, inner_steps=2),
+    ):
         traj = obs.run(y)
         state = obs.initial_state(7)
         for k in range(25):
@@ -95,8 +97,10 @@ def test_metrics_follow_the_design_definitions():
     assert support_error(est, true)[0, 0] == pytest.approx(2 / 3)
     x = np.array([3.0, 4.0])
     assert relative_error(x + [0.0, 5.0], x, x) == pytest.approx(1.0)
-    a = np.zeros((6, 1, 2)); a[2:, 0, 1] = 4.0
-    found_then_lost = np.zeros((6, 1, 2)); found_then_lost[2:4, 0, 1] = 1.0
+    a = np.zeros((6, 1, 2))
+    a[2:, 0, 1] = 4.0
+    found_then_lost = np.zeros((6, 1, 2))
+    found_then_lost[2:4, 0, 1] = 1.0
     assert np.isnan(detection_delay(found_then_lost, a)[0])
 
 
@@ -124,19 +128,33 @@ def test_dask_and_in_process_runs_are_bitwise_identical():
     local = simulate_scenario(design, spec.scenarios[0], runs=150, steps=40)
     with dask_client(workers=2) as client:
         remote = simulate_scenario(design, spec.scenarios[0], runs=150, steps=40, client=client)
-        grid_remote = grid_search(spec.system, spec.observer, spec.scenarios[0],
-                                  {"step": [0.3, 0.7]}, runs=20, steps=30, client=client)
+        grid_remote = grid_search(
+            spec.system,
+            spec.observer,
+            spec.scenarios[0],
+            {"step": [0.3, 0.7]},
+            runs=20,
+            steps=30,
+            client=client,
+        )
     for name in ("relative_error", "mse", "support_error", "detection_delay"):
         assert np.array_equal(getattr(local, name), getattr(remote, name), equal_nan=True), name
-    grid_local = grid_search(spec.system, spec.observer, spec.scenarios[0], {"step": [0.3, 0.7]},
-                             runs=20, steps=30)
+    grid_local = grid_search(
+        spec.system, spec.observer, spec.scenarios[0], {"step": [0.3, 0.7]}, runs=20, steps=30
+    )
     assert grid_local.points == grid_remote.points
 
 
 def test_grid_search_picks_the_lowest_cost():
     spec = load_example("ugv")
-    result = grid_search(spec.system, spec.observer, spec.scenarios[0],
-                         {"step": [0.2, 0.7], "threshold": [0.05, 0.1]}, runs=10, steps=60)
+    result = grid_search(
+        spec.system,
+        spec.observer,
+        spec.scenarios[0],
+        {"step": [0.2, 0.7], "threshold": [0.05, 0.1]},
+        runs=10,
+        steps=60,
+    )
     assert len(result.points) == 4
     assert result.best["cost"] == min(p["cost"] for p in result.points)
 
@@ -144,8 +162,9 @@ def test_grid_search_picks_the_lowest_cost():
 def test_attack_free_observer_converges():
     spec = load_example("ugv")
     design = build_observer(spec.system, spec.observer)
-    res = simulate_scenario(design, {"name": "none", "attack": "none", "noise": 0.0},
-                            runs=10, steps=150)
+    res = simulate_scenario(
+        design, {"name": "none", "attack": "none", "noise": 0.0}, runs=10, steps=150
+    )
     # the first residual is the whole output, so a_hat(1) is nonzero and disturbs the
     # estimate before it decays
     assert res.relative_error.mean(axis=1).max() > 1e-6
@@ -164,7 +183,9 @@ def test_simulate_command(capsys, tmp_path):
     assert len(scen["series"]["relative_error"]["mean"]) == 41
     assert "stealthy" in out.err
     spec = tmp_path / "plain.toml"
-    spec.write_text('name = "plain"\n[system]\nA = [[1.0]]\nC = [[1.0]]\n[attack]\nmax_attacked = 0\n')
+    spec.write_text(
+        'name = "plain"\n[system]\nA = [[1.0]]\nC = [[1.0]]\n[attack]\nmax_attacked = 0\n'
+    )
     assert main(["simulate", str(spec)]) == 2
     assert "needs an [observer]" in capsys.readouterr().err
 

@@ -74,7 +74,8 @@ TIGHT = dict(tol_gap_abs=1e-12, tol_gap_rel=1e-12, tol_feas=1e-12, tol_ktratio=1
 def cvx_lasso(Phi, y, weight):
     u = cp.Variable(Phi.shape[1])
     cp.Problem(cp.Minimize(cp.sum_squares(y - Phi @ u) + weight * cp.norm1(u))).solve(
-        solver="CLARABEL", **TIGHT)
+        solver="CLARABEL", **TIGHT
+    )
     return u.value
 
 
@@ -127,7 +128,7 @@ def test_sise_support_detection_is_the_cvxpy_lasso_of_the_innovation():
     for k in range(6):
         prev = state
         state = sise.step(state, ys[k])
-    innov = ys[5] - prev["x_hat"] @ A.T @ C.T   # y(k) - C A x_hat(k-1)
+    innov = ys[5] - prev["x_hat"] @ A.T @ C.T  # y(k) - C A x_hat(k-1)
     for r in range(3):
         ref = cvx_lasso(C @ B, innov[r], 0.5)
         assert np.allclose(state["lasso"][r], ref, atol=1e-6 * max(1.0, np.abs(ref).max()))
@@ -142,15 +143,16 @@ def test_oracle_is_exact_without_noise_and_known_x0(seed):
     A, B, C = plant(seed, n=6, p=4, m=3)
     xs, ys, u = simulate(A, B, C, runs=2, steps=12, seed=seed, amplitude=2.0, support_size=2)
     assert np.linalg.matrix_rank(C @ B[:, np.flatnonzero(u[0, 0])]) == 2  # C B_S full rank
-    oracle = OracleSISE(A, B, C, Q=1e-3 * np.eye(6), R=1e-3 * np.eye(3), support=u != 0,
-                        x0_hat=np.zeros(6))
+    oracle = OracleSISE(
+        A, B, C, Q=1e-3 * np.eye(6), R=1e-3 * np.eye(3), support=u != 0, x0_hat=np.zeros(6)
+    )
     state = oracle.initial_state(2)
-    state["x_hat"] = xs[0].copy()       # x(0) known
+    state["x_hat"] = xs[0].copy()  # x(0) known
     state["P"] = np.tile(1e-3 * np.eye(6), (2, 1, 1))
     traj = oracle.run(ys, state)
     scale = np.abs(xs).max()
-    assert np.abs(traj.x_hat[1:] - xs[:-1]).max() < 1e-9 * scale   # x_hat[k+1] ~ x(k)
-    assert np.abs(traj.a_hat[2:] - u[:-1]).max() < 1e-9 * scale    # a_hat[k+1] ~ u(k-1)
+    assert np.abs(traj.x_hat[1:] - xs[:-1]).max() < 1e-9 * scale  # x_hat[k+1] ~ x(k)
+    assert np.abs(traj.a_hat[2:] - u[:-1]).max() < 1e-9 * scale  # a_hat[k+1] ~ u(k-1)
 
 
 def test_oracle_forgets_a_wrong_prior_without_noise():
@@ -169,8 +171,7 @@ def test_oracle_forgets_a_wrong_prior_without_noise():
 def test_sise_is_exact_without_noise_and_known_x0(seed):
     A, B, C = plant(20 + seed, n=10, p=8, m=5)
     xs, ys, u = simulate(A, B, C, runs=3, steps=15, seed=seed, amplitude=3.0)
-    sise = SISE(A, B, C, Q=1e-3 * np.eye(10), R=1e-3 * np.eye(5), sparsity=1,
-                lasso_weight=1e-3)
+    sise = SISE(A, B, C, Q=1e-3 * np.eye(10), R=1e-3 * np.eye(5), sparsity=1, lasso_weight=1e-3)
     state = sise.initial_state(3)
     state["x_hat"] = xs[0].copy()
     state["P"] = np.tile(1e-3 * np.eye(10), (3, 1, 1))
@@ -205,8 +206,7 @@ def test_covariance_update_is_the_joseph_form():
 def test_empty_oracle_support_is_the_kalman_filter_ignoring_the_input():
     A, B, C = plant(9, n=6, p=4, m=3)
     Q, R = 0.01 * np.eye(6), 0.02 * np.eye(3)
-    xs, ys, u = simulate(A, B, C, runs=4, steps=20, seed=9, amplitude=1.0, q_std=0.1,
-                         r_std=0.1)
+    xs, ys, u = simulate(A, B, C, runs=4, steps=20, seed=9, amplitude=1.0, q_std=0.1, r_std=0.1)
     oracle = OracleSISE(A, B, C, Q=Q, R=R, support=np.zeros(4, dtype=bool))
     traj = oracle.run(ys)
     kf = kalman_ignoring_input(A, C, Q, R, ys, np.zeros(6), np.eye(6))
@@ -220,23 +220,26 @@ def test_empty_oracle_support_is_the_kalman_filter_ignoring_the_input():
 def test_sise_beats_a_kalman_filter_that_ignores_the_input():
     n, p, m = 20, 12, 10
     Q, R = 0.01 * np.eye(n), 0.01 * np.eye(m)
-    amplitude = 10 * np.sqrt(np.trace(Q))   # input-to-noise ratio 20 dB, as in the paper
+    amplitude = 10 * np.sqrt(np.trace(Q))  # input-to-noise ratio 20 dB, as in the paper
     steps, transient = 60, 20
     errors = []
     for seed in range(4):
         A, B, C = plant(100 + seed, n, p, m)
-        xs, ys, u = simulate(A, B, C, runs=4, steps=steps, seed=seed, amplitude=amplitude,
-                             q_std=0.1, r_std=0.1)
+        xs, ys, u = simulate(
+            A, B, C, runs=4, steps=steps, seed=seed, amplitude=amplitude, q_std=0.1, r_std=0.1
+        )
         traj = SISE(A, B, C, Q=Q, R=R, sparsity=1).run(ys)
         kf = kalman_ignoring_input(A, C, Q, R, ys, np.zeros(n), np.eye(n))
         oracle = OracleSISE(A, B, C, Q=Q, R=R, support=u != 0).run(ys)
         x_true = xs[:-1]
         # absolute errors: ||x|| grows on these marginally stable plants
-        err = [np.linalg.norm(e, axis=-1)[transient:].mean()
-               for e in (traj.x_hat[1:] - x_true, kf - x_true, oracle.x_hat[1:] - x_true)]
+        err = [
+            np.linalg.norm(e, axis=-1)[transient:].mean()
+            for e in (traj.x_hat[1:] - x_true, kf - x_true, oracle.x_hat[1:] - x_true)
+        ]
         err_u = rel(traj.a_hat[2:] - u[:-1], u[:-1])[transient:].mean()
         assert err[0] < 0.6 * err[1], seed
-        assert err_u < 0.5, seed   # the Kalman filter's input estimate (zero) has error 1
+        assert err_u < 0.5, seed  # the Kalman filter's input estimate (zero) has error 1
         errors.append(err + [err_u])
     sise, kf, oracle, err_u = np.mean(errors, axis=0)
     assert sise < 0.3 * kf
@@ -247,24 +250,23 @@ def test_sise_beats_a_kalman_filter_that_ignores_the_input():
 def test_batched_runs_equal_single_runs():
     A, B, C = plant(12, n=10, p=8, m=5)
     Q, R = 0.01 * np.eye(10), 0.01 * np.eye(5)
-    xs, ys, u = simulate(A, B, C, runs=5, steps=25, seed=12, amplitude=3.0, q_std=0.1,
-                         r_std=0.1)
+    xs, ys, u = simulate(A, B, C, runs=5, steps=25, seed=12, amplitude=3.0, q_std=0.1, r_std=0.1)
     for est in (SISE(A, B, C, Q=Q, R=R), SISE(A, B, C, Q=Q, R=R, sparsity=1)):
         batch = est.run(ys)
         for r in range(5):
-            alone = est.run(ys[:, r:r + 1])
+            alone = est.run(ys[:, r : r + 1])
             assert np.allclose(alone.x_hat[:, 0], batch.x_hat[:, r], rtol=1e-9, atol=1e-9)
             assert np.allclose(alone.a_hat[:, 0], batch.a_hat[:, r], rtol=1e-9, atol=1e-9)
     oracle = OracleSISE(A, B, C, Q=Q, R=R, support=u != 0)
     batch = oracle.run(ys)
     for r in range(5):
-        alone = OracleSISE(A, B, C, Q=Q, R=R, support=u[:, r:r + 1] != 0).run(ys[:, r:r + 1])
+        alone = OracleSISE(A, B, C, Q=Q, R=R, support=u[:, r : r + 1] != 0).run(ys[:, r : r + 1])
         assert np.allclose(alone.x_hat[:, 0], batch.x_hat[:, r], rtol=1e-12, atol=1e-12)
 
 
 def test_rank_deficient_support_is_flagged_not_hidden():
     A = 0.5 * np.eye(3)
-    B = np.array([[1.0, 1.0], [0.0, 0.0], [0.0, 0.0]])   # two identical input columns
+    B = np.array([[1.0, 1.0], [0.0, 0.0], [0.0, 0.0]])  # two identical input columns
     C = np.eye(3)
     oracle = OracleSISE(A, B, C, Q=0.01 * np.eye(3), R=0.01 * np.eye(3), support=[True, True])
     state = oracle.step(oracle.initial_state(1), np.zeros((1, 3)))
@@ -316,12 +318,19 @@ def test_bad_step_and_oracle_inputs():
     with pytest.raises(TypeError, match="support"):
         OracleSISE(GOOD["A"], GOOD["B"], GOOD["C"], Q=GOOD["Q"], R=GOOD["R"], support=[0.5, 1])
     with pytest.raises(ValueError, match="support"):
-        OracleSISE(GOOD["A"], GOOD["B"], GOOD["C"], Q=GOOD["Q"], R=GOOD["R"],
-                   support=[True, False, True])
-    oracle = OracleSISE(GOOD["A"], GOOD["B"], GOOD["C"], Q=GOOD["Q"], R=GOOD["R"],
-                        support=np.ones((1, 3, 2), dtype=bool))
+        OracleSISE(
+            GOOD["A"], GOOD["B"], GOOD["C"], Q=GOOD["Q"], R=GOOD["R"], support=[True, False, True]
+        )
+    oracle = OracleSISE(
+        GOOD["A"],
+        GOOD["B"],
+        GOOD["C"],
+        Q=GOOD["Q"],
+        R=GOOD["R"],
+        support=np.ones((1, 3, 2), dtype=bool),
+    )
     with pytest.raises(ValueError, match="support"):
-        oracle.run(np.zeros((4, 2, 2)))   # the support is for 3 runs, y has 2
+        oracle.run(np.zeros((4, 2, 2)))  # the support is for 3 runs, y has 2
     with pytest.raises(ValueError, match="weight"):
         lasso_fista(np.eye(2), np.ones(2), -1.0)
     with pytest.raises(ValueError, match=r"\by\b"):

@@ -128,8 +128,9 @@ def test_methods_agree_property(seed, kind, integer):
 
 def test_planted_breaking_sizes_are_varied():
     """The generator plants small breaking sets, not the generic p - 1."""
-    sizes = {planted(np.random.default_rng(seed), KINDS[seed % 4]).max_removable
-             for seed in range(200)}
+    sizes = {
+        planted(np.random.default_rng(seed), KINDS[seed % 4]).max_removable for seed in range(200)
+    }
     assert {-1, 0, 1, 2} <= sizes
 
 
@@ -233,7 +234,9 @@ def test_scan_removals_matches_exact_rank_reference():
 def test_progress_is_reported_during_enumeration():
     calls = []
     system = System(np.eye(3), np.random.default_rng(1).integers(-3, 4, size=(7, 3)))
-    sparse_observability(system, 1, method="enumeration", progress=lambda d, t: calls.append((d, t)))
+    sparse_observability(
+        system, 1, method="enumeration", progress=lambda d, t: calls.append((d, t))
+    )
     assert calls and all(0 < d <= t for d, t in calls)
 
 

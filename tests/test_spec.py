@@ -11,7 +11,6 @@ import dataclasses
 import hashlib
 import json
 import math
-import tomllib
 from pathlib import Path
 from typing import Any
 
@@ -79,9 +78,12 @@ def _toml_value(value: Any) -> str:
 def to_toml(data: dict[str, Any]) -> str:
     """A minimal TOML writer for spec dictionaries (tables, arrays of tables)."""
     lines: list[str] = []
-    scalars = {k: v for k, v in data.items()
-               if not isinstance(v, dict)
-               and not (isinstance(v, list) and v and all(isinstance(x, dict) for x in v))}
+    scalars = {
+        k: v
+        for k, v in data.items()
+        if not isinstance(v, dict)
+        and not (isinstance(v, list) and v and all(isinstance(x, dict) for x in v))
+    }
     for key, value in scalars.items():
         lines.append(f"{_toml_key(key)} = {_toml_value(value)}")
     for key, value in data.items():
@@ -235,16 +237,20 @@ def test_valid_file_round_trip(tmp_path, fmt):
 def test_toml_and_json_give_the_same_spec(tmp_path):
     data = base(
         observer={"kind": "elastic_net", "step": 0.5, "threshold": 0.1, "shrink": 0.9},
-        scenario=[{"name": "a", "attack": "constant", "sensors": [0, 2]},
-                  {"name": "b", "attack": "random", "count": 1, "noise": 0.01}],
+        scenario=[
+            {"name": "a", "attack": "constant", "sensors": [0, 2]},
+            {"name": "b", "attack": "random", "count": 1, "noise": 0.01},
+        ],
     )
     from_toml = load_spec(write_spec(tmp_path, data, "toml"))
     from_json = load_spec(write_spec(tmp_path, data, "json"))
     assert from_toml.system == from_json.system
     assert from_toml.observer == from_json.observer
     assert from_toml.scenarios == from_json.scenarios
-    assert (from_toml.max_attacked, from_toml.horizon) == (from_json.max_attacked,
-                                                           from_json.horizon)
+    assert (from_toml.max_attacked, from_toml.horizon) == (
+        from_json.max_attacked,
+        from_json.horizon,
+    )
     assert from_toml.sha256 != from_json.sha256
 
 
@@ -304,8 +310,9 @@ def test_overrides_replace_the_file_values(tmp_path, fmt):
 def test_horizon_defaults_to_n(tmp_path):
     data = base(attack={"max_attacked": 1})
     assert load_spec(write_spec(tmp_path, data)).horizon == 2
-    data = base(system={"A": np.eye(4).tolist(), "C": np.eye(4).tolist()},
-                attack={"max_attacked": 0})
+    data = base(
+        system={"A": np.eye(4).tolist(), "C": np.eye(4).tolist()}, attack={"max_attacked": 0}
+    )
     assert load_spec(write_spec(tmp_path, data, "json")).horizon == 4
 
 
@@ -347,23 +354,28 @@ def test_bad_overrides(tmp_path, kwargs, key):
 
 def test_nan_literal_in_toml(tmp_path):
     path = tmp_path / "nan.toml"
-    path.write_text('name = "x"\n[system]\nA = [[1.0, nan], [0.0, 1.0]]\nC = [[1, 0]]\n'
-                    "[attack]\nmax_attacked = 0\n")
+    path.write_text(
+        'name = "x"\n[system]\nA = [[1.0, nan], [0.0, 1.0]]\nC = [[1, 0]]\n'
+        "[attack]\nmax_attacked = 0\n"
+    )
     expect_error(path, "finite", key="system.A")
 
 
 @pytest.mark.parametrize("literal", ["inf", "-inf", "+inf"])
 def test_inf_literal_in_toml(tmp_path, literal):
     path = tmp_path / "inf.toml"
-    path.write_text(f'name = "x"\n[system]\nA = [[1.0, 0.0], [0.0, 1.0]]\nC = [[1, {literal}]]\n'
-                    "[attack]\nmax_attacked = 0\n")
+    path.write_text(
+        f'name = "x"\n[system]\nA = [[1.0, 0.0], [0.0, 1.0]]\nC = [[1, {literal}]]\n'
+        "[attack]\nmax_attacked = 0\n"
+    )
     expect_error(path, "finite", key="system.C")
 
 
 def test_nan_in_json(tmp_path):
     path = tmp_path / "nan.json"
-    path.write_text('{"name": "x", "system": {"A": [[NaN]], "C": [[1.0]]}, '
-                    '"attack": {"max_attacked": 0}}')
+    path.write_text(
+        '{"name": "x", "system": {"A": [[NaN]], "C": [[1.0]]}, "attack": {"max_attacked": 0}}'
+    )
     expect_error(path, "finite", key="system.A")
 
 
@@ -435,8 +447,9 @@ def test_bad_attack_values(tmp_path, fmt, attack, key, fragments):
 
 
 def test_integral_float_counts_are_accepted(tmp_path):
-    spec = load_spec(write_spec(tmp_path, base(attack={"max_attacked": 1.0, "horizon": 3.0}),
-                                "json"))
+    spec = load_spec(
+        write_spec(tmp_path, base(attack={"max_attacked": 1.0, "horizon": 3.0}), "json")
+    )
     assert (spec.max_attacked, spec.horizon) == (1, 3)
     assert isinstance(spec.max_attacked, int) and isinstance(spec.horizon, int)
 
@@ -474,22 +487,41 @@ def test_missing_required_keys(tmp_path, fmt, mutate, key):
         (lambda d: d["system"].update(a=[[1.0]]), "system.a", "A"),
         (lambda d: d["attack"].update(max_atacked=1), "attack.max_atacked", "max_attacked"),
         (lambda d: d["attack"].update(horizn=2), "attack.horizn", "horizon"),
-        (lambda d: d.update(observer={"kind": "dsso", "step": 0.5, "threshold": 0.1,
-                                      "treshold": 0.1}), "observer.treshold", "threshold"),
-        (lambda d: d.update(observer={"kind": "luenberger", "gains": "pinv"}),
-         "observer.gains", "gain"),
-        (lambda d: d.update(scenario=[{"name": "a", "attack": "none", "stpes": 10}]),
-         "scenario[0].stpes", "steps"),
-        (lambda d: d.update(scenario=[{"name": "a", "attack": "none"},
-                                      {"name": "b", "attack": "none", "magnitdue": 1.0}]),
-         "scenario[1].magnitdue", "magnitude"),
+        (
+            lambda d: d.update(
+                observer={"kind": "dsso", "step": 0.5, "threshold": 0.1, "treshold": 0.1}
+            ),
+            "observer.treshold",
+            "threshold",
+        ),
+        (
+            lambda d: d.update(observer={"kind": "luenberger", "gains": "pinv"}),
+            "observer.gains",
+            "gain",
+        ),
+        (
+            lambda d: d.update(scenario=[{"name": "a", "attack": "none", "stpes": 10}]),
+            "scenario[0].stpes",
+            "steps",
+        ),
+        (
+            lambda d: d.update(
+                scenario=[
+                    {"name": "a", "attack": "none"},
+                    {"name": "b", "attack": "none", "magnitdue": 1.0},
+                ]
+            ),
+            "scenario[1].magnitdue",
+            "magnitude",
+        ),
     ],
 )
 def test_unknown_keys_are_refused_with_a_suggestion(tmp_path, fmt, mutate, key, suggestion):
     data = base()
     mutate(data)
-    expect_error(write_spec(tmp_path, data, fmt), "unknown key", f"did you mean '{suggestion}'",
-                 key=key)
+    expect_error(
+        write_spec(tmp_path, data, fmt), "unknown key", f"did you mean '{suggestion}'", key=key
+    )
 
 
 @pytest.mark.parametrize(
@@ -499,15 +531,18 @@ def test_unknown_keys_are_refused_with_a_suggestion(tmp_path, fmt, mutate, key, 
         (lambda d: d["system"].update(qqqq=1), "system.qqqq"),
         (lambda d: d["attack"].update(qqqq=1), "attack.qqqq"),
         (lambda d: d.update(observer={"kind": "ogd", "step": 0.1, "qqqq": 1}), "observer.qqqq"),
-        (lambda d: d.update(scenario=[{"name": "a", "attack": "none", "qqqq": 1}]),
-         "scenario[0].qqqq"),
+        (
+            lambda d: d.update(scenario=[{"name": "a", "attack": "none", "qqqq": 1}]),
+            "scenario[0].qqqq",
+        ),
     ],
 )
 def test_unknown_keys_without_a_close_match(tmp_path, mutate, key):
     data = base()
     mutate(data)
-    message = expect_error(write_spec(tmp_path, data, "json"), "unknown key", "allowed here",
-                           key=key)
+    message = expect_error(
+        write_spec(tmp_path, data, "json"), "unknown key", "allowed here", key=key
+    )
     assert "did you mean" not in message
 
 
@@ -655,8 +690,11 @@ def test_npz_missing_variable(tmp_path, missing):
         ({"A": np.array(A2), "C": np.ones((3, 4))}, "system.C", ("columns", "expected 2")),
         ({"A": np.array(A2), "C": np.zeros((0, 2))}, "system.C", ("empty",)),
         ({"A": np.ones((2, 2, 2)), "C": np.array(C3)}, "system.A", ("2-D",)),
-        ({"A": np.array(A2), "C": np.array(C3), "sensors": np.array([1, 2, 3])},
-         "sensors", ("strings",)),
+        (
+            {"A": np.array(A2), "C": np.array(C3), "sensors": np.array([1, 2, 3])},
+            "sensors",
+            ("strings",),
+        ),
     ],
 )
 def test_npz_bad_arrays(tmp_path, arrays, key, fragments):
@@ -717,8 +755,10 @@ def test_mat_sensors_as_cell_array(tmp_path):
 def test_mat_sensors_as_string_array(tmp_path):
     path = tmp_path / "chars.mat"
     # a char matrix: MATLAB pads the shorter names with blanks
-    scipy.io.savemat(path, {"A": np.array(A2), "C": np.array(C3),
-                            "sensors": np.array(["pos", "velocity-a", "v"])})
+    scipy.io.savemat(
+        path,
+        {"A": np.array(A2), "C": np.array(C3), "sensors": np.array(["pos", "velocity-a", "v"])},
+    )
     spec = load_spec(path, max_attacked=1)
     assert spec.system.sensors == ("pos", "velocity-a", "v")
 
@@ -770,31 +810,78 @@ def observer_spec(observer: Any, **kwargs: Any) -> Spec:
     [
         ({"kind": "luenberger"}, {"kind": "luenberger", "gain": "deadbeat"}),
         ({"kind": "luenberger", "gain": "pinv"}, {"kind": "luenberger", "gain": "pinv"}),
-        ({"kind": "luenberger", "gain": "place", "poles": [0.1, -0.2]},
-         {"kind": "luenberger", "gain": "place", "poles": [0.1 + 0j, -0.2 + 0j]}),
-        ({"kind": "luenberger", "gain": "place", "poles": [[0.1, 0.2], [0.1, -0.2]]},
-         {"kind": "luenberger", "gain": "place", "poles": [0.1 + 0.2j, 0.1 - 0.2j]}),
+        (
+            {"kind": "luenberger", "gain": "place", "poles": [0.1, -0.2]},
+            {"kind": "luenberger", "gain": "place", "poles": [0.1 + 0j, -0.2 + 0j]},
+        ),
+        (
+            {"kind": "luenberger", "gain": "place", "poles": [[0.1, 0.2], [0.1, -0.2]]},
+            {"kind": "luenberger", "gain": "place", "poles": [0.1 + 0.2j, 0.1 - 0.2j]},
+        ),
         ({"kind": "ogd", "step": 0.1}, {"kind": "ogd", "gain": "ogd", "step": 0.1}),
         ({"kind": "ogd", "gain": "ogd", "step": 2}, {"kind": "ogd", "gain": "ogd", "step": 2.0}),
-        ({"kind": "sso", "step": 0.5, "threshold": 0.1},
-         {"kind": "sso", "step": 0.5, "threshold": 0.1, "shrink": 1.0, "window": 1,
-          "inner_steps": 1}),
-        ({"kind": "sso", "step": 0.5, "threshold": 0.1, "shrink": 1, "window": 3,
-          "inner_steps": 4},
-         {"kind": "sso", "step": 0.5, "threshold": 0.1, "shrink": 1.0, "window": 3,
-          "inner_steps": 4}),
-        ({"kind": "dsso", "step": 0.7, "threshold": 0.1},
-         {"kind": "dsso", "gain": "deadbeat", "step": 0.7, "threshold": 0.1, "shrink": 1.0}),
-        ({"kind": "dsso", "gain": "pinv", "step": 0.7, "threshold": 0.1, "shrink": 1.0},
-         {"kind": "dsso", "gain": "pinv", "step": 0.7, "threshold": 0.1, "shrink": 1.0}),
-        ({"kind": "dsso", "gain": "place", "poles": [0.0, 0.5], "step": 0.7, "threshold": 0.1},
-         {"kind": "dsso", "gain": "place", "poles": [0j, 0.5 + 0j], "step": 0.7,
-          "threshold": 0.1, "shrink": 1.0}),
-        ({"kind": "elastic_net", "step": 0.5, "threshold": 0.1, "shrink": 0.9},
-         {"kind": "elastic_net", "gain": "deadbeat", "step": 0.5, "threshold": 0.1,
-          "shrink": 0.9}),
-        ({"kind": "elastic_net", "gain": "ogd", "step": 0.5, "threshold": 0.1, "shrink": 0.5},
-         {"kind": "elastic_net", "gain": "ogd", "step": 0.5, "threshold": 0.1, "shrink": 0.5}),
+        (
+            {"kind": "sso", "step": 0.5, "threshold": 0.1},
+            {
+                "kind": "sso",
+                "step": 0.5,
+                "threshold": 0.1,
+                "shrink": 1.0,
+                "window": 1,
+                "inner_steps": 1,
+            },
+        ),
+        (
+            {
+                "kind": "sso",
+                "step": 0.5,
+                "threshold": 0.1,
+                "shrink": 1,
+                "window": 3,
+                "inner_steps": 4,
+            },
+            {
+                "kind": "sso",
+                "step": 0.5,
+                "threshold": 0.1,
+                "shrink": 1.0,
+                "window": 3,
+                "inner_steps": 4,
+            },
+        ),
+        (
+            {"kind": "dsso", "step": 0.7, "threshold": 0.1},
+            {"kind": "dsso", "gain": "deadbeat", "step": 0.7, "threshold": 0.1, "shrink": 1.0},
+        ),
+        (
+            {"kind": "dsso", "gain": "pinv", "step": 0.7, "threshold": 0.1, "shrink": 1.0},
+            {"kind": "dsso", "gain": "pinv", "step": 0.7, "threshold": 0.1, "shrink": 1.0},
+        ),
+        (
+            {"kind": "dsso", "gain": "place", "poles": [0.0, 0.5], "step": 0.7, "threshold": 0.1},
+            {
+                "kind": "dsso",
+                "gain": "place",
+                "poles": [0j, 0.5 + 0j],
+                "step": 0.7,
+                "threshold": 0.1,
+                "shrink": 1.0,
+            },
+        ),
+        (
+            {"kind": "elastic_net", "step": 0.5, "threshold": 0.1, "shrink": 0.9},
+            {
+                "kind": "elastic_net",
+                "gain": "deadbeat",
+                "step": 0.5,
+                "threshold": 0.1,
+                "shrink": 0.9,
+            },
+        ),
+        (
+            {"kind": "elastic_net", "gain": "ogd", "step": 0.5, "threshold": 0.1, "shrink": 0.5},
+            {"kind": "elastic_net", "gain": "ogd", "step": 0.5, "threshold": 0.1, "shrink": 0.5},
+        ),
     ],
 )
 def test_valid_observers(observer, expected):
@@ -817,8 +904,9 @@ def test_every_observer_kind_loads_from_toml(tmp_path, kind):
 
 def test_elastic_net_with_L2():
     L2 = np.diag([1.0, 2.0, 3.0]).tolist()
-    spec = observer_spec({"kind": "elastic_net", "step": 0.5, "threshold": 0.1, "shrink": 0.9,
-                          "L2": L2})
+    spec = observer_spec(
+        {"kind": "elastic_net", "step": 0.5, "threshold": 0.1, "shrink": 0.9, "L2": L2}
+    )
     np.testing.assert_array_equal(spec.observer["L2"], L2)
     assert spec.observer["L2"].shape == (3, 3)
 
@@ -858,42 +946,89 @@ def test_explicit_gain_matrix_from_toml(tmp_path):
         ({"kind": "luenberger", "gain": "ogd"}, "observer.gain", ()),
         ({"kind": "dsso", "gain": "ogd", "step": 0.5, "threshold": 0.1}, "observer.gain", ()),
         ({"kind": "ogd", "gain": "deadbeat", "step": 0.1}, "observer.gain", ("fixed",)),
-        ({"kind": "ogd", "gain": [[1.0, 0, 0], [0, 1.0, 0]], "step": 0.1}, "observer.gain",
-         ("fixed",)),
-        ({"kind": "sso", "gain": "deadbeat", "step": 0.5, "threshold": 0.1}, "observer.gain",
-         ("unknown key",)),
+        (
+            {"kind": "ogd", "gain": [[1.0, 0, 0], [0, 1.0, 0]], "step": 0.1},
+            "observer.gain",
+            ("fixed",),
+        ),
+        (
+            {"kind": "sso", "gain": "deadbeat", "step": 0.5, "threshold": 0.1},
+            "observer.gain",
+            ("unknown key",),
+        ),
         # explicit gains must be n x p = 2 x 3
-        ({"kind": "luenberger", "gain": [[1.0, 0.0], [0.0, 1.0]]}, "observer.gain",
-         ("columns", "expected 3")),
-        ({"kind": "luenberger", "gain": [[1.0, 0.0, 0.0]]}, "observer.gain",
-         ("rows", "expected 2")),
-        ({"kind": "dsso", "gain": [[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]], "step": 0.5,
-          "threshold": 0.1}, "observer.gain", ("expected 2",)),
-        ({"kind": "luenberger", "gain": [[1.0, 0.0, float("nan")], [0.0, 1.0, 0.0]]},
-         "observer.gain", ("finite",)),
+        (
+            {"kind": "luenberger", "gain": [[1.0, 0.0], [0.0, 1.0]]},
+            "observer.gain",
+            ("columns", "expected 3"),
+        ),
+        (
+            {"kind": "luenberger", "gain": [[1.0, 0.0, 0.0]]},
+            "observer.gain",
+            ("rows", "expected 2"),
+        ),
+        (
+            {
+                "kind": "dsso",
+                "gain": [[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]],
+                "step": 0.5,
+                "threshold": 0.1,
+            },
+            "observer.gain",
+            ("expected 2",),
+        ),
+        (
+            {"kind": "luenberger", "gain": [[1.0, 0.0, float("nan")], [0.0, 1.0, 0.0]]},
+            "observer.gain",
+            ("finite",),
+        ),
         ({"kind": "luenberger", "gain": [1.0, 0.0]}, "observer.gain", ("2-D",)),
         # poles
         ({"kind": "luenberger", "gain": "place"}, "observer.poles", ("missing",)),
-        ({"kind": "luenberger", "gain": "deadbeat", "poles": [0.1, 0.2]}, "observer.poles",
-         ("place",)),
+        (
+            {"kind": "luenberger", "gain": "deadbeat", "poles": [0.1, 0.2]},
+            "observer.poles",
+            ("place",),
+        ),
         ({"kind": "luenberger", "poles": [0.1, 0.2]}, "observer.poles", ("place",)),
-        ({"kind": "luenberger", "gain": "place", "poles": [0.1]}, "observer.poles",
-         ("expected 2", "got 1")),
-        ({"kind": "luenberger", "gain": "place", "poles": [0.1, 0.2, 0.3]}, "observer.poles",
-         ("expected 2", "got 3")),
-        ({"kind": "luenberger", "gain": "place", "poles": [[0.1, 0.2], [0.1, 0.2]]},
-         "observer.poles", ("conjugate",)),
-        ({"kind": "luenberger", "gain": "place", "poles": [[0.1, 0.2], 0.3]},
-         "observer.poles", ("conjugate",)),
+        (
+            {"kind": "luenberger", "gain": "place", "poles": [0.1]},
+            "observer.poles",
+            ("expected 2", "got 1"),
+        ),
+        (
+            {"kind": "luenberger", "gain": "place", "poles": [0.1, 0.2, 0.3]},
+            "observer.poles",
+            ("expected 2", "got 3"),
+        ),
+        (
+            {"kind": "luenberger", "gain": "place", "poles": [[0.1, 0.2], [0.1, 0.2]]},
+            "observer.poles",
+            ("conjugate",),
+        ),
+        (
+            {"kind": "luenberger", "gain": "place", "poles": [[0.1, 0.2], 0.3]},
+            "observer.poles",
+            ("conjugate",),
+        ),
         ({"kind": "luenberger", "gain": "place", "poles": ["a", 0.2]}, "observer.poles[0]", ()),
-        ({"kind": "luenberger", "gain": "place", "poles": [0.1, [1, 2, 3]]},
-         "observer.poles[1]", ()),
+        (
+            {"kind": "luenberger", "gain": "place", "poles": [0.1, [1, 2, 3]]},
+            "observer.poles[1]",
+            (),
+        ),
         ({"kind": "luenberger", "gain": "place", "poles": [True, 0.2]}, "observer.poles[0]", ()),
-        ({"kind": "luenberger", "gain": "place", "poles": [float("inf"), 0.2]},
-         "observer.poles[0]", ("finite",)),
+        (
+            {"kind": "luenberger", "gain": "place", "poles": [float("inf"), 0.2]},
+            "observer.poles[0]",
+            ("finite",),
+        ),
         ({"kind": "luenberger", "gain": "place", "poles": 0.5}, "observer.poles", ()),
-        ({"kind": "sso", "step": 0.5, "threshold": 0.1, "poles": [0.1, 0.2]}, "observer.poles",
-         ("unknown key",)),
+        (
+            {"kind": "sso", "step": 0.5, "threshold": 0.1, "poles": [0.1, 0.2]},
+            "observer.poles",
+            ("unknown key",),
+        ),
         ({"kind": "ogd", "step": 0.1, "poles": [0.1, 0.2]}, "observer.poles", ("unknown key",)),
         # step and threshold
         ({"kind": "ogd"}, "observer.step", ("missing",)),
@@ -907,47 +1042,94 @@ def test_explicit_gain_matrix_from_toml(tmp_path):
         ({"kind": "luenberger", "step": 0.5}, "observer.step", ("unknown key",)),
         ({"kind": "sso", "step": 0.5}, "observer.threshold", ("missing",)),
         ({"kind": "dsso", "step": 0.5}, "observer.threshold", ("missing",)),
-        ({"kind": "elastic_net", "step": 0.5, "shrink": 0.5}, "observer.threshold",
-         ("missing",)),
+        ({"kind": "elastic_net", "step": 0.5, "shrink": 0.5}, "observer.threshold", ("missing",)),
         ({"kind": "dsso", "step": 0.5, "threshold": -0.1}, "observer.threshold", ("> 0",)),
-        ({"kind": "ogd", "step": 0.5, "threshold": 0.1}, "observer.threshold",
-         ("unknown key",)),
+        ({"kind": "ogd", "step": 0.5, "threshold": 0.1}, "observer.threshold", ("unknown key",)),
         # shrink
-        ({"kind": "sso", "step": 0.5, "threshold": 0.1, "shrink": 0.5}, "observer.shrink",
-         ("elastic_net",)),
-        ({"kind": "dsso", "step": 0.5, "threshold": 0.1, "shrink": 0.99}, "observer.shrink",
-         ("elastic_net",)),
+        (
+            {"kind": "sso", "step": 0.5, "threshold": 0.1, "shrink": 0.5},
+            "observer.shrink",
+            ("elastic_net",),
+        ),
+        (
+            {"kind": "dsso", "step": 0.5, "threshold": 0.1, "shrink": 0.99},
+            "observer.shrink",
+            ("elastic_net",),
+        ),
         ({"kind": "dsso", "step": 0.5, "threshold": 0.1, "shrink": 2.0}, "observer.shrink", ()),
-        ({"kind": "elastic_net", "step": 0.5, "threshold": 0.1}, "observer.shrink",
-         ("missing",)),
-        ({"kind": "elastic_net", "step": 0.5, "threshold": 0.1, "shrink": 1.0},
-         "observer.shrink", ("< 1",)),
-        ({"kind": "elastic_net", "step": 0.5, "threshold": 0.1, "shrink": 0.0},
-         "observer.shrink", ("> 0",)),
-        ({"kind": "elastic_net", "step": 0.5, "threshold": 0.1, "shrink": 1.5},
-         "observer.shrink", ()),
-        ({"kind": "elastic_net", "step": 0.5, "threshold": 0.1, "shrink": -0.5},
-         "observer.shrink", ()),
+        ({"kind": "elastic_net", "step": 0.5, "threshold": 0.1}, "observer.shrink", ("missing",)),
+        (
+            {"kind": "elastic_net", "step": 0.5, "threshold": 0.1, "shrink": 1.0},
+            "observer.shrink",
+            ("< 1",),
+        ),
+        (
+            {"kind": "elastic_net", "step": 0.5, "threshold": 0.1, "shrink": 0.0},
+            "observer.shrink",
+            ("> 0",),
+        ),
+        (
+            {"kind": "elastic_net", "step": 0.5, "threshold": 0.1, "shrink": 1.5},
+            "observer.shrink",
+            (),
+        ),
+        (
+            {"kind": "elastic_net", "step": 0.5, "threshold": 0.1, "shrink": -0.5},
+            "observer.shrink",
+            (),
+        ),
         ({"kind": "luenberger", "shrink": 1.0}, "observer.shrink", ("unknown key",)),
         # L2
-        ({"kind": "elastic_net", "step": 0.5, "threshold": 0.1, "shrink": 0.5,
-          "L2": [[1.0, 0.0], [0.0, 1.0]]}, "observer.L2", ("expected 3",)),
-        ({"kind": "elastic_net", "step": 0.5, "threshold": 0.1, "shrink": 0.5,
-          "L2": [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]}, "observer.L2", ("rows", "expected 3")),
-        ({"kind": "dsso", "step": 0.5, "threshold": 0.1, "L2": np.eye(3).tolist()},
-         "observer.L2", ("unknown key",)),
+        (
+            {
+                "kind": "elastic_net",
+                "step": 0.5,
+                "threshold": 0.1,
+                "shrink": 0.5,
+                "L2": [[1.0, 0.0], [0.0, 1.0]],
+            },
+            "observer.L2",
+            ("expected 3",),
+        ),
+        (
+            {
+                "kind": "elastic_net",
+                "step": 0.5,
+                "threshold": 0.1,
+                "shrink": 0.5,
+                "L2": [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            },
+            "observer.L2",
+            ("rows", "expected 3"),
+        ),
+        (
+            {"kind": "dsso", "step": 0.5, "threshold": 0.1, "L2": np.eye(3).tolist()},
+            "observer.L2",
+            ("unknown key",),
+        ),
         # window and inner_steps: sso only
-        ({"kind": "dsso", "step": 0.5, "threshold": 0.1, "window": 2}, "observer.window",
-         ("unknown key",)),
-        ({"kind": "elastic_net", "step": 0.5, "threshold": 0.1, "shrink": 0.5,
-          "inner_steps": 2}, "observer.inner_steps", ("unknown key",)),
+        (
+            {"kind": "dsso", "step": 0.5, "threshold": 0.1, "window": 2},
+            "observer.window",
+            ("unknown key",),
+        ),
+        (
+            {"kind": "elastic_net", "step": 0.5, "threshold": 0.1, "shrink": 0.5, "inner_steps": 2},
+            "observer.inner_steps",
+            ("unknown key",),
+        ),
         ({"kind": "luenberger", "window": 2}, "observer.window", ("unknown key",)),
-        ({"kind": "sso", "step": 0.5, "threshold": 0.1, "window": 0}, "observer.window",
-         (">= 1",)),
-        ({"kind": "sso", "step": 0.5, "threshold": 0.1, "window": 1.5}, "observer.window",
-         ("integer",)),
-        ({"kind": "sso", "step": 0.5, "threshold": 0.1, "inner_steps": 0},
-         "observer.inner_steps", (">= 1",)),
+        ({"kind": "sso", "step": 0.5, "threshold": 0.1, "window": 0}, "observer.window", (">= 1",)),
+        (
+            {"kind": "sso", "step": 0.5, "threshold": 0.1, "window": 1.5},
+            "observer.window",
+            ("integer",),
+        ),
+        (
+            {"kind": "sso", "step": 0.5, "threshold": 0.1, "inner_steps": 0},
+            "observer.inner_steps",
+            (">= 1",),
+        ),
     ],
 )
 def test_bad_observers(observer, key, fragments):
@@ -958,8 +1140,10 @@ def test_bad_observers(observer, key, fragments):
     "observer, key",
     [
         ({"kind": "dsso", "step": 0.5, "threshold": 0.1, "shrink": 0.5}, "observer.shrink"),
-        ({"kind": "luenberger", "gain": "place", "poles": [[0.5, 0.1], [0.5, 0.2]]},
-         "observer.poles"),
+        (
+            {"kind": "luenberger", "gain": "place", "poles": [[0.5, 0.1], [0.5, 0.2]]},
+            "observer.poles",
+        ),
         ({"kind": "luenberger", "gain": [[1.0, 0.0], [0.0, 1.0]]}, "observer.gain"),
         ({"kind": "sso", "step": 0.5, "threshold": 0.1, "windw": 2}, "observer.windw"),
     ],
@@ -1004,21 +1188,51 @@ def test_scenario_defaults():
     assert scenario["seed"] == 0
     assert scenario["noise"] == 0.0
     assert scenario["magnitude"] == (4.0, 5.0)
-    assert SCENARIO_DEFAULTS == {"magnitude": (4.0, 5.0), "noise": 0.0, "steps": 300,
-                                 "runs": 50, "seed": 0}
-    assert scenario == {"name": "c", "attack": "constant", "sensors": [0],
-                        "magnitude": (4.0, 5.0), "noise": 0.0, "steps": 300, "runs": 50,
-                        "seed": 0}
+    assert SCENARIO_DEFAULTS == {
+        "magnitude": (4.0, 5.0),
+        "noise": 0.0,
+        "steps": 300,
+        "runs": 50,
+        "seed": 0,
+    }
+    assert scenario == {
+        "name": "c",
+        "attack": "constant",
+        "sensors": [0],
+        "magnitude": (4.0, 5.0),
+        "noise": 0.0,
+        "steps": 300,
+        "runs": 50,
+        "seed": 0,
+    }
 
 
 def test_scenario_values_are_kept():
-    spec = scenario_spec({"name": "sw", "attack": "switching", "count": 2, "period": 40,
-                          "magnitude": [1, 2], "noise": 0.01, "steps": 100, "runs": 3,
-                          "seed": 7})
+    spec = scenario_spec(
+        {
+            "name": "sw",
+            "attack": "switching",
+            "count": 2,
+            "period": 40,
+            "magnitude": [1, 2],
+            "noise": 0.01,
+            "steps": 100,
+            "runs": 3,
+            "seed": 7,
+        }
+    )
     (scenario,) = spec.scenarios
-    assert scenario == {"name": "sw", "attack": "switching", "count": 2, "period": 40,
-                        "magnitude": (1.0, 2.0), "noise": 0.01, "steps": 100, "runs": 3,
-                        "seed": 7}
+    assert scenario == {
+        "name": "sw",
+        "attack": "switching",
+        "count": 2,
+        "period": 40,
+        "magnitude": (1.0, 2.0),
+        "noise": 0.01,
+        "steps": 100,
+        "runs": 3,
+        "seed": 7,
+    }
 
 
 @pytest.mark.parametrize(
@@ -1046,26 +1260,43 @@ def test_valid_scenarios(scenario, expected):
 
 
 def test_every_attack_kind_is_covered():
-    assert set(ATTACK_KINDS) == {"none", "constant", "switching", "sinusoidal", "random",
-                                 "stealthy"}
+    assert set(ATTACK_KINDS) == {
+        "none",
+        "constant",
+        "switching",
+        "sinusoidal",
+        "random",
+        "stealthy",
+    }
 
 
 @pytest.mark.parametrize(
     "magnitude, expected",
-    [(3, (3.0, 3.0)), (0, (0.0, 0.0)), (2.5, (2.5, 2.5)), ([1, 2], (1.0, 2.0)),
-     ([0.0, 0.0], (0.0, 0.0)), ([3, 3], (3.0, 3.0))],
+    [
+        (3, (3.0, 3.0)),
+        (0, (0.0, 0.0)),
+        (2.5, (2.5, 2.5)),
+        ([1, 2], (1.0, 2.0)),
+        ([0.0, 0.0], (0.0, 0.0)),
+        ([3, 3], (3.0, 3.0)),
+    ],
 )
 def test_magnitude_forms(magnitude, expected):
-    (result,) = scenario_spec({"name": "s", "attack": "random", "count": 1,
-                               "magnitude": magnitude}).scenarios
+    (result,) = scenario_spec(
+        {"name": "s", "attack": "random", "count": 1, "magnitude": magnitude}
+    ).scenarios
     assert result["magnitude"] == expected
     assert all(isinstance(x, float) for x in result["magnitude"])
 
 
 def test_scenarios_keep_their_order_from_toml(tmp_path):
-    data = base(scenario=[{"name": "one", "attack": "none"},
-                          {"name": "two", "attack": "random", "count": 1},
-                          {"name": "three", "attack": "stealthy"}])
+    data = base(
+        scenario=[
+            {"name": "one", "attack": "none"},
+            {"name": "two", "attack": "random", "count": 1},
+            {"name": "three", "attack": "stealthy"},
+        ]
+    )
     spec = load_spec(write_spec(tmp_path, data))
     assert [s["name"] for s in spec.scenarios] == ["one", "two", "three"]
 
@@ -1085,21 +1316,36 @@ def test_a_single_scenario_table_is_accepted(tmp_path):
         ({"name": 3, "attack": "none"}, "scenario[0].name", ()),
         ({"name": "s"}, "scenario[0].attack", ("missing",)),
         ({"name": "s", "attack": "bogus"}, "scenario[0].attack", ("stealthy",)),
-        ({"name": "s", "attack": "constnat", "sensors": [0]}, "scenario[0].attack",
-         ("did you mean 'constant'",)),
+        (
+            {"name": "s", "attack": "constnat", "sensors": [0]},
+            "scenario[0].attack",
+            ("did you mean 'constant'",),
+        ),
         # sensors XOR count for constant and sinusoidal
         ({"name": "s", "attack": "constant"}, "scenario[0].sensors", ("exactly one",)),
-        ({"name": "s", "attack": "constant", "sensors": [0], "count": 1}, "scenario[0].sensors",
-         ("exactly one",)),
-        ({"name": "s", "attack": "sinusoidal", "period": 5}, "scenario[0].sensors",
-         ("exactly one",)),
-        ({"name": "s", "attack": "sinusoidal", "sensors": [0], "count": 1, "period": 5},
-         "scenario[0].sensors", ("exactly one",)),
+        (
+            {"name": "s", "attack": "constant", "sensors": [0], "count": 1},
+            "scenario[0].sensors",
+            ("exactly one",),
+        ),
+        (
+            {"name": "s", "attack": "sinusoidal", "period": 5},
+            "scenario[0].sensors",
+            ("exactly one",),
+        ),
+        (
+            {"name": "s", "attack": "sinusoidal", "sensors": [0], "count": 1, "period": 5},
+            "scenario[0].sensors",
+            ("exactly one",),
+        ),
         # count for switching and random
         ({"name": "s", "attack": "switching", "period": 5}, "scenario[0].count", ("missing",)),
         ({"name": "s", "attack": "random"}, "scenario[0].count", ("missing",)),
-        ({"name": "s", "attack": "switching", "sensors": [0], "period": 5},
-         "scenario[0].sensors", ("count",)),
+        (
+            {"name": "s", "attack": "switching", "sensors": [0], "period": 5},
+            "scenario[0].sensors",
+            ("count",),
+        ),
         ({"name": "s", "attack": "random", "sensors": [0]}, "scenario[0].sensors", ("count",)),
         ({"name": "s", "attack": "random", "count": 0}, "scenario[0].count", (">= 1",)),
         ({"name": "s", "attack": "random", "count": 4}, "scenario[0].count", ("<= 3",)),
@@ -1107,64 +1353,109 @@ def test_a_single_scenario_table_is_accepted(tmp_path):
         ({"name": "s", "attack": "random", "count": 1.5}, "scenario[0].count", ("integer",)),
         # period
         ({"name": "s", "attack": "switching", "count": 1}, "scenario[0].period", ("missing",)),
-        ({"name": "s", "attack": "sinusoidal", "sensors": [0]}, "scenario[0].period",
-         ("missing",)),
-        ({"name": "s", "attack": "switching", "count": 1, "period": 0}, "scenario[0].period",
-         (">= 1",)),
-        ({"name": "s", "attack": "constant", "sensors": [0], "period": 5},
-         "scenario[0].period", ("only used",)),
-        ({"name": "s", "attack": "random", "count": 1, "period": 5}, "scenario[0].period",
-         ("only used",)),
+        ({"name": "s", "attack": "sinusoidal", "sensors": [0]}, "scenario[0].period", ("missing",)),
+        (
+            {"name": "s", "attack": "switching", "count": 1, "period": 0},
+            "scenario[0].period",
+            (">= 1",),
+        ),
+        (
+            {"name": "s", "attack": "constant", "sensors": [0], "period": 5},
+            "scenario[0].period",
+            ("only used",),
+        ),
+        (
+            {"name": "s", "attack": "random", "count": 1, "period": 5},
+            "scenario[0].period",
+            ("only used",),
+        ),
         ({"name": "s", "attack": "none", "period": 5}, "scenario[0].period", ("only used",)),
-        ({"name": "s", "attack": "stealthy", "period": 5}, "scenario[0].period",
-         ("only used",)),
+        ({"name": "s", "attack": "stealthy", "period": 5}, "scenario[0].period", ("only used",)),
         # sensors / count where they are not used
         ({"name": "s", "attack": "none", "sensors": [0]}, "scenario[0].sensors", ("not used",)),
         ({"name": "s", "attack": "none", "count": 1}, "scenario[0].count", ("not used",)),
-        ({"name": "s", "attack": "stealthy", "sensors": [0]}, "scenario[0].sensors",
-         ("witness",)),
+        ({"name": "s", "attack": "stealthy", "sensors": [0]}, "scenario[0].sensors", ("witness",)),
         ({"name": "s", "attack": "stealthy", "count": 1}, "scenario[0].count", ("not used",)),
         # sensor indices
-        ({"name": "s", "attack": "constant", "sensors": [3]}, "scenario[0].sensors",
-         ("out of range", "< 3")),
-        ({"name": "s", "attack": "constant", "sensors": [0, 7]}, "scenario[0].sensors",
-         ("out of range",)),
-        ({"name": "s", "attack": "constant", "sensors": [-1]}, "scenario[0].sensors",
-         (">= 0",)),
-        ({"name": "s", "attack": "constant", "sensors": [1, 1]}, "scenario[0].sensors",
-         ("repeated",)),
-        ({"name": "s", "attack": "constant", "sensors": []}, "scenario[0].sensors",
-         ("at least one",)),
+        (
+            {"name": "s", "attack": "constant", "sensors": [3]},
+            "scenario[0].sensors",
+            ("out of range", "< 3"),
+        ),
+        (
+            {"name": "s", "attack": "constant", "sensors": [0, 7]},
+            "scenario[0].sensors",
+            ("out of range",),
+        ),
+        ({"name": "s", "attack": "constant", "sensors": [-1]}, "scenario[0].sensors", (">= 0",)),
+        (
+            {"name": "s", "attack": "constant", "sensors": [1, 1]},
+            "scenario[0].sensors",
+            ("repeated",),
+        ),
+        (
+            {"name": "s", "attack": "constant", "sensors": []},
+            "scenario[0].sensors",
+            ("at least one",),
+        ),
         ({"name": "s", "attack": "constant", "sensors": 1}, "scenario[0].sensors", ()),
         ({"name": "s", "attack": "constant", "sensors": "0"}, "scenario[0].sensors", ()),
-        ({"name": "s", "attack": "constant", "sensors": [0.5]}, "scenario[0].sensors",
-         ("integer",)),
-        ({"name": "s", "attack": "constant", "sensors": [True]}, "scenario[0].sensors",
-         ("integer",)),
+        (
+            {"name": "s", "attack": "constant", "sensors": [0.5]},
+            "scenario[0].sensors",
+            ("integer",),
+        ),
+        (
+            {"name": "s", "attack": "constant", "sensors": [True]},
+            "scenario[0].sensors",
+            ("integer",),
+        ),
         # magnitude
-        ({"name": "s", "attack": "random", "count": 1, "magnitude": [5.0, 4.0]},
-         "scenario[0].magnitude", ("low <= high",)),
-        ({"name": "s", "attack": "random", "count": 1, "magnitude": [-1.0, 4.0]},
-         "scenario[0].magnitude", ("0 <= low",)),
-        ({"name": "s", "attack": "random", "count": 1, "magnitude": -2.0},
-         "scenario[0].magnitude", ("0 <= low",)),
-        ({"name": "s", "attack": "random", "count": 1, "magnitude": [1.0, 2.0, 3.0]},
-         "scenario[0].magnitude", ()),
-        ({"name": "s", "attack": "random", "count": 1, "magnitude": [1.0]},
-         "scenario[0].magnitude", ()),
-        ({"name": "s", "attack": "random", "count": 1, "magnitude": "big"},
-         "scenario[0].magnitude", ()),
-        ({"name": "s", "attack": "random", "count": 1, "magnitude": True},
-         "scenario[0].magnitude", ()),
-        ({"name": "s", "attack": "random", "count": 1, "magnitude": [1.0, float("inf")]},
-         "scenario[0].magnitude", ("finite",)),
-        ({"name": "s", "attack": "none", "magnitude": 1.0}, "scenario[0].magnitude",
-         ("not used",)),
+        (
+            {"name": "s", "attack": "random", "count": 1, "magnitude": [5.0, 4.0]},
+            "scenario[0].magnitude",
+            ("low <= high",),
+        ),
+        (
+            {"name": "s", "attack": "random", "count": 1, "magnitude": [-1.0, 4.0]},
+            "scenario[0].magnitude",
+            ("0 <= low",),
+        ),
+        (
+            {"name": "s", "attack": "random", "count": 1, "magnitude": -2.0},
+            "scenario[0].magnitude",
+            ("0 <= low",),
+        ),
+        (
+            {"name": "s", "attack": "random", "count": 1, "magnitude": [1.0, 2.0, 3.0]},
+            "scenario[0].magnitude",
+            (),
+        ),
+        (
+            {"name": "s", "attack": "random", "count": 1, "magnitude": [1.0]},
+            "scenario[0].magnitude",
+            (),
+        ),
+        (
+            {"name": "s", "attack": "random", "count": 1, "magnitude": "big"},
+            "scenario[0].magnitude",
+            (),
+        ),
+        (
+            {"name": "s", "attack": "random", "count": 1, "magnitude": True},
+            "scenario[0].magnitude",
+            (),
+        ),
+        (
+            {"name": "s", "attack": "random", "count": 1, "magnitude": [1.0, float("inf")]},
+            "scenario[0].magnitude",
+            ("finite",),
+        ),
+        ({"name": "s", "attack": "none", "magnitude": 1.0}, "scenario[0].magnitude", ("not used",)),
         # noise, steps, runs, seed
         ({"name": "s", "attack": "none", "noise": -0.1}, "scenario[0].noise", (">= 0",)),
         ({"name": "s", "attack": "none", "noise": "x"}, "scenario[0].noise", ()),
-        ({"name": "s", "attack": "none", "noise": float("nan")}, "scenario[0].noise",
-         ("finite",)),
+        ({"name": "s", "attack": "none", "noise": float("nan")}, "scenario[0].noise", ("finite",)),
         ({"name": "s", "attack": "none", "steps": 0}, "scenario[0].steps", (">= 1",)),
         ({"name": "s", "attack": "none", "steps": 2.5}, "scenario[0].steps", ("integer",)),
         ({"name": "s", "attack": "none", "runs": 0}, "scenario[0].runs", (">= 1",)),
@@ -1178,8 +1469,12 @@ def test_bad_scenarios(scenario, key, fragments):
 
 def test_error_names_the_index_of_the_bad_scenario():
     message = dict_error(
-        base(scenario=[{"name": "ok", "attack": "none"},
-                       {"name": "bad", "attack": "constant", "sensors": [9]}]),
+        base(
+            scenario=[
+                {"name": "ok", "attack": "none"},
+                {"name": "bad", "attack": "constant", "sensors": [9]},
+            ]
+        ),
         "scenario[1].sensors",
     )
     assert "scenario[0]" not in message
@@ -1187,9 +1482,16 @@ def test_error_names_the_index_of_the_bad_scenario():
 
 def test_duplicate_scenario_names():
     dict_error(
-        base(scenario=[{"name": "x", "attack": "none"}, {"name": "y", "attack": "stealthy"},
-                       {"name": "x", "attack": "random", "count": 1}]),
-        "scenario[2].name", "duplicate", "'x'",
+        base(
+            scenario=[
+                {"name": "x", "attack": "none"},
+                {"name": "y", "attack": "stealthy"},
+                {"name": "x", "attack": "random", "count": 1},
+            ]
+        ),
+        "scenario[2].name",
+        "duplicate",
+        "'x'",
     )
 
 
@@ -1212,8 +1514,9 @@ def test_spec_from_dict_builds_the_system():
     spec = spec_from_dict(base())
     assert isinstance(spec, Spec)
     assert spec.system == System(A2, C3, sensors=["s0", "s1", "s2"], name="demo")
-    assert spec.system == System(np.array(A2), np.array(C3, dtype=float),
-                                 sensors=("s0", "s1", "s2"), name="demo")
+    assert spec.system == System(
+        np.array(A2), np.array(C3, dtype=float), sensors=("s0", "s1", "s2"), name="demo"
+    )
     assert spec.system != System(A2, C3, name="demo")  # different sensor names
     assert (spec.name, spec.max_attacked, spec.horizon) == ("demo", 1, 2)
     assert spec.source == "<dict>"
@@ -1227,14 +1530,21 @@ def test_spec_from_dict_with_numpy_arrays():
 
 
 def test_spec_from_dict_docstring_example():
-    spec = spec_from_dict({"name": "demo", "system": {"A": [[1.0]], "C": [[1.0], [2.0]]},
-                           "attack": {"max_attacked": 0}})
+    spec = spec_from_dict(
+        {
+            "name": "demo",
+            "system": {"A": [[1.0]], "C": [[1.0], [2.0]]},
+            "attack": {"max_attacked": 0},
+        }
+    )
     assert (spec.system.p, spec.horizon) == (2, 1)
 
 
 def test_spec_from_dict_does_not_modify_its_input():
-    data = base(observer={"kind": "dsso", "step": 0.5, "threshold": 0.1},
-                scenario=[{"name": "a", "attack": "constant", "sensors": [0]}])
+    data = base(
+        observer={"kind": "dsso", "step": 0.5, "threshold": 0.1},
+        scenario=[{"name": "a", "attack": "constant", "sensors": [0]}],
+    )
     before = copy.deepcopy(data)
     spec_from_dict(data)
     assert data == before
@@ -1244,15 +1554,15 @@ def test_spec_from_dict_options():
     data = base()
     del data["name"]
     dict_error(data, "name", "missing")
-    spec = spec_from_dict(data, default_name="fallback", max_attacked=0, horizon=4,
-                          source="somewhere", sha256="abc")
+    spec = spec_from_dict(
+        data, default_name="fallback", max_attacked=0, horizon=4, source="somewhere", sha256="abc"
+    )
     assert (spec.name, spec.max_attacked, spec.horizon) == ("fallback", 0, 4)
     assert (spec.source, spec.sha256) == ("somewhere", "abc")
 
 
 def test_spec_from_dict_errors_use_the_source():
-    dict_error(base(attack={"max_attacked": -1}), "attack.max_attacked",
-               source="my/design.toml")
+    dict_error(base(attack={"max_attacked": -1}), "attack.max_attacked", source="my/design.toml")
 
 
 @pytest.mark.parametrize("data", [[1, 2], "spec", None, 3])
@@ -1268,8 +1578,10 @@ def test_spec_from_dict_wrong_column_count_message():
 
 
 def test_spec_error_messages_keep_the_index_of_the_bad_entry():
-    message = dict_error(base(scenario=[{"name": "s", "attack": "constant", "sensors": [0, 5]}]),
-                         "scenario[0].sensors")
+    message = dict_error(
+        base(scenario=[{"name": "s", "attack": "constant", "sensors": [0, 5]}]),
+        "scenario[0].sensors",
+    )
     assert "sensors[1] = 5" in message
     message = dict_error(base(system={"A": A2, "C": [[1.0, 0.0], [1.0]]}), "system.C")
     assert "row 1" in message
@@ -1394,8 +1706,7 @@ def test_observability_matrix_matches_numpy_and_control(seed):
         assert O.shape == (p * h, n)
         np.testing.assert_allclose(O, _reference_obsv(A, C, h), rtol=1e-12, atol=1e-12)
     expected = np.asarray(control.obsv(A, C))
-    np.testing.assert_allclose(system.observability_matrix(n), expected, rtol=1e-12,
-                               atol=1e-12)
+    np.testing.assert_allclose(system.observability_matrix(n), expected, rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(system.observability_matrix(), expected, rtol=1e-12, atol=1e-12)
 
 
@@ -1416,8 +1727,9 @@ def test_sensor_blocks(h):
     assert blocks.shape == (4, h, 3)
     for i in range(4):
         for k in range(h):
-            np.testing.assert_allclose(blocks[i, k], C[i] @ np.linalg.matrix_power(A, k),
-                                       rtol=1e-12, atol=1e-12)
+            np.testing.assert_allclose(
+                blocks[i, k], C[i] @ np.linalg.matrix_power(A, k), rtol=1e-12, atol=1e-12
+            )
     O = system.observability_matrix(h)
     for i in range(4):
         for k in range(h):

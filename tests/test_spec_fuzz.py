@@ -22,7 +22,6 @@ import os
 import subprocess
 import sys
 import tomllib
-from pathlib import Path
 from typing import Any
 
 import pytest
@@ -39,21 +38,73 @@ THOROUGH = os.environ.get("HYPOTHESIS_PROFILE") == "thorough"
 # strategies
 # ---------------------------------------------------------------------------
 
-KEYS = ["name", "system", "A", "C", "sensors", "attack", "max_attacked", "horizon", "observer",
-        "kind", "gain", "poles", "step", "threshold", "shrink", "L2", "window", "inner_steps",
-        "scenario", "attack", "count", "magnitude", "period", "noise", "steps", "runs", "seed",
-        "System", "max_attack", "horizn", "stpe", "sensor", "", " ", "a.b", "[x]"]
-WORDS = ["luenberger", "ogd", "sso", "dsso", "elastic_net", "deadbeat", "place", "pinv",
-         "none", "constant", "switching", "sinusoidal", "random", "stealthy", "ugv"]
+KEYS = [
+    "name",
+    "system",
+    "A",
+    "C",
+    "sensors",
+    "attack",
+    "max_attacked",
+    "horizon",
+    "observer",
+    "kind",
+    "gain",
+    "poles",
+    "step",
+    "threshold",
+    "shrink",
+    "L2",
+    "window",
+    "inner_steps",
+    "scenario",
+    "attack",
+    "count",
+    "magnitude",
+    "period",
+    "noise",
+    "steps",
+    "runs",
+    "seed",
+    "System",
+    "max_attack",
+    "horizn",
+    "stpe",
+    "sensor",
+    "",
+    " ",
+    "a.b",
+    "[x]",
+]
+WORDS = [
+    "luenberger",
+    "ogd",
+    "sso",
+    "dsso",
+    "elastic_net",
+    "deadbeat",
+    "place",
+    "pinv",
+    "none",
+    "constant",
+    "switching",
+    "sinusoidal",
+    "random",
+    "stealthy",
+    "ugv",
+]
 
 integers = st.one_of(
     st.integers(-3, 40),
     st.integers(),
-    st.sampled_from([2**63 - 1, 2**63, -(2**63), -(2**63) - 1, 10**19, 10**300, -10**400,
-                     10**4299]),
+    st.sampled_from(
+        [2**63 - 1, 2**63, -(2**63), -(2**63) - 1, 10**19, 10**300, -(10**400), 10**4299]
+    ),
 )
-floats = st.one_of(st.floats(allow_nan=True, allow_infinity=True),
-                   st.sampled_from([0.0, -0.0, 1e-300, 1e300, 1.5, 0.5, 1e308, 5e-324]))
+floats = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.sampled_from([0.0, -0.0, 1e-300, 1e300, 1.5, 0.5, 1e308, 5e-324]),
+)
 texts = st.one_of(
     st.sampled_from(KEYS + WORDS),
     st.text(max_size=12),
@@ -63,9 +114,10 @@ texts = st.one_of(
 scalars = st.one_of(st.none(), st.booleans(), integers, floats, texts)
 values = st.recursive(
     scalars,
-    lambda inner: st.one_of(st.lists(inner, max_size=5),
-                            st.dictionaries(st.one_of(st.sampled_from(KEYS), st.text(max_size=6)),
-                                            inner, max_size=4)),
+    lambda inner: st.one_of(
+        st.lists(inner, max_size=5),
+        st.dictionaries(st.one_of(st.sampled_from(KEYS), st.text(max_size=6)), inner, max_size=4),
+    ),
     max_leaves=12,
 )
 
@@ -88,8 +140,21 @@ def _get(doc: Any, path: tuple) -> Any:
     return doc
 
 
-MUTATIONS = ["delete", "rename", "replace", "insert", "wrap", "unwrap", "nest_deep", "truncate",
-             "append", "stringify", "to_dict", "huge_list", "duplicate_list"]
+MUTATIONS = [
+    "delete",
+    "rename",
+    "replace",
+    "insert",
+    "wrap",
+    "unwrap",
+    "nest_deep",
+    "truncate",
+    "append",
+    "stringify",
+    "to_dict",
+    "huge_list",
+    "duplicate_list",
+]
 
 
 @st.composite
@@ -205,8 +270,13 @@ def loads_or_spec_error(call: Any) -> None:
 # the properties
 # ---------------------------------------------------------------------------
 
-_LIMITED = settings(suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,
-                                           HealthCheck.large_base_example])
+_LIMITED = settings(
+    suppress_health_check=[
+        HealthCheck.too_slow,
+        HealthCheck.data_too_large,
+        HealthCheck.large_base_example,
+    ]
+)
 
 
 @_LIMITED
@@ -232,16 +302,19 @@ def test_spec_files_load_or_refuse(tmp_path_factory, doc, fmt):
 
 
 @_LIMITED
-@given(name=st.sampled_from(sorted(EXAMPLES)), fmt=st.sampled_from(["toml", "json"]),
-       edits=st.lists(st.tuples(st.integers(0, 10**6), st.binary(min_size=0, max_size=4)),
-                      min_size=1, max_size=6))
+@given(
+    name=st.sampled_from(sorted(EXAMPLES)),
+    fmt=st.sampled_from(["toml", "json"]),
+    edits=st.lists(
+        st.tuples(st.integers(0, 10**6), st.binary(min_size=0, max_size=4)), min_size=1, max_size=6
+    ),
+)
 def test_corrupted_spec_files_load_or_refuse(tmp_path_factory, name, fmt, edits):
-    text = (example_path(name).read_bytes() if fmt == "toml"
-            else json.dumps(EXAMPLES[name]).encode())
+    text = example_path(name).read_bytes() if fmt == "toml" else json.dumps(EXAMPLES[name]).encode()
     data = bytearray(text)
     for position, replacement in edits:
         at = position % (len(data) + 1)
-        data[at:at + len(replacement)] = replacement
+        data[at : at + len(replacement)] = replacement
     path = tmp_path_factory.mktemp("corrupt") / f"spec.{fmt}"
     path.write_bytes(bytes(data))
     loads_or_spec_error(lambda: load_spec(path))
@@ -252,7 +325,7 @@ def test_corrupted_spec_files_load_or_refuse(tmp_path_factory, name, fmt, edits)
 # reader would otherwise take the test session down with it
 # ---------------------------------------------------------------------------
 
-_CHILD = r'''
+_CHILD = r"""
 import io, sys, traceback
 import numpy as np, scipy.io
 from pathlib import Path
@@ -292,24 +365,30 @@ for seed in range(count):
         traceback.print_exc()
         sys.exit(3)
 print(outcomes)
-'''
+"""
 
 
 def test_corrupted_mat_and_npz_files_never_crash(tmp_path):
     count = 5000 if THOROUGH else 400
-    done = subprocess.run([sys.executable, "-c", _CHILD, str(tmp_path), str(count)],
-                          capture_output=True, text=True, timeout=600)
+    done = subprocess.run(
+        [sys.executable, "-c", _CHILD, str(tmp_path), str(count)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert done.returncode == 0, (
         f"exit status {done.returncode} (negative: killed by a signal, such as a segmentation "
-        f"fault in a file reader)\n{done.stderr[-3000:]}")
+        f"fault in a file reader)\n{done.stderr[-3000:]}"
+    )
     assert "refused" in done.stdout
 
 
-@pytest.mark.parametrize("case", ["complex flag without an imaginary part",
-                                  "unknown data type code", "data type code 8"])
+@pytest.mark.parametrize(
+    "case", ["complex flag without an imaginary part", "unknown data type code", "data type code 8"]
+)
 def test_mat_files_that_crashed_scipy(tmp_path, case):
     """Files scipy.io.loadmat (1.17) crashed on with a segmentation fault."""
-    script = r'''
+    script = r"""
 import io, struct, sys
 import numpy as np, scipy.io
 from ssecert.spec import SpecError, load_spec
@@ -329,9 +408,10 @@ try:
     load_spec(sys.argv[1], max_attacked=1)
 except SpecError as exc:
     print(exc)
-'''
+"""
     path = tmp_path / "crash.mat"
-    done = subprocess.run([sys.executable, "-c", script, str(path), case],
-                          capture_output=True, text=True, timeout=120)
+    done = subprocess.run(
+        [sys.executable, "-c", script, str(path), case], capture_output=True, text=True, timeout=120
+    )
     assert done.returncode == 0, (done.returncode, done.stderr[-2000:])
     assert "cannot read the .mat file" in done.stdout, done.stdout

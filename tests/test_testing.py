@@ -22,8 +22,8 @@ from ssecert.testing import (
     assert_recovers,
     assert_schur,
     assert_sparse_observable,
+    strategies,
 )
-from ssecert.testing import strategies
 from ssecert.testing.plugin import PROFILES, QUICK_EXAMPLES, THOROUGH_EXAMPLES
 from ssecert.testing.strategies import (
     marginally_stable_systems,
@@ -117,8 +117,7 @@ def test_sparse_attacks_are_sparse_finite_and_bounded(kind):
     def check(data):
         p = data.draw(st.integers(1, 6), label="p")
         s = data.draw(st.integers(0, p), label="s")
-        a = data.draw(sparse_attacks(p, s, st.integers(1, 40), kinds=[kind],
-                                     magnitude=(0.5, 2.0)))
+        a = data.draw(sparse_attacks(p, s, st.integers(1, 40), kinds=[kind], magnitude=(0.5, 2.0)))
         assert a.ndim == 2 and a.shape[1] == p and a.dtype == np.float64
         assert np.all(np.isfinite(a)) and np.abs(a).max(initial=0.0) <= 2.0
         assert np.all(np.count_nonzero(a, axis=1) <= s)
@@ -144,15 +143,21 @@ def test_switching_attacks_change_their_support():
 def test_sparse_attacks_refuse_bad_arguments():
     with pytest.raises(ValueError, match=r"s must be between 0 and p = 3.*got 4"):
         sparse_attacks(3, 4, 10)
-    with pytest.raises(ValueError, match=r"kinds must contain only constant, switching, "
-                                         r"sinusoidal; got 'random'"):
+    with pytest.raises(
+        ValueError,
+        match=r"kinds must contain only constant, switching, "
+        r"sinusoidal; got 'random'",
+    ):
         sparse_attacks(3, 1, 10, kinds=["random"])
     with pytest.raises(ValueError, match="low <= high"):
         sparse_attacks(3, 1, 10, magnitude=(2.0, 1.0))
 
 
-@given(observer_designs(observable_systems(st.integers(1, 4), st.integers(1, 4)),
-                        max_attacked=st.integers(0, 2)))
+@given(
+    observer_designs(
+        observable_systems(st.integers(1, 4), st.integers(1, 4)), max_attacked=st.integers(0, 2)
+    )
+)
 def test_observer_designs_are_valid_and_buildable(design):
     assert isinstance(design, Spec) and design.max_attacked in (0, 1, 2)
     observer = design.observer
@@ -267,7 +272,8 @@ def test_assert_sparse_observable_inconclusive_gives_the_budget():
         assert_sparse_observable(plant, 2, method="enumeration", max_sets=5)
     message = str(info.value)
     assert "2-sparse observability of system 'system' (n = 6, p = 12) could not be decided" in (
-        message)
+        message
+    )
     assert "enumeration budget of 5 sets reached" in message and "max_sets=..." in message
 
 
@@ -316,15 +322,24 @@ def test_assert_schur():
 
 
 def _luenberger_design(C, s):
-    return spec_from_dict({"name": "three-sensors", "system": {"A": [[0.5]], "C": C},
-                           "attack": {"max_attacked": s},
-                           "observer": {"kind": "luenberger", "gain": "deadbeat"}})
+    return spec_from_dict(
+        {
+            "name": "three-sensors",
+            "system": {"A": [[0.5]], "C": C},
+            "attack": {"max_attacked": s},
+            "observer": {"kind": "luenberger", "gain": "deadbeat"},
+        }
+    )
 
 
 def test_assert_certified():
     cert = assert_certified(_luenberger_design([[1.0], [1.0], [1.0]], 1))
     assert [c.id for c in cert.checks if c.required] == [
-        "observability", "sparse_observability", "observer_gain", "observer_stability"]
+        "observability",
+        "sparse_observability",
+        "observer_gain",
+        "observer_stability",
+    ]
     with pytest.raises(AssertionError) as info:
         assert_certified(UGV)
     message = str(info.value)
@@ -336,9 +351,14 @@ def test_assert_certified():
 
 
 def test_assert_certified_gives_the_growing_error_of_an_unstable_gain():
-    design = spec_from_dict({"name": "bad-gain", "system": {"A": [[0.5]], "C": [[1.0], [1.0]]},
-                             "attack": {"max_attacked": 0},
-                             "observer": {"kind": "luenberger", "gain": [[-1.0, 0.0]]}})
+    design = spec_from_dict(
+        {
+            "name": "bad-gain",
+            "system": {"A": [[0.5]], "C": [[1.0], [1.0]]},
+            "attack": {"max_attacked": 0},
+            "observer": {"kind": "luenberger", "gain": [[-1.0, 0.0]]},
+        }
+    )
     with pytest.raises(AssertionError) as info:
         assert_certified(design)
     message = str(info.value)
@@ -354,9 +374,11 @@ def test_assert_recovers():
         assert_recovers(UGV, "stealthy", 0.01, runs=8, steps=100)
     message = str(info.value)
     assert "the dsso observer of design 'ugv' does not recover under scenario 'stealthy'" in (
-        message)
+        message
+    )
     assert "8 of 8 runs end with a relative state error above tol = 0.01 after 100 steps" in (
-        message)
+        message
+    )
     worst = int(message.split("worst run: index ")[1].split(",")[0])
     final = float(message.split("final relative error ")[1].split(";")[0])
     mean = float(message.split("; mean ")[1].split(".\n")[0])
@@ -366,14 +388,23 @@ def test_assert_recovers():
 
 
 def test_assert_recovers_validates_the_scenario_as_the_loader_does():
-    with pytest.raises(SpecError, match=r"scenario\[0\]\.sensorz': unknown key \(did you mean "
-                                        r"'sensors'\?\)"):
+    with pytest.raises(
+        SpecError,
+        match=r"scenario\[0\]\.sensorz': unknown key \(did you mean "
+        r"'sensors'\?\)",
+    ):
         assert_recovers(UGV, {"attack": "constant", "sensorz": [1]}, 0.1)
-    with pytest.raises(SpecError, match=r"scenario\[0\]\.sensors': sensors\[0\] = 7 is out "
-                                        r"of range: sensor indices are 0-based and must be < 3"):
+    with pytest.raises(
+        SpecError,
+        match=r"scenario\[0\]\.sensors': sensors\[0\] = 7 is out "
+        r"of range: sensor indices are 0-based and must be < 3",
+    ):
         assert_recovers(UGV, {"attack": "constant", "sensors": [7]}, 0.1)
-    with pytest.raises(ValueError, match="'nope' is not a \\[\\[scenario\\]\\] of design 'ugv'; "
-                                         "its scenarios: 'constant-velocity-a', 'stealthy'"):
+    with pytest.raises(
+        ValueError,
+        match="'nope' is not a \\[\\[scenario\\]\\] of design 'ugv'; "
+        "its scenarios: 'constant-velocity-a', 'stealthy'",
+    ):
         assert_recovers(UGV, "nope", 0.1)
     with pytest.raises(TypeError, match="design must be a ssecert.Spec"):
         assert_recovers(UGV.system, "stealthy", 0.1)
@@ -412,8 +443,9 @@ def test_example_fixture(ssecert_example):
     assert ssecert_example("ugv") is ugv
     with pytest.raises(ValueError) as info:
         ssecert_example("ugv2")
-    assert str(info.value) == ("no packaged ssecert example named 'ugv2'; available: "
-                               + ", ".join(list_examples()))
+    assert str(info.value) == (
+        "no packaged ssecert example named 'ugv2'; available: " + ", ".join(list_examples())
+    )
 
 
 COUNTING = """
@@ -456,8 +488,9 @@ def test_profiles_quick_by_default_and_thorough_on_demand(pytester):
     assert again == quick  # derandomized: the same examples every run
     thorough, result, after = _run(pytester, "--ssecert-profile", "thorough")
     result.assert_outcomes(passed=1)
-    result.stdout.fnmatch_lines(["ssecert: hypothesis profile 'ssecert-thorough' "
-                                 "(--ssecert-profile)"])
+    result.stdout.fnmatch_lines(
+        ["ssecert: hypothesis profile 'ssecert-thorough' (--ssecert-profile)"]
+    )
     assert len(thorough) == THOROUGH_EXAMPLES
     assert after == "default"
 
@@ -470,8 +503,12 @@ def test_an_explicit_hypothesis_profile_is_respected(pytester):
     result.stdout.fnmatch_lines(["ssecert: hypothesis profile 'ci' (--hypothesis-profile ci)"])
     _, result, _ = _run(pytester, "--hypothesis-profile", "ci", "--ssecert-profile", "quick")
     assert result.ret == pytest.ExitCode.USAGE_ERROR
-    result.stderr.fnmatch_lines(["*--ssecert-profile quick and --hypothesis-profile ci both "
-                                 "choose the hypothesis profile; give only one"])
+    result.stderr.fnmatch_lines(
+        [
+            "*--ssecert-profile quick and --hypothesis-profile ci both "
+            "choose the hypothesis profile; give only one"
+        ]
+    )
 
 
 def test_hypothesis_verbosity_keeps_the_ssecert_profile(pytester):
@@ -479,12 +516,17 @@ def test_hypothesis_verbosity_keeps_the_ssecert_profile(pytester):
     drawn, result, after = _run(pytester, "--hypothesis-verbosity", "verbose")
     result.assert_outcomes(passed=1)
     assert len(drawn) == QUICK_EXAMPLES
-    result.stdout.fnmatch_lines(["ssecert: hypothesis profile "
-                                 "'ssecert-quick-with-verbose-verbosity' (default)"])
+    result.stdout.fnmatch_lines(
+        ["ssecert: hypothesis profile 'ssecert-quick-with-verbose-verbosity' (default)"]
+    )
     # the verbosity was kept, and so were the quick profile's settings
     header = next(line for line in result.outlines if line.startswith("hypothesis profile "))
-    for setting in ("deadline=None", f"max_examples={QUICK_EXAMPLES}", "derandomize=True",
-                    "verbosity=Verbosity.verbose"):
+    for setting in (
+        "deadline=None",
+        f"max_examples={QUICK_EXAMPLES}",
+        "derandomize=True",
+        "verbosity=Verbosity.verbose",
+    ):
         assert setting in header, header
     assert after == "default-with-verbose-verbosity"  # what hypothesis's plugin had loaded
 
@@ -510,7 +552,8 @@ def test_ini_option_and_project_profiles(pytester):
 
 
 def test_example_fixture_in_property_tests(pytester):
-    pytester.makepyfile(test_fixture="""
+    pytester.makepyfile(
+        test_fixture="""
         from hypothesis import given, strategies as st
         from ssecert import Spec
 
@@ -520,11 +563,16 @@ def test_example_fixture_in_property_tests(pytester):
 
         def test_unknown(ssecert_example):
             ssecert_example("no-such-example")
-    """)
+    """
+    )
     result = pytester.runpytest("-p", "no:cacheprovider")
     result.assert_outcomes(passed=1, failed=1)
-    result.stdout.fnmatch_lines(["*ValueError: no packaged ssecert example named "
-                                 "'no-such-example'; available: lasso-example-1, *ugv"])
+    result.stdout.fnmatch_lines(
+        [
+            "*ValueError: no packaged ssecert example named "
+            "'no-such-example'; available: lasso-example-1, *ugv"
+        ]
+    )
 
 
 def test_plugin_works_without_hypothesis(pytester):
@@ -532,8 +580,10 @@ def test_plugin_works_without_hypothesis(pytester):
     shadow = pytester.mkdir("no_hypothesis")
     for name in ("hypothesis", "_hypothesis_pytestplugin", "_hypothesis_globals"):
         (shadow / f"{name}.py").write_text(
-            f'raise ModuleNotFoundError("No module named {name!r}", name={name!r})\n')
-    pytester.makepyfile(test_plain="""
+            f'raise ModuleNotFoundError("No module named {name!r}", name={name!r})\n'
+        )
+    pytester.makepyfile(
+        test_plain="""
         import sys
         from ssecert import Spec
         from ssecert.testing import assert_observable
@@ -542,19 +592,39 @@ def test_plugin_works_without_hypothesis(pytester):
             assert isinstance(ssecert_example("ugv"), Spec)
             assert_observable(ssecert_example("ugv").system)
             assert "hypothesis" not in sys.modules
-    """)
+    """
+    )
     env = {k: v for k, v in os.environ.items() if k not in ("PYTEST_ADDOPTS",)}
     env["PYTHONPATH"] = str(shadow)
-    command = [sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "-p",
-               "no:hypothesispytest"]
-    run = subprocess.run([*command, "test_plain.py"], cwd=pytester.path, capture_output=True,
-                         text=True, env=env, timeout=300)
+    command = [
+        sys.executable,
+        "-m",
+        "pytest",
+        "-p",
+        "no:cacheprovider",
+        "-p",
+        "no:hypothesispytest",
+    ]
+    run = subprocess.run(
+        [*command, "test_plain.py"],
+        cwd=pytester.path,
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=300,
+    )
     assert run.returncode == 0, run.stdout + run.stderr
     assert "1 passed" in run.stdout and "ssecert: hypothesis profile" not in run.stdout
-    run = subprocess.run([*command, "--ssecert-profile", "thorough", "test_plain.py"],
-                         cwd=pytester.path, capture_output=True, text=True, env=env, timeout=300)
+    run = subprocess.run(
+        [*command, "--ssecert-profile", "thorough", "test_plain.py"],
+        cwd=pytester.path,
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=300,
+    )
     assert run.returncode == pytest.ExitCode.USAGE_ERROR
-    assert "--ssecert-profile needs hypothesis: pip install \"ssecert[testing]\"" in run.stderr
+    assert '--ssecert-profile needs hypothesis: pip install "ssecert[testing]"' in run.stderr
 
 
 def test_profile_names_do_not_collide_with_common_ones():

@@ -26,8 +26,17 @@ def test_deadbeat_gain_breaks_lemma_1():
 @pytest.mark.parametrize("poles", [[0.5, 0.6], [0.9, 0.95]])
 def test_claimed_lipschitz_constant_has_a_verified_counterexample(poles):
     spec = load_example("ugv")
-    design = build_observer(spec.system, {"kind": "elastic_net", "gain": "place", "poles": poles,
-                                          "step": 0.01, "threshold": 0.1, "shrink": 0.3})
+    design = build_observer(
+        spec.system,
+        {
+            "kind": "elastic_net",
+            "gain": "place",
+            "poles": poles,
+            "step": 0.01,
+            "threshold": 0.1,
+            "shrink": 0.3,
+        },
+    )
     _, items = items_of(design)
     lemma = items["lemma_1"]
     assert lemma.verdict == "fails"
@@ -35,8 +44,9 @@ def test_claimed_lipschitz_constant_has_a_verified_counterexample(poles):
     L1 = -design.gain.L
     F = spec.system.A + L1 @ spec.system.C
     Finv = np.linalg.inv(F)
-    ratio = (np.linalg.norm(pi_map(a1, Finv, L1, 0.3, 0.1) - pi_map(a2, Finv, L1, 0.3, 0.1))
-             / np.linalg.norm(a1 - a2))
+    ratio = np.linalg.norm(
+        pi_map(a1, Finv, L1, 0.3, 0.1) - pi_map(a2, Finv, L1, 0.3, 0.1)
+    ) / np.linalg.norm(a1 - a2)
     claimed = np.linalg.norm(L1, 2) / abs(np.abs(np.linalg.eigvals(F)).max() - 0.3)
     assert ratio > claimed
     # the corrected bound still holds
@@ -45,9 +55,17 @@ def test_claimed_lipschitz_constant_has_a_verified_counterexample(poles):
 
 def test_pi_satisfies_equation_5_9():
     spec = load_example("ugv")
-    design = build_observer(spec.system, {"kind": "elastic_net", "gain": "place",
-                                          "poles": [0.9, 0.95], "step": 0.01, "threshold": 0.1,
-                                          "shrink": 0.3})
+    design = build_observer(
+        spec.system,
+        {
+            "kind": "elastic_net",
+            "gain": "place",
+            "poles": [0.9, 0.95],
+            "step": 0.01,
+            "threshold": 0.1,
+            "shrink": 0.3,
+        },
+    )
     L1 = -design.gain.L
     F = spec.system.A + L1 @ spec.system.C
     Finv = np.linalg.inv(F)
@@ -59,11 +77,27 @@ def test_pi_satisfies_equation_5_9():
 
 def test_epsilon_bound_is_sufficient_not_necessary():
     spec = load_example("ugv")
-    small = build_observer(spec.system, {"kind": "elastic_net", "gain": "place",
-                                         "poles": [0.9, 0.95], "step": 0.01, "threshold": 0.1,
-                                         "shrink": 0.3})
-    large = build_observer(spec.system, {"kind": "elastic_net", "gain": "place",
-                                         "poles": [0.9, 0.95], "step": 0.5, "threshold": 0.1,
-                                         "shrink": 0.3})
+    small = build_observer(
+        spec.system,
+        {
+            "kind": "elastic_net",
+            "gain": "place",
+            "poles": [0.9, 0.95],
+            "step": 0.01,
+            "threshold": 0.1,
+            "shrink": 0.3,
+        },
+    )
+    large = build_observer(
+        spec.system,
+        {
+            "kind": "elastic_net",
+            "gain": "place",
+            "poles": [0.9, 0.95],
+            "step": 0.5,
+            "threshold": 0.1,
+            "shrink": 0.3,
+        },
+    )
     assert items_of(small)[1]["epsilon_bound"].verdict == "holds"
     assert items_of(large)[1]["epsilon_bound"].verdict == "inconclusive"

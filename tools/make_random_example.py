@@ -30,7 +30,9 @@ def make(seed: int = SEED) -> tuple[np.ndarray, np.ndarray]:
 
 
 def rows(M: np.ndarray) -> str:
-    return "[\n" + ",\n".join("  [" + ", ".join(repr(float(x)) for x in r) + "]" for r in M) + ",\n]"
+    return (
+        "[\n" + ",\n".join("  [" + ", ".join(repr(float(x)) for x in r) + "]" for r in M) + ",\n]"
+    )
 
 
 def main() -> None:

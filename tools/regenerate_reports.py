@@ -1,6 +1,6 @@
 """Regenerate reports/ for every packaged example: NAME.html and NAME.json.
 
-    python tools/regenerate_reports.py
+python tools/regenerate_reports.py
 """
 
 from pathlib import Path

@@ -38,10 +38,15 @@ def main(out: Path) -> None:
         (out / f"{name}.json").write_text(json.dumps(doc, indent=1, sort_keys=True))
         (out / f"{name}.html").write_text(_without_times(render_report(result)))
         for command in ("analyze", "simulate"):
-            run = subprocess.run([sys.executable, "-m", "ssecert", command, name, "--seed", "0"],
-                                 capture_output=True, text=True, check=False)
+            run = subprocess.run(
+                [sys.executable, "-m", "ssecert", command, name, "--seed", "0"],
+                capture_output=True,
+                text=True,
+                check=False,
+            )
             (out / f"{name}.{command}.txt").write_text(
-                f"exit {run.returncode}\n{_without_times(run.stdout)}{_without_times(run.stderr)}")
+                f"exit {run.returncode}\n{_without_times(run.stdout)}{_without_times(run.stderr)}"
+            )
         print(name, result.certificate.verdict.value)
 
 

@@ -121,13 +121,23 @@ def nilpotency(
         if norms[-1] <= rtol:
             previous = norms[-2] if k > 1 else 1.0
             ok = previous > clear * rtol
-            reason = "" if ok else (
-                f"||(F/s)^{k - 1}|| = {previous:.2e} is not clearly above {rtol:.0e} "
-                f"(s = {s:.3g})"
+            reason = (
+                ""
+                if ok
+                else (
+                    f"||(F/s)^{k - 1}|| = {previous:.2e} is not clearly above {rtol:.0e} "
+                    f"(s = {s:.3g})"
+                )
             )
             return Nilpotency(k, tuple(norms), rtol, s, ok, reason)
-    return Nilpotency(None, tuple(norms), rtol, s, True,
-                      f"||(F/s)^{n}|| = {norms[-1]:.2e} exceeds {rtol:.0e} (s = {s:.3g})")
+    return Nilpotency(
+        None,
+        tuple(norms),
+        rtol,
+        s,
+        True,
+        f"||(F/s)^{n}|| = {norms[-1]:.2e} exceeds {rtol:.0e} (s = {s:.3g})",
+    )
 
 
 @dataclass(frozen=True)
@@ -187,10 +197,12 @@ class DeadbeatCheck:
             "rtol": self.rtol,
             "verified": self.verified,
             "reason": self.reason,
-            "test": ("F = A - L C formed exactly from the printed floats; ||F^k||_2 <= rtol "
-                     "||A||_2^k with ||F^(k-1)||_2 clearly above (exact bounds "
-                     "||X||_inf / sqrt(n) <= ||X||_2 <= sqrt(||X||_1 ||X||_inf)), and "
-                     "rho(F) <= ||F^m||_inf^(1/m) < 1 for an exact power m"),
+            "test": (
+                "F = A - L C formed exactly from the printed floats; ||F^k||_2 <= rtol "
+                "||A||_2^k with ||F^(k-1)||_2 clearly above (exact bounds "
+                "||X||_inf / sqrt(n) <= ||X||_2 <= sqrt(||X||_1 ||X||_inf)), and "
+                "rho(F) <= ||F^m||_inf^(1/m) < 1 for an exact power m"
+            ),
         }
 
 
@@ -230,10 +242,13 @@ def verify_deadbeat(
 
     A = np.asarray(as_real_matrix(A, "A"), dtype=float)
     n = A.shape[0]
-    C = np.asarray(as_real_matrix(C, "C", shape=(None, n), shape_hint="the number of states"),
-                   dtype=float)
-    L = np.asarray(as_real_matrix(L, "L", shape=(n, C.shape[0]),
-                                  shape_hint="n x p: states by sensors"), dtype=float)
+    C = np.asarray(
+        as_real_matrix(C, "C", shape=(None, n), shape_hint="the number of states"), dtype=float
+    )
+    L = np.asarray(
+        as_real_matrix(L, "L", shape=(n, C.shape[0]), shape_hint="n x p: states by sensors"),
+        dtype=float,
+    )
     F = exact_error_matrix(A, L, C)
     powers = spectral_radius_bound(F, consecutive=n, squarings=8, target=1.0)
     scale = float(np.linalg.norm(A, 2))
@@ -245,24 +260,32 @@ def verify_deadbeat(
     relative = tuple(0.0 if r == -math.inf else 2.0 ** min(r, 1e4) for r in upper)
     threshold = math.log2(rtol)
     index = next((k + 1 for k, r in enumerate(upper) if r <= threshold), None)
-    conclusive = index is not None and (index == 1 or lower[index - 2] > threshold
-                                        + math.log2(clear))
+    conclusive = index is not None and (
+        index == 1 or lower[index - 2] > threshold + math.log2(clear)
+    )
     reasons = []
     if index is None:
         reasons.append(
             f"||F^k|| / ||A||^k stays above {rtol:.0e} up to k = {len(upper)}"
             + (f" (smallest {min(relative):.2e})" if relative else "")
-            + ("" if powers.complete else "; the exact powers stopped at their budget"))
+            + ("" if powers.complete else "; the exact powers stopped at their budget")
+        )
     elif not conclusive:
-        reasons.append(f"||F^{index - 1}|| / ||A||^{index - 1} = {relative[index - 2]:.2e} is "
-                       f"not clearly above {rtol:.0e}")
+        reasons.append(
+            f"||F^{index - 1}|| / ||A||^{index - 1} = {relative[index - 2]:.2e} is "
+            f"not clearly above {rtol:.0e}"
+        )
     if powers.radius_bound >= 1:
         if powers.radius_lower > 1:
-            reasons.append(f"the printed gain is unstable: exact traces of powers of "
-                           f"A - L C prove spectral radius >= {powers.radius_lower:.6g}")
+            reasons.append(
+                f"the printed gain is unstable: exact traces of powers of "
+                f"A - L C prove spectral radius >= {powers.radius_lower:.6g}"
+            )
         else:
-            reasons.append(f"the spectral radius of the printed A - L C is not certified below 1 "
-                           f"(exact bound {powers.radius_bound:.6g})")
+            reasons.append(
+                f"the spectral radius of the printed A - L C is not certified below 1 "
+                f"(exact bound {powers.radius_bound:.6g})"
+            )
     return DeadbeatCheck(
         index=index,
         relative_norms=relative,
@@ -387,8 +410,10 @@ def deadbeat_gain(
     test = verify_deadbeat(A, L, C)
     problem = test.reason
     if test.index is not None and test.index < index:  # impossible: rounding fooled the test
-        problem = (f"the power test gives index {test.index}, below the observability index "
-                   f"{index}, which no gain can reach")
+        problem = (
+            f"the power test gives index {test.index}, below the observability index "
+            f"{index}, which no gain can reach"
+        )
     verified = test.verified and test.index is not None and test.index >= index
     return Gain(
         L=L,
@@ -541,7 +566,7 @@ def exact_deadbeat_gain(A: Sequence[Sequence[Any]], C: Sequence[Sequence[Any]]) 
                 else:
                     P = span(prev)
                     sol, params = (NB.T * P).gauss_jordan_solve(R * v)
-                    sol = sol.subs({t: 0 for t in params})
+                    sol = sol.subs(dict.fromkeys(params, 0))
                     W_cols.append(P * sol)
         prev = Vi
     X, W = span(X_cols), span(W_cols)
@@ -684,8 +709,13 @@ def ogd_gain(system: System, step: float) -> Gain:
     """
     step = as_float_option(step, "step", min_value=0.0, min_inclusive=False)
     L = step * system.A @ system.C.T
-    return Gain(L=L, method="ogd", error_matrix=system.A - L @ system.C, verified=True,
-                details={"step": step})
+    return Gain(
+        L=L,
+        method="ogd",
+        error_matrix=system.A - L @ system.C,
+        verified=True,
+        details={"step": step},
+    )
 
 
 def pinv_gain(system: System) -> Gain:
@@ -713,5 +743,6 @@ def pinv_gain(system: System) -> Gain:
             f"n = {system.n}"
         )
     L = system.A @ np.linalg.pinv(C)
-    return Gain(L=L, method="pinv", error_matrix=system.A - L @ C, verified=True,
-                details={"rank_C": rank})
+    return Gain(
+        L=L, method="pinv", error_matrix=system.A - L @ C, verified=True, details={"rank_C": rank}
+    )

@@ -93,8 +93,14 @@ class ObserverDesign:
             "L": self.gain.L,
         }
         if self.sparse:
-            out.update(step=self.step, threshold=self.threshold, shrink=self.shrink,
-                       L2=self.L2, window=self.window, inner_steps=self.inner_steps)
+            out.update(
+                step=self.step,
+                threshold=self.threshold,
+                shrink=self.shrink,
+                L2=self.L2,
+                window=self.window,
+                inner_steps=self.inner_steps,
+            )
         return out
 
 
@@ -142,25 +148,38 @@ def build_observer(
         (budget or Budget()).require(
             f"observer.window = {window:,}: the SSO's stacked O_tau ({m:,} x {n}) with its gain "
             f"and {m:,} x {m:,} L2",
-            nbytes=8.0 * (3 * m * n + m * m + 2 * n * m))
+            nbytes=8.0 * (3 * m * n + m * m + 2 * n * m),
+        )
         with np.errstate(over="ignore", invalid="ignore"):
             sensing = system.observability_matrix(window)
         if not np.all(np.isfinite(sensing)):
-            raise GainError(f"the stacked observability matrix O_tau overflows for the window "
-                            f"tau = {window} (C A^k is not finite in floating point)")
+            raise GainError(
+                f"the stacked observability matrix O_tau overflows for the window "
+                f"tau = {window} (C A^k is not finite in floating point)"
+            )
     else:
         sensing = system.C
     step = spec.get("step")
     if kind in ("ogd", "sso"):
         if kind == "sso" and window > 1:
             L = step * system.A @ sensing.T
-            gain = Gain(L=L, method="sso", error_matrix=system.A - L @ sensing, verified=True,
-                        details={"step": step, "window": window})
+            gain = Gain(
+                L=L,
+                method="sso",
+                error_matrix=system.A - L @ sensing,
+                verified=True,
+                details={"step": step, "window": window},
+            )
         else:
             gain = ogd_gain(system, step)
             if kind == "sso":
-                gain = Gain(L=gain.L, method="sso", error_matrix=gain.error_matrix,
-                            verified=True, details=gain.details)
+                gain = Gain(
+                    L=gain.L,
+                    method="sso",
+                    error_matrix=gain.error_matrix,
+                    verified=True,
+                    details=gain.details,
+                )
     else:
         choice = spec.get("gain", "deadbeat")
         if isinstance(choice, str):
@@ -176,18 +195,36 @@ def build_observer(
                 raise GainError(f"unknown gain {choice!r}")
         else:
             L = np.asarray(choice, dtype=float)
-            gain = Gain(L=L, method="matrix", error_matrix=system.A - L @ system.C,
-                        verified=True, details={})
+            gain = Gain(
+                L=L,
+                method="matrix",
+                error_matrix=system.A - L @ system.C,
+                verified=True,
+                details={},
+            )
     if not (np.all(np.isfinite(gain.L)) and np.all(np.isfinite(gain.error_matrix))):
-        raise GainError("the gain L or the error matrix A - L C has entries that overflow "
-                        "in floating point")
+        raise GainError(
+            "the gain L or the error matrix A - L C has entries that overflow in floating point"
+        )
     if kind in SPARSE_KINDS:
         m = sensing.shape[0]
         L2 = np.asarray(spec["L2"], dtype=float) if spec.get("L2") is not None else np.eye(m)
         return ObserverDesign(
-            kind=kind, system=system, gain=gain, sensing=sensing, step=float(step),
-            threshold=float(spec["threshold"]), shrink=float(spec.get("shrink", 1.0)), L2=L2,
-            window=window, inner_steps=int(spec.get("inner_steps", 1)),
+            kind=kind,
+            system=system,
+            gain=gain,
+            sensing=sensing,
+            step=float(step),
+            threshold=float(spec["threshold"]),
+            shrink=float(spec.get("shrink", 1.0)),
+            L2=L2,
+            window=window,
+            inner_steps=int(spec.get("inner_steps", 1)),
         )
-    return ObserverDesign(kind=kind, system=system, gain=gain, sensing=sensing,
-                          step=None if step is None else float(step))
+    return ObserverDesign(
+        kind=kind,
+        system=system,
+        gain=gain,
+        sensing=sensing,
+        step=None if step is None else float(step),
+    )

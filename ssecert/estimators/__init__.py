@@ -8,14 +8,29 @@
 * ``localization``: RSS-fingerprint localization under sensor attacks.
 """
 
-from .shrinkage import (
-    soft_threshold,
-    elastic_net_shrink,
-    weighted_soft_threshold,
-)
 from .base import (
     DynamicObserver,
     Trajectory,
+)
+from .decoders import (
+    IterativeSolution,
+    L0Solution,
+    elastic_net_cvxpy,
+    fista,
+    ijam,
+    ista,
+    l0_decoder,
+    l1_decoder,
+    partial_lasso_cvxpy,
+)
+from .localization import (
+    LocalizationResult,
+    LocalizationScenario,
+    RSSDictionary,
+    elastic_net_localization,
+    localization_scenario,
+    path_loss_rss,
+    rss_dictionary,
 )
 from .observers import (
     LinearObserver,
@@ -23,48 +38,33 @@ from .observers import (
     WindowSSO,
     observer_from_design,
 )
-from .decoders import (
-    IterativeSolution,
-    L0Solution,
-    partial_lasso_cvxpy,
-    elastic_net_cvxpy,
-    ista,
-    fista,
-    ijam,
-    l1_decoder,
-    l0_decoder,
-)
 from .pruning import (
-    l1_decode,
+    AttackVerification,
     DetectorDecision,
-    detector,
-    poisson_binomial_pmf,
-    reliable_safe_count,
+    FalseDataInjectionAttack,
     PrunedSupportPrior,
-    prune_support_prior,
     WeightedL1Estimate,
-    weighted_l1_observer,
+    detector,
+    l1_decode,
+    poisson_binomial_pmf,
+    prune_support_prior,
     pruned_weighted_l1_observer,
     pruned_weighted_l1_window_observer,
-    FalseDataInjectionAttack,
+    reliable_safe_count,
     successful_attack,
-    AttackVerification,
     verify_successful_attack,
+    weighted_l1_observer,
+)
+from .shrinkage import (
+    elastic_net_shrink,
+    soft_threshold,
+    weighted_soft_threshold,
 )
 from .sise import (
-    LassoResult,
-    lasso_fista,
     SISE,
+    LassoResult,
     OracleSISE,
-)
-from .localization import (
-    path_loss_rss,
-    RSSDictionary,
-    rss_dictionary,
-    LocalizationScenario,
-    localization_scenario,
-    LocalizationResult,
-    elastic_net_localization,
+    lasso_fista,
 )
 
 __all__ = [

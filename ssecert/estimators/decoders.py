@@ -324,8 +324,14 @@ Advance = Callable[[State], tuple[State, np.ndarray, np.ndarray]]
 
 
 def _iterate(
-    advance: Advance, state: State, n: int, iterations: int, tol: float, single: bool,
-    step: float, method: str,
+    advance: Advance,
+    state: State,
+    n: int,
+    iterations: int,
+    tol: float,
+    single: bool,
+    step: float,
+    method: str,
 ) -> IterativeSolution:
     """Run ``advance`` until each run meets its stopping rule; finished runs are frozen.
 
@@ -368,8 +374,14 @@ def _iterate(
     x_out, a_out = z_out[:, :n], z_out[:, n:]
     if single:
         return IterativeSolution(
-            x_out[0].copy(), a_out[0].copy(), int(iters[0]), bool(converged[0]),
-            float(change[0]), tol, step, method,
+            x_out[0].copy(),
+            a_out[0].copy(),
+            int(iters[0]),
+            bool(converged[0]),
+            float(change[0]),
+            tol,
+            step,
+            method,
         )
     return IterativeSolution(
         x_out.copy(), a_out.copy(), iters, converged, change, tol, step, method
@@ -719,8 +731,10 @@ def ijam(
     M, Y, single, lam, iterations, tol, Z0 = _prepare(M, y, lam, iterations, tol, x0, a0)
     m, n = M.shape
     nu = as_float_option(nu, "nu", min_value=0.0, max_value=1.0, min_inclusive=False)
-    rtol = default_rtol(m, n) if rank_rtol is None else as_float_option(
-        rank_rtol, "rank_rtol", min_value=0.0, max_value=1.0
+    rtol = (
+        default_rtol(m, n)
+        if rank_rtol is None
+        else as_float_option(rank_rtol, "rank_rtol", min_value=0.0, max_value=1.0)
     )
     if m < n:
         raise ValueError(
@@ -798,7 +812,11 @@ def l1_decoder(M: Any, y: Any, *, tol: float = 1e-9) -> np.ndarray:
     cost = np.concatenate([np.zeros(n), np.ones(2 * m)])
     bounds = [(None, None)] * n + [(0.0, None)] * (2 * m)
     result = linprog(
-        cost, A_eq=A_eq, b_eq=y, bounds=bounds, method="highs",
+        cost,
+        A_eq=A_eq,
+        b_eq=y,
+        bounds=bounds,
+        method="highs",
         options={"primal_feasibility_tolerance": tol, "dual_feasibility_tolerance": tol},
     )
     if result.status != 0:
@@ -849,15 +867,21 @@ def _supports(q: int, k: int, chunk: int) -> Iterator[np.ndarray]:
         count = min(chunk, total - start)
         flat = np.fromiter(
             itertools.chain.from_iterable(itertools.islice(combos, count)),
-            dtype=np.int64, count=count * k,
+            dtype=np.int64,
+            count=count * k,
         )
         yield flat.reshape(count, k)
 
 
 def _screen(
-    grams: np.ndarray, moments: np.ndarray, energies: np.ndarray,
-    gram0: np.ndarray, moment0: np.ndarray, energy0: float,
-    supports: np.ndarray, shift: float,
+    grams: np.ndarray,
+    moments: np.ndarray,
+    energies: np.ndarray,
+    gram0: np.ndarray,
+    moment0: np.ndarray,
+    energy0: float,
+    supports: np.ndarray,
+    shift: float,
 ) -> np.ndarray:
     """Squared least-squares residuals of many supports by normal equations.
 
@@ -1005,8 +1029,16 @@ def l0_decoder(
     ) -> L0Solution:
         a = np.where(np.isin(sensors, support), y - M @ x, 0.0)
         return L0Solution(
-            x, tuple(int(i) for i in support), a, residual, residual <= accept, unique,
-            checked, verified, rtol, screen_rtol,
+            x,
+            tuple(int(i) for i in support),
+            a,
+            residual,
+            residual <= accept,
+            unique,
+            checked,
+            verified,
+            rtol,
+            screen_rtol,
         )
 
     for k in range(s + 1):
@@ -1036,8 +1068,6 @@ def l0_decoder(
             ]
             # residuals within rtol ||y|| of the least are ties: lexicographically first
             least = min(residual for _, residual, _, _ in candidates)
-            support, residual, x, unique = next(
-                c for c in candidates if c[1] <= least + accept
-            )
+            support, residual, x, unique = next(c for c in candidates if c[1] <= least + accept)
             return solution(support, residual, x, unique)
     raise AssertionError("unreachable: the last level always returns")  # pragma: no cover

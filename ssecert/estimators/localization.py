@@ -215,8 +215,9 @@ def rss_dictionary(
     cell_size = as_float_option(cell_size, "cell_size", min_value=0.0, min_inclusive=False)
     width, height = cols * cell_size, rows * cell_size
     if sensor_positions is not None:
-        S = as_real_matrix(sensor_positions, "sensor_positions", shape=(None, 2),
-                           shape_hint="(x, y) in metres")
+        S = as_real_matrix(
+            sensor_positions, "sensor_positions", shape=(None, 2), shape_hint="(x, y) in metres"
+        )
         q = S.shape[0]
     else:
         q = as_int_option(q, "q", min_value=1)
@@ -233,8 +234,9 @@ def rss_dictionary(
     S = np.array(S, dtype=float)
     for arr in (D, centers, S):
         arr.flags.writeable = False
-    return RSSDictionary(D, centers, S, (rows, cols), cell_size, float(P_t), float(P_l),
-                         float(alpha), float(d0))
+    return RSSDictionary(
+        D, centers, S, (rows, cols), cell_size, float(P_t), float(P_l), float(alpha), float(d0)
+    )
 
 
 @dataclass(frozen=True)
@@ -498,8 +500,13 @@ def elastic_net_localization(
     D = as_real_matrix(D, "D")
     q, n = D.shape
     single = np.ndim(y) == 1
-    Y = as_real_matrix(y, "y", ndim=1 if single else 2, shape=(q,) if single else (None, q),
-                       shape_hint="the number of sensors, rows of D")
+    Y = as_real_matrix(
+        y,
+        "y",
+        ndim=1 if single else 2,
+        shape=(q,) if single else (None, q),
+        shape_hint="the number of sensors, rows of D",
+    )
     Y = np.atleast_2d(Y)
     q_x = as_float_option(q_x, "q_x", min_value=0.0, max_value=1.0, min_inclusive=False)
     q_a = as_float_option(q_a, "q_a", min_value=0.0, max_value=1.0, min_inclusive=False)
@@ -520,8 +527,10 @@ def elastic_net_localization(
         Yt = Y - Y.mean(axis=1, keepdims=True)
     w = np.linalg.norm(G, axis=0) if normalize else np.ones(n + q)
     if np.any(w <= 0):
-        raise ValueError("D has a zero column (after removing the common offset): a cell "
-                         "with a fingerprint equal to a constant cannot be localized")
+        raise ValueError(
+            "D has a zero column (after removing the common offset): a cell "
+            "with a fingerprint equal to a constant cannot be localized"
+        )
     Gt = G / w
     sigma2 = np.linalg.norm(Gt, 2) ** 2
     if epsilon is None:
@@ -534,10 +543,16 @@ def elastic_net_localization(
                 f"epsilon = {epsilon:.3g}, bound {2.0 / (L2 * sigma2):.3g}"
             )
     t = epsilon * L2
-    lambda_x = 0.05 * t if lambda_x is None else as_float_option(
-        lambda_x, "lambda_x", min_value=0.0, min_inclusive=False)
-    lambda_a = 0.05 * t if lambda_a is None else as_float_option(
-        lambda_a, "lambda_a", min_value=0.0, min_inclusive=False)
+    lambda_x = (
+        0.05 * t
+        if lambda_x is None
+        else as_float_option(lambda_x, "lambda_x", min_value=0.0, min_inclusive=False)
+    )
+    lambda_a = (
+        0.05 * t
+        if lambda_a is None
+        else as_float_option(lambda_a, "lambda_a", min_value=0.0, min_inclusive=False)
+    )
 
     thr = np.concatenate([np.full(n, lambda_x), np.full(q, lambda_a)])
     shrink = np.concatenate([np.full(n, q_x), np.full(q, q_a)])
@@ -552,14 +567,26 @@ def elastic_net_localization(
     cells = np.argsort(-x_hat, axis=1, kind="stable")[:, :targets]
     attacked = np.abs(a_hat) > attack_rtol * np.abs(Yt).max(axis=1, keepdims=True)
     identifiable = 2 * (targets + attacked.sum(axis=1)) <= q
-    objective = {"t": t, "l1_x": lambda_x / t, "l1_a": lambda_a / t,
-                 "mu_x": (1.0 / q_x - 1.0) / t, "mu_a": (1.0 / q_a - 1.0) / t}
+    objective = {
+        "t": t,
+        "l1_x": lambda_x / t,
+        "l1_a": lambda_a / t,
+        "mu_x": (1.0 / q_x - 1.0) / t,
+        "mu_a": (1.0 / q_a - 1.0) / t,
+    }
     pick = (lambda arr: arr[0]) if single else (lambda arr: arr)
     return LocalizationResult(
-        cell=pick(cells[:, 0]), cells=pick(cells), attacked=pick(attacked),
-        x_hat=pick(x_hat), a_hat=pick(a_hat), offset=pick(offset), residual=pick(residual),
-        iterations=pick(iterations), converged=pick(converged),
-        identifiable=pick(identifiable), objective=objective,
+        cell=pick(cells[:, 0]),
+        cells=pick(cells),
+        attacked=pick(attacked),
+        x_hat=pick(x_hat),
+        a_hat=pick(a_hat),
+        offset=pick(offset),
+        residual=pick(residual),
+        iterations=pick(iterations),
+        converged=pick(converged),
+        identifiable=pick(identifiable),
+        objective=objective,
     )
 
 

@@ -113,8 +113,17 @@ class SparseSoftObserver(DynamicObserver):
     1.1
     """
 
-    def __init__(self, A: np.ndarray, C: np.ndarray, L: np.ndarray, *, step: float,
-                 threshold: float, shrink: float = 1.0, L2: np.ndarray | None = None) -> None:
+    def __init__(
+        self,
+        A: np.ndarray,
+        C: np.ndarray,
+        L: np.ndarray,
+        *,
+        step: float,
+        threshold: float,
+        shrink: float = 1.0,
+        L2: np.ndarray | None = None,
+    ) -> None:
         self.A, self.C, self.L = (np.asarray(M, dtype=float) for M in (A, C, L))
         self.n, self.m = self.A.shape[0], self.C.shape[0]
         self.step_size, self.threshold, self.shrink = float(step), float(threshold), float(shrink)
@@ -122,8 +131,7 @@ class SparseSoftObserver(DynamicObserver):
         n, m = self.n, self.m
         nuL2 = self.step_size * self.L2
         # z+ (before shrinkage of the a-part) = z @ M^T + y @ N^T
-        M = np.block([[self.A - self.L @ self.C, -self.L],
-                      [-nuL2 @ self.C, np.eye(m) - nuL2]])
+        M = np.block([[self.A - self.L @ self.C, -self.L], [-nuL2 @ self.C, np.eye(m) - nuL2]])
         N = np.vstack([self.L, nuL2])
         self._M_T = np.ascontiguousarray(M.T)
         self._N_T = np.ascontiguousarray(N.T)
@@ -133,7 +141,7 @@ class SparseSoftObserver(DynamicObserver):
 
     def step(self, state: dict[str, np.ndarray], y: np.ndarray) -> dict[str, np.ndarray]:
         z = np.hstack([state["x_hat"], state["a_hat"]]) @ self._M_T + y @ self._N_T
-        a = self.shrink * soft_threshold(z[:, self.n:], self.threshold)
+        a = self.shrink * soft_threshold(z[:, self.n :], self.threshold)
         return {"x_hat": z[:, : self.n], "a_hat": a}
 
     def run(self, y: np.ndarray, state: dict[str, np.ndarray] | None = None) -> Trajectory:
@@ -187,8 +195,16 @@ class WindowSSO(DynamicObserver):
     (1, 3)
     """
 
-    def __init__(self, A: np.ndarray, C: np.ndarray, *, step: float, threshold: float,
-                 window: int = 1, inner_steps: int = 1) -> None:
+    def __init__(
+        self,
+        A: np.ndarray,
+        C: np.ndarray,
+        *,
+        step: float,
+        threshold: float,
+        window: int = 1,
+        inner_steps: int = 1,
+    ) -> None:
         self.A, self.C = np.asarray(A, dtype=float), np.asarray(C, dtype=float)
         self.n, self.m = self.A.shape[0], self.C.shape[0]
         self.window, self.inner_steps = int(window), int(inner_steps)
@@ -200,17 +216,23 @@ class WindowSSO(DynamicObserver):
         self.O = np.vstack(blocks)  # (p tau, n), step-major
         nu = self.step_size
         mp = self.O.shape[0]
-        G = np.block([[np.eye(self.n) - nu * self.O.T @ self.O, -nu * self.O.T],
-                      [-nu * self.O, (1 - nu) * np.eye(mp)]])
+        G = np.block(
+            [
+                [np.eye(self.n) - nu * self.O.T @ self.O, -nu * self.O.T],
+                [-nu * self.O, (1 - nu) * np.eye(mp)],
+            ]
+        )
         H = np.vstack([nu * self.O.T, nu * np.eye(mp)])
         self._G_T = np.ascontiguousarray(G.T)
         self._H_T = np.ascontiguousarray(H.T)
 
     def initial_state(self, runs: int) -> dict[str, np.ndarray]:
-        return {"x_hat": np.zeros((runs, self.n)),
-                "a_hat": np.zeros((runs, self.O.shape[0])),
-                "buffer": np.zeros((runs, self.window, self.m)),
-                "filled": np.zeros((), dtype=np.int64)}
+        return {
+            "x_hat": np.zeros((runs, self.n)),
+            "a_hat": np.zeros((runs, self.O.shape[0])),
+            "buffer": np.zeros((runs, self.window, self.m)),
+            "filled": np.zeros((), dtype=np.int64),
+        }
 
     def step(self, state: dict[str, np.ndarray], y: np.ndarray) -> dict[str, np.ndarray]:
         buffer = np.concatenate([state["buffer"][:, 1:], y[:, None, :]], axis=1)
@@ -220,10 +242,16 @@ class WindowSSO(DynamicObserver):
             stacked = buffer.reshape(buffer.shape[0], -1)
             x, a = self._ista(x, a, stacked)
             x = x @ self.A.T
-        return {"x_hat": x, "a_hat": a, "buffer": buffer,
-                "filled": np.asarray(min(filled, self.window))}
+        return {
+            "x_hat": x,
+            "a_hat": a,
+            "buffer": buffer,
+            "filled": np.asarray(min(filled, self.window)),
+        }
 
-    def _ista(self, x: np.ndarray, a: np.ndarray, stacked: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _ista(
+        self, x: np.ndarray, a: np.ndarray, stacked: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
         n = self.n
         z = np.hstack([x, a])
         injected = stacked @ self._H_T
@@ -248,7 +276,20 @@ def observer_from_design(design: ObserverDesign) -> DynamicObserver:
     if not design.sparse:
         return LinearObserver(A, C, design.gain.L)
     if design.kind == "sso" and (design.window > 1 or design.inner_steps > 1):
-        return WindowSSO(A, C, step=design.step, threshold=design.threshold,
-                         window=design.window, inner_steps=design.inner_steps)
-    return SparseSoftObserver(A, design.sensing, design.gain.L, step=design.step,
-                              threshold=design.threshold, shrink=design.shrink, L2=design.L2)
+        return WindowSSO(
+            A,
+            C,
+            step=design.step,
+            threshold=design.threshold,
+            window=design.window,
+            inner_steps=design.inner_steps,
+        )
+    return SparseSoftObserver(
+        A,
+        design.sensing,
+        design.gain.L,
+        step=design.step,
+        threshold=design.threshold,
+        shrink=design.shrink,
+        L2=design.L2,
+    )

@@ -178,17 +178,29 @@ def lasso_fista(
     max_iter = as_int_option(max_iter, "max_iter", min_value=1)
     rtol = as_float_option(rtol, "rtol", min_value=0.0)
     single = np.ndim(y) == 1
-    Y = as_real_matrix(y, "y", ndim=1 if single else 2, shape=(m,) if single else (None, m),
-                       shape_hint="rows of Phi")
+    Y = as_real_matrix(
+        y,
+        "y",
+        ndim=1 if single else 2,
+        shape=(m,) if single else (None, m),
+        shape_hint="rows of Phi",
+    )
     Y = np.atleast_2d(Y)
     if initial is None:
         U0 = np.zeros((Y.shape[0], p))
     else:
-        U0 = np.atleast_2d(as_real_matrix(initial, "initial", ndim=1 if single else 2,
-                                          shape=(p,) if single else (Y.shape[0], p),
-                                          shape_hint="columns of Phi"))
-    U, iterations, converged = _fista_batch(Phi, Y, weight, np.array(U0, dtype=float),
-                                           max_iter, rtol)
+        U0 = np.atleast_2d(
+            as_real_matrix(
+                initial,
+                "initial",
+                ndim=1 if single else 2,
+                shape=(p,) if single else (Y.shape[0], p),
+                shape_hint="columns of Phi",
+            )
+        )
+    U, iterations, converged = _fista_batch(
+        Phi, Y, weight, np.array(U0, dtype=float), max_iter, rtol
+    )
     kkt = _lasso_kkt(Phi, Y, U, weight)
     if single:
         return LassoResult(U[0], iterations[0], converged[0], kkt[0], weight, rtol)
@@ -206,9 +218,7 @@ def _covariance(value: Any, name: str, size: int, *, definite: bool) -> np.ndarr
     lowest = float(np.linalg.eigvalsh(S)[0])
     floor = 100 * size * EPS * scale
     if definite and lowest <= floor:
-        raise ValueError(
-            f"{name} must be positive definite, got smallest eigenvalue {lowest:.3g}"
-        )
+        raise ValueError(f"{name} must be positive definite, got smallest eigenvalue {lowest:.3g}")
     if not definite and lowest < -floor:
         raise ValueError(
             f"{name} must be positive semidefinite, got smallest eigenvalue {lowest:.3g}"
@@ -347,20 +357,32 @@ class SISE(DynamicObserver):
         self.n, self.m, self.p = n, m, p
         self.Q = _covariance(Q, "Q", n, definite=False)
         self.R = _covariance(R, "R", m, definite=True)
-        self.lasso_weight = as_float_option(lasso_weight, "lasso_weight", min_value=0.0,
-                                            min_inclusive=False)
-        self.sparsity = (None if sparsity is None
-                         else as_int_option(sparsity, "sparsity", min_value=1, max_value=p))
-        self.x0_hat = (np.zeros(n) if x0_hat is None
-                       else as_real_matrix(x0_hat, "x0_hat", ndim=1, shape=(n,),
-                                           shape_hint="the number of states"))
+        self.lasso_weight = as_float_option(
+            lasso_weight, "lasso_weight", min_value=0.0, min_inclusive=False
+        )
+        self.sparsity = (
+            None
+            if sparsity is None
+            else as_int_option(sparsity, "sparsity", min_value=1, max_value=p)
+        )
+        self.x0_hat = (
+            np.zeros(n)
+            if x0_hat is None
+            else as_real_matrix(
+                x0_hat, "x0_hat", ndim=1, shape=(n,), shape_hint="the number of states"
+            )
+        )
         self.P0 = np.eye(n) if P0 is None else _covariance(P0, "P0", n, definite=True)
         self.lasso_max_iter = as_int_option(lasso_max_iter, "lasso_max_iter", min_value=1)
         self.lasso_rtol = as_float_option(lasso_rtol, "lasso_rtol", min_value=0.0)
-        self.support_rtol = as_float_option(support_rtol, "support_rtol", min_value=0.0,
-                                            max_value=1.0, max_inclusive=False)
-        self.rank_rtol = (default_rtol(m, p) if rank_rtol is None
-                          else as_float_option(rank_rtol, "rank_rtol", min_value=0.0))
+        self.support_rtol = as_float_option(
+            support_rtol, "support_rtol", min_value=0.0, max_value=1.0, max_inclusive=False
+        )
+        self.rank_rtol = (
+            default_rtol(m, p)
+            if rank_rtol is None
+            else as_float_option(rank_rtol, "rank_rtol", min_value=0.0)
+        )
         self.CB = self.C @ self.B
 
     # -- interface ---------------------------------------------------------
@@ -386,8 +408,9 @@ class SISE(DynamicObserver):
         """Process y(k), shape (runs, m): estimates of x(k) and u(k - 1)."""
         x = state["x_hat"]
         runs = x.shape[0]
-        y = as_real_matrix(y, "y", shape=(runs, self.m),
-                           shape_hint="runs x measurements of the state")
+        y = as_real_matrix(
+            y, "y", shape=(runs, self.m), shape_hint="runs x measurements of the state"
+        )
         first = state["k"] == 0
         P_pred = self.A @ state["P"] @ self.A.T + self.Q
         x_pred = x @ self.A.T
@@ -401,10 +424,17 @@ class SISE(DynamicObserver):
 
     # -- support detection -------------------------------------------------
 
-    def _detect_support(self, state: dict[str, np.ndarray],
-                        innov: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        res = lasso_fista(self.CB, innov, self.lasso_weight, initial=state["lasso"],
-                          max_iter=self.lasso_max_iter, rtol=self.lasso_rtol)
+    def _detect_support(
+        self, state: dict[str, np.ndarray], innov: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        res = lasso_fista(
+            self.CB,
+            innov,
+            self.lasso_weight,
+            initial=state["lasso"],
+            max_iter=self.lasso_max_iter,
+            rtol=self.lasso_rtol,
+        )
         return self.support_of(res.solution), res.solution
 
     def support_of(self, u: np.ndarray) -> np.ndarray:
@@ -455,13 +485,13 @@ class SISE(DynamicObserver):
         winv = np.where(w > cut, 1.0 / np.where(w > cut, w, 1.0), 0.0)
         Ninv = np.einsum("rij,rj,rkj->rik", V, winv, V)
         Hinv = np.where(mask2, Ninv / (d[:, :, None] * d[:, None, :]), 0.0)
-        M = Hinv @ np.swapaxes(Rinv_F, 1, 2)          # (runs, p, m), zero rows off S
+        M = Hinv @ np.swapaxes(Rinv_F, 1, 2)  # (runs, p, m), zero rows off S
         u_hat = np.einsum("rpm,rm->rp", M, innov)
-        BM = self.B @ M                                 # B_S M, (runs, n, m)
+        BM = self.B @ M  # B_S M, (runs, n, m)
         x_star = x_pred + u_hat @ self.B.T
         I_BMC = np.eye(n) - BM @ C
         P_star = I_BMC @ P_pred @ np.swapaxes(I_BMC, 1, 2) + BM @ self.R @ np.swapaxes(BM, 1, 2)
-        K = np.swapaxes(_chol_solve(chol, C @ P_pred), 1, 2)   # P~ C^T R~^-1
+        K = np.swapaxes(_chol_solve(chol, C @ P_pred), 1, 2)  # P~ C^T R~^-1
         x_new = x_star + np.einsum("rnm,rm->rn", K, y - x_star @ C.T)
         P_new = P_star - K @ np.swapaxes(P_star @ C.T - BM @ self.R, 1, 2)
         P_new = 0.5 * (P_new + np.swapaxes(P_new, 1, 2))

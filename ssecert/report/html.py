@@ -16,8 +16,13 @@ from .._format import sig
 from .._io import atomic_write_text
 from ..results import Certificate, Check, to_jsonable
 
-__all__ = ["render_report", "render_fragment", "write_report", "certificate_fragment",
-           "check_fragment"]
+__all__ = [
+    "render_report",
+    "render_fragment",
+    "write_report",
+    "certificate_fragment",
+    "check_fragment",
+]
 
 CSS = """
 .ssecert-report{font-family:system-ui,-apple-system,'Segoe UI',sans-serif;color:#1d1d1f;
@@ -55,8 +60,11 @@ def _template(name: str) -> Any:
     from jinja2 import Environment, select_autoescape
 
     text = resources.files("ssecert.report").joinpath("templates", name).read_text()
-    env = Environment(autoescape=select_autoescape(default=True, default_for_string=True),
-                      trim_blocks=True, lstrip_blocks=True)
+    env = Environment(
+        autoescape=select_autoescape(default=True, default_for_string=True),
+        trim_blocks=True,
+        lstrip_blocks=True,
+    )
     return env.from_string(text)
 
 
@@ -90,8 +98,10 @@ def _render(value: Any, depth: int = 0) -> str:
     if isinstance(value, Mapping):
         if not value:
             return "-"
-        rows = "".join(f"<tr><th>{escape(str(k))}</th><td>{_render(v, depth + 1)}</td></tr>"
-                       for k, v in value.items())
+        rows = "".join(
+            f"<tr><th>{escape(str(k))}</th><td>{_render(v, depth + 1)}</td></tr>"
+            for k, v in value.items()
+        )
         return f"<table class='kv'>{rows}</table>"
     if isinstance(value, (list, tuple, np.ndarray)):
         arr = None
@@ -107,13 +117,21 @@ def _render(value: Any, depth: int = 0) -> str:
         if all(isinstance(it, Mapping) for it in items):
             keys = list(dict.fromkeys(k for it in items for k in it))
             head = "".join(f"<th>{escape(k)}</th>" for k in keys)
-            body = "".join("<tr>" + "".join(f"<td>{_render(it.get(k), depth + 1)}</td>"
-                                            for k in keys) + "</tr>" for it in items[:MAX_ROWS])
-            more = (f"<p>... {len(items) - MAX_ROWS} more rows in the JSON</p>"
-                    if len(items) > MAX_ROWS else "")
+            body = "".join(
+                "<tr>"
+                + "".join(f"<td>{_render(it.get(k), depth + 1)}</td>" for k in keys)
+                + "</tr>"
+                for it in items[:MAX_ROWS]
+            )
+            more = (
+                f"<p>... {len(items) - MAX_ROWS} more rows in the JSON</p>"
+                if len(items) > MAX_ROWS
+                else ""
+            )
             return f"<table class='kv'><tr>{head}</tr>{body}</table>{more}"
-        return escape(", ".join(_fmt(it) for it in items[:50])
-                      + (" ..." if len(items) > 50 else ""))
+        return escape(
+            ", ".join(_fmt(it) for it in items[:50]) + (" ..." if len(items) > 50 else "")
+        )
     return escape(_fmt(value))
 
 
@@ -122,8 +140,9 @@ def _matrix(arr: np.ndarray) -> str:
         arr = arr[None, :]
     r, c = arr.shape
     shown = arr[:MAX_ROWS, :MAX_COLS]
-    rows = "".join("<tr>" + "".join(f"<td>{escape(_fmt(v))}</td>" for v in row) + "</tr>"
-                   for row in shown)
+    rows = "".join(
+        "<tr>" + "".join(f"<td>{escape(_fmt(v))}</td>" for v in row) + "</tr>" for row in shown
+    )
     note = ""
     if r > MAX_ROWS or c > MAX_COLS:
         note = f"<p>{r} x {c}; the first {min(r, MAX_ROWS)} x {min(c, MAX_COLS)} shown, all in the JSON</p>"
@@ -135,8 +154,18 @@ def _matrix(arr: np.ndarray) -> str:
 
 def _check_context(check: Check) -> dict[str, Any]:
     data = to_jsonable(check.to_dict())
-    skip = {"verdict", "title", "summary", "required", "value", "margin", "method", "evidence",
-            "tolerances", "witness"}
+    skip = {
+        "verdict",
+        "title",
+        "summary",
+        "required",
+        "value",
+        "margin",
+        "method",
+        "evidence",
+        "tolerances",
+        "witness",
+    }
     fields = [(k, Markup(_render(v))) for k, v in data.items() if k not in skip]
     return {
         "id": check.id,
@@ -167,8 +196,11 @@ def _context(result: Any, *, fragment: bool) -> dict[str, Any]:
     meta = dict(cert.meta or {})
     versions = meta.get("versions", {})
     identity = [
-        ("design", f"{spec.name}: n = {system.n} states, p = {system.p} sensors, "
-                   f"s = {spec.max_attacked} attacked, horizon {spec.horizon}"),
+        (
+            "design",
+            f"{spec.name}: n = {system.n} states, p = {system.p} sensors, "
+            f"s = {spec.max_attacked} attacked, horizon {spec.horizon}",
+        ),
         ("spec file", spec.source),
         ("spec sha256", spec.sha256 or "-"),
         ("seed", str(result.seed)),
@@ -186,9 +218,15 @@ def _context(result: Any, *, fragment: bool) -> dict[str, Any]:
     else:
         headline = "Every required check holds."
     ctx: dict[str, Any] = {
-        "fragment": fragment, "css": Markup(CSS), "name": spec.name, "verdict": verdict,
-        "exit_code": cert.exit_code, "headline": headline, "identity": identity,
-        "checks": checks, "notes": list(result.notes) + list(meta.get("notes", [])),
+        "fragment": fragment,
+        "css": Markup(CSS),
+        "name": spec.name,
+        "verdict": verdict,
+        "exit_code": cert.exit_code,
+        "headline": headline,
+        "identity": identity,
+        "checks": checks,
+        "notes": list(result.notes) + list(meta.get("notes", [])),
         "command": result.command,
     }
     sparse = cert["sparse_observability"] if "sparse_observability" in cert else None
@@ -196,8 +234,10 @@ def _context(result: Any, *, fragment: bool) -> dict[str, Any]:
     if sparse is not None and sparse.verdict.value == "fails":
         ctx["sensors_svg"] = Markup(sensor_plot(system.sensors, breaking))
         ctx["breaking_names"] = ", ".join(system.sensors[i] for i in breaking) or "none"
-        ctx["sensor_rows"] = [{"name": nm, "index": i, "breaking": i in set(breaking)}
-                              for i, nm in enumerate(system.sensors)]
+        ctx["sensor_rows"] = [
+            {"name": nm, "index": i, "breaking": i in set(breaking)}
+            for i, nm in enumerate(system.sensors)
+        ]
         ctx["why_sentence"] = _why(system, spec.max_attacked, sparse)
     if result.stealthy is not None:
         ctx["stealthy_svg"] = Markup(stealthy_plot(system, result.stealthy))
@@ -208,22 +248,42 @@ def _context(result: Any, *, fragment: bool) -> dict[str, Any]:
     for name, res in result.simulations.items():
         slug = _slug(name)
         if slug in slugs:  # names differing only in punctuation: ids stay unique
-            slug = next(f"{slug}-{i}" for i in range(2, len(slugs) + 3)
-                        if f"{slug}-{i}" not in slugs)
+            slug = next(
+                f"{slug}-{i}" for i in range(2, len(slugs) + 3) if f"{slug}-{i}" not in slugs
+            )
         slugs.add(slug)
         if isinstance(res, Mapping):
-            sims.append({"name": name, "attack": "-", "runs": "-", "steps": "-", "rel": "-",
-                         "q90": "-", "support": "-", "delay": "-", "svg": None,
-                         "skipped": res.get("skipped", ""), "slug": slug})
+            sims.append(
+                {
+                    "name": name,
+                    "attack": "-",
+                    "runs": "-",
+                    "steps": "-",
+                    "rel": "-",
+                    "q90": "-",
+                    "support": "-",
+                    "delay": "-",
+                    "svg": None,
+                    "skipped": res.get("skipped", ""),
+                    "slug": slug,
+                }
+            )
             continue
         final = res.final()
-        sims.append({
-            "name": name, "attack": res.attack, "runs": res.runs, "steps": res.steps,
-            "rel": _fmt(final["relative_error_mean"]), "q90": _fmt(final["relative_error_q90"]),
-            "support": _fmt(final["support_error_mean"]),
-            "delay": _fmt(final.get("detection_delay_median")),
-            "svg": Markup(simulation_plot(name, res, gid=f"sim-{slug}")), "slug": slug,
-        })
+        sims.append(
+            {
+                "name": name,
+                "attack": res.attack,
+                "runs": res.runs,
+                "steps": res.steps,
+                "rel": _fmt(final["relative_error_mean"]),
+                "q90": _fmt(final["relative_error_q90"]),
+                "support": _fmt(final["support_error_mean"]),
+                "delay": _fmt(final.get("detection_delay_median")),
+                "svg": Markup(simulation_plot(name, res, gid=f"sim-{slug}")),
+                "slug": slug,
+            }
+        )
     ctx["simulations"] = sims
     if result.region is not None:
         obs = spec.observer or {}
@@ -239,27 +299,37 @@ def _why(system: Any, s: int, check: Check) -> str:
     names = ", ".join(system.sensors[i] for i in breaking)
     mr = check.fields.get("max_removable")
     if mr == -1:
-        return ("The plant is not observable even with every sensor intact, so no number of "
-                "attacked sensors can be corrected.")
+        return (
+            "The plant is not observable even with every sensor intact, so no number of "
+            "attacked sensors can be corrected."
+        )
     plural = "sensor" if s == 1 else "sensors"
     if len(breaking) <= s:
-        return (f"{s} attacked {plural} cannot be corrected because removing {names} leaves "
-                f"the plant unobservable: an attacker who controls {names} can make the state "
-                f"look like a different one, and no estimator can tell them apart.")
-    return (f"{s} attacked {plural} cannot be corrected because removing the {len(breaking)} "
-            f"sensors {names} leaves the plant unobservable: split into two groups of at most "
-            f"{s}, they give two attacks that make two different states produce the same "
-            f"outputs.")
+        return (
+            f"{s} attacked {plural} cannot be corrected because removing {names} leaves "
+            f"the plant unobservable: an attacker who controls {names} can make the state "
+            f"look like a different one, and no estimator can tell them apart."
+        )
+    return (
+        f"{s} attacked {plural} cannot be corrected because removing the {len(breaking)} "
+        f"sensors {names} leaves the plant unobservable: split into two groups of at most "
+        f"{s}, they give two attacks that make two different states produce the same "
+        f"outputs."
+    )
 
 
 def _stealthy_text(system: Any, demo: Mapping[str, Any]) -> str:
     a = ", ".join(system.sensors[i] for i in demo["sensors_a"]) or "no sensor"
     b = ", ".join(system.sensors[i] for i in demo["sensors_b"])
     if b:
-        return (f"One plant starts at x0 with an attack on {a}; another starts at x0 + z with an "
-                f"attack on {b}. Their outputs coincide at every step.")
-    return (f"The plant starts at x0 and the attacker corrupts {a} only; the outputs are exactly "
-            f"those of the unattacked plant started at x0 + z. The attack is undetectable.")
+        return (
+            f"One plant starts at x0 with an attack on {a}; another starts at x0 + z with an "
+            f"attack on {b}. Their outputs coincide at every step."
+        )
+    return (
+        f"The plant starts at x0 and the attacker corrupts {a} only; the outputs are exactly "
+        f"those of the unattacked plant started at x0 + z. The attack is undetectable."
+    )
 
 
 def render_report(result: Any) -> str:
@@ -280,12 +350,14 @@ def write_report(result: Any, path: str | Path) -> Path:
 def check_fragment(check: Check) -> str:
     """A small HTML card for one check (Jupyter)."""
     c = _check_context(check)
-    return (f"<div class='ssecert-report'><style>{CSS}</style><h3>{escape(c['title'])} "
-            f"<span class='badge {c['verdict']}'>{c['verdict']}</span></h3>"
-            f"<p>{escape(c['summary'])}</p><table class='kv'><tr><th>value</th>"
-            f"<td>{escape(c['value'])}</td></tr><tr><th>margin</th><td>{escape(c['margin'])}"
-            f"</td></tr><tr><th>method</th><td>{escape(c['method'])}</td></tr></table>"
-            f"<details><summary>evidence</summary>{c['evidence']}</details></div>")
+    return (
+        f"<div class='ssecert-report'><style>{CSS}</style><h3>{escape(c['title'])} "
+        f"<span class='badge {c['verdict']}'>{c['verdict']}</span></h3>"
+        f"<p>{escape(c['summary'])}</p><table class='kv'><tr><th>value</th>"
+        f"<td>{escape(c['value'])}</td></tr><tr><th>margin</th><td>{escape(c['margin'])}"
+        f"</td></tr><tr><th>method</th><td>{escape(c['method'])}</td></tr></table>"
+        f"<details><summary>evidence</summary>{c['evidence']}</details></div>"
+    )
 
 
 def certificate_fragment(cert: Certificate) -> str:
@@ -294,9 +366,12 @@ def certificate_fragment(cert: Certificate) -> str:
         f"<tr><td>{escape(c.id)}</td><td><span class='badge {c.verdict.value}'>"
         f"{c.verdict.value}</span></td><td>{escape(_fmt(c.value))}</td>"
         f"<td>{escape(_fmt(c.margin))}</td><td>{escape(c.summary)}</td></tr>"
-        for c in cert.checks)
+        for c in cert.checks
+    )
     verdict = cert.verdict.value
-    return (f"<div class='ssecert-report'><style>{CSS}</style><h3>{escape(cert.system.name)} "
-            f"<span class='badge {verdict}'>{verdict}</span></h3><table class='checks'><tr>"
-            f"<th>check</th><th>verdict</th><th>value</th><th>margin</th><th>finding</th></tr>"
-            f"{rows}</table></div>")
+    return (
+        f"<div class='ssecert-report'><style>{CSS}</style><h3>{escape(cert.system.name)} "
+        f"<span class='badge {verdict}'>{verdict}</span></h3><table class='checks'><tr>"
+        f"<th>check</th><th>verdict</th><th>value</th><th>margin</th><th>finding</th></tr>"
+        f"{rows}</table></div>"
+    )

@@ -17,8 +17,15 @@ import numpy as np
 
 __all__ = ["svg_figure", "simulation_plot", "stealthy_plot", "region_plot", "sensor_plot"]
 
-PALETTE = {"holds": "#1b7f3b", "fails": "#b3261e", "inconclusive": "#a36b00",
-           "a": "#1f5fa8", "b": "#c2410c", "output": "#333333", "band": "#9ec5ee"}
+PALETTE = {
+    "holds": "#1b7f3b",
+    "fails": "#b3261e",
+    "inconclusive": "#a36b00",
+    "a": "#1f5fa8",
+    "b": "#c2410c",
+    "output": "#333333",
+    "band": "#9ec5ee",
+}
 
 
 def plain(text: str, limit: int = 40) -> str:
@@ -42,8 +49,10 @@ def svg_figure(fig: Any, *, title: str = "") -> str:
     import matplotlib
 
     buf = io.StringIO()
-    with matplotlib.rc_context({"svg.fonttype": "none", "svg.hashsalt": f"ssecert {title}"}), \
-            warnings.catch_warnings():
+    with (
+        matplotlib.rc_context({"svg.fonttype": "none", "svg.hashsalt": f"ssecert {title}"}),
+        warnings.catch_warnings(),
+    ):
         # text stays text in the SVG and the browser draws it with its own fonts
         warnings.filterwarnings("ignore", message="Glyph .* missing from font")
         fig.savefig(buf, format="svg", bbox_inches="tight")
@@ -83,8 +92,9 @@ def simulation_plot(name: str, result: Any, *, gid: str) -> str:
             floor = 1e-17
             mean, lo, hi = (np.maximum(v, floor) for v in (mean, lo, hi))
             ax.set_yscale("log")
-        band = ax.fill_between(k, lo, hi, color=PALETTE["band"], alpha=0.6, linewidth=0,
-                               label="10-90% of runs")
+        band = ax.fill_between(
+            k, lo, hi, color=PALETTE["band"], alpha=0.6, linewidth=0, label="10-90% of runs"
+        )
         band.set_gid(f"{gid}-{'error' if log else 'support'}-band")
         (line,) = ax.plot(k, mean, color=PALETTE["a"], linewidth=1.5, label="mean")
         line.set_gid(f"{gid}-{'error' if log else 'support'}-mean")
@@ -104,10 +114,12 @@ def stealthy_plot(system: Any, demo: dict[str, Any], *, gid: str = "stealthy") -
     sensor = int(demo["sensor"])
     fig, axes = _figure(7.5, 2.8, 1, 2)
     ax = axes[0][0]
-    (la,) = ax.plot(k, xa[:, comp], color=PALETTE["a"], linewidth=1.8,
-                    label="plant from x0, attacked")
-    (lb,) = ax.plot(k, xb[:, comp], color=PALETTE["b"], linewidth=1.8, linestyle="--",
-                    label="plant from x0 + z")
+    (la,) = ax.plot(
+        k, xa[:, comp], color=PALETTE["a"], linewidth=1.8, label="plant from x0, attacked"
+    )
+    (lb,) = ax.plot(
+        k, xb[:, comp], color=PALETTE["b"], linewidth=1.8, linestyle="--", label="plant from x0 + z"
+    )
     la.set_gid(f"{gid}-trajectory-a")
     lb.set_gid(f"{gid}-trajectory-b")
     ax.set_title(f"two state trajectories (state {comp + 1})", fontsize=10)
@@ -115,8 +127,13 @@ def stealthy_plot(system: Any, demo: dict[str, Any], *, gid: str = "stealthy") -
     ax.legend(fontsize=8)
     ax.grid(True, alpha=0.3)
     ax = axes[0][1]
-    (lo,) = ax.plot(k, y[:, sensor], color=PALETTE["output"], linewidth=1.8,
-                    label=f"output of {plain(system.sensors[sensor])} (both plants)")
+    (lo,) = ax.plot(
+        k,
+        y[:, sensor],
+        color=PALETTE["output"],
+        linewidth=1.8,
+        label=f"output of {plain(system.sensors[sensor])} (both plants)",
+    )
     lo.set_gid(f"{gid}-output")
     ax.set_title("one output: the sensors cannot tell them apart", fontsize=10)
     ax.set_xlabel("step k")
@@ -134,8 +151,16 @@ def region_plot(region: Any, design_point: tuple[float, float] | None = None) ->
     from matplotlib.colors import ListedColormap
 
     cmap = ListedColormap([PALETTE["fails"], PALETTE["inconclusive"], PALETTE["holds"]])
-    mesh = ax.pcolormesh(np.arange(region.steps.size + 1), np.arange(region.shrinks.size + 1),
-                         grid, cmap=cmap, vmin=0, vmax=2, edgecolors="white", linewidth=0.5)
+    mesh = ax.pcolormesh(
+        np.arange(region.steps.size + 1),
+        np.arange(region.shrinks.size + 1),
+        grid,
+        cmap=cmap,
+        vmin=0,
+        vmax=2,
+        edgecolors="white",
+        linewidth=0.5,
+    )
     mesh.set_gid("region-map")
     ax.set_xticks(np.arange(region.steps.size) + 0.5)
     ax.set_xticklabels([f"{s:.3g}" for s in region.steps], rotation=45, fontsize=7)
@@ -147,12 +172,21 @@ def region_plot(region: Any, design_point: tuple[float, float] | None = None) ->
         q, nu = design_point
         i = int(np.argmin(np.abs(region.shrinks - q)))
         j = int(np.argmin(np.abs(region.steps - nu)))
-        (mark,) = ax.plot([j + 0.5], [i + 0.5], marker="*", markersize=14, color="white",
-                          markeredgecolor="black", linestyle="none", label="this design")
+        (mark,) = ax.plot(
+            [j + 0.5],
+            [i + 0.5],
+            marker="*",
+            markersize=14,
+            color="white",
+            markeredgecolor="black",
+            linestyle="none",
+            label="this design",
+        )
         mark.set_gid("region-design")
         ax.legend(fontsize=8, loc="upper right")
-    ax.set_title("circle criterion: green certified, amber no certificate, red unstable",
-                 fontsize=8)
+    ax.set_title(
+        "circle criterion: green certified, amber no certificate, red unstable", fontsize=8
+    )
     return svg_figure(fig, title="certified region")
 
 
@@ -163,13 +197,26 @@ def sensor_plot(sensors: Sequence[str], breaking: Sequence[int]) -> str:
     broken = set(breaking)
     for i, name in enumerate(sensors):
         color = PALETTE["fails"] if i in broken else "#d9e7d9"
-        box = ax.add_patch(__import__("matplotlib.patches", fromlist=["FancyBboxPatch"])
-                           .FancyBboxPatch((i + 0.05, 0.1), 0.9, 0.8,
-                                           boxstyle="round,pad=0.02", facecolor=color,
-                                           edgecolor="#444"))
+        box = ax.add_patch(
+            __import__("matplotlib.patches", fromlist=["FancyBboxPatch"]).FancyBboxPatch(
+                (i + 0.05, 0.1),
+                0.9,
+                0.8,
+                boxstyle="round,pad=0.02",
+                facecolor=color,
+                edgecolor="#444",
+            )
+        )
         box.set_gid(f"sensor-{i}{'-breaking' if i in broken else ''}")
-        ax.text(i + 0.5, 0.5, plain(name, 14), ha="center", va="center", fontsize=8,
-                color="white" if i in broken else "black")
+        ax.text(
+            i + 0.5,
+            0.5,
+            plain(name, 14),
+            ha="center",
+            va="center",
+            fontsize=8,
+            color="white" if i in broken else "black",
+        )
     ax.set_xlim(0, len(sensors))
     ax.set_ylim(0, 1)
     ax.axis("off")

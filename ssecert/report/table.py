@@ -66,8 +66,9 @@ def render_table(certificate: Certificate, *, width: int = 100, compact: bool = 
     rows = [("check", "verdict", "value", "margin", "method")]
     for check in certificate.checks:
         name = check.id + ("" if check.required else " *")
-        rows.append((name, _MARK[check.verdict], _fmt(check.value), _fmt(check.margin),
-                     check.method))
+        rows.append(
+            (name, _MARK[check.verdict], _fmt(check.value), _fmt(check.margin), check.method)
+        )
     widths = [max(len(r[i]) for r in rows) for i in range(5)]
     for j, row in enumerate(rows):
         lines.append("  ".join(cell.ljust(widths[i]) for i, cell in enumerate(row)).rstrip())
@@ -78,28 +79,36 @@ def render_table(certificate: Certificate, *, width: int = 100, compact: bool = 
     if compact:
         for check in certificate.checks:
             if check.required and check.verdict is not Verdict.HOLDS:
-                lines.append(textwrap.fill(f"{check.id}: {check.summary}", width=width,
-                                           subsequent_indent="  "))
+                lines.append(
+                    textwrap.fill(
+                        f"{check.id}: {check.summary}", width=width, subsequent_indent="  "
+                    )
+                )
         lines.append(f"verdict: {_MARK[certificate.verdict]} (exit status {certificate.exit_code})")
         return "\n".join(lines) + "\n"
     for check in certificate.checks:
         lines.append(f"{check.id}: {_MARK[check.verdict]}")
-        body = textwrap.fill(check.summary, width=width - 2, initial_indent="  ",
-                             subsequent_indent="  ")
+        body = textwrap.fill(
+            check.summary, width=width - 2, initial_indent="  ", subsequent_indent="  "
+        )
         lines.append(body)
         if check.id == "sparse_observability":
             f = check.fields
-            extra = (f"  max_removable = {_fmt(f.get('max_removable'))}"
-                     + (" (lower bound)" if f.get("max_removable_is_lower_bound") else "")
-                     + f", max_correctable = {_fmt(f.get('max_correctable'))}"
-                     + f", breaking set: {_sensor_list(check, system.sensors, 'breaking_set')}")
+            extra = (
+                f"  max_removable = {_fmt(f.get('max_removable'))}"
+                + (" (lower bound)" if f.get("max_removable_is_lower_bound") else "")
+                + f", max_correctable = {_fmt(f.get('max_correctable'))}"
+                + f", breaking set: {_sensor_list(check, system.sensors, 'breaking_set')}"
+            )
             lines.append(extra)
             if check.witness:
                 w = check.witness
                 a = ", ".join(system.sensors[i] for i in w.get("sensors_a", [])) or "none"
                 b = ", ".join(system.sensors[i] for i in w.get("sensors_b", [])) or "none"
-                lines.append(f"  stealthy attack: sensors {a} / {b}; simulated output mismatch "
-                             f"{_fmt(w.get('residual'))} (verified: {w.get('verified')})")
+                lines.append(
+                    f"  stealthy attack: sensors {a} / {b}; simulated output mismatch "
+                    f"{_fmt(w.get('residual'))} (verified: {w.get('verified')})"
+                )
         if check.id == "observer_gain" and check.fields.get("L") is not None:
             L = np.asarray(check.fields["L"], dtype=float)
             line = f"  L ({L.shape[0]} x {L.shape[1]}, {check.fields.get('gain_method')})"
@@ -107,7 +116,9 @@ def render_table(certificate: Certificate, *, width: int = 100, compact: bool = 
                 line += f", nilpotency index {check.fields['nilpotency_index']}"
             lines.append(line)
         if check.id == "iss_gain" and check.fields.get("gamma") is not None:
-            lines.append(f"  gamma = {check.fields['gamma']:.4g}, alpha = {check.fields['alpha']:.3g}")
+            lines.append(
+                f"  gamma = {check.fields['gamma']:.4g}, alpha = {check.fields['alpha']:.3g}"
+            )
         if check.id == "thesis_assumptions":
             items = check.fields.get("items", {})
             lines.append("  " + ", ".join(f"{k}: {v}" for k, v in items.items()))

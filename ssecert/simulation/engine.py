@@ -30,8 +30,16 @@ from ..system import System
 from .metrics import detection_delay, mse, relative_error, summarize, support_error
 from .scenarios import StealthyReplay, generate
 
-__all__ = ["ScenarioResult", "simulate_scenario", "simulate_spec", "GridResult", "grid_search",
-           "CHUNK_RUNS", "stealthy_replay", "scenario_cost"]
+__all__ = [
+    "ScenarioResult",
+    "simulate_scenario",
+    "simulate_spec",
+    "GridResult",
+    "grid_search",
+    "CHUNK_RUNS",
+    "stealthy_replay",
+    "scenario_cost",
+]
 
 CHUNK_RUNS = 64
 # operations charged for one pass of a Python-level loop (about 10 us), so that
@@ -86,12 +94,18 @@ def scenario_cost(
 
 
 def _plan(
-    design: ObserverDesign, scenario: Mapping[str, Any], runs: int, steps: int, chunk_runs: int,
+    design: ObserverDesign,
+    scenario: Mapping[str, Any],
+    runs: int,
+    steps: int,
+    chunk_runs: int,
     budget: Budget,
 ) -> int:
     """Runs per chunk within the memory budget; raises ResourceLimitError with the estimate."""
-    what = (f"scenario {scenario.get('name', 'scenario')!r} ({runs:,} runs x {steps:,} steps "
-            f"of the {design.kind} observer)")
+    what = (
+        f"scenario {scenario.get('name', 'scenario')!r} ({runs:,} runs x {steps:,} steps "
+        f"of the {design.kind} observer)"
+    )
     result_bytes, per_run, flops = scenario_cost(design, scenario, runs, steps, chunk_runs)
     chunk = max(1, min(int(chunk_runs), runs))
     room = budget.memory - result_bytes
@@ -138,8 +152,9 @@ class ScenarioResult:
                 "relative_error_mean": float(np.mean(rel)),
                 "relative_error_q90": float(np.quantile(rel, 0.9)),
                 "mse_mean": float(np.mean(self.mse[-1])),
-                "support_error_mean": (None if self.support_error is None
-                                       else float(np.mean(self.support_error[-1]))),
+                "support_error_mean": (
+                    None if self.support_error is None else float(np.mean(self.support_error[-1]))
+                ),
             }
         if self.detection_delay is not None:
             delays = self.detection_delay[np.isfinite(self.detection_delay)]
@@ -149,13 +164,23 @@ class ScenarioResult:
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON object of ``ssecert simulate`` for this scenario."""
-        series: dict[str, Any] = {"relative_error": summarize(self.relative_error),
-                                  "mse": summarize(self.mse)}
+        series: dict[str, Any] = {
+            "relative_error": summarize(self.relative_error),
+            "mse": summarize(self.mse),
+        }
         if self.support_error is not None:
             series["support_error"] = summarize(self.support_error)
-        return {"observer": self.observer, "attack": self.attack, "runs": self.runs,
-                "steps": self.steps, "seed": self.seed, "final": self.final(),
-                "series": series, "seconds": self.seconds, "notes": list(self.notes)}
+        return {
+            "observer": self.observer,
+            "attack": self.attack,
+            "runs": self.runs,
+            "steps": self.steps,
+            "seed": self.seed,
+            "final": self.final(),
+            "series": series,
+            "seconds": self.seconds,
+            "notes": list(self.notes),
+        }
 
 
 def stealthy_replay(system: System, max_attacked: int) -> StealthyReplay | None:
@@ -176,8 +201,14 @@ def _chunk(args: tuple) -> dict[str, np.ndarray]:
         return _simulate_chunk(*args)
 
 
-def _simulate_chunk(design: ObserverDesign, scenario: Mapping[str, Any], runs: list[int],
-                    steps: int, seed: int, replay: StealthyReplay | None) -> dict[str, np.ndarray]:
+def _simulate_chunk(
+    design: ObserverDesign,
+    scenario: Mapping[str, Any],
+    runs: list[int],
+    steps: int,
+    seed: int,
+    replay: StealthyReplay | None,
+) -> dict[str, np.ndarray]:
     system = design.system
     data = generate(system, scenario, runs, steps, seed=seed, replay=replay)
     A_T, C_T = system.A.T, system.C.T
@@ -194,8 +225,10 @@ def _simulate_chunk(design: ObserverDesign, scenario: Mapping[str, Any], runs: l
     d = traj.delay
     # estimate at time k refers to x(k - d); compare where defined
     x_ref = xs if d == 0 else np.concatenate([np.repeat(xs[:1], d, axis=0), xs[:-d]], axis=0)
-    out = {"relative_error": relative_error(traj.x_hat, x_ref, data.x0[None]),
-           "mse": mse(traj.x_hat, x_ref)}
+    out = {
+        "relative_error": relative_error(traj.x_hat, x_ref, data.x0[None]),
+        "mse": mse(traj.x_hat, x_ref),
+    }
     if traj.a_hat is not None and traj.a_hat.shape[-1] == system.p:
         # a_hat(k + 1) is the estimate built from y(k): compare it with a(k)
         truth = np.concatenate([np.zeros_like(data.attack[:1]), data.attack], axis=0)
@@ -267,21 +300,33 @@ def simulate_scenario(
     replay = None
     if scenario["attack"] == "stealthy":
         replay = stealthy_replay(design.system, int(max_attacked or 0))
-    chunks = [(design, dict(scenario), list(range(r0, min(r0 + chunk_runs, runs))), steps, seed,
-               replay) for r0 in range(0, runs, chunk_runs)]
+    chunks = [
+        (design, dict(scenario), list(range(r0, min(r0 + chunk_runs, runs))), steps, seed, replay)
+        for r0 in range(0, runs, chunk_runs)
+    ]
     parts = map_ordered(_chunk, chunks, client)
     merged = {key: np.concatenate([p[key] for p in parts], axis=-1) for key in parts[0]}
     notes = []
     overflowed = int(np.count_nonzero(~np.all(np.isfinite(merged["relative_error"]), axis=0)))
     if overflowed:
-        notes.append(f"the plant state or its estimate overflows in floating point in "
-                     f"{overflowed} of {runs} runs (their errors are reported as inf or NaN)")
+        notes.append(
+            f"the plant state or its estimate overflows in floating point in "
+            f"{overflowed} of {runs} runs (their errors are reported as inf or NaN)"
+        )
     return ScenarioResult(
-        name=str(scenario.get("name", "scenario")), attack=scenario["attack"], observer=design.kind,
-        runs=runs, steps=steps, seed=seed, relative_error=merged["relative_error"],
-        mse=merged["mse"], support_error=merged.get("support_error"),
-        detection_delay=merged.get("detection_delay"), seconds=time.perf_counter() - start,
-        notes=tuple(notes))
+        name=str(scenario.get("name", "scenario")),
+        attack=scenario["attack"],
+        observer=design.kind,
+        runs=runs,
+        steps=steps,
+        seed=seed,
+        relative_error=merged["relative_error"],
+        mse=merged["mse"],
+        support_error=merged.get("support_error"),
+        detection_delay=merged.get("detection_delay"),
+        seconds=time.perf_counter() - start,
+        notes=tuple(notes),
+    )
 
 
 @dataclass(frozen=True)
@@ -305,8 +350,9 @@ class GridResult:
 def _grid_point(args: tuple) -> dict[str, Any]:
     system, observer, params, scenario, runs, steps, seed, s, budget = args
     design = build_observer(system, {**observer, **params}, budget=budget)
-    res = simulate_scenario(design, scenario, runs=runs, steps=steps, seed=seed, max_attacked=s,
-                            budget=budget)
+    res = simulate_scenario(
+        design, scenario, runs=runs, steps=steps, seed=seed, max_attacked=s, budget=budget
+    )
     return res.final()
 
 
@@ -351,8 +397,10 @@ def grid_search(
 
     keys = list(grid)
     combos = [dict(zip(keys, values)) for values in itertools.product(*(grid[k] for k in keys))]
-    tasks = [(system, dict(observer), c, dict(scenario), runs, steps, seed, max_attacked, budget)
-             for c in combos]
+    tasks = [
+        (system, dict(observer), c, dict(scenario), runs, steps, seed, max_attacked, budget)
+        for c in combos
+    ]
     finals = map_ordered(_grid_point, tasks, client)
     points = []
     for params, final in zip(combos, finals):
@@ -417,14 +465,22 @@ def simulate_spec(
         except ResourceLimitError as exc:
             keys = " and ".join(
                 f"--{key}" if override is not None else f"scenario[{index}].{key}"
-                for key, override in (("runs", runs), ("steps", steps)))
+                for key, override in (("runs", runs), ("steps", steps))
+            )
             raise ResourceLimitError(f"{spec.source}: {exc}; lower {keys}") from None
     out: dict[str, Any] = {}
     for scenario in spec.scenarios:
         try:
             out[scenario["name"]] = simulate_scenario(
-                design, scenario, runs=runs, steps=steps, seed=seed,
-                max_attacked=spec.max_attacked, client=client, budget=budget)
+                design,
+                scenario,
+                runs=runs,
+                steps=steps,
+                seed=seed,
+                max_attacked=spec.max_attacked,
+                client=client,
+                budget=budget,
+            )
         except ResourceLimitError:
             raise
         except ValueError as exc:  # a stealthy scenario on a sparse-observable plant

@@ -106,7 +106,9 @@ def detection_delay(a_hat: np.ndarray, a: np.ndarray) -> np.ndarray:
     return out
 
 
-def summarize(series: np.ndarray, *, quantiles: tuple[float, ...] = (0.1, 0.5, 0.9)) -> dict[str, Any]:
+def summarize(
+    series: np.ndarray, *, quantiles: tuple[float, ...] = (0.1, 0.5, 0.9)
+) -> dict[str, Any]:
     """Mean and quantiles over runs of a (steps, runs) array, per step (NaN where no run
     has a value, inf where runs diverged)."""
     with warnings.catch_warnings(), np.errstate(over="ignore", invalid="ignore"):

@@ -155,8 +155,9 @@ def generate(
             period = int(scenario["period"])
             for start in range(0, steps, period):
                 support = _support(rng, p, scenario)
-                attack[start : start + period, j, support] = _magnitudes(rng, support.size,
-                                                                         magnitude)
+                attack[start : start + period, j, support] = _magnitudes(
+                    rng, support.size, magnitude
+                )
         elif kind == "random":
             count = int(scenario["count"])
             for k in range(steps):

@@ -21,8 +21,13 @@ from .lmi import LureModel, circle_certificate, iss_certificate, iss_from_circle
 from .lyapunov import lyapunov_certificate
 from .thesis import thesis_assumptions
 
-__all__ = ["observer_checks", "observer_gain_check", "observer_stability_check", "iss_gain_check",
-           "thesis_assumptions_check"]
+__all__ = [
+    "observer_checks",
+    "observer_gain_check",
+    "observer_stability_check",
+    "iss_gain_check",
+    "thesis_assumptions_check",
+]
 
 ISS_OPTIMIZE_LIMIT = 60  # largest dissipation LMI solved directly
 
@@ -36,9 +41,11 @@ def _lyapunov_evidence(cert) -> dict[str, Any]:
         "contraction": cert.contraction,
         "condition_number_P": cert.condition,
         "residual": cert.residual,
-        "margin_definition": ("lambda_min(P - F'PF) / ||P||, recomputed from P"
-                              if cert.method == "lyapunov" else
-                              "1 - (certified upper bound on the spectral radius of the exact F)"),
+        "margin_definition": (
+            "lambda_min(P - F'PF) / ||P||, recomputed from P"
+            if cert.method == "lyapunov"
+            else "1 - (certified upper bound on the spectral radius of the exact F)"
+        ),
         "certificate": cert.method,
         "exact_decision": cert.proof,
     }
@@ -59,8 +66,10 @@ def _exact_deadbeat(system: System) -> dict[str, Any]:
         "verified": exact.verified,
         "exact_index": exact.details["exact_index"],
         "L_exact": exact.details["L_exact"],
-        "note": ("A and C taken as the exact rational values of their floating-point entries; "
-                 "F^k == 0 and F^(k-1) != 0 checked exactly"),
+        "note": (
+            "A and C taken as the exact rational values of their floating-point entries; "
+            "F^k == 0 and F^(k-1) != 0 checked exactly"
+        ),
     }
 
 
@@ -78,8 +87,10 @@ def observer_gain_check(design: ObserverDesign) -> Check:
     computed_radius = float(np.abs(np.linalg.eigvals(F)).max())
     fields: dict[str, Any] = {"L": gain.L, "gain_method": gain.method, "kind": design.kind}
     title = f"Observer gain ({gain.method})"
-    evidence: dict[str, Any] = {"details": gain.details,
-                                "computed_eigenvalue_radius": computed_radius}
+    evidence: dict[str, Any] = {
+        "details": gain.details,
+        "computed_eigenvalue_radius": computed_radius,
+    }
     if gain.method == "deadbeat":
         return _deadbeat_check(design, fields, evidence, title)
     cert = lyapunov_certificate(F, parts=parts)
@@ -88,23 +99,35 @@ def observer_gain_check(design: ObserverDesign) -> Check:
     verdict = Verdict(cert.verdict)
     if verdict is Verdict.HOLDS and cert.method == "exact powers":
         fields["spectral_radius"] = cert.contraction
-        summary = (f"The linear error dynamics e+ = (A - L C) e are stable: {cert.reason}.")
+        summary = f"The linear error dynamics e+ = (A - L C) e are stable: {cert.reason}."
     elif verdict is Verdict.HOLDS:
-        summary = (f"The linear error dynamics e+ = (A - L C) e are stable (spectral radius "
-                   f"{sig(cert.spectral_radius)}), certified by a Lyapunov matrix P: the error "
-                   f"contracts at least by {sig(cert.contraction)} per step in the P-norm.")
+        summary = (
+            f"The linear error dynamics e+ = (A - L C) e are stable (spectral radius "
+            f"{sig(cert.spectral_radius)}), certified by a Lyapunov matrix P: the error "
+            f"contracts at least by {sig(cert.contraction)} per step in the P-norm."
+        )
     elif verdict is Verdict.FAILS:
-        summary = (f"A - L C is not stable: {cert.reason}. With this gain the error does not "
-                   f"vanish even without attack.")
+        summary = (
+            f"A - L C is not stable: {cert.reason}. With this gain the error does not "
+            f"vanish even without attack."
+        )
     else:
         summary = f"The stability of A - L C could not be certified: {cert.reason}."
-    return Check(id="observer_gain", title=title, verdict=verdict, summary=summary,
-                 value=fields["spectral_radius"], margin=cert.margin,
-                 method="discrete Lyapunov (dlyap)" if cert.method == "lyapunov"
-                 else "exact powers of A - L C",
-                 fields=fields, evidence=evidence,
-                 witness=cert.witness if verdict is Verdict.FAILS else None,
-                 tolerances={"error_bound": cert.error_bound, "clear_factor": 100})
+    return Check(
+        id="observer_gain",
+        title=title,
+        verdict=verdict,
+        summary=summary,
+        value=fields["spectral_radius"],
+        margin=cert.margin,
+        method="discrete Lyapunov (dlyap)"
+        if cert.method == "lyapunov"
+        else "exact powers of A - L C",
+        fields=fields,
+        evidence=evidence,
+        witness=cert.witness if verdict is Verdict.FAILS else None,
+        tolerances={"error_bound": cert.error_bound, "clear_factor": 100},
+    )
 
 
 def _parts(design: ObserverDesign) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
@@ -114,8 +137,9 @@ def _parts(design: ObserverDesign) -> tuple[np.ndarray, np.ndarray, np.ndarray] 
     return design.system.A, design.gain.L, design.sensing
 
 
-def _deadbeat_check(design: ObserverDesign, fields: dict[str, Any], evidence: dict[str, Any],
-                    title: str) -> Check:
+def _deadbeat_check(
+    design: ObserverDesign, fields: dict[str, Any], evidence: dict[str, Any], title: str
+) -> Check:
     gain = design.gain
     details = gain.details
     index = details.get("nilpotency_index")
@@ -125,8 +149,10 @@ def _deadbeat_check(design: ObserverDesign, fields: dict[str, Any], evidence: di
     if design.system.n <= EXACT_LIMIT:
         evidence["exact"] = _exact_deadbeat(design.system)
         if evidence["exact"].get("verified"):
-            exact_note = (f" In exact arithmetic the rational gain L_exact (evidence) is nilpotent "
-                          f"with index {evidence['exact']['exact_index']}.")
+            exact_note = (
+                f" In exact arithmetic the rational gain L_exact (evidence) is nilpotent "
+                f"with index {evidence['exact']['exact_index']}."
+            )
     fields["nilpotency_index"] = index
     fields["observability_index"] = details.get("observability_index")
     fields["spectral_radius"] = upper
@@ -137,18 +163,27 @@ def _deadbeat_check(design: ObserverDesign, fields: dict[str, Any], evidence: di
         rel = details["relative_power_norms"][index - 1]
         exactly = details.get("exactly_nilpotent")
         summary = (
-            (f"A - L C with the printed L is exactly nilpotent with index {index}: the error "
-             f"vanishes in {index} step{'s' if index != 1 else ''} without attack."
-             if exactly else
-             f"With the printed L, ||(A - L C)^{index}|| <= {rel:.1e} ||A||^{index} (powers "
-             f"computed exactly from the floats): the error vanishes to rounding in {index} "
-             f"step{'s' if index != 1 else ''} without attack, the observability index"
-             f"{'' if details.get('minimal') else ' (index not minimal)'}, and the spectral "
-             f"radius is certified <= {upper:.3g}.")
-            + exact_note)
-        return Check(id="observer_gain", title=title, verdict=Verdict.HOLDS, summary=summary,
-                     value=index, margin=1.0 - upper, method=method, fields=fields,
-                     evidence=evidence, tolerances=tolerances)
+            f"A - L C with the printed L is exactly nilpotent with index {index}: the error "
+            f"vanishes in {index} step{'s' if index != 1 else ''} without attack."
+            if exactly
+            else f"With the printed L, ||(A - L C)^{index}|| <= {rel:.1e} ||A||^{index} (powers "
+            f"computed exactly from the floats): the error vanishes to rounding in {index} "
+            f"step{'s' if index != 1 else ''} without attack, the observability index"
+            f"{'' if details.get('minimal') else ' (index not minimal)'}, and the spectral "
+            f"radius is certified <= {upper:.3g}."
+        ) + exact_note
+        return Check(
+            id="observer_gain",
+            title=title,
+            verdict=Verdict.HOLDS,
+            summary=summary,
+            value=index,
+            margin=1.0 - upper,
+            method=method,
+            fields=fields,
+            evidence=evidence,
+            tolerances=tolerances,
+        )
     problem = details.get("problem") or "the power test did not conclude"
     if lower is not None and lower > 1:
         from .lyapunov import instability_witness
@@ -156,21 +191,39 @@ def _deadbeat_check(design: ObserverDesign, fields: dict[str, Any], evidence: di
         witness = instability_witness(design.error_matrix, parts=_parts(design))
         if witness is not None and witness["verified"]:
             return Check(
-                id="observer_gain", title=title, verdict=Verdict.FAILS,
-                summary=(f"The deadbeat construction's printed gain is not deadbeat: {problem}. "
-                         f"Rounding L to floats destroys the nilpotency of this plant's "
-                         f"deadbeat loop." + exact_note),
-                value=index, margin=None, method=method, fields=fields, evidence=evidence,
-                witness=witness, tolerances=tolerances)
+                id="observer_gain",
+                title=title,
+                verdict=Verdict.FAILS,
+                summary=(
+                    f"The deadbeat construction's printed gain is not deadbeat: {problem}. "
+                    f"Rounding L to floats destroys the nilpotency of this plant's "
+                    f"deadbeat loop." + exact_note
+                ),
+                value=index,
+                margin=None,
+                method=method,
+                fields=fields,
+                evidence=evidence,
+                witness=witness,
+                tolerances=tolerances,
+            )
     return Check(
-        id="observer_gain", title=title, verdict=Verdict.INCONCLUSIVE,
+        id="observer_gain",
+        title=title,
+        verdict=Verdict.INCONCLUSIVE,
         summary=f"The deadbeat gain could not be verified for the printed L: {problem}."
-                + exact_note,
-        value=index, method=method, fields=fields, evidence=evidence, tolerances=tolerances)
+        + exact_note,
+        value=index,
+        method=method,
+        fields=fields,
+        evidence=evidence,
+        tolerances=tolerances,
+    )
 
 
-def observer_stability_check(design: ObserverDesign, *,
-                             budget: Budget | None = None) -> tuple[Check, Any]:
+def observer_stability_check(
+    design: ObserverDesign, *, budget: Budget | None = None
+) -> tuple[Check, Any]:
     """Global asymptotic stability of the observer's error dynamics without attack.
 
     Returns the Check and the underlying certificate (for the ISS check).
@@ -183,79 +236,132 @@ def observer_stability_check(design: ObserverDesign, *,
         if verdict is Verdict.HOLDS and cert.method == "exact powers":
             summary = f"The error dynamics are linear and stable: {cert.reason}."
         elif verdict is Verdict.HOLDS:
-            summary = (f"The error dynamics are linear and certified stable by a Lyapunov matrix "
-                       f"(contraction {sig(cert.contraction)} per step).")
+            summary = (
+                f"The error dynamics are linear and certified stable by a Lyapunov matrix "
+                f"(contraction {sig(cert.contraction)} per step)."
+            )
         elif verdict is Verdict.FAILS:
             summary = f"The error dynamics are unstable: {cert.reason}."
         else:
             summary = f"Stability could not be certified: {cert.reason}."
-        return Check(id="observer_stability", title=title, verdict=verdict, summary=summary,
-                     value=cert.contraction, margin=cert.margin,
-                     method="discrete Lyapunov" if cert.method == "lyapunov"
-                     else "exact powers of A - L C",
-                     fields={"decay_rate": None if cert.contraction is None
-                             else 1 - cert.contraction},
-                     evidence=_lyapunov_evidence(cert),
-                     witness=cert.witness if verdict is Verdict.FAILS else None,
-                     tolerances={"error_bound": cert.error_bound}), cert
+        return Check(
+            id="observer_stability",
+            title=title,
+            verdict=verdict,
+            summary=summary,
+            value=cert.contraction,
+            margin=cert.margin,
+            method="discrete Lyapunov" if cert.method == "lyapunov" else "exact powers of A - L C",
+            fields={"decay_rate": None if cert.contraction is None else 1 - cert.contraction},
+            evidence=_lyapunov_evidence(cert),
+            witness=cert.witness if verdict is Verdict.FAILS else None,
+            tolerances={"error_bound": cert.error_bound},
+        ), cert
     if design.inner_steps > 1:
         return Check(
-            id="observer_stability", title=title, verdict=Verdict.INCONCLUSIVE,
-            summary=(f"Certificates for an SSO with {design.inner_steps} inner steps per sample "
-                     f"are not implemented (the Lur'e model covers one step)."),
-            method="circle criterion", fields={}), None
+            id="observer_stability",
+            title=title,
+            verdict=Verdict.INCONCLUSIVE,
+            summary=(
+                f"Certificates for an SSO with {design.inner_steps} inner steps per sample "
+                f"are not implemented (the Lur'e model covers one step)."
+            ),
+            method="circle criterion",
+            fields={},
+        ), None
     refusal = (budget or Budget()).refusal(
         f"the Lur'e model of the {design.kind} observer",
-        nbytes=lure_model_cost(design.system.n, design.sensing.shape[0],
-                               design.sensing.shape[0])[0])
+        nbytes=lure_model_cost(design.system.n, design.sensing.shape[0], design.sensing.shape[0])[
+            0
+        ],
+    )
     if refusal:
-        return Check(id="observer_stability", title=title, verdict=Verdict.INCONCLUSIVE,
-                     summary=f"No stability certificate: not attempted: {refusal}.",
-                     method="circle criterion (LMI, Clarabel)", fields={}), None
+        return Check(
+            id="observer_stability",
+            title=title,
+            verdict=Verdict.INCONCLUSIVE,
+            summary=f"No stability certificate: not attempted: {refusal}.",
+            method="circle criterion (LMI, Clarabel)",
+            fields={},
+        ), None
     model = LureModel.from_design(design)
     cert = circle_certificate(model, budget=budget)
     verdict = Verdict(cert.verdict)
-    fields = {"decay_rate": cert.decay, "structure": cert.structure, "shrink": design.shrink,
-              "step": design.step, "threshold": design.threshold}
+    fields = {
+        "decay_rate": cert.decay,
+        "structure": cert.structure,
+        "shrink": design.shrink,
+        "step": design.step,
+        "threshold": design.threshold,
+    }
     evidence = cert.evidence()
-    evidence["lmi"] = ("[A B]' P [A B] - diag(P, 0) + [[0, q Cw' T], [q T Cw, -2 T]] <= -margin ||P|| I"
-                       " with xi = (e, a_hat), A = [[F, -L], [0, 0]], B = [[0], [I]], "
-                       "Cw = [-step L2 S, I - step L2]")
-    evidence["model"] = {"A": model.A, "B": model.B, "Cw": model.Cw, "E": model.E, "Dw": model.Dw,
-                         "Ce": model.Ce, "q": model.q, "n_e": model.n_e,
-                         "threshold": model.threshold}
+    evidence["lmi"] = (
+        "[A B]' P [A B] - diag(P, 0) + [[0, q Cw' T], [q T Cw, -2 T]] <= -margin ||P|| I"
+        " with xi = (e, a_hat), A = [[F, -L], [0, 0]], B = [[0], [I]], "
+        "Cw = [-step L2 S, I - step L2]"
+    )
+    evidence["model"] = {
+        "A": model.A,
+        "B": model.B,
+        "Cw": model.Cw,
+        "E": model.E,
+        "Dw": model.Dw,
+        "Ce": model.Ce,
+        "q": model.q,
+        "n_e": model.n_e,
+        "threshold": model.threshold,
+    }
     if verdict is Verdict.HOLDS:
-        summary = (f"The error state (e, a_hat) converges to 0 from every initial condition "
-                   f"without attack: V = xi' P xi decreases by at least a factor "
-                   f"{1 - cert.decay:.6g} per step (circle criterion with a diagonal multiplier, "
-                   f"{cert.structure} P, verified margin {cert.margin:.3g} against an error bound "
-                   f"{cert.error_bound:.1e}).")
+        summary = (
+            f"The error state (e, a_hat) converges to 0 from every initial condition "
+            f"without attack: V = xi' P xi decreases by at least a factor "
+            f"{1 - cert.decay:.6g} per step (circle criterion with a diagonal multiplier, "
+            f"{cert.structure} P, verified margin {cert.margin:.3g} against an error bound "
+            f"{cert.error_bound:.1e})."
+        )
     elif verdict is Verdict.FAILS:
         summary = f"The observer is not globally asymptotically stable: {cert.reason}."
     else:
         summary = f"No stability certificate: {cert.reason}."
-    return Check(id="observer_stability", title=title, verdict=verdict, summary=summary,
-                 value=cert.decay, margin=cert.margin, method="circle criterion (LMI, Clarabel)",
-                 fields=fields, evidence=evidence,
-                 witness=cert.details.get("witness") if verdict is Verdict.FAILS else None,
-                 tolerances={"error_bound": cert.error_bound, "clear_factor": 100,
-                             "lmi_eta": 1e-4}), (model, cert)
+    return Check(
+        id="observer_stability",
+        title=title,
+        verdict=verdict,
+        summary=summary,
+        value=cert.decay,
+        margin=cert.margin,
+        method="circle criterion (LMI, Clarabel)",
+        fields=fields,
+        evidence=evidence,
+        witness=cert.details.get("witness") if verdict is Verdict.FAILS else None,
+        tolerances={"error_bound": cert.error_bound, "clear_factor": 100, "lmi_eta": 1e-4},
+    ), (model, cert)
 
 
-def iss_gain_check(design: ObserverDesign, stability: Any, *,
-                   budget: Budget | None = None) -> Check:
+def iss_gain_check(
+    design: ObserverDesign, stability: Any, *, budget: Budget | None = None
+) -> Check:
     """l2 gain from attack to estimation error (and ISS decay), advisory."""
     title = "ISS gain from attack to estimation error"
-    norm = ("l2 gain: sum_k |e(k)|^2 <= gamma^2 sum_k |a(k)|^2 + V(xi(0)), with a the "
-            + ("stacked " if design.window > 1 else "") + "attack and e the state estimation error")
+    norm = (
+        "l2 gain: sum_k |e(k)|^2 <= gamma^2 sum_k |a(k)|^2 + V(xi(0)), with a the "
+        + ("stacked " if design.window > 1 else "")
+        + "attack and e the state estimation error"
+    )
     if not design.sparse:
         model = LureModel.linear(design.error_matrix, design.gain.L)
         cert = iss_certificate(model, alpha=0.0, budget=budget)
     else:
         if stability is None or stability[1].verdict != "holds":
-            return Check(id="iss_gain", title=title, verdict=Verdict.INCONCLUSIVE, required=False,
-                         summary="No ISS gain without a stability certificate.",
-                         method="dissipation inequality", fields={"norm": norm})
+            return Check(
+                id="iss_gain",
+                title=title,
+                verdict=Verdict.INCONCLUSIVE,
+                required=False,
+                summary="No ISS gain without a stability certificate.",
+                method="dissipation inequality",
+                fields={"norm": norm},
+            )
         model, circle = stability
         cert = iss_from_circle(model, circle)
         if model.N + model.m + model.r <= ISS_OPTIMIZE_LIMIT:
@@ -265,39 +371,62 @@ def iss_gain_check(design: ObserverDesign, stability: Any, *,
     verdict = Verdict(cert.verdict)
     fields = {"gamma": cert.gamma, "alpha": cert.decay, "norm": norm}
     if verdict is Verdict.HOLDS:
-        summary = (f"V(xi+) - V(xi) <= -{cert.decay:.3g} V(xi) - |e|^2 + gamma^2 |a|^2 holds with "
-                   f"gamma = {cert.gamma:.4g}: the estimation error is input-to-state stable with "
-                   f"respect to the attack, with l2 gain at most {cert.gamma:.4g}.")
+        summary = (
+            f"V(xi+) - V(xi) <= -{cert.decay:.3g} V(xi) - |e|^2 + gamma^2 |a|^2 holds with "
+            f"gamma = {cert.gamma:.4g}: the estimation error is input-to-state stable with "
+            f"respect to the attack, with l2 gain at most {cert.gamma:.4g}."
+        )
     else:
         summary = f"No ISS gain certified: {cert.reason}."
     evidence = cert.evidence()
     evidence["inequality"] = "V(xi+) - V(xi) <= -alpha V(xi) - |e|^2 + gamma^2 |a|^2"
-    return Check(id="iss_gain", title=title, verdict=verdict, summary=summary, required=False,
-                 value=cert.gamma, margin=cert.margin, method="dissipation inequality (LMI)",
-                 fields=fields, evidence=evidence,
-                 tolerances={"error_bound": cert.error_bound})
+    return Check(
+        id="iss_gain",
+        title=title,
+        verdict=verdict,
+        summary=summary,
+        required=False,
+        value=cert.gamma,
+        margin=cert.margin,
+        method="dissipation inequality (LMI)",
+        fields=fields,
+        evidence=evidence,
+        tolerances={"error_bound": cert.error_bound},
+    )
 
 
-def thesis_assumptions_check(design: ObserverDesign, observability: Check | None,
-                             *, seed: int = 0, budget: Budget | None = None) -> Check:
+def thesis_assumptions_check(
+    design: ObserverDesign,
+    observability: Check | None,
+    *,
+    seed: int = 0,
+    budget: Budget | None = None,
+) -> Check:
     """The thesis's Assumptions 1-3, Lemma 1 and epsilon bound (5.20), advisory."""
     holds = None if observability is None else observability.verdict is Verdict.HOLDS
-    verdict, items = thesis_assumptions(design, observability_holds=holds, seed=seed,
-                                        budget=budget)
+    verdict, items = thesis_assumptions(design, observability_holds=holds, seed=seed, budget=budget)
     failing = [i.name for i in items if i.verdict == "fails"]
     open_ = [i.name for i in items if i.verdict == "inconclusive"]
     if verdict == "holds":
         summary = "Every assumption of the thesis's stability proof holds on this design."
     elif verdict == "fails":
-        summary = ("The thesis's stability proof does not apply to this design: "
-                   + "; ".join(f"{i.name}: {i.reason}" for i in items if i.verdict == "fails")[:600])
+        summary = (
+            "The thesis's stability proof does not apply to this design: "
+            + "; ".join(f"{i.name}: {i.reason}" for i in items if i.verdict == "fails")[:600]
+        )
     else:
-        summary = ("Not all assumptions could be decided: "
-                   + "; ".join(f"{i.name}: {i.reason}" for i in items
-                               if i.verdict == "inconclusive")[:600])
+        summary = (
+            "Not all assumptions could be decided: "
+            + "; ".join(f"{i.name}: {i.reason}" for i in items if i.verdict == "inconclusive")[:600]
+        )
     return Check(
-        id="thesis_assumptions", title="Thesis assumptions (Ch. 5)", verdict=Verdict(verdict),
-        summary=summary, required=False, value=len(failing), method="proof or counterexample search",
+        id="thesis_assumptions",
+        title="Thesis assumptions (Ch. 5)",
+        verdict=Verdict(verdict),
+        summary=summary,
+        required=False,
+        value=len(failing),
+        method="proof or counterexample search",
         fields={"items": {i.name: i.verdict for i in items}},
         evidence={i.name: i.to_dict() for i in items},
     )
@@ -345,25 +474,42 @@ def observer_checks(
     try:
         design = build_observer(system, observer, budget=budget)
     except ResourceLimitError as exc:
-        gain = Check(id="observer_gain", title="Observer gain", verdict=Verdict.INCONCLUSIVE,
-                     summary=f"The observer was not built: {exc}.",
-                     method=str(observer.get("gain", observer["kind"])),
-                     fields={"L": None, "spectral_radius": None, "kind": observer["kind"]})
-        stab = Check(id="observer_stability", title="Observer stability",
-                     verdict=Verdict.INCONCLUSIVE,
-                     summary=f"No stability analysis: the observer was not built ({exc}).",
-                     method="", fields={})
+        gain = Check(
+            id="observer_gain",
+            title="Observer gain",
+            verdict=Verdict.INCONCLUSIVE,
+            summary=f"The observer was not built: {exc}.",
+            method=str(observer.get("gain", observer["kind"])),
+            fields={"L": None, "spectral_radius": None, "kind": observer["kind"]},
+        )
+        stab = Check(
+            id="observer_stability",
+            title="Observer stability",
+            verdict=Verdict.INCONCLUSIVE,
+            summary=f"No stability analysis: the observer was not built ({exc}).",
+            method="",
+            fields={},
+        )
         return [gain, stab]
     except GainError as exc:
         unobservable = observability is not None and observability.verdict is Verdict.FAILS
         verdict = Verdict.FAILS if unobservable else Verdict.INCONCLUSIVE
-        gain = Check(id="observer_gain", title="Observer gain", verdict=verdict,
-                     summary=f"The requested gain cannot be computed: {exc}.",
-                     method=str(observer.get("gain", observer["kind"])),
-                     fields={"L": None, "spectral_radius": None, "kind": observer["kind"]})
-        stab = Check(id="observer_stability", title="Observer stability",
-                     verdict=Verdict.INCONCLUSIVE, summary="No gain, so no stability analysis.",
-                     method="", fields={})
+        gain = Check(
+            id="observer_gain",
+            title="Observer gain",
+            verdict=verdict,
+            summary=f"The requested gain cannot be computed: {exc}.",
+            method=str(observer.get("gain", observer["kind"])),
+            fields={"L": None, "spectral_radius": None, "kind": observer["kind"]},
+        )
+        stab = Check(
+            id="observer_stability",
+            title="Observer stability",
+            verdict=Verdict.INCONCLUSIVE,
+            summary="No gain, so no stability analysis.",
+            method="",
+            fields={},
+        )
         return [gain, stab]
     checks = [observer_gain_check(design)]
     stability, cert = observer_stability_check(design, budget=budget)

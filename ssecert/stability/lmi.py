@@ -328,15 +328,26 @@ def verify_certificate(
     bound = _error_bound(model, P, t, M.shape[0])
     p_eigs = np.linalg.eigvalsh(P)
     if p_eigs[0] <= clear * 10 * P.shape[0] * EPS * normP:
-        return False, margin, bound, f"P is not clearly positive definite (lambda_min {p_eigs[0]:.2e})"
+        return (
+            False,
+            margin,
+            bound,
+            f"P is not clearly positive definite (lambda_min {p_eigs[0]:.2e})",
+        )
     try:
         np.linalg.cholesky(P - 0.5 * p_eigs[0] * np.eye(P.shape[0]))
     except np.linalg.LinAlgError:
         return False, margin, bound, "P fails the Cholesky test"
     if margin <= clear * bound:
-        return False, margin, bound, (
-            f"the recomputed LMI has largest eigenvalue {-margin:.2e} ||P||, not below "
-            f"-{clear:g} x the error bound {bound:.2e}")
+        return (
+            False,
+            margin,
+            bound,
+            (
+                f"the recomputed LMI has largest eigenvalue {-margin:.2e} ||P||, not below "
+                f"-{clear:g} x the error bound {bound:.2e}"
+            ),
+        )
     return True, margin, bound, ""
 
 
@@ -352,7 +363,7 @@ def _solve(
     N, m, r, n = model.N, model.m, model.r, model.n_e
     start = time.perf_counter()
     t = cp.Variable(m) if m else None
-    if structure in ("block-diagonal", "cross") and N > n:
+    if structure in ("block-diagonal", "cross") and n < N:
         P1 = cp.Variable((n, n), symmetric=True)
         d = cp.Variable(N - n)
         P12 = cp.Variable((n, N - n)) if structure == "cross" else np.zeros((n, N - n))
@@ -383,16 +394,23 @@ def _solve(
         Z = np.zeros
         M = H.T @ P @ H
         top = model.Ce.T @ model.Ce - (1.0 - alpha) * P
-        M = M + cp.bmat([[top, Z((N, m + r))],
-                         [Z((m + r, N)), cp.bmat([[Z((m, m)), Z((m, r))],
-                                                 [Z((r, m)), -g * np.eye(r)]]) if m
-                          else -g * np.eye(r)]])
+        M = M + cp.bmat(
+            [
+                [top, Z((N, m + r))],
+                [
+                    Z((m + r, N)),
+                    cp.bmat([[Z((m, m)), Z((m, r))], [Z((r, m)), -g * np.eye(r)]])
+                    if m
+                    else -g * np.eye(r),
+                ],
+            ]
+        )
         if m:
             qTC = model.q * T @ model.Cw
             qTD = model.q * T @ model.Dw
-            M = M + cp.bmat([[Z((N, N)), qTC.T, Z((N, r))],
-                             [qTC, -2 * T, qTD],
-                             [Z((r, N)), qTD.T, Z((r, r))]])
+            M = M + cp.bmat(
+                [[Z((N, N)), qTC.T, Z((N, r))], [qTC, -2 * T, qTD], [Z((r, N)), qTD.T, Z((r, r))]]
+            )
         size = N + m + r
     M = 0.5 * (M + M.T)
     cons.append(M << -ETA * np.eye(size))
@@ -406,15 +424,18 @@ def _solve(
             warnings.simplefilter("ignore", UserWarning)  # verified below, not trusted
             problem.solve(solver=cp.CLARABEL, **options)
     except Exception as exc:  # solver failure is an answer: inconclusive
-        info.update(status=f"solver error: {type(exc).__name__}: {exc}".rstrip(": "),
-                    seconds=time.perf_counter() - start)
+        info.update(
+            status=f"solver error: {type(exc).__name__}: {exc}".rstrip(": "),
+            seconds=time.perf_counter() - start,
+        )
         return None, None, None, info
     info.update(status=str(problem.status), seconds=time.perf_counter() - start)
     if problem.status not in ("optimal", "optimal_inaccurate"):
         return None, None, None, info
     values = [P.value, t.value if m else np.zeros(0), g.value if g is not None else 0.0]
     if any(v is None for v in values) or not all(
-            np.all(np.isfinite(np.asarray(v, dtype=float))) for v in values):
+        np.all(np.isfinite(np.asarray(v, dtype=float))) for v in values
+    ):
         info["status"] = f"{problem.status}, but the solver returned no finite values"
         return None, None, None, info
     Pv = np.asarray(values[0], dtype=float)
@@ -425,15 +446,19 @@ def _solve(
 def _model_refusal(model: LureModel, budget: Budget) -> str:
     """Why the structural pre-checks (eigenvalues of N x N closed loops) are not affordable."""
     nbytes, flops = lure_model_cost(model.n_e, model.m, model.r)
-    return budget.refusal(f"the Lur'e model with {model.N} states and {model.m} "
-                          f"nonlinearities", nbytes=nbytes, flops=flops)
+    return budget.refusal(
+        f"the Lur'e model with {model.N} states and {model.m} nonlinearities",
+        nbytes=nbytes,
+        flops=flops,
+    )
 
 
 def _solve_refusal(model: LureModel, kind: str, structure: str, budget: Budget) -> str:
     nbytes, flops = lmi_cost(model, kind, structure)
     size = model.N + model.m + (model.r if kind == "iss" else 0)
-    return budget.refusal(f"the {structure} LMI with {size} rows (cvxpy and Clarabel)",
-                          nbytes=nbytes, flops=flops)
+    return budget.refusal(
+        f"the {structure} LMI with {size} rows (cvxpy and Clarabel)", nbytes=nbytes, flops=flops
+    )
 
 
 def _prechecks(model: LureModel) -> tuple[str, str, dict[str, Any]]:
@@ -453,29 +478,47 @@ def _prechecks(model: LureModel) -> tuple[str, str, dict[str, Any]]:
         if decision.state != "stable":
             witness = instability_witness(F, decision=decision)
             details["witness"] = witness
-            where = ("near the origin the soft threshold is zero (dead zone), so the error "
-                     "follows e+ = F e and " if model.m else "")
+            where = (
+                "near the origin the soft threshold is zero (dead zone), so the error "
+                "follows e+ = F e and "
+                if model.m
+                else ""
+            )
             if witness is not None and witness["verified"]:
-                return "fails", (
-                    f"the linear error matrix F = A - L C is not stable: {decision.reason}; "
-                    f"{where}the origin is not asymptotically stable"), details
-            return "inconclusive", (
-                f"the computed spectral radius of F = A - L C is {rho_F:.12g}, and its stability "
-                f"cannot be decided: {decision.reason}; no certificate is attempted"), details
+                return (
+                    "fails",
+                    (
+                        f"the linear error matrix F = A - L C is not stable: {decision.reason}; "
+                        f"{where}the origin is not asymptotically stable"
+                    ),
+                    details,
+                )
+            return (
+                "inconclusive",
+                (
+                    f"the computed spectral radius of F = A - L C is {rho_F:.12g}, and its stability "
+                    f"cannot be decided: {decision.reason}; no certificate is attempted"
+                ),
+                details,
+            )
     if model.m:
         rho_q = float(np.abs(np.linalg.eigvals(model.vertex(model.q))).max())
         details["spectral_radius_at_sector_vertex"] = rho_q
         if rho_q >= 1 - 1e-9:
             if model.q >= 1 - 1e-12:
-                why = (f"with shrink = 1 the sector [0, 1] contains the identity, and the linear "
-                       f"loop it then contains has spectral radius {rho_q:.6g} (exactly 1 whenever "
-                       f"A has an eigenvalue at 1: e = v, a_hat = -C v); no sector certificate can "
-                       f"exist, which does not mean the observer is unstable. Shrink < 1 (the "
-                       f"elastic-net observer) is what makes a certificate possible")
+                why = (
+                    f"with shrink = 1 the sector [0, 1] contains the identity, and the linear "
+                    f"loop it then contains has spectral radius {rho_q:.6g} (exactly 1 whenever "
+                    f"A has an eigenvalue at 1: e = v, a_hat = -C v); no sector certificate can "
+                    f"exist, which does not mean the observer is unstable. Shrink < 1 (the "
+                    f"elastic-net observer) is what makes a certificate possible"
+                )
             else:
-                why = (f"the sector [0, {model.q:g}] contains the linear map phi = {model.q:g} w, "
-                       f"whose closed loop has spectral radius {rho_q:.6g} >= 1; no sector "
-                       f"certificate can exist")
+                why = (
+                    f"the sector [0, {model.q:g}] contains the linear map phi = {model.q:g} w, "
+                    f"whose closed loop has spectral radius {rho_q:.6g} >= 1; no sector "
+                    f"certificate can exist"
+                )
             return "inconclusive", why, details
     return "", "", details
 
@@ -517,8 +560,12 @@ def circle_certificate(
     budget = budget or Budget()
     refusal = _model_refusal(model, budget)
     if refusal:
-        return LMICertificate("inconclusive", "circle", reason=f"not attempted: {refusal}",
-                              details={"budget": budget.to_dict()})
+        return LMICertificate(
+            "inconclusive",
+            "circle",
+            reason=f"not attempted: {refusal}",
+            details={"budget": budget.to_dict()},
+        )
     verdict, reason, details = _prechecks(model)
     if verdict:
         return LMICertificate(verdict, "circle", reason=reason, details=details)
@@ -530,7 +577,9 @@ def circle_certificate(
     structures = STRUCTURES if structure == "auto" else [structure]
     for st in structures:
         if st == "full" and structure == "auto" and model.N + model.m > FULL_LIMIT:
-            attempts.append({"structure": "full", "status": f"skipped: LMI larger than {FULL_LIMIT}"})
+            attempts.append(
+                {"structure": "full", "status": f"skipped: LMI larger than {FULL_LIMIT}"}
+            )
             continue
         skip = _solve_refusal(model, "circle", st, budget)
         if skip:
@@ -546,22 +595,41 @@ def circle_certificate(
             return _holds(model, P, t, margin, bound, st, {**details, "attempts": attempts})
         info["verification_problem"] = problem
     return LMICertificate(
-        "inconclusive", "circle", reason=(
+        "inconclusive",
+        "circle",
+        reason=(
             "no circle-criterion certificate was found or verified (LMI "
             + "; ".join(f"{a['structure']}: {a['status']}" for a in attempts)
-            + "); this does not show the observer is unstable"),
+            + "); this does not show the observer is unstable"
+        ),
         details={**details, "attempts": attempts},
     )
 
 
-def _holds(model: LureModel, P: np.ndarray, t: np.ndarray, margin: float, bound: float,
-           structure: str, details: dict[str, Any]) -> LMICertificate:
+def _holds(
+    model: LureModel,
+    P: np.ndarray,
+    t: np.ndarray,
+    margin: float,
+    bound: float,
+    structure: str,
+    details: dict[str, Any],
+) -> LMICertificate:
     lam_max_P = float(np.linalg.eigvalsh(P)[-1])
     normP = float(np.linalg.norm(P, 2))
     # V(xi+) - V(xi) <= -margin ||P|| |xi|^2 <= -(margin ||P|| / lambda_max(P)) V(xi)
     decay = min(1.0, margin * normP / lam_max_P)
-    return LMICertificate("holds", "circle", P=P, multipliers=t, margin=margin,
-                          error_bound=bound, decay=decay, structure=structure, details=details)
+    return LMICertificate(
+        "holds",
+        "circle",
+        P=P,
+        multipliers=t,
+        margin=margin,
+        error_bound=bound,
+        decay=decay,
+        structure=structure,
+        details=details,
+    )
 
 
 def iss_certificate(
@@ -592,8 +660,12 @@ def iss_certificate(
     budget = budget or Budget()
     refusal = _model_refusal(model, budget)
     if refusal:
-        return LMICertificate("inconclusive", "iss", reason=f"not attempted: {refusal}",
-                              details={"budget": budget.to_dict()})
+        return LMICertificate(
+            "inconclusive",
+            "iss",
+            reason=f"not attempted: {refusal}",
+            details={"budget": budget.to_dict()},
+        )
     verdict, reason, details = _prechecks(model)
     if verdict:
         return LMICertificate(verdict, "iss", reason=reason, details=details)
@@ -601,7 +673,9 @@ def iss_certificate(
     structures = STRUCTURES if structure == "auto" else [structure]
     for st in structures:
         if st == "full" and structure == "auto" and model.N + model.m + model.r > FULL_LIMIT:
-            attempts.append({"structure": "full", "status": f"skipped: LMI larger than {FULL_LIMIT}"})
+            attempts.append(
+                {"structure": "full", "status": f"skipped: LMI larger than {FULL_LIMIT}"}
+            )
             continue
         skip = _solve_refusal(model, "iss", st, budget)
         if skip:
@@ -613,19 +687,32 @@ def iss_certificate(
             continue
         # certify a slightly larger gain than the optimum so that the margin survives
         g_cert = g * (1 + 1e-6) + 1e-9
-        ok, margin, bound, problem = verify_certificate(model, P, t, kind="iss", alpha=alpha,
-                                                        g=g_cert, clear=clear)
+        ok, margin, bound, problem = verify_certificate(
+            model, P, t, kind="iss", alpha=alpha, g=g_cert, clear=clear
+        )
         info["verified"] = ok
         if ok:
-            return LMICertificate("holds", "iss", P=P, multipliers=t, margin=margin,
-                                  error_bound=bound, decay=alpha, gamma=float(np.sqrt(g_cert)),
-                                  structure=st, details={**details, "attempts": attempts,
-                                                         "gamma_squared": g_cert})
+            return LMICertificate(
+                "holds",
+                "iss",
+                P=P,
+                multipliers=t,
+                margin=margin,
+                error_bound=bound,
+                decay=alpha,
+                gamma=float(np.sqrt(g_cert)),
+                structure=st,
+                details={**details, "attempts": attempts, "gamma_squared": g_cert},
+            )
         info["verification_problem"] = problem
     return LMICertificate(
-        "inconclusive", "iss", reason=(
+        "inconclusive",
+        "iss",
+        reason=(
             "no dissipation certificate was found or verified (LMI "
-            + "; ".join(f"{a['structure']}: {a['status']}" for a in attempts) + ")"),
+            + "; ".join(f"{a['structure']}: {a['status']}" for a in attempts)
+            + ")"
+        ),
         details={**details, "attempts": attempts},
     )
 
@@ -690,31 +777,51 @@ def iss_from_circle(
 
     if np.isfinite(values[best]):
         refined = minimize_scalar(gain, bounds=(a, b), method="bounded")
-        x, g = (float(refined.x), float(refined.fun)) if refined.fun <= values[best] else (
-            float(grid[best]), float(values[best]))
+        x, g = (
+            (float(refined.x), float(refined.fun))
+            if refined.fun <= values[best]
+            else (float(grid[best]), float(values[best]))
+        )
     else:
         x, g = float(grid[best]), float(values[best])
     if not np.isfinite(g):
-        return LMICertificate("inconclusive", "iss", reason=(
-            "no finite gain from the circle certificate (the Schur complement in the attack "
-            "is not defined for any scaling tried)"))
+        return LMICertificate(
+            "inconclusive",
+            "iss",
+            reason=(
+                "no finite gain from the circle certificate (the Schur complement in the attack "
+                "is not defined for any scaling tried)"
+            ),
+        )
     kappa = float(np.exp(x))
     g_cert = max(g, 0.0) * (1 + 1e-6) + 1e-9
-    ok, margin, bound, problem = verify_certificate(model, kappa * P, kappa * t, kind="iss",
-                                                    alpha=alpha, g=g_cert, clear=clear)
+    ok, margin, bound, problem = verify_certificate(
+        model, kappa * P, kappa * t, kind="iss", alpha=alpha, g=g_cert, clear=clear
+    )
     if not ok:
         # the Schur complement is tight by construction: keep a relative margin
         g_cert = max(g, 0.0) * 1.01 + 1e-6
-        ok, margin, bound, problem = verify_certificate(model, kappa * P, kappa * t, kind="iss",
-                                                        alpha=alpha, g=g_cert, clear=clear)
+        ok, margin, bound, problem = verify_certificate(
+            model, kappa * P, kappa * t, kind="iss", alpha=alpha, g=g_cert, clear=clear
+        )
     if not ok:
         return LMICertificate("inconclusive", "iss", reason=f"gain not verified: {problem}")
-    return LMICertificate("holds", "iss", P=kappa * P, multipliers=kappa * t, margin=margin,
-                          error_bound=bound, decay=alpha, gamma=float(np.sqrt(g_cert)),
-                          structure=circle.structure,
-                          details={"method": "from the circle certificate (scaled, Schur "
-                                             "complement in the attack)", "kappa": kappa,
-                                   "gamma_squared": g_cert})
+    return LMICertificate(
+        "holds",
+        "iss",
+        P=kappa * P,
+        multipliers=kappa * t,
+        margin=margin,
+        error_bound=bound,
+        decay=alpha,
+        gamma=float(np.sqrt(g_cert)),
+        structure=circle.structure,
+        details={
+            "method": "from the circle certificate (scaled, Schur complement in the attack)",
+            "kappa": kappa,
+            "gamma_squared": g_cert,
+        },
+    )
 
 
 # ---------------------------------------------------------------------------
@@ -736,16 +843,27 @@ class RegionMap:
     solves: int
     reused: int
     seconds: float
-    certificates: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = field(
-        default_factory=dict)
+    certificates: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
-        return {"shrinks": self.shrinks, "steps": self.steps, "verdicts": self.verdicts.tolist(),
-                "margins": self.margins, "solves": self.solves, "reused": self.reused,
-                "seconds": self.seconds,
-                "certificates": [{"shrink": float(self.shrinks[i]), "step": float(self.steps[j]),
-                                  "P": P, "multipliers_T": t}
-                                 for (i, j), (P, t) in sorted(self.certificates.items())]}
+        return {
+            "shrinks": self.shrinks,
+            "steps": self.steps,
+            "verdicts": self.verdicts.tolist(),
+            "margins": self.margins,
+            "solves": self.solves,
+            "reused": self.reused,
+            "seconds": self.seconds,
+            "certificates": [
+                {
+                    "shrink": float(self.shrinks[i]),
+                    "step": float(self.steps[j]),
+                    "P": P,
+                    "multipliers_T": t,
+                }
+                for (i, j), (P, t) in sorted(self.certificates.items())
+            ],
+        }
 
 
 def region_map(
@@ -776,12 +894,17 @@ def region_map(
         for j, nu in enumerate(steps):
             model = LureModel.from_design(replace(design, shrink=float(q), step=float(nu)))
             neighbours = [found[k] for k in ((i - 1, j), (i, j - 1), (i - 1, j - 1)) if k in found]
-            cert = circle_certificate(model, structure="block-diagonal",
-                                      solver_options=solver_options, reuse=neighbours,
-                                      budget=budget)
+            cert = circle_certificate(
+                model,
+                structure="block-diagonal",
+                solver_options=solver_options,
+                reuse=neighbours,
+                budget=budget,
+            )
             if cert.verdict == "inconclusive" and cert.details.get("attempts"):
-                cert = circle_certificate(model, structure="cross", solver_options=solver_options,
-                                          budget=budget)
+                cert = circle_certificate(
+                    model, structure="cross", solver_options=solver_options, budget=budget
+                )
                 solves += 1
             if cert.details.get("reused"):
                 reused += 1
@@ -791,5 +914,6 @@ def region_map(
             if cert.verdict == "holds":
                 margins[i, j] = cert.margin
                 found[(i, j)] = (cert.P, cert.multipliers)
-    return RegionMap(shrinks, steps, verdicts, margins, solves, reused,
-                     time.perf_counter() - start, dict(found))
+    return RegionMap(
+        shrinks, steps, verdicts, margins, solves, reused, time.perf_counter() - start, dict(found)
+    )

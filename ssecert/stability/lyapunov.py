@@ -190,24 +190,66 @@ def lyapunov_certificate(
     rho = float(np.abs(np.linalg.eigvals(F)).max()) if n else 0.0
     normF = float(np.linalg.norm(F, 2))
 
-    def exact_fallback(why: str, P: np.ndarray | None = None, decrease: np.ndarray | None = None,
-                       margin: float | None = None, bound: float = 0.0,
-                       condition: float | None = None,
-                       residual: float | None = None) -> LyapunovCertificate:
+    def exact_fallback(
+        why: str,
+        P: np.ndarray | None = None,
+        decrease: np.ndarray | None = None,
+        margin: float | None = None,
+        bound: float = 0.0,
+        condition: float | None = None,
+        residual: float | None = None,
+    ) -> LyapunovCertificate:
         decision = schur_decision(F, parts=parts)
         proof = decision.to_dict()
         if decision.state == "stable":
             upper = float(decision.radius_upper)
             return LyapunovCertificate(
-                "holds", None, None, 1.0 - upper, 0.0, upper, None, None, rho,
-                f"{why}; instead, {decision.reason}", None, "exact powers", proof)
+                "holds",
+                None,
+                None,
+                1.0 - upper,
+                0.0,
+                upper,
+                None,
+                None,
+                rho,
+                f"{why}; instead, {decision.reason}",
+                None,
+                "exact powers",
+                proof,
+            )
         witness = instability_witness(F, parts=parts, decision=decision)
         if decision.state == "unstable":
-            return LyapunovCertificate("fails", P, decrease, margin, bound, None, condition,
-                                       residual, rho, decision.reason, witness, "lyapunov", proof)
-        return LyapunovCertificate("inconclusive", P, decrease, margin, bound, None, condition,
-                                   residual, rho, f"{why}; {decision.reason}", witness,
-                                   "lyapunov", proof)
+            return LyapunovCertificate(
+                "fails",
+                P,
+                decrease,
+                margin,
+                bound,
+                None,
+                condition,
+                residual,
+                rho,
+                decision.reason,
+                witness,
+                "lyapunov",
+                proof,
+            )
+        return LyapunovCertificate(
+            "inconclusive",
+            P,
+            decrease,
+            margin,
+            bound,
+            None,
+            condition,
+            residual,
+            rho,
+            f"{why}; {decision.reason}",
+            witness,
+            "lyapunov",
+            proof,
+        )
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # an ill-conditioned solve is judged below, not trusted
@@ -219,8 +261,9 @@ def lyapunov_certificate(
         return exact_fallback("the Lyapunov solution is not finite")
     P = 0.5 * (P + P.T)
     normP = max(float(np.linalg.norm(P, 2)), np.finfo(float).tiny)
-    residual = float(np.linalg.norm(F.T @ P @ F - P + Q, 2)) / max(float(np.linalg.norm(Q, 2)),
-                                                                      np.finfo(float).tiny)
+    residual = float(np.linalg.norm(F.T @ P @ F - P + Q, 2)) / max(
+        float(np.linalg.norm(Q, 2)), np.finfo(float).tiny
+    )
     decrease = P - F.T @ P @ F
     decrease = 0.5 * (decrease + decrease.T)
     # rounding in forming F^T P F and in eigvalsh, relative to ||P||
@@ -237,10 +280,17 @@ def lyapunov_certificate(
             pass
         else:
             contraction = float(np.sqrt(max(0.0, 1.0 - dec_min * normP / p_eigs[-1])))
-            return LyapunovCertificate("holds", P, decrease, dec_min, bound, contraction,
-                                       condition, residual, rho)
+            return LyapunovCertificate(
+                "holds", P, decrease, dec_min, bound, contraction, condition, residual, rho
+            )
     margin = min(dec_min, p_min)  # negative when P or the decrease is indefinite
     return exact_fallback(
         f"the Lyapunov solution cannot be verified with a margin (smallest decrease "
         f"{dec_min:.2e}, smallest eigenvalue of P {p_min:.2e}, error bound {bound:.2e})",
-        P, decrease, margin, bound, condition, residual)
+        P,
+        decrease,
+        margin,
+        bound,
+        condition,
+        residual,
+    )

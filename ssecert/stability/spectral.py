@@ -42,6 +42,7 @@ def _fmt(x: float) -> str:
     """A radius with enough digits to show on which side of 1 it lies."""
     return sig(x, 6)
 
+
 EXACT_SCHUR_LIMIT = 80  # largest n whose powers are computed exactly
 
 
@@ -137,8 +138,9 @@ def schur_decision(
     F = np.asarray(F, dtype=float)
     n = F.shape[0]
     if not np.all(np.isfinite(F)):
-        return SchurDecision("unknown", None, None, "none", complex(np.nan), False,
-                             "F has non-finite entries")
+        return SchurDecision(
+            "unknown", None, None, "none", complex(np.nan), False, "F has non-finite entries"
+        )
     try:
         lam, bound = _first_order(F)
     except (np.linalg.LinAlgError, ValueError):
@@ -149,34 +151,69 @@ def schur_decision(
         exact: Dyadic = exact_error_matrix(*parts) if parts is not None else dyadic(F)
         powers = spectral_radius_bound(exact, squarings=8, target=1.0, max_work=max_work)
         upper, lower = powers.radius_bound, powers.radius_lower
-        details.update(upper_bound_power=powers.radius_power, lower_bound_power=powers.lower_power,
-                       exactly_nilpotent_index=powers.nilpotent_index,
-                       exact_powers_complete=powers.complete)
+        details.update(
+            upper_bound_power=powers.radius_power,
+            lower_bound_power=powers.lower_power,
+            exactly_nilpotent_index=powers.nilpotent_index,
+            exact_powers_complete=powers.complete,
+        )
         source = "of the printed gain (F = A - L C from its floats)" if parts else "of F"
         if upper < 1.0:
             return SchurDecision(
-                "stable", upper, lower, f"exact powers: rho <= ||F^{powers.radius_power}||^(1/"
-                f"{powers.radius_power})", lam, True,
-                f"the exact powers {source} bound its spectral radius by {_fmt(upper)} < 1", details)
+                "stable",
+                upper,
+                lower,
+                f"exact powers: rho <= ||F^{powers.radius_power}||^(1/{powers.radius_power})",
+                lam,
+                True,
+                f"the exact powers {source} bound its spectral radius by {_fmt(upper)} < 1",
+                details,
+            )
         if lower > 1.0:
             return SchurDecision(
-                "unstable", upper, lower, f"exact traces: rho >= (|tr F^{powers.lower_power}| / n)"
-                f"^(1/{powers.lower_power})", lam, True,
+                "unstable",
+                upper,
+                lower,
+                f"exact traces: rho >= (|tr F^{powers.lower_power}| / n)^(1/{powers.lower_power})",
+                lam,
+                True,
                 f"the exact traces of the powers {source} bound its spectral radius below by "
-                f"{_fmt(lower)} > 1", details)
+                f"{_fmt(lower)} > 1",
+                details,
+            )
         for value in (1, -1):
             if n <= 40 and exact_kernel_vector(shift_identity(exact, value)) is not None:
                 return SchurDecision(
-                    "unstable", upper, max(lower, 1.0), f"exact eigenvalue {value}", lam, True,
+                    "unstable",
+                    upper,
+                    max(lower, 1.0),
+                    f"exact eigenvalue {value}",
+                    lam,
+                    True,
                     f"F has the eigenvalue {value} exactly (F - ({value}) I has an exact kernel "
-                    f"vector): the error along it never decays", details)
+                    f"vector): the error along it never decays",
+                    details,
+                )
     if np.isfinite(abs(lam)) and abs(lam) - bound > 1 + 1e-9:
         return SchurDecision(
-            "unstable", upper, lower, "first-order eigenvalue bound", lam, False,
+            "unstable",
+            upper,
+            lower,
+            "first-order eigenvalue bound",
+            lam,
+            False,
             f"the dominant eigenvalue {lam:.6g} exceeds 1 in modulus by more than its first-order "
-            f"error bound {bound:.1e}", details)
+            f"error bound {bound:.1e}",
+            details,
+        )
     return SchurDecision(
-        "unknown", upper, lower, "none", lam, False,
+        "unknown",
+        upper,
+        lower,
+        "none",
+        lam,
+        False,
         "neither exact powers nor traces nor a clear eigenvalue decide it"
         + (f" (certified {lower:.6g} <= rho <= {upper:.6g})" if upper is not None else ""),
-        details)
+        details,
+    )

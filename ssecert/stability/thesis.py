@@ -120,15 +120,25 @@ class _PiSeries:
     reason.
     """
 
-    def __init__(self, F_inv: np.ndarray, L1: np.ndarray, q: float, lam: float, *,
-                 max_terms: int = MAX_SERIES_TERMS, memory: int = SEARCH_MEMORY) -> None:
+    def __init__(
+        self,
+        F_inv: np.ndarray,
+        L1: np.ndarray,
+        q: float,
+        lam: float,
+        *,
+        max_terms: int = MAX_SERIES_TERMS,
+        memory: int = SEARCH_MEMORY,
+    ) -> None:
         self.F_inv, self.L1, self.q, self.lam = F_inv, L1, float(q), float(lam)
         n, p = L1.shape
         self.memory = memory
         self.max_terms = int(max(1, min(max_terms, memory // (8 * n * p))))
-        self.limit_reason = ("" if self.max_terms == max_terms else
-                             f" (the cached powers F^-l L1 are bounded to "
-                             f"{memory // 2**20} MiB)")
+        self.limit_reason = (
+            ""
+            if self.max_terms == max_terms
+            else f" (the cached powers F^-l L1 are bounded to {memory // 2**20} MiB)"
+        )
         self.W = np.empty((0, p, n))  # W[l] = (F^(-l-1) L1)^T
         self.overflow_at: int | None = None  # first l with a non-finite W_l
         self._next = F_inv.copy()
@@ -182,19 +192,22 @@ class _PiSeries:
         ok = needed <= self.max_terms
         if not ok.all():
             worst = int(np.argmax(needed))
-            reason = (f"the series for Pi needs {needed[worst]:.3g} terms at max |a_i| = "
-                      f"{mags[worst]:.3g} (threshold {self.lam:g}, shrink {self.q:g}); at most "
-                      f"{self.max_terms:,} are summed{self.limit_reason}")
+            reason = (
+                f"the series for Pi needs {needed[worst]:.3g} terms at max |a_i| = "
+                f"{mags[worst]:.3g} (threshold {self.lam:g}, shrink {self.q:g}); at most "
+                f"{self.max_terms:,} are summed{self.limit_reason}"
+            )
         if ok.any():
             K = int(needed[ok].max())
             self._extend(K)
-            if self.overflow_at is not None and K > self.overflow_at:
+            if self.overflow_at is not None and self.overflow_at < K:
                 over = ok & (needed > self.overflow_at)
                 ok &= ~over
                 reason = reason or (
                     f"the powers of F^-1 overflow after {self.overflow_at} terms of the series "
                     f"for Pi (||F^-1|| = {np.linalg.norm(self.F_inv, 2):.3g}); "
-                    f"max |a_i| = {mags[over].max():.3g} needs {needed[over].max():.3g}")
+                    f"max |a_i| = {mags[over].max():.3g} needs {needed[over].max():.3g}"
+                )
         idx = np.flatnonzero(ok)
         if idx.size:
             K = max(1, int(needed[idx].max()))
@@ -214,7 +227,12 @@ class _PiSeries:
 
 
 def pi_map(
-    a: np.ndarray, F_inv: np.ndarray, L1: np.ndarray, q: float, lam: float, *,
+    a: np.ndarray,
+    F_inv: np.ndarray,
+    L1: np.ndarray,
+    q: float,
+    lam: float,
+    *,
     max_terms: int = MAX_SERIES_TERMS,
 ) -> np.ndarray:
     """Pi(a) = -sum_l F^(-l-1) L1 Psi_q^l(a) for a batch of a (rows).
@@ -251,6 +269,7 @@ class _Search:
 
     def objective(self, ratio) -> Any:
         """-ratio(x) for minimisation; a point whose ratio cannot be evaluated counts as 0."""
+
         def neg(x: np.ndarray) -> float:
             self.meter.charge(0.0, 1)
             value, reason = ratio(x)
@@ -260,6 +279,7 @@ class _Search:
             if value > self.best_value:
                 self.best_value, self.best_point = value, np.array(x, copy=True)
             return -value
+
         return neg
 
 
@@ -270,8 +290,12 @@ def _local_search(neg, x0: np.ndarray, maxiter: int) -> str:
     if x0.size > LOCAL_SEARCH_DIM:
         return f"no local refinement in dimension {x0.size} (> {LOCAL_SEARCH_DIM})"
     try:
-        minimize(neg, x0, method="Nelder-Mead",
-                 options={"maxiter": maxiter, "xatol": 1e-10, "fatol": 1e-12})
+        minimize(
+            neg,
+            x0,
+            method="Nelder-Mead",
+            options={"maxiter": maxiter, "xatol": 1e-10, "fatol": 1e-12},
+        )
     except _SearchExhausted:
         return "the search budget ran out during the local refinement"
     return ""
@@ -293,7 +317,11 @@ def _lipschitz_search(
     search = _Search(meter)
     mags = scale * np.exp(rng.uniform(np.log(0.05), np.log(50.0), (samples, 1)))
     a1 = rng.standard_normal((samples, dim)) * mags
-    d = rng.standard_normal((samples, dim)) * mags * np.exp(rng.uniform(np.log(1e-3), 0, (samples, 1)))
+    d = (
+        rng.standard_normal((samples, dim))
+        * mags
+        * np.exp(rng.uniform(np.log(1e-3), 0, (samples, 1)))
+    )
     a2 = a1 + d
     ratios = np.full(samples, np.nan)
     stopped = ""
@@ -304,14 +332,17 @@ def _lipschitz_search(
             f1, r1 = pi(a1[sl])
             f2, r2 = pi(a2[sl])
             with np.errstate(over="ignore", invalid="ignore"):
-                ratios[sl] = (np.linalg.norm(f1 - f2, axis=1)
-                              / np.linalg.norm(a1[sl] - a2[sl], axis=1))
+                ratios[sl] = np.linalg.norm(f1 - f2, axis=1) / np.linalg.norm(
+                    a1[sl] - a2[sl], axis=1
+                )
             search.note(r1 or r2, int(np.count_nonzero(~np.isfinite(ratios[sl]))))
     except _SearchExhausted:
         stopped = "the search budget ran out during sampling"
     finite = np.flatnonzero(np.isfinite(ratios))
-    info: dict[str, Any] = {"pairs_evaluated": int(finite.size), "pairs_not_evaluated":
-                            int(samples - finite.size)}
+    info: dict[str, Any] = {
+        "pairs_evaluated": int(finite.size),
+        "pairs_not_evaluated": int(samples - finite.size),
+    }
     if finite.size == 0:
         info["reason"] = search.reason or stopped or "no pair could be evaluated"
         return None, None, None, info
@@ -385,26 +416,37 @@ def thesis_assumptions(
     if observability_holds is None:
         items.append(AssumptionResult("assumption_1", "inconclusive", "observability not checked"))
     else:
-        items.append(AssumptionResult(
-            "assumption_1", "holds" if observability_holds else "fails",
-            "(A, C) is observable (see the observability check)" if observability_holds
-            else "(A, C) is not observable (see the observability check)"))
+        items.append(
+            AssumptionResult(
+                "assumption_1",
+                "holds" if observability_holds else "fails",
+                "(A, C) is observable (see the observability check)"
+                if observability_holds
+                else "(A, C) is not observable (see the observability check)",
+            )
+        )
 
     # Assumption 2 with Q = I (p x p)
-    items.append(AssumptionResult(
-        "assumption_2", "holds",
-        "With Q = I (p x p; the thesis's n x n is a typo): Psi_q(0) = 0; |Psi_q(s)_i| = "
-        f"q max(|s_i| - lambda, 0) < |s_i| for s_i != 0 (q = {q:g}, lambda = {lam:g}), so "
-        "Psi_q(s)' Q Psi_q(s) < s' Q s for s != 0; and Psi_q is Lipschitz with constant q "
-        "because soft thresholding is 1-Lipschitz. The property (5.21) "
-        "Psi_q(s)' Q Psi_q(s) <= q^2 s' Q s also holds for this diagonal Q (it can fail for a "
-        "non-diagonal Q).",
-        {"Q": "identity", "lipschitz_psi": q}))
+    items.append(
+        AssumptionResult(
+            "assumption_2",
+            "holds",
+            "With Q = I (p x p; the thesis's n x n is a typo): Psi_q(0) = 0; |Psi_q(s)_i| = "
+            f"q max(|s_i| - lambda, 0) < |s_i| for s_i != 0 (q = {q:g}, lambda = {lam:g}), so "
+            "Psi_q(s)' Q Psi_q(s) < s' Q s for s != 0; and Psi_q is Lipschitz with constant q "
+            "because soft thresholding is 1-Lipschitz. The property (5.21) "
+            "Psi_q(s)' Q Psi_q(s) <= q^2 s' Q s also holds for this diagonal Q (it can fail for a "
+            "non-diagonal Q).",
+            {"Q": "identity", "lipschitz_psi": q},
+        )
+    )
 
     # the bounds below take 2-norms of p x p matrices (p = attack-estimate entries)
     refusal = (budget or Budget()).refusal(
         f"checking Lemma 1 and Assumption 3 with {p} attack-estimate entries",
-        nbytes=8.0 * (4 * p * p + _sample_rows(p) * p * 6), flops=30.0 * p**3)
+        nbytes=8.0 * (4 * p * p + _sample_rows(p) * p * 6),
+        flops=30.0 * p**3,
+    )
     if refusal:
         for name in ("lemma_1", "assumption_3", "epsilon_bound"):
             items.append(AssumptionResult(name, "inconclusive", f"not attempted: {refusal}"))
@@ -413,8 +455,12 @@ def thesis_assumptions(
     # Lemma 1
     s_F = np.linalg.svd(F, compute_uv=False)
     # singularity relative to the plant's scale (a deadbeat F can be zero to rounding)
-    scale_F = max(float(np.linalg.norm(A, 2)), float(np.linalg.norm(L1 @ S, 2)), float(s_F[0]),
-                  np.finfo(float).tiny)
+    scale_F = max(
+        float(np.linalg.norm(A, 2)),
+        float(np.linalg.norm(L1 @ S, 2)),
+        float(s_F[0]),
+        np.finfo(float).tiny,
+    )
     singular = s_F[-1] <= 1e3 * F.shape[0] * EPS * scale_F
     rho_F = float(np.abs(np.linalg.eigvals(F)).max())
     claimed = float(np.linalg.norm(L1, 2)) / abs(rho_F - q) if abs(rho_F - q) > 0 else np.inf
@@ -426,12 +472,16 @@ def thesis_assumptions(
     lemma_meter = _Meter(SEARCH_FLOPS / 2, SEARCH_EVALUATIONS / 2)
     rows = _sample_rows(p)
     if singular:
-        items.append(AssumptionResult(
-            "lemma_1", "fails",
-            f"F = A + L1 C is singular (smallest singular value {s_F[-1]:.2e}; a deadbeat gain "
-            f"makes it nilpotent), so Pi(a) = -sum F^(-l-1) L1 Psi_q^l(a) does not exist and the "
-            f"change of variable eta = e - Pi(a_hat) of the proof is unavailable.",
-            {"smallest_singular_value_F": float(s_F[-1]), "claimed_lipschitz": claimed}))
+        items.append(
+            AssumptionResult(
+                "lemma_1",
+                "fails",
+                f"F = A + L1 C is singular (smallest singular value {s_F[-1]:.2e}; a deadbeat gain "
+                f"makes it nilpotent), so Pi(a) = -sum F^(-l-1) L1 Psi_q^l(a) does not exist and the "
+                f"change of variable eta = e - Pi(a_hat) of the proof is unavailable.",
+                {"smallest_singular_value_F": float(s_F[-1]), "claimed_lipschitz": claimed},
+            )
+        )
     else:
         F_inv = np.linalg.inv(F)
         ninv = float(np.linalg.norm(F_inv, 2))
@@ -452,47 +502,75 @@ def thesis_assumptions(
             eq = F @ pi_a.T + L1 @ sample.T - pi_psi.T
             ok = np.all(np.isfinite(eq), axis=0)
             if np.any(ok):
-                residual = float(np.abs(eq[:, ok]).max()
-                                 / max(1.0, np.abs(pi_a[ok]).max()))
+                residual = float(np.abs(eq[:, ok]).max() / max(1.0, np.abs(pi_a[ok]).max()))
         except _SearchExhausted:
             search.setdefault("stopped", "the search budget ran out before the (5.9) check")
-        details = {"claimed_lipschitz": claimed, "correct_bound": correct,
-                   "empirical_ratio": ratio, "equation_5_9_residual": residual,
-                   "norm_F_inv": ninv, "spectral_radius_F": rho_F, "search": search}
+        details = {
+            "claimed_lipschitz": claimed,
+            "correct_bound": correct,
+            "empirical_ratio": ratio,
+            "equation_5_9_residual": residual,
+            "norm_F_inv": ninv,
+            "spectral_radius_F": rho_F,
+            "search": search,
+        }
         if ratio is not None and ratio > claimed * (1 + 1e-9):
             # the claimed constant is wrong, but Pi exists and the corrected bound is valid
-            lemma_ok, ell_pi = bool(np.isfinite(correct)), (correct if np.isfinite(correct) else None)
-            items.append(AssumptionResult(
-                "lemma_1", "fails",
-                f"the claimed Lipschitz constant ||L1|| / |lambda_max(F) - q| = {claimed:.4g} is "
-                f"exceeded: |Pi(a1) - Pi(a2)| / |a1 - a2| = {ratio:.4g} for the pair in the "
-                f"counterexample",
-                {**details, "counterexample": {"a1": a1, "a2": a2}}))
+            lemma_ok, ell_pi = (
+                bool(np.isfinite(correct)),
+                (correct if np.isfinite(correct) else None),
+            )
+            items.append(
+                AssumptionResult(
+                    "lemma_1",
+                    "fails",
+                    f"the claimed Lipschitz constant ||L1|| / |lambda_max(F) - q| = {claimed:.4g} is "
+                    f"exceeded: |Pi(a1) - Pi(a2)| / |a1 - a2| = {ratio:.4g} for the pair in the "
+                    f"counterexample",
+                    {**details, "counterexample": {"a1": a1, "a2": a2}},
+                )
+            )
         elif correct <= claimed:
             lemma_ok, ell_pi = True, correct
-            items.append(AssumptionResult(
-                "lemma_1", "holds",
-                f"Pi exists (the series is finite) and is Lipschitz with constant <= {correct:.4g} "
-                f"(= ||L1|| ||F^-1|| / (1 - q ||F^-1||)) <= the claimed {claimed:.4g}",
-                details))
+            items.append(
+                AssumptionResult(
+                    "lemma_1",
+                    "holds",
+                    f"Pi exists (the series is finite) and is Lipschitz with constant <= {correct:.4g} "
+                    f"(= ||L1|| ||F^-1|| / (1 - q ||F^-1||)) <= the claimed {claimed:.4g}",
+                    details,
+                )
+            )
         else:
             lemma_ok, ell_pi = True, correct if np.isfinite(correct) else None
-            found = (f"sampling found ratios up to {ratio:.4g}" if ratio is not None else
-                     f"no ratio could be sampled: {search['reason']}")
-            items.append(AssumptionResult(
-                "lemma_1", "inconclusive",
-                f"Pi exists, but the claimed constant {claimed:.4g} is not proven: the series "
-                f"gives {correct:.4g}; {found}",
-                details))
+            found = (
+                f"sampling found ratios up to {ratio:.4g}"
+                if ratio is not None
+                else f"no ratio could be sampled: {search['reason']}"
+            )
+            items.append(
+                AssumptionResult(
+                    "lemma_1",
+                    "inconclusive",
+                    f"Pi exists, but the claimed constant {claimed:.4g} is not proven: the series "
+                    f"gives {correct:.4g}; {found}",
+                    details,
+                )
+            )
 
     # Assumption 3 with Q = I
     rho_a = None
     a3_meter = _Meter(SEARCH_FLOPS / 2, SEARCH_EVALUATIONS / 2)
     if F_inv is None:
-        items.append(AssumptionResult(
-            "assumption_3", "inconclusive",
-            "it is stated in terms of Pi from Lemma 1, which does not exist for this gain"))
+        items.append(
+            AssumptionResult(
+                "assumption_3",
+                "inconclusive",
+                "it is stated in terms of Pi from Lemma 1, which does not exist for this gain",
+            )
+        )
     else:
+
         def g(a: np.ndarray) -> tuple[np.ndarray, str]:
             a = np.atleast_2d(a)
             values, reason = series(a, a3_meter)
@@ -537,9 +615,12 @@ def thesis_assumptions(
                 stopped = _local_search(a3.objective(one), samples[worst].copy(), 400)
             if a3.best_point is not None and a3.best_value > worst_value:
                 worst_value, worst_point = a3.best_value, a3.best_point
-        details = {"Q": "identity", "largest_ratio_found": worst_value,
-                   "search": f"{rows} samples over magnitudes 0.05-100 lambda, then Nelder-Mead",
-                   "samples_evaluated": int(finite.size)}
+        details = {
+            "Q": "identity",
+            "largest_ratio_found": worst_value,
+            "search": f"{rows} samples over magnitudes 0.05-100 lambda, then Nelder-Mead",
+            "samples_evaluated": int(finite.size),
+        }
         if stopped:
             details["stopped"] = stopped
         if a3.failed:
@@ -547,42 +628,70 @@ def thesis_assumptions(
             details["first_failure"] = a3.reason
         bound = None
         if ell_pi is not None:
-            bound = q * (float(np.linalg.norm(np.eye(p) - eps * L2, 2))
-                         + eps * float(np.linalg.norm(L2, 2)) * float(np.linalg.norm(S, 2)) * ell_pi)
+            bound = q * (
+                float(np.linalg.norm(np.eye(p) - eps * L2, 2))
+                + eps * float(np.linalg.norm(L2, 2)) * float(np.linalg.norm(S, 2)) * ell_pi
+            )
             details["proven_bound_sqrt_rho"] = bound
         if worst_value is not None and worst_value >= 1.0:
-            items.append(AssumptionResult(
-                "assumption_3", "fails",
-                f"for the a_hat in the counterexample the left side is {worst_value:.4g} times "
-                f"a_hat' Q a_hat, so no rho'' < 1 works",
-                {**details, "counterexample": worst_point}))
+            items.append(
+                AssumptionResult(
+                    "assumption_3",
+                    "fails",
+                    f"for the a_hat in the counterexample the left side is {worst_value:.4g} times "
+                    f"a_hat' Q a_hat, so no rho'' < 1 works",
+                    {**details, "counterexample": worst_point},
+                )
+            )
         elif bound is not None and bound < 1.0:
             rho_a = bound**2
-            items.append(AssumptionResult(
-                "assumption_3", "holds",
-                f"proven with rho'' = {rho_a:.4g} < 1 from |Psi_q(v)| <= q |v| and the Lipschitz "
-                f"bound of Pi", details))
+            items.append(
+                AssumptionResult(
+                    "assumption_3",
+                    "holds",
+                    f"proven with rho'' = {rho_a:.4g} < 1 from |Psi_q(v)| <= q |v| and the Lipschitz "
+                    f"bound of Pi",
+                    details,
+                )
+            )
         elif worst_value is None:
-            items.append(AssumptionResult(
-                "assumption_3", "inconclusive",
-                f"no proof, and no sample could be evaluated: "
-                f"{a3.reason or stopped or 'the ratio is not finite'}", details))
+            items.append(
+                AssumptionResult(
+                    "assumption_3",
+                    "inconclusive",
+                    f"no proof, and no sample could be evaluated: "
+                    f"{a3.reason or stopped or 'the ratio is not finite'}",
+                    details,
+                )
+            )
         else:
-            items.append(AssumptionResult(
-                "assumption_3", "inconclusive",
-                f"no counterexample found (largest ratio found {worst_value:.4g}) but no "
-                f"proof either", details))
+            items.append(
+                AssumptionResult(
+                    "assumption_3",
+                    "inconclusive",
+                    f"no counterexample found (largest ratio found {worst_value:.4g}) but no "
+                    f"proof either",
+                    details,
+                )
+            )
 
     # epsilon bound (5.20), with the eigenvalues the inequalities need
     if not (lemma_ok and rho_a is not None and ell_pi is not None):
-        items.append(AssumptionResult(
-            "epsilon_bound", "inconclusive",
-            "the bound (5.20) needs Lemma 1 and Assumption 3, which are not established here"))
+        items.append(
+            AssumptionResult(
+                "epsilon_bound",
+                "inconclusive",
+                "the bound (5.20) needs Lemma 1 and Assumption 3, which are not established here",
+            )
+        )
     else:
         lyap = lyapunov_certificate(F)
         if lyap.verdict != "holds" or lyap.P is None:
-            items.append(AssumptionResult("epsilon_bound", "inconclusive",
-                                          "F is not certified stable, so no P exists"))
+            items.append(
+                AssumptionResult(
+                    "epsilon_bound", "inconclusive", "F is not certified stable, so no P exists"
+                )
+            )
         else:
             P = lyap.P
             p_eigs = np.linalg.eigvalsh(P)
@@ -595,7 +704,15 @@ def thesis_assumptions(
                 if gamma <= 0:
                     continue
                 c_eta = 2 * (1 + 1 / g_eta) * normP * ell_pi**2 * lpsi**2 * l2**2 * lc**2
-                c_a = 2 * (1 + 1 / g_eta) * normP * ell_pi**2 * lpsi**2 * l2**2 * (1 + lc * ell_pi) ** 2
+                c_a = (
+                    2
+                    * (1 + 1 / g_eta)
+                    * normP
+                    * ell_pi**2
+                    * lpsi**2
+                    * l2**2
+                    * (1 + lc * ell_pi) ** 2
+                )
                 for g_a in np.linspace(0.02, 0.98, 25) * (1 / rho_a - 1):
                     rho2 = (1 + g_a) * rho_a
                     if rho2 >= 1:
@@ -607,22 +724,39 @@ def thesis_assumptions(
                         val = min(e1, e2, 1.0)
                         if val > best_eps:
                             best_eps, best_par = val, (float(g_eta), float(g_a), float(mu))
-            details = {"epsilon_star": best_eps, "step": eps, "rho_P": rho,
-                       "parameters_gamma_eta_gamma_a_mu": best_par}
+            details = {
+                "epsilon_star": best_eps,
+                "step": eps,
+                "rho_P": rho,
+                "parameters_gamma_eta_gamma_a_mu": best_par,
+            }
             if best_par is not None and eps <= best_eps:
-                items.append(AssumptionResult(
-                    "epsilon_bound", "holds",
-                    f"step = {eps:g} <= epsilon* = {sig(best_eps, versus=eps)} (corrected constants)", details))
+                items.append(
+                    AssumptionResult(
+                        "epsilon_bound",
+                        "holds",
+                        f"step = {eps:g} <= epsilon* = {sig(best_eps, versus=eps)} (corrected constants)",
+                        details,
+                    )
+                )
             else:
-                items.append(AssumptionResult(
-                    "epsilon_bound", "inconclusive",
-                    f"step = {eps:g} exceeds epsilon* = {sig(best_eps, versus=eps)}; the bound is sufficient, "
-                    f"not necessary", details))
+                items.append(
+                    AssumptionResult(
+                        "epsilon_bound",
+                        "inconclusive",
+                        f"step = {eps:g} exceeds epsilon* = {sig(best_eps, versus=eps)}; the bound is sufficient, "
+                        f"not necessary",
+                        details,
+                    )
+                )
 
     return _overall(items), items
 
 
 def _overall(items: list[AssumptionResult]) -> str:
     verdicts = [i.verdict for i in items]
-    return "fails" if "fails" in verdicts else ("inconclusive" if "inconclusive" in verdicts
-                                                  else "holds")
+    return (
+        "fails"
+        if "fails" in verdicts
+        else ("inconclusive" if "inconclusive" in verdicts else "holds")
+    )

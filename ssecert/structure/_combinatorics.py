@@ -80,7 +80,9 @@ class SubsetBlock:
         return np.concatenate([bottoms, top], axis=1)
 
 
-def _level(items: np.ndarray, base: np.ndarray, sign: float, m: int) -> tuple[np.ndarray, np.ndarray]:
+def _level(
+    items: np.ndarray, base: np.ndarray, sign: float, m: int
+) -> tuple[np.ndarray, np.ndarray]:
     """All m-subsets in colex order with their summed matrices."""
     sums = base[None].copy()
     subsets = np.zeros((1, 0), dtype=np.int64)

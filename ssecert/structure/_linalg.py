@@ -245,8 +245,11 @@ def eigen_clusters(A: np.ndarray, *, tolerances: Tolerances | None = None) -> Ei
         # numbers); well-conditioned distinct eigenvalues are never merged,
         # however close: a symmetric triple lambda - d, lambda, lambda + d is
         # singular at its mean, so that test alone is not enough.
-        if (_compatible(sub, delta[comp], tight) and diameter <= norm * wide ** (1.0 / m)
-                and singular_at(comp)):
+        if (
+            _compatible(sub, delta[comp], tight)
+            and diameter <= norm * wide ** (1.0 / m)
+            and singular_at(comp)
+        ):
             labels[comp] = labels[comp[0]]
 
     groups = [np.nonzero(labels == g)[0] for g in np.unique(labels)]
@@ -320,8 +323,12 @@ def eigen_clusters(A: np.ndarray, *, tolerances: Tolerances | None = None) -> Ei
 
 
 def _classify_krylov(
-    values: np.ndarray, scale: float | np.ndarray, rtol: float,
-    err_pess: float | np.ndarray, err_step: float | np.ndarray, factor: float,
+    values: np.ndarray,
+    scale: float | np.ndarray,
+    rtol: float,
+    err_pess: float | np.ndarray,
+    err_step: float | np.ndarray,
+    factor: float,
 ) -> np.ndarray:
     """Zero / borderline / nonzero for Krylov residuals with amplified errors.
 
@@ -462,8 +469,7 @@ def staircase(
         if W.shape[0] == 0:
             break
         _, s, vh = np.linalg.svd(W, full_matrices=False)
-        codes = _classify_krylov(s, scale, tol.rtol(*W.shape), err, err_step,
-                                 tol.borderline_factor)
+        codes = _classify_krylov(s, scale, tol.rtol(*W.shape), err, err_step, tol.borderline_factor)
         thr = scale * (tol.rtol(*W.shape) + err)
         if np.any(codes == BORDERLINE) and not problem:
             problem = (
@@ -566,8 +572,7 @@ def sensor_subspaces(
         for _ in range(2):
             w = w - np.einsum("ik,ikn->in", np.einsum("ikn,in->ik", Q, w), Q)
         nrm = np.linalg.norm(w, axis=1)
-        codes = _classify_krylov(nrm, normA, rtol0, err[idx], err_step[idx],
-                                 tol.borderline_factor)
+        codes = _classify_krylov(nrm, normA, rtol0, err[idx], err_step[idx], tol.borderline_factor)
         borderline[idx[codes == BORDERLINE]] = True
         keep = codes == NONZERO
         active[idx[~keep]] = False

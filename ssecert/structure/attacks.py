@@ -32,8 +32,13 @@ from .._validation import as_index_list, as_int_option, as_real_matrix
 from ..system import System
 from ..tolerances import Tolerances
 
-__all__ = ["StealthyAttack", "stealthy_attack", "initial_state", "WITNESS_MAX_STEPS",
-           "WITNESS_MAX_ENTRIES"]
+__all__ = [
+    "StealthyAttack",
+    "stealthy_attack",
+    "initial_state",
+    "WITNESS_MAX_STEPS",
+    "WITNESS_MAX_ENTRIES",
+]
 
 # The witness is simulated and reported over at most this many steps (and
 # steps x p entries): beyond n steps it adds nothing, since C_i A^k z = 0 for
@@ -118,15 +123,18 @@ class StealthyAttack:
         steps = int(self.attack_a.shape[0])
         out["steps"] = steps
         if self.horizon is not None and self.horizon > steps:
-            why = (f"the simulated states overflow in floating point at step {self.overflow_at:,}"
-                   if self.overflow_at is not None else
-                   f"longer witnesses are cut at {WITNESS_MAX_STEPS:,} steps")
+            why = (
+                f"the simulated states overflow in floating point at step {self.overflow_at:,}"
+                if self.overflow_at is not None
+                else f"longer witnesses are cut at {WITNESS_MAX_STEPS:,} steps"
+            )
             out["horizon"] = self.horizon
             out["truncated"] = (
                 f"shown and verified over the first {steps:,} of the {self.horizon:,} steps of "
                 f"the horizon ({why}); attack_a(k) = P_a C A^k z continues in the same way, "
                 f"and the outputs coincide at every later step too, because C_i A^k z = 0 for "
-                f"k < n implies it for every k (Cayley-Hamilton)")
+                f"k < n implies it for every k (Cayley-Hamilton)"
+            )
         return out
 
 
@@ -232,9 +240,13 @@ def stealthy_attack(
             xa, xb = A @ xa, A @ xb
         # an unstable plant overflows after enough steps; the steps before the first
         # overflow decide the witness when they are at least n (Cayley-Hamilton)
-        finite = (np.all(np.isfinite(attack_a), axis=1) & np.all(np.isfinite(attack_b), axis=1)
-                  & np.all(np.isfinite(outputs_a), axis=1)
-                  & np.all(np.isfinite(outputs_b), axis=1) & np.isfinite(scales))
+        finite = (
+            np.all(np.isfinite(attack_a), axis=1)
+            & np.all(np.isfinite(attack_b), axis=1)
+            & np.all(np.isfinite(outputs_a), axis=1)
+            & np.all(np.isfinite(outputs_b), axis=1)
+            & np.isfinite(scales)
+        )
         overflow_at = None
         if not finite.all():
             first = int(np.argmin(finite))
@@ -248,8 +260,10 @@ def stealthy_attack(
         window = min(outputs_a.shape[0], system.n)
         diff = float(np.max(np.linalg.norm(outputs_a[:window] - outputs_b[:window], axis=1)))
         # rounding in the simulated states themselves is of order eps * ||x||
-        floor = np.finfo(float).eps * normC * float(
-            max(np.abs(outputs_a[:window]).max(initial=0.0), 1.0)
+        floor = (
+            np.finfo(float).eps
+            * normC
+            * float(max(np.abs(outputs_a[:window]).max(initial=0.0), 1.0))
         )
         residual = diff / max(float(scales[:window].max()), floor, np.finfo(float).tiny)
         if not np.isfinite(residual):

@@ -27,10 +27,10 @@ import numpy as np
 
 from .._format import sig
 from .._validation import as_choice, as_int_option
+from ..budget import Budget, bounded_comb, format_count, log10_comb
 from ..results import Check, Verdict
 from ..system import System
 from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances
-from ..budget import Budget, bounded_comb, format_count, log10_comb
 from ._combinatorics import DEFAULT_CHUNK_BYTES, DEFAULT_MEMORY, colex_blocks
 from ._linalg import screen_positive_definite, stacked_rank, staircase
 from .sparse import DEFAULT_MAX_SETS
@@ -42,9 +42,7 @@ _SUB = 128  # largest number of supports per dense product
 _LISTED = 10_000  # largest support listed in full in a result
 
 
-def irrepresentable_constant(
-    O: np.ndarray, support: list[int] | np.ndarray
-) -> float:
+def irrepresentable_constant(O: np.ndarray, support: list[int] | np.ndarray) -> float:
     """rho(S) for one support of rows of O, straight from the definition.
 
     Uses ``numpy.linalg.pinv``; meant for checking and small problems.
@@ -157,8 +155,14 @@ def irrepresentable(
             return [system.sensors[i] for i in support]
         return [f"{system.sensors[r % p]}@{r // p}" for r in support]
 
-    def make(verdict: Verdict, value: float, support: tuple[int, ...] | None, summary: str,
-             margin: float | None = None, witness: dict | None = None) -> Check:
+    def make(
+        verdict: Verdict,
+        value: float,
+        support: tuple[int, ...] | None,
+        summary: str,
+        margin: float | None = None,
+        witness: dict | None = None,
+    ) -> Check:
         return Check(
             id="irrepresentable",
             title=title,
@@ -168,10 +172,12 @@ def irrepresentable(
             margin=margin,
             method=method,
             required=False,
-            fields={**fields, "value": value,
-                    "worst_support": list(support) if support is not None else None,
-                    "worst_support_names": (describe_support(support)
-                                            if support is not None else None)},
+            fields={
+                **fields,
+                "value": value,
+                "worst_support": list(support) if support is not None else None,
+                "worst_support_names": (describe_support(support) if support is not None else None),
+            },
             evidence=evidence,
             witness=witness,
             tolerances=tol_out,
@@ -180,37 +186,63 @@ def irrepresentable(
     if k == 0:
         sc0 = staircase(system.A, system.C, max_steps=min(tau, n), tolerances=tol)
         if sc0.rank < n and not sc0.problem:
-            return make(Verdict.FAILS, math.inf, (),
-                        f"O_tau (horizon {tau}) has rank {sc0.rank} < n = {n}: even without "
-                        f"attack the state is not determined, so rho is inf.")
-        return make(Verdict.HOLDS, 0.0, (), "With no attacked entries there is nothing to misidentify.",
-                    margin=1.0)
+            return make(
+                Verdict.FAILS,
+                math.inf,
+                (),
+                f"O_tau (horizon {tau}) has rank {sc0.rank} < n = {n}: even without "
+                f"attack the state is not determined, so rho is inf.",
+            )
+        return make(
+            Verdict.HOLDS,
+            0.0,
+            (),
+            "With no attacked entries there is nothing to misidentify.",
+            margin=1.0,
+        )
     if k > items:
         every = tuple(range(items)) if items <= _LISTED else None
-        return make(Verdict.FAILS, math.inf, every,
-                    f"The support size {k:,} exceeds the {items:,} available "
-                    f"{'sensors' if mode == 'block' else 'entries'}: an attack on all of them "
-                    f"leaves nothing to estimate the state from.")
+        return make(
+            Verdict.FAILS,
+            math.inf,
+            every,
+            f"The support size {k:,} exceeds the {items:,} available "
+            f"{'sensors' if mode == 'block' else 'entries'}: an attack on all of them "
+            f"leaves nothing to estimate the state from.",
+        )
     if total is None:
-        return make(Verdict.INCONCLUSIVE, math.nan, None,
-                    f"C({items:,}, {k:,}) = {format_count(10 ** min(log10_comb(items, k), 308))} "
-                    f"supports exceed the budget of {max_sets:,}; raise it with --max-sets "
-                    f"(max_sets=...).")
+        return make(
+            Verdict.INCONCLUSIVE,
+            math.nan,
+            None,
+            f"C({items:,}, {k:,}) = {format_count(10 ** min(log10_comb(items, k), 308))} "
+            f"supports exceed the budget of {max_sets:,}; raise it with --max-sets "
+            f"(max_sets=...).",
+        )
     if k == items:
-        return make(Verdict.FAILS, math.inf, tuple(range(items)),
-                    f"With all {items} {'sensors' if mode == 'block' else 'entries'} attacked, "
-                    f"O_Sbar is empty and lacks full column rank (Theorem 1's assumption), so "
-                    f"rho is inf.",
-                    witness={"support": list(range(items)),
-                             "support_names": describe_support(tuple(range(items))),
-                             "reason": "O_Sbar lacks full column rank"})
+        return make(
+            Verdict.FAILS,
+            math.inf,
+            tuple(range(items)),
+            f"With all {items} {'sensors' if mode == 'block' else 'entries'} attacked, "
+            f"O_Sbar is empty and lacks full column rank (Theorem 1's assumption), so "
+            f"rho is inf.",
+            witness={
+                "support": list(range(items)),
+                "support_names": describe_support(tuple(range(items))),
+                "reason": "O_Sbar lacks full column rank",
+            },
+        )
     h = k * tau if mode == "block" else k
     colex_memory = int(min(DEFAULT_MEMORY, budget.memory // 8))
     nbytes, flops, per_support = _cost(n, p, tau, items, h, total, mode, colex_memory)
     evidence["estimate"] = {"bytes": nbytes, "flops": flops, "bytes_per_support": per_support}
     refusal = budget.refusal(
         f"the irrepresentable enumeration ({format_count(total)} supports of {h:,} rows of the "
-        f"{p * tau:,} x {n} matrix O_tau, horizon {tau:,})", nbytes=nbytes, flops=flops)
+        f"{p * tau:,} x {n} matrix O_tau, horizon {tau:,})",
+        nbytes=nbytes,
+        flops=flops,
+    )
     if refusal:
         hint = "; a shorter horizon (--horizon) makes it smaller" if tau > n else ""
         return make(Verdict.INCONCLUSIVE, math.nan, None, f"Not attempted: {refusal}{hint}.")
@@ -219,28 +251,42 @@ def irrepresentable(
     with np.errstate(over="ignore", invalid="ignore"):
         O = system.observability_matrix(tau)  # row t * p + i: sensor i at step t
     if mode == "block":
-        rows_of = (np.arange(tau, dtype=np.int64)[None, :] * p
-                   + np.arange(p, dtype=np.int64)[:, None])
+        rows_of = (
+            np.arange(tau, dtype=np.int64)[None, :] * p + np.arange(p, dtype=np.int64)[:, None]
+        )
     else:
         rows_of = np.arange(p * tau, dtype=np.int64)[:, None]
     if not np.all(np.isfinite(O)):
-        return make(Verdict.INCONCLUSIVE, math.nan, None,
-                    f"The stacked observability matrix overflows over {tau} steps.")
+        return make(
+            Verdict.INCONCLUSIVE,
+            math.nan,
+            None,
+            f"The stacked observability matrix overflows over {tau} steps.",
+        )
 
     sc = staircase(system.A, system.C, max_steps=tau, tolerances=tol)
     evidence["rank_O_tau"] = sc.rank
     if sc.rank < n or sc.problem:
         first = tuple(range(k))
         if sc.problem:
-            return make(Verdict.INCONCLUSIVE, math.nan, None,
-                        f"The rank of O_tau cannot be decided: {sc.problem}.")
+            return make(
+                Verdict.INCONCLUSIVE,
+                math.nan,
+                None,
+                f"The rank of O_tau cannot be decided: {sc.problem}.",
+            )
         return make(
-            Verdict.FAILS, math.inf, first,
+            Verdict.FAILS,
+            math.inf,
+            first,
             f"O_tau (horizon {tau}) has rank {sc.rank} < n = {n}, so no O_Sbar has full column "
             f"rank as Theorem 1 requires; the first support {', '.join(map(str, describe_support(first)))} "
             f"is a witness.",
-            witness={"support": list(first), "support_names": describe_support(first),
-                     "reason": "O_Sbar lacks full column rank"},
+            witness={
+                "support": list(first),
+                "support_names": describe_support(first),
+                "reason": "O_Sbar lacks full column rank",
+            },
         )
 
     Q, _ = np.linalg.qr(O)
@@ -290,16 +336,25 @@ def irrepresentable(
     evidence["borderline_supports"] = borderline
     if infinite is not None:
         return make(
-            Verdict.FAILS, math.inf, infinite,
+            Verdict.FAILS,
+            math.inf,
+            infinite,
             f"For {n_inf} of {total} supports O_Sbar lacks full column rank (Theorem 1's "
             f"assumption); the first is {', '.join(map(str, describe_support(infinite)))}, so rho is inf "
             f"there.",
-            witness={"support": list(infinite), "support_names": describe_support(infinite),
-                     "reason": "O_Sbar lacks full column rank"},
+            witness={
+                "support": list(infinite),
+                "support_names": describe_support(infinite),
+                "reason": "O_Sbar lacks full column rank",
+            },
         )
     if borderline:
-        return make(Verdict.INCONCLUSIVE, math.nan, None,
-                    f"{borderline} support(s) have a borderline rank decision for O_Sbar.")
+        return make(
+            Verdict.INCONCLUSIVE,
+            math.nan,
+            None,
+            f"{borderline} support(s) have a borderline rank decision for O_Sbar.",
+        )
     assert worst_support is not None
     rows = rows_of[list(worst_support)].ravel()
     direct = irrepresentable_constant(O, rows)
@@ -309,28 +364,47 @@ def irrepresentable(
     names = describe_support(worst_support)
     label = ", ".join(map(str, names))
     if not math.isfinite(direct) or rel > 1e-6:
-        return make(Verdict.INCONCLUSIVE, worst, worst_support,
-                    f"The worst constant {worst:.6g} on {label} does not match its direct "
-                    f"recomputation {direct:.6g}.")
+        return make(
+            Verdict.INCONCLUSIVE,
+            worst,
+            worst_support,
+            f"The worst constant {worst:.6g} on {label} does not match its direct "
+            f"recomputation {direct:.6g}.",
+        )
     margin = 1.0 - worst
     band = tol.irrepresentable_rtol
     if worst < 1.0 - band:
-        return make(Verdict.HOLDS, worst, worst_support,
-                    f"The worst irrepresentable constant is {sig(worst)} < 1 (support {label}): "
-                    f"Lasso identifies every attack on {k} {'sensors' if mode == 'block' else 'entries'}"
-                    f" for small enough lambda.", margin=margin)
+        return make(
+            Verdict.HOLDS,
+            worst,
+            worst_support,
+            f"The worst irrepresentable constant is {sig(worst)} < 1 (support {label}): "
+            f"Lasso identifies every attack on {k} {'sensors' if mode == 'block' else 'entries'}"
+            f" for small enough lambda.",
+            margin=margin,
+        )
     if worst > 1.0 + band:
-        return make(Verdict.FAILS, worst, worst_support,
-                    f"The irrepresentable constant reaches {sig(worst)} >= 1 on support {label}: "
-                    f"Lasso's support recovery is not guaranteed there.", margin=margin,
-                    witness={"support": list(worst_support), "support_names": names,
-                             "value": worst})
-    return make(Verdict.INCONCLUSIVE, worst, worst_support,
-                f"The worst constant {worst:.12g} is within {band:g} of 1.", margin=margin)
+        return make(
+            Verdict.FAILS,
+            worst,
+            worst_support,
+            f"The irrepresentable constant reaches {sig(worst)} >= 1 on support {label}: "
+            f"Lasso's support recovery is not guaranteed there.",
+            margin=margin,
+            witness={"support": list(worst_support), "support_names": names, "value": worst},
+        )
+    return make(
+        Verdict.INCONCLUSIVE,
+        worst,
+        worst_support,
+        f"The worst constant {worst:.12g} is within {band:g} of 1.",
+        margin=margin,
+    )
 
 
-def _cost(n: int, p: int, tau: int, items: int, h: int, supports: int,
-          mode: str, colex_memory: int) -> tuple[float, float, float]:
+def _cost(
+    n: int, p: int, tau: int, items: int, h: int, supports: int, mode: str, colex_memory: int
+) -> tuple[float, float, float]:
     """Peak bytes, operations and bytes per support of the enumeration, from the shapes.
 
     Peak: O_tau and its QR factor (4 copies of p tau x n), the per-item
@@ -344,12 +418,14 @@ def _cost(n: int, p: int, tau: int, items: int, h: int, supports: int,
     M = p * tau
     per_support = 8.0 * (2 * M * h + 3 * h * n + M)
     colex = min(colex_memory + DEFAULT_CHUNK_BYTES, 2 * 8.0 * supports * n * n)
-    nbytes = (8.0 * (4 * M * n + M + items * n * n) + colex + per_support
-              + 8.0 * (2 * M * n + M * h))
+    nbytes = 8.0 * (4 * M * n + M + items * n * n) + colex + per_support + 8.0 * (2 * M * n + M * h)
     # the elementwise passes over the p tau x h product (absolute value, sums, the
     # memory traffic) cost far more than their count: 60 per entry, measured
-    flops = 4.0 * M * n * n + 2.0 * M * n * n + supports * (
-        2.0 * M * n * h + 60.0 * M * h + n**3 + 2.0 * n * n * h)
+    flops = (
+        4.0 * M * n * n
+        + 2.0 * M * n * n
+        + supports * (2.0 * M * n * h + 60.0 * M * h + n**3 + 2.0 * n * n * h)
+    )
     return nbytes, flops, per_support
 
 

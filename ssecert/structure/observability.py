@@ -164,9 +164,11 @@ def observability(
                 "algebraic_multiplicity": c.algebraic,
                 "geometric_multiplicity": c.geometric,
                 "pbh_margin": float(m),
-                "decision": {ZERO: "rank deficient", BORDERLINE: "borderline", NONZERO: "full rank"}[
-                    int(code)
-                ],
+                "decision": {
+                    ZERO: "rank deficient",
+                    BORDERLINE: "borderline",
+                    NONZERO: "full rank",
+                }[int(code)],
             }
             for c, m, code in zip(eig.clusters, margins, codes)
         ],
@@ -176,9 +178,11 @@ def observability(
         "pbh_state": pbh_state,
         "staircase_state": stair_state,
         "exact": exact.to_dict(),
-        "margin_definition": ("min over eigenvalues of sigma_min([A - lambda I; C]) / ||[A; C]||_2,"
-                              " in units where ||A||_max and every sensor row are within a factor "
-                              "2 of 1 (powers of two, exact)"),
+        "margin_definition": (
+            "min over eigenvalues of sigma_min([A - lambda I; C]) / ||[A; C]||_2,"
+            " in units where ||A||_max and every sensor row are within a factor "
+            "2 of 1 (powers of two, exact)"
+        ),
         "method_detail": (
             "PBH test at grouped eigenvalues, re-checked by the orthogonal observability "
             "staircase; an unobservable direction is verified by simulating C A^k z; the exact "
@@ -195,8 +199,13 @@ def observability(
     method = "pbh+staircase"
     title = "Observability of (A, C)"
 
-    def check(verdict: Verdict, summary: str, index: int | None, unobs: int | None,
-              witness: dict | None = None) -> Check:
+    def check(
+        verdict: Verdict,
+        summary: str,
+        index: int | None,
+        unobs: int | None,
+        witness: dict | None = None,
+    ) -> Check:
         return Check(
             id="observability",
             title=title,
@@ -211,8 +220,9 @@ def observability(
             tolerances=tolerances_out,
         )
 
-    if exact.state == "unobservable" and not (pbh_state == "unobservable"
-                                              or stair_state == "unobservable"):
+    if exact.state == "unobservable" and not (
+        pbh_state == "unobservable" or stair_state == "unobservable"
+    ):
         # floating point was fooled (error amplification); the exact direction is the proof
         witness = {
             "z": exact.z,
@@ -221,16 +231,19 @@ def observability(
             "unobservable_eigenvalues": [],
             "residual": unobservable_residual(A, C, exact.z),
             "meaning": "C A^k z = 0 exactly for every k (z_exact, checked in integer arithmetic): "
-                       "x0 and x0 + z give identical outputs",
+            "x0 and x0 + z give identical outputs",
         }
         return check(
             Verdict.FAILS,
             "(A, C) is not observable: exact arithmetic on the data finds a state direction that "
             "produces no output (floating point could not resolve it).",
-            None, None, witness,
+            None,
+            None,
+            witness,
         )
-    if exact.state == "observable" and (pbh_state == "unobservable"
-                                        or stair_state == "unobservable"):
+    if exact.state == "observable" and (
+        pbh_state == "unobservable" or stair_state == "unobservable"
+    ):
         evidence["distance_to_unobservability"] = margin
         return check(
             Verdict.INCONCLUSIVE,
@@ -238,7 +251,8 @@ def observability(
             f"(Krylov rank {n} modulo a prime): the plant is within a relative distance "
             f"{margin:.1e} of an unobservable one, below the precision of its data, so the answer "
             f"depends on digits the data do not have.",
-            None, None,
+            None,
+            None,
         )
     if pbh_state == "observable" and stair_state == "observable":
         confirmed = " (confirmed in exact arithmetic)" if exact.state == "observable" else ""
@@ -246,7 +260,8 @@ def observability(
             Verdict.HOLDS,
             f"(A, C) is observable{confirmed}: x(0) is determined by {sc.index} "
             f"step{'s' if sc.index != 1 else ''} of output; PBH margin {margin:.3g}.",
-            sc.index, 0,
+            sc.index,
+            0,
         )
 
     # candidate unobservable directions: PBH null vectors, then the
@@ -260,8 +275,9 @@ def observability(
         ]
         for c, code in zip(eig.clusters, codes):
             if code == ZERO:
-                candidates.append((_pbh_null_vector(A, C, c.center), "PBH null vector",
-                                   unobservable))
+                candidates.append(
+                    (_pbh_null_vector(A, C, c.center), "PBH null vector", unobservable)
+                )
     conservative = staircase(A, C, tolerances=tol, error_model="compound")
     if not conservative.problem and conservative.rank < n:
         candidates.append((conservative.unobservable_direction(), "staircase", []))
@@ -287,7 +303,9 @@ def observability(
                 Verdict.FAILS,
                 f"(A, C) is not observable: a {unobs}-dimensional subspace of states produces "
                 f"no output{note}.",
-                None, unobs, witness,
+                None,
+                unobs,
+                witness,
             )
         evidence.setdefault("rejected_directions", []).append(
             {"source": source, "residual": residual}
@@ -303,7 +321,8 @@ def observability(
     return check(
         Verdict.INCONCLUSIVE,
         "Observability could not be decided reliably: " + "; ".join(reasons) + ".",
-        None, None,
+        None,
+        None,
     )
 
 

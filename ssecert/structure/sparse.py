@@ -38,20 +38,20 @@ from typing import Any
 
 import numpy as np
 
+from .._exact import ExactPlant
 from .._validation import as_choice, as_int_option
 from ..results import Check, Verdict
 from ..system import System
-from ..tolerances import BORDERLINE, EPS, NONZERO, ZERO, Tolerances, classify
+from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances, classify
 from ._combinatorics import colex_blocks, count_subsets
 from ._linalg import (
     EigenAnalysis,
-    unit_normalized,
     SensorSubspaces,
     eigen_clusters,
     sensor_subspaces,
     stacked_rank,
+    unit_normalized,
 )
-from .._exact import ExactPlant
 from .attacks import stealthy_attack
 from .observability import pbh_margins
 
@@ -136,7 +136,7 @@ def _enumeration(
         # every set of 2s sensors keeps a sensor that alone observes the state
         dropped = set(full[: 2 * s].tolist())
         best_critical = [(0.0, tuple(i for i in range(p) if i not in dropped))]
-    for k in range(0, q + 1):
+    for k in range(q + 1):
         count = math.comb(q, k)
         if out.checked + count > max_sets:
             out.needed = count_subsets(q, range(k, max(target, k) + 1))
@@ -148,8 +148,17 @@ def _enumeration(
             )
             break
         level = _scan_level(
-            P, sub.ranks[rest], proj, base, k, rest, full, tol,
-            critical=(k == target), progress=progress, errors=sub.errors[rest],
+            P,
+            sub.ranks[rest],
+            proj,
+            base,
+            k,
+            rest,
+            full,
+            tol,
+            critical=(k == target),
+            progress=progress,
+            errors=sub.errors[rest],
         )
         out.checked += level.checked
         if level.critical:
@@ -176,8 +185,11 @@ def _enumeration(
                 distance = out.details.get("distance_to_breaking")
                 out.problems.append(
                     f"removing sensors {list(within[0])}"
-                    + (f" (and {len(within) - 1} other set(s) of that size)" if len(within) > 1
-                       else "")
+                    + (
+                        f" (and {len(within) - 1} other set(s) of that size)"
+                        if len(within) > 1
+                        else ""
+                    )
                     + " leaves a plant that is observable in exact arithmetic but within "
                     "floating-point precision of an unobservable one"
                     + (f" (relative distance {distance:.1e})" if distance is not None else "")
@@ -207,8 +219,9 @@ def _clearly_observable(
     return sc.rank == system.n and not sc.problem
 
 
-def _distance(system: System, kept: tuple[int, ...], eig: EigenAnalysis | None,
-              tol: Tolerances) -> float | None:
+def _distance(
+    system: System, kept: tuple[int, ...], eig: EigenAnalysis | None, tol: Tolerances
+) -> float | None:
     """Smallest relative PBH singular value of (A, C_kept) over the eigenvalue groups and the
     computed eigenvalues: how far the kept sensors are from losing observability."""
     if not kept:
@@ -260,7 +273,8 @@ def _resolve_failures(
             return removed, failures[removed], within
         if _clearly_observable(system, kept, eig, tol):
             out.details["float_failures_refuted_exactly"] = (
-                out.details.get("float_failures_refuted_exactly", 0) + 1)
+                out.details.get("float_failures_refuted_exactly", 0) + 1
+            )
         else:
             within.append(removed)
             if len(within) == 1:
@@ -411,8 +425,18 @@ def scan_removals(
         return RemovalScan(size, 0, (), 0)
     P = sub.bases[rest]
     proj = np.einsum("qkn,qkm->qnm", P, P)
-    level = _scan_level(P, sub.ranks[rest], proj, proj.sum(axis=0), k, rest, full, tol,
-                        progress=progress, errors=sub.errors[rest])
+    level = _scan_level(
+        P,
+        sub.ranks[rest],
+        proj,
+        proj.sum(axis=0),
+        k,
+        rest,
+        full,
+        tol,
+        progress=progress,
+        errors=sub.errors[rest],
+    )
     # every reported breaking set is confirmed on the exact data; refuted ones are dropped
     # when independent float evidence shows a clear margin, else counted as borderline
     exact = ExactPlant(original.A, original.C)
@@ -539,7 +563,9 @@ def _eigenspace(
             order = np.argsort(-mags, kind="stable")
             critical.append(_critical_entry(mags, order, s, p))
         else:
-            candidates, crit, problem, used = _hyperplanes(W, V, thr, s, tol, max_sets - out.checked)
+            candidates, crit, problem, used = _hyperplanes(
+                W, V, thr, s, tol, max_sets - out.checked
+            )
             out.checked += used
             if problem:
                 out.problems.append(f"eigenvalue {cluster.center:.6g}: {problem}")
@@ -577,7 +603,8 @@ def _eigenspace(
             out.problems.append(
                 f"its smallest support, sensors {list(best[1])}, does not break the exact data "
                 f"(relative distance {distance:.1e} to a plant it breaks: the data are within "
-                f"precision of one, or its eigenvectors are too ill-conditioned to trust)")
+                f"precision of one, or its eigenvectors are too ill-conditioned to trust)"
+            )
             return out
         out.details["breaking_set_exact"] = decision.state == "unobservable"
         if decision.state == "unobservable":
@@ -703,7 +730,7 @@ def _estimates(
         full = int(np.count_nonzero(sub.ranks == n))
         q = p - full
         upto = max(0, 2 * s - full + 1)
-        enum_cost = count_subsets(q, range(0, upto + 1)) * (n**3 / 3 + n * n) + p * n**3
+        enum_cost = count_subsets(q, range(upto + 1)) * (n**3 / 3 + n * n) + p * n**3
     return {"eigenspace": float(eigen_cost), "enumeration": float(enum_cost)}
 
 
@@ -787,38 +814,52 @@ def _cross_check(
     full = int(np.count_nonzero(sub.ranks == n))
     q = system.p - full
     size = len(outcome.breaking_set)
-    needed = count_subsets(q, range(0, max(size - full, 0) + 1))
+    needed = count_subsets(q, range(max(size - full, 0) + 1))
     if needed > CROSS_CHECK_SETS:
-        outcome.details["cross_check"] = {"status": "not run", "sets_needed": needed,
-                                          "limit": CROSS_CHECK_SETS}
+        outcome.details["cross_check"] = {
+            "status": "not run",
+            "sets_needed": needed,
+            "limit": CROSS_CHECK_SETS,
+        }
         return outcome
     enum = _enumeration(system, s, CROSS_CHECK_SETS, tol, None, sub, eig, exact)
-    record = {"status": enum.status, "max_removable": enum.max_removable,
-              "breaking_set": list(enum.breaking_set) if enum.breaking_set is not None else None,
-              "sets_checked": enum.checked}
+    record = {
+        "status": enum.status,
+        "max_removable": enum.max_removable,
+        "breaking_set": list(enum.breaking_set) if enum.breaking_set is not None else None,
+        "sets_checked": enum.checked,
+    }
     mr = outcome.max_removable
     if enum.max_removable is not None and enum.max_removable < mr:
         outcome.problems.append(
             f"the enumeration finds {'a breaking set' if enum.status == 'exact' else 'a set within precision of breaking'} of "
             f"{enum.max_removable + 1} sensors, smaller than the eigenspace method's {size} (its "
-            f"eigenvalue groups missed it)")
+            f"eigenvalue groups missed it)"
+        )
         outcome.status = "inconclusive"
-        enum.details["cross_check_of_eigenspace"] = {"max_removable": mr,
-                                                      "breaking_set": list(outcome.breaking_set)}
+        enum.details["cross_check_of_eigenspace"] = {
+            "max_removable": mr,
+            "breaking_set": list(outcome.breaking_set),
+        }
         return enum
     if enum.status == "exact" and enum.max_removable == mr:
         record["agrees"] = True
         outcome.breaking_set = enum.breaking_set
         outcome.z = enum.z
         outcome.details["breaking_set_exact"] = enum.details.get(
-            "breaking_set_exact", outcome.details.get("breaking_set_exact"))
-    elif outcome.details.get("breaking_set_exact") and enum.max_removable is not None and (
-            enum.max_removable >= size):
+            "breaking_set_exact", outcome.details.get("breaking_set_exact")
+        )
+    elif (
+        outcome.details.get("breaking_set_exact")
+        and enum.max_removable is not None
+        and (enum.max_removable >= size)
+    ):
         record["agrees"] = False
         outcome.problems.append(
             f"the enumeration finds no breaking set of {size} sensors, although sensors "
             f"{list(outcome.breaking_set)} break the exact data: the enumeration's decisions "
-            f"are unreliable on this plant")
+            f"are unreliable on this plant"
+        )
         outcome.status = "inconclusive"
     outcome.details["cross_check"] = record
     return outcome
@@ -859,8 +900,9 @@ def _recheck_holds(
         value = float(m.min()) if m.size else None
         if value is not None:
             margin = value if margin is None else min(margin, value)
-        exact_state = (exact.observability(kept, proof=False).state if exact is not None
-                       else "unknown")
+        exact_state = (
+            exact.observability(kept, proof=False).state if exact is not None else "unknown"
+        )
         records.append(
             {
                 "kept_sensors": list(kept),
@@ -871,8 +913,10 @@ def _recheck_holds(
             }
         )
         if exact_state == "unobservable" and not problem:
-            problem = (f"without sensors outside {list(kept)} the exact data are unobservable "
-                       f"(an exact kernel vector), which floating point missed")
+            problem = (
+                f"without sensors outside {list(kept)} the exact data are unobservable "
+                f"(an exact kernel vector), which floating point missed"
+            )
         checker_ok = pbh_ok if outcome.method == "enumeration" else stair_ok
         if eig.problems and outcome.method == "enumeration":
             checker_ok = stair_ok
@@ -907,7 +951,7 @@ def _recheck_raw_eigenvalues(
         _, _, vh = np.linalg.svd(A - shift * np.eye(n))
         v = vh[-1].conj()
         seen = np.abs(C @ v) / safe
-        kept = np.sort(np.argsort(-seen, kind="stable")[2 * s:])
+        kept = np.sort(np.argsort(-seen, kind="stable")[2 * s :])
         m, codes = pbh_margins(A, C[kept], np.array([value]), tolerances=tol)
         worst = float(m[0]) if worst is None else min(worst, float(m[0]))
         if codes[0] != NONZERO:
@@ -1030,8 +1074,14 @@ def sparse_observability(
             "breaking_set": list(bset) if bset is not None else None,
         }
 
-    def make(verdict: Verdict, summary: str, value: int | None, extra: dict[str, Any],
-             margin: float | None = None, witness: dict | None = None) -> Check:
+    def make(
+        verdict: Verdict,
+        summary: str,
+        value: int | None,
+        extra: dict[str, Any],
+        margin: float | None = None,
+        witness: dict | None = None,
+    ) -> Check:
         return Check(
             id="sparse_observability",
             title=title,
@@ -1050,10 +1100,12 @@ def sparse_observability(
         mr = outcome.max_removable
         assert mr is not None and outcome.breaking_set is not None and outcome.z is not None
         if 2 * s > mr:
-            verdict, summary, witness = _failure(system, work, s, outcome, H, seed, tol,
-                                                 evidence, exact)
-            return make(verdict, summary, mr, fields(mr, False, outcome.breaking_set),
-                        witness=witness)
+            verdict, summary, witness = _failure(
+                system, work, s, outcome, H, seed, tol, evidence, exact
+            )
+            return make(
+                verdict, summary, mr, fields(mr, False, outcome.breaking_set), witness=witness
+            )
         margin, records, problem = _recheck_holds(work, outcome, eig, tol, s, exact)
         evidence["recheck"] = records
         evidence["margin_definition"] = (
@@ -1062,16 +1114,25 @@ def sparse_observability(
         )
         if problem:
             evidence["disputed_max_removable"] = mr
-            return make(Verdict.INCONCLUSIVE,
-                        f"The {outcome.method} method finds max_removable = {mr}, but {problem}.",
-                        None, fields(None, False, None), margin=margin)
+            return make(
+                Verdict.INCONCLUSIVE,
+                f"The {outcome.method} method finds max_removable = {mr}, but {problem}.",
+                None,
+                fields(None, False, None),
+                margin=margin,
+            )
         else:
             summary = (
                 f"Removing any {mr} of the {p} sensors keeps the plant observable, so up to "
                 f"{mr // 2} attacked sensors can be corrected (s = {s} needed)."
             )
-        return make(Verdict.INCONCLUSIVE if problem else Verdict.HOLDS, summary, mr,
-                    fields(mr, False, outcome.breaking_set), margin=margin)
+        return make(
+            Verdict.INCONCLUSIVE if problem else Verdict.HOLDS,
+            summary,
+            mr,
+            fields(mr, False, outcome.breaking_set),
+            margin=margin,
+        )
 
     if outcome.status == "lower_bound" and outcome.max_removable is not None:
         mr = outcome.max_removable
@@ -1086,8 +1147,13 @@ def sparse_observability(
                     f"so s = {s} attacked sensors can be corrected; the exact max_removable was "
                     f"not computed ({'; '.join(outcome.problems)})."
                 )
-            return make(Verdict.INCONCLUSIVE if problem else Verdict.HOLDS, summary, mr,
-                        fields(mr, True, None), margin=margin)
+            return make(
+                Verdict.INCONCLUSIVE if problem else Verdict.HOLDS,
+                summary,
+                mr,
+                fields(mr, True, None),
+                margin=margin,
+            )
     reasons = [pr for o in tried for pr in o.problems] or ["no method could decide"]
     needed = next((o.needed for o in tried if o.needed is not None), None)
     hint = ""
@@ -1097,14 +1163,24 @@ def sparse_observability(
             f"--max-sets (max_sets=...)."
         )
     lower = outcome.max_removable if outcome.status == "lower_bound" else None
-    return make(Verdict.INCONCLUSIVE,
-                f"Sparse observability could not be decided: {'; '.join(reasons)}.{hint}",
-                lower, {**fields(lower, lower is not None, None), "sets_needed": needed})
+    return make(
+        Verdict.INCONCLUSIVE,
+        f"Sparse observability could not be decided: {'; '.join(reasons)}.{hint}",
+        lower,
+        {**fields(lower, lower is not None, None), "sets_needed": needed},
+    )
 
 
 def _failure(
-    system: System, work: System, s: int, outcome: _Outcome, H: int, seed: int, tol: Tolerances,
-    evidence: dict[str, Any], exact: ExactPlant,
+    system: System,
+    work: System,
+    s: int,
+    outcome: _Outcome,
+    H: int,
+    seed: int,
+    tol: Tolerances,
+    evidence: dict[str, Any],
+    exact: ExactPlant,
 ) -> tuple[Verdict, str, dict[str, Any]]:
     """Verdict, summary and stealthy-attack witness of a failing check.
 
@@ -1120,8 +1196,7 @@ def _failure(
     # independent confirmation that the kept sensors do not observe the plant
     kept = [i for i in range(system.p) if i not in set(B)]
     sc_rank = (
-        staircase(work.A, work.C[kept], tolerances=tol, error_model="compound").rank
-        if kept else 0
+        staircase(work.A, work.C[kept], tolerances=tol, error_model="compound").rank if kept else 0
     )
     decision = exact.observability(tuple(kept))
     evidence["breaking_set_check"] = {
@@ -1131,25 +1206,37 @@ def _failure(
         "exact": decision.to_dict(),
     }
     if decision.state == "observable":
-        return Verdict.INCONCLUSIVE, (
-            f"The {outcome.method} method finds breaking set {list(B)}, but without those sensors "
-            f"the exact data are observable (Krylov rank {system.n} modulo a prime): the plant is "
-            f"within floating-point precision of one they break, and the answer depends on digits "
-            f"the data do not have."
-        ), None
+        return (
+            Verdict.INCONCLUSIVE,
+            (
+                f"The {outcome.method} method finds breaking set {list(B)}, but without those sensors "
+                f"the exact data are observable (Krylov rank {system.n} modulo a prime): the plant is "
+                f"within floating-point precision of one they break, and the answer depends on digits "
+                f"the data do not have."
+            ),
+            None,
+        )
     witness = stealthy_attack(system, B, outcome.z, s, horizon=H, seed=seed, tolerances=tol)
     witness_out = witness.to_dict()
     if decision.state == "unobservable":
-        witness_out["exact_check"] = ("removing the breaking set leaves the exact data "
-                                      "unobservable: z_exact_integers (up to scale) satisfies "
-                                      "C_i A^k z = 0 exactly for every kept sensor i")
+        witness_out["exact_check"] = (
+            "removing the breaking set leaves the exact data "
+            "unobservable: z_exact_integers (up to scale) satisfies "
+            "C_i A^k z = 0 exactly for every kept sensor i"
+        )
         witness_out["z_exact_integers"] = [str(v) for v in decision.z_exact or []]
-    if decision.state != "unobservable" and (not witness.verified or (kept and sc_rank >= system.n)):
-        return Verdict.INCONCLUSIVE, (
-            f"The {outcome.method} method finds breaking set {list(B)}, but the stealthy attack "
-            f"built from it does not verify (output mismatch {witness.residual:.2e}, kept sensors "
-            f"observable dimension {sc_rank})."
-        ), witness_out
+    if decision.state != "unobservable" and (
+        not witness.verified or (kept and sc_rank >= system.n)
+    ):
+        return (
+            Verdict.INCONCLUSIVE,
+            (
+                f"The {outcome.method} method finds breaking set {list(B)}, but the stealthy attack "
+                f"built from it does not verify (output mismatch {witness.residual:.2e}, kept sensors "
+                f"observable dimension {sc_rank})."
+            ),
+            witness_out,
+        )
     if mr == -1:
         what = "(A, C) itself is not observable: some states produce no output at all."
     elif len(B) <= s:

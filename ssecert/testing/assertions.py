@@ -107,26 +107,34 @@ def _stealthy_brief(system: System, check: Check) -> list[str]:
     breaking = list(f.get("breaking_set") or [])
     lines = []
     if mr == -1:
-        lines.append("(A, C) itself is not observable: every sensor set is a breaking set, "
-                     "and no attack is needed to hide the direction z.")
+        lines.append(
+            "(A, C) itself is not observable: every sensor set is a breaking set, "
+            "and no attack is needed to hide the direction z."
+        )
     else:
         lines.append(f"max_removable = {mr} < 2s = {2 * s}.")
-        lines.append(f"Breaking sensor set: {_sensors(system, breaking)}; removing "
-                     f"{'it' if len(breaking) == 1 else 'them'} leaves the plant unobservable.")
+        lines.append(
+            f"Breaking sensor set: {_sensors(system, breaking)}; removing "
+            f"{'it' if len(breaking) == 1 else 'them'} leaves the plant unobservable."
+        )
     if "attack_a" in w:
         a = np.asarray(w["attack_a"], dtype=float)
         b = np.asarray(w["attack_b"], dtype=float)
         z = np.asarray(w["z"], dtype=float)
         steps = a.shape[0]
-        checked = ("verified by simulation" if w.get("verified") else
-                   f"NOT verified: output mismatch {w.get('residual', float('nan')):.2e}")
+        checked = (
+            "verified by simulation"
+            if w.get("verified")
+            else f"NOT verified: output mismatch {w.get('residual', float('nan')):.2e}"
+        )
         size_a = float(np.abs(a).max(initial=0.0))
         size_b = float(np.abs(b).max(initial=0.0))
         direction = f"z = {_vector(z)} (||z|| = {_num(np.linalg.norm(z))})"
         head = f"Stealthy attack over {steps} step{'s' if steps != 1 else ''} ({checked}): "
         if not w.get("sensors_a") and not w.get("sensors_b"):
-            lines.append(f"{head}no attack is needed: x0 and x0 + z give identical outputs for "
-                         f"{direction}.")
+            lines.append(
+                f"{head}no attack is needed: x0 and x0 + z give identical outputs for {direction}."
+            )
         elif not w.get("sensors_b"):
             lines.append(
                 f"{head}an attacker on {_sensors(system, w['sensors_a'])} makes x0 look exactly "
@@ -150,8 +158,11 @@ def _instability_brief(w: Mapping[str, Any]) -> str:
     if "kind" in w:
         parts.append(str(w["kind"]))
     if "eigenvalue" in w:
-        lam = complex(w["eigenvalue"]) if not isinstance(w["eigenvalue"], Mapping) else complex(
-            w["eigenvalue"]["re"], w["eigenvalue"]["im"])
+        lam = (
+            complex(w["eigenvalue"])
+            if not isinstance(w["eigenvalue"], Mapping)
+            else complex(w["eigenvalue"]["re"], w["eigenvalue"]["im"])
+        )
         parts.append(f"eigenvalue {_num(lam)} of modulus {abs(lam):.6g}")
     for key in ("initial_error", "e0"):
         if key in w:
@@ -223,10 +234,12 @@ def assert_observable(system: System) -> Check:
     if check.verdict is Verdict.HOLDS:
         return check
     if check.verdict is Verdict.FAILS:
-        raise AssertionError(f"{_label(system)} is not observable: {_unobservable_brief(check)}. "
-                             f"{check.summary}")
-    raise AssertionError(f"observability of {_label(system)} could not be decided "
-                         f"(inconclusive): {check.summary}")
+        raise AssertionError(
+            f"{_label(system)} is not observable: {_unobservable_brief(check)}. {check.summary}"
+        )
+    raise AssertionError(
+        f"observability of {_label(system)} could not be decided (inconclusive): {check.summary}"
+    )
 
 
 def assert_sparse_observable(
@@ -287,18 +300,26 @@ def assert_sparse_observable(
 
     system = _require_system(system)
     s = as_int_option(s, "s", min_value=0)
-    check = sparse_observability(system, s, method=method,
-                                 max_sets=DEFAULT_MAX_SETS if max_sets is None else max_sets,
-                                 horizon=horizon)
+    check = sparse_observability(
+        system,
+        s,
+        method=method,
+        max_sets=DEFAULT_MAX_SETS if max_sets is None else max_sets,
+        horizon=horizon,
+    )
     if check.verdict is Verdict.HOLDS:
         return check
     if check.verdict is Verdict.FAILS:
-        lines = [f"{_label(system)} is not {s}-sparse observable: {s} attacked sensor"
-                 f"{'s' if s != 1 else ''} cannot be corrected."]
+        lines = [
+            f"{_label(system)} is not {s}-sparse observable: {s} attacked sensor"
+            f"{'s' if s != 1 else ''} cannot be corrected."
+        ]
         lines += _stealthy_brief(system, check)
         raise AssertionError("\n".join(lines))
-    raise AssertionError(f"{s}-sparse observability of {_label(system)} could not be decided "
-                         f"(inconclusive): {check.summary}")
+    raise AssertionError(
+        f"{s}-sparse observability of {_label(system)} could not be decided "
+        f"(inconclusive): {check.summary}"
+    )
 
 
 def assert_deadbeat(A: Any, L: Any, C: Any) -> int:
@@ -359,29 +380,38 @@ def assert_deadbeat(A: Any, L: Any, C: Any) -> int:
 
     if test.index is None:
         k = len(norms)
-        problem = (f"A - L C is not nilpotent: ||F^{k}|| / ||A||^{k} >= {lower[-1]:.3g} at the "
-                   f"power k = n = {k} (exactly between {lower[-1]:.3g} and {norms[-1]:.3g}), "
-                   f"where a nilpotent F has reached 0 (needs <= {test.rtol:.0e}; F = A - L C "
-                   f"formed exactly from the given floats)")
+        problem = (
+            f"A - L C is not nilpotent: ||F^{k}|| / ||A||^{k} >= {lower[-1]:.3g} at the "
+            f"power k = n = {k} (exactly between {lower[-1]:.3g} and {norms[-1]:.3g}), "
+            f"where a nilpotent F has reached 0 (needs <= {test.rtol:.0e}; F = A - L C "
+            f"formed exactly from the given floats)"
+        )
     elif not test.conclusive:
         k = test.index
         previous = f">= {lower[k - 2]:.3g} only" if k > 1 else "= 1"
-        problem = (f"the nilpotency test cannot conclude: ||F^{k}|| / ||A||^{k} <= "
-                   f"{norms[k - 1]:.3g} <= {test.rtol:.0e}, but ||F^{k - 1}|| / ||A||^{k - 1} "
-                   f"{previous}, not clearly above it (F = A - L C)")
+        problem = (
+            f"the nilpotency test cannot conclude: ||F^{k}|| / ||A||^{k} <= "
+            f"{norms[k - 1]:.3g} <= {test.rtol:.0e}, but ||F^{k - 1}|| / ||A||^{k - 1} "
+            f"{previous}, not clearly above it (F = A - L C)"
+        )
     else:
         k = test.index
-        problem = (f"||F^{k}|| / ||A||^{k} <= {norms[k - 1]:.3g} looks deadbeat, but the gain as "
-                   f"given is not certified stable: {test.reason}")
+        problem = (
+            f"||F^{k}|| / ||A||^{k} <= {norms[k - 1]:.3g} looks deadbeat, but the gain as "
+            f"given is not certified stable: {test.reason}"
+        )
     flipped = verify_deadbeat(A, -np.asarray(L), C)
     if flipped.verified:
-        problem += (f". A + L C is nilpotent (index {flipped.index}): L has the opposite sign "
-                    f"convention; ssecert writes x_hat+ = A x_hat + L (y - C x_hat), the thesis's "
-                    f"L1 is -L")
+        problem += (
+            f". A + L C is nilpotent (index {flipped.index}): L has the opposite sign "
+            f"convention; ssecert writes x_hat+ = A x_hat + L (y - C x_hat), the thesis's "
+            f"L1 is -L"
+        )
     raise AssertionError(
         f"{problem}. Spectral radius of A - L C: certified between {sig(test.radius_lower)} and "
         f"{sig(test.radius_upper)}. Relative norms ||F^k|| / ||A||^k, k = 1..{len(norms)}: "
-        f"{_vector(norms)}.")
+        f"{_vector(norms)}."
+    )
 
 
 def assert_schur(M: Any) -> Any:
@@ -440,11 +470,14 @@ def assert_schur(M: Any) -> Any:
         if w.get("grows_by_factor_2"):
             how = "an initial state along its eigenvector grows by a factor 2 in simulation"
         else:
-            how = (f"the modulus exceeds 1 by more than its rounding error bound "
-                   f"{w.get('eigenvalue_error_bound', float('nan')):.1e}")
+            how = (
+                f"the modulus exceeds 1 by more than its rounding error bound "
+                f"{w.get('eigenvalue_error_bound', float('nan')):.1e}"
+            )
         raise AssertionError(f"M is not Schur stable: {where} >= 1 (confirmed: {how}).")
-    raise AssertionError(f"M could not be certified Schur stable (inconclusive): {where}; "
-                         f"{cert.reason}.")
+    raise AssertionError(
+        f"M could not be certified Schur stable (inconclusive): {where}; {cert.reason}."
+    )
 
 
 def assert_certified(design: Spec, *, method: str = "auto") -> Certificate:
@@ -494,8 +527,10 @@ def assert_certified(design: Spec, *, method: str = "auto") -> Certificate:
     if not bad:
         return cert
     required = sum(1 for c in cert.checks if c.required)
-    lines = [f"design {design.name!r} ({design.source}) is not certified: {len(bad)} of "
-             f"{required} required checks do not hold."]
+    lines = [
+        f"design {design.name!r} ({design.source}) is not certified: {len(bad)} of "
+        f"{required} required checks do not hold."
+    ]
     for check in bad:
         verdict = "FAILS" if check.verdict is Verdict.FAILS else "inconclusive"
         lines.append(f"- {check.id} {verdict}: {check.summary}")
@@ -510,22 +545,32 @@ def _scenario(design: Spec, scenario: str | Mapping[str, Any]) -> dict[str, Any]
             if table["name"] == scenario:
                 return dict(table)
         names = ", ".join(repr(t["name"]) for t in design.scenarios) or "none"
-        raise ValueError(f"scenario {scenario!r} is not a [[scenario]] of design "
-                         f"{design.name!r}; its scenarios: {names}")
+        raise ValueError(
+            f"scenario {scenario!r} is not a [[scenario]] of design "
+            f"{design.name!r}; its scenarios: {names}"
+        )
     if not isinstance(scenario, Mapping):
-        raise TypeError(f"scenario must be the name of one of the design's scenarios or a "
-                        f"mapping with the keys of a [[scenario]] table, got {describe(scenario)}")
+        raise TypeError(
+            f"scenario must be the name of one of the design's scenarios or a "
+            f"mapping with the keys of a [[scenario]] table, got {describe(scenario)}"
+        )
     from ..spec import spec_from_dict
 
     table = {"name": "custom", **scenario}
     system = design.system
     checked = spec_from_dict(
-        {"name": design.name,
-         "system": {"A": system.A.tolist(), "C": system.C.tolist(),
-                    "sensors": list(system.sensors)},
-         "attack": {"max_attacked": design.max_attacked},
-         "scenario": [table]},
-        source="assert_recovers(scenario=...)")
+        {
+            "name": design.name,
+            "system": {
+                "A": system.A.tolist(),
+                "C": system.C.tolist(),
+                "sensors": list(system.sensors),
+            },
+            "attack": {"max_attacked": design.max_attacked},
+            "scenario": [table],
+        },
+        source="assert_recovers(scenario=...)",
+    )
     return dict(checked.scenarios[0])
 
 
@@ -604,25 +649,32 @@ def assert_recovers(
     try:
         observer = build_observer(design.system, design.observer)
     except GainError as exc:
-        raise AssertionError(f"the observer of design {design.name!r} cannot be built: the gain "
-                             f"cannot be computed ({exc})") from None
-    result = simulate_scenario(observer, table, runs=runs, steps=steps, seed=seed,
-                               max_attacked=design.max_attacked)
+        raise AssertionError(
+            f"the observer of design {design.name!r} cannot be built: the gain "
+            f"cannot be computed ({exc})"
+        ) from None
+    result = simulate_scenario(
+        observer, table, runs=runs, steps=steps, seed=seed, max_attacked=design.max_attacked
+    )
     final = np.asarray(result.relative_error[-1], dtype=float)
     bad = ~(final <= tol)  # NaN (a diverged run) counts as failing
     if not bad.any():
         return result
     ranked = np.where(np.isnan(final), np.inf, final)
     worst = int(np.argmax(ranked))
-    where = ", ".join(f"{key} = {table[key]}" for key in ("sensors", "count", "magnitude",
-                                                         "period", "noise") if key in table)
+    where = ", ".join(
+        f"{key} = {table[key]}"
+        for key in ("sensors", "count", "magnitude", "period", "noise")
+        if key in table
+    )
     raise AssertionError(
         f"the {observer.kind} observer of design {design.name!r} does not recover under scenario "
         f"{table['name']!r}: {int(bad.sum())} of {result.runs} runs end with a relative state "
         f"error above tol = {tol:g} after {result.steps} steps.\n"
         f"worst run: index {worst}, final relative error {_num(final[worst])}; mean "
         f"{_num(np.mean(final))}.\n"
-        f"scenario: attack {table['attack']!r}" + (f" ({where})" if where else "")
+        f"scenario: attack {table['attack']!r}"
+        + (f" ({where})" if where else "")
         + f", seed {result.seed}, runs {result.runs}, steps {result.steps}; run r draws from "
         f"numpy.random.default_rng([{result.seed}, r])."
     )

@@ -85,23 +85,40 @@ def register_profiles() -> bool:
     except ImportError:
         return False
     suppress = [HealthCheck.too_slow, HealthCheck.data_too_large]
-    settings.register_profile(PROFILES["quick"], max_examples=QUICK_EXAMPLES, derandomize=True,
-                              deadline=None, database=None, suppress_health_check=suppress)
-    settings.register_profile(PROFILES["thorough"], max_examples=THOROUGH_EXAMPLES,
-                              deadline=None, print_blob=True, suppress_health_check=suppress)
+    settings.register_profile(
+        PROFILES["quick"],
+        max_examples=QUICK_EXAMPLES,
+        derandomize=True,
+        deadline=None,
+        database=None,
+        suppress_health_check=suppress,
+    )
+    settings.register_profile(
+        PROFILES["thorough"],
+        max_examples=THOROUGH_EXAMPLES,
+        deadline=None,
+        print_blob=True,
+        suppress_health_check=suppress,
+    )
     return True
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("ssecert", "ssecert property tests")
     group.addoption(
-        "--ssecert-profile", action="store", choices=tuple(PROFILES), default=None,
+        "--ssecert-profile",
+        action="store",
+        choices=tuple(PROFILES),
+        default=None,
         dest="ssecert_profile",
-        help=("hypothesis profile for property tests: quick (40 derandomized examples, the "
-              "default) or thorough (1000 random examples); both without deadline"),
+        help=(
+            "hypothesis profile for property tests: quick (40 derandomized examples, the "
+            "default) or thorough (1000 random examples); both without deadline"
+        ),
     )
-    parser.addini("ssecert_profile", default="",
-                  help="default of --ssecert-profile: quick or thorough")
+    parser.addini(
+        "ssecert_profile", default="", help="default of --ssecert-profile: quick or thorough"
+    )
 
 
 def _choose(config: pytest.Config) -> tuple[str | None, str]:
@@ -121,8 +138,7 @@ def _choose(config: pytest.Config) -> tuple[str | None, str]:
     if ini:
         if ini not in PROFILES:
             raise pytest.UsageError(
-                f"the ini option ssecert_profile must be one of {', '.join(PROFILES)}; "
-                f"got {ini!r}"
+                f"the ini option ssecert_profile must be one of {', '.join(PROFILES)}; got {ini!r}"
             )
         return ini, "ini option ssecert_profile"
     from hypothesis import settings
@@ -144,11 +160,15 @@ def _load(key: str) -> None:
 
     ours = PROFILES[key]
     current = settings.get_current_profile_name()
-    suffix = current[len(_base(current)):]
+    suffix = current[len(_base(current)) :]
     if suffix:  # --hypothesis-verbosity / --hypothesis-explain were given
         active = settings.default
-        settings.register_profile(ours + suffix, parent=settings.get_profile(ours),
-                                  verbosity=active.verbosity, phases=active.phases)
+        settings.register_profile(
+            ours + suffix,
+            parent=settings.get_profile(ours),
+            verbosity=active.verbosity,
+            phases=active.phases,
+        )
     settings.load_profile(ours + suffix)
 
 
@@ -158,7 +178,7 @@ def pytest_configure(config: pytest.Config) -> None:
     if not register_profiles():
         if config.getoption("ssecert_profile"):
             raise pytest.UsageError(
-                "--ssecert-profile needs hypothesis: pip install \"ssecert[testing]\""
+                '--ssecert-profile needs hypothesis: pip install "ssecert[testing]"'
             )
         return
     from hypothesis import settings
@@ -184,8 +204,7 @@ def pytest_report_header(config: pytest.Config) -> str | None:
         return None
     from hypothesis import settings
 
-    return (f"ssecert: hypothesis profile {settings.get_current_profile_name()!r} "
-            f"({state['why']})")
+    return f"ssecert: hypothesis profile {settings.get_current_profile_name()!r} ({state['why']})"
 
 
 @pytest.fixture(scope="session")
@@ -210,13 +229,15 @@ def ssecert_example() -> Any:
         from ssecert.examples import list_examples, load_example
 
         if not isinstance(name, str):
-            raise TypeError(f"name must be the name of a packaged example, got "
-                            f"{type(name).__name__} {name!r}")
+            raise TypeError(
+                f"name must be the name of a packaged example, got {type(name).__name__} {name!r}"
+            )
         if name not in cache:
             names = list_examples()
             if name not in names:
-                raise ValueError(f"no packaged ssecert example named {name!r}; available: "
-                                 f"{', '.join(names)}")
+                raise ValueError(
+                    f"no packaged ssecert example named {name!r}; available: {', '.join(names)}"
+                )
             spec = load_example(name)
             cache[name] = spec if spec.observer is not None else spec.system
         return cache[name]

@@ -70,8 +70,7 @@ def _size(value: Any, name: str, minimum: int) -> SearchStrategy[int]:
         return value.map(lambda drawn: _drawn(drawn, name, minimum))
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
         raise TypeError(
-            f"{name} must be an integer or a hypothesis strategy of integers, got "
-            f"{describe(value)}"
+            f"{name} must be an integer or a hypothesis strategy of integers, got {describe(value)}"
         )
     if value < minimum:
         raise ValueError(f"{name} must be >= {minimum}, got {int(value)}")
@@ -82,8 +81,9 @@ def _drawn(value: Any, name: str, minimum: int) -> int:
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
         raise TypeError(f"the strategy given as {name} must draw integers, drew {describe(value)}")
     if value < minimum:
-        raise ValueError(f"the strategy given as {name} drew {int(value)}; {name} must be "
-                         f">= {minimum}")
+        raise ValueError(
+            f"the strategy given as {name} drew {int(value)}; {name} must be >= {minimum}"
+        )
     return int(value)
 
 
@@ -94,8 +94,9 @@ def _fixed(value: Any) -> int | None:
 
 def _choices(value: Any, name: str, allowed: Sequence[str]) -> tuple[str, ...]:
     if isinstance(value, str) or not isinstance(value, Sequence):
-        raise TypeError(f"{name} must be a sequence of names from {', '.join(allowed)}; got "
-                        f"{describe(value)}")
+        raise TypeError(
+            f"{name} must be a sequence of names from {', '.join(allowed)}; got {describe(value)}"
+        )
     chosen = tuple(value)
     if not chosen:
         raise ValueError(f"{name} must name at least one of {', '.join(allowed)}; got none")
@@ -115,8 +116,9 @@ def _distinct(draw: Any, items: Sequence[Any], k: int) -> list[Any]:
     return [remaining.pop(draw(st.integers(0, len(remaining) - 1))) for _ in range(k)]
 
 
-def _spectrum(draw: Any, n: int, radius: float, *, pairs: bool = True,
-              dyadic: bool = False) -> list[tuple[float, float]]:
+def _spectrum(
+    draw: Any, n: int, radius: float, *, pairs: bool = True, dyadic: bool = False
+) -> list[tuple[float, float]]:
     """n eigenvalues: reals (re, 0) and complex pairs (a, b), b > 0, counted twice.
 
     They lie on a grid of spacing radius / K inside the closed disc of that
@@ -128,12 +130,15 @@ def _spectrum(draw: Any, n: int, radius: float, *, pairs: bool = True,
     count = draw(st.integers(0, n // 2)) if pairs else 0
     # ordered so that draws shrink towards small eigenvalues
     values = sorted(range(-K, K + 1), key=lambda k: (abs(k), k))
-    grid = sorted(((a, b) for a in range(-K, K + 1) for b in range(1, K + 1)
-                   if a * a + b * b <= K * K), key=lambda ab: (ab[0] ** 2 + ab[1] ** 2, ab))
+    grid = sorted(
+        ((a, b) for a in range(-K, K + 1) for b in range(1, K + 1) if a * a + b * b <= K * K),
+        key=lambda ab: (ab[0] ** 2 + ab[1] ** 2, ab),
+    )
     reals = _distinct(draw, values, n - 2 * count)
     complex_ = _distinct(draw, grid, count)
-    return ([(radius * k / K, 0.0) for k in reals]
-            + [(radius * a / K, radius * b / K) for a, b in complex_])
+    return [(radius * k / K, 0.0) for k in reals] + [
+        (radius * a / K, radius * b / K) for a, b in complex_
+    ]
 
 
 def _modal_blocks(spectrum: list[tuple[float, float]]) -> tuple[np.ndarray, list[list[int]]]:
@@ -154,9 +159,14 @@ def _modal_blocks(spectrum: list[tuple[float, float]]) -> tuple[np.ndarray, list
     return M, columns
 
 
-def _modal_outputs(rng: np.random.Generator, p: int, columns: list[list[int]],
-                   support_sizes: list[int], fixed: int | None = None,
-                   dyadic: bool = False) -> np.ndarray:
+def _modal_outputs(
+    rng: np.random.Generator,
+    p: int,
+    columns: list[list[int]],
+    support_sizes: list[int],
+    fixed: int | None = None,
+    dyadic: bool = False,
+) -> np.ndarray:
     """C_modal: the eigenvalue with columns ``cols`` is seen by ``size`` sensors.
 
     Nonzero entries have magnitudes in [0.5, 2] with random signs; a sensor
@@ -187,8 +197,9 @@ def _orthogonal(rng: np.random.Generator, n: int) -> np.ndarray:
     return Q * np.where(np.diag(R) < 0, -1.0, 1.0)
 
 
-def _exact_similarity(rng: np.random.Generator, M: np.ndarray,
-                      Cm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _exact_similarity(
+    rng: np.random.Generator, M: np.ndarray, Cm: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """A = T M T^-1 and C = C_modal T^-1 computed without rounding.
 
     T is a permutation times elementary operations (row i += c row j,
@@ -208,15 +219,23 @@ def _exact_similarity(rng: np.random.Generator, M: np.ndarray,
         perm = rng.permutation(n)
         T, T_inv = T[perm], T_inv[:, perm]
         A, C = T @ M @ T_inv, Cm @ T_inv
-        if (np.array_equal(T @ T_inv, np.eye(n)) and np.array_equal(A @ T, T @ M)
-                and np.array_equal(C @ T, Cm)):
+        if (
+            np.array_equal(T @ T_inv, np.eye(n))
+            and np.array_equal(A @ T, T @ M)
+            and np.array_equal(C @ T, Cm)
+        ):
             return A, C
     raise AssertionError("a permutation similarity cannot round")  # pragma: no cover
 
 
 @st.composite
-def _modal_plant(draw: Any, n: SearchStrategy[int], p: SearchStrategy[int],
-                 max_removable: SearchStrategy[int] | None, name: str) -> System:
+def _modal_plant(
+    draw: Any,
+    n: SearchStrategy[int],
+    p: SearchStrategy[int],
+    max_removable: SearchStrategy[int] | None,
+    name: str,
+) -> System:
     n_ = draw(n)
     p_ = draw(p)
     exact = max_removable is not None
@@ -244,8 +263,9 @@ def _modal_plant(draw: Any, n: SearchStrategy[int], p: SearchStrategy[int],
     return System(Q @ M @ Q.T, Cm @ Q.T, name=name)
 
 
-def observable_systems(n: int | SearchStrategy[int],
-                       p: int | SearchStrategy[int]) -> SearchStrategy[System]:
+def observable_systems(
+    n: int | SearchStrategy[int], p: int | SearchStrategy[int]
+) -> SearchStrategy[System]:
     """Observable plants with a comfortable margin, built so ``observability`` decides them.
 
     A = Q M Q^T with M block diagonal in real modal form and Q a random
@@ -377,8 +397,9 @@ def _marginal_plant(draw: Any, n: SearchStrategy[int], p: SearchStrategy[int]) -
     return System(U[np.ix_(perm, perm)], C[:, perm], name="marginally-stable")
 
 
-def marginally_stable_systems(n: int | SearchStrategy[int],
-                              p: int | SearchStrategy[int]) -> SearchStrategy[System]:
+def marginally_stable_systems(
+    n: int | SearchStrategy[int], p: int | SearchStrategy[int]
+) -> SearchStrategy[System]:
     """Observable plants with an eigenvalue exactly at 1 and the others inside the unit disc.
 
     Like the thesis's vehicle, whose position integrates its velocity.  A is
@@ -429,9 +450,14 @@ def marginally_stable_systems(n: int | SearchStrategy[int],
 
 
 @st.composite
-def _attacks(draw: Any, p: SearchStrategy[int], s: SearchStrategy[int],
-             steps: SearchStrategy[int], kinds: tuple[str, ...],
-             magnitude: tuple[float, float]) -> np.ndarray:
+def _attacks(
+    draw: Any,
+    p: SearchStrategy[int],
+    s: SearchStrategy[int],
+    steps: SearchStrategy[int],
+    kinds: tuple[str, ...],
+    magnitude: tuple[float, float],
+) -> np.ndarray:
     p_, s_, steps_ = draw(p), draw(s), draw(steps)
     if s_ > p_:
         reject()
@@ -534,11 +560,15 @@ def sparse_attacks(
     steps_ = _size(steps, "steps", 1)
     fixed_p, fixed_s = _fixed(p), _fixed(s)
     if fixed_p is not None and fixed_s is not None and fixed_s > fixed_p:
-        raise ValueError(f"s must be between 0 and p = {fixed_p} (the number of sensors), "
-                         f"got {fixed_s}")
+        raise ValueError(
+            f"s must be between 0 and p = {fixed_p} (the number of sensors), got {fixed_s}"
+        )
     chosen = _choices(kinds, "kinds", ATTACK_SHAPES)
-    if isinstance(magnitude, (str, bytes)) or not isinstance(magnitude, Sequence) or len(
-            magnitude) != 2:
+    if (
+        isinstance(magnitude, (str, bytes))
+        or not isinstance(magnitude, Sequence)
+        or len(magnitude) != 2
+    ):
         raise TypeError(f"magnitude must be a pair (low, high), got {describe(magnitude)}")
     low = as_float_option(magnitude[0], "magnitude[0]", min_value=0.0)
     high = as_float_option(magnitude[1], "magnitude[1]", min_value=0.0)
@@ -587,13 +617,18 @@ def _gain(draw: Any, system: System, kind: str, feasible: dict[str, Any]) -> dic
     """The gain keys of an [observer] table (gain, poles)."""
     from ..design.gains import GainError, place_gain
 
-    allowed = {"luenberger": ("deadbeat", "place", "pinv", "matrix"),
-               "dsso": ("deadbeat", "place", "pinv", "matrix"),
-               "elastic_net": ("deadbeat", "place", "ogd", "pinv", "matrix")}[kind]
-    options = [g for g in allowed
-               if g in ("ogd", "matrix")
-               or (g in ("deadbeat", "place") and feasible["deadbeat"] is not None)
-               or (g == "pinv" and feasible["pinv"])]
+    allowed = {
+        "luenberger": ("deadbeat", "place", "pinv", "matrix"),
+        "dsso": ("deadbeat", "place", "pinv", "matrix"),
+        "elastic_net": ("deadbeat", "place", "ogd", "pinv", "matrix"),
+    }[kind]
+    options = [
+        g
+        for g in allowed
+        if g in ("ogd", "matrix")
+        or (g in ("deadbeat", "place") and feasible["deadbeat"] is not None)
+        or (g == "pinv" and feasible["pinv"])
+    ]
     gain = draw(st.sampled_from(options))
     if gain == "place":
         poles = _poles(draw, system.n)
@@ -611,24 +646,29 @@ def _gain(draw: Any, system: System, kind: str, feasible: dict[str, Any]) -> dic
     else:
         poles = _poles(draw, system.n)
         try:
-            L = place_gain(system, [complex(*q) if isinstance(q, list) else q
-                                    for q in poles]).L
+            L = place_gain(system, [complex(*q) if isinstance(q, list) else q for q in poles]).L
         except GainError:
             L = feasible["deadbeat"]
     return {"gain": np.asarray(L, dtype=float).tolist()}
 
 
 @st.composite
-def _designs(draw: Any, system: System | SearchStrategy[System], kinds: tuple[str, ...],
-             max_attacked: SearchStrategy[int], cache: dict[int, Any]) -> Spec:
+def _designs(
+    draw: Any,
+    system: System | SearchStrategy[System],
+    kinds: tuple[str, ...],
+    max_attacked: SearchStrategy[int],
+    cache: dict[int, Any],
+) -> Spec:
     from ..design.gains import GainError
     from ..design.observer import build_observer
 
     if isinstance(system, SearchStrategy):
         plant = draw(system)
         if not isinstance(plant, System):
-            raise TypeError(f"the strategy given as system must draw System objects, drew "
-                            f"{describe(plant)}")
+            raise TypeError(
+                f"the strategy given as system must draw System objects, drew {describe(plant)}"
+            )
         feasible = _feasible_gains(plant)
     else:
         plant = system
@@ -738,7 +778,9 @@ def observer_designs(
     >>> check()
     """
     if not isinstance(system, (System, SearchStrategy)):
-        raise TypeError(f"system must be a System or a hypothesis strategy of System objects, "
-                        f"got {describe(system)}")
+        raise TypeError(
+            f"system must be a System or a hypothesis strategy of System objects, "
+            f"got {describe(system)}"
+        )
     chosen = _choices(kinds, "kinds", OBSERVER_KINDS)
     return _designs(system, chosen, _size(max_attacked, "max_attacked", 0), {})
