@@ -126,7 +126,9 @@ def measure(M, y, x_true, lam, repeat, limit):
         if K is None:
             row[label] = (None, math.nan, math.nan)
             continue
-        seconds, sol = best_time(lambda: fista(M, y, lam, iterations=K, tol=0.0, **options), repeat)
+        seconds, sol = best_time(
+            lambda K=K, options=options: fista(M, y, lam, iterations=K, tol=0.0, **options), repeat
+        )
         reached = error(sol.x, sol.a, x_ref, a_ref)
         assert reached <= TARGET, (label, K, reached)
         row[label] = (K, seconds, reached)

@@ -222,7 +222,7 @@ def main() -> None:
             for run in range(args.runs)
         ]
 
-        def mean(key: str) -> float:
+        def mean(key: str, results: list = results) -> float:
             values = [float(r[key]) for r in results if not np.isnan(r[key])]
             return float(np.mean(values)) if values else float("nan")
 

@@ -234,8 +234,8 @@ def paragraph(rows, transient) -> str:
         f"(oracle {r1['ox']:.1e}); the support is right in {r1['hit']:.0%} of the (run, k) pairs "
         f"and in more than 95% of the steps for {r1['runs_ok']:.0%} of the runs. ",
         (
-            "This agrees with the paper: errors of order 1e-%d for the input, SISE close to the "
-            "oracle, the support right almost always. " % -order(r1["su"])
+            f"This agrees with the paper: errors of order 1e-{-order(r1['su'])} for the input, "
+            "SISE close to the oracle, the support right almost always. "
         )
         if close and order(r1["su"]) == -2
         else (

@@ -186,6 +186,10 @@ class Certificate:
     def __contains__(self, check_id: object) -> bool:
         return any(c.id == check_id for c in self.checks)
 
+    def get(self, check_id: str, default: Check | None = None) -> Check | None:
+        """The check with this id, or ``default`` when the certificate has none."""
+        return next((c for c in self.checks if c.id == check_id), default)
+
     def _repr_html_(self) -> str:
         from .report.html import certificate_fragment
 

@@ -166,7 +166,7 @@ def planted(rng: np.random.Generator, kind: str, *, integer: bool = True) -> Pla
             eig_cols.setdefault((a, b), []).append(start)
         start += m
     # plant the sensor patterns on the eigenvector columns
-    for (a, b), cols in eig_cols.items():
+    for (_, b), cols in eig_cols.items():
         for c in cols:
             width = 2 if b else 1
             k = int(rng.integers(1, p + 1)) if rng.random() < 0.9 else 0
@@ -182,7 +182,7 @@ def planted(rng: np.random.Generator, kind: str, *, integer: bool = True) -> Pla
         Cm[j] = Cm[i] * int(rng.choice([-2, -1, 1, 2]))
     # exact truth
     best, supports = None, []
-    for (a, b), cols in eig_cols.items():
+    for (_, b), cols in eig_cols.items():
         if b == 0:
             W = [[int(Cm[i, c]) for c in cols] for i in range(p)]
             size, sup = exact_min_supports(W)

@@ -107,7 +107,7 @@ def test_place_miss_is_an_error(monkeypatch):
     system = System([[1.0, 0.1], [0.0, 1.0]], [[1.0, 0.0]])
 
     def bad_place(A, B, poles):
-        warnings.warn("convergence not reached")
+        warnings.warn("convergence not reached", stacklevel=2)
         return np.array([[0.0, 0.0]])
 
     monkeypatch.setattr(control, "place", bad_place)

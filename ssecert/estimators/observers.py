@@ -128,7 +128,7 @@ class SparseSoftObserver(DynamicObserver):
         self.n, self.m = self.A.shape[0], self.C.shape[0]
         self.step_size, self.threshold, self.shrink = float(step), float(threshold), float(shrink)
         self.L2 = np.eye(self.m) if L2 is None else np.asarray(L2, dtype=float)
-        n, m = self.n, self.m
+        m = self.m
         nuL2 = self.step_size * self.L2
         # z+ (before shrinkage of the a-part) = z @ M^T + y @ N^T
         M = np.block([[self.A - self.L @ self.C, -self.L], [-nuL2 @ self.C, np.eye(m) - nuL2]])

@@ -229,7 +229,7 @@ def _context(result: Any, *, fragment: bool) -> dict[str, Any]:
         "notes": list(result.notes) + list(meta.get("notes", [])),
         "command": result.command,
     }
-    sparse = cert["sparse_observability"] if "sparse_observability" in cert else None
+    sparse = cert.get("sparse_observability")
     breaking = (sparse.fields.get("breaking_set") if sparse is not None else None) or []
     if sparse is not None and sparse.verdict.value == "fails":
         ctx["sensors_svg"] = Markup(sensor_plot(system.sensors, breaking))

@@ -115,5 +115,5 @@ def summarize(
         warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN steps give NaN, as intended
         out: dict[str, Any] = {"mean": np.nanmean(series, axis=1)}
         for q in quantiles:
-            out[f"q{int(round(q * 100)):02d}"] = np.nanquantile(series, q, axis=1)
+            out[f"q{round(q * 100):02d}"] = np.nanquantile(series, q, axis=1)
     return out

@@ -406,7 +406,6 @@ def thesis_assumptions_check(
     holds = None if observability is None else observability.verdict is Verdict.HOLDS
     verdict, items = thesis_assumptions(design, observability_holds=holds, seed=seed, budget=budget)
     failing = [i.name for i in items if i.verdict == "fails"]
-    open_ = [i.name for i in items if i.verdict == "inconclusive"]
     if verdict == "holds":
         summary = "Every assumption of the thesis's stability proof holds on this design."
     elif verdict == "fails":

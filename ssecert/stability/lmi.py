@@ -246,7 +246,7 @@ def circle_matrix(model: LureModel, P: np.ndarray, t: np.ndarray, alpha: float =
     [A B]' P [A B] - diag((1 - alpha) P, 0) + sym([[0, q Cw' T], [q T Cw, -2 T]])
     """
     G = np.hstack([model.A, model.B])
-    N, m = model.N, model.m
+    N = model.N
     M = G.T @ P @ G
     M[:N, :N] -= (1.0 - alpha) * P
     T = np.diag(t)

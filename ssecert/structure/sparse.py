@@ -831,8 +831,9 @@ def _cross_check(
     }
     mr = outcome.max_removable
     if enum.max_removable is not None and enum.max_removable < mr:
+        found = "a breaking set" if enum.status == "exact" else "a set within precision of breaking"
         outcome.problems.append(
-            f"the enumeration finds {'a breaking set' if enum.status == 'exact' else 'a set within precision of breaking'} of "
+            f"the enumeration finds {found} of "
             f"{enum.max_removable + 1} sensors, smaller than the eigenspace method's {size} (its "
             f"eigenvalue groups missed it)"
         )
