@@ -20,8 +20,8 @@ import cvxpy as cp
 import numpy as np
 
 from ssecert import System
-from ssecert.design.observer import build_observer
 from ssecert.examples import load_example
+from ssecert.observers import build_observer
 from ssecert.stability.lmi import LureModel, circle_certificate, region_map, verify_certificate
 
 

@@ -16,8 +16,8 @@ import time
 
 import numpy as np
 
-from ssecert.estimators.observers import SparseSoftObserver
 from ssecert.estimators.shrinkage import soft_threshold
+from ssecert.observers import SparseSoftObserver
 
 
 def reference(A, C, L, step, threshold, y):

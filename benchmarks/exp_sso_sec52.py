@@ -25,7 +25,7 @@ import time
 
 import numpy as np
 
-from ssecert.estimators.observers import WindowSSO
+from ssecert.observers import WindowSSO
 from ssecert.simulation.metrics import relative_error, support_error
 
 

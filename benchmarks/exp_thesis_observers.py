@@ -20,9 +20,8 @@ import argparse
 
 import numpy as np
 
-from ssecert.design.observer import build_observer
-from ssecert.estimators.observers import observer_from_design
 from ssecert.examples import load_example
+from ssecert.observers import build_observer, observer_from_design
 from ssecert.simulation.engine import grid_search, simulate_scenario
 from ssecert.simulation.metrics import mse
 from ssecert.simulation.scenarios import generate

@@ -9,6 +9,7 @@ from dataclasses import replace
 from typing import Any
 
 from .budget import Budget
+from .observers import get_kind, observer_kinds
 from .results import Certificate, Check, Verdict
 from .spec import Spec
 from .structure._linalg import eigen_clusters, unit_normalized
@@ -45,7 +46,8 @@ def _contradictions(by_id: dict[str, Check]) -> list[tuple[str, str, str]]:
             )
     gain, stab = by_id.get("observer_gain"), by_id.get("observer_stability")
     if gain is not None and stab is not None:
-        linear = gain.fields.get("kind") in ("luenberger", "ogd")
+        kind = gain.fields.get("kind")
+        linear = kind in observer_kinds() and not get_kind(kind).estimates_attack
         if linear and {gain.verdict, stab.verdict} == {Verdict.HOLDS, Verdict.FAILS}:
             out.append(
                 (
@@ -104,7 +106,7 @@ def environment() -> dict[str, str]:
     import numpy
     import scipy
 
-    from . import __version__
+    from ._version import __version__
 
     versions = {
         "ssecert": __version__,

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import shlex
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -190,7 +190,7 @@ def certify(
     design = None
     if spec.observer is not None:
         from .design.gains import GainError
-        from .design.observer import build_observer
+        from .observers import build_observer
 
         try:
             design = build_observer(spec.system, spec.observer, budget=budget)
@@ -231,8 +231,9 @@ def certify(
     elif not simulate:
         notes.append("simulations skipped (--no-sim)")
     region_map = None
-    if region and design is not None and design.sparse:
-        region_map = _region(design, notes, say, budget)
+    family = design.observer_kind.region_family(design) if region and design is not None else None
+    if family is not None:
+        region_map = _region(family, notes, say, budget)
     return CertifyResult(
         spec=spec,
         certificate=cert,
@@ -246,12 +247,11 @@ def certify(
 
 
 def _region(design: Any, notes: list[str], say: Progress, budget: Budget) -> Any | None:
-    from .stability.lmi import LureModel, lmi_cost, region_map
+    """The certified (shrink, step) map of ``design``, its kind's region family."""
+    from .stability.lmi import lmi_cost, region_map
 
     m = design.sensing.shape[0]
     n = design.system.n
-    if design.inner_steps > 1:
-        return None
     if n + 2 * m > REGION_LIMIT:
         notes.append(
             f"certified region not mapped: the LMI has {n + 2 * m} rows "
@@ -263,13 +263,12 @@ def _region(design: Any, notes: list[str], say: Progress, budget: Budget) -> Any
     step = float(design.step)
     steps = np.unique(np.round(step * np.geomspace(0.1, 2.0, 6), 12))
     shrinks = np.array([0.2, 0.4, 0.6, 0.8, 0.9, 1.0])
-    if design.kind == "elastic_net" and not np.any(np.isclose(shrinks, design.shrink)):
+    if not np.any(np.isclose(shrinks, design.shrink)):
         shrinks = np.sort(np.append(shrinks, design.shrink))
     if not np.any(np.isclose(steps, step)):
         steps = np.sort(np.append(steps, step))
-    target = replace(design, kind="elastic_net")
     # every grid point may need a block-diagonal and a cross-term solve
-    model = LureModel.from_design(target)
+    model = design.observer_kind.lure_model(design)
     costs = [lmi_cost(model, "circle", st) for st in ("block-diagonal", "cross")]
     refusal = budget.refusal(
         f"the {shrinks.size} x {steps.size} region map ({n + 2 * m} LMI rows per point)",
@@ -279,7 +278,7 @@ def _region(design: Any, notes: list[str], say: Progress, budget: Budget) -> Any
     if refusal:
         notes.append(f"certified region not mapped: {refusal}")
         return None
-    return region_map(target, shrinks, steps, budget=budget)
+    return region_map(design, shrinks, steps, budget=budget)
 
 
 def _command(spec: Spec, seed: int | None, simulate: bool) -> str:

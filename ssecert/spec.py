@@ -42,7 +42,6 @@ wrong or hostile file costs a message and not a frozen machine:
 
 from __future__ import annotations
 
-import difflib
 import hashlib
 import io
 import json
@@ -61,18 +60,33 @@ from typing import Any
 
 import numpy as np
 
+from ._spec_table import (
+    INT64_MAX,
+    INT64_MIN,
+    MATRIX_LIMITS,
+    UNPRINTABLE,
+    SpecError,
+    SpecTable,
+    check_keys,
+    convert,
+    one_line,
+    require,
+    spec_error,
+    spec_int,
+    suggest,
+)
 from ._validation import (
     MAX_MATRIX_DIM,
     MAX_MATRIX_ENTRIES,
     as_choice,
     as_float_option,
     as_index_list,
-    as_int_option,
     as_real_matrix,
     check_size,
     describe,
     show_int,
 )
+from .observers import BUILTIN_KINDS, get_kind, observer_kinds
 from .system import System
 
 __all__ = [
@@ -97,11 +111,8 @@ MAX_BINARY_BYTES = 256 * 2**20
 MAX_HORIZON = 10_000
 MAX_NESTING = 16
 MAX_NAME_LENGTH = 128
-_INT64_MIN, _INT64_MAX = -(2**63), 2**63 - 1
-_MATRIX_LIMITS = {"max_dim": MAX_MATRIX_DIM, "max_entries": MAX_MATRIX_ENTRIES}
 
-OBSERVER_KINDS = ("luenberger", "ogd", "sso", "dsso", "elastic_net")
-GAIN_CHOICES = ("deadbeat", "place", "ogd", "pinv")
+OBSERVER_KINDS = BUILTIN_KINDS
 ATTACK_KINDS = ("none", "constant", "switching", "sinusoidal", "random", "stealthy")
 SCENARIO_DEFAULTS: dict[str, Any] = {
     "magnitude": (4.0, 5.0),
@@ -125,37 +136,7 @@ _SCENARIO_KEYS = (
     "runs",
     "seed",
 )
-# observer keys allowed per kind (DESIGN.md table)
-_OBSERVER_KEYS = {
-    "luenberger": ("kind", "gain", "poles"),
-    "ogd": ("kind", "gain", "step"),
-    "sso": ("kind", "step", "threshold", "shrink", "window", "inner_steps"),
-    "dsso": ("kind", "gain", "poles", "step", "threshold", "shrink"),
-    "elastic_net": ("kind", "gain", "poles", "step", "threshold", "shrink", "L2"),
-}
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
-
-
-class SpecError(ValueError):
-    """A spec file or spec dictionary is invalid.
-
-    The message names the file and the key, says what was expected and what
-    was found.  It is one line: control characters from the file (in keys,
-    names or paths) are shown escaped.
-    """
-
-    def __init__(self, message: str) -> None:
-        super().__init__(one_line(message))
-
-
-# control characters, line and paragraph separators, bidirectional overrides
-_UNPRINTABLE = re.compile("[\x00-\x1f\x7f-\x9f\u2028\u2029\u202a-\u202e\u2066-\u2069]")
-
-
-def one_line(text: str) -> str:
-    """``text`` with control characters escaped and lone surrogates replaced."""
-    text = _UNPRINTABLE.sub(lambda m: ascii(m.group())[1:-1], text)
-    return text.encode("utf-8", "backslashreplace").decode("utf-8")
 
 
 @dataclass(frozen=True)
@@ -191,44 +172,6 @@ class Spec:
     sha256: str | None = None
 
 
-def _err(source: str, key: str | None, message: str) -> SpecError:
-    if key is not None and len(key) > 80:
-        key = key[:77] + "..."
-    where = f"{source}: key '{key}'" if key else source
-    return SpecError(f"{where}: {message}")
-
-
-def _suggest(key: Any, allowed: tuple[str, ...]) -> str:
-    """' (did you mean 'X'?)' for a misspelt or wrongly capitalised key, else ''."""
-    text = str(key)
-    close = [a for a in allowed if a.lower() == text.lower()]
-    close = close or difflib.get_close_matches(text, allowed, n=1)
-    return f" (did you mean '{close[0]}'?)" if close else ""
-
-
-def _check_keys(source: str, prefix: str, table: Any, allowed: tuple[str, ...]) -> None:
-    if not isinstance(table, Mapping):
-        raise _err(source, prefix or None, f"expected a table, got {describe(table)}")
-    for key in table:
-        if key not in allowed:
-            hint = _suggest(key, allowed)
-            full = f"{prefix}.{key}" if prefix else str(key)
-            raise _err(source, full, f"unknown key{hint}; allowed here: {', '.join(allowed)}")
-
-
-def _convert(source: str, key: str, func: Any, *args: Any, **kwargs: Any) -> Any:
-    """Run a converter, turning its error into a SpecError naming file and key."""
-    try:
-        return func(*args, **kwargs)
-    except (TypeError, ValueError) as exc:
-        message = str(exc)
-        # converters name their argument first; the key already names it here
-        name = kwargs.get("name") or (args[1] if len(args) > 1 else None)
-        if isinstance(name, str) and message.startswith(name + " "):
-            message = message[len(name) :].lstrip(" :")
-        raise _err(source, key, message) from None
-
-
 class _TooLongInteger:
     """An integer literal too long to convert (JSON ``parse_int``)."""
 
@@ -241,15 +184,15 @@ def _check_text(source: str, path: str, text: str, what: str) -> None:
     try:
         text.encode("utf-8")
     except UnicodeEncodeError as exc:
-        raise _err(
+        raise spec_error(
             source,
             path or None,
             f"{what} is not valid Unicode (a lone surrogate "
             f"{text[exc.start]!a} at position {exc.start})",
         ) from None
-    bad = _UNPRINTABLE.search(text)
+    bad = UNPRINTABLE.search(text)
     if bad:
-        raise _err(
+        raise spec_error(
             source,
             path or None,
             f"{what} contains the control character {bad.group()!a} at position "
@@ -274,14 +217,14 @@ def _check_document(source: str, data: Mapping[str, Any]) -> None:
         container, parent, name, depth = stack.pop()
         path = _path(parent, name)
         if depth > MAX_NESTING:
-            raise _err(
+            raise spec_error(
                 source,
                 path or None,
                 f"nested more than {MAX_NESTING} levels deep (a spec needs at most 4)",
             )
         is_table = isinstance(container, Mapping)
         if not is_table and len(container) > MAX_MATRIX_DIM:
-            raise _err(
+            raise spec_error(
                 source,
                 path or None,
                 f"a list of {len(container):,} entries: more rows, columns or items than "
@@ -298,16 +241,16 @@ def _check_document(source: str, data: Mapping[str, Any]) -> None:
             if isinstance(item, (Mapping, list, tuple)):
                 children.append((item, path, index, depth + 1))
             elif isinstance(item, _TooLongInteger):
-                raise _err(
+                raise spec_error(
                     source,
                     _path(path, index),
                     f"an integer of {item.digits:,} digits is out of range: spec "
                     f"integers must fit in 64 bits (-2^63 to 2^63 - 1)",
                 )
-            elif isinstance(item, int) and not _INT64_MIN <= item <= _INT64_MAX:
+            elif isinstance(item, int) and not INT64_MIN <= item <= INT64_MAX:
                 text = show_int(item)
                 text = text if "digits" in text else f"the integer {text}"
-                raise _err(
+                raise spec_error(
                     source,
                     _path(path, index),
                     f"{text} is out of range: spec integers "
@@ -329,18 +272,12 @@ def _path(parent: str, key: Any) -> str:
 
 def _check_name(source: str, key: str, value: Any, what: str) -> str:
     if not isinstance(value, str) or not value.strip():
-        raise _err(source, key, f"expected a non-empty string, got {describe(value)}")
+        raise spec_error(source, key, f"expected a non-empty string, got {describe(value)}")
     if len(value) > MAX_NAME_LENGTH:
-        raise _err(
+        raise spec_error(
             source, key, f"{what} has {len(value):,} characters; the limit is {MAX_NAME_LENGTH}"
         )
     return value
-
-
-def _require(source: str, table: Mapping[str, Any], key: str, prefix: str) -> Any:
-    if key not in table:
-        raise _err(source, f"{prefix}.{key}" if prefix else key, "missing (required)")
-    return table[key]
 
 
 def spec_from_dict(
@@ -384,47 +321,47 @@ def spec_from_dict(
     >>> spec.system.p, spec.horizon
     (2, 1)
     """
-    _check_keys(source, "", data, _TOP_KEYS)
+    check_keys(source, "", data, _TOP_KEYS)
     _check_document(source, data)
     name = data.get("name", default_name)
     if name is None:
-        raise _err(source, "name", "missing (required)")
+        raise spec_error(source, "name", "missing (required)")
     if not isinstance(name, str) or not _NAME_RE.match(name):
-        raise _err(
+        raise spec_error(
             source,
             "name",
             f"expected a name of letters, digits, '.', '_' or '-' (it names the report files), "
             f"got {describe(name)}",
         )
     _check_name(source, "name", name, "the name")
-    system_table = _require(source, data, "system", "")
-    _check_keys(source, "system", system_table, _SYSTEM_KEYS)
-    A = _convert(
+    system_table = require(source, data, "system", "")
+    check_keys(source, "system", system_table, _SYSTEM_KEYS)
+    A = convert(
         source,
         "system.A",
         as_real_matrix,
-        _require(source, system_table, "A", "system"),
+        require(source, system_table, "A", "system"),
         "A",
-        **_MATRIX_LIMITS,
+        **MATRIX_LIMITS,
     )
     if A.shape[0] != A.shape[1]:
-        raise _err(source, "system.A", f"expected a square matrix, got shape {A.shape}")
+        raise spec_error(source, "system.A", f"expected a square matrix, got shape {A.shape}")
     n = A.shape[0]
-    C = _convert(
+    C = convert(
         source,
         "system.C",
         as_real_matrix,
-        _require(source, system_table, "C", "system"),
+        require(source, system_table, "C", "system"),
         "C",
         shape=(None, n),
         shape_hint="the number of states, from A",
-        **_MATRIX_LIMITS,
+        **MATRIX_LIMITS,
     )
     sensors = system_table.get("sensors")
     if isinstance(sensors, (list, tuple)) and len(sensors) == C.shape[0]:
         for i, label in enumerate(sensors):
             if isinstance(label, str) and len(label) > MAX_NAME_LENGTH:
-                raise _err(
+                raise spec_error(
                     source,
                     "system.sensors",
                     f"sensors[{i}] has {len(label):,} characters; the limit is {MAX_NAME_LENGTH}",
@@ -432,45 +369,45 @@ def spec_from_dict(
     try:
         system = System(A, C, sensors=sensors, name=name)
     except (TypeError, ValueError) as exc:
-        raise _err(source, "system.sensors", str(exc)) from None
+        raise spec_error(source, "system.sensors", str(exc)) from None
     p = system.p
 
     attack_table = data.get("attack", {})
-    _check_keys(source, "attack", attack_table, _ATTACK_KEYS)
+    check_keys(source, "attack", attack_table, _ATTACK_KEYS)
     if max_attacked is not None:
-        s = _convert(
+        s = convert(
             source,
             "--max-attacked",
-            _spec_int,
+            spec_int,
             max_attacked,
             "max_attacked",
             min_value=0,
-            max_value=_INT64_MAX,
+            max_value=INT64_MAX,
         )
     elif "max_attacked" in attack_table:
-        s = _convert(
+        s = convert(
             source,
             "attack.max_attacked",
-            _spec_int,
+            spec_int,
             attack_table["max_attacked"],
             "max_attacked",
             min_value=0,
         )
     else:
-        raise _err(
+        raise spec_error(
             source,
             "attack.max_attacked",
             "missing (required): the number of attacked sensors s; or pass --max-attacked",
         )
     if horizon is not None:
-        tau = _convert(
-            source, "--horizon", _spec_int, horizon, "horizon", min_value=1, max_value=MAX_HORIZON
+        tau = convert(
+            source, "--horizon", spec_int, horizon, "horizon", min_value=1, max_value=MAX_HORIZON
         )
     elif "horizon" in attack_table:
-        tau = _convert(
+        tau = convert(
             source,
             "attack.horizon",
-            _spec_int,
+            spec_int,
             attack_table["horizon"],
             "horizon",
             min_value=1,
@@ -487,7 +424,7 @@ def spec_from_dict(
     if isinstance(raw_scenarios, Mapping):
         raw_scenarios = [raw_scenarios]
     if not isinstance(raw_scenarios, list):
-        raise _err(
+        raise spec_error(
             source,
             "scenario",
             f"expected a list of tables ([[scenario]]), got {describe(raw_scenarios)}",
@@ -496,7 +433,7 @@ def spec_from_dict(
     for index, table in enumerate(raw_scenarios):
         scenario = _scenario(source, f"scenario[{index}]", table, p)
         if scenario["name"] in seen:
-            raise _err(
+            raise spec_error(
                 source, f"scenario[{index}].name", f"duplicate scenario name {scenario['name']!r}"
             )
         seen.add(scenario["name"])
@@ -513,170 +450,34 @@ def spec_from_dict(
     )
 
 
-def _spec_int(value: Any, name: str, *, min_value: int, max_value: int = _INT64_MAX) -> int:
-    """An integer option of a spec: at most 2^63 - 1 also when written as a float."""
-    return as_int_option(value, name, min_value=min_value, max_value=max_value)
-
-
-def _positive(source: str, key: str, value: Any) -> float:
-    return _convert(
-        source, key, as_float_option, value, key.split(".")[-1], min_value=0.0, min_inclusive=False
-    )
-
-
-def _poles(source: str, key: str, value: Any, n: int) -> list[complex]:
-    if not isinstance(value, list):
-        raise _err(source, key, f"expected a list of {n} poles, got {describe(value)}")
-    if len(value) != n:
-        raise _err(source, key, f"expected {n} poles (one per state), got {len(value):,}")
-    poles: list[complex] = []
-    for i, item in enumerate(value):
-        if (
-            isinstance(item, list)
-            and len(item) == 2
-            and all(isinstance(x, numbers.Real) and not isinstance(x, bool) for x in item)
-        ):
-            pole = complex(float(item[0]), float(item[1]))
-        elif isinstance(item, numbers.Real) and not isinstance(item, bool):
-            pole = complex(float(item), 0.0)
-        else:
-            raise _err(
-                source,
-                f"{key}[{i}]",
-                f"expected a real number or a [re, im] pair, got {describe(item)}",
-            )
-        if not (math.isfinite(pole.real) and math.isfinite(pole.imag)):
-            raise _err(source, f"{key}[{i}]", f"must be finite, got {pole}")
-        poles.append(pole)
-    if len(poles) != n:
-        raise _err(source, key, f"expected {n} poles (one per state), got {len(poles)}")
-    remaining = [q for q in poles if q.imag != 0]
-    while remaining:
-        q = remaining.pop(0)
-        match = next((r for r in remaining if r == q.conjugate()), None)
-        if match is None:
-            raise _err(source, key, f"complex pole {q} has no conjugate partner")
-        remaining.remove(match)
-    return poles
-
-
 def _observer(source: str, table: Any, n: int, p: int) -> dict[str, Any]:
+    """The ``[observer]`` table, read by the kind it names."""
     if not isinstance(table, Mapping):
-        raise _err(source, "observer", f"expected a table, got {describe(table)}")
-    kind = _convert(
+        raise spec_error(source, "observer", f"expected a table, got {describe(table)}")
+    name = convert(
         source,
         "observer.kind",
         as_choice,
-        _require(source, table, "kind", "observer"),
+        require(source, table, "kind", "observer"),
         "kind",
-        OBSERVER_KINDS,
+        observer_kinds(),
     )
-    _check_keys(source, "observer", table, _OBSERVER_KEYS[kind])
-    out: dict[str, Any] = {"kind": kind}
-    if kind != "sso":
-        gain = table.get("gain", "ogd" if kind == "ogd" else "deadbeat")
-        if isinstance(gain, str):
-            allowed = {"ogd": ("ogd",), "dsso": ("deadbeat", "pinv", "place")}.get(
-                kind, ("deadbeat", "place", "pinv") if kind == "luenberger" else GAIN_CHOICES
-            )
-            if kind == "ogd" and gain != "ogd":
-                raise _err(
-                    source,
-                    "observer.gain",
-                    f"the ogd observer's gain is fixed (L = step * A C^T); got {gain!r}",
-                )
-            gain = _convert(source, "observer.gain", as_choice, gain, "gain", allowed)
-        elif kind == "ogd":
-            raise _err(
-                source,
-                "observer.gain",
-                "the ogd observer's gain is fixed (L = step * A C^T); remove this key",
-            )
-        else:
-            gain = _convert(
-                source,
-                "observer.gain",
-                as_real_matrix,
-                gain,
-                "gain",
-                shape=(n, p),
-                shape_hint="n x p: states by sensors",
-                **_MATRIX_LIMITS,
-            )
-        out["gain"] = gain
-        if isinstance(gain, str) and gain == "place":
-            out["poles"] = _poles(
-                source, "observer.poles", _require(source, table, "poles", "observer"), n
-            )
-        elif "poles" in table:
-            raise _err(source, "observer.poles", 'poles are only used with gain = "place"')
-    if kind != "luenberger":
-        out["step"] = _positive(
-            source, "observer.step", _require(source, table, "step", "observer")
-        )
-    if kind in ("sso", "dsso", "elastic_net"):
-        out["threshold"] = _positive(
-            source, "observer.threshold", _require(source, table, "threshold", "observer")
-        )
-    if kind in ("sso", "dsso"):
-        if "shrink" in table:
-            shrink = _convert(source, "observer.shrink", as_float_option, table["shrink"], "shrink")
-            if shrink != 1.0:
-                raise _err(
-                    source,
-                    "observer.shrink",
-                    f'the {kind} observer has shrink = 1; use kind = "elastic_net" for '
-                    f"shrink < 1, got {shrink}",
-                )
-        out["shrink"] = 1.0
-    if kind == "elastic_net":
-        out["shrink"] = _convert(
-            source,
-            "observer.shrink",
-            as_float_option,
-            _require(source, table, "shrink", "observer"),
-            "shrink",
-            min_value=0.0,
-            max_value=1.0,
-            min_inclusive=False,
-            max_inclusive=False,
-        )
-        if "L2" in table:
-            out["L2"] = _convert(
-                source,
-                "observer.L2",
-                as_real_matrix,
-                table["L2"],
-                "L2",
-                shape=(p, p),
-                shape_hint="p x p: sensors by sensors",
-                **_MATRIX_LIMITS,
-            )
-    if kind == "sso":
-        out["window"] = _convert(
-            source, "observer.window", _spec_int, table.get("window", 1), "window", min_value=1
-        )
-        out["inner_steps"] = _convert(
-            source,
-            "observer.inner_steps",
-            _spec_int,
-            table.get("inner_steps", 1),
-            "inner_steps",
-            min_value=1,
-        )
-    return out
+    kind = get_kind(name)
+    reader = SpecTable(source, "observer", table)
+    reader.check_keys(kind.keys)
+    return {"kind": name, **kind.parse(reader, n, p)}
 
 
 def _scenario(source: str, prefix: str, table: Any, p: int) -> dict[str, Any]:
-    _check_keys(source, prefix, table, _SCENARIO_KEYS)
+    check_keys(source, prefix, table, _SCENARIO_KEYS)
     name = _check_name(
-        source, f"{prefix}.name", _require(source, table, "name", prefix), "a scenario name"
+        source, f"{prefix}.name", require(source, table, "name", prefix), "a scenario name"
     )
-    attack = _convert(
+    attack = convert(
         source,
         f"{prefix}.attack",
         as_choice,
-        _require(source, table, "attack", prefix),
+        require(source, table, "attack", prefix),
         "attack",
         ATTACK_KINDS,
     )
@@ -685,7 +486,7 @@ def _scenario(source: str, prefix: str, table: Any, p: int) -> dict[str, Any]:
     if attack in ("none", "stealthy"):
         for key in ("sensors", "count"):
             if key in table:
-                raise _err(
+                raise spec_error(
                     source,
                     f"{prefix}.{key}",
                     f"not used by attack = {attack!r}"
@@ -697,71 +498,71 @@ def _scenario(source: str, prefix: str, table: Any, p: int) -> dict[str, Any]:
                 )
     elif attack in ("switching", "random"):
         if has_sensors:
-            raise _err(
+            raise spec_error(
                 source,
                 f"{prefix}.sensors",
                 f"attack = {attack!r} draws its supports at random; give count instead",
             )
-        out["count"] = _convert(
+        out["count"] = convert(
             source,
             f"{prefix}.count",
-            _spec_int,
-            _require(source, table, "count", prefix),
+            spec_int,
+            require(source, table, "count", prefix),
             "count",
             min_value=1,
             max_value=p,
         )
     else:
         if has_sensors == has_count:
-            raise _err(
+            raise spec_error(
                 source,
                 f"{prefix}.sensors",
                 f"attack = {attack!r} needs exactly one of sensors (0-based indices) or "
                 f"count (a random support of that size)",
             )
         if has_sensors:
-            sensors = _convert(
+            sensors = convert(
                 source, f"{prefix}.sensors", as_index_list, table["sensors"], "sensors", upper=p
             )
             if not sensors:
-                raise _err(source, f"{prefix}.sensors", "expected at least one sensor")
+                raise spec_error(source, f"{prefix}.sensors", "expected at least one sensor")
             out["sensors"] = list(sensors)
         else:
-            out["count"] = _convert(
+            out["count"] = convert(
                 source,
                 f"{prefix}.count",
-                _spec_int,
+                spec_int,
                 table["count"],
                 "count",
                 min_value=1,
                 max_value=p,
             )
     if attack in ("switching", "sinusoidal"):
-        out["period"] = _convert(
+        out["period"] = convert(
             source,
             f"{prefix}.period",
-            _spec_int,
-            _require(source, table, "period", prefix),
+            spec_int,
+            require(source, table, "period", prefix),
             "period",
             min_value=1,
         )
     elif "period" in table:
-        raise _err(
+        raise spec_error(
             source,
             f"{prefix}.period",
             f"only used by switching and sinusoidal attacks, not {attack!r}",
         )
     if "magnitude" in table:
         if attack == "none":
-            raise _err(source, f"{prefix}.magnitude", "not used by attack = 'none'")
+            raise spec_error(source, f"{prefix}.magnitude", "not used by attack = 'none'")
         mag = table["magnitude"]
         if isinstance(mag, numbers.Real) and not isinstance(mag, bool):
             mag = [mag, mag]
-        arr = _convert(
+        arr = convert(
             source, f"{prefix}.magnitude", as_real_matrix, mag, "magnitude", shape=(2,), ndim=1
         )
         if arr[0] < 0 or arr[0] > arr[1]:
-            raise _err(
+            raise spec_error(
                 source,
                 f"{prefix}.magnitude",
                 f"expected [low, high] with 0 <= low <= high, got {arr.tolist()}",
@@ -769,7 +570,7 @@ def _scenario(source: str, prefix: str, table: Any, p: int) -> dict[str, Any]:
         out["magnitude"] = (float(arr[0]), float(arr[1]))
     else:
         out["magnitude"] = SCENARIO_DEFAULTS["magnitude"]
-    out["noise"] = _convert(
+    out["noise"] = convert(
         source,
         f"{prefix}.noise",
         as_float_option,
@@ -778,18 +579,18 @@ def _scenario(source: str, prefix: str, table: Any, p: int) -> dict[str, Any]:
         min_value=0.0,
     )
     for key in ("steps", "runs"):
-        out[key] = _convert(
+        out[key] = convert(
             source,
             f"{prefix}.{key}",
-            _spec_int,
+            spec_int,
             table.get(key, SCENARIO_DEFAULTS[key]),
             key,
             min_value=1,
         )
-    out["seed"] = _convert(
+    out["seed"] = convert(
         source,
         f"{prefix}.seed",
-        _spec_int,
+        spec_int,
         table.get("seed", SCENARIO_DEFAULTS["seed"]),
         "seed",
         min_value=0,
@@ -816,10 +617,12 @@ def _read_npz(raw: bytes, source: str) -> dict[str, Any]:
     for member in members:
         key = member[:-4] if member.endswith(".npy") else member
         if key not in _SYSTEM_KEYS:
-            hint = _suggest(key, _SYSTEM_KEYS)
-            raise _err(source, key, f"unknown variable{hint}; expected A, C and optionally sensors")
+            hint = suggest(key, _SYSTEM_KEYS)
+            raise spec_error(
+                source, key, f"unknown variable{hint}; expected A, C and optionally sensors"
+            )
         if key in keys:
-            raise _err(source, key, "the archive holds this variable twice")
+            raise spec_error(source, key, "the archive holds this variable twice")
         keys.append(key)
     data: dict[str, Any] = {}
     for member, key in zip(members, keys):
@@ -841,7 +644,7 @@ def _read_npz(raw: bytes, source: str) -> dict[str, Any]:
             if key == "sensors":
                 limits = {"max_dim": MAX_MATRIX_DIM, "max_entries": MAX_MATRIX_DIM}
             else:
-                limits = _MATRIX_LIMITS
+                limits = MATRIX_LIMITS
             _check_array_size(source, key, tuple(shape), dtype, **limits)
             with archive.open(member) as handle:
                 data[key] = np.lib.format.read_array(handle, allow_pickle=False)
@@ -867,9 +670,9 @@ def _check_array_size(
     try:
         check_size("the variable", shape, max_dim, max_entries)
     except ValueError as exc:
-        raise _err(source, name, str(exc)) from None
+        raise spec_error(source, name, str(exc)) from None
     if math.prod(shape) * dtype.itemsize > 16 * max_entries:
-        raise _err(
+        raise spec_error(
             source,
             name,
             f"the variable is too large: {math.prod(shape):,} entries of {dtype.itemsize:,} bytes",
@@ -910,20 +713,20 @@ def _read_mat(raw: bytes, source: str) -> dict[str, Any]:
     seen = set()
     for name, class_name, shape in found:
         if name not in _SYSTEM_KEYS:
-            hint = _suggest(name, _SYSTEM_KEYS)
-            raise _err(
+            hint = suggest(name, _SYSTEM_KEYS)
+            raise spec_error(
                 source, name, f"unknown variable{hint}; expected A, C and optionally sensors"
             )
         if name in seen:
-            raise _err(source, name, "the file holds this variable twice")
+            raise spec_error(source, name, "the file holds this variable twice")
         seen.add(name)
         numeric = class_name in ("double", "single") or class_name.startswith(("int", "uint"))
         if name != "sensors" and not numeric:
-            raise _err(
+            raise spec_error(
                 source, f"system.{name}", f"must contain real numbers, got a MATLAB {class_name}"
             )
         limits = (
-            _MATRIX_LIMITS
+            MATRIX_LIMITS
             if name != "sensors"
             else {"max_dim": MAX_MATRIX_DIM, "max_entries": MAX_MATRIX_ENTRIES}
         )
@@ -957,7 +760,7 @@ def _read_arrays(raw: bytes, suffix: str, source: str) -> dict[str, Any]:
     data = _read_npz(raw, source) if suffix == ".npz" else _read_mat(raw, source)
     for key in data:
         if key not in _SYSTEM_KEYS:  # pragma: no cover - refused before loading
-            raise _err(source, key, "unknown variable; expected A, C and optionally sensors")
+            raise spec_error(source, key, "unknown variable; expected A, C and optionally sensors")
     if "sensors" in data:
         data["sensors"] = _names(source, data["sensors"])
     return data
@@ -971,10 +774,10 @@ def _names(source: str, value: Any) -> list[str]:
         if isinstance(item, np.ndarray):
             item = item.ravel()
             if item.size != 1:
-                raise _err(source, "sensors", "expected one name per sensor")
+                raise spec_error(source, "sensors", "expected one name per sensor")
             item = item[0]
         if not isinstance(item, (str, np.str_)):
-            raise _err(source, "sensors", f"expected strings, got {describe(item)}")
+            raise spec_error(source, "sensors", f"expected strings, got {describe(item)}")
         names.append(str(item).strip())
     return names
 
@@ -1031,7 +834,7 @@ def load_spec(
         arrays = _read_arrays(raw, suffix, source)
         for key in ("A", "C"):
             if key not in arrays:
-                raise _err(source, key, "missing (required variable)")
+                raise spec_error(source, key, "missing (required variable)")
         if max_attacked is None:
             raise SpecError(
                 f"{source}: a {suffix} file holds only the plant; give the number of attacked "

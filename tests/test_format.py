@@ -5,7 +5,7 @@ import pytest
 
 from ssecert import System
 from ssecert._format import sig
-from ssecert.design.observer import build_observer
+from ssecert.observers import build_observer
 from ssecert.stability.checks import observer_gain_check
 
 

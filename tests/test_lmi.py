@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from ssecert import System
-from ssecert.design.observer import build_observer
 from ssecert.examples import load_example
+from ssecert.observers import build_observer
 from ssecert.stability import lmi
 from ssecert.stability.checks import observer_checks
 from ssecert.stability.lmi import (
@@ -209,7 +209,7 @@ def test_region_map_reuses_certificates_and_every_holds_reverifies():
 
 def test_lure_model_matches_the_observer_simulator():
     """The Lur'e model's error trajectory is exactly the simulated observer's error."""
-    from ssecert.estimators.observers import observer_from_design
+    from ssecert.observers import observer_from_design
 
     design = random_design(4, shrink=0.5, step=0.03)
     model = LureModel.from_design(design)

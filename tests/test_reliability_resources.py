@@ -20,8 +20,8 @@ from ssecert import System, analyze, irrepresentable, sparse_observability, spec
 from ssecert.budget import Budget, ResourceLimitError, bounded_comb, parse_bytes
 from ssecert.certify import certify
 from ssecert.cli import main
-from ssecert.design.observer import build_observer
 from ssecert.examples import load_example
+from ssecert.observers import build_observer
 from ssecert.simulation.engine import simulate_scenario, simulate_spec
 from ssecert.stability import lmi
 from ssecert.stability.checks import observer_checks

@@ -8,9 +8,8 @@ import pytest
 from ssecert import System
 from ssecert.cli import main
 from ssecert.design.gains import deadbeat_gain
-from ssecert.design.observer import build_observer
-from ssecert.estimators.observers import LinearObserver, SparseSoftObserver, WindowSSO
 from ssecert.examples import load_example
+from ssecert.observers import LinearObserver, SparseSoftObserver, WindowSSO, build_observer
 from ssecert.simulation.engine import grid_search, simulate_scenario, stealthy_replay
 from ssecert.simulation.metrics import detection_delay, relative_error, support_error
 from ssecert.simulation.scenarios import generate

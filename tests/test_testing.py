@@ -13,8 +13,8 @@ from hypothesis import strategies as st
 import ssecert.testing
 from ssecert import Spec, SpecError, System, observability, sparse_observability, spec_from_dict
 from ssecert.design.gains import deadbeat_gain
-from ssecert.design.observer import build_observer
 from ssecert.examples import list_examples, load_example
+from ssecert.observers import build_observer
 from ssecert.testing import (
     assert_certified,
     assert_deadbeat,

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from ssecert.design.observer import build_observer
 from ssecert.examples import load_example
+from ssecert.observers import build_observer
 from ssecert.stability.thesis import pi_map, thesis_assumptions
 
 

@@ -1,1 +1,1 @@
-"""Observer gains and observer designs."""
+"""Observer gains: deadbeat, pole placement, pseudo-inverse and online gradient, verified."""

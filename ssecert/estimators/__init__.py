@@ -3,14 +3,19 @@
 * ``shrinkage``: soft thresholding, elastic-net and weighted shrinkage;
 * ``decoders``: ISTA, FISTA, IJAM, partial Lasso and elastic net (cvxpy), l1 and l0 decoders;
 * ``pruning``: the weighted l1 observer with pruned prior and successful-attack construction;
-* ``observers``: Luenberger, online-gradient, SSO, D-SSO and elastic-net observers, batched;
+* the dynamic observers (Luenberger, online-gradient, SSO, D-SSO and elastic-net, batched)
+  live in ``ssecert.observers`` and are re-exported here;
 * ``sise``: sparse-input and state estimation (Kalman-like, Lasso support detection);
 * ``localization``: RSS-fingerprint localization under sensor attacks.
 """
 
-from .base import (
+from ..observers import (
     DynamicObserver,
+    LinearObserver,
+    SparseSoftObserver,
     Trajectory,
+    WindowSSO,
+    observer_from_design,
 )
 from .decoders import (
     IterativeSolution,
@@ -31,12 +36,6 @@ from .localization import (
     localization_scenario,
     path_loss_rss,
     rss_dictionary,
-)
-from .observers import (
-    LinearObserver,
-    SparseSoftObserver,
-    WindowSSO,
-    observer_from_design,
 )
 from .pruning import (
     AttackVerification,

@@ -25,8 +25,8 @@ from typing import Any
 import numpy as np
 
 from .._validation import as_float_option, as_int_option, as_real_matrix, describe
+from ..observers.dynamic import DynamicObserver
 from ..tolerances import EPS, default_rtol
-from .base import DynamicObserver
 from .shrinkage import soft_threshold
 
 __all__ = ["LassoResult", "lasso_fista", "SISE", "OracleSISE"]

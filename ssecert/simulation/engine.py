@@ -23,8 +23,7 @@ from typing import Any
 import numpy as np
 
 from ..budget import Budget, ResourceLimitError
-from ..design.observer import ObserverDesign, build_observer
-from ..estimators.observers import observer_from_design
+from ..observers import ObserverDesign, build_observer, observer_from_design
 from ..parallel import map_ordered
 from ..system import System
 from .metrics import detection_delay, mse, relative_error, summarize, support_error
@@ -78,10 +77,7 @@ def scenario_cost(
     result_bytes = 2 * 3 * 8.0 * rs
     per_run = 8.0 * (steps + 1) * (8 * p + 6 * n + 3 * (n + m))
     fixed = 8.0 * (4 * (n + m) ** 2 + 2 * m * n)
-    if design.kind == "sso" and (design.window > 1 or design.inner_steps > 1):
-        step_flops = design.inner_steps * 2.0 * (n + m) ** 2 + 2.0 * (n + m) * m
-    else:
-        step_flops = 2.0 * (n + m) * (n + 2 * m + p)
+    step_flops = design.observer_kind.simulation_flops(design)
     flops = rs * (step_flops + 2.0 * n * (n + p) + 20.0 * (n + p + m))
     chunks = -(-int(runs) // max(int(chunk_runs), 1))
     flops += float(steps) * chunks * _LOOP_COST + float(runs) * _LOOP_COST
@@ -285,7 +281,7 @@ def simulate_scenario(
     Examples
     --------
     >>> from ssecert.examples import load_example
-    >>> from ssecert.design.observer import build_observer
+    >>> from ssecert.observers import build_observer
     >>> spec = load_example("ugv")
     >>> design = build_observer(spec.system, spec.observer)
     >>> res = simulate_scenario(design, spec.scenarios[0], runs=4, steps=50)

@@ -14,10 +14,10 @@ import numpy as np
 from .._format import sig
 from ..budget import Budget, ResourceLimitError
 from ..design.gains import DEADBEAT_RTOL, GainError
-from ..design.observer import ObserverDesign, build_observer
+from ..observers import ObserverDesign, build_observer
 from ..results import Check, Verdict
 from ..system import System
-from .lmi import LureModel, circle_certificate, iss_certificate, iss_from_circle, lure_model_cost
+from .lmi import circle_certificate, iss_certificate, iss_from_circle, lure_model_cost
 from .lyapunov import lyapunov_certificate
 from .thesis import thesis_assumptions
 
@@ -132,9 +132,7 @@ def observer_gain_check(design: ObserverDesign) -> Check:
 
 def _parts(design: ObserverDesign) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """(A, L, S) whose exact combination A - L S is the error matrix, when it is one."""
-    if design.kind == "sso" and design.inner_steps > 1:
-        return None
-    return design.system.A, design.gain.L, design.sensing
+    return design.observer_kind.exact_parts(design)
 
 
 def _deadbeat_check(
@@ -257,15 +255,13 @@ def observer_stability_check(
             witness=cert.witness if verdict is Verdict.FAILS else None,
             tolerances={"error_bound": cert.error_bound},
         ), cert
-    if design.inner_steps > 1:
+    gap = design.observer_kind.lure_gap(design)
+    if gap:
         return Check(
             id="observer_stability",
             title=title,
             verdict=Verdict.INCONCLUSIVE,
-            summary=(
-                f"Certificates for an SSO with {design.inner_steps} inner steps per sample "
-                f"are not implemented (the Lur'e model covers one step)."
-            ),
+            summary=gap,
             method="circle criterion",
             fields={},
         ), None
@@ -284,7 +280,7 @@ def observer_stability_check(
             method="circle criterion (LMI, Clarabel)",
             fields={},
         ), None
-    model = LureModel.from_design(design)
+    model = design.observer_kind.lure_model(design)
     cert = circle_certificate(model, budget=budget)
     verdict = Verdict(cert.verdict)
     fields = {
@@ -349,7 +345,7 @@ def iss_gain_check(
         + "attack and e the state estimation error"
     )
     if not design.sparse:
-        model = LureModel.linear(design.error_matrix, design.gain.L)
+        model = design.observer_kind.lure_model(design)
         cert = iss_certificate(model, alpha=0.0, budget=budget)
     else:
         if stability is None or stability[1].verdict != "holds":

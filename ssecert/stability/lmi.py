@@ -43,7 +43,8 @@ from typing import Any
 import numpy as np
 
 from ..budget import Budget
-from ..design.observer import ObserverDesign
+from ..observers import ObserverDesign
+from ..observers.lure import LureModel
 from ..tolerances import EPS
 
 __all__ = [
@@ -97,88 +98,6 @@ def lmi_cost(model: LureModel, kind: str, structure: str) -> tuple[float, float]
     else:
         v = N * (N + 1) / 2 + m
     return 64 * 2**20 + 48.0 * (T + v) ** 2, 10.0 * (T + v) ** 3
-
-
-@dataclass(frozen=True)
-class LureModel:
-    """xi+ = A xi + B phi(w) + E a, w = Cw xi + Dw a, e = Ce xi; phi in sector [0, q].
-
-    ``n_e`` is the size of the first state block (the estimation error); the
-    remaining ``m`` states are the attack estimate, equal to the previous
-    nonlinearity output.
-    """
-
-    A: np.ndarray
-    B: np.ndarray
-    Cw: np.ndarray
-    E: np.ndarray
-    Dw: np.ndarray
-    Ce: np.ndarray
-    q: float
-    n_e: int
-    threshold: float = 0.0
-
-    @property
-    def N(self) -> int:
-        return self.A.shape[0]
-
-    @property
-    def m(self) -> int:
-        return self.B.shape[1]
-
-    @property
-    def r(self) -> int:
-        return self.E.shape[1]
-
-    def vertex(self, k: float) -> np.ndarray:
-        """Closed loop with phi(w) = k w."""
-        return self.A + k * self.B @ self.Cw
-
-    @classmethod
-    def from_design(cls, design: ObserverDesign) -> LureModel:
-        """The Lur'e form of a sparse observer (inner_steps = 1)."""
-        A_p = design.system.A
-        S = design.sensing
-        n, m = A_p.shape[0], S.shape[0]
-        L = design.gain.L
-        F = A_p - L @ S
-        nu = float(design.step)
-        L2 = design.L2 if design.L2 is not None else np.eye(m)
-        A = np.block([[F, -L], [np.zeros((m, n)), np.zeros((m, m))]])
-        B = np.vstack([np.zeros((n, m)), np.eye(m)])
-        Cw = np.hstack([-nu * L2 @ S, np.eye(m) - nu * L2])
-        E = np.vstack([L, np.zeros((m, m))])
-        Dw = nu * L2
-        Ce = np.hstack([np.eye(n), np.zeros((n, m))])
-        return cls(A, B, Cw, E, Dw, Ce, float(design.shrink), n, float(design.threshold or 0.0))
-
-    def phi(self, w: np.ndarray) -> np.ndarray:
-        """The nonlinearity q * soft_threshold(w), componentwise."""
-        return self.q * np.sign(w) * np.maximum(np.abs(w) - self.threshold, 0.0)
-
-    def simulate(self, xi0: np.ndarray, steps: int, attack: np.ndarray | None = None) -> np.ndarray:
-        """Trajectories of the error state, shape (steps + 1, ..., N).
-
-        ``xi0`` may hold many initial states (..., N); ``attack`` has shape
-        (steps, ..., r) or is None (no attack).
-        """
-        xi = np.asarray(xi0, dtype=float)
-        out = np.empty((steps + 1,) + xi.shape)
-        out[0] = xi
-        for k in range(steps):
-            a = 0.0 if attack is None else attack[k]
-            w = xi @ self.Cw.T + (0.0 if attack is None else a @ self.Dw.T)
-            xi = xi @ self.A.T + (self.phi(w) @ self.B.T if self.m else 0.0)
-            if attack is not None:
-                xi = xi + a @ self.E.T
-            out[k + 1] = xi
-        return out
-
-    @classmethod
-    def linear(cls, F: np.ndarray, L: np.ndarray) -> LureModel:
-        """e+ = F e + L a with no nonlinearity (a Luenberger-type observer)."""
-        n, r = L.shape
-        return cls(F, np.zeros((n, 0)), np.zeros((0, n)), L, np.zeros((0, r)), np.eye(n), 0.0, n)
 
 
 @dataclass(frozen=True)

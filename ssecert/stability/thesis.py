@@ -36,7 +36,7 @@ import numpy as np
 
 from .._format import sig
 from ..budget import Budget
-from ..design.observer import ObserverDesign
+from ..observers import ObserverDesign
 from ..tolerances import EPS
 from .lyapunov import lyapunov_certificate
 

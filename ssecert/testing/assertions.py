@@ -638,7 +638,7 @@ def assert_recovers(
     """
     __tracebackhide__ = True  # pytest shows the caller's line, not ours
     from ..design.gains import GainError
-    from ..design.observer import build_observer
+    from ..observers import build_observer
     from ..simulation.engine import simulate_scenario
 
     design = _require_spec(design)

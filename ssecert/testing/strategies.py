@@ -661,7 +661,7 @@ def _designs(
     cache: dict[int, Any],
 ) -> Spec:
     from ..design.gains import GainError
-    from ..design.observer import build_observer
+    from ..observers import build_observer
 
     if isinstance(system, SearchStrategy):
         plant = draw(system)
@@ -770,7 +770,7 @@ def observer_designs(
     Examples
     --------
     >>> from hypothesis import given
-    >>> from ssecert.design.observer import build_observer
+    >>> from ssecert.observers import build_observer
     >>> @given(observer_designs(observable_systems(3, 2), kinds=["dsso", "elastic_net"]))
     ... def check(design):
     ...     assert design.observer["kind"] in ("dsso", "elastic_net")

@@ -20,19 +20,18 @@ All follow ssecert's convention x_hat(k+1) = A x_hat(k) + L (y(k) - y_hat(k))
   the paper, the stacked attack estimate is not shifted when the window
   moves (the attack support is taken as constant).
 
-``observer_from_design`` turns an ``ObserverDesign`` (the spec's
-``[observer]`` section) into one of these.
+Each observer kind (``ssecert.observers``) picks one of these for its
+designs; ``ssecert.observers.observer_from_design`` asks it.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..design.observer import ObserverDesign
-from .base import DynamicObserver, Trajectory
+from .dynamic import DynamicObserver, Trajectory
 from .shrinkage import soft_threshold
 
-__all__ = ["LinearObserver", "SparseSoftObserver", "WindowSSO", "observer_from_design"]
+__all__ = ["LinearObserver", "SparseSoftObserver", "WindowSSO"]
 
 
 class LinearObserver(DynamicObserver):
@@ -259,37 +258,3 @@ class WindowSSO(DynamicObserver):
             z = z @ self._G_T + injected
             z[:, n:] = soft_threshold(z[:, n:], self.threshold)
         return z[:, :n], z[:, n:]
-
-
-def observer_from_design(design: ObserverDesign) -> DynamicObserver:
-    """The simulator of an ``ObserverDesign`` (from the spec's ``[observer]``).
-
-    Examples
-    --------
-    >>> from ssecert.examples import load_example
-    >>> from ssecert.design.observer import build_observer
-    >>> spec = load_example("ugv")
-    >>> type(observer_from_design(build_observer(spec.system, spec.observer))).__name__
-    'SparseSoftObserver'
-    """
-    A, C = design.system.A, design.system.C
-    if not design.sparse:
-        return LinearObserver(A, C, design.gain.L)
-    if design.kind == "sso" and (design.window > 1 or design.inner_steps > 1):
-        return WindowSSO(
-            A,
-            C,
-            step=design.step,
-            threshold=design.threshold,
-            window=design.window,
-            inner_steps=design.inner_steps,
-        )
-    return SparseSoftObserver(
-        A,
-        design.sensing,
-        design.gain.L,
-        step=design.step,
-        threshold=design.threshold,
-        shrink=design.shrink,
-        L2=design.L2,
-    )

@@ -1,0 +1,105 @@
+"""Observer kinds as plug-ins: one module per kind, one registry.
+
+========================  =====================================  ===============
+kind (module)             L                                      attack estimate
+========================  =====================================  ===============
+luenberger (luenberger)   deadbeat, place, pinv or a matrix      none
+ogd (ogd)                 step * A C^T (lecture notes Sec. 4.2)  none
+sso (sso)                 step * A S^T (Algorithm 1, Lasso       shrink 1, L2 = I
+                          paper; S = O_tau)
+dsso (dsso)               deadbeat (default), pinv, place,       shrink 1, L2 = I
+                          matrix
+elastic_net (elastic_net) any                                    shrink in (0, 1), L2
+========================  =====================================  ===============
+
+A kind is a subclass of ``ObserverKind`` decorated with ``register``; the
+spec loader, the certificates, the simulations and the report reach every
+kind through ``get_kind`` and the design's ``observer_kind``.  See
+CONTRIBUTING.md for adding one.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from ..budget import Budget
+from ..system import System
+from . import dsso, elastic_net, luenberger, ogd, sso  # noqa: F401  (register the built-in kinds)
+from .base import GAIN_CHOICES, ObserverDesign, ObserverKind
+from .dynamic import DynamicObserver, Trajectory
+from .lure import LureModel
+from .registry import BUILTIN_KINDS, get_kind, observer_kinds, register, unregister
+from .simulators import LinearObserver, SparseSoftObserver, WindowSSO
+
+__all__ = [
+    "ObserverDesign",
+    "ObserverKind",
+    "build_observer",
+    "observer_from_design",
+    "register",
+    "unregister",
+    "get_kind",
+    "observer_kinds",
+    "BUILTIN_KINDS",
+    "GAIN_CHOICES",
+    "LureModel",
+    "DynamicObserver",
+    "Trajectory",
+    "LinearObserver",
+    "SparseSoftObserver",
+    "WindowSSO",
+]
+
+
+def build_observer(
+    system: System, spec: Mapping[str, Any], *, budget: Budget | None = None
+) -> ObserverDesign:
+    """Build an observer from a validated ``[observer]`` section.
+
+    Parameters
+    ----------
+    system : System
+    spec : mapping
+        As validated by ``ssecert.spec`` (``Spec.observer``).
+    budget : Budget, optional
+        Memory allowed for the observer's matrices (default ``Budget()``,
+        2 GiB): an SSO with window tau stacks O_tau (p tau x n) and an
+        identity L2 of size p tau.
+
+    Returns
+    -------
+    ObserverDesign
+
+    Raises
+    ------
+    GainError
+        If the requested gain cannot be computed (not observable for a
+        deadbeat gain, C not of full column rank for pinv, placement missed,
+        O_tau or the gain overflows).
+    ResourceLimitError
+        If the matrices of an SSO window would exceed the memory budget (the
+        message gives the estimate).
+
+    Examples
+    --------
+    >>> from ssecert.examples import load_example
+    >>> spec = load_example("ugv")
+    >>> design = build_observer(spec.system, spec.observer)
+    >>> design.kind, design.gain.method, design.gain.details["nilpotency_index"]
+    ('dsso', 'deadbeat', 1)
+    """
+    return get_kind(spec["kind"]).build(system, spec, budget or Budget())
+
+
+def observer_from_design(design: ObserverDesign) -> DynamicObserver:
+    """The batched simulator of an ``ObserverDesign``, as its kind gives it.
+
+    Examples
+    --------
+    >>> from ssecert.examples import load_example
+    >>> spec = load_example("ugv")
+    >>> type(observer_from_design(build_observer(spec.system, spec.observer))).__name__
+    'SparseSoftObserver'
+    """
+    return design.observer_kind.simulator(design)

@@ -1,0 +1,282 @@
+"""What every observer kind provides, and the design it builds.
+
+Every observer of ssecert is written
+
+    x_hat(k+1) = A x_hat(k) + L (y(k) - y_hat(k)),   y_hat = S x_hat + a_hat,
+    a_hat(k+1) = shrink * S_threshold(a_hat(k) - step * L2 (y_hat(k) - y(k))),
+
+with S the sensing matrix (C, or the stacked O_tau for an SSO with window
+tau > 1) and the attack estimate absent for observers that do not estimate
+the attack.  The error matrix of the linear part is F = A - L S.
+
+An observer kind (one module of this package each) is a subclass of
+``ObserverKind`` registered under the name a spec's ``[observer] kind``
+gives.  It reads its spec table, builds an ``ObserverDesign``, writes the
+design's error dynamics in Lur'e form for the certificates, and gives the
+batched simulator; spec loading, certification, simulation and the report
+use only these methods and never a kind's name.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import numpy as np
+
+from .._spec_table import SpecTable
+from ..budget import Budget
+from ..design.gains import Gain, GainError, deadbeat_gain, ogd_gain, pinv_gain, place_gain
+from ..system import System
+from .lure import LureModel
+
+if TYPE_CHECKING:
+    from .dynamic import DynamicObserver
+
+__all__ = ["ObserverDesign", "ObserverKind", "LINEAR_GAINS", "GAIN_CHOICES"]
+
+LINEAR_GAINS = ("deadbeat", "place", "pinv")
+GAIN_CHOICES = ("deadbeat", "place", "ogd", "pinv")
+
+
+@dataclass(frozen=True)
+class ObserverDesign:
+    """A fully specified observer for a plant.
+
+    Attributes
+    ----------
+    kind : str
+        The name of its ``ObserverKind``.
+    system : System
+    gain : Gain
+        L with its verification.
+    sensing : ndarray, shape (m, n)
+        Output matrix the observer uses: C, or O_tau for an SSO window.
+    step, threshold, shrink : float or None
+        nu (or epsilon), lambda and q; None for linear observers.
+    L2 : ndarray, shape (m, m), or None
+    window, inner_steps : int
+    """
+
+    kind: str
+    system: System
+    gain: Gain
+    sensing: np.ndarray
+    step: float | None = None
+    threshold: float | None = None
+    shrink: float = 1.0
+    L2: np.ndarray | None = None
+    window: int = 1
+    inner_steps: int = 1
+
+    @property
+    def observer_kind(self) -> ObserverKind:
+        """The registered kind that built this design."""
+        from .registry import get_kind
+
+        return get_kind(self.kind)
+
+    @property
+    def L(self) -> np.ndarray:
+        return self.gain.L
+
+    @property
+    def error_matrix(self) -> np.ndarray:
+        """The linear error dynamics while the attack estimate is zero (F = A - L S)."""
+        return self.observer_kind.error_matrix(self)
+
+    @property
+    def sparse(self) -> bool:
+        """True for observers that also estimate the attack."""
+        return self.observer_kind.estimates_attack
+
+    def to_dict(self) -> dict[str, Any]:
+        return self.observer_kind.describe(self)
+
+
+class ObserverKind:
+    """One kind of observer: what the spec says, and what certification and simulation need.
+
+    Subclasses set the class attributes and implement ``parse``, ``build``
+    and ``simulator``; the defaults of the other methods fit an observer
+    x_hat+ = A x_hat + L (y - S x_hat) (with an attack estimate when
+    ``estimates_attack``).  Register a subclass with
+    ``ssecert.observers.register``.
+
+    Attributes
+    ----------
+    name : str
+        The spec's ``[observer] kind``.
+    keys : tuple of str
+        The keys its ``[observer]`` table may hold (``kind`` included).
+    estimates_attack : bool
+        True when the observer also estimates the attack (a sparse
+        observer): its certificates are LMIs on a Lur'e model, the thesis's
+        assumptions are checked, and its certified (shrink, step) region is
+        mapped.
+    """
+
+    name: ClassVar[str]
+    keys: ClassVar[tuple[str, ...]]
+    estimates_attack: ClassVar[bool] = False
+
+    def parse(self, table: SpecTable, n: int, p: int) -> dict[str, Any]:
+        """The validated parameters of an ``[observer]`` table (``kind`` excluded).
+
+        ``table.check_keys(self.keys)`` has passed.  Raise ``table.error``
+        for a wrong value.
+        """
+        raise NotImplementedError(f"observer kind {self.name!r} does not read a spec table")
+
+    def build(self, system: System, params: Mapping[str, Any], budget: Budget) -> ObserverDesign:
+        """The design for ``system`` from the validated parameters.
+
+        Raise ``GainError`` when the gain cannot be computed and
+        ``ResourceLimitError`` (``budget.require``) when its matrices would
+        not fit the memory budget.
+        """
+        raise NotImplementedError(f"observer kind {self.name!r} does not build designs")
+
+    def simulator(self, design: ObserverDesign) -> DynamicObserver:
+        """The batched simulator of ``design`` (``ssecert.observers.dynamic``)."""
+        raise NotImplementedError(f"observer kind {self.name!r} cannot be simulated")
+
+    def error_matrix(self, design: ObserverDesign) -> np.ndarray:
+        """The linear error dynamics while the attack estimate is zero: F = A - L S."""
+        return design.system.A - design.gain.L @ design.sensing
+
+    def exact_parts(
+        self, design: ObserverDesign
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """(A, L, S) whose exact combination A - L S is ``error_matrix``, or None."""
+        return design.system.A, design.gain.L, design.sensing
+
+    def lure_model(self, design: ObserverDesign) -> LureModel:
+        """The error dynamics in Lur'e form, for the LMI certificates.
+
+        The default is e+ = F e + L a with no nonlinearity.  Raises
+        NotImplementedError, with the reason, when ``lure_gap`` gives one.
+        """
+        gap = self.lure_gap(design)
+        if gap:
+            raise NotImplementedError(gap)
+        return LureModel.linear(self.error_matrix(design), design.gain.L)
+
+    def lure_gap(self, design: ObserverDesign) -> str | None:
+        """Why ``design`` has no Lur'e form (so no LMI certificate), or None.
+
+        Asked before the model is built, so that a design without one costs
+        no memory.
+        """
+        return None
+
+    def region_family(self, design: ObserverDesign) -> ObserverDesign | None:
+        """The design whose (shrink, step) the certified-region map varies, or None."""
+        return None
+
+    def simulation_flops(self, design: ObserverDesign) -> float:
+        """Operations of one simulated step of one run (for the simulation's work estimate)."""
+        n, p = design.system.n, design.system.p
+        m = design.sensing.shape[0] if self.estimates_attack else 0
+        return 2.0 * (n + m) * (n + 2 * m + p)
+
+    def describe(self, design: ObserverDesign) -> dict[str, Any]:
+        """What the certificate and the report show of the design."""
+        out: dict[str, Any] = {"kind": design.kind, "gain_method": design.gain.method}
+        out["L"] = design.gain.L
+        if self.estimates_attack:
+            out.update(
+                step=design.step,
+                threshold=design.threshold,
+                shrink=design.shrink,
+                L2=design.L2,
+                window=design.window,
+                inner_steps=design.inner_steps,
+            )
+        return out
+
+
+# Shared by several kinds ---------------------------------------------------
+
+
+def parse_gain(
+    table: SpecTable, n: int, p: int, choices: tuple[str, ...], default: str = "deadbeat"
+) -> dict[str, Any]:
+    """``gain`` (one of ``choices`` or an n x p matrix) and, for ``place``, ``poles``."""
+    out: dict[str, Any] = {}
+    gain = table.get("gain", default)
+    if isinstance(gain, str):
+        gain = table.choice("gain", gain, choices)
+    else:
+        gain = table.matrix("gain", gain, shape=(n, p), shape_hint="n x p: states by sensors")
+    out["gain"] = gain
+    if isinstance(gain, str) and gain == "place":
+        out["poles"] = table.poles("poles", n)
+    elif "poles" in table:
+        raise table.error("poles", 'poles are only used with gain = "place"')
+    return out
+
+
+def parse_unit_shrink(table: SpecTable, kind: str) -> float:
+    """The shrink of an SSO or D-SSO: 1, written or not."""
+    if "shrink" in table:
+        shrink = table.real("shrink", table.get("shrink"))
+        if shrink != 1.0:
+            raise table.error(
+                "shrink",
+                f'the {kind} observer has shrink = 1; use kind = "elastic_net" for '
+                f"shrink < 1, got {shrink}",
+            )
+    return 1.0
+
+
+def gain_from_choice(system: System, params: Mapping[str, Any]) -> Gain:
+    """The gain a validated ``gain`` (and ``poles``, ``step``) asks for."""
+    choice = params.get("gain", "deadbeat")
+    if not isinstance(choice, str):
+        L = np.asarray(choice, dtype=float)
+        return Gain(
+            L=L, method="matrix", error_matrix=system.A - L @ system.C, verified=True, details={}
+        )
+    if choice == "deadbeat":
+        return deadbeat_gain(system)
+    if choice == "place":
+        return place_gain(system, params["poles"])
+    if choice == "pinv":
+        return pinv_gain(system)
+    if choice == "ogd":
+        return ogd_gain(system, params.get("step"))
+    raise GainError(f"unknown gain {choice!r}")
+
+
+def check_finite(gain: Gain) -> Gain:
+    """``gain``, or GainError when L or A - L C overflows."""
+    if not (np.all(np.isfinite(gain.L)) and np.all(np.isfinite(gain.error_matrix))):
+        raise GainError(
+            "the gain L or the error matrix A - L C has entries that overflow in floating point"
+        )
+    return gain
+
+
+def soft_lure_model(design: ObserverDesign) -> LureModel:
+    """The Lur'e form of an observer with a soft-thresholded attack estimate (one step).
+
+    xi = (e, a_hat): A = [[F, -L], [0, 0]], B = [[0], [I]],
+    Cw = [-step L2 S, I - step L2], E = [[L], [0]], Dw = step L2, and the
+    nonlinearity shrink * soft_threshold in the sector [0, shrink].
+    """
+    A_p = design.system.A
+    S = design.sensing
+    n, m = A_p.shape[0], S.shape[0]
+    L = design.gain.L
+    F = A_p - L @ S
+    nu = float(design.step)  # type: ignore[arg-type]
+    L2 = design.L2 if design.L2 is not None else np.eye(m)
+    A = np.block([[F, -L], [np.zeros((m, n)), np.zeros((m, m))]])
+    B = np.vstack([np.zeros((n, m)), np.eye(m)])
+    Cw = np.hstack([-nu * L2 @ S, np.eye(m) - nu * L2])
+    E = np.vstack([L, np.zeros((m, m))])
+    Dw = nu * L2
+    Ce = np.hstack([np.eye(n), np.zeros((n, m))])
+    return LureModel(A, B, Cw, E, Dw, Ce, float(design.shrink), n, float(design.threshold or 0.0))

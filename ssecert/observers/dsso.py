@@ -1,0 +1,86 @@
+"""The decoupled sparse soft observer (D-SSO) of the thesis, shrink 1.
+
+Spec keys: ``gain`` (``"deadbeat"``, the default, ``"pinv"``, ``"place"``
+with ``poles``, or an n x p matrix), ``step`` and ``threshold`` (> 0),
+``shrink`` (1 if given).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from .._spec_table import SpecTable
+from ..budget import Budget
+from ..system import System
+from .base import (
+    ObserverDesign,
+    ObserverKind,
+    check_finite,
+    gain_from_choice,
+    parse_gain,
+    parse_unit_shrink,
+    soft_lure_model,
+)
+from .lure import LureModel
+from .registry import register
+from .simulators import SparseSoftObserver
+
+__all__ = ["DecoupledSSO", "SoftThresholdObserverKind"]
+
+
+class SoftThresholdObserverKind(ObserverKind):
+    """A Luenberger-type observer with a soft-thresholded attack estimate (D-SSO, elastic net)."""
+
+    estimates_attack = True
+
+    def build(self, system: System, params: Mapping[str, Any], budget: Budget) -> ObserverDesign:
+        gain = check_finite(gain_from_choice(system, params))
+        m = system.p
+        L2 = params.get("L2")
+        return ObserverDesign(
+            kind=self.name,
+            system=system,
+            gain=gain,
+            sensing=system.C,
+            step=float(params["step"]),
+            threshold=float(params["threshold"]),
+            shrink=float(params.get("shrink", 1.0)),
+            L2=np.eye(m) if L2 is None else np.asarray(L2, dtype=float),
+        )
+
+    def simulator(self, design: ObserverDesign) -> SparseSoftObserver:
+        return SparseSoftObserver(
+            design.system.A,
+            design.sensing,
+            design.gain.L,
+            step=design.step,  # type: ignore[arg-type]
+            threshold=design.threshold,  # type: ignore[arg-type]
+            shrink=design.shrink,
+            L2=design.L2,
+        )
+
+    def lure_model(self, design: ObserverDesign) -> LureModel:
+        gap = self.lure_gap(design)
+        if gap:
+            raise NotImplementedError(gap)
+        return soft_lure_model(design)
+
+    def region_family(self, design: ObserverDesign) -> ObserverDesign | None:
+        return replace(design, kind="elastic_net")
+
+
+@register
+class DecoupledSSO(SoftThresholdObserverKind):
+    name = "dsso"
+    keys = ("kind", "gain", "poles", "step", "threshold", "shrink")
+
+    def parse(self, table: SpecTable, n: int, p: int) -> dict[str, Any]:
+        out = parse_gain(table, n, p, ("deadbeat", "pinv", "place"))
+        out["step"] = table.positive("step")
+        out["threshold"] = table.positive("threshold")
+        out["shrink"] = parse_unit_shrink(table, self.name)
+        return out

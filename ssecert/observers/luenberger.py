@@ -1,0 +1,35 @@
+"""The Luenberger observer: x_hat+ = A x_hat + L (y - C x_hat).
+
+Spec keys: ``gain`` (``"deadbeat"``, the default, ``"place"`` with
+``poles``, ``"pinv"``, or an n x p matrix).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from .._spec_table import SpecTable
+from ..budget import Budget
+from ..system import System
+from .base import ObserverDesign, ObserverKind, check_finite, gain_from_choice, parse_gain
+from .registry import register
+from .simulators import LinearObserver
+
+__all__ = ["Luenberger"]
+
+
+@register
+class Luenberger(ObserverKind):
+    name = "luenberger"
+    keys = ("kind", "gain", "poles")
+
+    def parse(self, table: SpecTable, n: int, p: int) -> dict[str, Any]:
+        return parse_gain(table, n, p, ("deadbeat", "place", "pinv"))
+
+    def build(self, system: System, params: Mapping[str, Any], budget: Budget) -> ObserverDesign:
+        gain = check_finite(gain_from_choice(system, params))
+        return ObserverDesign(kind=self.name, system=system, gain=gain, sensing=system.C)
+
+    def simulator(self, design: ObserverDesign) -> LinearObserver:
+        return LinearObserver(design.system.A, design.system.C, design.gain.L)

@@ -1,0 +1,47 @@
+"""The online-gradient observer (lecture notes Sec. 4.2): L = step * A C^T.
+
+Spec keys: ``step`` (required, > 0); ``gain`` may only say ``"ogd"``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from .._spec_table import SpecTable
+from ..budget import Budget
+from ..design.gains import ogd_gain
+from ..system import System
+from .base import ObserverDesign, ObserverKind, check_finite
+from .registry import register
+from .simulators import LinearObserver
+
+__all__ = ["OnlineGradient"]
+
+
+@register
+class OnlineGradient(ObserverKind):
+    name = "ogd"
+    keys = ("kind", "gain", "step")
+
+    def parse(self, table: SpecTable, n: int, p: int) -> dict[str, Any]:
+        gain = table.get("gain", "ogd")
+        if not isinstance(gain, str):
+            raise table.error(
+                "gain", "the ogd observer's gain is fixed (L = step * A C^T); remove this key"
+            )
+        if gain != "ogd":
+            raise table.error(
+                "gain", f"the ogd observer's gain is fixed (L = step * A C^T); got {gain!r}"
+            )
+        return {"gain": table.choice("gain", gain, ("ogd",)), "step": table.positive("step")}
+
+    def build(self, system: System, params: Mapping[str, Any], budget: Budget) -> ObserverDesign:
+        step = params["step"]
+        gain = check_finite(ogd_gain(system, step))
+        return ObserverDesign(
+            kind=self.name, system=system, gain=gain, sensing=system.C, step=float(step)
+        )
+
+    def simulator(self, design: ObserverDesign) -> LinearObserver:
+        return LinearObserver(design.system.A, design.system.C, design.gain.L)

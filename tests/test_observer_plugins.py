@@ -1,0 +1,135 @@
+"""An observer kind is one module: a kind defined here alone is read, certified, simulated and reported."""
+
+import json
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+import pytest
+
+from ssecert import System
+from ssecert.budget import Budget
+from ssecert.certify import certify
+from ssecert.cli import main
+from ssecert.design.gains import Gain, pinv_gain
+from ssecert.observers import (
+    BUILTIN_KINDS,
+    LinearObserver,
+    ObserverDesign,
+    ObserverKind,
+    build_observer,
+    get_kind,
+    observer_kinds,
+    register,
+    unregister,
+)
+from ssecert.report.html import render_report
+from ssecert.spec import SpecError, spec_from_dict
+
+
+class DampedPinv(ObserverKind):
+    """x_hat+ = A x_hat + L (y - C x_hat) with L = factor * A C^+ (defined in this test only)."""
+
+    name = "damped_pinv"
+    keys = ("kind", "factor")
+
+    def parse(self, table, n, p):
+        return {"factor": table.real("factor", table.require("factor"), min_value=0.0)}
+
+    def build(self, system: System, params: Mapping[str, Any], budget: Budget) -> ObserverDesign:
+        base = pinv_gain(system)
+        L = params["factor"] * base.L
+        gain = Gain(
+            L=L,
+            method="damped pinv",
+            error_matrix=system.A - L @ system.C,
+            verified=True,
+            details={"factor": params["factor"]},
+        )
+        return ObserverDesign(kind=self.name, system=system, gain=gain, sensing=system.C)
+
+    def simulator(self, design):
+        return LinearObserver(design.system.A, design.system.C, design.gain.L)
+
+
+@pytest.fixture
+def damped():
+    register(DampedPinv)
+    yield
+    unregister(DampedPinv.name)
+
+
+def _spec(factor: float = 0.5) -> dict:
+    return {
+        "name": "plugin",
+        "system": {"A": [[0.9, 0.2], [0.0, 0.8]], "C": [[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]},
+        "attack": {"max_attacked": 1},
+        "observer": {"kind": "damped_pinv", "factor": factor},
+        "scenario": [{"name": "quiet", "attack": "none", "runs": 4, "steps": 40}],
+    }
+
+
+def test_builtin_kinds_are_registered():
+    assert observer_kinds()[: len(BUILTIN_KINDS)] == BUILTIN_KINDS
+    for name in BUILTIN_KINDS:
+        assert get_kind(name).name == name
+
+
+def test_a_kind_defined_in_a_test_is_certified_simulated_and_reported(damped):
+    spec = spec_from_dict(_spec())
+    assert spec.observer == {"kind": "damped_pinv", "factor": 0.5}
+    result = certify(spec, seed=0)
+    cert = result.certificate
+    assert cert["observer_gain"].fields["kind"] == "damped_pinv"
+    assert cert["observer_gain"].fields["gain_method"] == "damped pinv"
+    # A - 0.5 A C^+ C = 0.5 A: stable, and the certificate says so
+    assert cert["observer_gain"].verdict.value == "holds"
+    assert cert["observer_stability"].verdict.value == "holds"
+    assert cert["iss_gain"].verdict.value == "holds"
+    assert "thesis_assumptions" not in cert  # not an attack-estimating observer
+    sim = result.simulations["quiet"]
+    assert sim.observer == "damped_pinv" and sim.final()["relative_error_mean"] < 1e-6
+    html = render_report(result)
+    assert "damped_pinv" in html and "damped pinv" in html
+
+
+def test_a_kind_defined_in_a_test_fails_when_it_should(damped):
+    # factor 2 / 0.45: F = (1 - factor) A has spectral radius 0.9 * 3.44 > 1
+    result = certify(spec_from_dict(_spec(factor=1 / 0.225)), seed=0, simulate=False)
+    assert result.certificate["observer_gain"].verdict.value == "fails"
+    assert result.certificate["observer_stability"].verdict.value == "fails"
+
+
+def test_a_kind_defined_in_a_test_through_the_cli(damped, tmp_path, capsys):
+    spec_file = tmp_path / "plugin.json"
+    spec_file.write_text(json.dumps(_spec()))
+    code = main(["certify", str(spec_file), "--out", str(tmp_path / "out"), "--seed", "0"])
+    # exit 1: sensor 1 alone does not observe x1, so one attacked sensor cannot be corrected
+    assert code == 1, capsys.readouterr()
+    doc = json.loads((tmp_path / "out" / "plugin.json").read_text())
+    assert doc["checks"]["sparse_observability"]["verdict"] == "fails"
+    assert doc["checks"]["observer_gain"]["kind"] == "damped_pinv"
+    assert doc["checks"]["observer_stability"]["verdict"] == "holds"
+    assert (tmp_path / "out" / "plugin.html").is_file()
+
+
+def test_the_kind_reads_its_own_keys(damped):
+    with pytest.raises(SpecError, match=r"key 'observer.factor': missing \(required\)"):
+        spec_from_dict({**_spec(), "observer": {"kind": "damped_pinv"}})
+    with pytest.raises(SpecError, match=r"key 'observer.step': unknown key"):
+        spec_from_dict({**_spec(), "observer": {"kind": "damped_pinv", "factor": 1, "step": 1}})
+
+
+def test_an_unregistered_kind_is_refused_with_the_registered_ones():
+    with pytest.raises(SpecError, match="damped_pinv") as info:
+        spec_from_dict(_spec())
+    assert "dsso" in str(info.value)
+    with pytest.raises(ValueError, match="unknown observer kind 'damped_pinv'"):
+        build_observer(System(np.eye(1), np.eye(1)), {"kind": "damped_pinv"})
+
+
+@pytest.mark.parametrize("bad", [{"name": "not an identifier"}, {"keys": ("factor",)}])
+def test_register_checks_the_class(bad):
+    cls = type("Bad", (DampedPinv,), bad)
+    with pytest.raises(ValueError, match="observer kind"):
+        register(cls)
