@@ -7,9 +7,9 @@ s-sparse observability, the breaking sensor set and a stealthy attack) and
 whether Lasso will find the attack (the irrepresentable constant).
 """
 
-__version__ = "0.1.0"
-
+from ._version import __version__
 from .analyze import analyze
+from .certify import CertifyResult
 from .results import Certificate, Check, Verdict
 from .spec import Spec, SpecError, load_spec, spec_from_dict
 from .structure.attacks import StealthyAttack, stealthy_attack
@@ -41,3 +41,21 @@ __all__ = [
     "irrepresentable",
     "irrepresentable_constant",
 ]
+
+
+def _html_display(fragment: str):  # type: ignore[no-untyped-def]
+    """A ``_repr_html_`` that renders with ``ssecert.report.html`` (imported when first shown)."""
+
+    def _repr_html_(self) -> str:  # type: ignore[no-untyped-def]
+        from .report import html
+
+        return getattr(html, fragment)(self)
+
+    return _repr_html_
+
+
+# Notebooks show checks and certificates as the report does; the renderer sits above the
+# results it renders, so the package wires it here rather than results importing it.
+Check._repr_html_ = _html_display("check_fragment")  # type: ignore[attr-defined]
+Certificate._repr_html_ = _html_display("certificate_fragment")  # type: ignore[attr-defined]
+CertifyResult._repr_html_ = _html_display("render_fragment")  # type: ignore[attr-defined]

@@ -8,11 +8,11 @@ from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
 
+from ._linalg import eigen_clusters, unit_normalized
 from .budget import Budget
 from .observers import get_kind, observer_kinds
 from .results import Certificate, Check, Verdict
 from .spec import Spec
-from .structure._linalg import eigen_clusters, unit_normalized
 from .structure.irrepresentable import irrepresentable
 from .structure.observability import observability
 from .structure.sparse import DEFAULT_MAX_SETS, sparse_observability

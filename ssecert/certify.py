@@ -80,11 +80,6 @@ class CertifyResult:
             out["notes"] = list(self.notes)
         return to_jsonable(out)
 
-    def _repr_html_(self) -> str:
-        from .report.html import render_fragment
-
-        return render_fragment(self)
-
 
 def _stealthy_demo(spec: Spec, witness: dict[str, Any], seed: int) -> dict[str, Any]:
     """Long enough trajectories of the stealthy attack for a plot."""

@@ -27,7 +27,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, NoReturn, TextIO
 
-from . import __version__
+from ._version import __version__
 
 __all__ = ["main"]
 

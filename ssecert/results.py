@@ -116,11 +116,6 @@ class Check:
     def __post_init__(self) -> None:
         object.__setattr__(self, "verdict", Verdict(self.verdict))
 
-    def _repr_html_(self) -> str:
-        from .report.html import check_fragment
-
-        return check_fragment(self)
-
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary with the check-specific fields at top level."""
         out: dict[str, Any] = {
@@ -190,11 +185,6 @@ class Certificate:
         """The check with this id, or ``default`` when the certificate has none."""
         return next((c for c in self.checks if c.id == check_id), default)
 
-    def _repr_html_(self) -> str:
-        from .report.html import certificate_fragment
-
-        return certificate_fragment(self)
-
     @property
     def verdict(self) -> Verdict:
         """Overall verdict over the required checks."""
@@ -207,7 +197,7 @@ class Certificate:
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON document: version, system, verdict, checks."""
-        from . import __version__
+        from ._version import __version__
 
         out: dict[str, Any] = {
             "ssecert_version": __version__,

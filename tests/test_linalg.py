@@ -7,14 +7,14 @@ import numpy as np
 import pytest
 from scipy.linalg import block_diag
 
-from ssecert.structure._combinatorics import colex_blocks, colex_rank, colex_unrank
-from ssecert.structure._linalg import (
+from ssecert._linalg import (
     eigen_clusters,
     screen_positive_definite,
     sensor_subspaces,
     stacked_rank,
     staircase,
 )
+from ssecert.structure._combinatorics import colex_blocks, colex_rank, colex_unrank
 
 
 def jordan(lam, m):

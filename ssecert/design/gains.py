@@ -404,7 +404,7 @@ def deadbeat_gain(
     L_n, dims = _deadbeat_construction(alpha * A, D[:, None] * C, tol)
     L = (L_n * D[None, :]) / alpha
     F = A - L @ C
-    from ..structure._linalg import staircase
+    from .._linalg import staircase
 
     index = staircase(alpha * A, D[:, None] * C, tolerances=tol).index
     test = verify_deadbeat(A, L, C)
@@ -586,7 +586,7 @@ def exact_deadbeat_gain(A: Sequence[Sequence[Any]], C: Sequence[Sequence[Any]]) 
     L = np.array(Le.evalf(17).tolist(), dtype=float)
     Af = np.array(Ae.evalf(17).tolist(), dtype=float)
     Cf = np.array(Ce.evalf(17).tolist(), dtype=float)
-    from ..structure._linalg import staircase
+    from .._linalg import staircase
 
     obs_index = staircase(Af, Cf).index
     return Gain(

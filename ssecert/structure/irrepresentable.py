@@ -26,13 +26,13 @@ from typing import Any
 import numpy as np
 
 from .._format import sig
+from .._linalg import screen_positive_definite, stacked_rank, staircase
 from .._validation import as_choice, as_int_option
 from ..budget import Budget, bounded_comb, format_count, log10_comb
 from ..results import Check, Verdict
 from ..system import System
 from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances
 from ._combinatorics import DEFAULT_CHUNK_BYTES, DEFAULT_MEMORY, colex_blocks
-from ._linalg import screen_positive_definite, stacked_rank, staircase
 from .sparse import DEFAULT_MAX_SETS
 
 __all__ = ["irrepresentable", "irrepresentable_constant", "MODES"]

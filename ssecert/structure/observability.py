@@ -17,10 +17,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._linalg import EigenAnalysis, eigen_clusters, matrix_norm, staircase
 from ..results import Check, Verdict
 from ..system import System
 from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances, classify
-from ._linalg import EigenAnalysis, eigen_clusters, matrix_norm, staircase
 
 __all__ = ["observability", "pbh_margins", "observability_index", "unobservable_residual"]
 
@@ -123,7 +123,7 @@ def observability(
     ('holds', 20)
     """
     from .._exact import ExactPlant
-    from ._linalg import unit_normalized
+    from .._linalg import unit_normalized
 
     if not isinstance(system, System):
         raise TypeError(f"system must be a System, got {type(system).__name__}")

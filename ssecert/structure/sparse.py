@@ -39,12 +39,7 @@ from typing import Any
 import numpy as np
 
 from .._exact import ExactPlant
-from .._validation import as_choice, as_int_option
-from ..results import Check, Verdict
-from ..system import System
-from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances, classify
-from ._combinatorics import colex_blocks, count_subsets
-from ._linalg import (
+from .._linalg import (
     EigenAnalysis,
     SensorSubspaces,
     eigen_clusters,
@@ -52,6 +47,11 @@ from ._linalg import (
     stacked_rank,
     unit_normalized,
 )
+from .._validation import as_choice, as_int_option
+from ..results import Check, Verdict
+from ..system import System
+from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances, classify
+from ._combinatorics import colex_blocks, count_subsets
 from .attacks import stealthy_attack
 from .observability import pbh_margins
 
@@ -206,7 +206,7 @@ def _clearly_observable(
     """Float evidence, independent of the Krylov screening, that (A, C_kept) is observable
     with a margin beyond the borderline band (PBH at every eigenvalue group and the
     conservative staircase)."""
-    from ._linalg import staircase
+    from .._linalg import staircase
 
     if eig is None or eig.problems or not kept:
         return False
@@ -463,7 +463,7 @@ def _screen(
     Cholesky pivot plus the shift, an upper bound) that ranks the sets that
     come closest to breaking.
     """
-    from ._linalg import _CHOLESKY
+    from .._linalg import _CHOLESKY
 
     if _CHOLESKY is None:  # pragma: no cover - depends on the numpy build
         w = np.linalg.eigvalsh(shifted)[:, 0]
@@ -884,7 +884,7 @@ def _recheck_holds(
     the margin (smallest relative PBH singular value found), the records and
     a problem string (empty when every re-check agrees).
     """
-    from ._linalg import staircase
+    from .._linalg import staircase
 
     records = []
     margin = None
@@ -1188,7 +1188,7 @@ def _failure(
     ``work`` is the plant in power-of-two units used for float decisions;
     the witness is built on the user's ``system``.
     """
-    from ._linalg import staircase
+    from .._linalg import staircase
 
     mr = outcome.max_removable
     B = outcome.breaking_set

@@ -18,8 +18,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg
 
-from ..system import System
-from ..tolerances import BORDERLINE, EPS, NONZERO, ZERO, Tolerances, classify
+from .system import System
+from .tolerances import BORDERLINE, EPS, NONZERO, ZERO, Tolerances, classify
 
 try:  # the gufunc behind numpy.linalg.cholesky: NaN instead of an exception
     from numpy.linalg import _umath_linalg as _ul
@@ -54,7 +54,7 @@ def unit_normalized(system: System) -> tuple[System, float]:
     float range) can tip a rank threshold.  Returns the scaled plant and
     alpha (eigenvalues of the scaled A are alpha times those of A).
     """
-    from .._exact import pow2_row_scaling, pow2_scale
+    from ._exact import pow2_row_scaling, pow2_scale
 
     A, C = system.A, system.C
     with np.errstate(over="ignore"):

@@ -1,0 +1,151 @@
+"""The pipeline points one way: no import cycles, and no module imports a higher layer.
+
+Layers, lowest first (docs/architecture.md draws them):
+
+0. core: the System, results, tolerances, budgets, validation, exact arithmetic;
+1. design: observer gains and the observer kinds;
+2. spec: reading spec files and the packaged examples;
+3. analyses: structure, stability, simulation and the documents' estimators;
+4. pipeline: analyze and certify;
+5. renderers: text, JSON and HTML reports;
+6. interface: the command line, ``ssecert.testing`` and the package itself.
+
+Every import counts, also one inside a function; only imports under
+``if TYPE_CHECKING:`` (annotations) are left out.
+"""
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parents[1] / "ssecert"
+
+LAYERS = {
+    0: (
+        "ssecert._version",
+        "ssecert._format",
+        "ssecert._validation",
+        "ssecert._io",
+        "ssecert._exact",
+        "ssecert._linalg",
+        "ssecert._spec_table",
+        "ssecert._matfile",
+        "ssecert.tolerances",
+        "ssecert.budget",
+        "ssecert.results",
+        "ssecert.system",
+        "ssecert.parallel",
+    ),
+    1: ("ssecert.design", "ssecert.observers"),
+    2: ("ssecert.spec", "ssecert.examples"),
+    3: ("ssecert.structure", "ssecert.stability", "ssecert.simulation", "ssecert.estimators"),
+    4: ("ssecert.analyze", "ssecert.certify"),
+    5: ("ssecert.report",),
+    6: ("ssecert.cli", "ssecert.testing", "ssecert.__main__", "ssecert"),
+}
+
+
+def _module_name(path: Path) -> str:
+    parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+MODULES = {_module_name(p): p for p in sorted(PACKAGE.rglob("*.py"))}
+
+
+def _layer(module: str) -> int:
+    best, best_len = None, -1
+    for layer, prefixes in LAYERS.items():
+        for prefix in prefixes:
+            inside = (
+                module.startswith(prefix + ".") and prefix != "ssecert"
+            )  # the root: itself only
+            if (module == prefix or inside) and len(prefix) > best_len:
+                best, best_len = layer, len(prefix)
+    assert best is not None, f"{module} is in no layer: add it to LAYERS"
+    return best
+
+
+def _type_checking_lines(tree: ast.AST) -> set[int]:
+    lines: set[int] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            for child in node.body:
+                lines.update(range(child.lineno, (child.end_lineno or child.lineno) + 1))
+    return lines
+
+
+def _imports(module: str) -> set[str]:
+    """The ssecert modules ``module`` imports (a package's submodules resolved)."""
+    path = MODULES[module]
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    skip = _type_checking_lines(tree)
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+    out: set[str] = set()
+    for node in ast.walk(tree):
+        if getattr(node, "lineno", None) in skip:
+            continue
+        if isinstance(node, ast.Import):
+            out.update(a.name for a in node.names if a.name.split(".")[0] == "ssecert")
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")
+                base = base[: len(base) - (node.level - 1)]
+                target = ".".join(base + ([node.module] if node.module else []))
+            else:
+                target = node.module or ""
+            if target.split(".")[0] != "ssecert":
+                continue
+            for alias in node.names:
+                sub = f"{target}.{alias.name}"
+                out.add(sub if sub in MODULES else target)
+    out.discard(module)
+    return {m for m in out if m in MODULES}
+
+
+GRAPH = {m: _imports(m) for m in MODULES}
+
+
+def test_every_module_is_in_a_layer():
+    for module in MODULES:
+        _layer(module)
+
+
+@pytest.mark.parametrize("module", sorted(MODULES))
+def test_no_module_imports_a_higher_layer(module):
+    mine = _layer(module)
+    upward = sorted(m for m in GRAPH[module] if _layer(m) > mine)
+    assert not upward, f"{module} (layer {mine}) imports {upward}"
+
+
+def test_no_import_cycles():
+    state: dict[str, int] = {}  # 1 on the stack, 2 done
+    stack: list[str] = []
+
+    def visit(module: str) -> None:
+        state[module] = 1
+        stack.append(module)
+        for dep in sorted(GRAPH[module]):
+            # a package imports its own submodules to gather them; that is not a cycle
+            if module.startswith(dep + ".") and MODULES[dep].name == "__init__.py":
+                continue
+            if state.get(dep) == 1:
+                cycle = stack[stack.index(dep) :] + [dep]
+                pytest.fail("import cycle: " + " -> ".join(cycle))
+            if dep not in state:
+                visit(dep)
+        stack.pop()
+        state[module] = 2
+
+    for module in sorted(GRAPH):
+        if module not in state:
+            visit(module)
+
+
+def test_the_graph_is_what_it_seems():
+    # the walker finds imports of every kind, so an empty graph cannot pass the tests above
+    assert "ssecert.observers.registry" in GRAPH["ssecert.observers.luenberger"]
+    assert "ssecert.system" in GRAPH["ssecert.spec"]
+    assert "ssecert.report.html" in GRAPH["ssecert"]  # the function-level import counts
+    assert _layer("ssecert.observers.sso") == 1 and _layer("ssecert.report.html") == 5
