@@ -549,12 +549,12 @@ def exact_observability(
     if not (np.all(np.isfinite(A)) and np.all(np.isfinite(C))):
         return ExactObservability("unknown", reason="non-finite data")
     if C.shape[0] == 0 or not np.any(C):
-        z = np.zeros(n)
-        z[0] = 1.0
+        unit = np.zeros(n)
+        unit[0] = 1.0
         zi = [0] * n
         zi[0] = 1
         return ExactObservability(
-            "unobservable", 0, z, zi, None, "no sensor output: every state is unobservable"
+            "unobservable", 0, unit, zi, None, "no sensor output: every state is unobservable"
         )
     Aint, Cint = _integer_data(A, C)
     rank = 0
@@ -668,10 +668,10 @@ class ExactPlant:
         if not self.enabled:
             result = ExactObservability("unknown", reason="beyond the exact limits")
         elif not key:
-            z = np.zeros(self.n)
-            z[0] = 1.0
+            unit = np.zeros(self.n)
+            unit[0] = 1.0
             result = ExactObservability(
-                "unobservable", 0, z, [1] + [0] * (self.n - 1), None, "no sensor kept"
+                "unobservable", 0, unit, [1] + [0] * (self.n - 1), None, "no sensor kept"
             )
         else:
             rank = self.n

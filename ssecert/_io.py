@@ -91,7 +91,9 @@ def _unlink(name: str) -> None:
         pass
 
 
-def write_files(files: Mapping[str | Path, str]) -> list[Path]:
+def write_files(
+    files: Mapping[str, str] | Mapping[Path, str] | Mapping[str | Path, str],
+) -> list[Path]:
     """Write several text files (UTF-8), all or nothing.
 
     Parameters

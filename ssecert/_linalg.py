@@ -24,7 +24,7 @@ from .tolerances import BORDERLINE, EPS, NONZERO, ZERO, Tolerances, classify
 try:  # the gufunc behind numpy.linalg.cholesky: NaN instead of an exception
     from numpy.linalg import _umath_linalg as _ul
 
-    _CHOLESKY = _ul.cholesky_lo
+    _CHOLESKY: np.ufunc | None = _ul.cholesky_lo
 except (ImportError, AttributeError):  # pragma: no cover - depends on numpy build
     _CHOLESKY = None
 

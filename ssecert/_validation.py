@@ -220,7 +220,7 @@ def as_real_matrix(
                 raise TypeError(f"{name} must contain real numbers, got {describe(item)}")
             if isinstance(item, numbers.Complex) and not isinstance(item, numbers.Real):
                 raise TypeError(f"{name} must be real, got the complex entry {item!r}")
-            if isinstance(item, numbers.Integral) and not -_FLOAT_MAX <= item <= _FLOAT_MAX:
+            if isinstance(item, numbers.Integral) and not -_FLOAT_MAX <= int(item) <= _FLOAT_MAX:
                 raise ValueError(
                     f"{name} has an entry too large for a float64: {show_int(int(item))}"
                 )
@@ -306,7 +306,7 @@ def as_float_option(
         or not isinstance(value, numbers.Real)
     ):
         raise TypeError(f"{name} must be a real number, got {describe(value)}")
-    if isinstance(value, numbers.Integral) and not -_FLOAT_MAX <= value <= _FLOAT_MAX:
+    if isinstance(value, numbers.Integral) and not -_FLOAT_MAX <= int(value) <= _FLOAT_MAX:
         raise ValueError(f"{name} must be finite, got {show_int(int(value))}")
     result = float(value)
     if not np.isfinite(result):

@@ -51,7 +51,9 @@ class System:
 
     A: np.ndarray
     C: np.ndarray
-    sensors: tuple[str, ...] = field(default=None)  # type: ignore[assignment]
+    # None (default names) is resolved to a tuple in __post_init__; a dataclass field
+    # cannot type its __init__ argument apart from the stored value.
+    sensors: tuple[str, ...] = field(default=None)  # type: ignore[arg-type]
     name: str = "system"
 
     def __post_init__(self) -> None:
@@ -166,7 +168,7 @@ class System:
         if not keep:
             raise ValueError("keep must name at least one sensor")
         return System(
-            self.A, self.C[list(keep)], sensors=[self.sensors[i] for i in keep], name=self.name
+            self.A, self.C[list(keep)], sensors=tuple(self.sensors[i] for i in keep), name=self.name
         )
 
     def to_dict(self) -> dict[str, Any]:

@@ -646,24 +646,24 @@ def place_gain(system: System, poles: Sequence[complex]) -> Gain:
     """
     import control
 
-    poles = np.asarray(poles, dtype=complex)
-    if poles.shape != (system.n,):
-        raise GainError(f"poles: expected {system.n} poles (one per state), got {poles.size}")
+    wanted = np.asarray(poles, dtype=complex)
+    if wanted.shape != (system.n,):
+        raise GainError(f"poles: expected {system.n} poles (one per state), got {wanted.size}")
     # place_poles needs B = C^T of full column rank: place with an independent subset of
     # sensors (pivoted QR) and give the others zero gain; the poles are re-checked below
     rows = _independent_rows(system.C)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
-            K = control.place(system.A.T, system.C[rows].T, poles)
+            K = control.place(system.A.T, system.C[rows].T, wanted)
         except Exception as exc:  # control raises ValueError/ControlDimension/...
             raise GainError(f"control.place refused: {exc}") from None
     L = np.zeros((system.n, system.p))
     L[:, rows] = np.asarray(K, dtype=float).T
     F = system.A - L @ system.C
     got = np.linalg.eigvals(F)
-    scale = max(1.0, float(np.linalg.norm(system.A, 2)), float(np.abs(poles).max(initial=0.0)))
-    ratio, dist = _match_poles(got, poles, scale)
+    scale = max(1.0, float(np.linalg.norm(system.A, 2)), float(np.abs(wanted).max(initial=0.0)))
+    ratio, dist = _match_poles(got, wanted, scale)
     notes = [str(w.message) for w in caught]
     if ratio > 1.0:
         raise GainError(
@@ -677,7 +677,7 @@ def place_gain(system: System, poles: Sequence[complex]) -> Gain:
         error_matrix=F,
         verified=True,
         details={
-            "requested_poles": poles,
+            "requested_poles": wanted,
             "achieved_poles": got,
             "sensors_used": rows,
             "max_pole_error": float(dist.max()),

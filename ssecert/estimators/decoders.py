@@ -639,6 +639,7 @@ def fista(
         z_new[:, n:] = soft_threshold(wa - nu * r, threshold)
         g = z_new - w
         dz = z_new - z
+        beta: np.ndarray | float
         if restart:
             # momentum pointing against the proximal-gradient step: start again
             t = np.where(np.vecdot(g, dz) < 0, 1.0, t)

@@ -533,28 +533,29 @@ def elastic_net_localization(
         )
     Gt = G / w
     sigma2 = np.linalg.norm(Gt, 2) ** 2
+    step: float | np.floating[Any]
     if epsilon is None:
-        epsilon = 0.99 / (L2 * sigma2)
+        step = 0.99 / (L2 * sigma2)
     else:
-        epsilon = as_float_option(epsilon, "epsilon", min_value=0.0, min_inclusive=False)
-        if epsilon * L2 * sigma2 >= 2.0:
+        step = as_float_option(epsilon, "epsilon", min_value=0.0, min_inclusive=False)
+        if step * L2 * sigma2 >= 2.0:
             raise ValueError(
                 f"epsilon must satisfy epsilon * L2 * ||G||^2 < 2 for convergence; got "
-                f"epsilon = {epsilon:.3g}, bound {2.0 / (L2 * sigma2):.3g}"
+                f"epsilon = {step:.3g}, bound {2.0 / (L2 * sigma2):.3g}"
             )
-    t = epsilon * L2
-    lambda_x = (
+    t = step * L2
+    level_x = (
         0.05 * t
         if lambda_x is None
         else as_float_option(lambda_x, "lambda_x", min_value=0.0, min_inclusive=False)
     )
-    lambda_a = (
+    level_a = (
         0.05 * t
         if lambda_a is None
         else as_float_option(lambda_a, "lambda_a", min_value=0.0, min_inclusive=False)
     )
 
-    thr = np.concatenate([np.full(n, lambda_x), np.full(q, lambda_a)])
+    thr = np.concatenate([np.full(n, level_x), np.full(q, level_a)])
     shrink = np.concatenate([np.full(n, q_x), np.full(q, q_a)])
     Z, iterations, converged = _algorithm3(Gt, Yt, t, thr, shrink, N, method == "fista", rtol)
 
@@ -569,8 +570,8 @@ def elastic_net_localization(
     identifiable = 2 * (targets + attacked.sum(axis=1)) <= q
     objective = {
         "t": t,
-        "l1_x": lambda_x / t,
-        "l1_a": lambda_a / t,
+        "l1_x": level_x / t,
+        "l1_a": level_a / t,
         "mu_x": (1.0 / q_x - 1.0) / t,
         "mu_a": (1.0 / q_a - 1.0) / t,
     }

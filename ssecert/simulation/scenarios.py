@@ -119,16 +119,16 @@ def generate(
     kind = scenario["attack"]
     magnitude = scenario.get("magnitude", (4.0, 5.0))
     noise_bound = float(scenario.get("noise", 0.0))
-    runs = np.asarray(list(runs), dtype=np.int64)
-    x0 = np.empty((runs.size, n))
-    attack = np.zeros((steps, runs.size, p))
-    noise = np.zeros((steps, runs.size, p))
-    if kind == "stealthy" and replay is None:
-        raise ValueError(
-            "a stealthy scenario needs the sparse-observability witness; the plant is s-sparse "
-            "observable, so no stealthy attack exists"
-        )
+    run_ids = np.asarray(list(runs), dtype=np.int64)
+    x0 = np.empty((run_ids.size, n))
+    attack = np.zeros((steps, run_ids.size, p))
+    noise = np.zeros((steps, run_ids.size, p))
     if kind == "stealthy":
+        if replay is None:
+            raise ValueError(
+                "a stealthy scenario needs the sparse-observability witness; the plant is "
+                "s-sparse observable, so no stealthy attack exists"
+            )
         trace = np.empty((steps, n))  # A^k z
         w = np.asarray(replay.z, dtype=float)
         for k in range(steps):
@@ -137,7 +137,7 @@ def generate(
         mask = np.zeros(p)
         mask[list(replay.sensors)] = 1.0
         pattern = (trace @ system.C.T) * mask  # P_a C A^k z
-    for j, r in enumerate(runs):
+    for j, r in enumerate(run_ids):
         rng = run_rng(seed, int(r))
         x0[j] = initial_state(n, rng)
         if kind == "none":
@@ -149,8 +149,8 @@ def generate(
             support = _support(rng, p, scenario)
             amp = _magnitudes(rng, support.size, magnitude)
             phase = rng.uniform(0.0, 2 * np.pi, support.size)
-            k = np.arange(steps)[:, None]
-            attack[:, j, support] = amp * np.sin(2 * np.pi * k / scenario["period"] + phase)
+            times = np.arange(steps)[:, None]
+            attack[:, j, support] = amp * np.sin(2 * np.pi * times / scenario["period"] + phase)
         elif kind == "switching":
             period = int(scenario["period"])
             for start in range(0, steps, period):
@@ -170,4 +170,4 @@ def generate(
             raise ValueError(f"unknown attack kind {kind!r}")
         if noise_bound > 0:
             noise[:, j, :] = rng.uniform(-noise_bound, noise_bound, (steps, p))
-    return ScenarioData(runs, x0, attack, noise)
+    return ScenarioData(run_ids, x0, attack, noise)

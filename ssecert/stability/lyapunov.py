@@ -202,6 +202,8 @@ def lyapunov_certificate(
         decision = schur_decision(F, parts=parts)
         proof = decision.to_dict()
         if decision.state == "stable":
+            if decision.radius_upper is None:  # pragma: no cover - set whenever stable
+                raise RuntimeError("a stable Schur decision carries its radius bound")
             upper = float(decision.radius_upper)
             return LyapunovCertificate(
                 "holds",

@@ -407,6 +407,10 @@ def thesis_assumptions(
     F = A + L1 @ S
     q = float(design.shrink)
     lam = float(design.threshold or 0.0)
+    if design.step is None:
+        raise TypeError(
+            f"thesis_assumptions needs a sparse observer with a step, got {design.kind}"
+        )
     eps = float(design.step)
     L2 = design.L2 if design.L2 is not None else np.eye(S.shape[0])
     p = S.shape[0]
@@ -505,7 +509,7 @@ def thesis_assumptions(
                 residual = float(np.abs(eq[:, ok]).max() / max(1.0, np.abs(pi_a[ok]).max()))
         except _SearchExhausted:
             search.setdefault("stopped", "the search budget ran out before the (5.9) check")
-        details = {
+        details: dict[str, Any] = {
             "claimed_lipschitz": claimed,
             "correct_bound": correct,
             "empirical_ratio": ratio,

@@ -199,8 +199,8 @@ def stealthy_attack(
     if nz == 0.0:
         raise ValueError("z must be nonzero")
     z = z / nz
-    first = np.flatnonzero(np.abs(z) > 1e-12)
-    if first.size and z[first[0]] < 0:
+    nonzero = np.flatnonzero(np.abs(z) > 1e-12)
+    if nonzero.size and z[nonzero[0]] < 0:
         z = -z
     requested = system.n if horizon is None else as_int_option(horizon, "horizon", min_value=1)
     H = min(requested, max(system.n, min(WITNESS_MAX_STEPS, WITNESS_MAX_ENTRIES // system.p)))

@@ -15,6 +15,8 @@ backward-stable methods are used instead and must agree:
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from .._linalg import EigenAnalysis, eigen_clusters, matrix_norm, staircase
@@ -156,7 +158,7 @@ def observability(
     else:
         stair_state, stair_note = ("observable" if sc.rank == n else "unobservable"), ""
 
-    evidence = {
+    evidence: dict[str, Any] = {
         "eigenvalues": eig.eigenvalues / alpha,
         "pbh": [
             {
@@ -224,6 +226,8 @@ def observability(
         pbh_state == "unobservable" or stair_state == "unobservable"
     ):
         # floating point was fooled (error amplification); the exact direction is the proof
+        if exact.z is None:  # pragma: no cover - an exact unobservable verdict with proof has z
+            raise RuntimeError("the exact unobservable verdict carries no direction z")
         witness = {
             "z": exact.z,
             "z_exact_integers": [str(v) for v in exact.z_exact or []],
@@ -280,7 +284,10 @@ def observability(
                 )
     conservative = staircase(A, C, tolerances=tol, error_model="compound")
     if not conservative.problem and conservative.rank < n:
-        candidates.append((conservative.unobservable_direction(), "staircase", []))
+        direction = conservative.unobservable_direction()
+        if direction is None:  # pragma: no cover - None only at full rank
+            raise RuntimeError("a rank-deficient staircase has no unobservable direction")
+        candidates.append((direction, "staircase", []))
     for z, source, eigenvalues in candidates:
         residual = unobservable_residual(A, C, z)
         if residual <= tol.witness_rtol:

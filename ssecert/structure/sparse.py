@@ -325,9 +325,9 @@ def _scan_level(
         ok, proxy = _screen(block.matrices, shift, critical, buffer[: len(block)])
         if critical:
             for j in np.argsort(proxy)[:_CRITICAL]:
-                removed = set(rest[block.subsets(np.array([j]))[0]].tolist())
+                dropped = set(rest[block.subsets(np.array([j]))[0]].tolist())
                 candidates.append(
-                    (float(proxy[j]), tuple(int(i) for i in rest if i not in removed))
+                    (float(proxy[j]), tuple(int(i) for i in rest if i not in dropped))
                 )
             candidates.sort()
             del candidates[_CRITICAL:]
@@ -608,6 +608,8 @@ def _eigenspace(
             return out
         out.details["breaking_set_exact"] = decision.state == "unobservable"
         if decision.state == "unobservable":
+            if decision.z is None:  # pragma: no cover - an exact unobservable verdict has z
+                raise RuntimeError("the exact unobservable verdict carries no direction z")
             z = decision.z
     out.status = "exact"
     out.max_removable = best[0] - 1
@@ -1182,7 +1184,7 @@ def _failure(
     tol: Tolerances,
     evidence: dict[str, Any],
     exact: ExactPlant,
-) -> tuple[Verdict, str, dict[str, Any]]:
+) -> tuple[Verdict, str, dict[str, Any] | None]:
     """Verdict, summary and stealthy-attack witness of a failing check.
 
     ``work`` is the plant in power-of-two units used for float decisions;
@@ -1192,7 +1194,8 @@ def _failure(
 
     mr = outcome.max_removable
     B = outcome.breaking_set
-    assert mr is not None and B is not None
+    z = outcome.z
+    assert mr is not None and B is not None and z is not None
     names = [system.sensors[i] for i in B]
     # independent confirmation that the kept sensors do not observe the plant
     kept = [i for i in range(system.p) if i not in set(B)]
@@ -1217,7 +1220,7 @@ def _failure(
             ),
             None,
         )
-    witness = stealthy_attack(system, B, outcome.z, s, horizon=H, seed=seed, tolerances=tol)
+    witness = stealthy_attack(system, B, z, s, horizon=H, seed=seed, tolerances=tol)
     witness_out = witness.to_dict()
     if decision.state == "unobservable":
         witness_out["exact_check"] = (

@@ -112,6 +112,8 @@ def _stealthy_brief(system: System, check: Check) -> list[str]:
             "and no attack is needed to hide the direction z."
         )
     else:
+        if s is None:  # pragma: no cover - sparse_observability checks always record it
+            raise ValueError("the sparse_observability check has no max_attacked field")
         lines.append(f"max_removable = {mr} < 2s = {2 * s}.")
         lines.append(
             f"Breaking sensor set: {_sensors(system, breaking)}; removing "
@@ -375,6 +377,8 @@ def assert_deadbeat(A: Any, L: Any, C: Any) -> int:
 
     test = verify_deadbeat(A, L, C)
     if test.verified:
+        if test.index is None:  # pragma: no cover - verified means a nilpotency index was found
+            raise RuntimeError("verify_deadbeat verified a gain without a nilpotency index")
         return int(test.index)
     norms, lower = test.relative_norms, test.relative_lower
 

@@ -163,6 +163,8 @@ def _load(key: str) -> None:
     suffix = current[len(_base(current)) :]
     if suffix:  # --hypothesis-verbosity / --hypothesis-explain were given
         active = settings.default
+        if active is None:  # pragma: no cover - a profile is loaded, so hypothesis has a default
+            raise RuntimeError("hypothesis has no current settings to take the options from")
         settings.register_profile(
             ours + suffix,
             parent=settings.get_profile(ours),
