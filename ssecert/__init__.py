@@ -7,6 +7,9 @@ s-sparse observability, the breaking sensor set and a stealthy attack) and
 whether Lasso will find the attack (the irrepresentable constant).
 """
 
+from collections.abc import Callable
+from typing import Any
+
 from ._version import __version__
 from .analyze import analyze
 from .certify import CertifyResult
@@ -43,19 +46,23 @@ __all__ = [
 ]
 
 
-def _html_display(fragment: str):  # type: ignore[no-untyped-def]
+def _html_display(fragment: str) -> Callable[[Any], str]:
     """A ``_repr_html_`` that renders with ``ssecert.report.html`` (imported when first shown)."""
 
-    def _repr_html_(self) -> str:  # type: ignore[no-untyped-def]
+    def _repr_html_(self: Any) -> str:
         from .report import html
 
-        return getattr(html, fragment)(self)
+        return str(getattr(html, fragment)(self))
 
     return _repr_html_
 
 
 # Notebooks show checks and certificates as the report does; the renderer sits above the
 # results it renders, so the package wires it here rather than results importing it.
-Check._repr_html_ = _html_display("check_fragment")  # type: ignore[attr-defined]
-Certificate._repr_html_ = _html_display("certificate_fragment")  # type: ignore[attr-defined]
-CertifyResult._repr_html_ = _html_display("render_fragment")  # type: ignore[attr-defined]
+for _cls, _fragment in (
+    (Check, "check_fragment"),
+    (Certificate, "certificate_fragment"),
+    (CertifyResult, "render_fragment"),
+):
+    setattr(_cls, "_repr_html_", _html_display(_fragment))  # noqa: B010  (not a declared attribute)
+del _cls, _fragment

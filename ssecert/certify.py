@@ -10,7 +10,7 @@ JSON, HTML and the terminal.
 from __future__ import annotations
 
 import shlex
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -81,7 +81,7 @@ class CertifyResult:
         return to_jsonable(out)
 
 
-def _stealthy_demo(spec: Spec, witness: dict[str, Any], seed: int) -> dict[str, Any]:
+def _stealthy_demo(spec: Spec, witness: Mapping[str, Any], seed: int) -> dict[str, Any]:
     """Long enough trajectories of the stealthy attack for a plot."""
     from .structure.attacks import stealthy_attack
 
@@ -206,7 +206,9 @@ def certify(
             scenarios.append(
                 {**SCENARIO_DEFAULTS, "name": "stealthy (automatic)", "attack": "stealthy"}
             )
-        for scenario in scenarios if design is not None else []:
+        for scenario in scenarios:
+            if design is None:
+                break
             say(f"simulating scenario {scenario['name']}")
             try:
                 simulations[scenario["name"]] = simulate_scenario(

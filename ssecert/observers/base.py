@@ -94,6 +94,13 @@ class ObserverDesign:
     def to_dict(self) -> dict[str, Any]:
         return self.observer_kind.describe(self)
 
+    def parameter(self, name: str) -> float:
+        """``step`` or ``threshold`` of a design that has it; ValueError otherwise."""
+        value = getattr(self, name)
+        if value is None:
+            raise ValueError(f"the {self.kind} observer design has no {name}")
+        return float(value)
+
 
 class ObserverKind:
     """One kind of observer: what the spec says, and what certification and simulation need.
@@ -246,7 +253,7 @@ def gain_from_choice(system: System, params: Mapping[str, Any]) -> Gain:
     if choice == "pinv":
         return pinv_gain(system)
     if choice == "ogd":
-        return ogd_gain(system, params.get("step"))
+        return ogd_gain(system, params["step"])
     raise GainError(f"unknown gain {choice!r}")
 
 
@@ -271,7 +278,7 @@ def soft_lure_model(design: ObserverDesign) -> LureModel:
     n, m = A_p.shape[0], S.shape[0]
     L = design.gain.L
     F = A_p - L @ S
-    nu = float(design.step)  # type: ignore[arg-type]
+    nu = design.parameter("step")
     L2 = design.L2 if design.L2 is not None else np.eye(m)
     A = np.block([[F, -L], [np.zeros((m, n)), np.zeros((m, m))]])
     B = np.vstack([np.zeros((n, m)), np.eye(m)])

@@ -25,6 +25,7 @@ from .base import (
     parse_unit_shrink,
     soft_lure_model,
 )
+from .dynamic import DynamicObserver
 from .lure import LureModel
 from .registry import register
 from .simulators import SparseSoftObserver
@@ -52,13 +53,13 @@ class SoftThresholdObserverKind(ObserverKind):
             L2=np.eye(m) if L2 is None else np.asarray(L2, dtype=float),
         )
 
-    def simulator(self, design: ObserverDesign) -> SparseSoftObserver:
+    def simulator(self, design: ObserverDesign) -> DynamicObserver:
         return SparseSoftObserver(
             design.system.A,
             design.sensing,
             design.gain.L,
-            step=design.step,  # type: ignore[arg-type]
-            threshold=design.threshold,  # type: ignore[arg-type]
+            step=design.parameter("step"),
+            threshold=design.parameter("threshold"),
             shrink=design.shrink,
             L2=design.L2,
         )

@@ -99,8 +99,8 @@ class SparseSoftObserverKind(SoftThresholdObserverKind):
         return WindowSSO(
             design.system.A,
             design.system.C,
-            step=design.step,  # type: ignore[arg-type]
-            threshold=design.threshold,  # type: ignore[arg-type]
+            step=design.parameter("step"),
+            threshold=design.parameter("threshold"),
             window=design.window,
             inner_steps=design.inner_steps,
         )
@@ -109,7 +109,8 @@ class SparseSoftObserverKind(SoftThresholdObserverKind):
         """A - L S, or, with m inner ISTA steps per sample, A (I - step S^T S)^m."""
         if design.inner_steps == 1:
             return super().error_matrix(design)
-        inner = np.eye(design.system.n) - design.step * design.sensing.T @ design.sensing
+        step = design.parameter("step")
+        inner = np.eye(design.system.n) - step * design.sensing.T @ design.sensing
         return design.system.A @ np.linalg.matrix_power(inner, design.inner_steps)
 
     def exact_parts(

@@ -103,8 +103,8 @@ def observer_gain_check(design: ObserverDesign) -> Check:
     elif verdict is Verdict.HOLDS:
         summary = (
             f"The linear error dynamics e+ = (A - L C) e are stable (spectral radius "
-            f"{sig(cert.spectral_radius)}), certified by a Lyapunov matrix P: the error "
-            f"contracts at least by {sig(cert.contraction)} per step in the P-norm."
+            f"{sig(_known(cert.spectral_radius))}), certified by a Lyapunov matrix P: the error "
+            f"contracts at least by {sig(_known(cert.contraction))} per step in the P-norm."
         )
     elif verdict is Verdict.FAILS:
         summary = (
@@ -128,6 +128,13 @@ def observer_gain_check(design: ObserverDesign) -> Check:
         witness=cert.witness if verdict is Verdict.FAILS else None,
         tolerances={"error_bound": cert.error_bound, "clear_factor": 100},
     )
+
+
+def _known(value: float | None) -> float:
+    """A number a holding certificate always carries (its radius, contraction, gain)."""
+    if value is None:  # pragma: no cover - certificates that hold set it
+        raise RuntimeError("a holding certificate is missing the number it certifies")
+    return value
 
 
 def _parts(design: ObserverDesign) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
@@ -158,6 +165,7 @@ def _deadbeat_check(
     method = "deadbeat (exact powers of the printed A - L C)"
     tolerances = {"deadbeat_rtol": DEADBEAT_RTOL, "clear_factor": 100}
     if gain.verified:
+        index, upper = int(_known(index)), _known(upper)
         rel = details["relative_power_norms"][index - 1]
         exactly = details.get("exactly_nilpotent")
         summary = (
@@ -229,32 +237,32 @@ def observer_stability_check(
     """
     title = f"Observer stability ({design.kind})"
     if not design.sparse:
-        cert = lyapunov_certificate(design.error_matrix, parts=_parts(design))
-        verdict = Verdict(cert.verdict)
-        if verdict is Verdict.HOLDS and cert.method == "exact powers":
-            summary = f"The error dynamics are linear and stable: {cert.reason}."
+        lyap = lyapunov_certificate(design.error_matrix, parts=_parts(design))
+        verdict = Verdict(lyap.verdict)
+        if verdict is Verdict.HOLDS and lyap.method == "exact powers":
+            summary = f"The error dynamics are linear and stable: {lyap.reason}."
         elif verdict is Verdict.HOLDS:
             summary = (
-                f"The error dynamics are linear and certified stable by a Lyapunov matrix "
-                f"(contraction {sig(cert.contraction)} per step)."
+                f"The error dynamics are linear and lyapified stable by a Lyapunov matrix "
+                f"(contraction {sig(_known(lyap.contraction))} per step)."
             )
         elif verdict is Verdict.FAILS:
-            summary = f"The error dynamics are unstable: {cert.reason}."
+            summary = f"The error dynamics are unstable: {lyap.reason}."
         else:
-            summary = f"Stability could not be certified: {cert.reason}."
+            summary = f"Stability could not be lyapified: {lyap.reason}."
         return Check(
             id="observer_stability",
             title=title,
             verdict=verdict,
             summary=summary,
-            value=cert.contraction,
-            margin=cert.margin,
-            method="discrete Lyapunov" if cert.method == "lyapunov" else "exact powers of A - L C",
-            fields={"decay_rate": None if cert.contraction is None else 1 - cert.contraction},
-            evidence=_lyapunov_evidence(cert),
-            witness=cert.witness if verdict is Verdict.FAILS else None,
-            tolerances={"error_bound": cert.error_bound},
-        ), cert
+            value=lyap.contraction,
+            margin=lyap.margin,
+            method="discrete Lyapunov" if lyap.method == "lyapunov" else "exact powers of A - L C",
+            fields={"decay_rate": None if lyap.contraction is None else 1 - lyap.contraction},
+            evidence=_lyapunov_evidence(lyap),
+            witness=lyap.witness if verdict is Verdict.FAILS else None,
+            tolerances={"error_bound": lyap.error_bound},
+        ), lyap
     gap = design.observer_kind.lure_gap(design)
     if gap:
         return Check(
@@ -311,7 +319,7 @@ def observer_stability_check(
         summary = (
             f"The error state (e, a_hat) converges to 0 from every initial condition "
             f"without attack: V = xi' P xi decreases by at least a factor "
-            f"{1 - cert.decay:.6g} per step (circle criterion with a diagonal multiplier, "
+            f"{1 - _known(cert.decay):.6g} per step (circle criterion with a diagonal multiplier, "
             f"{cert.structure} P, verified margin {cert.margin:.3g} against an error bound "
             f"{cert.error_bound:.1e})."
         )
@@ -362,7 +370,9 @@ def iss_gain_check(
         cert = iss_from_circle(model, circle)
         if model.N + model.m + model.r <= ISS_OPTIMIZE_LIMIT:
             direct = iss_certificate(model, alpha=0.5 * float(circle.decay or 0.0), budget=budget)
-            if direct.verdict == "holds" and (cert.gamma is None or direct.gamma < cert.gamma):
+            if direct.verdict == "holds" and (
+                cert.gamma is None or _known(direct.gamma) < cert.gamma
+            ):
                 cert = direct
     verdict = Verdict(cert.verdict)
     fields = {"gamma": cert.gamma, "alpha": cert.decay, "norm": norm}

@@ -41,6 +41,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..budget import Budget
 from ..observers import ObserverDesign
@@ -294,7 +295,7 @@ def _solve(
     else:
         P = cp.Variable((N, N), symmetric=True)
         cons = [P >> np.eye(N)]
-    if m:
+    if t is not None:  # m > 0
         cons.append(t >= 1e-6)
         T = cp.diag(t)
     g = None
@@ -351,7 +352,7 @@ def _solve(
     info.update(status=str(problem.status), seconds=time.perf_counter() - start)
     if problem.status not in ("optimal", "optimal_inaccurate"):
         return None, None, None, info
-    values = [P.value, t.value if m else np.zeros(0), g.value if g is not None else 0.0]
+    values = [P.value, t.value if t is not None else np.zeros(0), g.value if g is not None else 0.0]
     if any(v is None for v in values) or not all(
         np.all(np.isfinite(np.asarray(v, dtype=float))) for v in values
     ):
@@ -488,10 +489,10 @@ def circle_certificate(
     verdict, reason, details = _prechecks(model)
     if verdict:
         return LMICertificate(verdict, "circle", reason=reason, details=details)
-    for P, t in reuse:
-        ok, margin, bound, _ = verify_certificate(model, P, t, clear=clear)
+    for P_old, t_old in reuse:
+        ok, margin, bound, _ = verify_certificate(model, P_old, t_old, clear=clear)
         if ok:
-            return _holds(model, P, t, margin, bound, "reused", {**details, "reused": True})
+            return _holds(model, P_old, t_old, margin, bound, "reused", {**details, "reused": True})
     attempts = []
     structures = STRUCTURES if structure == "auto" else [structure]
     for st in structures:
@@ -506,7 +507,7 @@ def circle_certificate(
             continue
         P, t, _, info = _solve(model, "circle", st, 0.0, solver_options or {})
         attempts.append(info)
-        if P is None:
+        if P is None or t is None:  # t is None only when the solve failed
             continue
         ok, margin, bound, problem = verify_certificate(model, P, t, clear=clear)
         info["verified"] = ok
@@ -602,7 +603,7 @@ def iss_certificate(
             continue
         P, t, g, info = _solve(model, "iss", st, alpha, solver_options or {})
         attempts.append(info)
-        if P is None or g is None:
+        if P is None or t is None or g is None:  # None only when the solve failed
             continue
         # certify a slightly larger gain than the optimum so that the margin survives
         g_cert = g * (1 + 1e-6) + 1e-9
@@ -787,8 +788,8 @@ class RegionMap:
 
 def region_map(
     design: ObserverDesign,
-    shrinks: Sequence[float],
-    steps: Sequence[float],
+    shrinks: ArrayLike,
+    steps: ArrayLike,
     *,
     solver_options: dict[str, Any] | None = None,
     budget: Budget | None = None,
@@ -803,14 +804,14 @@ def region_map(
     not fit is inconclusive.
     """
     start = time.perf_counter()
-    shrinks = np.asarray(shrinks, dtype=float)
-    steps = np.asarray(steps, dtype=float)
-    verdicts = np.empty((shrinks.size, steps.size), dtype=object)
-    margins = np.full((shrinks.size, steps.size), np.nan)
+    shrink_grid = np.asarray(shrinks, dtype=float)
+    step_grid = np.asarray(steps, dtype=float)
+    verdicts: np.ndarray = np.empty((shrink_grid.size, step_grid.size), dtype=object)
+    margins = np.full((shrink_grid.size, step_grid.size), np.nan)
     found: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
     solves = reused = 0
-    for i, q in enumerate(shrinks):
-        for j, nu in enumerate(steps):
+    for i, q in enumerate(shrink_grid):
+        for j, nu in enumerate(step_grid):
             model = LureModel.from_design(replace(design, shrink=float(q), step=float(nu)))
             neighbours = [found[k] for k in ((i - 1, j), (i, j - 1), (i - 1, j - 1)) if k in found]
             cert = circle_certificate(
@@ -832,7 +833,15 @@ def region_map(
             verdicts[i, j] = cert.verdict
             if cert.verdict == "holds":
                 margins[i, j] = cert.margin
-                found[(i, j)] = (cert.P, cert.multipliers)
+                if cert.P is not None and cert.multipliers is not None:  # holds carries both
+                    found[(i, j)] = (cert.P, cert.multipliers)
     return RegionMap(
-        shrinks, steps, verdicts, margins, solves, reused, time.perf_counter() - start, dict(found)
+        shrink_grid,
+        step_grid,
+        verdicts,
+        margins,
+        solves,
+        reused,
+        time.perf_counter() - start,
+        dict(found),
     )

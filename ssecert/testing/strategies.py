@@ -658,7 +658,7 @@ def _designs(
     system: System | SearchStrategy[System],
     kinds: tuple[str, ...],
     max_attacked: SearchStrategy[int],
-    cache: dict[int, Any],
+    cache: dict[str, Any],
 ) -> Spec:
     from ..design.gains import GainError
     from ..observers import build_observer
@@ -707,7 +707,7 @@ def _designs(
     }
     spec = spec_from_dict(data, source="observer_designs")
     try:
-        build_observer(spec.system, spec.observer)
+        build_observer(spec.system, table if spec.observer is None else spec.observer)
     except GainError:
         reject()  # a placement missed its poles: rare, and not a valid design
     return spec
