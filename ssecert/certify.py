@@ -66,7 +66,7 @@ class CertifyResult:
         return self.certificate.exit_code
 
     def to_dict(self) -> dict[str, Any]:
-        """The JSON certificate: DESIGN.md's fields plus simulations and the region."""
+        """The JSON certificate: the fields of docs/architecture.md plus simulations and the region."""
         out = self.certificate.to_dict()
         out["simulations"] = {
             name: (res.to_dict() if hasattr(res, "to_dict") else res)

@@ -153,7 +153,7 @@ class Spec:
     horizon : int
         tau, the stacked window (default n).
     observer : mapping or None
-        Validated ``[observer]`` section (keys as in DESIGN.md).
+        Validated ``[observer]`` section (keys as in docs/architecture.md, "Spec files").
     scenarios : tuple of mapping
         Validated ``[[scenario]]`` sections with defaults filled in.
     source : str

@@ -1,6 +1,6 @@
 """The ``ssecert`` command: exit statuses, table and JSON output, bad input.
 
-DESIGN.md, "Command line and JSON": 0 every required check holds, 1 one
+docs/architecture.md, "Command line and JSON": 0 every required check holds, 1 one
 fails, 2 bad input or usage (a one-line message on stderr, no traceback);
 with ``--json -`` the JSON is the only thing on stdout.
 """

@@ -1,7 +1,7 @@
 """Spec files (TOML, JSON, .npz, .mat), spec dictionaries and the System class.
 
 Every bad input must raise SpecError (a ValueError) whose one-line message
-names the file and the key; see DESIGN.md, "Spec files" and "Bad input".
+names the file and the key; see docs/architecture.md, "Spec files".
 """
 
 from __future__ import annotations
@@ -1154,7 +1154,7 @@ def test_bad_observers_in_files_name_the_file(tmp_path, observer, key):
 
 
 def test_every_kind_refuses_keys_of_other_kinds():
-    # each kind's allowed keys (DESIGN.md table); anything else is refused
+    # each kind's allowed keys (docs/architecture.md table); anything else is refused
     allowed = {
         "luenberger": {"kind", "gain", "poles"},
         "ogd": {"kind", "gain", "step"},

@@ -81,7 +81,7 @@ def nilpotency(
     """Decide whether F is nilpotent, and its index, from the norms of its powers.
 
     The rule is ``||F^k|| <= rtol * s^k`` with ``||F^(k-1)||`` clearly above
-    ``rtol * s^(k-1)``.  DESIGN.md writes s = max(1, ||A||); that is not
+    ``rtol * s^(k-1)``.  Taking s = max(1, ||A||) would not be
     invariant under rescaling the plant (for ||A|| < 1 it becomes an
     absolute threshold and declares fast-decaying, non-nilpotent powers
     zero), so s is the data's own scale.  Powers of F / s are computed,

@@ -1,6 +1,6 @@
 """Estimation metrics, per run and step, and their Monte Carlo aggregates.
 
-Definitions (DESIGN.md):
+Definitions (docs/architecture.md, "Simulation metrics"):
 
 * relative error: ||x_hat - x|| / max(||x||, 1e-9 ||x0||);
 * MSE: mean over states of (x_hat - x)^2;
