@@ -14,10 +14,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["Verdict", "Check", "Certificate", "to_jsonable", "REQUIRED_CHECKS"]
-
-# Checks that decide the exit status; the others are advisory.
-REQUIRED_CHECKS = ("observability", "sparse_observability", "observer_gain", "observer_stability")
+__all__ = ["Verdict", "Check", "Certificate", "to_jsonable", "combine_verdicts"]
 
 
 class Verdict(str, enum.Enum):
@@ -135,12 +132,12 @@ class Check:
         return to_jsonable(out)
 
 
-def combine_verdicts(verdicts: Sequence[Verdict]) -> Verdict:
-    """Fails if any fails, else inconclusive if any is, else holds."""
-    verdicts = [Verdict(v) for v in verdicts]
-    if Verdict.FAILS in verdicts:
+def combine_verdicts(verdicts: Sequence[Verdict | str]) -> Verdict:
+    """Fails if any fails, else inconclusive if any is, else holds (verdicts or their names)."""
+    given = [Verdict(v) for v in verdicts]
+    if Verdict.FAILS in given:
         return Verdict.FAILS
-    if Verdict.INCONCLUSIVE in verdicts:
+    if Verdict.INCONCLUSIVE in given:
         return Verdict.INCONCLUSIVE
     return Verdict.HOLDS
 

@@ -37,6 +37,7 @@ import numpy as np
 from .._format import sig
 from ..budget import Budget
 from ..observers import ObserverDesign
+from ..results import combine_verdicts
 from ..tolerances import EPS
 from .lyapunov import lyapunov_certificate
 
@@ -454,7 +455,7 @@ def thesis_assumptions(
     if refusal:
         for name in ("lemma_1", "assumption_3", "epsilon_bound"):
             items.append(AssumptionResult(name, "inconclusive", f"not attempted: {refusal}"))
-        return _overall(items), items
+        return combine_verdicts([i.verdict for i in items]).value, items
 
     # Lemma 1
     s_F = np.linalg.svd(F, compute_uv=False)
@@ -754,13 +755,4 @@ def thesis_assumptions(
                     )
                 )
 
-    return _overall(items), items
-
-
-def _overall(items: list[AssumptionResult]) -> str:
-    verdicts = [i.verdict for i in items]
-    return (
-        "fails"
-        if "fails" in verdicts
-        else ("inconclusive" if "inconclusive" in verdicts else "holds")
-    )
+    return combine_verdicts([i.verdict for i in items]).value, items
