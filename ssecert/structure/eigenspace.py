@@ -1,0 +1,215 @@
+"""Sparse observability by the eigenspace (PBH) method.
+
+(A, C_T) is unobservable iff some eigenvector v of A has C_T v = 0, so the
+smallest breaking sets are the supports of C v over nonzero v in an
+eigenspace: one support per eigenvalue of geometric multiplicity 1, and for
+an eigenspace of dimension g the C(p, g-1) hyperplanes through g-1 of the
+sensor rows.  ``ssecert.structure.sparse`` confirms its answers exactly and
+cross-checks them by enumeration.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+
+from .._exact import ExactPlant
+from .._linalg import (
+    EigenAnalysis,
+)
+from ..system import System
+from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances, classify
+from .enumeration import _CRITICAL, _distance, _Outcome
+
+__all__: list[str] = []
+
+
+def _eigenspace(
+    system: System,
+    s: int,
+    max_sets: int,
+    tol: Tolerances,
+    eig: EigenAnalysis,
+    exact: ExactPlant | None = None,
+) -> _Outcome:
+    out = _Outcome(method="eigenspace", status="inconclusive")
+    if eig.problems:
+        out.problems.extend(eig.problems)
+        return out
+    C = system.C
+    p, n = C.shape
+    row_norms = np.linalg.norm(C, axis=1)
+    safe = np.where(row_norms > 0, row_norms, 1.0)
+    best: tuple[int, tuple[int, ...]] | None = None
+    best_z: np.ndarray | None = None
+    critical: list[tuple[float, tuple[int, ...]]] = []
+    per_cluster = []
+    for cluster in eig.clusters:
+        V = cluster.basis
+        g = cluster.geometric
+        W = (C @ V) / safe[:, None]  # relative visibility of the eigenspace per sensor
+        # the eigenspace error is an estimate, not a bound: a factor 10 of safety
+        thr = tol.rtol(p, n + g) + 10.0 * cluster.error
+        if g == 1:
+            mags = np.abs(W[:, 0])
+            codes = classify(mags, thr, factor=tol.borderline_factor)
+            if np.any(codes == BORDERLINE):
+                out.problems.append(
+                    f"eigenvalue {cluster.center:.6g}: sensor(s) "
+                    f"{np.flatnonzero(codes == BORDERLINE).tolist()} see its eigenvector with a "
+                    f"borderline magnitude"
+                )
+                continue
+            support = tuple(int(i) for i in np.flatnonzero(codes == NONZERO))
+            candidates = [(len(support), support, V[:, 0])]
+            order = np.argsort(-mags, kind="stable")
+            critical.append(_critical_entry(mags, order, s, p))
+        else:
+            candidates, crit, problem, used = _hyperplanes(
+                W, V, thr, s, tol, max_sets - out.checked
+            )
+            out.checked += used
+            if problem:
+                out.problems.append(f"eigenvalue {cluster.center:.6g}: {problem}")
+                if problem.startswith("budget"):
+                    out.status = "budget"
+                continue
+            critical.extend(crit)
+        per_cluster.append(
+            {
+                "eigenvalue": cluster.center,
+                "geometric_multiplicity": g,
+                "fewest_sensors_seeing_it": min(c[0] for c in candidates),
+            }
+        )
+        for size, support, v in candidates:
+            if best is None or (size, support) < best:
+                best = (size, support)
+                best_z = v
+    out.details = {"eigenvalues": per_cluster}
+    if out.problems:
+        out.status = "inconclusive" if out.status != "budget" else "budget"
+        return out
+    assert best is not None and best_z is not None
+    z = best_z
+    if np.iscomplexobj(z):
+        z = z.real if np.linalg.norm(z.real) >= np.linalg.norm(z.imag) else z.imag
+    z = np.real(z)
+    if exact is not None:
+        gone = set(best[1])
+        decision = exact.observability(tuple(i for i in range(p) if i not in gone))
+        if decision.state == "observable":
+            kept = tuple(i for i in range(p) if i not in gone)
+            distance = _distance(system, kept, eig, tol)
+            out.details["distance_to_breaking"] = distance
+            out.problems.append(
+                f"its smallest support, sensors {list(best[1])}, does not break the exact data "
+                f"(relative distance {distance:.1e} to a plant it breaks: the data are within "
+                f"precision of one, or its eigenvectors are too ill-conditioned to trust)"
+            )
+            return out
+        out.details["breaking_set_exact"] = decision.state == "unobservable"
+        if decision.state == "unobservable":
+            if decision.z is None:  # pragma: no cover - an exact unobservable verdict has z
+                raise RuntimeError("the exact unobservable verdict carries no direction z")
+            z = decision.z
+    out.status = "exact"
+    out.max_removable = best[0] - 1
+    out.breaking_set = best[1]
+    out.z = z
+    critical.sort()
+    out.critical = [kept for _, kept in critical[:_CRITICAL]]
+    return out
+
+
+def _critical_entry(
+    mags: np.ndarray, order: np.ndarray, s: int, p: int
+) -> tuple[float, tuple[int, ...]]:
+    """Kept sensors after removing the 2s that see a mode best, and what remains."""
+    removed = order[: min(2 * s, p)]
+    kept = tuple(sorted(int(i) for i in range(p) if i not in set(removed.tolist())))
+    remaining = float(mags[order[2 * s]]) if 2 * s < p else 0.0
+    return remaining, kept
+
+
+def _hyperplanes(
+    W: np.ndarray,
+    V: np.ndarray,
+    thr: float,
+    s: int,
+    tol: Tolerances,
+    budget: int,
+) -> tuple[list, list, str, int]:
+    """Smallest supports of W u over u != 0 for an eigenspace of dimension g > 1."""
+    p, g = W.shape
+    _, sv, vh = np.linalg.svd(W, full_matrices=True)
+    smax = max(float(sv[0]), np.finfo(float).tiny)
+    sv = np.concatenate([sv, np.zeros(g - sv.size)])  # fewer sensors than g: rank < g
+    rank_codes = classify(sv / smax, thr, factor=tol.borderline_factor)
+    if np.any(rank_codes == BORDERLINE):
+        return [], [], "the sensors' view of its eigenspace has a borderline rank", 0
+    if np.any(rank_codes == ZERO):
+        u = vh[-1].conj()
+        return [(0, (), V @ u)], [], "", 0
+    row_norm = np.linalg.norm(W, axis=1)
+    row_codes = classify(row_norm, thr, factor=tol.borderline_factor)
+    if np.any(row_codes == BORDERLINE):
+        return [], [], "a sensor sees its eigenspace with a borderline magnitude", 0
+    rows = np.flatnonzero(row_codes == NONZERO)
+    total = math.comb(rows.size, g - 1)
+    if total > budget:
+        return [], [], f"budget: {total:,} hyperplanes exceed the remaining budget", 0
+    candidates: list[tuple[int, tuple[int, ...], np.ndarray]] = []
+    critical: list[tuple[float, tuple[int, ...]]] = []
+    best_size = None
+    combos = itertools.combinations(rows.tolist(), g - 1)
+    chunk = 4096
+    while True:
+        idx = np.array(list(itertools.islice(combos, chunk)), dtype=np.int64).reshape(-1, g - 1)
+        if idx.shape[0] == 0:
+            break
+        sub = W[idx]  # (N, g-1, g)
+        _, s_sub, vh_sub = np.linalg.svd(sub, full_matrices=True)
+        smax_sub = np.maximum(s_sub[:, 0], np.finfo(float).tiny)
+        independent = classify(s_sub[:, -1] / smax_sub, thr, factor=tol.borderline_factor)
+        u = vh_sub[:, -1, :].conj()  # (N, g)
+        mags = np.abs(u @ W.T)  # (N, p)
+        cond = smax_sub / np.maximum(s_sub[:, -1], np.finfo(float).tiny)
+        thr_u = thr * np.maximum(cond, 1.0)
+        codes = classify(mags, thr_u[:, None], factor=tol.borderline_factor)
+        use = independent == NONZERO
+        if np.any(independent == BORDERLINE) or np.any(codes[use] == BORDERLINE):
+            return [], [], "a hyperplane through its sensor rows is borderline", total
+        used = np.flatnonzero(use)
+        if used.size:
+            seen = codes[used] == NONZERO  # (N, p) supports
+            sizes = np.count_nonzero(seen, axis=1)
+            low = int(sizes.min())
+            if best_size is None or low <= best_size:
+                if best_size is None or low < best_size:
+                    candidates, best_size = [], low
+                ties = np.flatnonzero(sizes == low)
+                # among supports of equal size, the lexicographically first index
+                # tuple is the lexicographically largest boolean row
+                keys = [~seen[ties, c] for c in range(p - 1, -1, -1)]
+                j = ties[np.lexsort(keys)[0]]
+                support = tuple(int(i) for i in np.flatnonzero(seen[j]))
+                candidates.append((low, support, V @ u[used[j]]))
+            # the hyperplanes whose (2s+1)-th strongest sensor sees them least
+            if 2 * s < p:
+                remaining = -np.partition(-mags[used], 2 * s, axis=1)[:, 2 * s]
+            else:
+                remaining = np.zeros(used.size)
+            for j in used[np.argsort(remaining, kind="stable")[:_CRITICAL]]:
+                order = np.argsort(-mags[j], kind="stable")
+                critical.append(_critical_entry(mags[j], order, s, p))
+            critical.sort()
+            critical = critical[:_CRITICAL]
+    if not candidates:  # every (g-1)-subset dependent: only possible if rows.size < g - 1
+        u = vh[-1].conj()
+        support = tuple(int(i) for i in rows)
+        candidates = [(len(support), support, V @ u)]
+    candidates.sort(key=lambda c: (c[0], c[1]))
+    return candidates[:1], critical, "", total

@@ -1,0 +1,492 @@
+"""Sparse observability by enumeration of sensor sets.
+
+Sensor sets are checked by increasing size, so the first breaking set found
+is a smallest one, lexicographically first among equals.  Each sensor's
+observable row space comes from an orthogonal Krylov staircase; a set of
+kept sensors is observable iff the sum of their orthogonal projectors is
+positive definite, screened for many sets per numpy call by a batched
+Cholesky factorization of colex-ordered partial sums and decided exactly by
+SVD where screening fails.  Sensors that alone observe the whole state must
+all be removed to break the plant, which prunes the search.  Float failures
+are confirmed on the exact data (``_resolve_failures``).
+
+``scan_removals`` reports, level by level, how close each removal comes to
+breaking the plant.  ``ssecert.structure.sparse`` combines this method with
+the eigenspace method.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .._exact import ExactPlant
+from .._linalg import (
+    EigenAnalysis,
+    SensorSubspaces,
+    eigen_clusters,
+    sensor_subspaces,
+    stacked_rank,
+    unit_normalized,
+)
+from .._validation import as_int_option
+from ..system import System
+from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances
+from ._combinatorics import colex_blocks, count_subsets
+from .observability import pbh_margins
+
+__all__ = ["scan_removals", "RemovalScan"]
+
+_CRITICAL = 8  # critical sets re-checked per level
+
+Progress = Callable[[int, int], None]
+
+REFUTATION_LIMIT = 5_000  # float failures confirmed exactly per enumeration (about 1 ms each)
+
+
+@dataclass
+class _Outcome:
+    """What one method found (internal)."""
+
+    method: str
+    status: str  # "exact", "lower_bound", "inconclusive"
+    max_removable: int | None = None
+    breaking_set: tuple[int, ...] | None = None
+    z: np.ndarray | None = None
+    checked: int = 0
+    needed: int | None = None  # sets needed to finish, when over budget
+    problems: list[str] = field(default_factory=list)
+    critical: list[tuple[int, ...]] = field(default_factory=list)  # kept-sensor sets
+    details: dict[str, Any] = field(default_factory=dict)
+
+
+def _enumeration(
+    system: System,
+    s: int,
+    max_sets: int,
+    tol: Tolerances,
+    progress: Progress | None,
+    subspaces: SensorSubspaces | None = None,
+    eig: EigenAnalysis | None = None,
+    exact: ExactPlant | None = None,
+) -> _Outcome:
+    A, C = system.A, system.C
+    n, p = system.n, system.p
+    out = _Outcome(method="enumeration", status="inconclusive")
+    sub = subspaces if subspaces is not None else sensor_subspaces(A, C, tolerances=tol)
+    if sub.borderline.any():
+        bad = np.flatnonzero(sub.borderline).tolist()
+        out.problems.append(
+            f"the observable subspace of sensor(s) {bad} has a borderline rank decision"
+        )
+        return out
+    full = np.flatnonzero(sub.ranks == n)  # must all be removed to break the plant
+    rest = np.flatnonzero(sub.ranks < n)
+    q = rest.size
+    out.details = {
+        "sensor_observable_dimensions": sub.ranks.tolist(),
+        "sensors_observing_everything": full.tolist(),
+    }
+    if q == 0:
+        # every sensor alone observes the state: only removing all breaks it
+        out.status = "exact"
+        out.max_removable = p - 1
+        out.breaking_set = tuple(range(p))
+        z = np.zeros(n)
+        z[0] = 1.0
+        out.z = z
+        out.critical = [tuple(range(min(2 * s, p - 1), p))]
+        return out
+    P = sub.bases[rest]  # (q, n, n), zero-padded orthonormal rows
+    proj = np.einsum("qkn,qkm->qnm", P, P)
+    base = proj.sum(axis=0)
+    target = 2 * s - full.size  # level whose sets have 2s removed sensors
+    best_critical: list[tuple[float, tuple[int, ...]]] = []
+    if target < 0:
+        # every set of 2s sensors keeps a sensor that alone observes the state
+        dropped = set(full[: 2 * s].tolist())
+        best_critical = [(0.0, tuple(i for i in range(p) if i not in dropped))]
+    for k in range(q + 1):
+        count = math.comb(q, k)
+        if out.checked + count > max_sets:
+            out.needed = count_subsets(q, range(k, max(target, k) + 1))
+            out.status = "lower_bound"
+            out.max_removable = full.size + k - 1
+            out.problems.append(
+                f"enumeration budget of {max_sets:,} sets reached before sets of "
+                f"{full.size + k} sensor{'s' if full.size + k != 1 else ''}"
+            )
+            break
+        level = _scan_level(
+            P,
+            sub.ranks[rest],
+            proj,
+            base,
+            k,
+            rest,
+            full,
+            tol,
+            critical=(k == target),
+            progress=progress,
+            errors=sub.errors[rest],
+        )
+        out.checked += level.checked
+        if level.critical:
+            best_critical = level.critical
+        first, z_first, within = _resolve_failures(system, level.failures, eig, tol, exact, out)
+        if first is not None:
+            out.status = "exact"
+            out.max_removable = full.size + k - 1
+            out.breaking_set = first
+            out.z = z_first
+            if level.borderline or within:
+                out.details["borderline_sets_at_breaking_size"] = level.borderline + len(within)
+            break
+        if level.borderline or within:
+            out.status = "lower_bound"
+            out.max_removable = full.size + k - 1
+            if level.borderline:
+                out.problems.append(
+                    f"{level.borderline} set(s) of {full.size + k} sensors have a borderline "
+                    f"rank decision"
+                )
+            if within:
+                out.details["within_precision_of_breaking"] = [list(w) for w in within[:8]]
+                distance = out.details.get("distance_to_breaking")
+                out.problems.append(
+                    f"removing sensors {list(within[0])}"
+                    + (
+                        f" (and {len(within) - 1} other set(s) of that size)"
+                        if len(within) > 1
+                        else ""
+                    )
+                    + " leaves a plant that is observable in exact arithmetic but within "
+                    "floating-point precision of an unobservable one"
+                    + (f" (relative distance {distance:.1e})" if distance is not None else "")
+                    + ": the answer depends on digits the data do not have"
+                )
+            break
+    out.critical = [kept for _, kept in best_critical]
+    return out
+
+
+def _clearly_observable(
+    system: System, kept: tuple[int, ...], eig: EigenAnalysis | None, tol: Tolerances
+) -> bool:
+    """Float evidence, independent of the Krylov screening, that (A, C_kept) is observable
+    with a margin beyond the borderline band (PBH at every eigenvalue group and the
+    conservative staircase)."""
+    from .._linalg import staircase
+
+    if eig is None or eig.problems or not kept:
+        return False
+    Ck = system.C[list(kept)]
+    centers = np.array([c.center for c in eig.clusters], dtype=complex)
+    _, codes = pbh_margins(system.A, Ck, centers, tolerances=tol)
+    if not np.all(codes == NONZERO):
+        return False
+    sc = staircase(system.A, Ck, tolerances=tol, error_model="compound")
+    return sc.rank == system.n and not sc.problem
+
+
+def _distance(
+    system: System, kept: tuple[int, ...], eig: EigenAnalysis | None, tol: Tolerances
+) -> float | None:
+    """Smallest relative PBH singular value of (A, C_kept) over the eigenvalue groups and the
+    computed eigenvalues: how far the kept sensors are from losing observability."""
+    if not kept:
+        return 0.0
+    Ck = system.C[list(kept)]
+    points = [c.center for c in eig.clusters] if eig is not None else []
+    lam = np.linalg.eigvals(system.A)
+    points.extend(lam[lam.imag >= 0])
+    m, _ = pbh_margins(system.A, Ck, np.array(points, dtype=complex), tolerances=tol)
+    return float(m.min()) if m.size else None
+
+
+def _resolve_failures(
+    system: System,
+    failures: dict[tuple[int, ...], np.ndarray],
+    eig: EigenAnalysis | None,
+    tol: Tolerances,
+    exact: ExactPlant | None,
+    out: _Outcome,
+) -> tuple[tuple[int, ...] | None, np.ndarray | None, list[tuple[int, ...]]]:
+    """Confirm the float failures of a level on the exact data, in lexicographic order.
+
+    Returns the first breaking set that survives (exactly unobservable, or
+    undecidable exactly and kept on the float evidence) with its direction,
+    and the sets that are exactly observable but within floating-point
+    precision of unobservable.  Sets that are exactly observable with a clear
+    margin were float mistakes (basis errors amplified by defective
+    eigenvalues) and are dropped, counted in ``out.details``.
+    """
+    p = system.p
+    within: list[tuple[int, ...]] = []
+    for removed in sorted(failures):
+        if exact is None:
+            return removed, failures[removed], within
+        if out.details.get("float_failures_refuted_exactly", 0) >= REFUTATION_LIMIT:
+            # the float screening is wrong too often on this plant to be worth confirming
+            # set by set; what is left counts as undecided
+            out.details["refutation_limit_reached"] = True
+            within.append(removed)
+            continue
+        gone = set(removed)
+        kept = tuple(i for i in range(p) if i not in gone)
+        decision = exact.observability(kept)
+        if decision.state == "unobservable":
+            out.details["breaking_set_exact"] = True
+            return removed, decision.z, within
+        if decision.state == "unknown":
+            out.details["breaking_set_exact"] = False
+            return removed, failures[removed], within
+        if _clearly_observable(system, kept, eig, tol):
+            out.details["float_failures_refuted_exactly"] = (
+                out.details.get("float_failures_refuted_exactly", 0) + 1
+            )
+        else:
+            within.append(removed)
+            if len(within) == 1:
+                out.details["distance_to_breaking"] = _distance(system, kept, eig, tol)
+    return None, None, within
+
+
+@dataclass
+class _Level:
+    checked: int = 0
+    failures: dict[tuple[int, ...], np.ndarray] = field(default_factory=dict)
+    borderline: int = 0
+    critical: list[tuple[float, tuple[int, ...]]] = field(default_factory=list)
+
+
+def _scan_level(
+    P: np.ndarray,
+    ranks: np.ndarray,
+    proj: np.ndarray,
+    base: np.ndarray,
+    k: int,
+    rest: np.ndarray,
+    full: np.ndarray,
+    tol: Tolerances,
+    *,
+    critical: bool = False,
+    progress: Progress | None = None,
+    errors: np.ndarray | None = None,
+) -> _Level:
+    """Check every removal of ``full`` plus k sensors of ``rest``."""
+    q = rest.size
+    n = proj.shape[-1]
+    if errors is None:
+        errors = np.zeros(q)
+    # A set that is rank deficient in exact arithmetic shows a smallest
+    # eigenvalue up to about sum(err_i^2) <= (sum err_i)^2 when the sensors'
+    # bases carry errors err_i: screen at least that far from zero.
+    shift = max(tol.screen_rtol * max(q, 1), 10.0 * float(np.sum(errors)) ** 2)
+    total = math.comb(q, k)
+    level = _Level()
+    candidates: list[tuple[float, tuple[int, ...]]] = []
+    # the screening shift is folded into the base once, not per block
+    shifted = base - shift * np.eye(n)
+    buffer = np.empty((0, n, n))
+    for block in colex_blocks(proj, shifted, k):
+        if buffer.shape[0] < len(block):
+            buffer = np.empty((len(block), n, n))
+        ok, proxy = _screen(block.matrices, shift, critical, buffer[: len(block)])
+        if critical:
+            for j in np.argsort(proxy)[:_CRITICAL]:
+                dropped = set(rest[block.subsets(np.array([j]))[0]].tolist())
+                candidates.append(
+                    (float(proxy[j]), tuple(int(i) for i in rest if i not in dropped))
+                )
+            candidates.sort()
+            del candidates[_CRITICAL:]
+        bad = np.flatnonzero(~ok)
+        if bad.size:
+            subsets = block.subsets(bad)
+            codes, _, nulls = _refine(P, ranks, subsets, q, tol, errors)
+            for row, code, zvec in zip(subsets, codes, nulls):
+                removed = tuple(sorted(full.tolist() + rest[row].tolist()))
+                if code == ZERO:
+                    level.failures[removed] = zvec
+                elif code == BORDERLINE:
+                    level.borderline += 1
+        level.checked += len(block)
+        if progress is not None:
+            progress(level.checked, total)
+    level.critical = candidates
+    return level
+
+
+@dataclass(frozen=True)
+class RemovalScan:
+    """Result of ``scan_removals``.
+
+    Attributes
+    ----------
+    size : int
+        Number of removed sensors per set.
+    checked : int
+        Number of sets decided.
+    breaking_sets : tuple of tuple of int
+        Removed-sensor sets that leave the plant unobservable, sorted; each is
+        confirmed on the exact data when the plant is small enough (n <= 60):
+        its kept sensors have Krylov rank below n modulo two primes.
+    borderline : int
+        Sets whose rank decision was borderline, or that floating point
+        finds breaking while the exact data are observable within precision.
+    """
+
+    size: int
+    checked: int
+    breaking_sets: tuple[tuple[int, ...], ...]
+    borderline: int
+
+
+def scan_removals(
+    system: System,
+    size: int,
+    *,
+    prune: bool = True,
+    tolerances: Tolerances | None = None,
+    progress: Progress | None = None,
+) -> RemovalScan:
+    """Check every set of ``size`` removed sensors for observability of the rest.
+
+    Parameters
+    ----------
+    system : System
+    size : int
+        Number of sensors removed in each set, 0 <= size <= p.
+    prune : bool, default True
+        Skip sets that keep a sensor which alone observes the whole state
+        (they cannot break observability).  With ``prune=False`` all C(p,
+        size) sets are decided, which is what the enumeration benchmark
+        measures.
+    tolerances : Tolerances, optional
+    progress : callable, optional
+
+    Returns
+    -------
+    RemovalScan
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from ssecert import System
+    >>> ex2 = System(np.eye(3), [[1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1], [1, -1, 1]])
+    >>> scan_removals(ex2, 2).breaking_sets
+    ((0, 2),)
+    """
+    tol = Tolerances.check(tolerances)
+    size = as_int_option(size, "size", min_value=0, max_value=system.p)
+    original = system
+    system, _ = unit_normalized(system)
+    sub = sensor_subspaces(system.A, system.C, tolerances=tol)
+    n = system.n
+    if prune:
+        full = np.flatnonzero(sub.ranks == n)
+        rest = np.flatnonzero(sub.ranks < n)
+    else:
+        full = np.zeros(0, dtype=np.int64)
+        rest = np.arange(system.p)
+    k = size - full.size
+    if k < 0:
+        return RemovalScan(size, 0, (), 0)
+    P = sub.bases[rest]
+    proj = np.einsum("qkn,qkm->qnm", P, P)
+    level = _scan_level(
+        P,
+        sub.ranks[rest],
+        proj,
+        proj.sum(axis=0),
+        k,
+        rest,
+        full,
+        tol,
+        progress=progress,
+        errors=sub.errors[rest],
+    )
+    # every reported breaking set is confirmed on the exact data; refuted ones are dropped
+    # when independent float evidence shows a clear margin, else counted as borderline
+    exact = ExactPlant(original.A, original.C)
+    eig = eigen_clusters(system.A, tolerances=tol)
+    confirmed, borderline = [], level.borderline
+    for removed in sorted(level.failures):
+        gone = set(removed)
+        kept = tuple(i for i in range(system.p) if i not in gone)
+        state = exact.observability(kept, proof=False).state
+        if state != "observable":
+            confirmed.append(removed)
+        elif not _clearly_observable(system, kept, eig, tol):
+            borderline += 1
+    return RemovalScan(size, level.checked, tuple(confirmed), borderline)
+
+
+def _screen(
+    shifted: np.ndarray, shift: float, want_proxy: bool, out: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Cholesky screening of Gramians already shifted by ``-shift I``.
+
+    Returns whether each factorization exists and, when asked, a proxy for
+    the smallest eigenvalue of the unshifted Gramian (squared smallest
+    Cholesky pivot plus the shift, an upper bound) that ranks the sets that
+    come closest to breaking.
+    """
+    from .._linalg import _CHOLESKY
+
+    if _CHOLESKY is None:  # pragma: no cover - depends on the numpy build
+        w = np.linalg.eigvalsh(shifted)[:, 0]
+        return w > 0, w + shift
+    with np.errstate(all="ignore"):
+        L = _CHOLESKY(shifted, out=out)
+    ok = np.isfinite(L[:, -1, -1]) & np.isfinite(L[:, 0, 0])
+    if not want_proxy:
+        return ok, np.empty(0)
+    proxy = np.where(ok, np.min(np.diagonal(L, axis1=1, axis2=2), axis=1) ** 2 + shift, -np.inf)
+    return ok, proxy
+
+
+def _refine(
+    P: np.ndarray,
+    ranks: np.ndarray,
+    removed: np.ndarray,
+    q: int,
+    tol: Tolerances,
+    errors: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Exact rank decision for the kept sensors of each removed subset.
+
+    The tolerance adds the basis errors of the kept sensors: a sum of
+    subspaces that is rank deficient in exact arithmetic shows a smallest
+    singular value up to about their sum.
+    """
+    n = P.shape[-1]
+    codes = np.empty(removed.shape[0], dtype=np.int8)
+    rel = np.empty(removed.shape[0])
+    nulls = np.zeros((removed.shape[0], n))
+    for start in range(0, removed.shape[0], 256):
+        chunk = removed[start : start + 256]
+        keep = np.ones((chunk.shape[0], q), dtype=bool)
+        np.put_along_axis(keep, chunk, False, axis=1)
+        kept = [np.flatnonzero(row) for row in keep]
+        width = max((len(k) for k in kept), default=0)
+        if width == 0:
+            codes[start : start + len(chunk)] = ZERO
+            nulls[start : start + len(chunk), 0] = 1.0
+            continue
+        idx = np.array([np.pad(k, (0, width - len(k)), constant_values=-1) for k in kept])
+        stacks = P[idx]  # (N, width, n, n)
+        stacks[idx < 0] = 0.0
+        stacks = stacks.reshape(len(chunk), width * n, n)
+        rows = int(max(ranks[k].sum() for k in kept))
+        data_error = np.array([errors[k].sum() for k in kept])
+        c, r, z = stacked_rank(stacks, tolerances=tol, rows=max(rows, 1), data_error=data_error)
+        codes[start : start + len(chunk)] = c
+        rel[start : start + len(chunk)] = r
+        nulls[start : start + len(chunk)] = z
+    return codes, rel, nulls
