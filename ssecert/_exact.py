@@ -312,10 +312,14 @@ def spectral_radius_bound(
 
 
 def pow2_scale(x: float) -> float:
-    """The power of two nearest to 1 / x (exact rescaling), 1 for x = 0 or non-finite."""
+    """The power of two nearest to 1 / x (exact rescaling), 1 for x = 0 or non-finite.
+
+    For a subnormal x that power (up to 2^1075) is not a double; the largest
+    one, 2^1023, is returned: still exact, and x times it is normal.
+    """
     if not np.isfinite(x) or x <= 0:
         return 1.0
-    return math.ldexp(1.0, -math.frexp(x)[1] + 1)
+    return math.ldexp(1.0, min(-math.frexp(x)[1] + 1, 1023))
 
 
 def pow2_row_scaling(M: np.ndarray) -> np.ndarray:

@@ -7,7 +7,7 @@ import pytest
 
 from ssecert import System, irrepresentable, load_spec, sparse_observability
 from ssecert.cli import main
-from ssecert.design.gains import deadbeat_gain
+from ssecert.design.gains import GainError, deadbeat_gain
 
 DATA = Path(__file__).parent / "data"
 
@@ -85,3 +85,40 @@ def test_elastic_net_with_ogd_gain_runs(tmp_path):
 def test_unwritable_report_folder_is_bad_input(capsys):
     assert main(["certify", "notes-example-0", "--no-sim", "--out", "/proc/sys/ssecert"]) == 2
     assert "cannot write" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("tiny", [5e-324, 1e-310])
+@pytest.mark.parametrize("where", ["A", "C"])
+def test_subnormal_largest_entries_are_analysed(tiny, where):
+    """A plant whose largest entry (of A, or of a sensor's row) is subnormal: exact units
+    cannot reach [1, 2) with one power of two, and once ended in an OverflowError."""
+    from ssecert import analyze, spec_from_dict
+
+    A = [[tiny]] if where == "A" else [[1.0]]
+    C = [[1.0], [1.0]] if where == "A" else [[tiny], [1.0]]
+    spec = spec_from_dict(
+        {"name": "sub", "system": {"A": A, "C": C}, "attack": {"max_attacked": 0}}
+    )
+    cert = analyze(spec)
+    assert cert["observability"].verdict.value == "holds"  # every entry is exactly nonzero
+    assert cert["sparse_observability"].verdict.value == "holds"
+
+
+@pytest.mark.parametrize("A, index", [([[0.0, 1.0], [0.0, 0.0]], 2), ([[0.0]], 1)])
+def test_deadbeat_with_no_output_and_a_nilpotent_plant(A, index):
+    """C = 0: no gain changes A - L C, and L = 0 is deadbeat exactly when A is nilpotent."""
+    n = len(A)
+    gain = deadbeat_gain(System(A, np.zeros((1, n))))
+    assert gain.verified and gain.details["nilpotency_index"] == index
+    assert not np.any(gain.L)
+    with pytest.raises(GainError, match="A is not nilpotent"):
+        deadbeat_gain(System([[0.5]], [[0.0]]))
+
+
+def test_sparse_observability_with_no_attack_on_an_ill_conditioned_plant():
+    """s = 0 on a plant whose observability is confirmed only in exact arithmetic (a
+    20-state Vandermonde-like pair): the kept set is the whole plant, observable exactly,
+    so the floating-point re-check's doubt does not make the answer inconclusive."""
+    system = System(np.diag(np.linspace(0.1, 0.95, 20)), np.ones((1, 20)))
+    check = sparse_observability(system, 0)
+    assert check.verdict.value == "holds", check.summary

@@ -15,10 +15,13 @@ import subprocess
 import sys
 from pathlib import Path
 
-from ssecert.certify import certify
-from ssecert.examples import list_examples, load_example
-from ssecert.report.html import render_report
-from ssecert.report.json import certify_json
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))  # this tree's ssecert, whatever is installed
+
+from ssecert.certify import certify  # noqa: E402
+from ssecert.examples import list_examples, load_example  # noqa: E402
+from ssecert.report.html import render_report  # noqa: E402
+from ssecert.report.json import certify_json  # noqa: E402
 
 _DATE = re.compile(r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d[+\-Z0-9:]*")
 _SECONDS = re.compile(r"\b\d+(\.\d+)? ?(s|ms|seconds)\b")

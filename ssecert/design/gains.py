@@ -408,6 +408,12 @@ def deadbeat_gain(
 
     index = staircase(alpha * A, D[:, None] * C, tolerances=tol).index
     test = verify_deadbeat(A, L, C)
+    if not np.any(C) and not test.verified:
+        # A - L C = A exactly for every L, and its exact powers do not vanish
+        raise GainError(
+            "C is zero, so no gain changes A - L C = A, and A is not nilpotent: a deadbeat "
+            f"observer does not exist ({test.reason})"
+        )
     problem = test.reason
     if test.index is not None and test.index < index:  # impossible: rounding fooled the test
         problem = (
@@ -449,7 +455,9 @@ def _deadbeat_construction(
     UB = _orth(Bd, rtol)  # range(B)
     NB = _null(Bd.T, rtol)  # range(B) orthogonal complement
     if UB.shape[1] == 0:
-        raise GainError("C is zero: no observer gain can do anything")
+        # no gain changes anything: L = 0 is deadbeat exactly when A is nilpotent, which the
+        # exact power test of the printed gain decides
+        return np.zeros((n, p)), []
     R = NB.T @ Ad  # rows the feedback cannot change
     V = _null(R, rtol)  # V_1
     blocks = [V]

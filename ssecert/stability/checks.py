@@ -243,13 +243,13 @@ def observer_stability_check(
             summary = f"The error dynamics are linear and stable: {lyap.reason}."
         elif verdict is Verdict.HOLDS:
             summary = (
-                f"The error dynamics are linear and lyapified stable by a Lyapunov matrix "
+                f"The error dynamics are linear and certified stable by a Lyapunov matrix "
                 f"(contraction {sig(_known(lyap.contraction))} per step)."
             )
         elif verdict is Verdict.FAILS:
             summary = f"The error dynamics are unstable: {lyap.reason}."
         else:
-            summary = f"Stability could not be lyapified: {lyap.reason}."
+            summary = f"Stability could not be certified: {lyap.reason}."
         return Check(
             id="observer_stability",
             title=title,

@@ -303,9 +303,10 @@ def observability(
             if exact.state == "unobservable":
                 witness["z_exact_integers"] = [str(v) for v in exact.z_exact or []]
                 witness["exact_check"] = "an exact unobservable direction, checked in integers"
-            note = "" if stair_state == "unobservable" else " (confirmed by simulation)"
+            confirmed = [] if stair_state == "unobservable" else ["by simulation"]
             if exact.state == "unobservable":
-                note += " and in exact arithmetic"
+                confirmed.append("in exact arithmetic")
+            note = f" (confirmed {' and '.join(confirmed)})" if confirmed else ""
             return check(
                 Verdict.FAILS,
                 f"(A, C) is not observable: a {unobs}-dimensional subspace of states produces "
