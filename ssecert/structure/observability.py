@@ -303,10 +303,10 @@ def observability(
             if exact.state == "unobservable":
                 witness["z_exact_integers"] = [str(v) for v in exact.z_exact or []]
                 witness["exact_check"] = "an exact unobservable direction, checked in integers"
-            confirmed = [] if stair_state == "unobservable" else ["by simulation"]
+            how = [] if stair_state == "unobservable" else ["by simulation"]
             if exact.state == "unobservable":
-                confirmed.append("in exact arithmetic")
-            note = f" (confirmed {' and '.join(confirmed)})" if confirmed else ""
+                how.append("in exact arithmetic")
+            note = f" (confirmed {' and '.join(how)})" if how else ""
             return check(
                 Verdict.FAILS,
                 f"(A, C) is not observable: a {unobs}-dimensional subspace of states produces "
