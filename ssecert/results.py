@@ -170,13 +170,13 @@ class Certificate:
             raise ValueError(f"check ids must be unique, got {ids}")
 
     def __getitem__(self, check_id: str) -> Check:
-        for check in self.checks:
-            if check.id == check_id:
-                return check
-        raise KeyError(check_id)
+        check = self.get(check_id)
+        if check is None:
+            raise KeyError(check_id)
+        return check
 
     def __contains__(self, check_id: object) -> bool:
-        return any(c.id == check_id for c in self.checks)
+        return isinstance(check_id, str) and self.get(check_id) is not None
 
     def get(self, check_id: str, default: Check | None = None) -> Check | None:
         """The check with this id, or ``default`` when the certificate has none."""

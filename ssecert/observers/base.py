@@ -168,6 +168,10 @@ class ObserverKind:
         gap = self.lure_gap(design)
         if gap:
             raise NotImplementedError(gap)
+        return self.lure_form(design)
+
+    def lure_form(self, design: ObserverDesign) -> LureModel:
+        """The Lur'e model itself (``lure_model`` has checked ``lure_gap``); linear by default."""
         return LureModel.linear(self.error_matrix(design), design.gain.L)
 
     def lure_gap(self, design: ObserverDesign) -> str | None:

@@ -64,10 +64,7 @@ class SoftThresholdObserverKind(ObserverKind):
             L2=design.L2,
         )
 
-    def lure_model(self, design: ObserverDesign) -> LureModel:
-        gap = self.lure_gap(design)
-        if gap:
-            raise NotImplementedError(gap)
+    def lure_form(self, design: ObserverDesign) -> LureModel:
         return soft_lure_model(design)
 
     def region_family(self, design: ObserverDesign) -> ObserverDesign | None:

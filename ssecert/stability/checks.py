@@ -17,7 +17,7 @@ from ..design.gains import DEADBEAT_RTOL, GainError
 from ..observers import ObserverDesign, build_observer
 from ..results import Check, Verdict
 from ..system import System
-from .lmi import circle_certificate, iss_certificate, iss_from_circle, lure_model_cost
+from .lmi import ETA, circle_certificate, iss_certificate, iss_from_circle, lure_model_cost
 from .lyapunov import lyapunov_certificate
 from .thesis import thesis_assumptions
 
@@ -338,7 +338,7 @@ def observer_stability_check(
         fields=fields,
         evidence=evidence,
         witness=cert.details.get("witness") if verdict is Verdict.FAILS else None,
-        tolerances={"error_bound": cert.error_bound, "clear_factor": 100, "lmi_eta": 1e-4},
+        tolerances={"error_bound": cert.error_bound, "clear_factor": 100, "lmi_eta": ETA},
     ), (model, cert)
 
 
