@@ -40,6 +40,7 @@ __all__ = [
     "pow2_row_scaling",
     "pow2_scale",
     "ExactPlant",
+    "exact_stacked_rank",
 ]
 
 # primes just below 2^26: products of two residues stay below 2^52, so a dot
@@ -705,3 +706,92 @@ class ExactPlant:
                     )
         self._cache[key] = result
         return result
+
+
+def exact_stacked_rank(
+    A: np.ndarray,
+    C: np.ndarray,
+    rows: Any,
+    steps: int,
+    *,
+    max_n: int = 60,
+    max_bits: int = 200_000,
+) -> ExactObservability:
+    """Whether chosen rows of the stacked observability matrix have full column rank, exactly.
+
+    Row ``t * p + i`` of O_steps is C_i A^t (sensor i at step t), taken with
+    the floats of A and C as rationals.  Each row may be scaled by its own
+    power of two (a row scale changes no rank), so the rows are the integer
+    vectors C_i^int (A^int)^t.
+
+    Parameters
+    ----------
+    A : ndarray, shape (n, n)
+    C : ndarray, shape (p, n)
+    rows : iterable of int
+        Row indices into O_steps.
+    steps : int
+        The horizon of O_steps.
+    max_n, max_bits : int
+        Budgets: larger plants, or rows longer than ``max_bits`` bits, are
+        ``"unknown"``.
+
+    Returns
+    -------
+    ExactObservability
+        ``"observable"`` when the rows have rank n modulo a prime (a proof of
+        full column rank); ``"unobservable"`` with an integer z, O_rows z = 0
+        re-checked exactly; ``"unknown"`` beyond the budgets.
+
+    Examples
+    --------
+    >>> A = np.diag([1.0, 1.0 + 2.0**-52])
+    >>> exact_stacked_rank(A, np.ones((3, 2)), range(6), 2).state
+    'observable'
+    >>> exact_stacked_rank(np.eye(2), np.ones((3, 2)), range(6), 2).state
+    'unobservable'
+    """
+    A = np.asarray(A, dtype=float)
+    C = np.asarray(C, dtype=float)
+    n, p = A.shape[0], C.shape[0]
+    wanted = sorted({int(r) for r in rows})
+    if n > max_n:
+        return ExactObservability("unknown", reason=f"n = {n} exceeds the exact limit {max_n}")
+    if not (np.all(np.isfinite(A)) and np.all(np.isfinite(C))):
+        return ExactObservability("unknown", reason="non-finite data")
+    if any(r < 0 or r >= p * steps for r in wanted):
+        raise ValueError(f"rows must index the {p * steps} rows of O_{steps}")
+    last = max((r // p for r in wanted), default=-1)
+    if last * max(dyadic(A).bits(), 1) > max_bits:
+        return ExactObservability("unknown", reason="the exact powers of A exceed the bit budget")
+    Aint = dyadic(A).ints
+    picked: list[np.ndarray] = []
+    by_sensor: dict[int, list[int]] = {}
+    for r in wanted:
+        by_sensor.setdefault(r % p, []).append(r // p)
+    for i, ts in by_sensor.items():
+        row = dyadic(C[i : i + 1]).ints[0]
+        for t in range(max(ts) + 1):
+            if t in ts:
+                picked.append(row)
+            if t < max(ts):
+                row = row @ Aint
+    if not picked:
+        unit = np.zeros(n)
+        unit[0] = 1.0
+        return ExactObservability("unobservable", 0, unit, [1] + [0] * (n - 1), None, "no rows")
+    M = np.array(picked, dtype=object).reshape(len(picked), n)
+    zero = np.zeros((n, n), dtype=np.int64)
+    rank = 0
+    prime = _PRIMES[0]
+    for prime in _PRIMES[:2]:
+        rank = _rank_mod_p_residues(zero, _mod(M, prime), prime)
+        if rank == n:
+            return ExactObservability("observable", rank, prime=prime)
+    z = _exact_kernel_vector(np.zeros((n, n), dtype=object), M, max_bits)
+    if z is None or not _verify_kernel(np.zeros((n, n), dtype=object), M, z):
+        return ExactObservability(
+            "unknown", rank, prime=prime, reason="no exact kernel vector within the budget"
+        )
+    zf = _scaled_floats(z)
+    return ExactObservability("unobservable", rank, zf / np.linalg.norm(zf), z, prime)

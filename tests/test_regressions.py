@@ -122,3 +122,30 @@ def test_sparse_observability_with_no_attack_on_an_ill_conditioned_plant():
     system = System(np.diag(np.linspace(0.1, 0.95, 20)), np.ones((1, 20)))
     check = sparse_observability(system, 0)
     assert check.verdict.value == "holds", check.summary
+
+
+@pytest.mark.parametrize("support_size", [0, 1])
+def test_irrepresentable_does_not_fail_on_a_rank_deficiency_below_precision(support_size):
+    # exactly, O_tau has rank 2; in floating point it looks like rank 1
+    system = System(np.diag([1.0, 1.0 + 2.0**-52]), np.ones((3, 2)))
+    check = irrepresentable(system, support_size, horizon=2)
+    assert check.verdict.value == "inconclusive"
+    assert "digits the data do not have" in check.summary
+    assert check.evidence["exact_rank_check"]["state"] == "observable"
+
+
+def test_irrepresentable_rank_deficiency_is_confirmed_exactly():
+    check = irrepresentable(System(np.eye(2), np.ones((3, 2))), 1, horizon=2)
+    assert check.verdict.value == "fails"
+    assert check.evidence["exact_rank_check"]["state"] == "unobservable"
+
+
+@pytest.mark.parametrize(("top", "verdict"), [(1.0 + 2.0**-52, "inconclusive"), (1.0, "fails")])
+def test_irrepresentable_support_rank_is_decided_exactly(top, verdict):
+    # without sensor y3, the rows left are rank deficient exactly only when top == 1
+    system = System(np.diag([1.0, top]), [[1.0, 1.0], [1.0, 1.0], [1.0, 0.0]])
+    check = irrepresentable(system, 1, horizon=2)
+    assert check.verdict.value == verdict
+    assert check.evidence["exact_rank_check"]["state"] == (
+        "observable" if verdict == "inconclusive" else "unobservable"
+    )

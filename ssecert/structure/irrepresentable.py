@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from .._exact import exact_stacked_rank
 from .._format import sig
 from .._linalg import screen_positive_definite, stacked_rank, staircase
 from .._validation import as_choice, as_int_option
@@ -186,6 +187,9 @@ def irrepresentable(
     if k == 0:
         sc0 = staircase(system.A, system.C, max_steps=min(tau, n), tolerances=tol)
         if sc0.rank < n and not sc0.problem:
+            doubt = _exact_doubt(system, range(p * min(tau, n)), min(tau, n), evidence)
+            if doubt:
+                return make(Verdict.INCONCLUSIVE, math.nan, None, f"O_tau (horizon {tau}) {doubt}")
             return make(
                 Verdict.FAILS,
                 math.inf,
@@ -275,6 +279,9 @@ def irrepresentable(
                 None,
                 f"The rank of O_tau cannot be decided: {sc.problem}.",
             )
+        doubt = _exact_doubt(system, range(p * min(tau, n)), min(tau, n), evidence)
+        if doubt:
+            return make(Verdict.INCONCLUSIVE, math.nan, None, f"O_tau (horizon {tau}) {doubt}")
         return make(
             Verdict.FAILS,
             math.inf,
@@ -335,6 +342,16 @@ def irrepresentable(
     evidence["supports_without_full_rank"] = n_inf
     evidence["borderline_supports"] = borderline
     if infinite is not None:
+        kept = np.setdiff1d(np.arange(p * tau), rows_of[list(infinite)].ravel())
+        doubt = _exact_doubt(system, kept, tau, evidence)
+        if doubt:
+            label = ", ".join(map(str, describe_support(infinite)))
+            return make(
+                Verdict.INCONCLUSIVE,
+                math.nan,
+                None,
+                f"O_Sbar for the support {label} {doubt}",
+            )
         return make(
             Verdict.FAILS,
             math.inf,
@@ -399,6 +416,26 @@ def irrepresentable(
         worst_support,
         f"The worst constant {worst:.12g} is within {band:g} of 1.",
         margin=margin,
+    )
+
+
+def _exact_doubt(system: System, rows: Any, steps: int, evidence: dict[str, Any]) -> str:
+    """Why a floating-point rank deficiency of some rows of O_steps is not trusted, or "".
+
+    The rows are taken with the data as exact rationals: full column rank
+    there (modulo a prime, a proof) means the deficiency hinged on digits
+    below the data's precision.  An exact kernel vector confirms it; beyond
+    the exact budgets the floating-point decision stands.
+    """
+    exact = exact_stacked_rank(system.A, system.C, rows, steps)
+    evidence["exact_rank_check"] = exact.to_dict()
+    if exact.state != "observable":
+        return ""
+    return (
+        "looks rank deficient in floating point, but with the data taken exactly it has full "
+        f"column rank (rank {system.n} modulo a prime): the plant is within the precision of its "
+        "data of one where Theorem 1's assumption fails, so rho depends on digits the data do "
+        "not have."
     )
 
 
