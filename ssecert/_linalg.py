@@ -127,10 +127,16 @@ class EigenAnalysis:
     condition: np.ndarray
     threshold: float
     problems: tuple[str, ...] = field(default=())
+    unit: float = 1.0
 
     @property
     def ok(self) -> bool:
         return not self.problems
+
+    def label(self, value: complex) -> str:
+        """An eigenvalue of this (possibly rescaled) A as the caller's A has it, for messages."""
+        v = complex(value) / self.unit
+        return f"{v.real:.6g}" if v.imag == 0 else f"{v:.6g}"
 
 
 def _eigen_condition(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -160,7 +166,9 @@ def _compatible(dist: np.ndarray, delta: np.ndarray, tight: float) -> bool:
     return len(seen) == m
 
 
-def eigen_clusters(A: np.ndarray, *, tolerances: Tolerances | None = None) -> EigenAnalysis:
+def eigen_clusters(
+    A: np.ndarray, *, tolerances: Tolerances | None = None, unit: float = 1.0
+) -> EigenAnalysis:
     """Group the eigenvalues of ``A`` and compute each group's eigenspace.
 
     Two computed eigenvalues are grouped when their distance is below the
@@ -179,6 +187,9 @@ def eigen_clusters(A: np.ndarray, *, tolerances: Tolerances | None = None) -> Ei
     ----------
     A : ndarray, shape (n, n)
     tolerances : Tolerances, optional
+    unit : float, default 1.0
+        The factor by which ``A`` was scaled from the caller's matrix: messages
+        give eigenvalues divided by it.
 
     Returns
     -------
@@ -270,7 +281,7 @@ def eigen_clusters(A: np.ndarray, *, tolerances: Tolerances | None = None) -> Ei
         codes = classify(s, threshold, factor=tol.borderline_factor)
         g = int(np.count_nonzero(codes == ZERO))
         problem = ""
-        label = f"{center.real:.6g}" if self_conjugate else f"{center:.6g}"
+        label = f"{center.real / unit:.6g}" if self_conjugate else f"{center / unit:.6g}"
         if np.any(codes == BORDERLINE):
             problem = (
                 f"eigenvalue {label}: a singular value of A - lambda I "
@@ -319,6 +330,7 @@ def eigen_clusters(A: np.ndarray, *, tolerances: Tolerances | None = None) -> Ei
         condition=kappa,
         threshold=threshold,
         problems=tuple(problems),
+        unit=unit,
     )
 
 

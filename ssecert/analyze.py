@@ -170,7 +170,8 @@ def analyze(
     tol = tolerances or Tolerances()
     system = spec.system
     # shared by the structural checks, which decide in power-of-two units
-    eig = eigen_clusters(unit_normalized(system)[0].A, tolerances=tol)
+    work, alpha = unit_normalized(system)
+    eig = eigen_clusters(work.A, tolerances=tol, unit=alpha)
 
     def relay(check_id: str) -> Callable[[int, int], None] | None:
         if progress is None:
@@ -209,6 +210,15 @@ def analyze(
             )
         )
     checks, notes = reconcile(checks)
+    index = checks[0].fields.get("observability_index")
+    if index is not None and spec.horizon < index:
+        notes.append(
+            f"horizon = {spec.horizon} is shorter than the observability index {index}: "
+            f"{spec.horizon} step{'s' if spec.horizon != 1 else ''} of output "
+            f"{'do' if spec.horizon != 1 else 'does'} not determine the state even without attack, so the irrepresentable check (on O_tau with tau = "
+            f"horizon) cannot hold; sparse observability is a property of the plant and does "
+            f"not depend on the horizon"
+        )
 
     meta: dict[str, Any] = {
         "spec": {"source": spec.source, "sha256": spec.sha256, "name": spec.name},

@@ -94,9 +94,11 @@ def _stealthy_demo(spec: Spec, witness: Mapping[str, Any], seed: int) -> dict[st
     xa = np.empty((steps, system.n))
     xb = np.empty((steps, system.n))
     a, b = demo.x0.copy(), demo.x0 + demo.z
-    for k in range(steps):
-        xa[k], xb[k] = a, b
-        a, b = system.A @ a, system.A @ b
+    A = demo.time_scale * system.A  # the plant itself when its witness fits in floats
+    with np.errstate(over="ignore", invalid="ignore"):
+        for k in range(steps):
+            xa[k], xb[k] = a, b
+            a, b = A @ a, A @ b
     attacked = list(demo.sensors_a) or list(range(system.p))
     return {
         "states_a": xa,
@@ -109,6 +111,7 @@ def _stealthy_demo(spec: Spec, witness: Mapping[str, Any], seed: int) -> dict[st
         "sensors_a": list(demo.sensors_a),
         "sensors_b": list(demo.sensors_b),
         "z": demo.z,
+        "time_scale_log2": (int(np.log2(demo.time_scale)) if demo.time_scale != 1.0 else None),
     }
 
 

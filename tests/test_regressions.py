@@ -5,7 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ssecert import System, irrepresentable, load_spec, sparse_observability
+from ssecert import System, irrepresentable, load_spec, observability, sparse_observability
 from ssecert.cli import main
 from ssecert.design.gains import GainError, deadbeat_gain
 
@@ -149,3 +149,55 @@ def test_irrepresentable_support_rank_is_decided_exactly(top, verdict):
     assert check.evidence["exact_rank_check"]["state"] == (
         "observable" if verdict == "inconclusive" else "unobservable"
     )
+
+
+def test_stealthy_witness_beyond_the_float_range_is_shown_in_scaled_units():
+    # C A^3 z ~ 1e360: the plant's own attack overflows before n = 4 steps
+    n = 4
+    A = np.diag([1e120 * (1 - 0.1 * i) for i in range(n)])
+    A[0, 1] = A[1, 2] = A[2, 3] = 1e118
+    system = System(A, np.vstack([np.eye(n), np.eye(n)[-1:]]))
+    check = sparse_observability(system, 1)
+    assert check.verdict.value == "fails"
+    w = check.witness
+    assert w["verified"] and np.all(np.isfinite(np.asarray(w["attack_a"], dtype=float)))
+    assert w["time_scale_log2"] < -300 and "gamma" in w["units"]
+
+
+def test_ambiguous_eigenvalue_grouping_does_not_block_a_clear_observability_verdict():
+    # eigenvalues 0.5 and 0.5 + 2^-45 with independent eigenvectors; C alone has rank 2
+    d = 2.0**-45
+    system = System([[0.5 + d, 0.0], [-d, 0.5]], [[-1.0, 0.0], [1.0, 1.0], [1.0, 1.0], [-1.0, 0.0]])
+    check = observability(system)
+    assert check.verdict.value == "holds"
+    assert "eigenvalue_grouping_ambiguous" in check.evidence
+    # eigenvalues in messages are the plant's, not those of its power-of-two rescaling
+    assert "eigenvalue 0.5" in check.evidence["eigenvalue_grouping_ambiguous"]
+    sparse = sparse_observability(system, 1)
+    assert sparse.verdict.value == "fails" and sparse.fields["max_removable"] == 1
+
+
+def test_sparse_observability_of_an_exactly_unobservable_plant_is_minus_one():
+    # float analysis of the eigenspaces is borderline; the exact data are unobservable
+    A = np.array(
+        [
+            [1.5000000000009095, 1.0, -1.0, 0.0],
+            [
+                9.094947017729282e-13,
+                0.5000000000063665,
+                -9.094947017729282e-13,
+                -2.7284841053187847e-12,
+            ],
+            [1.0000000000009095, 1.000000000005457, -0.5, -2.7284841053187847e-12],
+            [
+                1.8189894035458565e-12,
+                1.0913936421275139e-11,
+                -1.8189894035458565e-12,
+                0.4999999999954525,
+            ],
+        ]
+    )
+    system = System(A, [[1.0, 4.0, -1.0, -2.0]])
+    assert observability(system).verdict.value == "fails"
+    check = sparse_observability(system, 1)
+    assert check.verdict.value == "fails" and check.fields["max_removable"] == -1

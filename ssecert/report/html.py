@@ -321,14 +321,22 @@ def _why(system: Any, s: int, check: Check) -> str:
 def _stealthy_text(system: Any, demo: Mapping[str, Any]) -> str:
     a = ", ".join(system.sensors[i] for i in demo["sensors_a"]) or "no sensor"
     b = ", ".join(system.sensors[i] for i in demo["sensors_b"])
+    scale = demo.get("time_scale_log2")
+    units = (
+        f" The plant's own signals grow beyond the floating-point range, so they are shown for "
+        f"2^{scale} A: at step k each is 2^({scale} k) times the plant's (sensor by sensor, up "
+        f"to a power of two)."
+        if scale is not None
+        else ""
+    )
     if b:
         return (
             f"One plant starts at x0 with an attack on {a}; another starts at x0 + z with an "
-            f"attack on {b}. Their outputs coincide at every step."
+            f"attack on {b}. Their outputs coincide at every step.{units}"
         )
     return (
         f"The plant starts at x0 and the attacker corrupts {a} only; the outputs are exactly "
-        f"those of the unattacked plant started at x0 + z. The attack is undetectable."
+        f"those of the unattacked plant started at x0 + z. The attack is undetectable.{units}"
     )
 
 

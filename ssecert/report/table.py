@@ -108,6 +108,12 @@ def render_table(certificate: Certificate, *, width: int = 100, compact: bool = 
                 lines.append(
                     f"  stealthy attack: sensors {a} / {b}; simulated output mismatch "
                     f"{_fmt(w.get('residual'))} (verified: {w.get('verified')})"
+                    + (
+                        f"; shown for 2^{w['time_scale_log2']} A (beyond the float range "
+                        f"on A itself)"
+                        if w.get("time_scale_log2") is not None
+                        else ""
+                    )
                 )
         if check.id == "observer_gain" and check.fields.get("L") is not None:
             L = np.asarray(check.fields["L"], dtype=float)

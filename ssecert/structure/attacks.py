@@ -23,7 +23,7 @@ as the sparse-observability definition does.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -81,6 +81,14 @@ class StealthyAttack:
     overflow_at : int or None
         First step at which the simulation of an unstable plant overflows,
         when that is after n steps: the arrays stop there.
+    time_scale : float
+        1, or a power of two gamma when the witness on the plant itself
+        overflows before n steps: the arrays are then those of the plant
+        (gamma A, D C), and the plant's own attack is
+        ``attack_a[k] / (gamma**k * sensor_scales)`` (and its outputs
+        likewise), beyond the floating-point range.
+    sensor_scales : ndarray, shape (p,), or None
+        D, the powers of two of the sensor rows, with ``time_scale``.
     """
 
     z: np.ndarray
@@ -96,6 +104,8 @@ class StealthyAttack:
     rtol: float
     horizon: int | None = None
     overflow_at: int | None = None
+    time_scale: float = 1.0
+    sensor_scales: np.ndarray | None = None
 
     @property
     def undetectable(self) -> bool:
@@ -122,6 +132,16 @@ class StealthyAttack:
         }
         steps = int(self.attack_a.shape[0])
         out["steps"] = steps
+        if self.time_scale != 1.0 and self.sensor_scales is not None:
+            out["time_scale_log2"] = int(np.log2(self.time_scale))
+            out["sensor_scales_log2"] = [int(v) for v in np.log2(self.sensor_scales)]
+            out["units"] = (
+                "the attack on the plant itself grows beyond the floating-point range, so "
+                "attack_a, attack_b and the outputs are those of the plant (gamma A, D C) with "
+                "gamma = 2^time_scale_log2 and D = diag(2^sensor_scales_log2); the plant's own "
+                "attack at step k is attack_a[k] / (gamma^k D), and the same x0 and z make it "
+                "stealthy, since x(k) scales by gamma^k"
+            )
         if self.horizon is not None and self.horizon > steps:
             why = (
                 f"the simulated states overflow in floating point at step {self.overflow_at:,}"
@@ -268,6 +288,10 @@ def stealthy_attack(
         residual = diff / max(float(scales[:window].max()), floor, np.finfo(float).tiny)
         if not np.isfinite(residual):
             residual = float("inf")
+    if (not finite.all()) and overflow_at is None:
+        scaled = _in_scaled_units(system, B, z, s, requested, seed, tol)
+        if scaled is not None:
+            return scaled
     return StealthyAttack(
         z=z,
         sensors_a=sensors_a,
@@ -283,3 +307,26 @@ def stealthy_attack(
         horizon=requested,
         overflow_at=overflow_at,
     )
+
+
+def _in_scaled_units(
+    system: System,
+    B: list[int],
+    z: np.ndarray,
+    s: int,
+    horizon: int,
+    seed: int,
+    tol: Tolerances,
+) -> StealthyAttack | None:
+    """The witness on (gamma A, D C), powers of two, when the plant's own overflows early."""
+    from .._exact import pow2_row_scaling
+    from .._linalg import unit_normalized
+
+    work, gamma = unit_normalized(system)
+    if gamma == 1.0:
+        return None
+    D = pow2_row_scaling(system.C)
+    witness = stealthy_attack(work, B, z, s, horizon=horizon, seed=seed, tolerances=tol)
+    if not (np.all(np.isfinite(witness.attack_a)) and np.all(np.isfinite(witness.outputs_a))):
+        return None
+    return replace(witness, time_scale=gamma, sensor_scales=D)

@@ -57,7 +57,7 @@ def _eigenspace(
             codes = classify(mags, thr, factor=tol.borderline_factor)
             if np.any(codes == BORDERLINE):
                 out.problems.append(
-                    f"eigenvalue {cluster.center:.6g}: sensor(s) "
+                    f"eigenvalue {eig.label(cluster.center)}: sensor(s) "
                     f"{np.flatnonzero(codes == BORDERLINE).tolist()} see its eigenvector with a "
                     f"borderline magnitude"
                 )
@@ -72,7 +72,7 @@ def _eigenspace(
             )
             out.checked += used
             if problem:
-                out.problems.append(f"eigenvalue {cluster.center:.6g}: {problem}")
+                out.problems.append(f"eigenvalue {eig.label(cluster.center)}: {problem}")
                 if problem.startswith("budget"):
                     out.status = "budget"
                 continue

@@ -133,7 +133,7 @@ def observability(
     work, alpha = unit_normalized(system)
     A, C = work.A, work.C
     n = system.n
-    eig = eigen if eigen is not None else eigen_clusters(A, tolerances=tol)
+    eig = eigen if eigen is not None else eigen_clusters(A, tolerances=tol, unit=alpha)
     sc = staircase(A, C, tolerances=tol)
     exact = ExactPlant(system.A, system.C).observability(tuple(range(system.p)))
 
@@ -141,7 +141,7 @@ def observability(
     margins, codes = pbh_margins(A, C, centers, tolerances=tol)
     # margin over every computed eigenvalue, as reported to users
     raw = eig.eigenvalues[eig.eigenvalues.imag >= 0]
-    raw_margins, _ = pbh_margins(A, C, raw, tolerances=tol)
+    raw_margins, raw_codes = pbh_margins(A, C, raw, tolerances=tol)
     margin = float(min(margins.min(initial=np.inf), raw_margins.min(initial=np.inf)))
 
     if eig.problems:
@@ -157,6 +157,18 @@ def observability(
         stair_state, stair_note = "unknown", sc.problem
     else:
         stair_state, stair_note = ("observable" if sc.rank == n else "unobservable"), ""
+    grouping = ""
+    if (
+        eig.problems
+        and stair_state == "observable"
+        and exact.state == "observable"
+        and np.all(codes == NONZERO)
+        and np.all(raw_codes == NONZERO)
+    ):
+        # how the eigenvalues group (their multiplicities) is ambiguous, but PBH is clearly of
+        # full rank at every computed eigenvalue and every group, the staircase agrees, and the
+        # exact data are observable: the grouping cannot change the answer
+        pbh_state, grouping = "observable", "; ".join(eig.problems)
 
     evidence: dict[str, Any] = {
         "eigenvalues": eig.eigenvalues / alpha,
@@ -260,6 +272,12 @@ def observability(
         )
     if pbh_state == "observable" and stair_state == "observable":
         confirmed = " (confirmed in exact arithmetic)" if exact.state == "observable" else ""
+        if grouping:
+            evidence["eigenvalue_grouping_ambiguous"] = grouping
+            confirmed = (
+                " (confirmed in exact arithmetic; how the eigenvalues group is ambiguous, but the "
+                "PBH test has full rank at every one of them)"
+            )
         return check(
             Verdict.HOLDS,
             f"(A, C) is observable{confirmed}: x(0) is determined by {sc.index} "

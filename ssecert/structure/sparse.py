@@ -58,7 +58,7 @@ from .enumeration import (
     _Outcome,
     scan_removals,
 )
-from .observability import pbh_margins
+from .observability import observability, pbh_margins
 
 __all__ = [
     "sparse_observability",
@@ -290,7 +290,7 @@ def _recheck_holds(
     # Independently of any grouping: at every computed eigenvalue, remove the
     # 2s sensors that see its (numerical) eigenvector best and test PBH there.
     if not problem:
-        raw_margin, raw_problem = _recheck_raw_eigenvalues(system, s, tol, eig.eigenvalues)
+        raw_margin, raw_problem = _recheck_raw_eigenvalues(system, s, tol, eig)
         if raw_margin is not None:
             margin = raw_margin if margin is None else min(margin, raw_margin)
         problem = raw_problem
@@ -298,7 +298,7 @@ def _recheck_holds(
 
 
 def _recheck_raw_eigenvalues(
-    system: System, s: int, tol: Tolerances, lam: np.ndarray
+    system: System, s: int, tol: Tolerances, eig: EigenAnalysis
 ) -> tuple[float | None, str]:
     """PBH at each computed eigenvalue after removing the 2s sensors that see it best."""
     A, C = system.A, system.C
@@ -308,6 +308,7 @@ def _recheck_raw_eigenvalues(
     norms = np.linalg.norm(C, axis=1)
     safe = np.where(norms > 0, norms, 1.0)
     worst = None
+    lam = eig.eigenvalues
     for value in lam[lam.imag >= 0]:
         shift = value.real if value.imag == 0 else value
         _, _, vh = np.linalg.svd(A - shift * np.eye(n))
@@ -318,7 +319,7 @@ def _recheck_raw_eigenvalues(
         worst = float(m[0]) if worst is None else min(worst, float(m[0]))
         if codes[0] != NONZERO:
             return worst, (
-                f"the PBH test at the computed eigenvalue {value:.6g}, after removing the "
+                f"the PBH test at the computed eigenvalue {eig.label(value)}, after removing the "
                 f"{2 * s} sensors that see its eigenvector best, is "
                 f"{'rank deficient' if codes[0] == ZERO else 'borderline'}"
             )
@@ -390,7 +391,7 @@ def sparse_observability(
     # decisions in power-of-two units (no sensor's units can tip a rank threshold), confirmed
     # on the user's exact data; the witness is built in the user's units
     work, alpha = unit_normalized(system)
-    eig = eigen if eigen is not None else eigen_clusters(work.A, tolerances=tol)
+    eig = eigen if eigen is not None else eigen_clusters(work.A, tolerances=tol, unit=alpha)
     exact = ExactPlant(system.A, system.C)
     outcome, tried, estimates = _run(work, s, method, max_sets, tol, progress, eig, exact)
     for o in tried:
@@ -458,6 +459,21 @@ def sparse_observability(
             tolerances=tolerances_out,
         )
 
+    def unobservable_plant() -> Check | None:
+        # the methods could not decide, but when the exact data are unobservable with every
+        # sensor kept, max_removable = -1 whatever the floating-point trouble
+        decision = exact.observability(tuple(range(p)))
+        if decision.state != "unobservable" or decision.z is None:
+            return None
+        found = _Outcome("exact arithmetic", "exact", -1, (), decision.z)
+        evidence["undecided_methods_settled_by"] = (
+            "the exact data are unobservable with every sensor kept (an exact kernel vector)"
+        )
+        verdict, summary, witness = _failure(system, work, s, found, H, seed, tol, evidence, exact)
+        if verdict is not Verdict.FAILS:
+            return None
+        return make(verdict, summary, -1, fields(-1, False, ()), witness=witness)
+
     if outcome.status == "exact":
         mr = outcome.max_removable
         assert mr is not None and outcome.breaking_set is not None and outcome.z is not None
@@ -476,6 +492,9 @@ def sparse_observability(
         )
         if problem:
             evidence["disputed_max_removable"] = mr
+            settled = unobservable_plant()
+            if settled is not None:
+                return settled
             return make(
                 Verdict.INCONCLUSIVE,
                 f"The {outcome.method} method finds max_removable = {mr}, but {problem}.",
@@ -516,7 +535,24 @@ def sparse_observability(
                 fields(mr, True, None),
                 margin=margin,
             )
+    settled = unobservable_plant()
+    if settled is not None:
+        return settled
     reasons = [pr for o in tried for pr in o.problems] or ["no method could decide"]
+    if s == 0:
+        # 2s = 0 <= max_removable is observability of (A, C) itself
+        plain = observability(system, tolerances=tol, eigen=eig)
+        evidence["observability"] = {"verdict": plain.verdict.value, "summary": plain.summary}
+        if plain.verdict is Verdict.HOLDS:
+            return make(
+                Verdict.HOLDS,
+                f"With s = 0 the condition 0 <= max_removable is the observability of (A, C), "
+                f"which holds: {plain.summary} The exact max_removable was not computed "
+                f"({'; '.join(reasons)}).",
+                0,
+                fields(0, True, None),
+                margin=plain.margin,
+            )
     needed = next((o.needed for o in tried if o.needed is not None), None)
     hint = ""
     if needed is not None:
