@@ -552,6 +552,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     import json
 
     from .results import to_jsonable
+    from .design.gains import GainError
     from .simulation.engine import simulate_spec
 
     target = _output_file("--json", args.json_path)
@@ -567,14 +568,22 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         context = dask_client(args.scheduler, workers=args.workers)
     with _warnings_as_notes() as log:
         with context as client:
-            results = simulate_spec(
-                spec,
-                seed=args.seed,
-                runs=args.runs,
-                steps=args.steps,
-                client=client,
-                budget=_budget(args),
-            )
+            try:
+                results = simulate_spec(
+                    spec,
+                    seed=args.seed,
+                    runs=args.runs,
+                    steps=args.steps,
+                    client=client,
+                    budget=_budget(args),
+                )
+            except GainError as exc:
+                gain = spec.observer.get("gain")
+                shown = repr(gain) if isinstance(gain, str) else "the given matrix"
+                raise UsageError(
+                    f"{spec.source}: observer.gain = {shown} cannot be used, so nothing can be "
+                    f"simulated: {exc}"
+                ) from exc
         document = {
             "ssecert_version": __version__,
             "system": spec.system.to_dict(),
@@ -619,6 +628,7 @@ def _simulation_table(spec: Any, scenarios: dict[str, Any]) -> str:
             rows.append((name, "-", "-", "-", "skipped", "", "", ""))
             notes.append(f"{name}: {res['skipped']}")
             continue
+        notes.extend(f"{name}: {note}" for note in getattr(res, "notes", ()))
         f = res.final()
         fmt = lambda v: "-" if v is None else f"{v:.3g}"  # noqa: E731
         rows.append(

@@ -70,6 +70,8 @@ def test_gain_that_cannot_be_computed_is_bad_input_for_simulate(tmp_path, capsys
     assert main(["simulate", str(spec), "--runs", "2", "--steps", "5"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("ssecert: error:") and "Traceback" not in err
+    # the file, the key and the cause
+    assert "s.toml: observer.gain = 'deadbeat'" in err and "not observable" in err
 
 
 def test_elastic_net_with_ogd_gain_runs(tmp_path):
@@ -201,3 +203,18 @@ def test_sparse_observability_of_an_exactly_unobservable_plant_is_minus_one():
     assert observability(system).verdict.value == "fails"
     check = sparse_observability(system, 1)
     assert check.verdict.value == "fails" and check.fields["max_removable"] == -1
+
+
+def test_a_diverging_simulation_says_so(tmp_path, capsys):
+    spec = tmp_path / "d.toml"
+    spec.write_text(
+        '[system]\nA = [[1.0, 0.0099], [0.0, 0.9876]]\nC = [[1, 0], [0, 1], [0, 1]]\n'
+        '[attack]\nmax_attacked = 1\n[observer]\nkind = "luenberger"\n'
+        'gain = [[3.0, 0.0, 0.0], [0.0, 0.0, 0.0]]\n'
+        '[[scenario]]\nname = "c"\nattack = "constant"\nsensors = [1]\nsteps = 2000\nruns = 3\n'
+    )
+    assert main(["simulate", str(spec)]) == 0
+    out = capsys.readouterr().out
+    row = next(line for line in out.splitlines() if line.startswith("c "))
+    assert row.split()[4:6] == ["inf", "inf"]  # unbounded, not NaN
+    assert "overflows in floating point in 3 of 3 runs, the first at step" in out

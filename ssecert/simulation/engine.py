@@ -26,7 +26,7 @@ from ..budget import Budget, ResourceLimitError
 from ..observers import ObserverDesign, build_observer, observer_from_design
 from ..parallel import map_ordered
 from ..system import System
-from .metrics import detection_delay, mse, relative_error, summarize, support_error
+from .metrics import detection_delay, mse, quantile, relative_error, summarize, support_error
 from .scenarios import StealthyReplay, generate
 
 __all__ = [
@@ -146,7 +146,7 @@ class ScenarioResult:
         with np.errstate(over="ignore", invalid="ignore"):  # diverged runs: inf or NaN
             out: dict[str, float | None] = {
                 "relative_error_mean": float(np.mean(rel)),
-                "relative_error_q90": float(np.quantile(rel, 0.9)),
+                "relative_error_q90": float(quantile(rel, 0.9)),
                 "mse_mean": float(np.mean(self.mse[-1])),
                 "support_error_mean": (
                     None if self.support_error is None else float(np.mean(self.support_error[-1]))
@@ -303,11 +303,18 @@ def simulate_scenario(
     parts = map_ordered(_chunk, chunks, client)
     merged = {key: np.concatenate([p[key] for p in parts], axis=-1) for key in parts[0]}
     notes = []
-    overflowed = int(np.count_nonzero(~np.all(np.isfinite(merged["relative_error"]), axis=0)))
+    bad = ~np.isfinite(merged["relative_error"])  # (steps + 1, runs)
+    overflowed = int(np.count_nonzero(bad.any(axis=0)))
     if overflowed:
+        first = int(np.argmax(bad.any(axis=1)))
+        # a run that overflowed has an unbounded error from then on, not an undefined one
+        gone = np.maximum.accumulate(bad, axis=0)
+        for key in ("relative_error", "mse"):
+            merged[key] = np.where(gone, np.inf, merged[key])
         notes.append(
-            f"the plant state or its estimate overflows in floating point in "
-            f"{overflowed} of {runs} runs (their errors are reported as inf or NaN)"
+            f"the plant state or its estimate overflows in floating point in {overflowed} of "
+            f"{runs} runs, the first at step {first:,}: their errors are reported as inf from "
+            f"then on"
         )
     return ScenarioResult(
         name=str(scenario.get("name", "scenario")),

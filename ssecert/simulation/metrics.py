@@ -115,5 +115,23 @@ def summarize(
         warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN steps give NaN, as intended
         out: dict[str, Any] = {"mean": np.nanmean(series, axis=1)}
         for q in quantiles:
-            out[f"q{round(q * 100):02d}"] = np.nanquantile(series, q, axis=1)
+            out[f"q{round(q * 100):02d}"] = quantile(series, q, axis=1)
     return out
+
+
+def quantile(values: np.ndarray, q: float, axis: int | None = None) -> Any:
+    """``numpy.nanquantile``, but inf where the quantile involves diverged (inf) runs.
+
+    Interpolating towards an infinite value gives NaN in NumPy; a quantile
+    that interpolates towards a diverged run is unbounded, not undefined.
+    """
+    big = np.finfo(float).max
+    finite = np.where(np.isposinf(values), big, values)
+    with warnings.catch_warnings(), np.errstate(over="ignore", invalid="ignore"):
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN slices give NaN, as intended
+        linear = np.nanquantile(finite, q, axis=axis)
+        low = np.nanquantile(finite, q, axis=axis, method="lower")
+        high = np.nanquantile(finite, q, axis=axis, method="higher")
+    unbounded = (low >= big) | ((high >= big) & (linear != low))
+    result = np.where(unbounded, np.inf, linear)
+    return result if np.ndim(result) else float(result)

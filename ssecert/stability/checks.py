@@ -168,14 +168,20 @@ def _deadbeat_check(
         index, upper = int(_known(index)), _known(upper)
         rel = details["relative_power_norms"][index - 1]
         exactly = details.get("exactly_nilpotent")
+        nu = details.get("observability_index")
+        if nu is None:
+            fastest = ""
+        elif details.get("minimal"):
+            fastest = ", the observability index"
+        else:
+            fastest = f" (the observability index is {nu}: a faster deadbeat gain exists)"
         summary = (
             f"A - L C with the printed L is exactly nilpotent with index {index}: the error "
             f"vanishes in {index} step{'s' if index != 1 else ''} without attack."
             if exactly
             else f"With the printed L, ||(A - L C)^{index}|| <= {rel:.1e} ||A||^{index} (powers "
             f"computed exactly from the floats): the error vanishes to rounding in {index} "
-            f"step{'s' if index != 1 else ''} without attack, the observability index"
-            f"{'' if details.get('minimal') else ' (index not minimal)'}, and the spectral "
+            f"step{'s' if index != 1 else ''} without attack{fastest}, and the spectral "
             f"radius is certified <= {upper:.3g}."
         ) + exact_note
         return Check(
