@@ -10,6 +10,7 @@ from typing import Any
 
 from ._linalg import eigen_clusters, unit_normalized
 from .budget import Budget
+from .context import AnalysisContext, sparse_key
 from .observers import get_kind, observer_kinds
 from .results import Certificate, Check, Verdict
 from .spec import Spec
@@ -131,6 +132,7 @@ def analyze(
     tolerances: Tolerances | None = None,
     progress: Callable[[str, int, int], None] | None = None,
     budget: Budget | None = None,
+    context: AnalysisContext | None = None,
 ) -> Certificate:
     """Run the structural checks of a design.
 
@@ -151,6 +153,10 @@ def analyze(
         Memory and work allowed for each analysis step (default ``Budget()``:
         2 GiB, 1e12 operations); a step that does not fit is inconclusive
         with its estimate.
+    context : AnalysisContext, optional
+        Where the run keeps what later steps share (the observer built from
+        the design, the sparse-observability check whose stealthy attack the
+        simulations replay); ``certify`` passes its own.
 
     Returns
     -------
@@ -206,18 +212,26 @@ def analyze(
 
         checks.extend(
             observer_checks(
-                system, spec.observer, observability=checks[0], seed=seed, budget=budget
+                system,
+                spec.observer,
+                observability=checks[0],
+                seed=seed,
+                budget=budget,
+                context=context,
             )
         )
     checks, notes = reconcile(checks)
+    if context is not None:  # the final (reconciled) check: its witness is the one reported
+        context.put(sparse_key(spec.max_attacked), checks[1])
     index = checks[0].fields.get("observability_index")
     if index is not None and spec.horizon < index:
+        steps = f"{spec.horizon} step{'s' if spec.horizon != 1 else ''} of output"
+        verb = "do" if spec.horizon != 1 else "does"
         notes.append(
             f"horizon = {spec.horizon} is shorter than the observability index {index}: "
-            f"{spec.horizon} step{'s' if spec.horizon != 1 else ''} of output "
-            f"{'do' if spec.horizon != 1 else 'does'} not determine the state even without attack, so the irrepresentable check (on O_tau with tau = "
-            f"horizon) cannot hold; sparse observability is a property of the plant and does "
-            f"not depend on the horizon"
+            f"{steps} {verb} not determine the state even without attack, so the "
+            f"irrepresentable check (on O_tau with tau = horizon) cannot hold; sparse "
+            f"observability is a property of the plant and does not depend on the horizon"
         )
 
     meta: dict[str, Any] = {

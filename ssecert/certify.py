@@ -18,6 +18,7 @@ import numpy as np
 
 from .analyze import analyze
 from .budget import Budget, ResourceLimitError
+from .context import OBSERVER, AnalysisContext
 from .results import Certificate, to_jsonable
 from .spec import SCENARIO_DEFAULTS, Spec
 
@@ -178,7 +179,8 @@ def certify(
     if max_sets is not None:
         kwargs["max_sets"] = max_sets
     say("structural checks and certificates")
-    cert = analyze(spec, **kwargs)
+    context = AnalysisContext()
+    cert = analyze(spec, context=context, **kwargs)
     notes: list[str] = []
     sparse = cert["sparse_observability"]
     witness = sparse.witness if sparse.verdict.value == "fails" else None
@@ -190,8 +192,11 @@ def certify(
         from .design.gains import GainError
         from .observers import build_observer
 
+        observer = spec.observer
         try:
-            design = build_observer(spec.system, spec.observer, budget=budget)
+            design = context.once(
+                OBSERVER, lambda: build_observer(spec.system, observer, budget=budget)
+            )
         except GainError as exc:
             notes.append(f"no simulation or region: the observer gain cannot be computed ({exc})")
         except ResourceLimitError as exc:
@@ -223,6 +228,7 @@ def certify(
                     max_attacked=spec.max_attacked,
                     client=client,
                     budget=budget,
+                    context=context,
                 )
             except ValueError as exc:  # no stealthy attack to replay, or over the budget
                 simulations[scenario["name"]] = {"skipped": str(exc)}

@@ -551,8 +551,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     import contextlib
     import json
 
-    from .results import to_jsonable
     from .design.gains import GainError
+    from .results import to_jsonable
     from .simulation.engine import simulate_spec
 
     target = _output_file("--json", args.json_path)

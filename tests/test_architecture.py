@@ -36,6 +36,7 @@ LAYERS = {
         "ssecert.results",
         "ssecert.system",
         "ssecert.parallel",
+        "ssecert.context",
     ),
     1: ("ssecert.design", "ssecert.observers"),
     2: ("ssecert.spec", "ssecert.examples"),
@@ -149,3 +150,39 @@ def test_the_graph_is_what_it_seems():
     assert "ssecert.system" in GRAPH["ssecert.spec"]
     assert "ssecert.report.html" in GRAPH["ssecert"]  # the function-level import counts
     assert _layer("ssecert.observers.sso") == 1 and _layer("ssecert.report.html") == 5
+
+
+def test_certify_builds_the_observer_and_decides_sparse_observability_once(monkeypatch):
+    # the observer built for the checks is the one simulated; the stealthy scenario replays
+    # the certificate's own witness
+    import importlib
+
+    from ssecert.examples import load_example
+
+    modules = {
+        name: importlib.import_module(name)
+        for name in (
+            "ssecert.certify",
+            "ssecert.analyze",
+            "ssecert.simulation.engine",
+            "ssecert.stability.checks",
+            "ssecert.structure.sparse",
+            "ssecert.observers",
+        )
+    }
+    calls = {"sparse_observability": 0, "build_observer": 0}
+
+    def counting(name, function):
+        def wrapped(*args, **kwargs):
+            calls[name] += 1
+            return function(*args, **kwargs)
+
+        return wrapped
+
+    for module in modules.values():
+        for name in calls:
+            if hasattr(module, name):
+                monkeypatch.setattr(module, name, counting(name, getattr(module, name)))
+    result = modules["ssecert.certify"].certify(load_example("ugv"), seed=0, runs=2, steps=20)
+    assert not isinstance(result.simulations["stealthy"], dict)  # simulated, not skipped
+    assert calls == {"sparse_observability": 1, "build_observer": 1}

@@ -208,9 +208,9 @@ def test_sparse_observability_of_an_exactly_unobservable_plant_is_minus_one():
 def test_a_diverging_simulation_says_so(tmp_path, capsys):
     spec = tmp_path / "d.toml"
     spec.write_text(
-        '[system]\nA = [[1.0, 0.0099], [0.0, 0.9876]]\nC = [[1, 0], [0, 1], [0, 1]]\n'
+        "[system]\nA = [[1.0, 0.0099], [0.0, 0.9876]]\nC = [[1, 0], [0, 1], [0, 1]]\n"
         '[attack]\nmax_attacked = 1\n[observer]\nkind = "luenberger"\n'
-        'gain = [[3.0, 0.0, 0.0], [0.0, 0.0, 0.0]]\n'
+        "gain = [[3.0, 0.0, 0.0], [0.0, 0.0, 0.0]]\n"
         '[[scenario]]\nname = "c"\nattack = "constant"\nsensors = [1]\nsteps = 2000\nruns = 3\n'
     )
     assert main(["simulate", str(spec)]) == 0

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from ..budget import Budget, ResourceLimitError
+from ..context import OBSERVER, AnalysisContext, shared, sparse_key
 from ..observers import ObserverDesign, build_observer, observer_from_design
 from ..parallel import map_ordered
 from ..system import System
@@ -179,11 +180,19 @@ class ScenarioResult:
         }
 
 
-def stealthy_replay(system: System, max_attacked: int) -> StealthyReplay | None:
-    """The witness of a failing sparse-observability check, or None when it holds."""
+def stealthy_replay(
+    system: System, max_attacked: int, *, context: AnalysisContext | None = None
+) -> StealthyReplay | None:
+    """The witness of a failing sparse-observability check, or None when it holds.
+
+    With a ``context``, the check the run already made (the certificate's own
+    witness) is replayed instead of a new one.
+    """
     from ..structure.sparse import sparse_observability
 
-    check = sparse_observability(system, max_attacked)
+    check = shared(
+        context, sparse_key(max_attacked), lambda: sparse_observability(system, max_attacked)
+    )
     if check.verdict.value != "fails" or check.witness is None:
         return None
     w = check.witness
@@ -244,6 +253,7 @@ def simulate_scenario(
     client: Any | None = None,
     chunk_runs: int = CHUNK_RUNS,
     budget: Budget | None = None,
+    context: AnalysisContext | None = None,
 ) -> ScenarioResult:
     """Simulate a design under a scenario for many runs at once.
 
@@ -265,6 +275,9 @@ def simulate_scenario(
         Memory and work allowed (default ``Budget()``: 2 GiB, 1e12
         operations), estimated by ``scenario_cost`` before anything is
         allocated.
+    context : AnalysisContext, optional
+        The run's shared results: a stealthy scenario replays the
+        sparse-observability witness kept there.
 
     Returns
     -------
@@ -295,7 +308,7 @@ def simulate_scenario(
     chunk_runs = _plan(design, scenario, runs, steps, chunk_runs, budget or Budget())
     replay = None
     if scenario["attack"] == "stealthy":
-        replay = stealthy_replay(design.system, int(max_attacked or 0))
+        replay = stealthy_replay(design.system, int(max_attacked or 0), context=context)
     chunks = [
         (design, dict(scenario), list(range(r0, min(r0 + chunk_runs, runs))), steps, seed, replay)
         for r0 in range(0, runs, chunk_runs)
@@ -422,6 +435,7 @@ def simulate_spec(
     steps: int | None = None,
     client: Any | None = None,
     budget: Budget | None = None,
+    context: AnalysisContext | None = None,
 ) -> dict[str, Any]:
     """Simulate every ``[[scenario]]`` of a spec with its ``[observer]``.
 
@@ -436,6 +450,9 @@ def simulate_spec(
     budget : Budget, optional
         Memory and work allowed per scenario (default ``Budget()``: 2 GiB,
         1e12 operations).
+    context : AnalysisContext, optional
+        Shared results of the run (the observer, the stealthy witness); one
+        is made when none is given, so that the scenarios share them.
 
     Returns
     -------
@@ -456,8 +473,11 @@ def simulate_spec(
     if not spec.scenarios:
         raise ValueError(f"{spec.source}: the spec has no [[scenario]] section")
     budget = budget or Budget()
+    context = context if context is not None else AnalysisContext()
     try:
-        design = build_observer(spec.system, spec.observer, budget=budget)
+        design = context.once(
+            OBSERVER, lambda: build_observer(spec.system, spec.observer, budget=budget)
+        )
     except ResourceLimitError as exc:
         raise ResourceLimitError(f"{spec.source}: {exc}") from None
     for index, scenario in enumerate(spec.scenarios):
@@ -483,6 +503,7 @@ def simulate_spec(
                 max_attacked=spec.max_attacked,
                 client=client,
                 budget=budget,
+                context=context,
             )
         except ResourceLimitError:
             raise

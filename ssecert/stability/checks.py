@@ -13,6 +13,7 @@ import numpy as np
 
 from .._format import sig
 from ..budget import Budget, ResourceLimitError
+from ..context import OBSERVER, AnalysisContext, shared
 from ..design.gains import DEADBEAT_RTOL, GainError
 from ..observers import ObserverDesign, build_observer
 from ..results import Check, Verdict
@@ -450,6 +451,7 @@ def observer_checks(
     observability: Check | None = None,
     seed: int = 0,
     budget: Budget | None = None,
+    context: AnalysisContext | None = None,
 ) -> list[Check]:
     """All observer checks of a spec's ``[observer]`` section.
 
@@ -466,6 +468,9 @@ def observer_checks(
         Memory and work allowed for the observer's matrices and each LMI
         (default ``Budget()``: 2 GiB, 1e12 operations); what does not fit is
         inconclusive with the estimate.
+    context : AnalysisContext, optional
+        The run's shared results: the observer is built once and kept there
+        for the simulations.
 
     Returns
     -------
@@ -483,7 +488,7 @@ def observer_checks(
      ('iss_gain', 'inconclusive'), ('thesis_assumptions', 'fails')]
     """
     try:
-        design = build_observer(system, observer, budget=budget)
+        design = shared(context, OBSERVER, lambda: build_observer(system, observer, budget=budget))
     except ResourceLimitError as exc:
         gain = Check(
             id="observer_gain",

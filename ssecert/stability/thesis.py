@@ -482,7 +482,8 @@ def thesis_assumptions(
                 "lemma_1",
                 "fails",
                 f"F = A + L1 C is singular (smallest singular value {s_F[-1]:.2e}; every "
-                f"nilpotent F, as a deadbeat gain makes it, is singular), so Pi(a) = -sum F^(-l-1) L1 Psi_q^l(a) does not exist and the "
+                f"nilpotent F, as a deadbeat gain makes it, is singular), so "
+                f"Pi(a) = -sum F^(-l-1) L1 Psi_q^l(a) does not exist and the "
                 f"change of variable eta = e - Pi(a_hat) of the proof is unavailable.",
                 {"smallest_singular_value_F": float(s_F[-1]), "claimed_lipschitz": claimed},
             )
