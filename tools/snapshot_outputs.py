@@ -10,6 +10,7 @@ a user sees leaves ``diff -r`` empty.
 """
 
 import json
+import os
 import re
 import subprocess
 import sys
@@ -46,6 +47,11 @@ def main(out: Path) -> None:
                 capture_output=True,
                 text=True,
                 check=False,
+                # this tree's ssecert in the child too, not the installed one
+                env={
+                    **os.environ,
+                    "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
+                },
             )
             (out / f"{name}.{command}.txt").write_text(
                 f"exit {run.returncode}\n{_without_times(run.stdout)}{_without_times(run.stderr)}"
