@@ -19,7 +19,7 @@ import numpy as np
 from .analyze import analyze
 from .budget import Budget, ResourceLimitError
 from .context import OBSERVER, AnalysisContext
-from .results import Certificate, to_jsonable
+from .results import Certificate, Verdict, to_jsonable
 from .spec import SCENARIO_DEFAULTS, Spec
 
 __all__ = ["CertifyResult", "certify", "REGION_LIMIT"]
@@ -183,7 +183,7 @@ def certify(
     cert = analyze(spec, context=context, **kwargs)
     notes: list[str] = []
     sparse = cert["sparse_observability"]
-    witness = sparse.witness if sparse.verdict.value == "fails" else None
+    witness = sparse.witness if sparse.verdict is Verdict.FAILS else None
     stealthy = None
     if witness is not None and witness.get("verified"):
         stealthy = _stealthy_demo(spec, witness, base_seed)

@@ -14,7 +14,7 @@ from markupsafe import Markup, escape
 
 from .._format import sig
 from .._io import atomic_write_text
-from ..results import Certificate, Check, to_jsonable
+from ..results import Certificate, Check, Verdict, to_jsonable
 
 __all__ = [
     "render_report",
@@ -209,8 +209,8 @@ def _context(result: Any, *, fragment: bool) -> dict[str, Any]:
     ]
     checks = [_check_context(c) for c in cert.checks]
     verdict = cert.verdict.value
-    failing = [c for c in cert.checks if c.required and c.verdict.value == "fails"]
-    undecided = [c for c in cert.checks if c.required and c.verdict.value == "inconclusive"]
+    failing = [c for c in cert.checks if c.required and c.verdict is Verdict.FAILS]
+    undecided = [c for c in cert.checks if c.required and c.verdict is Verdict.INCONCLUSIVE]
     if failing:
         headline = failing[0].summary
     elif undecided:
@@ -231,7 +231,7 @@ def _context(result: Any, *, fragment: bool) -> dict[str, Any]:
     }
     sparse = cert.get("sparse_observability")
     breaking = (sparse.fields.get("breaking_set") if sparse is not None else None) or []
-    if sparse is not None and sparse.verdict.value == "fails":
+    if sparse is not None and sparse.verdict is Verdict.FAILS:
         ctx["sensors_svg"] = Markup(sensor_plot(system.sensors, breaking))
         ctx["breaking_names"] = ", ".join(system.sensors[i] for i in breaking) or "none"
         ctx["sensor_rows"] = [

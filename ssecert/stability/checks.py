@@ -363,7 +363,7 @@ def iss_gain_check(
         model = design.observer_kind.lure_model(design)
         cert = iss_certificate(model, alpha=0.0, budget=budget)
     else:
-        if stability is None or stability[1].verdict != "holds":
+        if stability is None or stability[1].verdict != Verdict.HOLDS:
             return Check(
                 id="iss_gain",
                 title=title,
@@ -377,7 +377,7 @@ def iss_gain_check(
         cert = iss_from_circle(model, circle)
         if model.N + model.m + model.r <= ISS_OPTIMIZE_LIMIT:
             direct = iss_certificate(model, alpha=0.5 * float(circle.decay or 0.0), budget=budget)
-            if direct.verdict == "holds" and (
+            if direct.verdict == Verdict.HOLDS and (
                 cert.gamma is None or _known(direct.gamma) < cert.gamma
             ):
                 cert = direct
@@ -418,18 +418,20 @@ def thesis_assumptions_check(
     """The thesis's Assumptions 1-3, Lemma 1 and epsilon bound (5.20), advisory."""
     holds = None if observability is None else observability.verdict is Verdict.HOLDS
     verdict, items = thesis_assumptions(design, observability_holds=holds, seed=seed, budget=budget)
-    failing = [i.name for i in items if i.verdict == "fails"]
-    if verdict == "holds":
+    failing = [i.name for i in items if i.verdict == Verdict.FAILS]
+    if verdict == Verdict.HOLDS:
         summary = "Every assumption of the thesis's stability proof holds on this design."
-    elif verdict == "fails":
+    elif verdict == Verdict.FAILS:
         summary = (
             "The thesis's stability proof does not apply to this design: "
-            + "; ".join(f"{i.name}: {i.reason}" for i in items if i.verdict == "fails")[:600]
+            + "; ".join(f"{i.name}: {i.reason}" for i in items if i.verdict == Verdict.FAILS)[:600]
         )
     else:
         summary = (
             "Not all assumptions could be decided: "
-            + "; ".join(f"{i.name}: {i.reason}" for i in items if i.verdict == "inconclusive")[:600]
+            + "; ".join(
+                f"{i.name}: {i.reason}" for i in items if i.verdict == Verdict.INCONCLUSIVE
+            )[:600]
         )
     return Check(
         id="thesis_assumptions",

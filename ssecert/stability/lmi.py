@@ -46,6 +46,7 @@ from numpy.typing import ArrayLike
 from ..budget import Budget
 from ..observers import ObserverDesign
 from ..observers.lure import LureModel
+from ..results import Verdict
 from ..tolerances import EPS
 
 __all__ = [
@@ -107,8 +108,9 @@ class LMICertificate:
 
     Attributes
     ----------
-    verdict : str
-        ``"holds"``, ``"fails"`` or ``"inconclusive"``.
+    verdict : Verdict
+        Given as a Verdict or its name (``"holds"``, ``"fails"``,
+        ``"inconclusive"``).
     kind : str
         ``"circle"`` or ``"iss"``.
     P : ndarray or None
@@ -130,7 +132,7 @@ class LMICertificate:
         Solver status and times, pre-check results, witness.
     """
 
-    verdict: str
+    verdict: Verdict
     kind: str
     P: np.ndarray | None = None
     multipliers: np.ndarray | None = None
@@ -141,6 +143,9 @@ class LMICertificate:
     structure: str = ""
     reason: str = ""
     details: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "verdict", Verdict(self.verdict))  # a name is accepted too
 
     def evidence(self) -> dict[str, Any]:
         """JSON-serialisable evidence for re-verification."""
@@ -381,7 +386,7 @@ def _solve_refusal(model: LureModel, kind: str, structure: str, budget: Budget) 
     )
 
 
-def _prechecks(model: LureModel) -> tuple[str, str, dict[str, Any]]:
+def _prechecks(model: LureModel) -> tuple[Verdict | None, str, dict[str, Any]]:
     """Structural facts that decide before any LMI is solved."""
     from .lyapunov import instability_witness
 
@@ -406,7 +411,7 @@ def _prechecks(model: LureModel) -> tuple[str, str, dict[str, Any]]:
             )
             if witness is not None and witness["verified"]:
                 return (
-                    "fails",
+                    Verdict.FAILS,
                     (
                         f"the linear error matrix F = A - L C is not stable: {decision.reason}; "
                         f"{where}the origin is not asymptotically stable"
@@ -414,7 +419,7 @@ def _prechecks(model: LureModel) -> tuple[str, str, dict[str, Any]]:
                     details,
                 )
             return (
-                "inconclusive",
+                Verdict.INCONCLUSIVE,
                 (
                     f"the computed spectral radius of F = A - L C is {rho_F:.12g}, and its stability "
                     f"cannot be decided: {decision.reason}; no certificate is attempted"
@@ -439,8 +444,8 @@ def _prechecks(model: LureModel) -> tuple[str, str, dict[str, Any]]:
                     f"whose closed loop has spectral radius {rho_q:.6g} >= 1; no sector "
                     f"certificate can exist"
                 )
-            return "inconclusive", why, details
-    return "", "", details
+            return Verdict.INCONCLUSIVE, why, details
+    return None, "", details
 
 
 def circle_certificate(
@@ -481,13 +486,13 @@ def circle_certificate(
     refusal = _model_refusal(model, budget)
     if refusal:
         return LMICertificate(
-            "inconclusive",
+            Verdict.INCONCLUSIVE,
             "circle",
             reason=f"not attempted: {refusal}",
             details={"budget": budget.to_dict()},
         )
     verdict, reason, details = _prechecks(model)
-    if verdict:
+    if verdict is not None:
         return LMICertificate(verdict, "circle", reason=reason, details=details)
     for P_old, t_old in reuse:
         ok, margin, bound, _ = verify_certificate(model, P_old, t_old, clear=clear)
@@ -515,7 +520,7 @@ def circle_certificate(
             return _holds(model, P, t, margin, bound, st, {**details, "attempts": attempts})
         info["verification_problem"] = problem
     return LMICertificate(
-        "inconclusive",
+        Verdict.INCONCLUSIVE,
         "circle",
         reason=(
             "no circle-criterion certificate was found or verified (LMI "
@@ -540,7 +545,7 @@ def _holds(
     # V(xi+) - V(xi) <= -margin ||P|| |xi|^2 <= -(margin ||P|| / lambda_max(P)) V(xi)
     decay = min(1.0, margin * normP / lam_max_P)
     return LMICertificate(
-        "holds",
+        Verdict.HOLDS,
         "circle",
         P=P,
         multipliers=t,
@@ -581,13 +586,13 @@ def iss_certificate(
     refusal = _model_refusal(model, budget)
     if refusal:
         return LMICertificate(
-            "inconclusive",
+            Verdict.INCONCLUSIVE,
             "iss",
             reason=f"not attempted: {refusal}",
             details={"budget": budget.to_dict()},
         )
     verdict, reason, details = _prechecks(model)
-    if verdict:
+    if verdict is not None:
         return LMICertificate(verdict, "iss", reason=reason, details=details)
     attempts = []
     structures = STRUCTURES if structure == "auto" else [structure]
@@ -613,7 +618,7 @@ def iss_certificate(
         info["verified"] = ok
         if ok:
             return LMICertificate(
-                "holds",
+                Verdict.HOLDS,
                 "iss",
                 P=P,
                 multipliers=t,
@@ -626,7 +631,7 @@ def iss_certificate(
             )
         info["verification_problem"] = problem
     return LMICertificate(
-        "inconclusive",
+        Verdict.INCONCLUSIVE,
         "iss",
         reason=(
             "no dissipation certificate was found or verified (LMI "
@@ -659,8 +664,10 @@ def iss_from_circle(
     -------
     LMICertificate
     """
-    if circle.verdict != "holds" or circle.P is None:
-        return LMICertificate("inconclusive", "iss", reason="no circle certificate to build on")
+    if circle.verdict != Verdict.HOLDS or circle.P is None:
+        return LMICertificate(
+            Verdict.INCONCLUSIVE, "iss", reason="no circle certificate to build on"
+        )
     P, t = circle.P, circle.multipliers if circle.multipliers is not None else np.zeros(0)
     alpha = 0.5 * float(circle.decay or 0.0)
     N, m = model.N, model.m
@@ -706,7 +713,7 @@ def iss_from_circle(
         x, g = float(grid[best]), float(values[best])
     if not np.isfinite(g):
         return LMICertificate(
-            "inconclusive",
+            Verdict.INCONCLUSIVE,
             "iss",
             reason=(
                 "no finite gain from the circle certificate (the Schur complement in the attack "
@@ -725,9 +732,9 @@ def iss_from_circle(
             model, kappa * P, kappa * t, kind="iss", alpha=alpha, g=g_cert, clear=clear
         )
     if not ok:
-        return LMICertificate("inconclusive", "iss", reason=f"gain not verified: {problem}")
+        return LMICertificate(Verdict.INCONCLUSIVE, "iss", reason=f"gain not verified: {problem}")
     return LMICertificate(
-        "holds",
+        Verdict.HOLDS,
         "iss",
         P=kappa * P,
         multipliers=kappa * t,
@@ -821,7 +828,7 @@ def region_map(
                 reuse=neighbours,
                 budget=budget,
             )
-            if cert.verdict == "inconclusive" and cert.details.get("attempts"):
+            if cert.verdict == Verdict.INCONCLUSIVE and cert.details.get("attempts"):
                 cert = circle_certificate(
                     model, structure="cross", solver_options=solver_options, budget=budget
                 )
@@ -831,7 +838,7 @@ def region_map(
             elif cert.details.get("attempts"):
                 solves += 1
             verdicts[i, j] = cert.verdict
-            if cert.verdict == "holds":
+            if cert.verdict == Verdict.HOLDS:
                 margins[i, j] = cert.margin
                 if cert.P is not None and cert.multipliers is not None:  # holds carries both
                     found[(i, j)] = (cert.P, cert.multipliers)

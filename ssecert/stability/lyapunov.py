@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from .._validation import as_real_matrix
+from ..results import Verdict
 from ..tolerances import EPS
 
 __all__ = ["LyapunovCertificate", "lyapunov_certificate", "instability_witness"]
@@ -27,8 +28,8 @@ class LyapunovCertificate:
 
     Attributes
     ----------
-    verdict : str
-        ``"holds"`` (F is Schur, proven by P), ``"fails"`` (an eigenvalue of
+    verdict : Verdict
+        (or its name) ``"holds"`` (F is Schur, proven by P), ``"fails"`` (an eigenvalue of
         modulus >= 1, with a growing trajectory as witness) or
         ``"inconclusive"``.
     P : ndarray or None
@@ -60,7 +61,7 @@ class LyapunovCertificate:
         The exact decision (``schur_decision``) when one was needed.
     """
 
-    verdict: str
+    verdict: Verdict
     P: np.ndarray | None
     decrease: np.ndarray | None
     margin: float | None
@@ -73,6 +74,9 @@ class LyapunovCertificate:
     witness: dict[str, Any] | None = field(default=None)
     method: str = "lyapunov"
     proof: dict[str, Any] | None = field(default=None)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "verdict", Verdict(self.verdict))  # a name is accepted too
 
 
 def instability_witness(
@@ -174,9 +178,9 @@ def lyapunov_certificate(
     --------
     >>> import numpy as np
     >>> cert = lyapunov_certificate(np.array([[0.5, 1.0], [0.0, 0.2]]))
-    >>> cert.verdict, cert.contraction < 1
+    >>> cert.verdict.value, cert.contraction < 1
     ('holds', True)
-    >>> lyapunov_certificate(np.array([[1.1]])).verdict
+    >>> lyapunov_certificate(np.array([[1.1]])).verdict.value
     'fails'
     """
     import control
@@ -206,7 +210,7 @@ def lyapunov_certificate(
                 raise RuntimeError("a stable Schur decision carries its radius bound")
             upper = float(decision.radius_upper)
             return LyapunovCertificate(
-                "holds",
+                Verdict.HOLDS,
                 None,
                 None,
                 1.0 - upper,
@@ -223,7 +227,7 @@ def lyapunov_certificate(
         witness = instability_witness(F, parts=parts, decision=decision)
         if decision.state == "unstable":
             return LyapunovCertificate(
-                "fails",
+                Verdict.FAILS,
                 P,
                 decrease,
                 margin,
@@ -238,7 +242,7 @@ def lyapunov_certificate(
                 proof,
             )
         return LyapunovCertificate(
-            "inconclusive",
+            Verdict.INCONCLUSIVE,
             P,
             decrease,
             margin,
@@ -283,7 +287,7 @@ def lyapunov_certificate(
         else:
             contraction = float(np.sqrt(max(0.0, 1.0 - dec_min * normP / p_eigs[-1])))
             return LyapunovCertificate(
-                "holds", P, decrease, dec_min, bound, contraction, condition, residual, rho
+                Verdict.HOLDS, P, decrease, dec_min, bound, contraction, condition, residual, rho
             )
     margin = min(dec_min, p_min)  # negative when P or the decrease is indefinite
     return exact_fallback(

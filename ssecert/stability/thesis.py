@@ -37,7 +37,7 @@ import numpy as np
 from .._format import sig
 from ..budget import Budget
 from ..observers import ObserverDesign
-from ..results import combine_verdicts
+from ..results import Verdict, combine_verdicts
 from ..tolerances import EPS
 from .lyapunov import lyapunov_certificate
 
@@ -49,9 +49,12 @@ class AssumptionResult:
     """One item of the thesis's chain of assumptions."""
 
     name: str
-    verdict: str
+    verdict: Verdict  # or its name
     reason: str
     details: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "verdict", Verdict(self.verdict))  # a name is accepted too
 
     def to_dict(self) -> dict[str, Any]:
         return {"verdict": self.verdict, "reason": self.reason, **self.details}
@@ -419,12 +422,14 @@ def thesis_assumptions(
 
     # Assumption 1
     if observability_holds is None:
-        items.append(AssumptionResult("assumption_1", "inconclusive", "observability not checked"))
+        items.append(
+            AssumptionResult("assumption_1", Verdict.INCONCLUSIVE, "observability not checked")
+        )
     else:
         items.append(
             AssumptionResult(
                 "assumption_1",
-                "holds" if observability_holds else "fails",
+                Verdict.HOLDS if observability_holds else Verdict.FAILS,
                 "(A, C) is observable (see the observability check)"
                 if observability_holds
                 else "(A, C) is not observable (see the observability check)",
@@ -435,7 +440,7 @@ def thesis_assumptions(
     items.append(
         AssumptionResult(
             "assumption_2",
-            "holds",
+            Verdict.HOLDS,
             "With Q = I (p x p; the thesis's n x n is a typo): Psi_q(0) = 0; |Psi_q(s)_i| = "
             f"q max(|s_i| - lambda, 0) < |s_i| for s_i != 0 (q = {q:g}, lambda = {lam:g}), so "
             "Psi_q(s)' Q Psi_q(s) < s' Q s for s != 0; and Psi_q is Lipschitz with constant q "
@@ -454,7 +459,7 @@ def thesis_assumptions(
     )
     if refusal:
         for name in ("lemma_1", "assumption_3", "epsilon_bound"):
-            items.append(AssumptionResult(name, "inconclusive", f"not attempted: {refusal}"))
+            items.append(AssumptionResult(name, Verdict.INCONCLUSIVE, f"not attempted: {refusal}"))
         return combine_verdicts([i.verdict for i in items]).value, items
 
     # Lemma 1
@@ -480,7 +485,7 @@ def thesis_assumptions(
         items.append(
             AssumptionResult(
                 "lemma_1",
-                "fails",
+                Verdict.FAILS,
                 f"F = A + L1 C is singular (smallest singular value {s_F[-1]:.2e}; every "
                 f"nilpotent F, as a deadbeat gain makes it, is singular), so "
                 f"Pi(a) = -sum F^(-l-1) L1 Psi_q^l(a) does not exist and the "
@@ -529,7 +534,7 @@ def thesis_assumptions(
             items.append(
                 AssumptionResult(
                     "lemma_1",
-                    "fails",
+                    Verdict.FAILS,
                     f"the claimed Lipschitz constant ||L1|| / |lambda_max(F) - q| = {claimed:.4g} is "
                     f"exceeded: |Pi(a1) - Pi(a2)| / |a1 - a2| = {ratio:.4g} for the pair in the "
                     f"counterexample",
@@ -541,7 +546,7 @@ def thesis_assumptions(
             items.append(
                 AssumptionResult(
                     "lemma_1",
-                    "holds",
+                    Verdict.HOLDS,
                     f"Pi exists (the series is finite) and is Lipschitz with constant <= {correct:.4g} "
                     f"(= ||L1|| ||F^-1|| / (1 - q ||F^-1||)) <= the claimed {claimed:.4g}",
                     details,
@@ -557,7 +562,7 @@ def thesis_assumptions(
             items.append(
                 AssumptionResult(
                     "lemma_1",
-                    "inconclusive",
+                    Verdict.INCONCLUSIVE,
                     f"Pi exists, but the claimed constant {claimed:.4g} is not proven: the series "
                     f"gives {correct:.4g}; {found}",
                     details,
@@ -571,7 +576,7 @@ def thesis_assumptions(
         items.append(
             AssumptionResult(
                 "assumption_3",
-                "inconclusive",
+                Verdict.INCONCLUSIVE,
                 "it is stated in terms of Pi from Lemma 1, which does not exist for this gain",
             )
         )
@@ -643,7 +648,7 @@ def thesis_assumptions(
             items.append(
                 AssumptionResult(
                     "assumption_3",
-                    "fails",
+                    Verdict.FAILS,
                     f"for the a_hat in the counterexample the left side is {worst_value:.4g} times "
                     f"a_hat' Q a_hat, so no rho'' < 1 works",
                     {**details, "counterexample": worst_point},
@@ -654,7 +659,7 @@ def thesis_assumptions(
             items.append(
                 AssumptionResult(
                     "assumption_3",
-                    "holds",
+                    Verdict.HOLDS,
                     f"proven with rho'' = {rho_a:.4g} < 1 from |Psi_q(v)| <= q |v| and the Lipschitz "
                     f"bound of Pi",
                     details,
@@ -664,7 +669,7 @@ def thesis_assumptions(
             items.append(
                 AssumptionResult(
                     "assumption_3",
-                    "inconclusive",
+                    Verdict.INCONCLUSIVE,
                     f"no proof, and no sample could be evaluated: "
                     f"{a3.reason or stopped or 'the ratio is not finite'}",
                     details,
@@ -674,7 +679,7 @@ def thesis_assumptions(
             items.append(
                 AssumptionResult(
                     "assumption_3",
-                    "inconclusive",
+                    Verdict.INCONCLUSIVE,
                     f"no counterexample found (largest ratio found {worst_value:.4g}) but no "
                     f"proof either",
                     details,
@@ -686,16 +691,18 @@ def thesis_assumptions(
         items.append(
             AssumptionResult(
                 "epsilon_bound",
-                "inconclusive",
+                Verdict.INCONCLUSIVE,
                 "the bound (5.20) needs Lemma 1 and Assumption 3, which are not established here",
             )
         )
     else:
         lyap = lyapunov_certificate(F)
-        if lyap.verdict != "holds" or lyap.P is None:
+        if lyap.verdict != Verdict.HOLDS or lyap.P is None:
             items.append(
                 AssumptionResult(
-                    "epsilon_bound", "inconclusive", "F is not certified stable, so no P exists"
+                    "epsilon_bound",
+                    Verdict.INCONCLUSIVE,
+                    "F is not certified stable, so no P exists",
                 )
             )
         else:
@@ -740,7 +747,7 @@ def thesis_assumptions(
                 items.append(
                     AssumptionResult(
                         "epsilon_bound",
-                        "holds",
+                        Verdict.HOLDS,
                         f"step = {eps:g} <= epsilon* = {sig(best_eps, versus=eps)} (corrected constants)",
                         details,
                     )
@@ -749,7 +756,7 @@ def thesis_assumptions(
                 items.append(
                     AssumptionResult(
                         "epsilon_bound",
-                        "inconclusive",
+                        Verdict.INCONCLUSIVE,
                         f"step = {eps:g} exceeds epsilon* = {sig(best_eps, versus=eps)}; the bound is sufficient, "
                         f"not necessary",
                         details,

@@ -461,7 +461,7 @@ def assert_schur(M: Any) -> Any:
     if M.shape[0] != M.shape[1]:
         raise ValueError(f"M must be square, got shape {M.shape}")
     cert = lyapunov_certificate(M)
-    if cert.verdict == "holds":
+    if cert.verdict is Verdict.HOLDS:
         return cert
     eigenvalues = np.linalg.eigvals(M)
     worst = complex(eigenvalues[int(np.argmax(np.abs(eigenvalues)))])
@@ -469,7 +469,7 @@ def assert_schur(M: Any) -> Any:
         worst = complex(cert.witness["eigenvalue"])
     # enough digits to tell 1 + 1e-9 from 1
     where = f"eigenvalue {_num(worst, 12)} has modulus {abs(worst):.12g}"
-    if cert.verdict == "fails":
+    if cert.verdict is Verdict.FAILS:
         w = cert.witness or {}
         if w.get("grows_by_factor_2"):
             how = "an initial state along its eigenvector grows by a factor 2 in simulation"
