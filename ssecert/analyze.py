@@ -218,6 +218,7 @@ def analyze(
                 seed=seed,
                 budget=budget,
                 context=context,
+                tolerances=tol,
             )
         )
     checks, notes = reconcile(checks)

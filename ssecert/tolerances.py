@@ -104,6 +104,14 @@ class Tolerances:
     irrepresentable_rtol : float, default 1e-9
         An irrepresentable constant within this relative distance of 1 is
         inconclusive.
+    deadbeat_rtol : float, default 1e-8
+        A gain is deadbeat to rounding with index k when
+        ``||(A - L C)^k|| <= deadbeat_rtol ||A||^k`` (powers computed exactly
+        from the printed floats) and the power before is clearly above.
+    certificate_clear : float, default 100
+        How many times its floating-point error bound a certificate's margin
+        (a Lyapunov decrease, an LMI's eigenvalue, a power norm above the
+        deadbeat threshold) must exceed for the certificate to hold.
     """
 
     rank_rtol: float | None = None
@@ -112,6 +120,8 @@ class Tolerances:
     screen_rtol: float = 1000 * EPS
     witness_rtol: float = 1e-6
     irrepresentable_rtol: float = 1e-9
+    deadbeat_rtol: float = 1e-8
+    certificate_clear: float = 100.0
 
     @staticmethod
     def check(value: object, name: str = "tolerances") -> Tolerances:

@@ -218,3 +218,21 @@ def test_a_diverging_simulation_says_so(tmp_path, capsys):
     row = next(line for line in out.splitlines() if line.startswith("c "))
     assert row.split()[4:6] == ["inf", "inf"]  # unbounded, not NaN
     assert "overflows in floating point in 3 of 3 runs, the first at step" in out
+
+
+def test_observer_checks_use_and_report_the_tolerances_given():
+    from ssecert.stability.checks import observer_checks
+    from ssecert.tolerances import Tolerances
+
+    system = System([[0.5, 1.0], [0.0, 0.2]], [[1.0, 0.0]])
+    observer = {"kind": "luenberger", "gain": [[0.1], [0.0]]}
+    default = observer_checks(system, observer)
+    assert default[0].verdict.value == "holds"
+    assert default[0].tolerances["clear_factor"] == 100.0
+    assert default[0].method == "discrete Lyapunov (dlyap)"
+    # a Lyapunov decrease that must beat its error bound 1e30 times cannot: the gain falls
+    # back to the exact powers, and the ISS gain (an LMI certificate) is not certified
+    strict = observer_checks(system, observer, tolerances=Tolerances(certificate_clear=1e30))
+    assert [c.tolerances["clear_factor"] for c in strict] == [1e30] * 3
+    assert strict[0].method == "exact powers of A - L C"
+    assert strict[2].verdict.value == "inconclusive"

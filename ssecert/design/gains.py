@@ -49,7 +49,7 @@ __all__ = [
     "DEADBEAT_RTOL",
 ]
 
-DEADBEAT_RTOL = 1e-8
+DEADBEAT_RTOL = Tolerances().deadbeat_rtol  # the default, for the functions' signatures
 
 
 class GainError(ValueError):
@@ -407,7 +407,7 @@ def deadbeat_gain(
     from .._linalg import staircase
 
     index = staircase(alpha * A, D[:, None] * C, tolerances=tol).index
-    test = verify_deadbeat(A, L, C)
+    test = verify_deadbeat(A, L, C, rtol=tol.deadbeat_rtol, clear=tol.certificate_clear)
     if not np.any(C) and not test.verified:
         # A - L C = A exactly for every L, and its exact powers do not vanish
         raise GainError(
@@ -437,6 +437,8 @@ def deadbeat_gain(
             "upper_bound_power": test.radius_power,
             "kernel_dimensions": dims,
             "test": test.to_dict()["test"],
+            "deadbeat_rtol": tol.deadbeat_rtol,
+            "clear_factor": tol.certificate_clear,
             "problem": problem,
         },
     )

@@ -14,10 +14,11 @@ import numpy as np
 from .._format import sig
 from ..budget import Budget, ResourceLimitError
 from ..context import OBSERVER, AnalysisContext, shared
-from ..design.gains import DEADBEAT_RTOL, GainError
+from ..design.gains import GainError
 from ..observers import ObserverDesign, build_observer
 from ..results import Check, Verdict
 from ..system import System
+from ..tolerances import Tolerances
 from .lmi import ETA, circle_certificate, iss_certificate, iss_from_circle, lure_model_cost
 from .lyapunov import lyapunov_certificate
 from .thesis import thesis_assumptions
@@ -74,14 +75,21 @@ def _exact_deadbeat(system: System) -> dict[str, Any]:
     }
 
 
-def observer_gain_check(design: ObserverDesign) -> Check:
+def _decided_by(tol: Tolerances, **extra: Any) -> dict[str, Any]:
+    """The tolerances an observer check's verdict rests on, for its JSON."""
+    return {"clear_factor": tol.certificate_clear, **extra}
+
+
+def observer_gain_check(design: ObserverDesign, *, tolerances: Tolerances | None = None) -> Check:
     """Is the gain what was asked for, and is the linear error matrix F = A - L S stable?
 
     Every number is about the gain as printed: F is formed exactly from the
     floats of A, L and S.  For a deadbeat gain on a small plant the exact
     rational gain is also computed; it is evidence about the plant, and the
-    verdict never rests on it.
+    verdict never rests on it.  ``tolerances.certificate_clear`` is the
+    factor by which a Lyapunov decrease must beat its error bound.
     """
+    tol = Tolerances.check(tolerances)
     gain = design.gain
     F = design.error_matrix
     parts = _parts(design)
@@ -94,7 +102,7 @@ def observer_gain_check(design: ObserverDesign) -> Check:
     }
     if gain.method == "deadbeat":
         return _deadbeat_check(design, fields, evidence, title)
-    cert = lyapunov_certificate(F, parts=parts)
+    cert = lyapunov_certificate(F, parts=parts, clear=tol.certificate_clear)
     fields["spectral_radius"] = cert.spectral_radius
     evidence.update(_lyapunov_evidence(cert))
     verdict = Verdict(cert.verdict)
@@ -127,7 +135,7 @@ def observer_gain_check(design: ObserverDesign) -> Check:
         fields=fields,
         evidence=evidence,
         witness=cert.witness if verdict is Verdict.FAILS else None,
-        tolerances={"error_bound": cert.error_bound, "clear_factor": 100},
+        tolerances=_decided_by(tol, error_bound=cert.error_bound),
     )
 
 
@@ -164,7 +172,11 @@ def _deadbeat_check(
     fields["spectral_radius"] = upper
     fields["spectral_radius_lower_bound"] = lower
     method = "deadbeat (exact powers of the printed A - L C)"
-    tolerances = {"deadbeat_rtol": DEADBEAT_RTOL, "clear_factor": 100}
+    # the power test ran when the gain was built, with the builder's tolerances
+    tolerances = {
+        "deadbeat_rtol": details.get("deadbeat_rtol", Tolerances().deadbeat_rtol),
+        "clear_factor": details.get("clear_factor", Tolerances().certificate_clear),
+    }
     if gain.verified:
         index, upper = int(_known(index)), _known(upper)
         rel = details["relative_power_norms"][index - 1]
@@ -235,16 +247,24 @@ def _deadbeat_check(
 
 
 def observer_stability_check(
-    design: ObserverDesign, *, budget: Budget | None = None
+    design: ObserverDesign,
+    *,
+    budget: Budget | None = None,
+    tolerances: Tolerances | None = None,
 ) -> tuple[Check, Any]:
     """Global asymptotic stability of the observer's error dynamics without attack.
 
     Returns the Check and the underlying certificate (for the ISS check).
-    ``budget`` bounds the Lur'e model and each LMI solve (default ``Budget()``).
+    ``budget`` bounds the Lur'e model and each LMI solve (default ``Budget()``);
+    ``tolerances.certificate_clear`` is the factor by which a certificate's
+    margin must beat its error bound.
     """
+    tol = Tolerances.check(tolerances)
     title = f"Observer stability ({design.kind})"
     if not design.sparse:
-        lyap = lyapunov_certificate(design.error_matrix, parts=_parts(design))
+        lyap = lyapunov_certificate(
+            design.error_matrix, parts=_parts(design), clear=tol.certificate_clear
+        )
         verdict = Verdict(lyap.verdict)
         if verdict is Verdict.HOLDS and lyap.method == "exact powers":
             summary = f"The error dynamics are linear and stable: {lyap.reason}."
@@ -268,7 +288,7 @@ def observer_stability_check(
             fields={"decay_rate": None if lyap.contraction is None else 1 - lyap.contraction},
             evidence=_lyapunov_evidence(lyap),
             witness=lyap.witness if verdict is Verdict.FAILS else None,
-            tolerances={"error_bound": lyap.error_bound},
+            tolerances=_decided_by(tol, error_bound=lyap.error_bound),
         ), lyap
     gap = design.observer_kind.lure_gap(design)
     if gap:
@@ -296,7 +316,7 @@ def observer_stability_check(
             fields={},
         ), None
     model = design.observer_kind.lure_model(design)
-    cert = circle_certificate(model, budget=budget)
+    cert = circle_certificate(model, budget=budget, clear=tol.certificate_clear)
     verdict = Verdict(cert.verdict)
     fields = {
         "decay_rate": cert.decay,
@@ -345,14 +365,20 @@ def observer_stability_check(
         fields=fields,
         evidence=evidence,
         witness=cert.details.get("witness") if verdict is Verdict.FAILS else None,
-        tolerances={"error_bound": cert.error_bound, "clear_factor": 100, "lmi_eta": ETA},
+        tolerances=_decided_by(tol, error_bound=cert.error_bound, lmi_eta=ETA),
     ), (model, cert)
 
 
 def iss_gain_check(
-    design: ObserverDesign, stability: Any, *, budget: Budget | None = None
+    design: ObserverDesign,
+    stability: Any,
+    *,
+    budget: Budget | None = None,
+    tolerances: Tolerances | None = None,
 ) -> Check:
     """l2 gain from attack to estimation error (and ISS decay), advisory."""
+    tol = Tolerances.check(tolerances)
+    clear = tol.certificate_clear
     title = "ISS gain from attack to estimation error"
     norm = (
         "l2 gain: sum_k |e(k)|^2 <= gamma^2 sum_k |a(k)|^2 + V(xi(0)), with a the "
@@ -361,7 +387,7 @@ def iss_gain_check(
     )
     if not design.sparse:
         model = design.observer_kind.lure_model(design)
-        cert = iss_certificate(model, alpha=0.0, budget=budget)
+        cert = iss_certificate(model, alpha=0.0, budget=budget, clear=clear)
     else:
         if stability is None or stability[1].verdict != Verdict.HOLDS:
             return Check(
@@ -374,9 +400,11 @@ def iss_gain_check(
                 fields={"norm": norm},
             )
         model, circle = stability
-        cert = iss_from_circle(model, circle)
+        cert = iss_from_circle(model, circle, clear=clear)
         if model.N + model.m + model.r <= ISS_OPTIMIZE_LIMIT:
-            direct = iss_certificate(model, alpha=0.5 * float(circle.decay or 0.0), budget=budget)
+            direct = iss_certificate(
+                model, alpha=0.5 * float(circle.decay or 0.0), budget=budget, clear=clear
+            )
             if direct.verdict == Verdict.HOLDS and (
                 cert.gamma is None or _known(direct.gamma) < cert.gamma
             ):
@@ -404,7 +432,7 @@ def iss_gain_check(
         method="dissipation inequality (LMI)",
         fields=fields,
         evidence=evidence,
-        tolerances={"error_bound": cert.error_bound},
+        tolerances=_decided_by(tol, error_bound=cert.error_bound),
     )
 
 
@@ -454,6 +482,7 @@ def observer_checks(
     seed: int = 0,
     budget: Budget | None = None,
     context: AnalysisContext | None = None,
+    tolerances: Tolerances | None = None,
 ) -> list[Check]:
     """All observer checks of a spec's ``[observer]`` section.
 
@@ -473,6 +502,9 @@ def observer_checks(
     context : AnalysisContext, optional
         The run's shared results: the observer is built once and kept there
         for the simulations.
+    tolerances : Tolerances, optional
+        ``certificate_clear`` decides when a certificate's margin beats its
+        error bound; every check reports the tolerances it rests on.
 
     Returns
     -------
@@ -529,10 +561,11 @@ def observer_checks(
             fields={},
         )
         return [gain, stab]
-    checks = [observer_gain_check(design)]
-    stability, cert = observer_stability_check(design, budget=budget)
+    tol = Tolerances.check(tolerances)
+    checks = [observer_gain_check(design, tolerances=tol)]
+    stability, cert = observer_stability_check(design, budget=budget, tolerances=tol)
     checks.append(stability)
-    checks.append(iss_gain_check(design, cert, budget=budget))
+    checks.append(iss_gain_check(design, cert, budget=budget, tolerances=tol))
     if design.sparse:
         checks.append(thesis_assumptions_check(design, observability, seed=seed, budget=budget))
     return checks
