@@ -42,7 +42,8 @@ import time
 import numpy as np
 
 from ssecert import System
-from ssecert.estimators.decoders import fista, l0_decoder, l1_decoder
+from ssecert.estimators.decoders import fista
+from ssecert.estimators.support_decoders import l0_decoder, l1_decoder
 
 N_STATES = 20
 NOISE_BOUND = 1e-4

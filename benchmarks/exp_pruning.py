@@ -47,9 +47,9 @@ from ssecert import System
 from ssecert.estimators.pruning import (
     l1_decode,
     pruned_weighted_l1_window_observer,
-    successful_attack,
     weighted_l1_observer,
 )
+from ssecert.estimators.pruning_attacks import successful_attack
 
 M_SENSORS = 20
 N_STATES = 10

@@ -9,17 +9,16 @@ import pytest
 from scipy.optimize import linprog
 
 from ssecert import System, sparse_observability
-from ssecert.estimators import decoders
+from ssecert.estimators import decoders, support_decoders
 from ssecert.estimators.decoders import (
     elastic_net_cvxpy,
     fista,
     ijam,
     ista,
-    l0_decoder,
-    l1_decoder,
     partial_lasso_cvxpy,
 )
 from ssecert.estimators.shrinkage import soft_threshold
+from ssecert.estimators.support_decoders import l0_decoder, l1_decoder
 
 VARIANTS = {
     "ista": (ista, {}),
@@ -496,9 +495,12 @@ def test_bad_arguments_are_refused_by_name(call, error, name):
         call()
 
 
-@pytest.mark.parametrize("name", decoders.__all__)
-def test_public_arguments_are_documented(name):
-    obj = getattr(decoders, name)
+@pytest.mark.parametrize(
+    ("module", "name"),
+    [(m, name) for m in (decoders, support_decoders) for name in m.__all__],
+)
+def test_public_arguments_are_documented(module, name):
+    obj = getattr(module, name)
     doc = inspect.getdoc(obj) or ""
     if inspect.isclass(obj):
         assert "Attributes" in doc

@@ -18,10 +18,9 @@ from ssecert.estimators.pruning import (
     pruned_weighted_l1_observer,
     pruned_weighted_l1_window_observer,
     reliable_safe_count,
-    successful_attack,
-    verify_successful_attack,
     weighted_l1_observer,
 )
+from ssecert.estimators.pruning_attacks import successful_attack, verify_successful_attack
 
 SEEDS = range(8)
 

@@ -1,8 +1,10 @@
 """Estimators: shrinkage operators, static decoders and dynamic observers.
 
 * ``shrinkage``: soft thresholding, elastic-net and weighted shrinkage;
-* ``decoders``: ISTA, FISTA, IJAM, partial Lasso and elastic net (cvxpy), l1 and l0 decoders;
-* ``pruning``: the weighted l1 observer with pruned prior and successful-attack construction;
+* ``decoders``: ISTA, FISTA, IJAM, partial Lasso and elastic net (cvxpy);
+* ``support_decoders``: the l1 (linear program) and l0 (support enumeration) decoders;
+* ``pruning``: the weighted l1 observer with pruned prior; ``pruning_attacks``: the
+  (eps, alpha)-successful attack against it;
 * the dynamic observers (Luenberger, online-gradient, SSO, D-SSO and elastic-net, batched)
   live in ``ssecert.observers`` and are re-exported here;
 * ``sise``: sparse-input and state estimation (Kalman-like, Lasso support detection);
@@ -19,13 +21,10 @@ from ..observers import (
 )
 from .decoders import (
     IterativeSolution,
-    L0Solution,
     elastic_net_cvxpy,
     fista,
     ijam,
     ista,
-    l0_decoder,
-    l1_decoder,
     partial_lasso_cvxpy,
 )
 from .localization import (
@@ -38,9 +37,7 @@ from .localization import (
     rss_dictionary,
 )
 from .pruning import (
-    AttackVerification,
     DetectorDecision,
-    FalseDataInjectionAttack,
     PrunedSupportPrior,
     WeightedL1Estimate,
     detector,
@@ -50,9 +47,13 @@ from .pruning import (
     pruned_weighted_l1_observer,
     pruned_weighted_l1_window_observer,
     reliable_safe_count,
+    weighted_l1_observer,
+)
+from .pruning_attacks import (
+    AttackVerification,
+    FalseDataInjectionAttack,
     successful_attack,
     verify_successful_attack,
-    weighted_l1_observer,
 )
 from .shrinkage import (
     elastic_net_shrink,
@@ -65,6 +66,7 @@ from .sise import (
     OracleSISE,
     lasso_fista,
 )
+from .support_decoders import L0Solution, l0_decoder, l1_decoder
 
 __all__ = [
     "soft_threshold",
