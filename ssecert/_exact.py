@@ -185,6 +185,8 @@ class PowerBound:
         of (|trace F^m| / n)^(1/m), since |trace F^m| <= n rho^m.
     lower_power : int
         The power that gave the lower bound (0 if none).
+    trace_reaches_n : int
+        A power m with |trace F^m| >= n exactly (then rho >= 1), or 0.
     """
 
     log2_norms: tuple[float, ...]
@@ -196,6 +198,7 @@ class PowerBound:
     complete: bool
     radius_lower: float = 0.0
     lower_power: int = 0
+    trace_reaches_n: int = 0
 
 
 def spectral_radius_bound(
@@ -243,15 +246,21 @@ def spectral_radius_bound(
         return float(n) ** 3 * words**1.6
 
     lower, lower_m = 0.0, 0
+    reaches = 0
 
     def record(m: int, P: Dyadic) -> float:
-        nonlocal best, best_m, lower, lower_m
+        nonlocal best, best_m, lower, lower_m, reaches
         value = P.inf_norm_log2()
         powers.append(m)
         bound = 0.0 if value == -math.inf else 2.0 ** min(value / m, 1e4)
         if bound < best:
             best, best_m = bound, m
         trace = abs(sum(int(P.ints[i, i]) for i in range(n)))
+        if trace and not reaches:
+            # |trace F^m| >= n, decided in integers: trace * 2^exponent >= n
+            e = P.exponent
+            if (trace << e if e >= 0 else trace) >= (n if e >= 0 else n << -e):
+                reaches = m
         if trace:
             # rounded down: log2 of an int is within a few ulps
             log_t = math.log2(trace) - 1e-12 * max(1.0, abs(math.log2(trace))) + P.exponent
@@ -305,6 +314,7 @@ def spectral_radius_bound(
         complete,
         lower,
         lower_m,
+        reaches,
     )
 
 
@@ -605,6 +615,13 @@ def shift_identity(F: Dyadic, value: int) -> Dyadic:
     for i in range(n):
         ints[i, i] = int(ints[i, i]) - value
     return Dyadic(ints, 0)
+
+
+def shift_by(F: Dyadic, value: float) -> Dyadic:
+    """F - value I, exactly, for any finite float ``value`` (a dyadic rational)."""
+    n = F.shape[0]
+    ia, ib, e = _align(F, dyadic(np.diag(np.full(n, float(value)))))
+    return Dyadic(ia - ib, e)
 
 
 def exact_kernel_vector(M: Dyadic, *, max_bits: int = 200_000) -> list[int] | None:

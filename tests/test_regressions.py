@@ -236,3 +236,30 @@ def test_observer_checks_use_and_report_the_tolerances_given():
     assert [c.tolerances["clear_factor"] for c in strict] == [1e30] * 3
     assert strict[0].method == "exact powers of A - L C"
     assert strict[2].verdict.value == "inconclusive"
+
+
+@pytest.mark.parametrize(
+    ("F", "method"),
+    [
+        (np.diag([1.0 + 2.0**-40, 0.5]), "exact eigenvalue"),  # below the first-order bound
+        (np.diag([-(1.0 + 2.0**-40), 0.5]), "exact eigenvalue"),
+        (np.array([[0.0, 2.0**60], [2.0**-60, 0.0]]), "exact traces"),  # eigenvalues +-1
+        (np.array([[0.0, 1.0], [-1.0, 0.0]]), "exact traces"),  # a rotation: rho = 1
+    ],
+)
+def test_a_spectral_radius_of_at_least_one_is_decided_exactly(F, method):
+    from ssecert.stability.spectral import schur_decision
+
+    decision = schur_decision(F)
+    assert decision.state == "unstable" and decision.rigorous
+    assert decision.method.startswith(method)
+
+
+def test_certified_radius_bounds_print_on_their_side_of_one():
+    from ssecert.stability.spectral import schur_decision
+
+    # eigenvalues 1 - 2^-30 +- (slightly less than 2^-30): rho < 1 by ~1e-21, undecided
+    F = np.array([[1.0 - 2.0**-30, 1.0], [np.nextafter(2.0**-60, 0.0), 1.0 - 2.0**-30]])
+    decision = schur_decision(F)
+    assert decision.state == "unknown"
+    assert "certified 1 <=" not in decision.reason and "certified 0.99999" in decision.reason

@@ -312,11 +312,14 @@ def test_assert_schur():
     message = str(info.value)
     assert "M is not Schur stable: eigenvalue -1.25 has modulus 1.25 >= 1" in message
     assert "(confirmed: an initial state along its eigenvector grows by a factor 2" in message
-    with pytest.raises(AssertionError) as info:
+    with pytest.raises(AssertionError) as info:  # rho = 1 exactly: not asymptotically stable
         assert_schur([[0.0, -1.0], [1.0, 0.0]])
     message = str(info.value)
-    assert "could not be certified Schur stable (inconclusive)" in message
-    assert "eigenvalue 0+1j has modulus 1;" in message
+    assert "eigenvalue 0+1j has modulus 1 >= 1 (confirmed: in exact arithmetic" in message
+    assert "|trace F^2| >= n = 2" in message
+    with pytest.raises(AssertionError) as info:  # rho < 1 by less than rounding: undecided
+        assert_schur([[0.0, 2.0**60], [np.nextafter(2.0**-60, 0.0), 0.0]])
+    assert "could not be certified Schur stable (inconclusive)" in str(info.value)
     with pytest.raises(AssertionError, match=r"eigenvalue 1\.000000001 has modulus 1\.000000001"):
         assert_schur([[1.0 + 1e-9]])  # enough digits to see the eigenvalue is not 1
 

@@ -29,7 +29,7 @@ from .._exact import (
     dyadic,
     exact_error_matrix,
     exact_kernel_vector,
-    shift_identity,
+    shift_by,
     spectral_radius_bound,
 )
 from .._format import sig
@@ -129,9 +129,9 @@ def schur_decision(
     >>> import numpy as np
     >>> schur_decision(np.array([[0.5, 100.0], [0.0, 0.5]])).state
     'stable'
-    >>> d = schur_decision(np.array([[0.0, 1.0], [-1.0, 0.0]]))
-    >>> d.state, d.radius_upper < 1.0001
-    ('unknown', True)
+    >>> d = schur_decision(np.array([[0.0, 1.0], [-1.0, 0.0]]))  # rho = 1: not Schur
+    >>> d.state, d.method
+    ('unstable', 'exact traces: |tr F^2| >= n')
     >>> schur_decision(np.eye(2)).state
     'unstable'
     """
@@ -169,6 +169,19 @@ def schur_decision(
                 f"the exact powers {source} bound its spectral radius by {_fmt(upper)} < 1",
                 details,
             )
+        if powers.trace_reaches_n and not lower > 1.0:
+            m = powers.trace_reaches_n
+            return SchurDecision(
+                "unstable",
+                upper,
+                max(lower, 1.0),
+                f"exact traces: |tr F^{m}| >= n",
+                lam,
+                True,
+                f"the exact powers {source} give |trace F^{m}| >= n = {n}, so its spectral radius "
+                f"is at least 1: the error does not converge to 0 from every state",
+                details,
+            )
         if lower > 1.0:
             return SchurDecision(
                 "unstable",
@@ -181,17 +194,24 @@ def schur_decision(
                 f"{_fmt(lower)} > 1",
                 details,
             )
-        for value in (1, -1):
-            if n <= 40 and exact_kernel_vector(shift_identity(exact, value)) is not None:
+        # an eigenvalue on or outside the unit circle that is exactly a float: 1, -1, or the
+        # computed dominant one when it is real (a perturbation of 2^-40 is below what the
+        # first-order bound resolves, but an exact kernel vector proves it)
+        candidates: list[float] = [1.0, -1.0]
+        if np.isfinite(abs(lam)) and lam.imag == 0 and abs(lam.real) >= 1.0:
+            candidates.append(float(lam.real))
+        for value in candidates:
+            if n <= 40 and exact_kernel_vector(shift_by(exact, value)) is not None:
                 return SchurDecision(
                     "unstable",
                     upper,
-                    max(lower, 1.0),
-                    f"exact eigenvalue {value}",
+                    max(lower, abs(value)),
+                    f"exact eigenvalue {sig(value, 6, versus=np.sign(value))}",
                     lam,
                     True,
-                    f"F has the eigenvalue {value} exactly (F - ({value}) I has an exact kernel "
-                    f"vector): the error along it never decays",
+                    f"F has the eigenvalue {sig(value, 6, versus=np.sign(value))} exactly "
+                    f"(F - lambda I has an exact kernel vector), of modulus >= 1: the error along "
+                    f"it never decays",
                     details,
                 )
     if np.isfinite(abs(lam)) and abs(lam) - bound > 1 + 1e-9:
@@ -214,6 +234,10 @@ def schur_decision(
         lam,
         False,
         "neither exact powers nor traces nor a clear eigenvalue decide it"
-        + (f" (certified {lower:.6g} <= rho <= {upper:.6g})" if upper is not None else ""),
+        + (
+            f" (certified {_fmt(lower)} <= rho <= {_fmt(upper)})"
+            if upper is not None and lower is not None
+            else ""
+        ),
         details,
     )

@@ -471,8 +471,11 @@ def assert_schur(M: Any) -> Any:
     where = f"eigenvalue {_num(worst, 12)} has modulus {abs(worst):.12g}"
     if cert.verdict is Verdict.FAILS:
         w = cert.witness or {}
+        proof = w.get("proof") or {}
         if w.get("grows_by_factor_2"):
             how = "an initial state along its eigenvector grows by a factor 2 in simulation"
+        elif proof.get("rigorous"):
+            how = f"in exact arithmetic on the floats of M: {proof.get('reason')}"
         else:
             how = (
                 f"the modulus exceeds 1 by more than its rounding error bound "
