@@ -263,3 +263,15 @@ def test_certified_radius_bounds_print_on_their_side_of_one():
     decision = schur_decision(F)
     assert decision.state == "unknown"
     assert "certified 1 <=" not in decision.reason and "certified 0.99999" in decision.reason
+
+
+def test_deadbeat_summary_gives_the_exact_index_of_the_printed_gain():
+    # A nilpotent of index 2 and C of rank 2: the printed L leaves F = 2^-52 A, which is not
+    # zero (index 1 to rounding only) but squares to zero exactly
+    from ssecert.stability.checks import observer_checks
+
+    system = System([[-1.0, 1.0], [-1.0, 1.0]], [[-3.0, 1.0], [4.0, -2.0], [-2.0, 1.0], [0.0, 0.0]])
+    gain = observer_checks(system, {"kind": "luenberger", "gain": "deadbeat"})[0]
+    assert gain.verdict.value == "holds"
+    assert gain.fields["nilpotency_index"] == 2 and gain.fields["nilpotency_index_to_rounding"] == 1
+    assert "exactly nilpotent with index 2" in gain.summary

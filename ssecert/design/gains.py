@@ -162,6 +162,9 @@ class DeadbeatCheck:
         by its exact lower bound ``||F^(k-1)||_inf / sqrt(n)``.
     exactly_nilpotent : bool
         Some power of the printed F is exactly zero.
+    exact_index : int or None
+        The smallest such power (it may exceed ``index``: a printed F of size
+        2^-52 ||A|| that squares to zero has index 1 to rounding, 2 exactly).
     radius_upper, radius_lower : float
         Certified bounds on the spectral radius of the printed F.
     verified : bool
@@ -183,6 +186,7 @@ class DeadbeatCheck:
     reason: str = ""
     radius_power: int = 0
     relative_lower: tuple[float, ...] = ()
+    exact_index: int | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -191,6 +195,7 @@ class DeadbeatCheck:
             "relative_power_norms_lower": list(self.relative_lower),
             "conclusive": self.conclusive,
             "exactly_nilpotent": self.exactly_nilpotent,
+            "exact_nilpotency_index": self.exact_index,
             "spectral_radius_upper_bound": self.radius_upper,
             "spectral_radius_lower_bound": self.radius_lower,
             "upper_bound_power": self.radius_power,
@@ -298,6 +303,7 @@ def verify_deadbeat(
         reason="; ".join(reasons),
         radius_power=powers.radius_power,
         relative_lower=tuple(0.0 if r == -math.inf else 2.0 ** min(r, 1e4) for r in lower),
+        exact_index=powers.nilpotent_index,
     )
 
 
@@ -432,6 +438,7 @@ def deadbeat_gain(
             "minimal": test.index == index,
             "relative_power_norms": list(test.relative_norms),
             "exactly_nilpotent": test.exactly_nilpotent,
+            "exact_nilpotency_index": test.exact_index,
             "spectral_radius_upper_bound": test.radius_upper,
             "spectral_radius_lower_bound": test.radius_lower,
             "upper_bound_power": test.radius_power,

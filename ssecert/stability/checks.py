@@ -188,10 +188,21 @@ def _deadbeat_check(
             fastest = ", the observability index"
         else:
             fastest = f" (the observability index is {nu}: a faster deadbeat gain exists)"
+        exact_index = details.get("exact_nilpotency_index")
+        if exactly and exact_index is not None and exact_index != index:
+            fields["nilpotency_index"] = exact_index
+            fields["nilpotency_index_to_rounding"] = index
         summary = (
-            f"A - L C with the printed L is exactly nilpotent with index {index}: the error "
-            f"vanishes in {index} step{'s' if index != 1 else ''} without attack."
-            if exactly
+            f"A - L C with the printed L is exactly nilpotent with index {exact_index}: the "
+            f"error vanishes in {exact_index} step{'s' if exact_index != 1 else ''} without "
+            f"attack"
+            + (
+                f" (to rounding already in {index}: ||(A - L C)^{index}|| <= {rel:.1e} "
+                f"||A||^{index})."
+                if exact_index != index
+                else "."
+            )
+            if exactly and exact_index is not None
             else f"With the printed L, ||(A - L C)^{index}|| <= {rel:.1e} ||A||^{index} (powers "
             f"computed exactly from the floats): the error vanishes to rounding in {index} "
             f"step{'s' if index != 1 else ''} without attack{fastest}, and the spectral "
@@ -202,7 +213,7 @@ def _deadbeat_check(
             title=title,
             verdict=Verdict.HOLDS,
             summary=summary,
-            value=index,
+            value=fields["nilpotency_index"],
             margin=1.0 - upper,
             method=method,
             fields=fields,
