@@ -16,7 +16,7 @@ from .results import Certificate, Check, Verdict
 from .spec import Spec
 from .structure.irrepresentable import irrepresentable
 from .structure.observability import observability
-from .structure.sparse import DEFAULT_MAX_SETS, sparse_observability
+from .structure.sparse import DEFAULT_MAX_SETS, DEFAULT_TIME_BUDGET, sparse_observability
 from .tolerances import Tolerances
 
 __all__ = ["analyze", "environment", "reconcile"]
@@ -133,6 +133,7 @@ def analyze(
     progress: Callable[[str, int, int], None] | None = None,
     budget: Budget | None = None,
     context: AnalysisContext | None = None,
+    time_budget: float | None = DEFAULT_TIME_BUDGET,
 ) -> Certificate:
     """Run the structural checks of a design.
 
@@ -153,6 +154,10 @@ def analyze(
         Memory and work allowed for each analysis step (default ``Budget()``:
         2 GiB, 1e12 operations); a step that does not fit is inconclusive
         with its estimate.
+    time_budget : float or None, default 5
+        Seconds spent refining max_removable once the sparse-observability
+        verdict is decided (``sparse_observability``); None for the exact
+        value however long it takes.
     context : AnalysisContext, optional
         Where the run keeps what later steps share (the observer built from
         the design, the sparse-observability check whose stealthy attack the
@@ -196,6 +201,7 @@ def analyze(
             tolerances=tol,
             progress=relay("sparse_observability"),
             eigen=eig,
+            time_budget=time_budget,
         ),
         irrepresentable(
             system,

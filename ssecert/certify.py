@@ -21,6 +21,7 @@ from .budget import Budget, ResourceLimitError
 from .context import OBSERVER, AnalysisContext
 from .results import Certificate, Verdict, to_jsonable
 from .spec import SCENARIO_DEFAULTS, Spec
+from .structure.sparse import DEFAULT_TIME_BUDGET
 
 __all__ = ["CertifyResult", "certify", "REGION_LIMIT"]
 
@@ -130,6 +131,7 @@ def certify(
     progress: Progress | None = None,
     command: str | None = None,
     budget: Budget | None = None,
+    time_budget: float | None = DEFAULT_TIME_BUDGET,
 ) -> CertifyResult:
     """Certify a design: every check, the simulations and the report data.
 
@@ -160,6 +162,9 @@ def certify(
         scenario and each LMI of the region map (default ``Budget()``: 2 GiB,
         1e12 operations).  What does not fit is inconclusive (checks) or
         skipped (simulations, region), with the estimate in the reason.
+    time_budget : float or None, default 5
+        Seconds spent refining max_removable once the verdict is decided;
+        None for the exact value (``analyze``).
 
     Returns
     -------
@@ -175,7 +180,12 @@ def certify(
     say = progress or (lambda message: None)
     base_seed = 0 if seed is None else int(seed)
     budget = budget or Budget()
-    kwargs: dict[str, Any] = {"method": method, "seed": base_seed, "budget": budget}
+    kwargs: dict[str, Any] = {
+        "method": method,
+        "seed": base_seed,
+        "budget": budget,
+        "time_budget": time_budget,
+    }
     if max_sets is not None:
         kwargs["max_sets"] = max_sets
     say("structural checks and certificates")

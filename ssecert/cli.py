@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 import os
 import sys
 import time
@@ -109,6 +110,19 @@ def _positive_int(text: str) -> int:
     return _integer(text, 1, scientific=True)
 
 
+def _seconds(text: str) -> float:
+    """A finite, non-negative number of seconds."""
+    try:
+        if len(text) > 40:
+            raise ValueError(text)
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected seconds, got {_shown(text)}") from None
+    if not math.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"expected a finite number of seconds >= 0, got {text}")
+    return value
+
+
 def _add_budget_options(parser: argparse.ArgumentParser) -> None:
     from .budget import parse_bytes, parse_operations
 
@@ -149,6 +163,8 @@ def _budget(args: argparse.Namespace) -> Any:
 
 def _add_analysis_options(parser: argparse.ArgumentParser) -> None:
     """Options shared by ``certify`` and ``analyze``."""
+    from .structure.sparse import DEFAULT_TIME_BUDGET
+
     parser.add_argument(
         "--max-attacked",
         type=_nonnegative_int,
@@ -173,6 +189,24 @@ def _add_analysis_options(parser: argparse.ArgumentParser) -> None:
         choices=("auto", "enumeration", "eigenspace"),
         default="auto",
         help="sparse-observability method (default auto)",
+    )
+    refine = parser.add_mutually_exclusive_group()
+    refine.add_argument(
+        "--time-budget",
+        type=_seconds,
+        metavar="SECONDS",
+        default=DEFAULT_TIME_BUDGET,
+        help=(
+            "seconds spent refining max_removable once the verdict is decided; beyond it "
+            f"max_removable is a lower bound (default {DEFAULT_TIME_BUDGET:g})"
+        ),
+    )
+    refine.add_argument(
+        "--exact",
+        action="store_const",
+        const=None,
+        dest="time_budget",
+        help="compute the exact max_removable however long it takes",
     )
     _add_budget_options(parser)
 
@@ -469,6 +503,7 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
                 seed=args.seed,
                 progress=progress,
                 budget=_budget(args),
+                time_budget=args.time_budget,
             )
     finally:
         progress.close()
@@ -525,6 +560,7 @@ def _cmd_certify(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
             progress=say,
             command=command,
             budget=_budget(args),
+            time_budget=args.time_budget,
         )
         result.to_dict()  # simulation metrics are computed here: their warnings are notes too
     notes = log.notes()

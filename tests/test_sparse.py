@@ -267,3 +267,43 @@ def test_bad_method_and_budget():
         sparse_observability(system, 0, method="pbh")
     with pytest.raises(ValueError, match="max_sets"):
         sparse_observability(system, 0, max_sets=0)
+
+
+def test_time_budget_settles_the_verdict_first_and_bounds_the_refinement():
+    # a static plant with 12 generic sensors: max_removable = 12 - 3 = 9 exactly
+    rng = np.random.default_rng(0)
+    system = System(np.eye(3), rng.standard_normal((12, 3)))
+    exact = sparse_observability(system, 1, method="enumeration", time_budget=None)
+    assert exact.fields["max_removable"] == 9 and not exact.fields["max_removable_is_lower_bound"]
+    quick = sparse_observability(system, 1, method="enumeration", time_budget=0.0)
+    assert quick.verdict.value == "holds"  # every set of up to 2s = 2 sensors was checked
+    assert quick.fields["max_removable_is_lower_bound"]
+    assert quick.fields["max_removable"] == 2
+    assert "time budget" in quick.summary and "--exact" in quick.summary
+    assert quick.evidence["stopped_by_time_budget"]["time_budget_seconds"] == 0.0
+
+
+def test_time_budget_stops_auto_from_trying_another_method(monkeypatch):
+    # auto orders the methods by cost; once the enumeration settles the verdict within the
+    # time budget, the other method (which would only refine max_removable) is not run
+    sparse = __import__("ssecert.structure.sparse", fromlist=["_estimates"])
+    monkeypatch.setattr(
+        sparse, "_estimates", lambda *args: {"enumeration": 1.0, "eigenspace": 1e12}
+    )
+    rng = np.random.default_rng(0)
+    system = System(np.eye(3), rng.standard_normal((12, 3)))
+    quick = sparse_observability(system, 1, time_budget=0.0)
+    assert [t["method"] for t in quick.evidence["methods_tried"]] == ["enumeration"]
+    assert quick.fields["max_removable_is_lower_bound"]
+
+
+def test_time_budget_never_cuts_a_failing_verdict_short():
+    # sensors 0 and 1 see the same row: removing 2 sensors breaks the plant, s = 1 fails
+    C = np.vstack([[1.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.0, 1.0], [1.0, 1.0]])
+    check = sparse_observability(System(np.eye(2), C), 2, time_budget=0.0)
+    assert check.verdict.value == "fails" and not check.fields["max_removable_is_lower_bound"]
+
+
+def test_time_budget_is_validated():
+    with pytest.raises(ValueError, match="time_budget must be >= 0"):
+        sparse_observability(System(np.eye(2), np.eye(2)), 0, time_budget=-1.0)

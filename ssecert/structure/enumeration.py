@@ -18,6 +18,7 @@ the eigenspace method.
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -73,7 +74,16 @@ def _enumeration(
     subspaces: SensorSubspaces | None = None,
     eig: EigenAnalysis | None = None,
     exact: ExactPlant | None = None,
+    time_budget: float | None = None,
 ) -> _Outcome:
+    """Remove every set of sensors, smallest first, until one breaks observability.
+
+    The verdict needs the sets of up to 2s sensors; larger sets only refine
+    max_removable, and with ``time_budget`` (seconds from the start) a level
+    whose predicted end is past it is not started: the result is then a
+    lower bound, with ``details["stopped_by_time_budget"]``.
+    """
+    start = time.monotonic()
     A, C = system.A, system.C
     n, p = system.n, system.p
     out = _Outcome(method="enumeration", status="inconclusive")
@@ -112,6 +122,27 @@ def _enumeration(
         best_critical = [(0.0, tuple(i for i in range(p) if i not in dropped))]
     for k in range(q + 1):
         count = math.comb(q, k)
+        if time_budget is not None and k > max(target, 0) and out.checked:
+            # the verdict is settled (no set of up to 2s sensors breaks the plant); refine
+            # max_removable only while the next level is predicted to end within the budget
+            elapsed = time.monotonic() - start
+            predicted = elapsed + count * elapsed / out.checked
+            if predicted > time_budget:
+                out.needed = count_subsets(q, range(k, q + 1))
+                out.status = "lower_bound"
+                out.max_removable = full.size + k - 1
+                out.details["stopped_by_time_budget"] = {
+                    "time_budget_seconds": time_budget,
+                    "elapsed_seconds": round(elapsed, 3),
+                    "next_level_sets": count,
+                    "next_level_predicted_seconds": round(predicted - elapsed, 3),
+                }
+                out.problems.append(
+                    f"the refinement stopped at the time budget of {time_budget:g} s before the "
+                    f"{count:,} sets of {full.size + k} sensors (about "
+                    f"{predicted - elapsed:.3g} s more); --exact computes the exact value"
+                )
+                break
         if out.checked + count > max_sets:
             out.needed = count_subsets(q, range(k, max(target, k) + 1))
             out.status = "lower_bound"

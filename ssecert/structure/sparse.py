@@ -44,7 +44,7 @@ from .._linalg import (
     sensor_subspaces,
     unit_normalized,
 )
-from .._validation import as_choice, as_int_option
+from .._validation import as_choice, as_float_option, as_int_option
 from ..results import Check, Verdict
 from ..system import System
 from ..tolerances import NONZERO, ZERO, Tolerances
@@ -65,10 +65,13 @@ __all__ = [
     "scan_removals",
     "RemovalScan",
     "DEFAULT_MAX_SETS",
+    "DEFAULT_TIME_BUDGET",
     "METHODS",
 ]
 
 DEFAULT_MAX_SETS = 50_000_000
+# seconds spent refining max_removable once the verdict is settled (None: exact, however long)
+DEFAULT_TIME_BUDGET = 5.0
 
 METHODS = ("auto", "enumeration", "eigenspace")
 
@@ -103,6 +106,7 @@ def _run(
     progress: Progress | None,
     eig: EigenAnalysis,
     exact: ExactPlant | None = None,
+    time_budget: float | None = None,
 ) -> tuple[_Outcome, list[_Outcome], dict[str, float]]:
     n, p = system.n, system.p
     sub: SensorSubspaces | None = None
@@ -125,7 +129,17 @@ def _run(
         if name == "enumeration":
             if sub is None:
                 sub = sensor_subspaces(system.A, system.C, tolerances=tol)
-            outcome = _enumeration(system, s, max_sets, tol, progress, sub, eig, exact)
+            outcome = _enumeration(
+                system, s, max_sets, tol, progress, sub, eig, exact, time_budget=time_budget
+            )
+            if (
+                outcome.details.get("stopped_by_time_budget")
+                and outcome.max_removable is not None
+                and outcome.max_removable >= 2 * s
+            ):
+                # the verdict is decided; another method would only refine it, past the budget
+                tried.append(outcome)
+                return outcome, tried, estimates
         else:
             outcome = _eigenspace(system, s, max_sets, tol, eig, exact)
             if outcome.status == "exact":
@@ -337,6 +351,7 @@ def sparse_observability(
     tolerances: Tolerances | None = None,
     progress: Progress | None = None,
     eigen: EigenAnalysis | None = None,
+    time_budget: float | None = DEFAULT_TIME_BUDGET,
 ) -> Check:
     """Decide s-sparse observability and find the weakest sensor set.
 
@@ -363,6 +378,13 @@ def sparse_observability(
     eigen : EigenAnalysis, optional
         Precomputed eigenvalue groups of the plant in power-of-two units
         (``unit_normalized(system)[0].A``).
+    time_budget : float or None, default 5
+        Seconds the enumeration may spend refining max_removable once the
+        verdict is decided (every set of up to 2s sensors checked): a level
+        of larger sets predicted to end past it is not started, and
+        max_removable is then a lower bound (``max_removable_is_lower_bound``,
+        with the reason).  None computes the exact value however long it
+        takes.  The verdict itself is never cut short by it.
 
     Returns
     -------
@@ -393,7 +415,11 @@ def sparse_observability(
     work, alpha = unit_normalized(system)
     eig = eigen if eigen is not None else eigen_clusters(work.A, tolerances=tol, unit=alpha)
     exact = ExactPlant(system.A, system.C)
-    outcome, tried, estimates = _run(work, s, method, max_sets, tol, progress, eig, exact)
+    if time_budget is not None:
+        time_budget = as_float_option(time_budget, "time_budget", min_value=0.0)
+    outcome, tried, estimates = _run(
+        work, s, method, max_sets, tol, progress, eig, exact, time_budget=time_budget
+    )
     for o in tried:
         for item in o.details.get("eigenvalues", []):
             item["eigenvalue"] = item["eigenvalue"] / alpha
