@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["sig"]
+__all__ = ["sig", "distance"]
 
 
 def sig(x: float, digits: int = 4, versus: float = 1.0) -> str:
@@ -34,3 +34,21 @@ def sig(x: float, digits: int = 4, versus: float = 1.0) -> str:
         digits += 1
         text = f"{x:.{digits}g}"
     return text
+
+
+def distance(x: float) -> str:
+    """A relative distance to degeneracy: computed values below the rounding level say so.
+
+    A PBH singular value computed as 0 (or 1e-17) at a computed eigenvalue
+    only says the distance is at most about the rounding level; the exact
+    data may still be non-degenerate, so "0" would claim too much.
+
+    Examples
+    --------
+    >>> distance(0.0), distance(3.1e-12)
+    ('below the rounding level 2.2e-16', '3.1e-12')
+    """
+    eps = 2.0**-52
+    if not x >= eps:  # also NaN
+        return f"below the rounding level {eps:.1e}"
+    return f"{x:.1e}"

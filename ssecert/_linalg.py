@@ -238,10 +238,13 @@ def eigen_clusters(
     for e in order:
         i, j = int(ii[e]), int(jj[e])
         ri, rj = find(i), find(j)
-        if ri != rj:
-            parent[rj] = ri
-            members_of[ri] = members_of[ri] + members_of.pop(rj)
-        comp = members_of[find(i)]
+        if ri == rj:
+            # the component is unchanged, and its test ran when it last grew: the decision
+            # depends on its members only (re-testing made this O(n^4) on dense plants)
+            continue
+        parent[rj] = ri
+        members_of[ri] = members_of[ri] + members_of.pop(rj)
+        comp = members_of[ri]
         if len(set(labels[comp].tolist())) == 1:
             continue
         sub = dist[np.ix_(comp, comp)]

@@ -275,3 +275,24 @@ def test_deadbeat_summary_gives_the_exact_index_of_the_printed_gain():
     assert gain.verdict.value == "holds"
     assert gain.fields["nilpotency_index"] == 2 and gain.fields["nilpotency_index_to_rounding"] == 1
     assert "exactly nilpotent with index 2" in gain.summary
+
+
+def test_near_zero_distances_are_not_printed_as_zero():
+    # exactly observable (distinct eigenvalues), within rounding of unobservable
+    system = System(np.diag([1.0, 1.0 + 2.0**-52, 1.0 - 2.0**-53]), np.ones((5, 3)))
+    check = observability(system)
+    assert check.verdict.value == "inconclusive"
+    assert "below the rounding level" in check.summary and "0.0e+00" not in check.summary
+
+
+def test_eigenvalue_grouping_tests_each_component_once(monkeypatch):
+    # a dense plant: every pair of eigenvalues is a candidate edge, but a component is tested
+    # only when it grows (at most n - 1 times), not once per edge inside it
+    from ssecert import _linalg
+
+    calls = []
+    original = _linalg._compatible
+    monkeypatch.setattr(_linalg, "_compatible", lambda *args: calls.append(1) or original(*args))
+    n = 60
+    _linalg.eigen_clusters(np.random.default_rng(0).standard_normal((n, n)))
+    assert len(calls) <= n - 1

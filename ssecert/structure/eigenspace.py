@@ -16,6 +16,7 @@ import math
 import numpy as np
 
 from .._exact import ExactPlant
+from .._format import distance as format_distance
 from .._linalg import (
     EigenAnalysis,
 )
@@ -106,7 +107,7 @@ def _eigenspace(
             out.details["distance_to_breaking"] = distance
             out.problems.append(
                 f"its smallest support, sensors {list(best[1])}, does not break the exact data "
-                f"(relative distance {distance:.1e} to a plant it breaks: the data are within "
+                f"(relative distance {format_distance(distance)} to a plant it breaks: the data are within "
                 f"precision of one, or its eigenvectors are too ill-conditioned to trust)"
             )
             return out

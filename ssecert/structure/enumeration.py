@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from .._exact import ExactPlant
+from .._format import distance as format_distance
 from .._linalg import (
     EigenAnalysis,
     SensorSubspaces,
@@ -197,7 +198,11 @@ def _enumeration(
                     )
                     + " leaves a plant that is observable in exact arithmetic but within "
                     "floating-point precision of an unobservable one"
-                    + (f" (relative distance {distance:.1e})" if distance is not None else "")
+                    + (
+                        f" (relative distance {format_distance(distance)})"
+                        if distance is not None
+                        else ""
+                    )
                     + ": the answer depends on digits the data do not have"
                 )
             break

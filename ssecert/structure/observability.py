@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from .._format import distance as format_distance
 from .._linalg import EigenAnalysis, eigen_clusters, matrix_norm, staircase
 from ..results import Check, Verdict
 from ..system import System
@@ -265,7 +266,7 @@ def observability(
             Verdict.INCONCLUSIVE,
             f"In floating point (A, C) looks unobservable, but the exact data are observable "
             f"(Krylov rank {n} modulo a prime): the plant is within a relative distance "
-            f"{margin:.1e} of an unobservable one, below the precision of its data, so the answer "
+            f"{format_distance(margin)} of an unobservable one, below the precision of its data, so the answer "
             f"depends on digits the data do not have.",
             None,
             None,
