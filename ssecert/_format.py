@@ -36,7 +36,7 @@ def sig(x: float, digits: int = 4, versus: float = 1.0) -> str:
     return text
 
 
-def distance(x: float) -> str:
+def distance(x: float | None) -> str:
     """A relative distance to degeneracy: computed values below the rounding level say so.
 
     A PBH singular value computed as 0 (or 1e-17) at a computed eigenvalue
@@ -49,6 +49,8 @@ def distance(x: float) -> str:
     ('below the rounding level 2.2e-16', '3.1e-12')
     """
     eps = 2.0**-52
+    if x is None:
+        return "unknown"
     if not x >= eps:  # also NaN
         return f"below the rounding level {eps:.1e}"
     return f"{x:.1e}"

@@ -296,3 +296,15 @@ def test_eigenvalue_grouping_tests_each_component_once(monkeypatch):
     n = 60
     _linalg.eigen_clusters(np.random.default_rng(0).standard_normal((n, n)))
     assert len(calls) <= n - 1
+
+
+def test_a_certain_breaking_set_is_found_past_undecided_smaller_sets():
+    # A = I: any 4 removed sensors leave one row, so s = 2 fails whatever the last digits; the
+    # sets of 3 are within precision of breaking (rows [1, 0] and [1, 2^-52] are nearly parallel)
+    C = [[1.0, 0.0], [1.0, 2.0**-52], [0.0, 1.0], [1.0, 1.0], [1.0, -1.0]]
+    check = sparse_observability(System(np.eye(2), C), 2, method="enumeration")
+    assert check.verdict.value == "fails"
+    assert check.fields["max_removable_is_upper_bound"]
+    assert check.fields["max_removable"] == 3 and check.fields["max_removable_at_least"] == 2
+    assert "whatever digits the data lack" in check.summary
+    assert check.witness["verified"] and len(check.fields["breaking_set"]) == 4

@@ -69,7 +69,11 @@ def _consistent(check, pl, s, context):
         return False
     assert value == ("holds" if 2 * s <= pl.max_removable else "fails"), context
     mr = check.fields["max_removable"]
-    if check.fields["max_removable_is_lower_bound"]:
+    if check.fields.get("max_removable_is_upper_bound"):
+        # a certain breaking set past smaller sets within precision of breaking
+        assert check.fields["max_removable_at_least"] <= pl.max_removable <= mr, context
+        assert check.witness["verified"], context
+    elif check.fields["max_removable_is_lower_bound"]:
         assert mr <= pl.max_removable and check.fields["breaking_set"] is None, context
     else:
         assert mr == pl.max_removable, context
@@ -97,6 +101,7 @@ def test_methods_agree_with_planted_truth(seed):
         decided = _consistent(check, pl, 1, context)
         if integer:
             assert decided and not check.fields["max_removable_is_lower_bound"], context
+            assert not check.fields.get("max_removable_is_upper_bound"), context
         elif not decided:
             assert "precision" in check.summary or "borderline" in check.summary, context
 

@@ -97,6 +97,11 @@ def render_table(certificate: Certificate, *, width: int = 100, compact: bool = 
             extra = (
                 f"  max_removable = {_fmt(f.get('max_removable'))}"
                 + (" (lower bound)" if f.get("max_removable_is_lower_bound") else "")
+                + (
+                    f" (upper bound; at least {f.get('max_removable_at_least')})"
+                    if f.get("max_removable_is_upper_bound")
+                    else ""
+                )
                 + f", max_correctable = {_fmt(f.get('max_correctable'))}"
                 + f", breaking set: {_sensor_list(check, system.sensors, 'breaking_set')}"
             )

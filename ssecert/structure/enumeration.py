@@ -117,6 +117,7 @@ def _enumeration(
     base = proj.sum(axis=0)
     target = 2 * s - full.size  # level whose sets have 2s removed sensors
     best_critical: list[tuple[float, tuple[int, ...]]] = []
+    undecided: int | None = None  # size of the first removal level with undecided sets
     if target < 0:
         # every set of 2s sensors keeps a sensor that alone observes the state
         dropped = set(full[: 2 * s].tolist())
@@ -177,10 +178,26 @@ def _enumeration(
             out.z = z_first
             if level.borderline or within:
                 out.details["borderline_sets_at_breaking_size"] = level.borderline + len(within)
+            if undecided is not None:
+                # smaller sets were undecided, so this set need not be the smallest: the
+                # verdict (a breaking set of at most 2s sensors) is certain, max_removable is
+                # only bounded
+                out.details["max_removable_is_upper_bound"] = True
+                out.details["max_removable_at_least"] = undecided - 1
+            break
+        if undecided is not None and not (level.borderline or within):
+            if k < target:
+                continue
             break
         if level.borderline or within:
             out.status = "lower_bound"
             out.max_removable = full.size + k - 1
+            if undecided is not None:  # reported at the first undecided level
+                if k < target:
+                    continue
+                out.max_removable = undecided - 1
+                break
+            undecided = full.size + k
             if level.borderline:
                 out.problems.append(
                     f"{level.borderline} set(s) of {full.size + k} sensors have a borderline "
@@ -205,7 +222,12 @@ def _enumeration(
                     )
                     + ": the answer depends on digits the data do not have"
                 )
+            if k < target:
+                # a larger set of at most 2s sensors may still break the plant for certain
+                continue
             break
+    if out.status == "lower_bound" and undecided is not None:
+        out.max_removable = undecided - 1
     out.critical = [kept for _, kept in best_critical]
     return out
 

@@ -507,9 +507,11 @@ def sparse_observability(
             verdict, summary, witness = _failure(
                 system, work, s, outcome, H, seed, tol, evidence, exact
             )
-            return make(
-                verdict, summary, mr, fields(mr, False, outcome.breaking_set), witness=witness
-            )
+            extra = fields(mr, False, outcome.breaking_set)
+            if outcome.details.get("max_removable_is_upper_bound"):
+                extra["max_removable_is_upper_bound"] = True
+                extra["max_removable_at_least"] = outcome.details.get("max_removable_at_least")
+            return make(verdict, summary, mr, extra, witness=witness)
         margin, records, problem = _recheck_holds(work, outcome, eig, tol, s, exact)
         evidence["recheck"] = records
         evidence["margin_definition"] = (
@@ -677,6 +679,16 @@ def _failure(
             f"groups of at most s = {s}, they give two attacks under which different initial "
             f"states produce the same outputs."
         )
+    if outcome.details.get("max_removable_is_upper_bound"):
+        low = int(outcome.details.get("max_removable_at_least", -1))
+        summary = (
+            f"max_removable <= {mr} < 2s = {2 * s}: {s} attacked sensor"
+            f"{'s' if s != 1 else ''} cannot be corrected, whatever digits the data lack. "
+            f"{what} (Smaller sets, from {low + 1} sensors on, are within floating-point "
+            f"precision of breaking the plant, so the exact max_removable, between {low} and "
+            f"{mr}, is not decided; the verdict does not depend on it.)"
+        )
+        return Verdict.FAILS, summary, witness_out
     summary = (
         f"max_removable = {mr} < 2s = {2 * s}: {s} attacked sensor{'s' if s != 1 else ''} "
         f"cannot be corrected. {what}"
