@@ -30,6 +30,7 @@ LAYERS = {
         "ssecert._exact",
         "ssecert._linalg",
         "ssecert._spec_table",
+        "ssecert._spec_files",
         "ssecert._matfile",
         "ssecert.tolerances",
         "ssecert.budget",
