@@ -264,7 +264,8 @@ def certify(
 
 def _region(design: Any, notes: list[str], say: Progress, budget: Budget) -> Any | None:
     """The certified (shrink, step) map of ``design``, its kind's region family."""
-    from .stability.lmi import lmi_cost, region_map
+    from .stability.lmi import lmi_cost
+    from .stability.region import region_map
 
     m = design.sensing.shape[0]
     n = design.system.n

@@ -17,9 +17,9 @@ from ssecert.stability.lmi import (
     circle_matrix,
     iss_certificate,
     iss_from_circle,
-    region_map,
     verify_certificate,
 )
+from ssecert.stability.region import region_map
 
 
 def random_design(seed, *, shrink=None, step=None):

@@ -23,7 +23,7 @@ from ssecert.cli import main
 from ssecert.examples import load_example
 from ssecert.observers import build_observer
 from ssecert.simulation.engine import simulate_scenario, simulate_spec
-from ssecert.stability import lmi
+from ssecert.stability import lmi, region
 from ssecert.stability.checks import observer_checks
 from ssecert.stability.thesis import SeriesError, pi_map, thesis_assumptions
 from ssecert.structure.attacks import WITNESS_MAX_STEPS
@@ -236,8 +236,8 @@ def test_lmi_solver_failures_are_inconclusive(monkeypatch, mode):
             "optimal": "no finite values",
         }.get(mode, mode)
         assert expected in cert.reason
-    region = lmi.region_map(design, [0.5, 0.9], [0.05])
-    assert set(region.verdicts.ravel()) == {"inconclusive"}
+    grid = region.region_map(design, [0.5, 0.9], [0.05])
+    assert set(grid.verdicts.ravel()) == {"inconclusive"}
     checks = {
         c.id: c
         for c in observer_checks(
