@@ -602,21 +602,6 @@ def _scaled_floats(z: list[int]) -> np.ndarray:
     return np.array([float(v >> shift) if v >= 0 else -float((-v) >> shift) for v in z])
 
 
-def shift_identity(F: Dyadic, value: int) -> Dyadic:
-    """F - value I, exactly."""
-    n = F.shape[0]
-    ints = F.ints.copy()
-    if F.exponent <= 0:
-        step = value << (-F.exponent)
-        for i in range(n):
-            ints[i, i] = int(ints[i, i]) - step
-        return Dyadic(ints, F.exponent)
-    ints = ints * (1 << F.exponent)
-    for i in range(n):
-        ints[i, i] = int(ints[i, i]) - value
-    return Dyadic(ints, 0)
-
-
 def shift_by(F: Dyadic, value: float) -> Dyadic:
     """F - value I, exactly, for any finite float ``value`` (a dyadic rational)."""
     n = F.shape[0]
@@ -779,20 +764,20 @@ def exact_stacked_rank(
     if any(r < 0 or r >= p * steps for r in wanted):
         raise ValueError(f"rows must index the {p * steps} rows of O_{steps}")
     last = max((r // p for r in wanted), default=-1)
-    if last * max(dyadic(A).bits(), 1) > max_bits:
+    exact_A = dyadic(A)
+    if last * max(exact_A.bits(), 1) > max_bits:
         return ExactObservability("unknown", reason="the exact powers of A exceed the bit budget")
-    Aint = dyadic(A).ints
     picked: list[np.ndarray] = []
-    by_sensor: dict[int, list[int]] = {}
+    by_sensor: dict[int, set[int]] = {}
     for r in wanted:
-        by_sensor.setdefault(r % p, []).append(r // p)
+        by_sensor.setdefault(r % p, set()).add(r // p)
     for i, ts in by_sensor.items():
-        row = dyadic(C[i : i + 1]).ints[0]
+        row = dyadic(C[i : i + 1]).ints[0]  # C_i A^t, each row on its own power of two
         for t in range(max(ts) + 1):
             if t in ts:
                 picked.append(row)
             if t < max(ts):
-                row = row @ Aint
+                row = row @ exact_A.ints
     if not picked:
         unit = np.zeros(n)
         unit[0] = 1.0
@@ -805,8 +790,8 @@ def exact_stacked_rank(
         rank = _rank_mod_p_residues(zero, _mod(M, prime), prime)
         if rank == n:
             return ExactObservability("observable", rank, prime=prime)
-    z = _exact_kernel_vector(np.zeros((n, n), dtype=object), M, max_bits)
-    if z is None or not _verify_kernel(np.zeros((n, n), dtype=object), M, z):
+    z = exact_kernel_vector(Dyadic(M, 0), max_bits=max_bits)  # re-checked in integers
+    if z is None:
         return ExactObservability(
             "unknown", rank, prime=prime, reason="no exact kernel vector within the budget"
         )

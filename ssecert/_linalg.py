@@ -135,8 +135,13 @@ class EigenAnalysis:
 
     def label(self, value: complex) -> str:
         """An eigenvalue of this (possibly rescaled) A as the caller's A has it, for messages."""
-        v = complex(value) / self.unit
-        return f"{v.real:.6g}" if v.imag == 0 else f"{v:.6g}"
+        return _eigenvalue_label(value, self.unit)
+
+
+def _eigenvalue_label(value: complex, unit: float = 1.0) -> str:
+    """``value / unit`` for messages: a real number when it is real."""
+    v = complex(value) / unit
+    return f"{v.real:.6g}" if v.imag == 0 else f"{v:.6g}"
 
 
 def _eigen_condition(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -284,7 +289,7 @@ def eigen_clusters(
         codes = classify(s, threshold, factor=tol.borderline_factor)
         g = int(np.count_nonzero(codes == ZERO))
         problem = ""
-        label = f"{center.real / unit:.6g}" if self_conjugate else f"{center / unit:.6g}"
+        label = _eigenvalue_label(complex(center.real, 0.0) if self_conjugate else center, unit)
         if np.any(codes == BORDERLINE):
             problem = (
                 f"eigenvalue {label}: a singular value of A - lambda I "

@@ -125,8 +125,14 @@ def quantile(values: np.ndarray, q: float, axis: int | None = None) -> Any:
     Interpolating towards an infinite value gives NaN in NumPy; a quantile
     that interpolates towards a diverged run is unbounded, not undefined.
     """
+    diverged = np.isposinf(values)
+    if not diverged.any():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN slices give NaN
+            plain = np.nanquantile(values, q, axis=axis)
+        return plain if np.ndim(plain) else float(plain)
     big = np.finfo(float).max
-    finite = np.where(np.isposinf(values), big, values)
+    finite = np.where(diverged, big, values)
     with warnings.catch_warnings(), np.errstate(over="ignore", invalid="ignore"):
         warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN slices give NaN, as intended
         linear = np.nanquantile(finite, q, axis=axis)

@@ -202,14 +202,15 @@ def schur_decision(
             candidates.append(float(lam.real))
         for value in candidates:
             if n <= 40 and exact_kernel_vector(shift_by(exact, value)) is not None:
+                shown = sig(value, 6, versus=np.sign(value))  # 1 + 2^-40 is not "1"
                 return SchurDecision(
                     "unstable",
                     upper,
                     max(lower, abs(value)),
-                    f"exact eigenvalue {sig(value, 6, versus=np.sign(value))}",
+                    f"exact eigenvalue {shown}",
                     lam,
                     True,
-                    f"F has the eigenvalue {sig(value, 6, versus=np.sign(value))} exactly "
+                    f"F has the eigenvalue {shown} exactly "
                     f"(F - lambda I has an exact kernel vector), of modulus >= 1: the error along "
                     f"it never decays",
                     details,
