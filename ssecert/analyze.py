@@ -178,7 +178,7 @@ def analyze(
     >>> cert.verdict.value, cert["sparse_observability"].fields["breaking_set"]
     ('fails', [0, 2])
     """
-    tol = tolerances or Tolerances()
+    tol = Tolerances.check(tolerances)
     system = spec.system
     # shared by the structural checks, which decide in power-of-two units
     work, alpha = unit_normalized(system)

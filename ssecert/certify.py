@@ -22,6 +22,7 @@ from .context import OBSERVER, AnalysisContext
 from .results import Certificate, Verdict, to_jsonable
 from .spec import SCENARIO_DEFAULTS, Spec
 from .structure.sparse import DEFAULT_TIME_BUDGET
+from .tolerances import Tolerances
 
 __all__ = ["CertifyResult", "certify", "REGION_LIMIT"]
 
@@ -132,6 +133,7 @@ def certify(
     command: str | None = None,
     budget: Budget | None = None,
     time_budget: float | None = DEFAULT_TIME_BUDGET,
+    tolerances: Tolerances | None = None,
 ) -> CertifyResult:
     """Certify a design: every check, the simulations and the report data.
 
@@ -165,6 +167,9 @@ def certify(
     time_budget : float or None, default 5
         Seconds spent refining max_removable once the verdict is decided;
         None for the exact value (``analyze``).
+    tolerances : Tolerances, optional
+        The tolerances of every check and of the observer's gain (default
+        ``Tolerances()``); each check reports those its verdict rests on.
 
     Returns
     -------
@@ -180,7 +185,9 @@ def certify(
     say = progress or (lambda message: None)
     base_seed = 0 if seed is None else int(seed)
     budget = budget or Budget()
+    tol = Tolerances.check(tolerances)
     kwargs: dict[str, Any] = {
+        "tolerances": tol,
         "method": method,
         "seed": base_seed,
         "budget": budget,
@@ -205,7 +212,8 @@ def certify(
         observer = spec.observer
         try:
             design = context.once(
-                OBSERVER, lambda: build_observer(spec.system, observer, budget=budget)
+                OBSERVER,
+                lambda: build_observer(spec.system, observer, budget=budget, tolerances=tol),
             )
         except GainError as exc:
             notes.append(f"no simulation or region: the observer gain cannot be computed ({exc})")

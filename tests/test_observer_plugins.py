@@ -25,6 +25,7 @@ from ssecert.observers import (
 )
 from ssecert.report.html import render_report
 from ssecert.spec import SpecError, spec_from_dict
+from ssecert.tolerances import Tolerances
 
 
 class DampedPinv(ObserverKind):
@@ -36,7 +37,9 @@ class DampedPinv(ObserverKind):
     def parse(self, table, n, p):
         return {"factor": table.real("factor", table.require("factor"), min_value=0.0)}
 
-    def build(self, system: System, params: Mapping[str, Any], budget: Budget) -> ObserverDesign:
+    def build(
+        self, system: System, params: Mapping[str, Any], budget: Budget, tolerances: Tolerances
+    ) -> ObserverDesign:
         base = pinv_gain(system)
         L = params["factor"] * base.L
         gain = Gain(

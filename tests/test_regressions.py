@@ -238,6 +238,23 @@ def test_observer_checks_use_and_report_the_tolerances_given():
     assert strict[2].verdict.value == "inconclusive"
 
 
+def test_the_deadbeat_gain_is_built_with_the_run_tolerances():
+    # the power test of a deadbeat gain runs when the gain is built: certify's tolerances
+    # reach the builder, and the check reports the ones the verdict rested on
+    from ssecert.certify import certify
+    from ssecert.examples import load_example
+    from ssecert.tolerances import Tolerances
+
+    tol = Tolerances(deadbeat_rtol=1e-6, certificate_clear=1e3)
+    result = certify(load_example("ugv"), simulate=False, region=False, tolerances=tol)
+    gain = result.certificate["observer_gain"]
+    assert gain.method.startswith("deadbeat")
+    assert gain.tolerances["deadbeat_rtol"] == 1e-6
+    assert gain.tolerances["clear_factor"] == 1e3
+    default = certify(load_example("ugv"), simulate=False, region=False)
+    assert default.certificate["observer_gain"].tolerances["deadbeat_rtol"] == 1e-8
+
+
 @pytest.mark.parametrize(
     ("F", "method"),
     [

@@ -25,6 +25,7 @@ from typing import Any
 
 from ..budget import Budget
 from ..system import System
+from ..tolerances import Tolerances
 from . import dsso, elastic_net, luenberger, ogd, sso  # noqa: F401  (register the built-in kinds)
 from .base import GAIN_CHOICES, ObserverDesign, ObserverKind
 from .dynamic import DynamicObserver, Trajectory
@@ -53,7 +54,11 @@ __all__ = [
 
 
 def build_observer(
-    system: System, spec: Mapping[str, Any], *, budget: Budget | None = None
+    system: System,
+    spec: Mapping[str, Any],
+    *,
+    budget: Budget | None = None,
+    tolerances: Tolerances | None = None,
 ) -> ObserverDesign:
     """Build an observer from a validated ``[observer]`` section.
 
@@ -66,6 +71,9 @@ def build_observer(
         Memory allowed for the observer's matrices (default ``Budget()``,
         2 GiB): an SSO with window tau stacks O_tau (p tau x n) and an
         identity L2 of size p tau.
+    tolerances : Tolerances, optional
+        The run's tolerances (default ``Tolerances()``); the deadbeat gain's
+        power test uses ``deadbeat_rtol`` and ``certificate_clear``.
 
     Returns
     -------
@@ -89,7 +97,8 @@ def build_observer(
     >>> design.kind, design.gain.method, design.gain.details["nilpotency_index"]
     ('dsso', 'deadbeat', 1)
     """
-    return get_kind(spec["kind"]).build(system, spec, budget or Budget())
+    kind = get_kind(spec["kind"])
+    return kind.build(system, spec, budget or Budget(), Tolerances.check(tolerances))
 
 
 def observer_from_design(design: ObserverDesign) -> DynamicObserver:

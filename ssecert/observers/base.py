@@ -29,6 +29,7 @@ from .._spec_table import SpecTable
 from ..budget import Budget
 from ..design.gains import Gain, GainError, deadbeat_gain, ogd_gain, pinv_gain, place_gain
 from ..system import System
+from ..tolerances import Tolerances
 from .lure import LureModel
 
 if TYPE_CHECKING:
@@ -136,7 +137,9 @@ class ObserverKind:
         """
         raise NotImplementedError(f"observer kind {self.name!r} does not read a spec table")
 
-    def build(self, system: System, params: Mapping[str, Any], budget: Budget) -> ObserverDesign:
+    def build(
+        self, system: System, params: Mapping[str, Any], budget: Budget, tolerances: Tolerances
+    ) -> ObserverDesign:
         """The design for ``system`` from the validated parameters.
 
         Raise ``GainError`` when the gain cannot be computed and
@@ -242,8 +245,14 @@ def parse_unit_shrink(table: SpecTable, kind: str) -> float:
     return 1.0
 
 
-def gain_from_choice(system: System, params: Mapping[str, Any]) -> Gain:
-    """The gain a validated ``gain`` (and ``poles``, ``step``) asks for."""
+def gain_from_choice(
+    system: System, params: Mapping[str, Any], tolerances: Tolerances | None = None
+) -> Gain:
+    """The gain a validated ``gain`` (and ``poles``, ``step``) asks for.
+
+    ``tolerances`` decide the deadbeat gain's power test (``deadbeat_rtol``,
+    ``certificate_clear``); the other gains do not depend on them.
+    """
     choice = params.get("gain", "deadbeat")
     if not isinstance(choice, str):
         L = np.asarray(choice, dtype=float)
@@ -251,7 +260,7 @@ def gain_from_choice(system: System, params: Mapping[str, Any]) -> Gain:
             L=L, method="matrix", error_matrix=system.A - L @ system.C, verified=True, details={}
         )
     if choice == "deadbeat":
-        return deadbeat_gain(system)
+        return deadbeat_gain(system, tolerances=tolerances)
     if choice == "place":
         return place_gain(system, params["poles"])
     if choice == "pinv":

@@ -16,6 +16,7 @@ import numpy as np
 from .._spec_table import SpecTable
 from ..budget import Budget
 from ..system import System
+from ..tolerances import Tolerances
 from .base import (
     ObserverDesign,
     ObserverKind,
@@ -38,8 +39,10 @@ class SoftThresholdObserverKind(ObserverKind):
 
     estimates_attack = True
 
-    def build(self, system: System, params: Mapping[str, Any], budget: Budget) -> ObserverDesign:
-        gain = check_finite(gain_from_choice(system, params))
+    def build(
+        self, system: System, params: Mapping[str, Any], budget: Budget, tolerances: Tolerances
+    ) -> ObserverDesign:
+        gain = check_finite(gain_from_choice(system, params, tolerances))
         m = system.p
         L2 = params.get("L2")
         return ObserverDesign(

@@ -12,6 +12,7 @@ from typing import Any
 from .._spec_table import SpecTable
 from ..budget import Budget
 from ..system import System
+from ..tolerances import Tolerances
 from .base import ObserverDesign, ObserverKind, check_finite, gain_from_choice, parse_gain
 from .registry import register
 from .simulators import LinearObserver
@@ -27,8 +28,10 @@ class Luenberger(ObserverKind):
     def parse(self, table: SpecTable, n: int, p: int) -> dict[str, Any]:
         return parse_gain(table, n, p, ("deadbeat", "place", "pinv"))
 
-    def build(self, system: System, params: Mapping[str, Any], budget: Budget) -> ObserverDesign:
-        gain = check_finite(gain_from_choice(system, params))
+    def build(
+        self, system: System, params: Mapping[str, Any], budget: Budget, tolerances: Tolerances
+    ) -> ObserverDesign:
+        gain = check_finite(gain_from_choice(system, params, tolerances))
         return ObserverDesign(kind=self.name, system=system, gain=gain, sensing=system.C)
 
     def simulator(self, design: ObserverDesign) -> LinearObserver:

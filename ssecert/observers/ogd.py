@@ -12,6 +12,7 @@ from .._spec_table import SpecTable
 from ..budget import Budget
 from ..design.gains import ogd_gain
 from ..system import System
+from ..tolerances import Tolerances
 from .base import ObserverDesign, ObserverKind, check_finite
 from .registry import register
 from .simulators import LinearObserver
@@ -36,7 +37,9 @@ class OnlineGradient(ObserverKind):
             )
         return {"gain": table.choice("gain", gain, ("ogd",)), "step": table.positive("step")}
 
-    def build(self, system: System, params: Mapping[str, Any], budget: Budget) -> ObserverDesign:
+    def build(
+        self, system: System, params: Mapping[str, Any], budget: Budget, tolerances: Tolerances
+    ) -> ObserverDesign:
         step = params["step"]
         gain = check_finite(ogd_gain(system, step))
         return ObserverDesign(

@@ -17,6 +17,7 @@ from .._spec_table import SpecTable
 from ..budget import Budget
 from ..design.gains import Gain, GainError, ogd_gain
 from ..system import System
+from ..tolerances import Tolerances
 from .base import ObserverDesign, check_finite, parse_unit_shrink
 from .dsso import SoftThresholdObserverKind
 from .dynamic import DynamicObserver
@@ -40,7 +41,9 @@ class SparseSoftObserverKind(SoftThresholdObserverKind):
         out["inner_steps"] = table.integer("inner_steps", 1, min_value=1)
         return out
 
-    def build(self, system: System, params: Mapping[str, Any], budget: Budget) -> ObserverDesign:
+    def build(
+        self, system: System, params: Mapping[str, Any], budget: Budget, tolerances: Tolerances
+    ) -> ObserverDesign:
         window = int(params.get("window", 1))
         step = params["step"]
         if window > 1:

@@ -172,7 +172,7 @@ def _deadbeat_check(
     fields["spectral_radius"] = upper
     fields["spectral_radius_lower_bound"] = lower
     method = "deadbeat (exact powers of the printed A - L C)"
-    # the power test ran when the gain was built, with the builder's tolerances
+    # the power test ran when the gain was built, with the run's tolerances
     tolerances = {
         "deadbeat_rtol": details.get("deadbeat_rtol", Tolerances().deadbeat_rtol),
         "clear_factor": details.get("clear_factor", Tolerances().certificate_clear),
@@ -532,8 +532,13 @@ def observer_checks(
     [('observer_gain', 'holds'), ('observer_stability', 'inconclusive'),
      ('iss_gain', 'inconclusive'), ('thesis_assumptions', 'fails')]
     """
+    tol = Tolerances.check(tolerances)
     try:
-        design = shared(context, OBSERVER, lambda: build_observer(system, observer, budget=budget))
+        design = shared(
+            context,
+            OBSERVER,
+            lambda: build_observer(system, observer, budget=budget, tolerances=tol),
+        )
     except ResourceLimitError as exc:
         gain = Check(
             id="observer_gain",
@@ -572,7 +577,6 @@ def observer_checks(
             fields={},
         )
         return [gain, stab]
-    tol = Tolerances.check(tolerances)
     checks = [observer_gain_check(design, tolerances=tol)]
     stability, cert = observer_stability_check(design, budget=budget, tolerances=tol)
     checks.append(stability)
