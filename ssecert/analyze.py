@@ -134,6 +134,7 @@ def analyze(
     budget: Budget | None = None,
     context: AnalysisContext | None = None,
     time_budget: float | None = DEFAULT_TIME_BUDGET,
+    client: Any | None = None,
 ) -> Certificate:
     """Run the structural checks of a design.
 
@@ -158,6 +159,9 @@ def analyze(
         Seconds spent refining max_removable once the sparse-observability
         verdict is decided (``sparse_observability``); None for the exact
         value however long it takes.
+    client : dask.distributed.Client, optional
+        Split the sparse-observability enumeration over the client's workers
+        (the same answer as in-process).
     context : AnalysisContext, optional
         Where the run keeps what later steps share (the observer built from
         the design, the sparse-observability check whose stealthy attack the
@@ -202,6 +206,7 @@ def analyze(
             progress=relay("sparse_observability"),
             eigen=eig,
             time_budget=time_budget,
+            client=client,
         ),
         irrepresentable(
             system,

@@ -154,7 +154,8 @@ def certify(
     max_sets : int, optional
         Enumeration budget.
     client : dask.distributed.Client, optional
-        Spread the simulation runs over Dask workers.
+        Spread the sparse-observability enumeration and the simulation runs
+        over Dask workers (the same answers as in-process).
     progress : callable, optional
         ``progress(message)`` before each long stage.
     command : str, optional
@@ -188,6 +189,7 @@ def certify(
     tol = Tolerances.check(tolerances)
     kwargs: dict[str, Any] = {
         "tolerances": tol,
+        "client": client,
         "method": method,
         "seed": base_seed,
         "budget": budget,

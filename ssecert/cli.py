@@ -16,6 +16,7 @@ libraries, which say nothing about the design, are dropped.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import math
 import os
@@ -161,6 +162,29 @@ def _budget(args: argparse.Namespace) -> Any:
     )
 
 
+def _add_dask_options(parser: argparse.ArgumentParser, work: str) -> None:
+    parser.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help=f"run {work} on an existing Dask scheduler (needs the dist extra)",
+    )
+    parser.add_argument(
+        "--workers",
+        type=_positive_int,
+        metavar="N",
+        help=f"run {work} on a local Dask cluster of N worker processes",
+    )
+
+
+def _dask(args: argparse.Namespace) -> Any:
+    """A context giving the Dask client the options ask for, else None."""
+    if not (args.scheduler or args.workers):
+        return contextlib.nullcontext(None)
+    from .parallel import dask_client
+
+    return dask_client(args.scheduler, workers=args.workers)
+
+
 def _add_analysis_options(parser: argparse.ArgumentParser) -> None:
     """Options shared by ``certify`` and ``analyze``."""
     from .structure.sparse import DEFAULT_TIME_BUDGET
@@ -257,6 +281,7 @@ def _build_parser() -> argparse.ArgumentParser:
         "--runs", type=_positive_int, metavar="N", help="runs per scenario (default: the spec's)"
     )
     _add_analysis_options(certify)
+    _add_dask_options(certify, "the enumeration and the runs")
 
     analyze = sub.add_parser(
         "analyze",
@@ -275,6 +300,7 @@ def _build_parser() -> argparse.ArgumentParser:
         help="write the JSON certificate to PATH ('-' for stdout)",
     )
     _add_analysis_options(analyze)
+    _add_dask_options(analyze, "the enumeration")
     analyze.add_argument(
         "--seed",
         type=_nonnegative_int,
@@ -314,17 +340,7 @@ def _build_parser() -> argparse.ArgumentParser:
         metavar="S",
         help="number of attacked sensors s (required for .npz/.mat)",
     )
-    simulate.add_argument(
-        "--scheduler",
-        metavar="ADDRESS",
-        help="run on an existing Dask scheduler (needs the dist extra)",
-    )
-    simulate.add_argument(
-        "--workers",
-        type=_positive_int,
-        metavar="N",
-        help="run on a local Dask cluster of N worker processes",
-    )
+    _add_dask_options(simulate, "the runs")
     _add_budget_options(simulate)
 
     examples = sub.add_parser(
@@ -495,7 +511,7 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     human = sys.stderr if to_stdout_json else sys.stdout
     progress = _Progress(sys.stderr)
     try:
-        with _warnings_as_notes() as log:
+        with _warnings_as_notes() as log, _dask(args) as client:
             cert = analyze(
                 spec,
                 method=args.method,
@@ -504,6 +520,7 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
                 progress=progress,
                 budget=_budget(args),
                 time_budget=args.time_budget,
+                client=client,
             )
     finally:
         progress.close()
@@ -549,7 +566,7 @@ def _cmd_certify(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
 
     words = ["ssecert", "certify", *(list(argv) if argv is not None else sys.argv[2:])]
     command = " ".join(words if argv is not None else ["ssecert", *sys.argv[1:]])
-    with _warnings_as_notes() as log:
+    with _warnings_as_notes() as log, _dask(args) as client:
         result = certify(
             spec,
             seed=args.seed,
@@ -561,6 +578,7 @@ def _cmd_certify(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
             command=command,
             budget=_budget(args),
             time_budget=args.time_budget,
+            client=client,
         )
         result.to_dict()  # simulation metrics are computed here: their warnings are notes too
     notes = log.notes()
@@ -584,7 +602,6 @@ def _cmd_certify(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    import contextlib
     import json
 
     from .design.gains import GainError
@@ -597,13 +614,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         raise UsageError(
             f"{spec.source}: simulate needs an [observer] section and at least one [[scenario]]"
         )
-    context: Any = contextlib.nullcontext(None)
-    if args.scheduler or args.workers:
-        from .parallel import dask_client
-
-        context = dask_client(args.scheduler, workers=args.workers)
     with _warnings_as_notes() as log:
-        with context as client:
+        with _dask(args) as client:
             try:
                 results = simulate_spec(
                     spec,

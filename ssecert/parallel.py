@@ -11,7 +11,7 @@ import contextlib
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
-__all__ = ["dask_client", "map_ordered"]
+__all__ = ["ChunkError", "dask_client", "map_chunks", "map_ordered"]
 
 
 @contextlib.contextmanager
@@ -38,7 +38,7 @@ def dask_client(address: str | None = None, *, workers: int | None = None) -> It
             client.close()
         return
     cluster = LocalCluster(
-        n_workers=workers or 2, threads_per_worker=1, processes=True, dashboard_address=None
+        n_workers=workers or 2, threads_per_worker=1, processes=True, dashboard_address=":0"
     )
     client = Client(cluster)
     try:
@@ -56,3 +56,62 @@ def map_ordered(
         return [func(item) for item in items]
     futures = client.map(func, list(items), pure=False)
     return client.gather(futures)
+
+
+class ChunkError(RuntimeError):
+    """A chunk of work failed on the Dask workers, also when retried.
+
+    Attributes
+    ----------
+    chunk : object
+        The chunk that failed (for an enumeration, its range of ranks).
+    """
+
+    def __init__(self, chunk: Any, cause: BaseException) -> None:
+        super().__init__(f"chunk {chunk!r} failed twice on the Dask workers: {cause!r}")
+        self.chunk = chunk
+        self.cause = cause
+
+
+def map_chunks(
+    func: Callable[[Any, Any], Any],
+    payload: Any,
+    chunks: Sequence[Any],
+    client: Any | None = None,
+    *,
+    on_result: Callable[[int, Any], None] | None = None,
+) -> list[Any]:
+    """[func(payload, chunk) for chunk in chunks], on Dask workers when a client is given.
+
+    ``payload`` (the data every chunk reads) is sent to the workers once;
+    results come back in the order of ``chunks`` whatever order they finish
+    in, and ``on_result(index, result)`` is called as each arrives (for
+    progress).  A chunk that fails on a worker is retried once; if it fails
+    again, ``ChunkError`` names it.
+    """
+    if client is None:
+        out = []
+        for index, chunk in enumerate(chunks):
+            out.append(func(payload, chunk))
+            if on_result is not None:
+                on_result(index, out[-1])
+        return out
+    from dask.distributed import as_completed
+
+    shared = client.scatter(payload, broadcast=True)
+    futures = [client.submit(func, shared, chunk, pure=False, retries=1) for chunk in chunks]
+    index_of = {future.key: i for i, future in enumerate(futures)}
+    results: list[Any] = [None] * len(futures)
+    try:
+        for future in as_completed(futures):
+            i = index_of[future.key]
+            if future.status == "error":
+                raise ChunkError(chunks[i], future.exception())
+            results[i] = future.result()
+            if on_result is not None:
+                on_result(i, results[i])
+    finally:
+        for future in futures:
+            if not future.done():
+                future.cancel()
+    return results

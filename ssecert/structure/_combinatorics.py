@@ -12,14 +12,20 @@ per-subset gathering.
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["SubsetBlock", "colex_blocks", "colex_rank", "colex_unrank", "count_subsets"]
+__all__ = [
+    "SubsetBlock",
+    "colex_blocks",
+    "colex_rank",
+    "colex_unrank",
+    "count_subsets",
+    "level_split",
+]
 
 DEFAULT_MEMORY = 128 * 2**20
 DEFAULT_CHUNK_BYTES = 4 * 2**20  # measured best for 15 x 15 Gramians
@@ -100,6 +106,32 @@ def _level(
     return sums, subsets
 
 
+def level_split(q: int, k: int, per: int, memory: int = DEFAULT_MEMORY) -> int:
+    """Size m of the precomputed level of partial sums for k-subsets of q items.
+
+    The largest m <= k whose C(q, m) matrices of ``per`` bytes fit in
+    ``memory``.  Every k-subset is its m smallest items (a precomputed sum)
+    plus its k - m largest (the "top", added per block), so the arithmetic
+    of each subset's sum depends on m alone: any split of the ranks into
+    ranges gives bitwise the same matrices.
+    """
+    for cand in range(k, -1, -1):
+        if math.comb(q, cand) * per <= memory:
+            return cand
+    return 0
+
+
+def _next_top(top: list[int], low: int, q: int) -> bool:
+    """Advance ``top`` to the next subset of {low, ..., q-1} in colex order; False after the last."""
+    for i in range(len(top)):
+        limit = top[i + 1] if i + 1 < len(top) else q
+        if top[i] + 1 < limit:
+            top[i] += 1
+            top[:i] = range(low, low + i)
+            return True
+    return False
+
+
 def colex_blocks(
     items: np.ndarray,
     base: np.ndarray,
@@ -108,6 +140,8 @@ def colex_blocks(
     sign: float = -1.0,
     memory: int = DEFAULT_MEMORY,
     chunk_bytes: int = DEFAULT_CHUNK_BYTES,
+    start: int = 0,
+    stop: int | None = None,
 ) -> Iterator[SubsetBlock]:
     """Yield every k-subset of the q items with its summed matrix, colex order.
 
@@ -125,34 +159,46 @@ def colex_blocks(
         Bytes allowed for the precomputed level of partial sums.
     chunk_bytes : int
         Approximate size of each yielded block.
+    start, stop : int, optional
+        Only the subsets with colex ranks in [start, stop) (default: all
+        C(q, k)).  The matrices do not depend on the range: splitting the
+        ranks into ranges and concatenating the blocks gives the same
+        matrices, bit for bit, as one pass.
 
     Yields
     ------
     SubsetBlock
-        Blocks covering the C(q, k) subsets exactly once, in colex order.
+        Blocks covering the subsets of the range exactly once, in colex order.
     """
     q = items.shape[0]
     if not 0 <= k <= q:
         return
+    total = math.comb(q, k)
+    stop = total if stop is None else min(stop, total)
+    if start >= stop:
+        return
     per = items[0].nbytes if q else base.nbytes
-    m = 0
-    for cand in range(k, -1, -1):
-        if math.comb(q, cand) * per <= memory:
-            m = cand
-            break
+    m = level_split(q, k, per, memory)
     sums, subsets = _level(items, base, sign, m)
     chunk = max(64, chunk_bytes // max(per, 1))
     if m == k:
-        for start in range(0, sums.shape[0], chunk):
-            stop = min(start + chunk, sums.shape[0])
-            yield SubsetBlock(start, sums[start:stop], subsets[start:stop], ())
+        for first in range(start, stop, chunk):
+            last = min(first + chunk, stop)
+            yield SubsetBlock(first, sums[first:last], subsets[first:last], ())
         return
-    # tops: (k - m)-subsets t_1 < ... of {m, ..., q-1}, in colex order
-    tops = sorted(itertools.combinations(range(m, q), k - m), key=lambda t: t[::-1])
-    for top in tops:
+    # tops: (k - m)-subsets t_1 < ... of {m, ..., q-1}, in colex order, from the one that
+    # holds rank ``start`` (its m smallest items are the bottom, the rest the top)
+    top = list(colex_unrank(start, k)[m:])
+    while True:
         count = math.comb(top[0], m)
-        shift = sign * items[list(top)].sum(axis=0)
         offset = sum(math.comb(t, m + j + 1) for j, t in enumerate(top))
-        for start in range(0, count, chunk):
-            stop = min(start + chunk, count)
-            yield SubsetBlock(offset + start, sums[start:stop] + shift, subsets[start:stop], top)
+        if offset >= stop:
+            return
+        shift = sign * items[top].sum(axis=0)
+        for first in range(max(start - offset, 0), min(count, stop - offset), chunk):
+            last = min(first + chunk, count, stop - offset)
+            yield SubsetBlock(
+                offset + first, sums[first:last] + shift, subsets[first:last], tuple(top)
+            )
+        if not _next_top(top, m, q):
+            return

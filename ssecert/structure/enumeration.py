@@ -36,9 +36,10 @@ from .._linalg import (
     unit_normalized,
 )
 from .._validation import as_int_option
+from ..parallel import ChunkError, map_chunks
 from ..system import System
 from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances
-from ._combinatorics import colex_blocks, count_subsets
+from ._combinatorics import colex_blocks, count_subsets, level_split
 from .observability import pbh_margins
 
 __all__ = ["scan_removals", "RemovalScan"]
@@ -76,13 +77,15 @@ def _enumeration(
     eig: EigenAnalysis | None = None,
     exact: ExactPlant | None = None,
     time_budget: float | None = None,
+    client: Any | None = None,
 ) -> _Outcome:
     """Remove every set of sensors, smallest first, until one breaks observability.
 
     The verdict needs the sets of up to 2s sensors; larger sets only refine
     max_removable, and with ``time_budget`` (seconds from the start) a level
     whose predicted end is past it is not started: the result is then a
-    lower bound, with ``details["stopped_by_time_budget"]``.
+    lower bound, with ``details["stopped_by_time_budget"]``.  With a Dask
+    ``client`` each level is split over the workers, with the same findings.
     """
     start = time.monotonic()
     A, C = system.A, system.C
@@ -116,12 +119,12 @@ def _enumeration(
     proj = np.einsum("qkn,qkm->qnm", P, P)
     base = proj.sum(axis=0)
     target = 2 * s - full.size  # level whose sets have 2s removed sensors
-    best_critical: list[tuple[float, tuple[int, ...]]] = []
+    best_critical: list[tuple[float, int, tuple[int, ...]]] = []
     undecided: int | None = None  # size of the first removal level with undecided sets
     if target < 0:
         # every set of 2s sensors keeps a sensor that alone observes the state
         dropped = set(full[: 2 * s].tolist())
-        best_critical = [(0.0, tuple(i for i in range(p) if i not in dropped))]
+        best_critical = [(0.0, 0, tuple(i for i in range(p) if i not in dropped))]
     for k in range(q + 1):
         count = math.comb(q, k)
         if time_budget is not None and k > max(target, 0) and out.checked:
@@ -154,19 +157,30 @@ def _enumeration(
                 f"{full.size + k} sensor{'s' if full.size + k != 1 else ''}"
             )
             break
-        level = _scan_level(
-            P,
-            sub.ranks[rest],
-            proj,
-            base,
-            k,
-            rest,
-            full,
-            tol,
-            critical=(k == target),
-            progress=progress,
-            errors=sub.errors[rest],
-        )
+        try:
+            level = _scan_level(
+                P,
+                sub.ranks[rest],
+                proj,
+                base,
+                k,
+                rest,
+                full,
+                tol,
+                critical=(k == target),
+                progress=progress,
+                errors=sub.errors[rest],
+                client=client,
+            )
+        except ChunkError as exc:
+            out.status = "lower_bound"
+            out.max_removable = full.size + k - 1
+            out.details["failed_chunk"] = {"removed_sensors": full.size + k, "ranks": exc.chunk}
+            out.problems.append(
+                f"the Dask workers failed twice on the sets of {full.size + k} sensors with "
+                f"colex ranks {exc.chunk[0]:,} to {exc.chunk[1] - 1:,} ({exc.cause!r})"
+            )
+            break
         out.checked += level.checked
         if level.critical:
             best_critical = level.critical
@@ -228,7 +242,7 @@ def _enumeration(
             break
     if out.status == "lower_bound" and undecided is not None:
         out.max_removable = undecided - 1
-    out.critical = [kept for _, kept in best_critical]
+    out.critical = [kept for _, _, kept in best_critical]
     return out
 
 
@@ -319,7 +333,93 @@ class _Level:
     checked: int = 0
     failures: dict[tuple[int, ...], np.ndarray] = field(default_factory=dict)
     borderline: int = 0
-    critical: list[tuple[float, tuple[int, ...]]] = field(default_factory=list)
+    # (proxy, colex rank, kept sensors) of the sets closest to breaking: the smallest by
+    # (proxy, rank), whatever the split of the level into ranges
+    critical: list[tuple[float, int, tuple[int, ...]]] = field(default_factory=list)
+
+    def merge(self, other: _Level) -> None:
+        """Add the findings of another range of the same level."""
+        self.checked += other.checked
+        self.failures.update(other.failures)
+        self.borderline += other.borderline
+        self.critical = sorted(self.critical + other.critical)[:_CRITICAL]
+
+
+@dataclass(frozen=True)
+class _LevelTask:
+    """What every range of one level's sets reads (sent once to Dask workers)."""
+
+    P: np.ndarray
+    ranks: np.ndarray
+    proj: np.ndarray
+    shifted: np.ndarray  # sum of all projectors minus the screening shift
+    shift: float
+    k: int
+    rest: np.ndarray
+    full: np.ndarray
+    tol: Tolerances
+    critical: bool
+    errors: np.ndarray
+
+
+# a level is split over Dask workers in ranges of at least this many sets, and of at least
+# this many times the precomputed partial sums every range recomputes
+MIN_CHUNK_SETS = 200_000
+_CHUNK_OVER_LEVEL = 20
+
+
+def _chunks(task: _LevelTask, client: Any | None) -> list[tuple[int, int]]:
+    """Ranges of colex ranks covering the level: one without a client, else about four per
+    worker thread, none smaller than is worth a task."""
+    q, n = task.rest.size, task.proj.shape[-1]
+    total = math.comb(q, task.k)
+    if client is None or total == 0:
+        return [(0, total)]
+    threads = max(1, sum(client.nthreads().values()))
+    m = level_split(q, task.k, 8 * n * n)
+    smallest = max(MIN_CHUNK_SETS, _CHUNK_OVER_LEVEL * math.comb(q, m))
+    pieces = max(1, min(4 * threads, total // smallest))
+    step = -(-total // pieces)
+    return [(lo, min(lo + step, total)) for lo in range(0, total, step)]
+
+
+def _scan_range(
+    task: _LevelTask, ranks: tuple[int, int], progress: Progress | None = None
+) -> _Level:
+    """Check the removals whose colex ranks lie in ``ranks`` (one chunk of a level)."""
+    P, proj, rest, full, tol = task.P, task.proj, task.rest, task.full, task.tol
+    n = proj.shape[-1]
+    q = rest.size
+    level = _Level()
+    candidates: list[tuple[float, int, tuple[int, ...]]] = []
+    buffer = np.empty((0, n, n))
+    lo, hi = ranks
+    for block in colex_blocks(proj, task.shifted, task.k, start=lo, stop=hi):
+        if buffer.shape[0] < len(block):
+            buffer = np.empty((len(block), n, n))
+        ok, proxy = _screen(block.matrices, task.shift, task.critical, buffer[: len(block)])
+        if task.critical:
+            for j in np.argsort(proxy, kind="stable")[:_CRITICAL]:
+                dropped = set(rest[block.subsets(np.array([j]))[0]].tolist())
+                kept = tuple(int(i) for i in rest if i not in dropped)
+                candidates.append((float(proxy[j]), block.offset + int(j), kept))
+            candidates.sort()
+            del candidates[_CRITICAL:]
+        bad = np.flatnonzero(~ok)
+        if bad.size:
+            subsets = block.subsets(bad)
+            codes, _, nulls = _refine(P, task.ranks, subsets, q, tol, task.errors)
+            for row, code, zvec in zip(subsets, codes, nulls):
+                removed = tuple(sorted(full.tolist() + rest[row].tolist()))
+                if code == ZERO:
+                    level.failures[removed] = zvec
+                elif code == BORDERLINE:
+                    level.borderline += 1
+        level.checked += len(block)
+        if progress is not None:
+            progress(level.checked, hi - lo)
+    level.critical = candidates
+    return level
 
 
 def _scan_level(
@@ -335,8 +435,14 @@ def _scan_level(
     critical: bool = False,
     progress: Progress | None = None,
     errors: np.ndarray | None = None,
+    client: Any | None = None,
 ) -> _Level:
-    """Check every removal of ``full`` plus k sensors of ``rest``."""
+    """Check every removal of ``full`` plus k sensors of ``rest``.
+
+    With a Dask ``client`` the level's colex ranks are split into ranges
+    checked on the workers; the sums, screening and refinement of each set
+    do not depend on the split, so the findings are the in-process ones.
+    """
     q = rest.size
     n = proj.shape[-1]
     if errors is None:
@@ -345,38 +451,25 @@ def _scan_level(
     # eigenvalue up to about sum(err_i^2) <= (sum err_i)^2 when the sensors'
     # bases carry errors err_i: screen at least that far from zero.
     shift = max(tol.screen_rtol * max(q, 1), 10.0 * float(np.sum(errors)) ** 2)
-    total = math.comb(q, k)
-    level = _Level()
-    candidates: list[tuple[float, tuple[int, ...]]] = []
     # the screening shift is folded into the base once, not per block
-    shifted = base - shift * np.eye(n)
-    buffer = np.empty((0, n, n))
-    for block in colex_blocks(proj, shifted, k):
-        if buffer.shape[0] < len(block):
-            buffer = np.empty((len(block), n, n))
-        ok, proxy = _screen(block.matrices, shift, critical, buffer[: len(block)])
-        if critical:
-            for j in np.argsort(proxy)[:_CRITICAL]:
-                dropped = set(rest[block.subsets(np.array([j]))[0]].tolist())
-                candidates.append(
-                    (float(proxy[j]), tuple(int(i) for i in rest if i not in dropped))
-                )
-            candidates.sort()
-            del candidates[_CRITICAL:]
-        bad = np.flatnonzero(~ok)
-        if bad.size:
-            subsets = block.subsets(bad)
-            codes, _, nulls = _refine(P, ranks, subsets, q, tol, errors)
-            for row, code, zvec in zip(subsets, codes, nulls):
-                removed = tuple(sorted(full.tolist() + rest[row].tolist()))
-                if code == ZERO:
-                    level.failures[removed] = zvec
-                elif code == BORDERLINE:
-                    level.borderline += 1
-        level.checked += len(block)
+    task = _LevelTask(
+        P, ranks, proj, base - shift * np.eye(n), shift, k, rest, full, tol, critical, errors
+    )
+    chunks = _chunks(task, client)
+    if len(chunks) == 1:
+        return _scan_range(task, chunks[0], progress)
+    total = math.comb(q, k)
+    done = 0
+
+    def arrived(index: int, part: _Level) -> None:
+        nonlocal done
+        done += part.checked
         if progress is not None:
-            progress(level.checked, total)
-    level.critical = candidates
+            progress(done, total)
+
+    level = _Level()
+    for part in map_chunks(_scan_range, task, chunks, client, on_result=arrived):
+        level.merge(part)
     return level
 
 

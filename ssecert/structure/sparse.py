@@ -107,6 +107,7 @@ def _run(
     eig: EigenAnalysis,
     exact: ExactPlant | None = None,
     time_budget: float | None = None,
+    client: Any | None = None,
 ) -> tuple[_Outcome, list[_Outcome], dict[str, float]]:
     n, p = system.n, system.p
     sub: SensorSubspaces | None = None
@@ -130,7 +131,16 @@ def _run(
             if sub is None:
                 sub = sensor_subspaces(system.A, system.C, tolerances=tol)
             outcome = _enumeration(
-                system, s, max_sets, tol, progress, sub, eig, exact, time_budget=time_budget
+                system,
+                s,
+                max_sets,
+                tol,
+                progress,
+                sub,
+                eig,
+                exact,
+                time_budget=time_budget,
+                client=client,
             )
             if (
                 outcome.details.get("stopped_by_time_budget")
@@ -352,6 +362,7 @@ def sparse_observability(
     progress: Progress | None = None,
     eigen: EigenAnalysis | None = None,
     time_budget: float | None = DEFAULT_TIME_BUDGET,
+    client: Any | None = None,
 ) -> Check:
     """Decide s-sparse observability and find the weakest sensor set.
 
@@ -385,6 +396,13 @@ def sparse_observability(
         max_removable is then a lower bound (``max_removable_is_lower_bound``,
         with the reason).  None computes the exact value however long it
         takes.  The verdict itself is never cut short by it.
+    client : dask.distributed.Client, optional
+        Split each level of the enumeration over the client's workers (in
+        ranges of colex ranks).  The answer is the in-process one: the same
+        max_removable, the same smallest breaking set (lexicographically first
+        among equals), the same critical sets.  A range that fails on a
+        worker is retried once; a second failure ends the enumeration there
+        with the reason.
 
     Returns
     -------
@@ -418,7 +436,7 @@ def sparse_observability(
     if time_budget is not None:
         time_budget = as_float_option(time_budget, "time_budget", min_value=0.0)
     outcome, tried, estimates = _run(
-        work, s, method, max_sets, tol, progress, eig, exact, time_budget=time_budget
+        work, s, method, max_sets, tol, progress, eig, exact, time_budget=time_budget, client=client
     )
     for o in tried:
         for item in o.details.get("eigenvalues", []):

@@ -1,0 +1,166 @@
+"""Enumeration split into ranges of colex ranks: the same answer in-process and on Dask."""
+
+import contextlib
+import json
+import math
+
+import numpy as np
+import pytest
+
+from ssecert import System
+from ssecert.analyze import analyze
+from ssecert.cli import main
+from ssecert.report.json import certificate_json
+from ssecert.spec import spec_from_dict
+from ssecert.structure import enumeration
+from ssecert.structure._combinatorics import colex_blocks, colex_rank
+from ssecert.structure.sparse import sparse_observability
+
+pytest.importorskip("dask.distributed")
+
+
+def _two_planted_breaking_sets() -> dict:
+    # n = 3, A = I: rows 1, 2, 5..8 lie on the line v, rows 3, 4 in a plane through v,
+    # rows 0, 9 in another. Removing {0, 9} or {3, 4} leaves rows in one plane (unobservable);
+    # no single removal does. The lexicographically first, (0, 9), is late in colex order
+    # (rank 36 of 45) and {3, 4} early (rank 9).
+    v = [1.0, 2.0, -1.0]
+    rows = {1: v, 2: [2, 4, -2], 5: [-1, -2, 1], 6: [3, 6, -3], 7: [0.5, 1, -0.5], 8: v}
+    rows |= {3: [1, 0, 0], 4: [3, 2, -1]}  # plane spanned by v and (1, 0, 0)
+    rows |= {0: [0, 0, 1], 9: [1, 2, 0]}  # plane spanned by v and (0, 0, 1)
+    C = [rows[i] for i in range(10)]
+    return {
+        "name": "planted",
+        "system": {"A": np.eye(3).tolist(), "C": C},
+        "attack": {"max_attacked": 1},
+    }
+
+
+def _holding() -> dict:
+    rng = np.random.default_rng(3)
+    A = np.array([[0.9, 0.2, 0.0], [0.0, 0.8, 0.3], [0.1, 0.0, 0.7]])
+    return {
+        "name": "holding",
+        "system": {"A": A.tolist(), "C": rng.integers(-3, 4, size=(9, 3)).tolist()},
+        "attack": {"max_attacked": 1},
+    }
+
+
+def _answers(cert) -> dict:
+    document = json.loads(certificate_json(cert))
+    document.pop("meta", None)
+    return document
+
+
+@contextlib.contextmanager
+def _in_process_cluster():
+    from dask.distributed import Client, LocalCluster
+
+    with (
+        LocalCluster(n_workers=1, processes=False, dashboard_address=":0") as cluster,
+        Client(cluster) as client,
+    ):
+        yield client
+
+
+@pytest.fixture(scope="module")
+def client():
+    from ssecert.parallel import dask_client
+
+    with dask_client(workers=2) as client:
+        yield client
+
+
+@pytest.fixture
+def small_chunks(monkeypatch):
+    # split even these small levels into many ranges
+    monkeypatch.setattr(enumeration, "MIN_CHUNK_SETS", 1)
+    monkeypatch.setattr(enumeration, "_CHUNK_OVER_LEVEL", 0)
+
+
+def test_colex_ranges_give_the_same_matrices_bit_for_bit():
+    rng = np.random.default_rng(0)
+    for q, n, k, memory in [(9, 3, 4, 200), (12, 2, 5, 1000), (7, 2, 7, 100), (10, 3, 3, 0)]:
+        items, base = rng.standard_normal((q, n, n)), rng.standard_normal((n, n))
+        whole = list(colex_blocks(items, base, k, memory=memory, chunk_bytes=64))
+        matrices = np.concatenate([b.matrices for b in whole])
+        subsets = np.concatenate([b.subsets() for b in whole])
+        total = math.comb(q, k)
+        assert [colex_rank(tuple(s)) for s in subsets] == list(range(total))
+        for _ in range(20):
+            cuts = sorted(rng.integers(0, total + 1, size=3).tolist())
+            parts = []
+            for lo, hi in zip([0, *cuts], [*cuts, total]):
+                parts += list(colex_blocks(items, base, k, memory=memory, start=lo, stop=hi))
+            assert np.array_equal(np.concatenate([b.matrices for b in parts]), matrices)
+            assert np.array_equal(np.concatenate([b.subsets() for b in parts]), subsets)
+
+
+@pytest.mark.parametrize("design", [_two_planted_breaking_sets, _holding])
+def test_dask_gives_the_in_process_answer(design, client, small_chunks):
+    spec = spec_from_dict(design())
+    local = analyze(spec, method="enumeration")
+    spread = analyze(spec, method="enumeration", client=client)
+    assert _answers(spread) == _answers(local)
+    check = spread["sparse_observability"]
+    if design is _two_planted_breaking_sets:
+        assert check.verdict.value == "fails"
+        assert check.fields["breaking_set"] == [0, 9]  # lexicographically first, late in colex
+    else:
+        assert check.verdict.value == "holds"
+
+
+def test_the_command_line_runs_the_enumeration_on_workers(tmp_path, capsys, small_chunks):
+    path = tmp_path / "planted.json"
+    path.write_text(json.dumps(_two_planted_breaking_sets()))
+    assert main(["analyze", str(path), "--method", "enumeration", "--json", "-"]) == 1
+    local = json.loads(capsys.readouterr().out)
+    code = main(["analyze", str(path), "--method", "enumeration", "--workers", "2", "--json", "-"])
+    assert code == 1
+    spread = json.loads(capsys.readouterr().out)
+    local.pop("meta"), spread.pop("meta")
+    assert spread == local
+
+
+def test_a_range_that_fails_twice_ends_the_enumeration_with_the_reason(monkeypatch, small_chunks):
+    scan = enumeration._scan_range
+    calls = {"n": 0}
+
+    def flaky(task, ranks, progress=None):
+        calls["n"] += 1
+        if task.k == 2 and ranks[0] == 0:
+            raise RuntimeError("worker lost")
+        return scan(task, ranks, progress)
+
+    monkeypatch.setattr(enumeration, "_scan_range", flaky)
+    system = System(**{k: np.array(v) for k, v in _two_planted_breaking_sets()["system"].items()})
+    with _in_process_cluster() as client:  # the patched function reaches the worker
+        check = sparse_observability(system, 1, method="enumeration", client=client)
+    assert check.verdict.value == "inconclusive"
+    assert check.fields["max_removable"] == 1
+    assert check.fields["max_removable_is_lower_bound"] is True
+    assert "failed twice on the sets of 2 sensors with colex ranks 0 to" in check.summary + str(
+        check.evidence
+    )
+    assert check.evidence["failed_chunk"]["removed_sensors"] == 2
+
+
+def test_a_range_that_fails_once_is_retried(monkeypatch, small_chunks, tmp_path):
+    scan = enumeration._scan_range
+
+    def once(task, ranks, progress=None):
+        # the function travels to the worker pickled: its memory is a file
+        mark = tmp_path / f"failed-{task.k}-{ranks[0]}"
+        if task.k == 2 and not mark.exists():
+            mark.write_text("")
+            raise RuntimeError("worker lost")
+        return scan(task, ranks, progress)
+
+    system = System(**{k: np.array(v) for k, v in _two_planted_breaking_sets()["system"].items()})
+    expected = sparse_observability(system, 1, method="enumeration")
+    monkeypatch.setattr(enumeration, "_scan_range", once)
+    with _in_process_cluster() as client:  # the patched function reaches the worker
+        check = sparse_observability(system, 1, method="enumeration", client=client)
+    assert len(list(tmp_path.glob("failed-2-*"))) > 1  # every range of the level failed once
+    assert check.fields == expected.fields
+    assert check.verdict.value == "fails"
