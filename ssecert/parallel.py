@@ -11,7 +11,7 @@ import contextlib
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
-__all__ = ["ChunkError", "dask_client", "map_chunks", "map_ordered"]
+__all__ = ["ChunkError", "dask_client", "map_chunks", "map_ordered", "worker_threads"]
 
 
 @contextlib.contextmanager
@@ -115,3 +115,10 @@ def map_chunks(
             if not future.done():
                 future.cancel()
     return results
+
+
+def worker_threads(client: Any | None) -> int:
+    """Threads the client's workers offer (1 in-process)."""
+    if client is None:
+        return 1
+    return max(1, sum(client.nthreads().values()))

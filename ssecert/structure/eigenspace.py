@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import time
 
 import numpy as np
 
@@ -34,7 +35,13 @@ def _eigenspace(
     tol: Tolerances,
     eig: EigenAnalysis,
     exact: ExactPlant | None = None,
+    deadline: float | None = None,
 ) -> _Outcome:
+    """The smallest breaking set from the supports of C v over the eigenspaces of A.
+
+    ``deadline`` (a ``time.monotonic()`` value) stops the hyperplane search
+    of a large eigenspace: the outcome is then ``budget``, with the reason.
+    """
     out = _Outcome(method="eigenspace", status="inconclusive")
     if eig.problems:
         out.problems.extend(eig.problems)
@@ -69,7 +76,7 @@ def _eigenspace(
             critical.append(_critical_entry(mags, order, s, p))
         else:
             candidates, crit, problem, used = _hyperplanes(
-                W, V, thr, s, tol, max_sets - out.checked
+                W, V, thr, s, tol, max_sets - out.checked, deadline
             )
             out.checked += used
             if problem:
@@ -142,6 +149,7 @@ def _hyperplanes(
     s: int,
     tol: Tolerances,
     budget: int,
+    deadline: float | None = None,
 ) -> tuple[list, list, str, int]:
     """Smallest supports of W u over u != 0 for an eigenspace of dimension g > 1."""
     p, g = W.shape
@@ -167,10 +175,19 @@ def _hyperplanes(
     best_size = None
     combos = itertools.combinations(rows.tolist(), g - 1)
     chunk = 4096
+    done = 0
     while True:
+        if deadline is not None and time.monotonic() > deadline:
+            return (
+                [],
+                [],
+                f"budget: the time budget ended after {done:,} of {total:,} hyperplanes",
+                done,
+            )
         idx = np.array(list(itertools.islice(combos, chunk)), dtype=np.int64).reshape(-1, g - 1)
         if idx.shape[0] == 0:
             break
+        done += idx.shape[0]
         sub = W[idx]  # (N, g-1, g)
         _, s_sub, vh_sub = np.linalg.svd(sub, full_matrices=True)
         smax_sub = np.maximum(s_sub[:, 0], np.finfo(float).tiny)

@@ -36,10 +36,11 @@ from .._linalg import (
     unit_normalized,
 )
 from .._validation import as_int_option
-from ..parallel import ChunkError, map_chunks
+from ..parallel import ChunkError, map_chunks, worker_threads
 from ..system import System
 from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances
 from ._combinatorics import colex_blocks, count_subsets, level_split
+from .cost import calibrate, level_seconds, workers_for
 from .observability import pbh_margins
 
 __all__ = ["scan_removals", "RemovalScan"]
@@ -125,6 +126,9 @@ def _enumeration(
         # every set of 2s sensors keeps a sensor that alone observes the state
         dropped = set(full[: 2 * s].tolist())
         best_critical = [(0.0, 0, tuple(i for i in range(p) if i not in dropped))]
+    cost = _verdict_cost(q, n, target, client, time_budget)
+    if cost is not None:
+        out.details["cost_estimate"] = cost
     for k in range(q + 1):
         count = math.comb(q, k)
         if time_budget is not None and k > max(target, 0) and out.checked:
@@ -155,6 +159,7 @@ def _enumeration(
             out.problems.append(
                 f"enumeration budget of {max_sets:,} sets reached before sets of "
                 f"{full.size + k} sensor{'s' if full.size + k != 1 else ''}"
+                + _cost_of_the_rest(q, n, k, target, client, time_budget)
             )
             break
         try:
@@ -182,6 +187,8 @@ def _enumeration(
             )
             break
         out.checked += level.checked
+        if cost is not None and k == max(target, 0):
+            cost["measured_seconds_for_verdict"] = _sig(time.monotonic() - start)
         if level.critical:
             best_critical = level.critical
         first, z_first, within = _resolve_failures(system, level.failures, eig, tol, exact, out)
@@ -244,6 +251,50 @@ def _enumeration(
         out.max_removable = undecided - 1
     out.critical = [kept for _, _, kept in best_critical]
     return out
+
+
+CALIBRATE_ABOVE = 200_000  # sets for the verdict: below, the enumeration takes about a second
+
+
+def _sig(seconds: float) -> float:
+    return float(f"{seconds:.3g}")
+
+
+def _verdict_cost(
+    q: int, n: int, target: int, client: Any | None, time_budget: float | None
+) -> dict[str, Any] | None:
+    """The estimated cost of the levels that decide the verdict, when they are many sets."""
+    levels = range(max(target, 0) + 1)
+    sets = count_subsets(q, levels)
+    if sets <= CALIBRATE_ABOVE:
+        return None
+    seconds = sum(level_seconds(q, k, n, critical=(k == target)) for k in levels)
+    threads = worker_threads(client)
+    record: dict[str, Any] = {
+        "sets_for_verdict": sets,
+        "seconds_for_verdict": _sig(seconds / threads),
+        "worker_threads": threads,
+        "rates": calibrate(n).to_dict(),
+    }
+    workers = workers_for(seconds, time_budget)
+    if workers is not None and workers > threads:
+        record["workers_for_time_budget"] = workers
+    return record
+
+
+def _cost_of_the_rest(
+    q: int, n: int, k: int, target: int, client: Any | None, time_budget: float | None
+) -> str:
+    """What the sets beyond the set budget, up to the verdict's level, would cost here."""
+    if k > target:
+        return ""
+    seconds = sum(level_seconds(q, j, n, critical=(j == target)) for j in range(k, target + 1))
+    threads = worker_threads(client)
+    text = f" (the rest of the verdict's sets would take about {_sig(seconds / threads):g} s here"
+    workers = workers_for(seconds, time_budget)
+    if workers is not None and workers > threads:
+        text += f"; about {workers:,} Dask workers would take them under {time_budget:g} s"
+    return text + "; --max-sets raises the budget)"
 
 
 def _clearly_observable(
@@ -375,7 +426,7 @@ def _chunks(task: _LevelTask, client: Any | None) -> list[tuple[int, int]]:
     total = math.comb(q, task.k)
     if client is None or total == 0:
         return [(0, total)]
-    threads = max(1, sum(client.nthreads().values()))
+    threads = worker_threads(client)
     m = level_split(q, task.k, 8 * n * n)
     smallest = max(MIN_CHUNK_SETS, _CHUNK_OVER_LEVEL * math.comb(q, m))
     pieces = max(1, min(4 * threads, total // smallest))

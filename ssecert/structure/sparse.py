@@ -32,6 +32,7 @@ simulation.
 from __future__ import annotations
 
 import math
+import time
 from typing import Any
 
 import numpy as np
@@ -151,7 +152,14 @@ def _run(
                 tried.append(outcome)
                 return outcome, tried, estimates
         else:
-            outcome = _eigenspace(system, s, max_sets, tol, eig, exact)
+            # in auto, a hyperplane search past the time budget gives way to the enumeration,
+            # which decides the verdict first; a forced eigenspace method runs to the end
+            deadline = (
+                time.monotonic() + time_budget
+                if time_budget is not None and order == ["eigenspace", "enumeration"] and not tried
+                else None
+            )
+            outcome = _eigenspace(system, s, max_sets, tol, eig, exact, deadline=deadline)
             if outcome.status == "exact":
                 if sub is None:
                     sub = sensor_subspaces(system.A, system.C, tolerances=tol)

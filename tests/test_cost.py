@@ -1,0 +1,69 @@
+"""The cost model: estimates recorded and quoted, and the time budget of the eigenspace search."""
+
+import math
+
+import numpy as np
+import pytest
+
+from ssecert import System
+from ssecert.structure import enumeration
+from ssecert.structure.cost import calibrate, level_seconds, workers_for
+from ssecert.structure.sparse import sparse_observability
+
+
+def _generic(n: int, p: int, seed: int = 0) -> System:
+    return System(np.eye(n), np.random.default_rng(seed).standard_normal((p, n)))
+
+
+def test_rates_are_positive_and_cached():
+    rates = calibrate(5)
+    assert rates.per_set > 0 and rates.per_element > 0
+    assert calibrate(5) is rates  # measured once per process
+    assert level_seconds(20, 3, 5) > level_seconds(20, 2, 5) > 0
+    assert level_seconds(20, 21, 5) == 0.0
+
+
+def test_workers_for_a_budget():
+    assert workers_for(10.0, 5.0) == 2
+    assert workers_for(0.1, 5.0) == 1
+    assert workers_for(10.0, None) is None and workers_for(10.0, 0.0) is None
+
+
+def test_a_large_enumeration_records_its_estimate_and_time(monkeypatch):
+    monkeypatch.setattr(enumeration, "CALIBRATE_ABOVE", 1000)
+    check = sparse_observability(_generic(4, 20), 2, method="enumeration", time_budget=None)
+    cost = check.evidence["cost_estimate"]
+    assert cost["sets_for_verdict"] == sum(math.comb(20, k) for k in range(5))
+    assert cost["seconds_for_verdict"] > 0 and cost["measured_seconds_for_verdict"] > 0
+    assert cost["worker_threads"] == 1 and cost["rates"]["n"] == 4
+
+
+def test_a_small_enumeration_is_not_calibrated():
+    check = sparse_observability(_generic(3, 8), 1, method="enumeration")
+    assert "cost_estimate" not in check.evidence
+
+
+def test_a_refusal_over_the_set_budget_quotes_the_time_it_would_take():
+    check = sparse_observability(_generic(4, 40), 2, method="enumeration", max_sets=1000)
+    assert check.verdict.value == "inconclusive"
+    problems = " ".join(check.evidence["methods_tried"][0]["problems"])
+    assert "enumeration budget of 1,000 sets reached" in problems
+    assert "would take about" in problems and "--max-sets raises the budget" in problems
+
+
+@pytest.mark.parametrize("time_budget", [0.0, None])
+def test_an_eigenspace_search_past_the_time_budget_gives_way_to_the_enumeration(time_budget):
+    # A = I: one eigenspace of dimension 3, whose hyperplane search auto tries first
+    system = _generic(3, 12, seed=4)
+    check = sparse_observability(system, 2, time_budget=time_budget)
+    tried = check.evidence["methods_tried"]
+    assert tried[0]["method"] == "eigenspace"
+    if time_budget == 0.0:
+        assert "the time budget ended after 0 of 66 hyperplanes" in " ".join(tried[0]["problems"])
+        assert tried[1]["method"] == "enumeration"
+    else:
+        assert tried[0]["status"] == "exact"
+    exact = sparse_observability(system, 2, method="enumeration", time_budget=None)
+    assert check.verdict == exact.verdict
+    if not check.fields["max_removable_is_lower_bound"]:
+        assert check.fields["max_removable"] == exact.fields["max_removable"]
