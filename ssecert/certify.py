@@ -134,6 +134,7 @@ def certify(
     budget: Budget | None = None,
     time_budget: float | None = DEFAULT_TIME_BUDGET,
     tolerances: Tolerances | None = None,
+    set_progress: Callable[[str, int, int], None] | None = None,
 ) -> CertifyResult:
     """Certify a design: every check, the simulations and the report data.
 
@@ -171,6 +172,9 @@ def certify(
     tolerances : Tolerances, optional
         The tolerances of every check and of the observer's gain (default
         ``Tolerances()``); each check reports those its verdict rests on.
+    set_progress : callable, optional
+        ``set_progress(check_id, done, total)`` during long enumerations
+        (``analyze``'s ``progress``).
 
     Returns
     -------
@@ -190,6 +194,7 @@ def certify(
     kwargs: dict[str, Any] = {
         "tolerances": tol,
         "client": client,
+        "progress": set_progress,
         "method": method,
         "seed": base_seed,
         "budget": budget,

@@ -49,31 +49,42 @@ class _Parser(argparse.ArgumentParser):
 
 
 class _Progress:
-    """Throttled progress on a terminal; silent otherwise."""
+    """Throttled progress of the set enumerations on a terminal, with the time left;
+    silent otherwise (and when ``quiet``, e.g. under ``--json -``)."""
 
-    def __init__(self, stream: TextIO) -> None:
+    def __init__(self, stream: TextIO, *, quiet: bool = False) -> None:
         self.stream = stream
-        self.enabled = stream.isatty()
+        self.enabled = stream.isatty() and not quiet
         self.start = time.monotonic()
         self.last = 0.0
         self.shown = False
+        self.level: tuple[str, int] | None = None
+        self.level_start = self.start
 
     def __call__(self, label: str, done: int, total: int) -> None:
         if not self.enabled:
             return
         now = time.monotonic()
+        if self.level != (label, total) or done == 0:  # a new level of sets
+            self.level, self.level_start = (label, total), now
         if now - self.start < 1.0 or (now - self.last < 0.25 and done < total):
             return
         self.last = now
         pct = 100.0 * done / max(total, 1)
-        self.stream.write(f"\r{label}: {done:,}/{total:,} sets ({pct:5.1f}%)   ")
+        elapsed = now - self.level_start
+        left = ""
+        if 0 < done < total and elapsed > 0:
+            left = f", about {elapsed * (total - done) / done:.0f} s left"
+        self.stream.write(f"\r{label}: {done:,}/{total:,} sets ({pct:5.1f}%{left})      ")
         self.stream.flush()
         self.shown = True
 
     def close(self) -> None:
+        """Clear the progress line (before other output, and at the end)."""
         if self.shown:
-            self.stream.write("\r" + " " * 70 + "\r")
+            self.stream.write("\r" + " " * 90 + "\r")
             self.stream.flush()
+            self.shown = False
 
 
 def _shown(text: str) -> str:
@@ -509,7 +520,7 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     spec = _load(args.spec, max_attacked=args.max_attacked, horizon=args.horizon)
     to_stdout_json = args.json_path == "-"
     human = sys.stderr if to_stdout_json else sys.stdout
-    progress = _Progress(sys.stderr)
+    progress = _Progress(sys.stderr, quiet=to_stdout_json)
     try:
         with _warnings_as_notes() as log, _dask(args) as client:
             cert = analyze(
@@ -557,16 +568,18 @@ def _cmd_certify(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
         if path.is_dir():
             raise UsageError(f"--out {args.out}: {path} is a folder; the report needs that name")
     human = sys.stderr if args.json_path == "-" else sys.stdout
-    tty = sys.stderr.isatty()
+    tty = sys.stderr.isatty() and args.json_path != "-"
+    counter = _Progress(sys.stderr, quiet=args.json_path == "-")
 
     def say(message: str) -> None:
+        counter.close()
         if tty:
             sys.stderr.write(f"ssecert: {message}...\n")
             sys.stderr.flush()
 
     words = ["ssecert", "certify", *(list(argv) if argv is not None else sys.argv[2:])]
     command = " ".join(words if argv is not None else ["ssecert", *sys.argv[1:]])
-    with _warnings_as_notes() as log, _dask(args) as client:
+    with _warnings_as_notes() as log, _dask(args) as client, contextlib.closing(counter):
         result = certify(
             spec,
             seed=args.seed,
@@ -579,6 +592,7 @@ def _cmd_certify(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
             budget=_budget(args),
             time_budget=args.time_budget,
             client=client,
+            set_progress=counter,
         )
         result.to_dict()  # simulation metrics are computed here: their warnings are notes too
     notes = log.notes()
