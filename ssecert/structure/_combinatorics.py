@@ -18,8 +18,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._linalg import _CHOLESKY
+
 __all__ = [
     "SubsetBlock",
+    "cholesky_screen",
     "colex_blocks",
     "colex_rank",
     "colex_unrank",
@@ -204,3 +207,25 @@ def colex_blocks(
             )
         if not _next_top(top, m, q):
             return
+
+
+def cholesky_screen(
+    shifted: np.ndarray, shift: float, want_proxy: bool, out: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Cholesky screening of Gramians already shifted by ``-shift I``.
+
+    Returns whether each factorization exists and, when asked, a proxy for
+    the smallest eigenvalue of the unshifted Gramian (squared smallest
+    Cholesky pivot plus the shift, an upper bound) that ranks the sets that
+    come closest to breaking.
+    """
+    if _CHOLESKY is None:  # pragma: no cover - depends on the numpy build
+        w = np.linalg.eigvalsh(shifted)[:, 0]
+        return w > 0, w + shift
+    with np.errstate(all="ignore"):
+        L = _CHOLESKY(shifted, out=out)
+    ok = np.isfinite(L[:, -1, -1]) & np.isfinite(L[:, 0, 0])
+    if not want_proxy:
+        return ok, np.empty(0)
+    proxy = np.where(ok, np.min(np.diagonal(L, axis1=1, axis2=2), axis=1) ** 2 + shift, -np.inf)
+    return ok, proxy

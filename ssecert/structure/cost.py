@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from ._combinatorics import DEFAULT_CHUNK_BYTES, _level, level_split
+from ._combinatorics import DEFAULT_CHUNK_BYTES, _level, cholesky_screen, level_split
 
 __all__ = ["Rates", "calibrate", "level_seconds", "workers_for"]
 
@@ -67,15 +67,13 @@ def _best_of(repeats: int, run: Any) -> float:
 @functools.lru_cache(maxsize=64)
 def calibrate(n: int) -> Rates:
     """Measure the two rates for n x n Gramians (cached per process and n)."""
-    from .enumeration import _screen
-
     rng = np.random.default_rng(0)
     count = max(64, DEFAULT_CHUNK_BYTES // (8 * n * n))
     X = rng.standard_normal((count, n, n))
     gramians = X @ X.transpose(0, 2, 1) + n * np.eye(n)
     shift = np.eye(n)
     out = np.empty_like(gramians)
-    per_set = _best_of(2, lambda: _screen(gramians + shift, 0.0, False, out)) / count
+    per_set = _best_of(2, lambda: cholesky_screen(gramians + shift, 0.0, False, out)) / count
     # partial sums of m = 3 of q items, about 2e6 entries whatever n (beyond the caches, as
     # the levels that cost anything are)
     q = 8

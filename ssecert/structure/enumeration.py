@@ -39,7 +39,7 @@ from .._validation import as_int_option
 from ..parallel import ChunkError, map_chunks, worker_threads
 from ..system import System
 from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances
-from ._combinatorics import colex_blocks, count_subsets, level_split
+from ._combinatorics import cholesky_screen, colex_blocks, count_subsets, level_split
 from .cost import calibrate, level_seconds, workers_for
 from .observability import pbh_margins
 
@@ -448,7 +448,7 @@ def _scan_range(
     for block in colex_blocks(proj, task.shifted, task.k, start=lo, stop=hi):
         if buffer.shape[0] < len(block):
             buffer = np.empty((len(block), n, n))
-        ok, proxy = _screen(block.matrices, task.shift, task.critical, buffer[: len(block)])
+        ok, proxy = cholesky_screen(block.matrices, task.shift, task.critical, buffer[: len(block)])
         if task.critical:
             for j in np.argsort(proxy, kind="stable")[:_CRITICAL]:
                 dropped = set(rest[block.subsets(np.array([j]))[0]].tolist())
@@ -627,30 +627,6 @@ def scan_removals(
         elif not _clearly_observable(system, kept, eig, tol):
             borderline += 1
     return RemovalScan(size, level.checked, tuple(confirmed), borderline)
-
-
-def _screen(
-    shifted: np.ndarray, shift: float, want_proxy: bool, out: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Cholesky screening of Gramians already shifted by ``-shift I``.
-
-    Returns whether each factorization exists and, when asked, a proxy for
-    the smallest eigenvalue of the unshifted Gramian (squared smallest
-    Cholesky pivot plus the shift, an upper bound) that ranks the sets that
-    come closest to breaking.
-    """
-    from .._linalg import _CHOLESKY
-
-    if _CHOLESKY is None:  # pragma: no cover - depends on the numpy build
-        w = np.linalg.eigvalsh(shifted)[:, 0]
-        return w > 0, w + shift
-    with np.errstate(all="ignore"):
-        L = _CHOLESKY(shifted, out=out)
-    ok = np.isfinite(L[:, -1, -1]) & np.isfinite(L[:, 0, 0])
-    if not want_proxy:
-        return ok, np.empty(0)
-    proxy = np.where(ok, np.min(np.diagonal(L, axis1=1, axis2=2), axis=1) ** 2 + shift, -np.inf)
-    return ok, proxy
 
 
 def _refine(

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -48,8 +49,9 @@ from .._linalg import (
 from .._validation import as_choice, as_float_option, as_int_option
 from ..results import Check, Verdict
 from ..system import System
-from ..tolerances import NONZERO, ZERO, Tolerances
+from ..tolerances import Tolerances
 from ._combinatorics import count_subsets
+from ._rechecks import _cross_check, _recheck_holds
 from .attacks import stealthy_attack
 from .eigenspace import _eigenspace
 from .enumeration import (
@@ -59,7 +61,7 @@ from .enumeration import (
     _Outcome,
     scan_removals,
 )
-from .observability import observability, pbh_margins
+from .observability import observability
 
 __all__ = [
     "sparse_observability",
@@ -178,186 +180,6 @@ def _run(
     return tried[0], tried, estimates
 
 
-CROSS_CHECK_SETS = 200_000  # enumeration that confirms an eigenspace answer when this cheap
-
-
-def _cross_check(
-    system: System,
-    s: int,
-    outcome: _Outcome,
-    tol: Tolerances,
-    eig: EigenAnalysis,
-    exact: ExactPlant | None,
-    sub: SensorSubspaces,
-) -> _Outcome:
-    """Confirm an eigenspace answer by enumerating every set up to its breaking-set size.
-
-    The eigenspace method's minimality rests on the computed eigenvalue
-    groups, which ill-conditioned or hidden defective eigenvalues can merge
-    or split; the enumeration does not use them.  Agreement keeps the
-    answer (with the enumeration's lexicographically first breaking set); a
-    smaller breaking set or a smaller set within precision of breaking
-    replaces it; an enumeration that misses the eigenspace method's exactly
-    confirmed set makes the answer disputed.
-    """
-    assert outcome.breaking_set is not None and outcome.max_removable is not None
-    n = system.n
-    full = int(np.count_nonzero(sub.ranks == n))
-    q = system.p - full
-    size = len(outcome.breaking_set)
-    needed = count_subsets(q, range(max(size - full, 0) + 1))
-    if needed > CROSS_CHECK_SETS:
-        outcome.details["cross_check"] = {
-            "status": "not run",
-            "sets_needed": needed,
-            "limit": CROSS_CHECK_SETS,
-        }
-        return outcome
-    enum = _enumeration(system, s, CROSS_CHECK_SETS, tol, None, sub, eig, exact)
-    record = {
-        "status": enum.status,
-        "max_removable": enum.max_removable,
-        "breaking_set": list(enum.breaking_set) if enum.breaking_set is not None else None,
-        "sets_checked": enum.checked,
-    }
-    mr = outcome.max_removable
-    if enum.max_removable is not None and enum.max_removable < mr:
-        found = "a breaking set" if enum.status == "exact" else "a set within precision of breaking"
-        outcome.problems.append(
-            f"the enumeration finds {found} of "
-            f"{enum.max_removable + 1} sensors, smaller than the eigenspace method's {size} (its "
-            f"eigenvalue groups missed it)"
-        )
-        outcome.status = "inconclusive"
-        enum.details["cross_check_of_eigenspace"] = {
-            "max_removable": mr,
-            "breaking_set": list(outcome.breaking_set),
-        }
-        return enum
-    if enum.status == "exact" and enum.max_removable == mr:
-        record["agrees"] = True
-        outcome.breaking_set = enum.breaking_set
-        outcome.z = enum.z
-        outcome.details["breaking_set_exact"] = enum.details.get(
-            "breaking_set_exact", outcome.details.get("breaking_set_exact")
-        )
-    elif (
-        outcome.details.get("breaking_set_exact")
-        and enum.max_removable is not None
-        and (enum.max_removable >= size)
-    ):
-        record["agrees"] = False
-        outcome.problems.append(
-            f"the enumeration finds no breaking set of {size} sensors, although sensors "
-            f"{list(outcome.breaking_set)} break the exact data: the enumeration's decisions "
-            f"are unreliable on this plant"
-        )
-        outcome.status = "inconclusive"
-    outcome.details["cross_check"] = record
-    return outcome
-
-
-def _recheck_holds(
-    system: System,
-    outcome: _Outcome,
-    eig: EigenAnalysis,
-    tol: Tolerances,
-    s: int,
-    exact: ExactPlant | None = None,
-) -> tuple[float | None, list[dict[str, Any]], str]:
-    """Independent re-check of the sets closest to breaking.
-
-    Each is also decided on the exact data when affordable: a set the exact
-    data prove unobservable withdraws the holds.
-
-    Enumeration results are re-checked by the PBH test at the eigenvalues;
-    eigenspace results by the Krylov staircase of the kept sensors.  Returns
-    the margin (smallest relative PBH singular value found), the records and
-    a problem string (empty when every re-check agrees).
-    """
-    from .._linalg import staircase
-
-    records = []
-    margin = None
-    problem = ""
-    centers = np.array([c.center for c in eig.clusters], dtype=complex)
-    for kept in outcome.critical:
-        if not kept:
-            continue
-        Ck = system.C[list(kept)]
-        m, codes = pbh_margins(system.A, Ck, centers, tolerances=tol)
-        sc = staircase(system.A, Ck, tolerances=tol, error_model="compound")
-        pbh_ok = bool(np.all(codes == NONZERO)) and not eig.problems
-        stair_ok = sc.rank == system.n and not sc.problem
-        value = float(m.min()) if m.size else None
-        if value is not None:
-            margin = value if margin is None else min(margin, value)
-        exact_state = (
-            exact.observability(kept, proof=False).state if exact is not None else "unknown"
-        )
-        records.append(
-            {
-                "kept_sensors": list(kept),
-                "pbh_margin": value,
-                "pbh_full_rank": pbh_ok,
-                "staircase_full_rank": stair_ok,
-                "exact": exact_state,
-            }
-        )
-        if exact_state == "unobservable" and not problem:
-            problem = (
-                f"without sensors outside {list(kept)} the exact data are unobservable "
-                f"(an exact kernel vector), which floating point missed"
-            )
-        checker_ok = pbh_ok if outcome.method == "enumeration" else stair_ok
-        if eig.problems and outcome.method == "enumeration":
-            checker_ok = stair_ok
-        # full Krylov rank of the exact data modulo a prime proves the kept set observable,
-        # whatever the floating-point re-check of an ill-conditioned plant says
-        if not checker_ok and exact_state != "observable" and not problem:
-            problem = (
-                f"re-check of kept sensors {list(kept)} does not confirm observability "
-                f"(PBH full rank: {pbh_ok}, staircase full rank: {stair_ok})"
-            )
-    # Independently of any grouping: at every computed eigenvalue, remove the
-    # 2s sensors that see its (numerical) eigenvector best and test PBH there.
-    if not problem:
-        raw_margin, raw_problem = _recheck_raw_eigenvalues(system, s, tol, eig)
-        if raw_margin is not None:
-            margin = raw_margin if margin is None else min(margin, raw_margin)
-        problem = raw_problem
-    return margin, records, problem
-
-
-def _recheck_raw_eigenvalues(
-    system: System, s: int, tol: Tolerances, eig: EigenAnalysis
-) -> tuple[float | None, str]:
-    """PBH at each computed eigenvalue after removing the 2s sensors that see it best."""
-    A, C = system.A, system.C
-    n, p = system.n, system.p
-    if 2 * s >= p:
-        return None, ""
-    norms = np.linalg.norm(C, axis=1)
-    safe = np.where(norms > 0, norms, 1.0)
-    worst = None
-    lam = eig.eigenvalues
-    for value in lam[lam.imag >= 0]:
-        shift = value.real if value.imag == 0 else value
-        _, _, vh = np.linalg.svd(A - shift * np.eye(n))
-        v = vh[-1].conj()
-        seen = np.abs(C @ v) / safe
-        kept = np.sort(np.argsort(-seen, kind="stable")[2 * s :])
-        m, codes = pbh_margins(A, C[kept], np.array([value]), tolerances=tol)
-        worst = float(m[0]) if worst is None else min(worst, float(m[0]))
-        if codes[0] != NONZERO:
-            return worst, (
-                f"the PBH test at the computed eigenvalue {eig.label(value)}, after removing the "
-                f"{2 * s} sensors that see its eigenvector best, is "
-                f"{'rank deficient' if codes[0] == ZERO else 'borderline'}"
-            )
-    return worst, ""
-
-
 def sparse_observability(
     system: System,
     max_attacked: int,
@@ -449,8 +271,26 @@ def sparse_observability(
     for o in tried:
         for item in o.details.get("eigenvalues", []):
             item["eigenvalue"] = item["eigenvalue"] / alpha
+    decision = _Decision(
+        system, work, s, outcome, tried, H, seed, tol, eig, exact,
+        _evidence(s, outcome, tried, estimates, max_sets),
+    )  # fmt: skip
+    if outcome.status == "exact":
+        return decision.exact_answer()
+    if outcome.status == "lower_bound" and outcome.max_removable is not None:
+        if outcome.max_removable >= 2 * s:
+            return decision.lower_bound_answer()
+    return decision.undecided()
 
-    p = system.p
+
+def _evidence(
+    s: int,
+    outcome: _Outcome,
+    tried: list[_Outcome],
+    estimates: dict[str, float],
+    max_sets: int,
+) -> dict[str, Any]:
+    """What every sparse-observability check records: the methods tried and the condition."""
     evidence: dict[str, Any] = {
         "methods_tried": [
             {
@@ -469,20 +309,34 @@ def sparse_observability(
         "condition": f"secure estimation with s = {s} attacked sensors needs 2s = {2 * s} <= max_removable",
     }
     evidence.update(outcome.details)
-    tolerances_out = tol.to_dict()
-    title = f"{s}-sparse observability"
-    base_fields: dict[str, Any] = {
-        "max_attacked": s,
-        "method": outcome.method,
-    }
+    return evidence
 
-    def fields(mr: int | None, lower: bool, bset: tuple[int, ...] | None) -> dict[str, Any]:
+
+@dataclass
+class _Decision:
+    """Turns the chosen method's outcome into the check: exact, lower bound or undecided."""
+
+    system: System  # the user's plant (witnesses)
+    work: System  # the plant in power-of-two units (float decisions)
+    s: int
+    outcome: _Outcome
+    tried: list[_Outcome]
+    horizon: int
+    seed: int
+    tol: Tolerances
+    eig: EigenAnalysis
+    exact: ExactPlant
+    evidence: dict[str, Any]
+
+    def fields(self, mr: int | None, lower: bool, bset: tuple[int, ...] | None) -> dict[str, Any]:
+        """The check's fields for max_removable ``mr`` and breaking set ``bset``."""
         if mr is None:
             correctable = None
         else:
             correctable = -1 if mr < 0 else mr // 2
         return {
-            **base_fields,
+            "max_attacked": self.s,
+            "method": self.outcome.method,
             "max_removable": mr,
             "max_removable_is_lower_bound": lower,
             "max_correctable": correctable,
@@ -490,6 +344,7 @@ def sparse_observability(
         }
 
     def make(
+        self,
         verdict: Verdict,
         summary: str,
         value: int | None,
@@ -497,130 +352,157 @@ def sparse_observability(
         margin: float | None = None,
         witness: dict | None = None,
     ) -> Check:
+        """The check, with this decision's evidence and tolerances."""
         return Check(
             id="sparse_observability",
-            title=title,
+            title=f"{self.s}-sparse observability",
             verdict=verdict,
             summary=summary,
             value=value,
             margin=margin,
-            method=outcome.method,
+            method=self.outcome.method,
             fields=extra,
-            evidence=evidence,
+            evidence=self.evidence,
             witness=witness,
-            tolerances=tolerances_out,
+            tolerances=self.tol.to_dict(),
         )
 
-    def unobservable_plant() -> Check | None:
-        # the methods could not decide, but when the exact data are unobservable with every
-        # sensor kept, max_removable = -1 whatever the floating-point trouble
-        decision = exact.observability(tuple(range(p)))
+    def failure(self, found: _Outcome) -> tuple[Verdict, str, dict[str, Any] | None]:
+        """Verdict, summary and stealthy attack of a breaking set (``_failure``)."""
+        return _failure(
+            self.system, self.work, self.s, found, self.horizon, self.seed, self.tol,
+            self.evidence, self.exact,
+        )  # fmt: skip
+
+    def recheck(self) -> tuple[float | None, str]:
+        """Margin and problem of the independent re-check of a holds (``_recheck_holds``)."""
+        margin, records, problem = _recheck_holds(
+            self.work, self.outcome, self.eig, self.tol, self.s, self.exact
+        )
+        self.evidence["recheck"] = records
+        return margin, problem
+
+    def unobservable_plant(self) -> Check | None:
+        """max_removable = -1 when the exact data are unobservable with every sensor kept,
+        whatever the floating-point trouble of the methods."""
+        decision = self.exact.observability(tuple(range(self.system.p)))
         if decision.state != "unobservable" or decision.z is None:
             return None
         found = _Outcome("exact arithmetic", "exact", -1, (), decision.z)
-        evidence["undecided_methods_settled_by"] = (
+        self.evidence["undecided_methods_settled_by"] = (
             "the exact data are unobservable with every sensor kept (an exact kernel vector)"
         )
-        verdict, summary, witness = _failure(system, work, s, found, H, seed, tol, evidence, exact)
+        verdict, summary, witness = self.failure(found)
         if verdict is not Verdict.FAILS:
             return None
-        return make(verdict, summary, -1, fields(-1, False, ()), witness=witness)
+        return self.make(verdict, summary, -1, self.fields(-1, False, ()), witness=witness)
 
-    if outcome.status == "exact":
+    def exact_answer(self) -> Check:
+        """A method found the exact max_removable: fails with the stealthy attack, or holds
+        once the sets closest to breaking are re-checked."""
+        outcome, s, p = self.outcome, self.s, self.system.p
         mr = outcome.max_removable
         assert mr is not None and outcome.breaking_set is not None and outcome.z is not None
         if 2 * s > mr:
-            verdict, summary, witness = _failure(
-                system, work, s, outcome, H, seed, tol, evidence, exact
-            )
-            extra = fields(mr, False, outcome.breaking_set)
+            verdict, summary, witness = self.failure(outcome)
+            extra = self.fields(mr, False, outcome.breaking_set)
             if outcome.details.get("max_removable_is_upper_bound"):
                 extra["max_removable_is_upper_bound"] = True
                 extra["max_removable_at_least"] = outcome.details.get("max_removable_at_least")
-            return make(verdict, summary, mr, extra, witness=witness)
-        margin, records, problem = _recheck_holds(work, outcome, eig, tol, s, exact)
-        evidence["recheck"] = records
-        evidence["margin_definition"] = (
+            return self.make(verdict, summary, mr, extra, witness=witness)
+        margin, problem = self.recheck()
+        self.evidence["margin_definition"] = (
             "smallest relative PBH singular value sigma_min([A - lambda I; C_T]) / ||[A; C]||"
             " over the kept-sensor sets T that come closest to breaking"
         )
         if problem:
-            evidence["disputed_max_removable"] = mr
-            settled = unobservable_plant()
+            self.evidence["disputed_max_removable"] = mr
+            settled = self.unobservable_plant()
             if settled is not None:
                 return settled
-            return make(
+            return self.make(
                 Verdict.INCONCLUSIVE,
                 f"The {outcome.method} method finds max_removable = {mr}, but {problem}.",
                 None,
-                fields(None, False, None),
+                self.fields(None, False, None),
                 margin=margin,
             )
+        summary = (
+            f"Removing any {mr} of the {p} sensors keeps the plant observable, so up to "
+            f"{mr // 2} attacked sensors can be corrected (s = {s} needed)."
+        )
+        return self.make(
+            Verdict.HOLDS, summary, mr, self.fields(mr, False, outcome.breaking_set), margin=margin
+        )
+
+    def lower_bound_answer(self) -> Check:
+        """Every set of up to 2s sensors was checked: the verdict holds, max_removable is a
+        lower bound."""
+        outcome = self.outcome
+        mr = outcome.max_removable
+        assert mr is not None
+        margin, problem = self.recheck()
+        if problem:
+            summary = f"Lower bound max_removable >= {mr}, but {problem}."
         else:
             summary = (
-                f"Removing any {mr} of the {p} sensors keeps the plant observable, so up to "
-                f"{mr // 2} attacked sensors can be corrected (s = {s} needed)."
+                f"Every set of up to {mr} sensors was checked and none breaks observability, "
+                f"so s = {self.s} attacked sensors can be corrected; the exact max_removable was "
+                f"not computed ({'; '.join(outcome.problems)})."
             )
-        return make(
+        return self.make(
             Verdict.INCONCLUSIVE if problem else Verdict.HOLDS,
             summary,
             mr,
-            fields(mr, False, outcome.breaking_set),
+            self.fields(mr, True, None),
             margin=margin,
         )
 
-    if outcome.status == "lower_bound" and outcome.max_removable is not None:
-        mr = outcome.max_removable
-        if mr >= 2 * s:
-            margin, records, problem = _recheck_holds(work, outcome, eig, tol, s, exact)
-            evidence["recheck"] = records
-            if problem:
-                summary = f"Lower bound max_removable >= {mr}, but {problem}."
-            else:
-                summary = (
-                    f"Every set of up to {mr} sensors was checked and none breaks observability, "
-                    f"so s = {s} attacked sensors can be corrected; the exact max_removable was "
-                    f"not computed ({'; '.join(outcome.problems)})."
-                )
-            return make(
-                Verdict.INCONCLUSIVE if problem else Verdict.HOLDS,
-                summary,
-                mr,
-                fields(mr, True, None),
-                margin=margin,
+    def undecided(self) -> Check:
+        """No method decided: settled exactly when the plant is unobservable, by observability
+        when s = 0, else inconclusive with the reasons and the sets still needed."""
+        settled = self.unobservable_plant()
+        if settled is not None:
+            return settled
+        reasons = [pr for o in self.tried for pr in o.problems] or ["no method could decide"]
+        if self.s == 0:
+            held = self.observability_decides(reasons)
+            if held is not None:
+                return held
+        needed = next((o.needed for o in self.tried if o.needed is not None), None)
+        hint = ""
+        if needed is not None:
+            hint = (
+                f" About {needed:,} more sensor sets are needed; raise the budget with "
+                f"--max-sets (max_sets=...)."
             )
-    settled = unobservable_plant()
-    if settled is not None:
-        return settled
-    reasons = [pr for o in tried for pr in o.problems] or ["no method could decide"]
-    if s == 0:
-        # 2s = 0 <= max_removable is observability of (A, C) itself
-        plain = observability(system, tolerances=tol, eigen=eig)
-        evidence["observability"] = {"verdict": plain.verdict.value, "summary": plain.summary}
-        if plain.verdict is Verdict.HOLDS:
-            return make(
-                Verdict.HOLDS,
-                f"With s = 0 the condition 0 <= max_removable is the observability of (A, C), "
-                f"which holds: {plain.summary} The exact max_removable was not computed "
-                f"({'; '.join(reasons)}).",
-                0,
-                fields(0, True, None),
-                margin=plain.margin,
-            )
-    needed = next((o.needed for o in tried if o.needed is not None), None)
-    hint = ""
-    if needed is not None:
-        hint = (
-            f" About {needed:,} more sensor sets are needed; raise the budget with "
-            f"--max-sets (max_sets=...)."
+        outcome = self.outcome
+        lower = outcome.max_removable if outcome.status == "lower_bound" else None
+        return self.make(
+            Verdict.INCONCLUSIVE,
+            f"Sparse observability could not be decided: {'; '.join(reasons)}.{hint}",
+            lower,
+            {**self.fields(lower, lower is not None, None), "sets_needed": needed},
         )
-    lower = outcome.max_removable if outcome.status == "lower_bound" else None
-    return make(
-        Verdict.INCONCLUSIVE,
-        f"Sparse observability could not be decided: {'; '.join(reasons)}.{hint}",
-        lower,
-        {**fields(lower, lower is not None, None), "sets_needed": needed},
-    )
+
+    def observability_decides(self, reasons: list[str]) -> Check | None:
+        """With s = 0 the condition 0 <= max_removable is the observability of (A, C)."""
+        plain = observability(self.system, tolerances=self.tol, eigen=self.eig)
+        self.evidence["observability"] = {
+            "verdict": plain.verdict.value,
+            "summary": plain.summary,
+        }
+        if plain.verdict is not Verdict.HOLDS:
+            return None
+        return self.make(
+            Verdict.HOLDS,
+            f"With s = 0 the condition 0 <= max_removable is the observability of (A, C), "
+            f"which holds: {plain.summary} The exact max_removable was not computed "
+            f"({'; '.join(reasons)}).",
+            0,
+            self.fields(0, True, None),
+            margin=plain.margin,
+        )
 
 
 def _failure(
