@@ -43,7 +43,6 @@ wrong or hostile file costs a message and not a frozen machine:
 from __future__ import annotations
 
 import hashlib
-import numbers
 import os
 import re
 import stat
@@ -61,12 +60,15 @@ from ._spec_files import (
     _parse_text,
     _read_arrays,
 )
+from ._spec_scenarios import ATTACK_KINDS, SCENARIO_DEFAULTS, read_scenarios
 from ._spec_table import (
     INT64_MAX,
     MATRIX_LIMITS,
+    MAX_NAME_LENGTH,
     SpecError,
     SpecTable,
     check_keys,
+    check_name,
     convert,
     one_line,
     require,
@@ -77,8 +79,6 @@ from ._validation import (
     MAX_MATRIX_DIM,
     MAX_MATRIX_ENTRIES,
     as_choice,
-    as_float_option,
-    as_index_list,
     as_real_matrix,
     describe,
 )
@@ -103,31 +103,10 @@ __all__ = [
 ]
 
 MAX_HORIZON = 10_000
-MAX_NAME_LENGTH = 128
 
 OBSERVER_KINDS = BUILTIN_KINDS
-ATTACK_KINDS = ("none", "constant", "switching", "sinusoidal", "random", "stealthy")
-SCENARIO_DEFAULTS: dict[str, Any] = {
-    "magnitude": (4.0, 5.0),
-    "noise": 0.0,
-    "steps": 300,
-    "runs": 50,
-    "seed": 0,
-}
 _TOP_KEYS = ("name", "system", "attack", "observer", "scenario")
 _ATTACK_KEYS = ("max_attacked", "horizon")
-_SCENARIO_KEYS = (
-    "name",
-    "attack",
-    "sensors",
-    "count",
-    "magnitude",
-    "period",
-    "noise",
-    "steps",
-    "runs",
-    "seed",
-)
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
 
 
@@ -162,16 +141,6 @@ class Spec:
     scenarios: tuple[Mapping[str, Any], ...] = field(default=())
     source: str = "<dict>"
     sha256: str | None = None
-
-
-def _check_name(source: str, key: str, value: Any, what: str) -> str:
-    if not isinstance(value, str) or not value.strip():
-        raise spec_error(source, key, f"expected a non-empty string, got {describe(value)}")
-    if len(value) > MAX_NAME_LENGTH:
-        raise spec_error(
-            source, key, f"{what} has {len(value):,} characters; the limit is {MAX_NAME_LENGTH}"
-        )
-    return value
 
 
 def spec_from_dict(
@@ -232,7 +201,7 @@ def spec_from_dict(
         max_attacked=s,
         horizon=tau,
         observer=observer,
-        scenarios=_scenarios(source, data.get("scenario", []), system.p),
+        scenarios=read_scenarios(source, data.get("scenario", []), system.p),
         source=source,
         sha256=sha256,
     )
@@ -249,7 +218,7 @@ def _spec_name(source: str, name: Any) -> str:
             f"expected a name of letters, digits, '.', '_' or '-' (it names the report files), "
             f"got {describe(name)}",
         )
-    return _check_name(source, "name", name, "the name")
+    return check_name(source, "name", name, "the name")
 
 
 def _system(source: str, table: Any, name: str) -> System:
@@ -346,29 +315,6 @@ def _horizon(source: str, attack_table: Any, horizon: int | None, n: int) -> int
     return n
 
 
-def _scenarios(source: str, raw: Any, p: int) -> tuple[dict[str, Any], ...]:
-    """The ``[[scenario]]`` tables (one table is taken as a list of one), names unique."""
-    if isinstance(raw, Mapping):
-        raw = [raw]
-    if not isinstance(raw, list):
-        raise spec_error(
-            source,
-            "scenario",
-            f"expected a list of tables ([[scenario]]), got {describe(raw)}",
-        )
-    scenarios: list[dict[str, Any]] = []
-    seen: set[str] = set()
-    for index, table in enumerate(raw):
-        scenario = _scenario(source, f"scenario[{index}]", table, p)
-        if scenario["name"] in seen:
-            raise spec_error(
-                source, f"scenario[{index}].name", f"duplicate scenario name {scenario['name']!r}"
-            )
-        seen.add(scenario["name"])
-        scenarios.append(scenario)
-    return tuple(scenarios)
-
-
 def _observer(source: str, table: Any, n: int, p: int) -> dict[str, Any]:
     """The ``[observer]`` table, read by the kind it names."""
     if not isinstance(table, Mapping):
@@ -385,143 +331,6 @@ def _observer(source: str, table: Any, n: int, p: int) -> dict[str, Any]:
     reader = SpecTable(source, "observer", table)
     reader.check_keys(kind.keys)
     return {"kind": name, **kind.parse(reader, n, p)}
-
-
-def _scenario(source: str, prefix: str, table: Any, p: int) -> dict[str, Any]:
-    """One ``[[scenario]]`` table, checked against its attack, with defaults filled in."""
-    check_keys(source, prefix, table, _SCENARIO_KEYS)
-    name = _check_name(
-        source, f"{prefix}.name", require(source, table, "name", prefix), "a scenario name"
-    )
-    attack = convert(
-        source,
-        f"{prefix}.attack",
-        as_choice,
-        require(source, table, "attack", prefix),
-        "attack",
-        ATTACK_KINDS,
-    )
-    out: dict[str, Any] = {"name": name, "attack": attack}
-    out.update(_attack_support(source, prefix, table, attack, p))
-    if attack in ("switching", "sinusoidal"):
-        out["period"] = convert(
-            source,
-            f"{prefix}.period",
-            spec_int,
-            require(source, table, "period", prefix),
-            "period",
-            min_value=1,
-        )
-    elif "period" in table:
-        raise spec_error(
-            source,
-            f"{prefix}.period",
-            f"only used by switching and sinusoidal attacks, not {attack!r}",
-        )
-    out["magnitude"] = _attack_magnitude(source, prefix, table, attack)
-    out.update(_run_settings(source, prefix, table))
-    return out
-
-
-def _attack_support(source: str, prefix: str, table: Any, attack: str, p: int) -> dict[str, Any]:
-    """Which sensors the attack takes: ``{"sensors": [...]}``, ``{"count": k}`` or nothing.
-
-    No attack and the stealthy one (whose sensors come from the witness)
-    take neither; switching and random attacks draw supports of a given
-    count; the others take exactly one of sensors or count.
-    """
-    if attack in ("none", "stealthy"):
-        for key in ("sensors", "count"):
-            if key in table:
-                why = (
-                    " (the sensors come from the sparse-observability witness)"
-                    if attack == "stealthy"
-                    else ""
-                )
-                raise spec_error(source, f"{prefix}.{key}", f"not used by attack = {attack!r}{why}")
-        return {}
-    has_sensors, has_count = "sensors" in table, "count" in table
-    if attack in ("switching", "random"):
-        if has_sensors:
-            raise spec_error(
-                source,
-                f"{prefix}.sensors",
-                f"attack = {attack!r} draws its supports at random; give count instead",
-            )
-        return {"count": _attack_count(source, prefix, require(source, table, "count", prefix), p)}
-    if has_sensors == has_count:
-        raise spec_error(
-            source,
-            f"{prefix}.sensors",
-            f"attack = {attack!r} needs exactly one of sensors (0-based indices) or "
-            f"count (a random support of that size)",
-        )
-    if not has_sensors:
-        return {"count": _attack_count(source, prefix, table["count"], p)}
-    sensors = convert(
-        source, f"{prefix}.sensors", as_index_list, table["sensors"], "sensors", upper=p
-    )
-    if not sensors:
-        raise spec_error(source, f"{prefix}.sensors", "expected at least one sensor")
-    return {"sensors": list(sensors)}
-
-
-def _attack_count(source: str, prefix: str, value: Any, p: int) -> int:
-    """The number of attacked sensors a scenario draws, from 1 to p."""
-    return convert(source, f"{prefix}.count", spec_int, value, "count", min_value=1, max_value=p)
-
-
-def _attack_magnitude(source: str, prefix: str, table: Any, attack: str) -> tuple[float, float]:
-    """The attack's [low, high] magnitude range (one number is both), or the default."""
-    if "magnitude" not in table:
-        return SCENARIO_DEFAULTS["magnitude"]
-    if attack == "none":
-        raise spec_error(source, f"{prefix}.magnitude", "not used by attack = 'none'")
-    mag = table["magnitude"]
-    if isinstance(mag, numbers.Real) and not isinstance(mag, bool):
-        mag = [mag, mag]
-    arr = convert(
-        source, f"{prefix}.magnitude", as_real_matrix, mag, "magnitude", shape=(2,), ndim=1
-    )
-    if arr[0] < 0 or arr[0] > arr[1]:
-        raise spec_error(
-            source,
-            f"{prefix}.magnitude",
-            f"expected [low, high] with 0 <= low <= high, got {arr.tolist()}",
-        )
-    return (float(arr[0]), float(arr[1]))
-
-
-def _run_settings(source: str, prefix: str, table: Any) -> dict[str, Any]:
-    """The scenario's noise, steps, runs and seed, with their defaults."""
-    out: dict[str, Any] = {
-        "noise": convert(
-            source,
-            f"{prefix}.noise",
-            as_float_option,
-            table.get("noise", SCENARIO_DEFAULTS["noise"]),
-            "noise",
-            min_value=0.0,
-        )
-    }
-    for key in ("steps", "runs"):
-        out[key] = convert(
-            source,
-            f"{prefix}.{key}",
-            spec_int,
-            table.get(key, SCENARIO_DEFAULTS[key]),
-            key,
-            min_value=1,
-        )
-    out["seed"] = convert(
-        source,
-        f"{prefix}.seed",
-        spec_int,
-        table.get("seed", SCENARIO_DEFAULTS["seed"]),
-        "seed",
-        min_value=0,
-    )
-    return out
 
 
 def load_spec(

@@ -32,6 +32,7 @@ LAYERS = {
         "ssecert._linalg",
         "ssecert._spec_table",
         "ssecert._spec_files",
+        "ssecert._spec_scenarios",
         "ssecert._matfile",
         "ssecert.tolerances",
         "ssecert.budget",
