@@ -234,88 +234,107 @@ def spectral_radius_bound(
     """
     n = F.shape[0]
     k_max = n if consecutive is None else max(1, int(consecutive))
-    log2_norms: list[float] = []
-    log2_two: list[tuple[float, float]] = []
-    powers: list[int] = []
-    best, best_m = math.inf, 0
-    nil = None
-    complete = True
+    trail = _PowerTrail(n, max_work)
+    P, nil = _consecutive_powers(F, k_max, trail)
+    if nil is None and trail.complete:
+        _square_powers(P, squarings, target, trail)
+    return PowerBound(
+        tuple(trail.log2_norms),
+        tuple(trail.log2_two),
+        nil,
+        trail.best,
+        trail.best_m,
+        tuple(trail.powers),
+        trail.complete,
+        trail.lower,
+        trail.lower_m,
+        trail.reaches,
+    )
 
-    def cost(a: Dyadic, b: Dyadic) -> float:
+
+class _PowerTrail:
+    """What the exact powers of F computed so far prove, and the work they cost."""
+
+    def __init__(self, n: int, max_work: float) -> None:
+        self.n = n
+        self.max_work = max_work
+        self.work = 0.0
+        self.complete = True
+        self.powers: list[int] = []
+        self.log2_norms: list[float] = []  # of the consecutive powers only
+        self.log2_two: list[tuple[float, float]] = []
+        self.best, self.best_m = math.inf, 0
+        self.lower, self.lower_m = 0.0, 0
+        self.reaches = 0
+
+    def affordable(self, a: Dyadic, b: Dyadic) -> bool:
+        """Whether a @ b fits in the work budget (then it is charged); else incomplete."""
         words = (a.bits() + b.bits()) / 64.0 + 1.0
-        return float(n) ** 3 * words**1.6
-
-    lower, lower_m = 0.0, 0
-    reaches = 0
-
-    def record(m: int, P: Dyadic) -> float:
-        nonlocal best, best_m, lower, lower_m, reaches
-        value = P.inf_norm_log2()
-        powers.append(m)
-        bound = 0.0 if value == -math.inf else 2.0 ** min(value / m, 1e4)
-        if bound < best:
-            best, best_m = bound, m
-        trace = abs(sum(int(P.ints[i, i]) for i in range(n)))
-        if trace and not reaches:
-            # |trace F^m| >= n, decided in integers: trace * 2^exponent >= n
-            e = P.exponent
-            if (trace << e if e >= 0 else trace) >= (n if e >= 0 else n << -e):
-                reaches = m
-        if trace:
-            # rounded down: log2 of an int is within a few ulps
-            log_t = math.log2(trace) - 1e-12 * max(1.0, abs(math.log2(trace))) + P.exponent
-            low = 2.0 ** max(min((log_t - math.log2(n)) / m, 1e4), -1e4)
-            if low > lower:
-                lower, lower_m = low, m
-        return value
-
-    work = 0.0
-
-    def affordable(a: Dyadic, b: Dyadic) -> bool:
-        nonlocal work
-        c = cost(a, b)
-        if work + c > max_work:
+        cost = float(self.n) ** 3 * words**1.6
+        if self.work + cost > self.max_work:
+            self.complete = False
             return False
-        work += c
+        self.work += cost
         return True
 
+    def record(self, m: int, P: Dyadic) -> float:
+        """Take P = F^m into the bounds; returns log2 ||F^m||_inf (-inf when zero)."""
+        value = P.inf_norm_log2()
+        self.powers.append(m)
+        bound = 0.0 if value == -math.inf else 2.0 ** min(value / m, 1e4)
+        if bound < self.best:
+            self.best, self.best_m = bound, m
+        trace = abs(sum(int(P.ints[i, i]) for i in range(self.n)))
+        if trace and not self.reaches and _trace_reaches_n(trace, P.exponent, self.n):
+            self.reaches = m
+        if trace:
+            low = _trace_radius_lower(trace, P.exponent, self.n, m)
+            if low > self.lower:
+                self.lower, self.lower_m = low, m
+        return value
+
+
+def _trace_reaches_n(trace: int, exponent: int, n: int) -> bool:
+    """|trace F^m| >= n, decided in integers: trace * 2^exponent >= n."""
+    e = exponent
+    return (trace << e if e >= 0 else trace) >= (n if e >= 0 else n << -e)
+
+
+def _trace_radius_lower(trace: int, exponent: int, n: int, m: int) -> float:
+    """(|trace F^m| / n)^(1/m), rounded down: a lower bound on the spectral radius."""
+    # log2 of an int is within a few ulps
+    log_t = math.log2(trace) - 1e-12 * max(1.0, abs(math.log2(trace))) + exponent
+    return 2.0 ** max(min((log_t - math.log2(n)) / m, 1e4), -1e4)
+
+
+def _consecutive_powers(F: Dyadic, k_max: int, trail: _PowerTrail) -> tuple[Dyadic, int | None]:
+    """F, F^2, ..., F^k_max into ``trail``: the last power computed and the nilpotency index."""
     P = F
     for k in range(1, k_max + 1):
         if k > 1:
-            if not affordable(P, F):
-                complete = False
+            if not trail.affordable(P, F):
                 break
             P = P @ F
-        value = record(k, P)
-        log2_norms.append(value)
-        log2_two.append(P.two_norm_log2_bounds())
+        value = trail.record(k, P)
+        trail.log2_norms.append(value)
+        trail.log2_two.append(P.two_norm_log2_bounds())
         if value == -math.inf:
-            nil = k
+            return P, k
+    return P, None
+
+
+def _square_powers(P: Dyadic, squarings: int, target: float | None, trail: _PowerTrail) -> None:
+    """Square the last power P into ``trail`` until the bounds decide ``target`` or stop."""
+    m = trail.powers[-1] if trail.powers else 1
+    for _ in range(squarings):
+        if target is not None and (trail.best < target or trail.lower > target):
             break
-    m = powers[-1] if powers else 1
-    if nil is None and complete:
-        for _ in range(squarings):
-            if target is not None and (best < target or lower > target):
-                break
-            if not affordable(P, P):
-                complete = False
-                break
-            P = P @ P
-            m *= 2
-            if record(m, P) == -math.inf:
-                break
-    return PowerBound(
-        tuple(log2_norms),
-        tuple(log2_two),
-        nil,
-        best,
-        best_m,
-        tuple(powers),
-        complete,
-        lower,
-        lower_m,
-        reaches,
-    )
+        if not trail.affordable(P, P):
+            break
+        P = P @ P
+        m *= 2
+        if trail.record(m, P) == -math.inf:
+            break
 
 
 # ---------------------------------------------------------------------------
