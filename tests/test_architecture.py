@@ -28,6 +28,7 @@ LAYERS = {
         "ssecert._validation",
         "ssecert._io",
         "ssecert._exact",
+        "ssecert._exact_powers",
         "ssecert._eigen",
         "ssecert._linalg",
         "ssecert._spec_table",
