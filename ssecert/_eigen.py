@@ -183,6 +183,7 @@ def _spectrum(A: np.ndarray, tol: Tolerances) -> _Spectrum:
     """The eigenvalues of A with their condition numbers, error bounds and rank threshold."""
     A = np.asarray(A, dtype=float)
     n = A.shape[0]
+    # _linalg.matrix_norm, written out: _linalg imports this module
     norm = max(float(np.linalg.norm(A, 2)) if A.size else 0.0, np.finfo(float).tiny)
     lam, kappa = _eigen_condition(A)
     delta = np.minimum(n * EPS * norm * kappa, norm)
