@@ -4,12 +4,12 @@ Every float is a dyadic rational m 2^e, so a float matrix is exactly an
 integer matrix times a power of two.  Two kinds of exact decision are built
 on that:
 
-* **powers of a float matrix** (``exact_power_norms``,
-  ``spectral_radius_bound``): F = A - L C formed exactly from the floats of
-  A, L and C, its powers computed in integers, and
-  rho(F) <= ||F^m||_inf^(1/m) for any m: a certified bound on the spectral
-  radius of the very matrix a report prints, which no eigenvalue solver
-  gives for a nearly nilpotent F;
+* **powers of a float matrix** (``spectral_radius_bound``, in
+  ``ssecert._exact_powers`` and re-exported here): F = A - L C formed
+  exactly from the floats of A, L and C, its powers computed in integers,
+  and rho(F) <= ||F^m||_inf^(1/m) for any m: a certified bound on the
+  spectral radius of the very matrix a report prints, which no eigenvalue
+  solver gives for a nearly nilpotent F;
 * **observability of the exact data** (``exact_observability``): the
   Krylov rank of (A, C) modulo a prime bounds the rank over the rationals
   from below, so full rank modulo a prime proves observability; an exact
@@ -29,10 +29,20 @@ from typing import Any
 
 import numpy as np
 
+from ._exact_powers import (
+    Dyadic,
+    PowerBound,
+    dyadic,
+    exact_error_matrix,
+    shift_by,
+    spectral_radius_bound,
+)
+
 __all__ = [
     "Dyadic",
     "dyadic",
     "exact_error_matrix",
+    "shift_by",
     "PowerBound",
     "spectral_radius_bound",
     "ExactObservability",
@@ -47,275 +57,6 @@ __all__ = [
 # product of up to 2^11 terms fits in int64 without overflow
 _PRIMES = (67108859, 67108837, 67108819)
 _MAX_MOD_N = 2048
-
-
-@dataclass(frozen=True)
-class Dyadic:
-    """An exact matrix ``ints * 2**exponent`` (``ints`` of Python integers)."""
-
-    ints: np.ndarray  # object array of int
-    exponent: int
-
-    @property
-    def shape(self) -> tuple[int, ...]:
-        return self.ints.shape
-
-    def bits(self) -> int:
-        """Largest bit length of an entry."""
-        return max((abs(int(x)).bit_length() for x in self.ints.flat), default=0)
-
-    def __matmul__(self, other: Dyadic) -> Dyadic:
-        return Dyadic(self.ints.dot(other.ints), self.exponent + other.exponent)
-
-    def inf_norm_log2(self) -> float:
-        """log2 of the exact infinity norm (max absolute row sum); -inf for zero.
-
-        Rounded up by a relative 1e-12, so that 2 ** value bounds the norm
-        from above.
-        """
-        if self.ints.size == 0:
-            return -math.inf
-        sums = [sum(abs(int(x)) for x in row) for row in self.ints]
-        top = max(sums)
-        if top == 0:
-            return -math.inf
-        value = math.log2(top)
-        return value + 1e-12 * max(1.0, abs(value)) + self.exponent
-
-    def two_norm_log2_bounds(self) -> tuple[float, float]:
-        """log2 of exact bounds on the spectral norm: ||X||_inf / sqrt(n) <= ||X||_2 <=
-        sqrt(||X||_1 ||X||_inf) (-inf for zero)."""
-        inf = self.inf_norm_log2()
-        if inf == -math.inf:
-            return -math.inf, -math.inf
-        one = Dyadic(self.ints.T, self.exponent).inf_norm_log2()
-        n = self.ints.shape[1]
-        lower = inf - 1e-12 * max(1.0, abs(inf)) * 2 - 0.5 * math.log2(n)
-        return lower, 0.5 * (inf + one)
-
-    def to_float(self) -> np.ndarray:
-        """Nearest floats (entries beyond the float range become inf)."""
-        out = np.empty(self.ints.shape)
-        for index, x in np.ndenumerate(self.ints):
-            try:
-                out[index] = math.ldexp(float(int(x)), self.exponent)
-            except OverflowError:
-                out[index] = math.copysign(math.inf, int(x))
-        return out
-
-
-def dyadic(M: np.ndarray) -> Dyadic:
-    """The exact value of a finite float matrix as integers times a power of two.
-
-    Examples
-    --------
-    >>> d = dyadic(np.array([[0.5, 3.0]]))
-    >>> d.ints.tolist(), d.exponent
-    ([[1, 6]], -1)
-    """
-    M = np.asarray(M, dtype=np.float64)
-    if not np.all(np.isfinite(M)):
-        raise ValueError("dyadic: the matrix has non-finite entries")
-    mant, expo = np.frexp(M)
-    ints = (mant * 2.0**53).astype(np.int64)  # exact: |mant| < 1
-    expo = expo.astype(np.int64) - 53
-    nonzero = ints != 0
-    if not nonzero.any():
-        return Dyadic(np.zeros(M.shape, dtype=object), 0)
-    # strip common trailing zero bits to keep the integers small
-    tz = np.zeros(M.shape, dtype=np.int64)
-    vals = np.abs(ints[nonzero])
-    tz_nz = np.zeros(vals.shape, dtype=np.int64)
-    work = vals.copy()
-    while True:
-        even = (work & 1) == 0
-        if not even.any():
-            break
-        tz_nz[even] += 1
-        work[even] >>= 1
-    tz[nonzero] = tz_nz
-    ints = np.where(nonzero, ints >> np.where(nonzero, tz, 0), 0)
-    expo = expo + tz
-    low = int(expo[nonzero].min())
-    out = np.empty(M.shape, dtype=object)
-    for index in np.ndindex(M.shape):
-        v = int(ints[index])
-        out[index] = v << int(expo[index] - low) if v else 0
-    return Dyadic(out, low)
-
-
-def _align(a: Dyadic, b: Dyadic) -> tuple[np.ndarray, np.ndarray, int]:
-    e = min(a.exponent, b.exponent)
-    sa, sb = a.exponent - e, b.exponent - e
-    ia = a.ints * (1 << sa) if sa else a.ints
-    ib = b.ints * (1 << sb) if sb else b.ints
-    return ia, ib, e
-
-
-def exact_error_matrix(A: np.ndarray, L: np.ndarray, C: np.ndarray) -> Dyadic:
-    """F = A - L C computed exactly from the floats of A, L and C."""
-    LC = dyadic(L) @ dyadic(C)
-    ia, ib, e = _align(dyadic(A), LC)
-    return Dyadic(ia - ib, e)
-
-
-@dataclass(frozen=True)
-class PowerBound:
-    """Certified facts about the powers of an exact matrix F.
-
-    Attributes
-    ----------
-    log2_norms : tuple of float
-        log2 ||F^k||_inf for k = 1, ..., len (upper bounds, exact data).
-    log2_two_norms : tuple of (float, float)
-        log2 of a lower and an upper bound on ||F^k||_2, k = 1, ..., len.
-    nilpotent_index : int or None
-        Smallest k with F^k exactly zero, if found.
-    radius_bound : float
-        Certified upper bound on the spectral radius: min over the powers m
-        computed of ||F^m||_inf^(1/m).
-    radius_power : int
-        The power m that gave the bound.
-    powers : tuple of int
-        Every power whose exact norm was computed.
-    complete : bool
-        False when the bit budget stopped the computation early.
-    radius_lower : float
-        Certified lower bound on the spectral radius: max over the powers m
-        of (|trace F^m| / n)^(1/m), since |trace F^m| <= n rho^m.
-    lower_power : int
-        The power that gave the lower bound (0 if none).
-    trace_reaches_n : int
-        A power m with |trace F^m| >= n exactly (then rho >= 1), or 0.
-    """
-
-    log2_norms: tuple[float, ...]
-    log2_two_norms: tuple[tuple[float, float], ...]
-    nilpotent_index: int | None
-    radius_bound: float
-    radius_power: int
-    powers: tuple[int, ...]
-    complete: bool
-    radius_lower: float = 0.0
-    lower_power: int = 0
-    trace_reaches_n: int = 0
-
-
-def spectral_radius_bound(
-    F: Dyadic,
-    *,
-    consecutive: int | None = None,
-    squarings: int = 6,
-    target: float | None = 1.0,
-    max_work: float = 3e8,
-) -> PowerBound:
-    """Exact norms of F, F^2, ..., F^consecutive, then of repeated squares.
-
-    rho(F) <= ||F^m||^(1/m) for every m and every induced norm, so each
-    exact power gives a certified bound; squaring F^m tightens it (the bound
-    tends to rho(F)).  Squaring stops once the bound is below ``target``.
-
-    Parameters
-    ----------
-    F : Dyadic, shape (n, n)
-    consecutive : int, optional
-        Powers 1..consecutive computed one by one (default n).
-    squarings : int, default 6
-        Further squarings of the last power.
-    target : float or None, default 1
-        Stop squaring when the bound is below this value.
-    max_work : float, default 3e8
-        Budget in word operations (n^3 times the words of the entries to the
-        power 1.6, Karatsuba); beyond it the result is marked incomplete.
-
-    Returns
-    -------
-    PowerBound
-    """
-    n = F.shape[0]
-    k_max = n if consecutive is None else max(1, int(consecutive))
-    log2_norms: list[float] = []
-    log2_two: list[tuple[float, float]] = []
-    powers: list[int] = []
-    best, best_m = math.inf, 0
-    nil = None
-    complete = True
-
-    def cost(a: Dyadic, b: Dyadic) -> float:
-        words = (a.bits() + b.bits()) / 64.0 + 1.0
-        return float(n) ** 3 * words**1.6
-
-    lower, lower_m = 0.0, 0
-    reaches = 0
-
-    def record(m: int, P: Dyadic) -> float:
-        nonlocal best, best_m, lower, lower_m, reaches
-        value = P.inf_norm_log2()
-        powers.append(m)
-        bound = 0.0 if value == -math.inf else 2.0 ** min(value / m, 1e4)
-        if bound < best:
-            best, best_m = bound, m
-        trace = abs(sum(int(P.ints[i, i]) for i in range(n)))
-        if trace and not reaches:
-            # |trace F^m| >= n, decided in integers: trace * 2^exponent >= n
-            e = P.exponent
-            if (trace << e if e >= 0 else trace) >= (n if e >= 0 else n << -e):
-                reaches = m
-        if trace:
-            # rounded down: log2 of an int is within a few ulps
-            log_t = math.log2(trace) - 1e-12 * max(1.0, abs(math.log2(trace))) + P.exponent
-            low = 2.0 ** max(min((log_t - math.log2(n)) / m, 1e4), -1e4)
-            if low > lower:
-                lower, lower_m = low, m
-        return value
-
-    work = 0.0
-
-    def affordable(a: Dyadic, b: Dyadic) -> bool:
-        nonlocal work
-        c = cost(a, b)
-        if work + c > max_work:
-            return False
-        work += c
-        return True
-
-    P = F
-    for k in range(1, k_max + 1):
-        if k > 1:
-            if not affordable(P, F):
-                complete = False
-                break
-            P = P @ F
-        value = record(k, P)
-        log2_norms.append(value)
-        log2_two.append(P.two_norm_log2_bounds())
-        if value == -math.inf:
-            nil = k
-            break
-    m = powers[-1] if powers else 1
-    if nil is None and complete:
-        for _ in range(squarings):
-            if target is not None and (best < target or lower > target):
-                break
-            if not affordable(P, P):
-                complete = False
-                break
-            P = P @ P
-            m *= 2
-            if record(m, P) == -math.inf:
-                break
-    return PowerBound(
-        tuple(log2_norms),
-        tuple(log2_two),
-        nil,
-        best,
-        best_m,
-        tuple(powers),
-        complete,
-        lower,
-        lower_m,
-        reaches,
-    )
 
 
 # ---------------------------------------------------------------------------
@@ -600,13 +341,6 @@ def _scaled_floats(z: list[int]) -> np.ndarray:
     top = max(abs(x) for x in z)
     shift = max(top.bit_length() - 60, 0)
     return np.array([float(v >> shift) if v >= 0 else -float((-v) >> shift) for v in z])
-
-
-def shift_by(F: Dyadic, value: float) -> Dyadic:
-    """F - value I, exactly, for any finite float ``value`` (a dyadic rational)."""
-    n = F.shape[0]
-    ia, ib, e = _align(F, dyadic(np.diag(np.full(n, float(value)))))
-    return Dyadic(ia - ib, e)
 
 
 def exact_kernel_vector(M: Dyadic, *, max_bits: int = 200_000) -> list[int] | None:

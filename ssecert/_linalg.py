@@ -1,8 +1,9 @@
 """Numerical building blocks of the structural analyses.
 
-* ``eigen_clusters``: eigenvalues grouped into clusters with their
-  eigenspaces, grouping decided from condition numbers and a defect-aware
-  radius, every doubtful grouping reported instead of guessed;
+* ``eigen_clusters`` (from ``ssecert._eigen``): eigenvalues grouped into
+  clusters with their eigenspaces, grouping decided from condition numbers
+  and a defect-aware radius, every doubtful grouping reported instead of
+  guessed;
 * ``staircase``: orthogonal observability staircase (block Arnoldi on the
   rows of C), the reliable way to get the observable subspace and the
   observability index (the rank of the stacked observability matrix is not);
@@ -13,13 +14,13 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
 
+from ._eigen import EigenAnalysis, EigenCluster, eigen_clusters
 from .system import System
-from .tolerances import BORDERLINE, EPS, NONZERO, ZERO, Tolerances, classify
+from .tolerances import BORDERLINE, NONZERO, ZERO, Tolerances, classify
 
 try:  # the gufunc behind numpy.linalg.cholesky: NaN instead of an exception
     from numpy.linalg import _umath_linalg as _ul
@@ -74,272 +75,7 @@ def matrix_norm(M: np.ndarray) -> float:
 
 
 # ---------------------------------------------------------------------------
-# eigenvalue clusters
-
-
-@dataclass(frozen=True)
-class EigenCluster:
-    """A group of computed eigenvalues treated as one eigenvalue.
-
-    Attributes
-    ----------
-    center : complex
-        Mean of the group (real when the group is closed under conjugation).
-    members : tuple of int
-        Indices into ``EigenAnalysis.eigenvalues``.
-    geometric : int
-        Dimension of the eigenspace (numerical null space of A - center I).
-    basis : ndarray, shape (n, geometric)
-        Orthonormal basis of the eigenspace; real when ``center`` is real.
-    error : float
-        Estimated angle between ``basis`` and the exact eigenspace.
-    conjugate_pair : bool
-        True when the group stands for itself and its complex conjugate.
-    problem : str
-        Empty when the group is sound; otherwise why it is not.
-    """
-
-    center: complex
-    members: tuple[int, ...]
-    geometric: int
-    basis: np.ndarray
-    error: float
-    conjugate_pair: bool
-    problem: str = ""
-
-    @property
-    def algebraic(self) -> int:
-        """Number of computed eigenvalues in the group."""
-        return len(self.members)
-
-    @property
-    def is_real(self) -> bool:
-        return not self.conjugate_pair
-
-
-@dataclass(frozen=True)
-class EigenAnalysis:
-    """Eigenvalues of A grouped into clusters (one per conjugate pair)."""
-
-    eigenvalues: np.ndarray
-    clusters: tuple[EigenCluster, ...]
-    norm: float
-    condition: np.ndarray
-    threshold: float
-    problems: tuple[str, ...] = field(default=())
-    unit: float = 1.0
-
-    @property
-    def ok(self) -> bool:
-        return not self.problems
-
-    def label(self, value: complex) -> str:
-        """An eigenvalue of this (possibly rescaled) A as the caller's A has it, for messages."""
-        return _eigenvalue_label(value, self.unit)
-
-
-def _eigenvalue_label(value: complex, unit: float = 1.0) -> str:
-    """``value / unit`` for messages: a real number when it is real."""
-    v = complex(value) / unit
-    return f"{v.real:.6g}" if v.imag == 0 else f"{v:.6g}"
-
-
-def _eigen_condition(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Eigenvalues and their condition numbers 1 / |y^H x| (unit x, y)."""
-    w, vl, vr = scipy.linalg.eig(A, left=True, right=True)
-    vl = vl / np.linalg.norm(vl, axis=0)
-    vr = vr / np.linalg.norm(vr, axis=0)
-    dots = np.abs(np.sum(vl.conj() * vr, axis=0))
-    with np.errstate(divide="ignore"):
-        kappa = np.where(dots > 0, 1.0 / np.maximum(dots, np.finfo(float).tiny), np.inf)
-    return w, kappa
-
-
-def _compatible(dist: np.ndarray, delta: np.ndarray, tight: float) -> bool:
-    """Whether the pairs i, j with |lambda_i - lambda_j| <= 2 (delta_i + delta_j) (or equal to
-    rounding) connect every member of a group."""
-    m = dist.shape[0]
-    link = (dist <= 2.0 * (delta[:, None] + delta[None, :])) | (dist <= tight)
-    seen = {0}
-    frontier = [0]
-    while frontier:
-        i = frontier.pop()
-        for j in np.flatnonzero(link[i]):
-            if int(j) not in seen:
-                seen.add(int(j))
-                frontier.append(int(j))
-    return len(seen) == m
-
-
-def eigen_clusters(
-    A: np.ndarray, *, tolerances: Tolerances | None = None, unit: float = 1.0
-) -> EigenAnalysis:
-    """Group the eigenvalues of ``A`` and compute each group's eigenspace.
-
-    Two computed eigenvalues are grouped when their distance is below the
-    larger of (i) their first-order error bounds ``n eps ||A|| kappa``
-    (``kappa`` the eigenvalue condition number, huge for the perturbed
-    copies of a defective eigenvalue) and (ii) the spread a defective
-    eigenvalue of the group's size shows in floating point,
-    ``||A|| (n cluster_rtol)^(1/m)``.  Each group's eigenspace is the
-    numerical null space of ``A - center I``.  A group is reported as a
-    problem (and analyses that need it become inconclusive) when the null
-    space is empty or borderline, larger than the group, or when a single
-    eigenvalue is so ill-conditioned that it may be a defective one that was
-    not recognised.
-
-    Parameters
-    ----------
-    A : ndarray, shape (n, n)
-    tolerances : Tolerances, optional
-    unit : float, default 1.0
-        The factor by which ``A`` was scaled from the caller's matrix: messages
-        give eigenvalues divided by it.
-
-    Returns
-    -------
-    EigenAnalysis
-    """
-    tol = tolerances or Tolerances()
-    A = np.asarray(A, dtype=float)
-    n = A.shape[0]
-    norm = max(matrix_norm(A), np.finfo(float).tiny)
-    lam, kappa = _eigen_condition(A)
-    delta = np.minimum(n * EPS * norm * kappa, norm)  # first-order error bound
-
-    threshold = 10 * tol.rtol(n) * norm
-
-    def singular_at(members: list[int]) -> bool:
-        center = lam[members].mean()
-        smin = np.linalg.svd(A - center * np.eye(n), compute_uv=False)[-1]
-        return bool(smin <= tol.borderline_factor * threshold)
-
-    # Level-wise single linkage.  Edges are added by increasing distance;
-    # the connected component an edge closes is accepted as one eigenvalue
-    # when its diameter is within the spread a defective eigenvalue of that
-    # size can show, ||A|| (n * 1e4 * cluster_rtol)^(1/m), and either all its
-    # members are equal to rounding or A - mu I is singular at its mean.
-    # Components that fail stay split; a later, larger component can pass
-    # (a Jordan block's perturbed eigenvalues only average out when all are
-    # in), and every acceptance is validated, so no radius alone merges
-    # distinct eigenvalues.
-    labels = np.arange(n)
-    dist = np.abs(lam[:, None] - lam[None, :])
-    tight = n * tol.cluster_rtol * norm
-    wide = n * 1e4 * tol.cluster_rtol
-    ii, jj = np.triu_indices(n, 1)
-    keep = dist[ii, jj] <= norm * wide ** (1.0 / n)
-    ii, jj = ii[keep], jj[keep]
-    order = np.argsort(dist[ii, jj], kind="stable")
-    parent = list(range(n))
-
-    def find(x: int) -> int:
-        while parent[x] != x:
-            parent[x] = parent[parent[x]]
-            x = parent[x]
-        return x
-
-    members_of = {i: [i] for i in range(n)}
-    for e in order:
-        i, j = int(ii[e]), int(jj[e])
-        ri, rj = find(i), find(j)
-        if ri == rj:
-            # the component is unchanged, and its test ran when it last grew: the decision
-            # depends on its members only (re-testing made this O(n^4) on dense plants)
-            continue
-        parent[rj] = ri
-        members_of[ri] = members_of[ri] + members_of.pop(rj)
-        comp = members_of[ri]
-        if len(set(labels[comp].tolist())) == 1:
-            continue
-        sub = dist[np.ix_(comp, comp)]
-        diameter = float(sub.max())
-        m = len(comp)
-        if diameter <= tight:
-            labels[comp] = labels[comp[0]]
-            continue
-        # Beyond rounding, a group is one eigenvalue only if its members are
-        # linked by pairs whose first-order error bounds cover their distance
-        # (perturbed copies of a defective eigenvalue have huge condition
-        # numbers); well-conditioned distinct eigenvalues are never merged,
-        # however close: a symmetric triple lambda - d, lambda, lambda + d is
-        # singular at its mean, so that test alone is not enough.
-        if (
-            _compatible(sub, delta[comp], tight)
-            and diameter <= norm * wide ** (1.0 / m)
-            and singular_at(comp)
-        ):
-            labels[comp] = labels[comp[0]]
-
-    groups = [np.nonzero(labels == g)[0] for g in np.unique(labels)]
-    group_of = {int(i): gi for gi, members in enumerate(groups) for i in members}
-    clusters: list[EigenCluster] = []
-    problems: list[str] = []
-    for gi, members in enumerate(groups):
-        center = complex(lam[members].mean())
-        # conjugate-closed group: every member's conjugate lies in the group
-        conj_groups = {group_of[int(np.argmin(np.abs(lam - lam[i].conj())))] for i in members}
-        self_conjugate = conj_groups == {gi}
-        if self_conjugate:
-            center = complex(center.real, 0.0)
-        elif center.imag < 0:
-            continue  # represented by its conjugate group
-        M = A - (center.real if self_conjugate else center) * np.eye(n)
-        _, s, vh = np.linalg.svd(M)
-        codes = classify(s, threshold, factor=tol.borderline_factor)
-        g = int(np.count_nonzero(codes == ZERO))
-        problem = ""
-        label = _eigenvalue_label(complex(center.real, 0.0) if self_conjugate else center, unit)
-        if np.any(codes == BORDERLINE):
-            problem = (
-                f"eigenvalue {label}: a singular value of A - lambda I "
-                f"({s[codes == BORDERLINE].min():.2e}) is within a factor "
-                f"{tol.borderline_factor:g} of the rank threshold {threshold:.2e}"
-            )
-        elif g == 0:
-            problem = (
-                f"eigenvalues near {label} are too close to separate and do not behave as "
-                f"one eigenvalue (A - lambda I is not singular at their mean)"
-            )
-        elif g > len(members):
-            problem = (
-                f"eigenvalue {label}: eigenspace dimension {g} exceeds the {len(members)} "
-                f"eigenvalues grouped there"
-            )
-        elif len(members) == 1 and delta[members[0]] > np.sqrt(EPS) * norm:
-            problem = (
-                f"eigenvalue {label} is ill-conditioned (condition number "
-                f"{kappa[members[0]]:.1e}); it may be a defective eigenvalue that cannot be "
-                f"resolved in floating point"
-            )
-        basis = vh[n - g :].conj().T if g else np.zeros((n, 0))
-        if self_conjugate:
-            basis = np.real(basis)
-        zero_max = float(s[n - g]) if g else 0.0
-        gap = float(s[n - g - 1]) if g < n else norm
-        error = max(zero_max, threshold / 10) / max(gap, np.finfo(float).tiny) if g else np.inf
-        if problem:
-            problems.append(problem)
-        clusters.append(
-            EigenCluster(
-                center=center,
-                members=tuple(int(i) for i in members),
-                geometric=g,
-                basis=basis,
-                error=float(min(error, 1.0)),
-                conjugate_pair=not self_conjugate,
-                problem=problem,
-            )
-        )
-    return EigenAnalysis(
-        eigenvalues=lam,
-        clusters=tuple(clusters),
-        norm=norm,
-        condition=kappa,
-        threshold=threshold,
-        problems=tuple(problems),
-        unit=unit,
-    )
+# observability staircase
 
 
 def _classify_krylov(
@@ -366,10 +102,6 @@ def _classify_krylov(
     codes[values <= upper] = BORDERLINE
     codes[values <= zero] = ZERO
     return codes
-
-
-# ---------------------------------------------------------------------------
-# observability staircase
 
 
 @dataclass(frozen=True)

@@ -27,6 +27,7 @@ from ._validation import (
 __all__ = ["SpecError", "SpecTable", "one_line"]
 
 INT64_MIN, INT64_MAX = -(2**63), 2**63 - 1
+MAX_NAME_LENGTH = 128
 MATRIX_LIMITS = {"max_dim": MAX_MATRIX_DIM, "max_entries": MAX_MATRIX_ENTRIES}
 
 
@@ -88,6 +89,17 @@ def convert(source: str, key: str, func: Any, *args: Any, **kwargs: Any) -> Any:
         if isinstance(name, str) and message.startswith(name + " "):
             message = message[len(name) :].lstrip(" :")
         raise spec_error(source, key, message) from None
+
+
+def check_name(source: str, key: str, value: Any, what: str) -> str:
+    """``value`` when it is a non-empty string of at most ``MAX_NAME_LENGTH`` characters."""
+    if not isinstance(value, str) or not value.strip():
+        raise spec_error(source, key, f"expected a non-empty string, got {describe(value)}")
+    if len(value) > MAX_NAME_LENGTH:
+        raise spec_error(
+            source, key, f"{what} has {len(value):,} characters; the limit is {MAX_NAME_LENGTH}"
+        )
+    return value
 
 
 def require(source: str, table: Mapping[str, Any], key: str, prefix: str) -> Any:

@@ -43,7 +43,6 @@ wrong or hostile file costs a message and not a frozen machine:
 from __future__ import annotations
 
 import hashlib
-import numbers
 import os
 import re
 import stat
@@ -61,12 +60,15 @@ from ._spec_files import (
     _parse_text,
     _read_arrays,
 )
+from ._spec_scenarios import ATTACK_KINDS, SCENARIO_DEFAULTS, read_scenarios
 from ._spec_table import (
     INT64_MAX,
     MATRIX_LIMITS,
+    MAX_NAME_LENGTH,
     SpecError,
     SpecTable,
     check_keys,
+    check_name,
     convert,
     one_line,
     require,
@@ -77,8 +79,6 @@ from ._validation import (
     MAX_MATRIX_DIM,
     MAX_MATRIX_ENTRIES,
     as_choice,
-    as_float_option,
-    as_index_list,
     as_real_matrix,
     describe,
 )
@@ -103,31 +103,10 @@ __all__ = [
 ]
 
 MAX_HORIZON = 10_000
-MAX_NAME_LENGTH = 128
 
 OBSERVER_KINDS = BUILTIN_KINDS
-ATTACK_KINDS = ("none", "constant", "switching", "sinusoidal", "random", "stealthy")
-SCENARIO_DEFAULTS: dict[str, Any] = {
-    "magnitude": (4.0, 5.0),
-    "noise": 0.0,
-    "steps": 300,
-    "runs": 50,
-    "seed": 0,
-}
 _TOP_KEYS = ("name", "system", "attack", "observer", "scenario")
 _ATTACK_KEYS = ("max_attacked", "horizon")
-_SCENARIO_KEYS = (
-    "name",
-    "attack",
-    "sensors",
-    "count",
-    "magnitude",
-    "period",
-    "noise",
-    "steps",
-    "runs",
-    "seed",
-)
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
 
 
@@ -162,16 +141,6 @@ class Spec:
     scenarios: tuple[Mapping[str, Any], ...] = field(default=())
     source: str = "<dict>"
     sha256: str | None = None
-
-
-def _check_name(source: str, key: str, value: Any, what: str) -> str:
-    if not isinstance(value, str) or not value.strip():
-        raise spec_error(source, key, f"expected a non-empty string, got {describe(value)}")
-    if len(value) > MAX_NAME_LENGTH:
-        raise spec_error(
-            source, key, f"{what} has {len(value):,} characters; the limit is {MAX_NAME_LENGTH}"
-        )
-    return value
 
 
 def spec_from_dict(
@@ -217,7 +186,29 @@ def spec_from_dict(
     """
     check_keys(source, "", data, _TOP_KEYS)
     _check_document(source, data)
-    name = data.get("name", default_name)
+    name = _spec_name(source, data.get("name", default_name))
+    system = _system(source, require(source, data, "system", ""), name)
+    attack_table = data.get("attack", {})
+    check_keys(source, "attack", attack_table, _ATTACK_KEYS)
+    s = _max_attacked(source, attack_table, max_attacked)
+    tau = _horizon(source, attack_table, horizon, system.n)
+    observer = None
+    if "observer" in data:
+        observer = _observer(source, data["observer"], system.n, system.p)
+    return Spec(
+        name=name,
+        system=system,
+        max_attacked=s,
+        horizon=tau,
+        observer=observer,
+        scenarios=read_scenarios(source, data.get("scenario", []), system.p),
+        source=source,
+        sha256=sha256,
+    )
+
+
+def _spec_name(source: str, name: Any) -> str:
+    """The spec's name, checked: it names the report files."""
     if name is None:
         raise spec_error(source, "name", "missing (required)")
     if not isinstance(name, str) or not _NAME_RE.match(name):
@@ -227,32 +218,47 @@ def spec_from_dict(
             f"expected a name of letters, digits, '.', '_' or '-' (it names the report files), "
             f"got {describe(name)}",
         )
-    _check_name(source, "name", name, "the name")
-    system_table = require(source, data, "system", "")
-    check_keys(source, "system", system_table, _SYSTEM_KEYS)
+    return check_name(source, "name", name, "the name")
+
+
+def _system(source: str, table: Any, name: str) -> System:
+    """The ``[system]`` table as a System: A square, C with n columns, sensors named."""
+    check_keys(source, "system", table, _SYSTEM_KEYS)
     A = convert(
         source,
         "system.A",
         as_real_matrix,
-        require(source, system_table, "A", "system"),
+        require(source, table, "A", "system"),
         "A",
         **MATRIX_LIMITS,
     )
     if A.shape[0] != A.shape[1]:
         raise spec_error(source, "system.A", f"expected a square matrix, got shape {A.shape}")
-    n = A.shape[0]
     C = convert(
         source,
         "system.C",
         as_real_matrix,
-        require(source, system_table, "C", "system"),
+        require(source, table, "C", "system"),
         "C",
-        shape=(None, n),
+        shape=(None, A.shape[0]),
         shape_hint="the number of states, from A",
         **MATRIX_LIMITS,
     )
-    sensors = system_table.get("sensors")
-    if isinstance(sensors, (list, tuple)) and len(sensors) == C.shape[0]:
+    sensors = table.get("sensors")
+    _check_sensor_names(source, sensors, C.shape[0])
+    try:
+        return System(A, C, sensors=sensors, name=name)
+    except (TypeError, ValueError) as exc:
+        raise spec_error(source, "system.sensors", str(exc)) from None
+
+
+def _check_sensor_names(source: str, sensors: Any, p: int) -> None:
+    """Refuse a sensor name over ``MAX_NAME_LENGTH`` in a list of the right length.
+
+    Lists of another length, and names that are not strings, are left to
+    ``System``, which says what is wrong with them.
+    """
+    if isinstance(sensors, (list, tuple)) and len(sensors) == p:
         for i, label in enumerate(sensors):
             if isinstance(label, str) and len(label) > MAX_NAME_LENGTH:
                 raise spec_error(
@@ -260,16 +266,12 @@ def spec_from_dict(
                     "system.sensors",
                     f"sensors[{i}] has {len(label):,} characters; the limit is {MAX_NAME_LENGTH}",
                 )
-    try:
-        system = System(A, C, sensors=sensors, name=name)
-    except (TypeError, ValueError) as exc:
-        raise spec_error(source, "system.sensors", str(exc)) from None
-    p = system.p
 
-    attack_table = data.get("attack", {})
-    check_keys(source, "attack", attack_table, _ATTACK_KEYS)
+
+def _max_attacked(source: str, attack_table: Any, max_attacked: int | None) -> int:
+    """s: from ``--max-attacked`` when given, else the required ``attack.max_attacked``."""
     if max_attacked is not None:
-        s = convert(
+        return convert(
             source,
             "--max-attacked",
             spec_int,
@@ -278,8 +280,8 @@ def spec_from_dict(
             min_value=0,
             max_value=INT64_MAX,
         )
-    elif "max_attacked" in attack_table:
-        s = convert(
+    if "max_attacked" in attack_table:
+        return convert(
             source,
             "attack.max_attacked",
             spec_int,
@@ -287,18 +289,21 @@ def spec_from_dict(
             "max_attacked",
             min_value=0,
         )
-    else:
-        raise spec_error(
-            source,
-            "attack.max_attacked",
-            "missing (required): the number of attacked sensors s; or pass --max-attacked",
-        )
+    raise spec_error(
+        source,
+        "attack.max_attacked",
+        "missing (required): the number of attacked sensors s; or pass --max-attacked",
+    )
+
+
+def _horizon(source: str, attack_table: Any, horizon: int | None, n: int) -> int:
+    """tau: from ``--horizon`` when given, else ``attack.horizon``, else n."""
     if horizon is not None:
-        tau = convert(
+        return convert(
             source, "--horizon", spec_int, horizon, "horizon", min_value=1, max_value=MAX_HORIZON
         )
-    elif "horizon" in attack_table:
-        tau = convert(
+    if "horizon" in attack_table:
+        return convert(
             source,
             "attack.horizon",
             spec_int,
@@ -307,41 +312,7 @@ def spec_from_dict(
             min_value=1,
             max_value=MAX_HORIZON,
         )
-    else:
-        tau = n
-
-    observer = None
-    if "observer" in data:
-        observer = _observer(source, data["observer"], n, p)
-    scenarios: list[dict[str, Any]] = []
-    raw_scenarios = data.get("scenario", [])
-    if isinstance(raw_scenarios, Mapping):
-        raw_scenarios = [raw_scenarios]
-    if not isinstance(raw_scenarios, list):
-        raise spec_error(
-            source,
-            "scenario",
-            f"expected a list of tables ([[scenario]]), got {describe(raw_scenarios)}",
-        )
-    seen: set[str] = set()
-    for index, table in enumerate(raw_scenarios):
-        scenario = _scenario(source, f"scenario[{index}]", table, p)
-        if scenario["name"] in seen:
-            raise spec_error(
-                source, f"scenario[{index}].name", f"duplicate scenario name {scenario['name']!r}"
-            )
-        seen.add(scenario["name"])
-        scenarios.append(scenario)
-    return Spec(
-        name=name,
-        system=system,
-        max_attacked=s,
-        horizon=tau,
-        observer=observer,
-        scenarios=tuple(scenarios),
-        source=source,
-        sha256=sha256,
-    )
+    return n
 
 
 def _observer(source: str, table: Any, n: int, p: int) -> dict[str, Any]:
@@ -360,136 +331,6 @@ def _observer(source: str, table: Any, n: int, p: int) -> dict[str, Any]:
     reader = SpecTable(source, "observer", table)
     reader.check_keys(kind.keys)
     return {"kind": name, **kind.parse(reader, n, p)}
-
-
-def _scenario(source: str, prefix: str, table: Any, p: int) -> dict[str, Any]:
-    check_keys(source, prefix, table, _SCENARIO_KEYS)
-    name = _check_name(
-        source, f"{prefix}.name", require(source, table, "name", prefix), "a scenario name"
-    )
-    attack = convert(
-        source,
-        f"{prefix}.attack",
-        as_choice,
-        require(source, table, "attack", prefix),
-        "attack",
-        ATTACK_KINDS,
-    )
-    out: dict[str, Any] = {"name": name, "attack": attack}
-    has_sensors, has_count = "sensors" in table, "count" in table
-    if attack in ("none", "stealthy"):
-        for key in ("sensors", "count"):
-            if key in table:
-                raise spec_error(
-                    source,
-                    f"{prefix}.{key}",
-                    f"not used by attack = {attack!r}"
-                    + (
-                        " (the sensors come from the sparse-observability witness)"
-                        if attack == "stealthy"
-                        else ""
-                    ),
-                )
-    elif attack in ("switching", "random"):
-        if has_sensors:
-            raise spec_error(
-                source,
-                f"{prefix}.sensors",
-                f"attack = {attack!r} draws its supports at random; give count instead",
-            )
-        out["count"] = convert(
-            source,
-            f"{prefix}.count",
-            spec_int,
-            require(source, table, "count", prefix),
-            "count",
-            min_value=1,
-            max_value=p,
-        )
-    else:
-        if has_sensors == has_count:
-            raise spec_error(
-                source,
-                f"{prefix}.sensors",
-                f"attack = {attack!r} needs exactly one of sensors (0-based indices) or "
-                f"count (a random support of that size)",
-            )
-        if has_sensors:
-            sensors = convert(
-                source, f"{prefix}.sensors", as_index_list, table["sensors"], "sensors", upper=p
-            )
-            if not sensors:
-                raise spec_error(source, f"{prefix}.sensors", "expected at least one sensor")
-            out["sensors"] = list(sensors)
-        else:
-            out["count"] = convert(
-                source,
-                f"{prefix}.count",
-                spec_int,
-                table["count"],
-                "count",
-                min_value=1,
-                max_value=p,
-            )
-    if attack in ("switching", "sinusoidal"):
-        out["period"] = convert(
-            source,
-            f"{prefix}.period",
-            spec_int,
-            require(source, table, "period", prefix),
-            "period",
-            min_value=1,
-        )
-    elif "period" in table:
-        raise spec_error(
-            source,
-            f"{prefix}.period",
-            f"only used by switching and sinusoidal attacks, not {attack!r}",
-        )
-    if "magnitude" in table:
-        if attack == "none":
-            raise spec_error(source, f"{prefix}.magnitude", "not used by attack = 'none'")
-        mag = table["magnitude"]
-        if isinstance(mag, numbers.Real) and not isinstance(mag, bool):
-            mag = [mag, mag]
-        arr = convert(
-            source, f"{prefix}.magnitude", as_real_matrix, mag, "magnitude", shape=(2,), ndim=1
-        )
-        if arr[0] < 0 or arr[0] > arr[1]:
-            raise spec_error(
-                source,
-                f"{prefix}.magnitude",
-                f"expected [low, high] with 0 <= low <= high, got {arr.tolist()}",
-            )
-        out["magnitude"] = (float(arr[0]), float(arr[1]))
-    else:
-        out["magnitude"] = SCENARIO_DEFAULTS["magnitude"]
-    out["noise"] = convert(
-        source,
-        f"{prefix}.noise",
-        as_float_option,
-        table.get("noise", SCENARIO_DEFAULTS["noise"]),
-        "noise",
-        min_value=0.0,
-    )
-    for key in ("steps", "runs"):
-        out[key] = convert(
-            source,
-            f"{prefix}.{key}",
-            spec_int,
-            table.get(key, SCENARIO_DEFAULTS[key]),
-            key,
-            min_value=1,
-        )
-    out["seed"] = convert(
-        source,
-        f"{prefix}.seed",
-        spec_int,
-        table.get("seed", SCENARIO_DEFAULTS["seed"]),
-        "seed",
-        min_value=0,
-    )
-    return out
 
 
 def load_spec(

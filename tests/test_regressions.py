@@ -305,13 +305,13 @@ def test_near_zero_distances_are_not_printed_as_zero():
 def test_eigenvalue_grouping_tests_each_component_once(monkeypatch):
     # a dense plant: every pair of eigenvalues is a candidate edge, but a component is tested
     # only when it grows (at most n - 1 times), not once per edge inside it
-    from ssecert import _linalg
+    from ssecert import _eigen
 
     calls = []
-    original = _linalg._compatible
-    monkeypatch.setattr(_linalg, "_compatible", lambda *args: calls.append(1) or original(*args))
+    original = _eigen._compatible
+    monkeypatch.setattr(_eigen, "_compatible", lambda *args: calls.append(1) or original(*args))
     n = 60
-    _linalg.eigen_clusters(np.random.default_rng(0).standard_normal((n, n)))
+    _eigen.eigen_clusters(np.random.default_rng(0).standard_normal((n, n)))
     assert len(calls) <= n - 1
 
 

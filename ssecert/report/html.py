@@ -188,14 +188,39 @@ def _slug(text: str) -> str:
 
 
 def _context(result: Any, *, fragment: bool) -> dict[str, Any]:
-    from .plots import region_plot, sensor_plot, simulation_plot, stealthy_plot
-
+    """What the report template shows of a ``CertifyResult``: verdict, checks, plots."""
     cert: Certificate = result.certificate
     spec = result.spec
-    system = spec.system
     meta = dict(cert.meta or {})
+    ctx: dict[str, Any] = {
+        "fragment": fragment,
+        "css": Markup(CSS),
+        "name": spec.name,
+        "verdict": cert.verdict.value,
+        "exit_code": cert.exit_code,
+        "headline": _headline(cert),
+        "identity": _identity(result, meta),
+        "checks": [_check_context(c) for c in cert.checks],
+        "notes": list(result.notes) + list(meta.get("notes", [])),
+        "command": result.command,
+    }
+    sparse = cert.get("sparse_observability")
+    if sparse is not None and sparse.verdict is Verdict.FAILS:
+        ctx.update(_breaking_set_context(spec.system, spec.max_attacked, sparse))
+    if result.stealthy is not None:
+        ctx.update(_stealthy_context(spec.system, result.stealthy))
+    ctx["simulations"] = _simulation_rows(result.simulations)
+    if result.region is not None:
+        ctx["region_svg"] = _region_svg(result.region, spec.observer)
+    return ctx
+
+
+def _identity(result: Any, meta: Mapping[str, Any]) -> list[tuple[str, str]]:
+    """The report's identity rows: design, spec file and hash, seed, date, versions."""
+    spec = result.spec
+    system = spec.system
     versions = meta.get("versions", {})
-    identity = [
+    return [
         (
             "design",
             f"{spec.name}: n = {system.n} states, p = {system.p} sensors, "
@@ -207,91 +232,113 @@ def _context(result: Any, *, fragment: bool) -> dict[str, Any]:
         ("date", meta.get("date", "-")),
         ("versions", ", ".join(f"{k} {v}" for k, v in versions.items())),
     ]
-    checks = [_check_context(c) for c in cert.checks]
-    verdict = cert.verdict.value
+
+
+def _headline(cert: Certificate) -> str:
+    """The first failing required check's finding, else the first undecided one's."""
     failing = [c for c in cert.checks if c.required and c.verdict is Verdict.FAILS]
     undecided = [c for c in cert.checks if c.required and c.verdict is Verdict.INCONCLUSIVE]
     if failing:
-        headline = failing[0].summary
-    elif undecided:
-        headline = undecided[0].summary
-    else:
-        headline = "Every required check holds."
-    ctx: dict[str, Any] = {
-        "fragment": fragment,
-        "css": Markup(CSS),
-        "name": spec.name,
-        "verdict": verdict,
-        "exit_code": cert.exit_code,
-        "headline": headline,
-        "identity": identity,
-        "checks": checks,
-        "notes": list(result.notes) + list(meta.get("notes", [])),
-        "command": result.command,
-    }
-    sparse = cert.get("sparse_observability")
-    breaking = (sparse.fields.get("breaking_set") if sparse is not None else None) or []
-    if sparse is not None and sparse.verdict is Verdict.FAILS:
-        ctx["sensors_svg"] = Markup(sensor_plot(system.sensors, breaking))
-        ctx["breaking_names"] = ", ".join(system.sensors[i] for i in breaking) or "none"
-        ctx["sensor_rows"] = [
+        return failing[0].summary
+    if undecided:
+        return undecided[0].summary
+    return "Every required check holds."
+
+
+def _breaking_set_context(system: Any, s: int, sparse: Check) -> dict[str, Any]:
+    """The sensor plot, list and sentence of a failing sparse-observability check."""
+    from .plots import sensor_plot
+
+    breaking = sparse.fields.get("breaking_set") or []
+    return {
+        "sensors_svg": Markup(sensor_plot(system.sensors, breaking)),
+        "breaking_names": ", ".join(system.sensors[i] for i in breaking) or "none",
+        "sensor_rows": [
             {"name": nm, "index": i, "breaking": i in set(breaking)}
             for i, nm in enumerate(system.sensors)
-        ]
-        ctx["why_sentence"] = _why(system, spec.max_attacked, sparse)
-    if result.stealthy is not None:
-        ctx["stealthy_svg"] = Markup(stealthy_plot(system, result.stealthy))
-        ctx["stealthy_residual"] = _fmt(result.stealthy["residual"])
-        ctx["stealthy_text"] = _stealthy_text(system, result.stealthy)
-    sims = []
+        ],
+        "why_sentence": _why(system, s, sparse),
+    }
+
+
+def _stealthy_context(system: Any, demo: dict[str, Any]) -> dict[str, Any]:
+    """The stealthy attack's plot, output mismatch and sentence."""
+    from .plots import stealthy_plot
+
+    return {
+        "stealthy_svg": Markup(stealthy_plot(system, demo)),
+        "stealthy_residual": _fmt(demo["residual"]),
+        "stealthy_text": _stealthy_text(system, demo),
+    }
+
+
+def _simulation_rows(simulations: Mapping[str, Any]) -> list[dict[str, Any]]:
+    """One table row (with its plot) per simulated scenario, each with a unique id."""
+    rows = []
     slugs: set[str] = set()
-    for name, res in result.simulations.items():
-        slug = _slug(name)
-        if slug in slugs:  # names differing only in punctuation: ids stay unique
-            slug = next(
-                f"{slug}-{i}" for i in range(2, len(slugs) + 3) if f"{slug}-{i}" not in slugs
-            )
+    for name, res in simulations.items():
+        slug = _unique_slug(name, slugs)
         slugs.add(slug)
         if isinstance(res, Mapping):
-            sims.append(
-                {
-                    "name": name,
-                    "attack": "-",
-                    "runs": "-",
-                    "steps": "-",
-                    "rel": "-",
-                    "q90": "-",
-                    "support": "-",
-                    "delay": "-",
-                    "svg": None,
-                    "skipped": res.get("skipped", ""),
-                    "slug": slug,
-                }
-            )
-            continue
-        final = res.final()
-        sims.append(
-            {
-                "name": name,
-                "attack": res.attack,
-                "runs": res.runs,
-                "steps": res.steps,
-                "rel": _fmt(final["relative_error_mean"]),
-                "q90": _fmt(final["relative_error_q90"]),
-                "support": _fmt(final["support_error_mean"]),
-                "delay": _fmt(final.get("detection_delay_median")),
-                "svg": Markup(simulation_plot(name, res, gid=f"sim-{slug}")),
-                "slug": slug,
-            }
-        )
-    ctx["simulations"] = sims
-    if result.region is not None:
-        obs = spec.observer or {}
-        point = None
-        if "step" in obs:
-            point = (float(obs.get("shrink", 1.0)), float(obs["step"]))
-        ctx["region_svg"] = Markup(region_plot(result.region, point))
-    return ctx
+            rows.append(_skipped_row(name, res, slug))
+        else:
+            rows.append(_simulation_row(name, res, slug))
+    return rows
+
+
+def _unique_slug(name: str, taken: set[str]) -> str:
+    """The scenario's id: its slug, numbered when names differ only in punctuation."""
+    slug = _slug(name)
+    if slug in taken:
+        slug = next(f"{slug}-{i}" for i in range(2, len(taken) + 3) if f"{slug}-{i}" not in taken)
+    return slug
+
+
+def _skipped_row(name: str, res: Mapping[str, Any], slug: str) -> dict[str, Any]:
+    """The row of a scenario that was not simulated, with the reason."""
+    return {
+        "name": name,
+        "attack": "-",
+        "runs": "-",
+        "steps": "-",
+        "rel": "-",
+        "q90": "-",
+        "support": "-",
+        "delay": "-",
+        "svg": None,
+        "skipped": res.get("skipped", ""),
+        "slug": slug,
+    }
+
+
+def _simulation_row(name: str, res: Any, slug: str) -> dict[str, Any]:
+    """The row of a simulated scenario: final-step metrics and the error plot."""
+    from .plots import simulation_plot
+
+    final = res.final()
+    return {
+        "name": name,
+        "attack": res.attack,
+        "runs": res.runs,
+        "steps": res.steps,
+        "rel": _fmt(final["relative_error_mean"]),
+        "q90": _fmt(final["relative_error_q90"]),
+        "support": _fmt(final["support_error_mean"]),
+        "delay": _fmt(final.get("detection_delay_median")),
+        "svg": Markup(simulation_plot(name, res, gid=f"sim-{slug}")),
+        "slug": slug,
+    }
+
+
+def _region_svg(region: Any, observer: Mapping[str, Any] | None) -> Markup:
+    """The certified (shrink, step) map, with the design's own point when it has a step."""
+    from .plots import region_plot
+
+    obs = observer or {}
+    point = None
+    if "step" in obs:
+        point = (float(obs.get("shrink", 1.0)), float(obs["step"]))
+    return Markup(region_plot(region, point))
 
 
 def _why(system: Any, s: int, check: Check) -> str:

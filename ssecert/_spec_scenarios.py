@@ -1,0 +1,211 @@
+"""Reading a spec's ``[[scenario]]`` tables: the attacks simulated and how.
+
+Each table names its attack (one of ``ATTACK_KINDS``), the sensors it takes
+(a list, a count drawn at random, or none), its magnitude range, period and
+the run settings; ``SCENARIO_DEFAULTS`` fills in what a table leaves out.
+``ssecert.spec`` reads the scenarios with ``read_scenarios`` and re-exports
+the constants.
+"""
+
+from __future__ import annotations
+
+import numbers
+from collections.abc import Mapping
+from typing import Any
+
+from ._spec_table import (
+    check_keys,
+    check_name,
+    convert,
+    require,
+    spec_error,
+    spec_int,
+)
+from ._validation import (
+    as_choice,
+    as_float_option,
+    as_index_list,
+    as_real_matrix,
+    describe,
+)
+
+ATTACK_KINDS = ("none", "constant", "switching", "sinusoidal", "random", "stealthy")
+SCENARIO_DEFAULTS: dict[str, Any] = {
+    "magnitude": (4.0, 5.0),
+    "noise": 0.0,
+    "steps": 300,
+    "runs": 50,
+    "seed": 0,
+}
+_SCENARIO_KEYS = (
+    "name",
+    "attack",
+    "sensors",
+    "count",
+    "magnitude",
+    "period",
+    "noise",
+    "steps",
+    "runs",
+    "seed",
+)
+
+
+def read_scenarios(source: str, raw: Any, p: int) -> tuple[dict[str, Any], ...]:
+    """The ``[[scenario]]`` tables (one table is taken as a list of one), names unique."""
+    if isinstance(raw, Mapping):
+        raw = [raw]
+    if not isinstance(raw, list):
+        raise spec_error(
+            source,
+            "scenario",
+            f"expected a list of tables ([[scenario]]), got {describe(raw)}",
+        )
+    scenarios: list[dict[str, Any]] = []
+    seen: set[str] = set()
+    for index, table in enumerate(raw):
+        scenario = _scenario(source, f"scenario[{index}]", table, p)
+        if scenario["name"] in seen:
+            raise spec_error(
+                source, f"scenario[{index}].name", f"duplicate scenario name {scenario['name']!r}"
+            )
+        seen.add(scenario["name"])
+        scenarios.append(scenario)
+    return tuple(scenarios)
+
+
+def _scenario(source: str, prefix: str, table: Any, p: int) -> dict[str, Any]:
+    """One ``[[scenario]]`` table, checked against its attack, with defaults filled in."""
+    check_keys(source, prefix, table, _SCENARIO_KEYS)
+    name = check_name(
+        source, f"{prefix}.name", require(source, table, "name", prefix), "a scenario name"
+    )
+    attack = convert(
+        source,
+        f"{prefix}.attack",
+        as_choice,
+        require(source, table, "attack", prefix),
+        "attack",
+        ATTACK_KINDS,
+    )
+    out: dict[str, Any] = {"name": name, "attack": attack}
+    out.update(_attack_support(source, prefix, table, attack, p))
+    if attack in ("switching", "sinusoidal"):
+        out["period"] = convert(
+            source,
+            f"{prefix}.period",
+            spec_int,
+            require(source, table, "period", prefix),
+            "period",
+            min_value=1,
+        )
+    elif "period" in table:
+        raise spec_error(
+            source,
+            f"{prefix}.period",
+            f"only used by switching and sinusoidal attacks, not {attack!r}",
+        )
+    out["magnitude"] = _attack_magnitude(source, prefix, table, attack)
+    out.update(_run_settings(source, prefix, table))
+    return out
+
+
+def _attack_support(source: str, prefix: str, table: Any, attack: str, p: int) -> dict[str, Any]:
+    """Which sensors the attack takes: ``{"sensors": [...]}``, ``{"count": k}`` or nothing.
+
+    No attack and the stealthy one (whose sensors come from the witness)
+    take neither; switching and random attacks draw supports of a given
+    count; the others take exactly one of sensors or count.
+    """
+    if attack in ("none", "stealthy"):
+        for key in ("sensors", "count"):
+            if key in table:
+                why = (
+                    " (the sensors come from the sparse-observability witness)"
+                    if attack == "stealthy"
+                    else ""
+                )
+                raise spec_error(source, f"{prefix}.{key}", f"not used by attack = {attack!r}{why}")
+        return {}
+    has_sensors, has_count = "sensors" in table, "count" in table
+    if attack in ("switching", "random"):
+        if has_sensors:
+            raise spec_error(
+                source,
+                f"{prefix}.sensors",
+                f"attack = {attack!r} draws its supports at random; give count instead",
+            )
+        return {"count": _attack_count(source, prefix, require(source, table, "count", prefix), p)}
+    if has_sensors == has_count:
+        raise spec_error(
+            source,
+            f"{prefix}.sensors",
+            f"attack = {attack!r} needs exactly one of sensors (0-based indices) or "
+            f"count (a random support of that size)",
+        )
+    if not has_sensors:
+        return {"count": _attack_count(source, prefix, table["count"], p)}
+    sensors = convert(
+        source, f"{prefix}.sensors", as_index_list, table["sensors"], "sensors", upper=p
+    )
+    if not sensors:
+        raise spec_error(source, f"{prefix}.sensors", "expected at least one sensor")
+    return {"sensors": list(sensors)}
+
+
+def _attack_count(source: str, prefix: str, value: Any, p: int) -> int:
+    """The number of attacked sensors a scenario draws, from 1 to p."""
+    return convert(source, f"{prefix}.count", spec_int, value, "count", min_value=1, max_value=p)
+
+
+def _attack_magnitude(source: str, prefix: str, table: Any, attack: str) -> tuple[float, float]:
+    """The attack's [low, high] magnitude range (one number is both), or the default."""
+    if "magnitude" not in table:
+        return SCENARIO_DEFAULTS["magnitude"]
+    if attack == "none":
+        raise spec_error(source, f"{prefix}.magnitude", "not used by attack = 'none'")
+    mag = table["magnitude"]
+    if isinstance(mag, numbers.Real) and not isinstance(mag, bool):
+        mag = [mag, mag]
+    arr = convert(
+        source, f"{prefix}.magnitude", as_real_matrix, mag, "magnitude", shape=(2,), ndim=1
+    )
+    if arr[0] < 0 or arr[0] > arr[1]:
+        raise spec_error(
+            source,
+            f"{prefix}.magnitude",
+            f"expected [low, high] with 0 <= low <= high, got {arr.tolist()}",
+        )
+    return (float(arr[0]), float(arr[1]))
+
+
+def _run_settings(source: str, prefix: str, table: Any) -> dict[str, Any]:
+    """The scenario's noise, steps, runs and seed, with their defaults."""
+    out: dict[str, Any] = {
+        "noise": convert(
+            source,
+            f"{prefix}.noise",
+            as_float_option,
+            table.get("noise", SCENARIO_DEFAULTS["noise"]),
+            "noise",
+            min_value=0.0,
+        )
+    }
+    for key in ("steps", "runs"):
+        out[key] = convert(
+            source,
+            f"{prefix}.{key}",
+            spec_int,
+            table.get(key, SCENARIO_DEFAULTS[key]),
+            key,
+            min_value=1,
+        )
+    out["seed"] = convert(
+        source,
+        f"{prefix}.seed",
+        spec_int,
+        table.get("seed", SCENARIO_DEFAULTS["seed"]),
+        "seed",
+        min_value=0,
+    )
+    return out
