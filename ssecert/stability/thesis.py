@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -405,6 +405,40 @@ def thesis_assumptions(
     items : list of AssumptionResult
     """
     rng = np.random.default_rng(seed)
+    inst = _instance(design)
+    items = [_assumption_1(observability_holds), _assumption_2(inst)]
+    refusal = _refusal(inst, budget)
+    if refusal:
+        for name in ("lemma_1", "assumption_3", "epsilon_bound"):
+            items.append(AssumptionResult(name, Verdict.INCONCLUSIVE, f"not attempted: {refusal}"))
+        return combine_verdicts([i.verdict for i in items]).value, items
+    lemma = _lemma_1(inst, rng)
+    assumption_3, rho_a = _assumption_3(inst, lemma, rng)
+    items += [lemma.item, assumption_3, _epsilon_bound(inst, lemma, rho_a)]
+    return combine_verdicts([i.verdict for i in items]).value, items
+
+
+@dataclass(frozen=True)
+class _Instance:
+    """A sparse design in the thesis's notation: F = A + L1 S, Psi_q = q S_lambda, step eps."""
+
+    A: np.ndarray
+    S: np.ndarray
+    L1: np.ndarray
+    F: np.ndarray
+    L2: np.ndarray
+    q: float
+    lam: float
+    eps: float
+
+    @property
+    def p(self) -> int:
+        """Entries of the attack estimate."""
+        return int(self.S.shape[0])
+
+
+def _instance(design: ObserverDesign) -> _Instance:
+    """The design's matrices and parameters; TypeError for an observer without a step."""
     S = design.sensing
     A = design.system.A
     L1 = -design.gain.L
@@ -417,350 +451,373 @@ def thesis_assumptions(
         )
     eps = float(design.step)
     L2 = design.L2 if design.L2 is not None else np.eye(S.shape[0])
-    p = S.shape[0]
-    items: list[AssumptionResult] = []
+    return _Instance(A=A, S=S, L1=L1, F=F, L2=L2, q=q, lam=lam, eps=eps)
 
-    # Assumption 1
+
+def _assumption_1(observability_holds: bool | None) -> AssumptionResult:
+    """Assumption 1 (observability), taken from the observability check's verdict."""
     if observability_holds is None:
-        items.append(
-            AssumptionResult("assumption_1", Verdict.INCONCLUSIVE, "observability not checked")
-        )
-    else:
-        items.append(
-            AssumptionResult(
-                "assumption_1",
-                Verdict.HOLDS if observability_holds else Verdict.FAILS,
-                "(A, C) is observable (see the observability check)"
-                if observability_holds
-                else "(A, C) is not observable (see the observability check)",
-            )
-        )
-
-    # Assumption 2 with Q = I (p x p)
-    items.append(
-        AssumptionResult(
-            "assumption_2",
-            Verdict.HOLDS,
-            "With Q = I (p x p; the thesis's n x n is a typo): Psi_q(0) = 0; |Psi_q(s)_i| = "
-            f"q max(|s_i| - lambda, 0) < |s_i| for s_i != 0 (q = {q:g}, lambda = {lam:g}), so "
-            "Psi_q(s)' Q Psi_q(s) < s' Q s for s != 0; and Psi_q is Lipschitz with constant q "
-            "because soft thresholding is 1-Lipschitz. The property (5.21) "
-            "Psi_q(s)' Q Psi_q(s) <= q^2 s' Q s also holds for this diagonal Q (it can fail for a "
-            "non-diagonal Q).",
-            {"Q": "identity", "lipschitz_psi": q},
-        )
+        return AssumptionResult("assumption_1", Verdict.INCONCLUSIVE, "observability not checked")
+    return AssumptionResult(
+        "assumption_1",
+        Verdict.HOLDS if observability_holds else Verdict.FAILS,
+        "(A, C) is observable (see the observability check)"
+        if observability_holds
+        else "(A, C) is not observable (see the observability check)",
     )
 
+
+def _assumption_2(inst: _Instance) -> AssumptionResult:
+    """Assumption 2 with Q = I (p x p): holds for the shrinkage Psi_q."""
+    q, lam = inst.q, inst.lam
+    return AssumptionResult(
+        "assumption_2",
+        Verdict.HOLDS,
+        "With Q = I (p x p; the thesis's n x n is a typo): Psi_q(0) = 0; |Psi_q(s)_i| = "
+        f"q max(|s_i| - lambda, 0) < |s_i| for s_i != 0 (q = {q:g}, lambda = {lam:g}), so "
+        "Psi_q(s)' Q Psi_q(s) < s' Q s for s != 0; and Psi_q is Lipschitz with constant q "
+        "because soft thresholding is 1-Lipschitz. The property (5.21) "
+        "Psi_q(s)' Q Psi_q(s) <= q^2 s' Q s also holds for this diagonal Q (it can fail for a "
+        "non-diagonal Q).",
+        {"Q": "identity", "lipschitz_psi": q},
+    )
+
+
+def _refusal(inst: _Instance, budget: Budget | None) -> str:
+    """Why the budget refuses the p x p work of Lemma 1 and Assumption 3 ('' when it allows it)."""
+    p = inst.p
     # the bounds below take 2-norms of p x p matrices (p = attack-estimate entries)
-    refusal = (budget or Budget()).refusal(
+    return (budget or Budget()).refusal(
         f"checking Lemma 1 and Assumption 3 with {p} attack-estimate entries",
         nbytes=8.0 * (4 * p * p + _sample_rows(p) * p * 6),
         flops=30.0 * p**3,
     )
-    if refusal:
-        for name in ("lemma_1", "assumption_3", "epsilon_bound"):
-            items.append(AssumptionResult(name, Verdict.INCONCLUSIVE, f"not attempted: {refusal}"))
-        return combine_verdicts([i.verdict for i in items]).value, items
 
-    # Lemma 1
+
+class _Lemma1(NamedTuple):
+    """Lemma 1's item and what Assumption 3 and the epsilon bound take from it."""
+
+    item: AssumptionResult
+    holds: bool  # Pi exists with a finite Lipschitz bound
+    lipschitz: float | None  # the proven Lipschitz constant of Pi
+    series: _PiSeries | None  # Pi; None when F is singular
+
+
+def _lemma_1(inst: _Instance, rng: np.random.Generator) -> _Lemma1:
+    """Lemma 1: Pi exists (F invertible) and has the claimed Lipschitz constant."""
+    F, L1 = inst.F, inst.L1
     s_F = np.linalg.svd(F, compute_uv=False)
     # singularity relative to the plant's scale (a deadbeat F can be zero to rounding)
     scale_F = max(
-        float(np.linalg.norm(A, 2)),
-        float(np.linalg.norm(L1 @ S, 2)),
+        float(np.linalg.norm(inst.A, 2)),
+        float(np.linalg.norm(L1 @ inst.S, 2)),
         float(s_F[0]),
         np.finfo(float).tiny,
     )
     singular = s_F[-1] <= 1e3 * F.shape[0] * EPS * scale_F
     rho_F = float(np.abs(np.linalg.eigvals(F)).max())
+    q = inst.q
     claimed = float(np.linalg.norm(L1, 2)) / abs(rho_F - q) if abs(rho_F - q) > 0 else np.inf
-    lemma_ok = False
-    ell_pi = None
-    F_inv = None
-    # the searches below only look for counterexamples; a budget keeps them short
-    # each search gets half of the budget, so that one cannot starve the other
-    lemma_meter = _Meter(SEARCH_FLOPS / 2, SEARCH_EVALUATIONS / 2)
-    rows = _sample_rows(p)
     if singular:
-        items.append(
-            AssumptionResult(
-                "lemma_1",
-                Verdict.FAILS,
-                f"F = A + L1 C is singular (smallest singular value {s_F[-1]:.2e}; every "
-                f"nilpotent F, as a deadbeat gain makes it, is singular), so "
-                f"Pi(a) = -sum F^(-l-1) L1 Psi_q^l(a) does not exist and the "
-                f"change of variable eta = e - Pi(a_hat) of the proof is unavailable.",
-                {"smallest_singular_value_F": float(s_F[-1]), "claimed_lipschitz": claimed},
-            )
+        return _Lemma1(_singular_F(float(s_F[-1]), claimed), False, None, None)
+    return _lemma_1_on_pi(inst, rng, claimed, rho_F)
+
+
+def _singular_F(smallest: float, claimed: float) -> AssumptionResult:
+    """Lemma 1 fails: F is singular, so Pi does not exist."""
+    return AssumptionResult(
+        "lemma_1",
+        Verdict.FAILS,
+        f"F = A + L1 C is singular (smallest singular value {smallest:.2e}; every "
+        f"nilpotent F, as a deadbeat gain makes it, is singular), so "
+        f"Pi(a) = -sum F^(-l-1) L1 Psi_q^l(a) does not exist and the "
+        f"change of variable eta = e - Pi(a_hat) of the proof is unavailable.",
+        {"smallest_singular_value_F": smallest, "claimed_lipschitz": claimed},
+    )
+
+
+def _lemma_1_on_pi(
+    inst: _Instance, rng: np.random.Generator, claimed: float, rho_F: float
+) -> _Lemma1:
+    """Lemma 1 for an invertible F: the corrected bound against a search for larger ratios."""
+    q, lam, L1, p = inst.q, inst.lam, inst.L1, inst.p
+    F_inv = np.linalg.inv(inst.F)
+    ninv = float(np.linalg.norm(F_inv, 2))
+    correct = (float(np.linalg.norm(L1, 2)) * ninv / (1 - q * ninv)) if q * ninv < 1 else np.inf
+    series = _PiSeries(F_inv, L1, q, lam)
+    # the searches only look for counterexamples; a budget keeps them short
+    # each search gets half of the budget, so that one cannot starve the other
+    meter = _Meter(SEARCH_FLOPS / 2, SEARCH_EVALUATIONS / 2)
+
+    def pi(a: np.ndarray) -> tuple[np.ndarray, str]:
+        return series(a, meter)
+
+    scale = max(lam, 1e-3)
+    ratio, a1, a2, search = _lipschitz_search(pi, p, rng, scale, meter, samples=_sample_rows(p))
+    details: dict[str, Any] = {
+        "claimed_lipschitz": claimed,
+        "correct_bound": correct,
+        "empirical_ratio": ratio,
+        "equation_5_9_residual": _equation_5_9_residual(inst, pi, rng, scale, search),
+        "norm_F_inv": ninv,
+        "spectral_radius_F": rho_F,
+        "search": search,
+    }
+    if ratio is not None and ratio > claimed * (1 + 1e-9):
+        # the claimed constant is wrong, but Pi exists and the corrected bound is valid
+        item = AssumptionResult(
+            "lemma_1",
+            Verdict.FAILS,
+            f"the claimed Lipschitz constant ||L1|| / |lambda_max(F) - q| = {claimed:.4g} is "
+            f"exceeded: |Pi(a1) - Pi(a2)| / |a1 - a2| = {ratio:.4g} for the pair in the "
+            f"counterexample",
+            {**details, "counterexample": {"a1": a1, "a2": a2}},
         )
-    else:
-        F_inv = np.linalg.inv(F)
-        ninv = float(np.linalg.norm(F_inv, 2))
-        correct = (float(np.linalg.norm(L1, 2)) * ninv / (1 - q * ninv)) if q * ninv < 1 else np.inf
-
-        series = _PiSeries(F_inv, L1, q, lam)
-
-        def pi(a: np.ndarray) -> tuple[np.ndarray, str]:
-            return series(a, lemma_meter)
-
-        scale = max(lam, 1e-3)
-        ratio, a1, a2, search = _lipschitz_search(pi, p, rng, scale, lemma_meter, samples=rows)
-        residual = None
-        try:
-            sample = rng.standard_normal((200, p)) * scale * 5
-            pi_a, _ = pi(sample)
-            pi_psi, _ = pi(_psi(sample, q, lam))
-            eq = F @ pi_a.T + L1 @ sample.T - pi_psi.T
-            ok = np.all(np.isfinite(eq), axis=0)
-            if np.any(ok):
-                residual = float(np.abs(eq[:, ok]).max() / max(1.0, np.abs(pi_a[ok]).max()))
-        except _SearchExhausted:
-            search.setdefault("stopped", "the search budget ran out before the (5.9) check")
-        details: dict[str, Any] = {
-            "claimed_lipschitz": claimed,
-            "correct_bound": correct,
-            "empirical_ratio": ratio,
-            "equation_5_9_residual": residual,
-            "norm_F_inv": ninv,
-            "spectral_radius_F": rho_F,
-            "search": search,
-        }
-        if ratio is not None and ratio > claimed * (1 + 1e-9):
-            # the claimed constant is wrong, but Pi exists and the corrected bound is valid
-            lemma_ok, ell_pi = (
-                bool(np.isfinite(correct)),
-                (correct if np.isfinite(correct) else None),
-            )
-            items.append(
-                AssumptionResult(
-                    "lemma_1",
-                    Verdict.FAILS,
-                    f"the claimed Lipschitz constant ||L1|| / |lambda_max(F) - q| = {claimed:.4g} is "
-                    f"exceeded: |Pi(a1) - Pi(a2)| / |a1 - a2| = {ratio:.4g} for the pair in the "
-                    f"counterexample",
-                    {**details, "counterexample": {"a1": a1, "a2": a2}},
-                )
-            )
-        elif correct <= claimed:
-            lemma_ok, ell_pi = True, correct
-            items.append(
-                AssumptionResult(
-                    "lemma_1",
-                    Verdict.HOLDS,
-                    f"Pi exists (the series is finite) and is Lipschitz with constant <= {correct:.4g} "
-                    f"(= ||L1|| ||F^-1|| / (1 - q ||F^-1||)) <= the claimed {claimed:.4g}",
-                    details,
-                )
-            )
-        else:
-            lemma_ok, ell_pi = True, correct if np.isfinite(correct) else None
-            found = (
-                f"sampling found ratios up to {ratio:.4g}"
-                if ratio is not None
-                else f"no ratio could be sampled: {search['reason']}"
-            )
-            items.append(
-                AssumptionResult(
-                    "lemma_1",
-                    Verdict.INCONCLUSIVE,
-                    f"Pi exists, but the claimed constant {claimed:.4g} is not proven: the series "
-                    f"gives {correct:.4g}; {found}",
-                    details,
-                )
-            )
-
-    # Assumption 3 with Q = I
-    rho_a = None
-    a3_meter = _Meter(SEARCH_FLOPS / 2, SEARCH_EVALUATIONS / 2)
-    if F_inv is None:
-        items.append(
-            AssumptionResult(
-                "assumption_3",
-                Verdict.INCONCLUSIVE,
-                "it is stated in terms of Pi from Lemma 1, which does not exist for this gain",
-            )
+        finite = bool(np.isfinite(correct))
+        return _Lemma1(item, finite, correct if finite else None, series)
+    if correct <= claimed:
+        item = AssumptionResult(
+            "lemma_1",
+            Verdict.HOLDS,
+            f"Pi exists (the series is finite) and is Lipschitz with constant <= {correct:.4g} "
+            f"(= ||L1|| ||F^-1|| / (1 - q ||F^-1||)) <= the claimed {claimed:.4g}",
+            details,
         )
-    else:
+        return _Lemma1(item, True, correct, series)
+    found = (
+        f"sampling found ratios up to {ratio:.4g}"
+        if ratio is not None
+        else f"no ratio could be sampled: {search['reason']}"
+    )
+    item = AssumptionResult(
+        "lemma_1",
+        Verdict.INCONCLUSIVE,
+        f"Pi exists, but the claimed constant {claimed:.4g} is not proven: the series "
+        f"gives {correct:.4g}; {found}",
+        details,
+    )
+    return _Lemma1(item, True, correct if np.isfinite(correct) else None, series)
 
-        def g(a: np.ndarray) -> tuple[np.ndarray, str]:
-            a = np.atleast_2d(a)
-            values, reason = series(a, a3_meter)
-            with np.errstate(over="ignore", invalid="ignore"):
-                v = a - eps * (S @ values.T + a.T).T @ L2.T
-                return _psi(v, q, lam), reason
 
-        def ratio_of(a: np.ndarray) -> tuple[np.ndarray, str]:
-            a = np.atleast_2d(a)
-            values, reason = g(a)
-            with np.errstate(over="ignore", invalid="ignore"):
-                r = np.sum(values**2, axis=1) / np.sum(a**2, axis=1)
-            return r, reason
+def _equation_5_9_residual(
+    inst: _Instance, pi: Any, rng: np.random.Generator, scale: float, search: dict[str, Any]
+) -> float | None:
+    """Relative residual of F Pi(a) + L1 a = Pi(Psi_q(a)) (5.9) on 200 random a.
 
-        a3 = _Search(a3_meter)
-        mags = max(lam, 1e-3) * np.exp(rng.uniform(np.log(0.05), np.log(100.0), (rows, 1)))
-        samples = rng.standard_normal((rows, p)) * mags
-        ratios = np.full(rows, np.nan)
-        stopped = ""
-        try:
-            batch = max(1, rows // 8)
-            for start in range(0, rows, batch):
-                sl = slice(start, start + batch)
-                ratios[sl], reason = ratio_of(samples[sl])
-                a3.note(reason, int(np.count_nonzero(~np.isfinite(ratios[sl]))))
-        except _SearchExhausted:
-            stopped = "the search budget ran out during sampling"
-        finite = np.flatnonzero(np.isfinite(ratios))
-        worst_value, worst_point = None, None
-        if finite.size:
-            worst = int(finite[np.argmax(ratios[finite])])
-            worst_value, worst_point = float(ratios[worst]), samples[worst]
+    None when no a could be evaluated; a search that runs out of budget is
+    noted in ``search``.
+    """
+    residual = None
+    try:
+        sample = rng.standard_normal((200, inst.p)) * scale * 5
+        pi_a, _ = pi(sample)
+        pi_psi, _ = pi(_psi(sample, inst.q, inst.lam))
+        eq = inst.F @ pi_a.T + inst.L1 @ sample.T - pi_psi.T
+        ok = np.all(np.isfinite(eq), axis=0)
+        if np.any(ok):
+            residual = float(np.abs(eq[:, ok]).max() / max(1.0, np.abs(pi_a[ok]).max()))
+    except _SearchExhausted:
+        search.setdefault("stopped", "the search budget ran out before the (5.9) check")
+    return residual
 
-            def one(a: np.ndarray) -> tuple[float, str]:
-                if not float(a @ a) > 0:
-                    return 0.0, ""
-                r, reason = ratio_of(a)
-                return float(r[0]), reason
 
-            # then local optimisation from the worst sample
-            if not stopped:
-                stopped = _local_search(a3.objective(one), samples[worst].copy(), 400)
-            if a3.best_point is not None and a3.best_value > worst_value:
-                worst_value, worst_point = a3.best_value, a3.best_point
-        details = {
-            "Q": "identity",
-            "largest_ratio_found": worst_value,
-            "search": f"{rows} samples over magnitudes 0.05-100 lambda, then Nelder-Mead",
-            "samples_evaluated": int(finite.size),
-        }
-        if stopped:
-            details["stopped"] = stopped
-        if a3.failed:
-            details["evaluations_failed"] = a3.failed
-            details["first_failure"] = a3.reason
-        bound = None
-        if ell_pi is not None:
-            bound = q * (
-                float(np.linalg.norm(np.eye(p) - eps * L2, 2))
-                + eps * float(np.linalg.norm(L2, 2)) * float(np.linalg.norm(S, 2)) * ell_pi
-            )
-            details["proven_bound_sqrt_rho"] = bound
-        if worst_value is not None and worst_value >= 1.0:
-            items.append(
-                AssumptionResult(
-                    "assumption_3",
-                    Verdict.FAILS,
-                    f"for the a_hat in the counterexample the left side is {worst_value:.4g} times "
-                    f"a_hat' Q a_hat, so no rho'' < 1 works",
-                    {**details, "counterexample": worst_point},
-                )
-            )
-        elif bound is not None and bound < 1.0:
-            rho_a = bound**2
-            items.append(
-                AssumptionResult(
-                    "assumption_3",
-                    Verdict.HOLDS,
-                    f"proven with rho'' = {rho_a:.4g} < 1 from |Psi_q(v)| <= q |v| and the Lipschitz "
-                    f"bound of Pi",
-                    details,
-                )
-            )
-        elif worst_value is None:
-            items.append(
-                AssumptionResult(
-                    "assumption_3",
-                    Verdict.INCONCLUSIVE,
-                    f"no proof, and no sample could be evaluated: "
-                    f"{a3.reason or stopped or 'the ratio is not finite'}",
-                    details,
-                )
-            )
-        else:
-            items.append(
-                AssumptionResult(
-                    "assumption_3",
-                    Verdict.INCONCLUSIVE,
-                    f"no counterexample found (largest ratio found {worst_value:.4g}) but no "
-                    f"proof either",
-                    details,
-                )
-            )
+def _assumption_3(
+    inst: _Instance, lemma: _Lemma1, rng: np.random.Generator
+) -> tuple[AssumptionResult, float | None]:
+    """Assumption 3 with Q = I, and rho'' when it is proven."""
+    if lemma.series is None:
+        return AssumptionResult(
+            "assumption_3",
+            Verdict.INCONCLUSIVE,
+            "it is stated in terms of Pi from Lemma 1, which does not exist for this gain",
+        ), None
+    search = _Search(_Meter(SEARCH_FLOPS / 2, SEARCH_EVALUATIONS / 2))
+    ratio_of = _attack_ratio(inst, lemma.series, search.meter)
+    rows = _sample_rows(inst.p)
+    worst_value, worst_point, evaluated, stopped = _largest_attack_ratio(
+        ratio_of, search, inst, rng, rows
+    )
+    details: dict[str, Any] = {
+        "Q": "identity",
+        "largest_ratio_found": worst_value,
+        "search": f"{rows} samples over magnitudes 0.05-100 lambda, then Nelder-Mead",
+        "samples_evaluated": evaluated,
+    }
+    if stopped:
+        details["stopped"] = stopped
+    if search.failed:
+        details["evaluations_failed"] = search.failed
+        details["first_failure"] = search.reason
+    bound = None
+    if lemma.lipschitz is not None:
+        bound = _attack_contraction_bound(inst, lemma.lipschitz)
+        details["proven_bound_sqrt_rho"] = bound
+    if worst_value is not None and worst_value >= 1.0:
+        return AssumptionResult(
+            "assumption_3",
+            Verdict.FAILS,
+            f"for the a_hat in the counterexample the left side is {worst_value:.4g} times "
+            f"a_hat' Q a_hat, so no rho'' < 1 works",
+            {**details, "counterexample": worst_point},
+        ), None
+    if bound is not None and bound < 1.0:
+        rho_a = bound**2
+        return AssumptionResult(
+            "assumption_3",
+            Verdict.HOLDS,
+            f"proven with rho'' = {rho_a:.4g} < 1 from |Psi_q(v)| <= q |v| and the Lipschitz "
+            f"bound of Pi",
+            details,
+        ), rho_a
+    if worst_value is None:
+        why = search.reason or stopped or "the ratio is not finite"
+        return AssumptionResult(
+            "assumption_3",
+            Verdict.INCONCLUSIVE,
+            f"no proof, and no sample could be evaluated: {why}",
+            details,
+        ), None
+    return AssumptionResult(
+        "assumption_3",
+        Verdict.INCONCLUSIVE,
+        f"no counterexample found (largest ratio found {worst_value:.4g}) but no proof either",
+        details,
+    ), None
 
-    # epsilon bound (5.20), with the eigenvalues the inequalities need
-    if not (lemma_ok and rho_a is not None and ell_pi is not None):
-        items.append(
-            AssumptionResult(
-                "epsilon_bound",
-                Verdict.INCONCLUSIVE,
-                "the bound (5.20) needs Lemma 1 and Assumption 3, which are not established here",
-            )
+
+def _attack_ratio(inst: _Instance, series: _PiSeries, meter: _Meter) -> Any:
+    """The map a -> (|g(a)|^2 / |a|^2 per row, reason), g(a) = Psi_q(a - eps L2 (S Pi(a) + a))."""
+    S, L2, eps, q, lam = inst.S, inst.L2, inst.eps, inst.q, inst.lam
+
+    def g(a: np.ndarray) -> tuple[np.ndarray, str]:
+        a = np.atleast_2d(a)
+        values, reason = series(a, meter)
+        with np.errstate(over="ignore", invalid="ignore"):
+            v = a - eps * (S @ values.T + a.T).T @ L2.T
+            return _psi(v, q, lam), reason
+
+    def ratio_of(a: np.ndarray) -> tuple[np.ndarray, str]:
+        a = np.atleast_2d(a)
+        values, reason = g(a)
+        with np.errstate(over="ignore", invalid="ignore"):
+            r = np.sum(values**2, axis=1) / np.sum(a**2, axis=1)
+        return r, reason
+
+    return ratio_of
+
+
+def _largest_attack_ratio(
+    ratio_of: Any, search: _Search, inst: _Instance, rng: np.random.Generator, rows: int
+) -> tuple[float | None, np.ndarray | None, int, str]:
+    """The largest ratio found, its a, the samples evaluated and why the search stopped early.
+
+    ``rows`` samples over magnitudes 0.05-100 lambda, then Nelder-Mead from
+    the worst one; the ratio and point are None when no sample is finite.
+    """
+    mags = max(inst.lam, 1e-3) * np.exp(rng.uniform(np.log(0.05), np.log(100.0), (rows, 1)))
+    samples = rng.standard_normal((rows, inst.p)) * mags
+    ratios = np.full(rows, np.nan)
+    stopped = ""
+    try:
+        batch = max(1, rows // 8)
+        for start in range(0, rows, batch):
+            sl = slice(start, start + batch)
+            ratios[sl], reason = ratio_of(samples[sl])
+            search.note(reason, int(np.count_nonzero(~np.isfinite(ratios[sl]))))
+    except _SearchExhausted:
+        stopped = "the search budget ran out during sampling"
+    finite = np.flatnonzero(np.isfinite(ratios))
+    if not finite.size:
+        return None, None, 0, stopped
+    worst = int(finite[np.argmax(ratios[finite])])
+    worst_value, worst_point = float(ratios[worst]), samples[worst]
+
+    def one(a: np.ndarray) -> tuple[float, str]:
+        if not float(a @ a) > 0:
+            return 0.0, ""
+        r, reason = ratio_of(a)
+        return float(r[0]), reason
+
+    # then local optimisation from the worst sample
+    if not stopped:
+        stopped = _local_search(search.objective(one), samples[worst].copy(), 400)
+    if search.best_point is not None and search.best_value > worst_value:
+        worst_value, worst_point = search.best_value, search.best_point
+    return worst_value, worst_point, int(finite.size), stopped
+
+
+def _attack_contraction_bound(inst: _Instance, ell_pi: float) -> float:
+    """sqrt(rho'') = q (||I - eps L2|| + eps ||L2|| ||S|| ell_Pi), from |Psi_q(v)| <= q |v|."""
+    L2, eps = inst.L2, inst.eps
+    return inst.q * (
+        float(np.linalg.norm(np.eye(inst.p) - eps * L2, 2))
+        + eps * float(np.linalg.norm(L2, 2)) * float(np.linalg.norm(inst.S, 2)) * ell_pi
+    )
+
+
+def _epsilon_bound(inst: _Instance, lemma: _Lemma1, rho_a: float | None) -> AssumptionResult:
+    """The epsilon bound (5.20), with the eigenvalues the inequalities need."""
+    if not (lemma.holds and rho_a is not None and lemma.lipschitz is not None):
+        return AssumptionResult(
+            "epsilon_bound",
+            Verdict.INCONCLUSIVE,
+            "the bound (5.20) needs Lemma 1 and Assumption 3, which are not established here",
         )
-    else:
-        lyap = lyapunov_certificate(F)
-        if lyap.verdict != Verdict.HOLDS or lyap.P is None:
-            items.append(
-                AssumptionResult(
-                    "epsilon_bound",
-                    Verdict.INCONCLUSIVE,
-                    "F is not certified stable, so no P exists",
-                )
-            )
-        else:
-            P = lyap.P
-            p_eigs = np.linalg.eigvalsh(P)
-            rho = 1.0 - 1.0 / float(p_eigs[-1])  # F'PF - P = -I  =>  F'PF <= rho P
-            l2, lc, lpsi = float(np.linalg.norm(L2, 2)), float(np.linalg.norm(S, 2)), q
-            normP = float(p_eigs[-1])
-            best_eps, best_par = 0.0, None
-            for g_eta in np.linspace(0.02, 0.98, 25) * (1 - rho) / max(rho, 1e-12):
-                gamma = 1.0 - (1.0 + g_eta) * rho
-                if gamma <= 0:
-                    continue
-                c_eta = 2 * (1 + 1 / g_eta) * normP * ell_pi**2 * lpsi**2 * l2**2 * lc**2
-                c_a = (
-                    2
-                    * (1 + 1 / g_eta)
-                    * normP
-                    * ell_pi**2
-                    * lpsi**2
-                    * l2**2
-                    * (1 + lc * ell_pi) ** 2
-                )
-                for g_a in np.linspace(0.02, 0.98, 25) * (1 / rho_a - 1):
-                    rho2 = (1 + g_a) * rho_a
-                    if rho2 >= 1:
-                        continue
-                    d_eta = (1 + 1 / g_a) * 1.0 * lpsi**2 * l2**2 * lc**2
-                    for mu in np.logspace(-4, 4, 33):
-                        e1 = gamma * float(p_eigs[0]) / (c_eta + mu * d_eta)
-                        e2 = mu * (1 - rho2) * 1.0 / c_a  # lambda_min(Q) = 1
-                        val = min(e1, e2, 1.0)
-                        if val > best_eps:
-                            best_eps, best_par = val, (float(g_eta), float(g_a), float(mu))
-            details = {
-                "epsilon_star": best_eps,
-                "step": eps,
-                "rho_P": rho,
-                "parameters_gamma_eta_gamma_a_mu": best_par,
-            }
-            if best_par is not None and eps <= best_eps:
-                items.append(
-                    AssumptionResult(
-                        "epsilon_bound",
-                        Verdict.HOLDS,
-                        f"step = {eps:g} <= epsilon* = {sig(best_eps, versus=eps)} (corrected constants)",
-                        details,
-                    )
-                )
-            else:
-                items.append(
-                    AssumptionResult(
-                        "epsilon_bound",
-                        Verdict.INCONCLUSIVE,
-                        f"step = {eps:g} exceeds epsilon* = {sig(best_eps, versus=eps)}; the bound is sufficient, "
-                        f"not necessary",
-                        details,
-                    )
-                )
+    lyap = lyapunov_certificate(inst.F)
+    if lyap.verdict != Verdict.HOLDS or lyap.P is None:
+        return AssumptionResult(
+            "epsilon_bound",
+            Verdict.INCONCLUSIVE,
+            "F is not certified stable, so no P exists",
+        )
+    p_eigs = np.linalg.eigvalsh(lyap.P)
+    rho = 1.0 - 1.0 / float(p_eigs[-1])  # F'PF - P = -I  =>  F'PF <= rho P
+    best_eps, best_par = _epsilon_star(inst, p_eigs, rho, lemma.lipschitz, rho_a)
+    eps = inst.eps
+    details = {
+        "epsilon_star": best_eps,
+        "step": eps,
+        "rho_P": rho,
+        "parameters_gamma_eta_gamma_a_mu": best_par,
+    }
+    star = sig(best_eps, versus=eps)
+    if best_par is not None and eps <= best_eps:
+        return AssumptionResult(
+            "epsilon_bound",
+            Verdict.HOLDS,
+            f"step = {eps:g} <= epsilon* = {star} (corrected constants)",
+            details,
+        )
+    return AssumptionResult(
+        "epsilon_bound",
+        Verdict.INCONCLUSIVE,
+        f"step = {eps:g} exceeds epsilon* = {star}; the bound is sufficient, not necessary",
+        details,
+    )
 
-    return combine_verdicts([i.verdict for i in items]).value, items
+
+def _epsilon_star(
+    inst: _Instance, p_eigs: np.ndarray, rho: float, ell_pi: float, rho_a: float
+) -> tuple[float, tuple[float, float, float] | None]:
+    """The largest epsilon* of (5.20) over a grid of (gamma_eta, gamma_a, mu), and those."""
+    l2, lc, lpsi = float(np.linalg.norm(inst.L2, 2)), float(np.linalg.norm(inst.S, 2)), inst.q
+    normP = float(p_eigs[-1])
+    best_eps, best_par = 0.0, None
+    for g_eta in np.linspace(0.02, 0.98, 25) * (1 - rho) / max(rho, 1e-12):
+        gamma = 1.0 - (1.0 + g_eta) * rho
+        if gamma <= 0:
+            continue
+        c_eta = 2 * (1 + 1 / g_eta) * normP * ell_pi**2 * lpsi**2 * l2**2 * lc**2
+        c_a = 2 * (1 + 1 / g_eta) * normP * ell_pi**2 * lpsi**2 * l2**2 * (1 + lc * ell_pi) ** 2
+        for g_a in np.linspace(0.02, 0.98, 25) * (1 / rho_a - 1):
+            rho2 = (1 + g_a) * rho_a
+            if rho2 >= 1:
+                continue
+            d_eta = (1 + 1 / g_a) * 1.0 * lpsi**2 * l2**2 * lc**2
+            for mu in np.logspace(-4, 4, 33):
+                e1 = gamma * float(p_eigs[0]) / (c_eta + mu * d_eta)
+                e2 = mu * (1 - rho2) * 1.0 / c_a  # lambda_min(Q) = 1
+                val = min(e1, e2, 1.0)
+                if val > best_eps:
+                    best_eps, best_par = val, (float(g_eta), float(g_a), float(mu))
+    return best_eps, best_par
