@@ -28,7 +28,6 @@ counterexample or the reason) or inconclusive.  Findings on the text:
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
@@ -39,7 +38,26 @@ from ..budget import Budget
 from ..observers import ObserverDesign
 from ..results import Verdict, combine_verdicts
 from ..tolerances import EPS
+from .counterexample_search import (  # noqa: F401  (the search limits stay importable here)
+    LOCAL_SEARCH_DIM,
+    SEARCH_EVALUATIONS,
+    SEARCH_FLOPS,
+    SEARCH_MEMORY,
+    _lipschitz_search,
+    _local_search,
+    _Meter,
+    _sample_rows,
+    _Search,
+    _SearchExhausted,
+)
 from .lyapunov import lyapunov_certificate
+from .pi_series import (  # noqa: F401  (the series stays importable here)
+    MAX_SERIES_TERMS,
+    SeriesError,
+    _PiSeries,
+    pi_map,
+    series_terms,
+)
 
 __all__ = ["AssumptionResult", "thesis_assumptions", "pi_map"]
 
@@ -62,318 +80,6 @@ class AssumptionResult:
 
 def _psi(s: np.ndarray, q: float, lam: float) -> np.ndarray:
     return q * np.sign(s) * np.maximum(np.abs(s) - lam, 0.0)
-
-
-MAX_SERIES_TERMS = 10_000  # terms of the series for Pi summed per evaluation
-SEARCH_FLOPS = 2e9  # floating-point operations of the counterexample searches of one design
-SEARCH_EVALUATIONS = 6_000  # objective evaluations of the local refinements of one design
-SEARCH_MEMORY = 64 * 2**20  # bytes of the cached powers F^(-l-1) L1 and of one batch of terms
-LOCAL_SEARCH_DIM = 200  # largest dimension refined by Nelder-Mead
-
-
-class SeriesError(ArithmeticError):
-    """The series for Pi cannot be summed: too many terms, or the powers of F^-1 overflow."""
-
-
-class _SearchExhausted(Exception):
-    """The searches of one design used their budget (internal)."""
-
-
-def series_terms(magnitude: float, q: float, lam: float) -> float:
-    """Number of nonzero terms of the series for Pi at an a with max |a_i| = magnitude.
-
-    Psi_q^l(a) has largest entry m_l with m_0 = magnitude and
-    m_(l+1) = q max(m_l - lambda, 0): for q = 1, ceil(magnitude / lambda) terms;
-    for q < 1, m_l + c = q^l (m_0 + c) with c = q lambda / (1 - q).  Infinite
-    for lambda = 0 (the terms only shrink geometrically).
-    """
-    if not magnitude > 0:
-        return 0.0
-    if not math.isfinite(magnitude) or lam <= 0:
-        return math.inf
-    if q >= 1.0:
-        return float(math.ceil(magnitude / lam)) + 1.0
-    if q <= 0.0:
-        return 1.0
-    c = q * lam / (1.0 - q)
-    return float(max(1, math.ceil(math.log1p(magnitude / c) / -math.log(q)))) + 1.0
-
-
-class _Meter:
-    """Counts the work of the searches and stops them at their budget."""
-
-    def __init__(self, flops: float = math.inf, evaluations: float = math.inf) -> None:
-        self.max_flops, self.max_evaluations = flops, evaluations
-        self.flops = 0.0
-        self.evaluations = 0
-
-    def charge(self, flops: float, evaluations: int = 0) -> None:
-        self.flops += flops
-        self.evaluations += evaluations
-        if self.flops > self.max_flops or self.evaluations > self.max_evaluations:
-            raise _SearchExhausted
-
-
-class _PiSeries:
-    """Pi(a) = -sum_l W_l Psi_q^l(a) with W_l = F^(-l-1) L1 computed once per design.
-
-    Psi_q^l(a) is formed in closed form (see ``series_terms``), so an
-    evaluation is one tensor contraction instead of a loop over terms.  The
-    powers are cached up to ``max_terms`` terms within ``memory`` bytes;
-    rows that need more terms, or powers that overflow, give NaN and the
-    reason.
-    """
-
-    def __init__(
-        self,
-        F_inv: np.ndarray,
-        L1: np.ndarray,
-        q: float,
-        lam: float,
-        *,
-        max_terms: int = MAX_SERIES_TERMS,
-        memory: int = SEARCH_MEMORY,
-    ) -> None:
-        self.F_inv, self.L1, self.q, self.lam = F_inv, L1, float(q), float(lam)
-        n, p = L1.shape
-        self.memory = memory
-        self.max_terms = int(max(1, min(max_terms, memory // (8 * n * p))))
-        self.limit_reason = (
-            ""
-            if self.max_terms == max_terms
-            else f" (the cached powers F^-l L1 are bounded to {memory // 2**20} MiB)"
-        )
-        self.W = np.empty((0, p, n))  # W[l] = (F^(-l-1) L1)^T
-        self.overflow_at: int | None = None  # first l with a non-finite W_l
-        self._next = F_inv.copy()
-
-    def _extend(self, terms: int) -> None:
-        have = self.W.shape[0]
-        if terms <= have or self.overflow_at is not None:
-            return
-        want = min(self.max_terms, max(terms, 2 * have, 16))
-        new = np.empty((want - have,) + self.W.shape[1:])
-        P = self._next
-        with np.errstate(over="ignore", invalid="ignore"):
-            for j in range(want - have):
-                new[j] = (P @ self.L1).T
-                P = P @ self.F_inv
-        finite = np.all(np.isfinite(new), axis=(1, 2))
-        if not finite.all():
-            self.overflow_at = have + int(np.argmin(finite))
-            new = new[: self.overflow_at - have]
-        self.W = np.concatenate([self.W, new])
-        self._next = P
-
-    def _terms(self, a: np.ndarray, K: int) -> np.ndarray:
-        """Psi_q^l(a) for l < K, shape (rows, K, p)."""
-        q, lam = self.q, self.lam
-        mag = np.abs(a)[:, None, :]
-        ell = np.arange(K, dtype=float)[None, :, None]
-        with np.errstate(over="ignore", invalid="ignore"):
-            if q >= 1.0:
-                m = mag - ell * lam
-            else:
-                c = q * lam / (1.0 - q)
-                m = q**ell * (mag + c) - c
-        # term l is nonzero only while the previous one exceeds the threshold
-        dead = np.zeros(m.shape, dtype=bool)
-        np.less_equal(m[:, :-1], lam, out=dead[:, 1:])
-        np.maximum(m, 0.0, out=m)
-        m[dead] = 0.0
-        m[:, 0] = mag[:, 0]
-        m *= np.sign(a)[:, None, :]
-        return m
-
-    def __call__(self, a: np.ndarray, meter: _Meter | None = None) -> tuple[np.ndarray, str]:
-        a = np.atleast_2d(np.asarray(a, dtype=float))
-        rows = a.shape[0]
-        n, p = self.L1.shape
-        out = np.full((rows, n), np.nan)
-        mags = np.abs(a).max(axis=1, initial=0.0)
-        needed = np.array([series_terms(float(m), self.q, self.lam) for m in mags])
-        reason = ""
-        ok = needed <= self.max_terms
-        if not ok.all():
-            worst = int(np.argmax(needed))
-            reason = (
-                f"the series for Pi needs {needed[worst]:.3g} terms at max |a_i| = "
-                f"{mags[worst]:.3g} (threshold {self.lam:g}, shrink {self.q:g}); at most "
-                f"{self.max_terms:,} are summed{self.limit_reason}"
-            )
-        if ok.any():
-            K = int(needed[ok].max())
-            self._extend(K)
-            if self.overflow_at is not None and self.overflow_at < K:
-                over = ok & (needed > self.overflow_at)
-                ok &= ~over
-                reason = reason or (
-                    f"the powers of F^-1 overflow after {self.overflow_at} terms of the series "
-                    f"for Pi (||F^-1|| = {np.linalg.norm(self.F_inv, 2):.3g}); "
-                    f"max |a_i| = {mags[over].max():.3g} needs {needed[over].max():.3g}"
-                )
-        idx = np.flatnonzero(ok)
-        if idx.size:
-            K = max(1, int(needed[idx].max()))
-            if meter is not None:  # the elementwise work of _terms dominates for small n
-                meter.charge(idx.size * K * p * (2.0 * n + 30.0))
-            chunk = max(1, int(self.memory // (8 * 4 * K * p)))
-            W = self.W[:K].reshape(K * p, n)
-            with np.errstate(over="ignore", invalid="ignore"):
-                for start in range(0, idx.size, chunk):
-                    sel = idx[start : start + chunk]
-                    out[sel] = -np.dot(self._terms(a[sel], K).reshape(sel.size, K * p), W)
-            bad = ~np.all(np.isfinite(out[idx]), axis=1)
-            if bad.any():
-                out[idx[bad]] = np.nan
-                reason = reason or "the series for Pi overflows"
-        return out, reason
-
-
-def pi_map(
-    a: np.ndarray,
-    F_inv: np.ndarray,
-    L1: np.ndarray,
-    q: float,
-    lam: float,
-    *,
-    max_terms: int = MAX_SERIES_TERMS,
-) -> np.ndarray:
-    """Pi(a) = -sum_l F^(-l-1) L1 Psi_q^l(a) for a batch of a (rows).
-
-    The sum is finite: Psi_q^l(a) is exactly zero after finitely many
-    iterations when lambda > 0 (``series_terms`` counts them).
-
-    Raises
-    ------
-    SeriesError
-        (an ``ArithmeticError``) when some row needs more than ``max_terms``
-        terms or the powers of F^-1 overflow; the message says which.
-    """
-    out, reason = _PiSeries(F_inv, L1, q, lam, max_terms=max_terms)(a)
-    if reason or not np.all(np.isfinite(out)):
-        raise SeriesError(reason or "the series for Pi did not give finite values")
-    return out
-
-
-class _Search:
-    """Evaluations of one counterexample search: failures counted, best point kept."""
-
-    def __init__(self, meter: _Meter) -> None:
-        self.meter = meter
-        self.failed = 0
-        self.reason = ""
-        self.best_value = -math.inf
-        self.best_point: np.ndarray | None = None
-
-    def note(self, reason: str, count: int = 1) -> None:
-        if reason:
-            self.failed += count
-            self.reason = self.reason or reason
-
-    def objective(self, ratio) -> Any:
-        """-ratio(x) for minimisation; a point whose ratio cannot be evaluated counts as 0."""
-
-        def neg(x: np.ndarray) -> float:
-            self.meter.charge(0.0, 1)
-            value, reason = ratio(x)
-            if reason or not math.isfinite(value):
-                self.note(reason or "a non-finite ratio")
-                return 0.0
-            if value > self.best_value:
-                self.best_value, self.best_point = value, np.array(x, copy=True)
-            return -value
-
-        return neg
-
-
-def _local_search(neg, x0: np.ndarray, maxiter: int) -> str:
-    """Nelder-Mead from x0; returns why it stopped early ('' when it finished)."""
-    from scipy.optimize import minimize
-
-    if x0.size > LOCAL_SEARCH_DIM:
-        return f"no local refinement in dimension {x0.size} (> {LOCAL_SEARCH_DIM})"
-    try:
-        minimize(
-            neg,
-            x0,
-            method="Nelder-Mead",
-            options={"maxiter": maxiter, "xatol": 1e-10, "fatol": 1e-12},
-        )
-    except _SearchExhausted:
-        return "the search budget ran out during the local refinement"
-    return ""
-
-
-def _sample_rows(p: int) -> int:
-    """Samples per batch: 4000, fewer when p is large (SEARCH_MEMORY bounds a batch)."""
-    return int(min(4000, max(100, SEARCH_MEMORY // (8 * 8 * max(p, 1)))))
-
-
-def _lipschitz_search(
-    pi, dim: int, rng: np.random.Generator, scale: float, meter: _Meter, samples: int = 4000
-) -> tuple[float | None, np.ndarray | None, np.ndarray | None, dict[str, Any]]:
-    """Largest ||Pi(a1) - Pi(a2)|| / ||a1 - a2|| found by sampling and local refinement.
-
-    ``pi(a)`` returns (values with NaN rows, reason).  The ratio is None when
-    no pair could be evaluated.
-    """
-    search = _Search(meter)
-    mags = scale * np.exp(rng.uniform(np.log(0.05), np.log(50.0), (samples, 1)))
-    a1 = rng.standard_normal((samples, dim)) * mags
-    d = (
-        rng.standard_normal((samples, dim))
-        * mags
-        * np.exp(rng.uniform(np.log(1e-3), 0, (samples, 1)))
-    )
-    a2 = a1 + d
-    ratios = np.full(samples, np.nan)
-    stopped = ""
-    batch = max(1, samples // 8)
-    try:
-        for start in range(0, samples, batch):
-            sl = slice(start, start + batch)
-            f1, r1 = pi(a1[sl])
-            f2, r2 = pi(a2[sl])
-            with np.errstate(over="ignore", invalid="ignore"):
-                ratios[sl] = np.linalg.norm(f1 - f2, axis=1) / np.linalg.norm(
-                    a1[sl] - a2[sl], axis=1
-                )
-            search.note(r1 or r2, int(np.count_nonzero(~np.isfinite(ratios[sl]))))
-    except _SearchExhausted:
-        stopped = "the search budget ran out during sampling"
-    finite = np.flatnonzero(np.isfinite(ratios))
-    info: dict[str, Any] = {
-        "pairs_evaluated": int(finite.size),
-        "pairs_not_evaluated": int(samples - finite.size),
-    }
-    if finite.size == 0:
-        info["reason"] = search.reason or stopped or "no pair could be evaluated"
-        return None, None, None, info
-    best = int(finite[np.argmax(ratios[finite])])
-
-    def ratio(x: np.ndarray) -> tuple[float, str]:
-        x1, x2 = x[:dim], x[dim:]
-        den = float(np.linalg.norm(x1 - x2))
-        if den == 0:
-            return 0.0, ""
-        values, reason = pi(np.vstack([x1, x2]))
-        if reason:
-            return math.nan, reason
-        with np.errstate(over="ignore", invalid="ignore"):
-            return float(np.linalg.norm(values[0] - values[1])) / den, ""
-
-    if not stopped:
-        stopped = _local_search(search.objective(ratio), np.concatenate([a1[best], a2[best]]), 2000)
-    if stopped:
-        info["stopped"] = stopped
-    if search.failed:
-        info["evaluations_failed"] = search.failed
-        info["first_failure"] = search.reason
-    if search.best_point is not None and search.best_value > ratios[best]:
-        x = search.best_point
-        return float(search.best_value), x[:dim], x[dim:], info
-    return float(ratios[best]), a1[best], a2[best], info
 
 
 def thesis_assumptions(
