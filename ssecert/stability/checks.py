@@ -7,6 +7,7 @@ JSON ids: ``observer_gain`` and ``observer_stability`` (required),
 from __future__ import annotations
 
 from collections.abc import Mapping
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -16,11 +17,19 @@ from ..budget import Budget, ResourceLimitError
 from ..context import OBSERVER, AnalysisContext, shared
 from ..design.gains import GainError
 from ..observers import ObserverDesign, build_observer
+from ..observers.lure import LureModel
 from ..results import Check, Verdict
 from ..system import System
 from ..tolerances import Tolerances
-from .lmi import ETA, circle_certificate, iss_certificate, iss_from_circle, lure_model_cost
-from .lyapunov import lyapunov_certificate
+from .lmi import (
+    ETA,
+    LMICertificate,
+    circle_certificate,
+    iss_certificate,
+    iss_from_circle,
+    lure_model_cost,
+)
+from .lyapunov import LyapunovCertificate, lyapunov_certificate
 from .thesis import thesis_assumptions
 
 __all__ = [
@@ -154,107 +163,131 @@ def _parts(design: ObserverDesign) -> tuple[np.ndarray, np.ndarray, np.ndarray] 
 def _deadbeat_check(
     design: ObserverDesign, fields: dict[str, Any], evidence: dict[str, Any], title: str
 ) -> Check:
-    gain = design.gain
-    details = gain.details
-    index = details.get("nilpotency_index")
-    upper = details.get("spectral_radius_upper_bound")
-    lower = details.get("spectral_radius_lower_bound")
-    exact_note = ""
-    if design.system.n <= EXACT_LIMIT:
-        evidence["exact"] = _exact_deadbeat(design.system)
-        if evidence["exact"].get("verified"):
-            exact_note = (
-                f" In exact arithmetic the rational gain L_exact (evidence) is nilpotent "
-                f"with index {evidence['exact']['exact_index']}."
-            )
-    fields["nilpotency_index"] = index
+    """The observer_gain check of a deadbeat gain, from the power test its build ran."""
+    details = design.gain.details
+    exact_note = _exact_deadbeat_note(design, evidence)
+    fields["nilpotency_index"] = details.get("nilpotency_index")
     fields["observability_index"] = details.get("observability_index")
-    fields["spectral_radius"] = upper
-    fields["spectral_radius_lower_bound"] = lower
-    method = "deadbeat (exact powers of the printed A - L C)"
-    # the power test ran when the gain was built, with the run's tolerances
-    tolerances = {
-        "deadbeat_rtol": details.get("deadbeat_rtol", Tolerances().deadbeat_rtol),
-        "clear_factor": details.get("clear_factor", Tolerances().certificate_clear),
-    }
-    if gain.verified:
-        index, upper = int(_known(index)), _known(upper)
-        rel = details["relative_power_norms"][index - 1]
-        exactly = details.get("exactly_nilpotent")
-        nu = details.get("observability_index")
-        if nu is None:
-            fastest = ""
-        elif details.get("minimal"):
-            fastest = ", the observability index"
-        else:
-            fastest = f" (the observability index is {nu}: a faster deadbeat gain exists)"
-        exact_index = details.get("exact_nilpotency_index")
-        if exactly and exact_index is not None and exact_index != index:
-            fields["nilpotency_index"] = exact_index
-            fields["nilpotency_index_to_rounding"] = index
-        summary = (
-            f"A - L C with the printed L is exactly nilpotent with index {exact_index}: the "
-            f"error vanishes in {exact_index} step{'s' if exact_index != 1 else ''} without "
-            f"attack"
-            + (
-                f" (to rounding already in {index}: ||(A - L C)^{index}|| <= {rel:.1e} "
-                f"||A||^{index})."
-                if exact_index != index
-                else "."
-            )
-            if exactly and exact_index is not None
-            else f"With the printed L, ||(A - L C)^{index}|| <= {rel:.1e} ||A||^{index} (powers "
-            f"computed exactly from the floats): the error vanishes to rounding in {index} "
-            f"step{'s' if index != 1 else ''} without attack{fastest}, and the spectral "
-            f"radius is certified <= {upper:.3g}."
-        ) + exact_note
-        return Check(
-            id="observer_gain",
-            title=title,
-            verdict=Verdict.HOLDS,
-            summary=summary,
-            value=fields["nilpotency_index"],
-            margin=1.0 - upper,
-            method=method,
-            fields=fields,
-            evidence=evidence,
-            tolerances=tolerances,
-        )
-    problem = details.get("problem") or "the power test did not conclude"
-    if lower is not None and lower > 1:
-        from .lyapunov import instability_witness
-
-        witness = instability_witness(design.error_matrix, parts=_parts(design))
-        if witness is not None and witness["verified"]:
-            return Check(
-                id="observer_gain",
-                title=title,
-                verdict=Verdict.FAILS,
-                summary=(
-                    f"The deadbeat construction's printed gain is not deadbeat: {problem}. "
-                    f"Rounding L to floats destroys the nilpotency of this plant's "
-                    f"deadbeat loop." + exact_note
-                ),
-                value=index,
-                margin=None,
-                method=method,
-                fields=fields,
-                evidence=evidence,
-                witness=witness,
-                tolerances=tolerances,
-            )
-    return Check(
+    fields["spectral_radius"] = details.get("spectral_radius_upper_bound")
+    fields["spectral_radius_lower_bound"] = details.get("spectral_radius_lower_bound")
+    check = partial(
+        Check,
         id="observer_gain",
         title=title,
+        method="deadbeat (exact powers of the printed A - L C)",
+        fields=fields,
+        evidence=evidence,
+        tolerances=_deadbeat_tolerances(details),
+    )
+    if design.gain.verified:
+        summary = _nilpotent_summary(details, fields) + exact_note
+        upper = _known(details.get("spectral_radius_upper_bound"))
+        return check(
+            verdict=Verdict.HOLDS,
+            summary=summary,
+            value=fields["nilpotency_index"],  # the exact index when it differs
+            margin=1.0 - upper,
+        )
+    problem = details.get("problem") or "the power test did not conclude"
+    witness = _deadbeat_instability(design)
+    if witness is not None:
+        return check(
+            verdict=Verdict.FAILS,
+            summary=(
+                f"The deadbeat construction's printed gain is not deadbeat: {problem}. "
+                f"Rounding L to floats destroys the nilpotency of this plant's "
+                f"deadbeat loop." + exact_note
+            ),
+            value=details.get("nilpotency_index"),
+            margin=None,
+            witness=witness,
+        )
+    return check(
         verdict=Verdict.INCONCLUSIVE,
         summary=f"The deadbeat gain could not be verified for the printed L: {problem}."
         + exact_note,
-        value=index,
-        method=method,
-        fields=fields,
-        evidence=evidence,
-        tolerances=tolerances,
+        value=details.get("nilpotency_index"),
     )
+
+
+def _exact_deadbeat_note(design: ObserverDesign, evidence: dict[str, Any]) -> str:
+    """The summary's sentence on the exact rational gain (small plants; '' otherwise).
+
+    The exact construction is recorded in ``evidence["exact"]``.
+    """
+    if design.system.n > EXACT_LIMIT:
+        return ""
+    evidence["exact"] = _exact_deadbeat(design.system)
+    if not evidence["exact"].get("verified"):
+        return ""
+    return (
+        f" In exact arithmetic the rational gain L_exact (evidence) is nilpotent "
+        f"with index {evidence['exact']['exact_index']}."
+    )
+
+
+def _deadbeat_tolerances(details: Mapping[str, Any]) -> dict[str, Any]:
+    """The tolerances of the power test, which ran when the gain was built with the run's."""
+    return {
+        "deadbeat_rtol": details.get("deadbeat_rtol", Tolerances().deadbeat_rtol),
+        "clear_factor": details.get("clear_factor", Tolerances().certificate_clear),
+    }
+
+
+def _nilpotent_summary(details: Mapping[str, Any], fields: dict[str, Any]) -> str:
+    """What a verified deadbeat gain's check says.
+
+    An exact nilpotency index that differs from the index to rounding
+    becomes ``fields["nilpotency_index"]``, beside
+    ``nilpotency_index_to_rounding``.
+    """
+    index = int(_known(details.get("nilpotency_index")))
+    upper = _known(details.get("spectral_radius_upper_bound"))
+    rel = details["relative_power_norms"][index - 1]
+    exactly = details.get("exactly_nilpotent")
+    exact_index = details.get("exact_nilpotency_index")
+    if exactly and exact_index is not None and exact_index != index:
+        fields["nilpotency_index"] = exact_index
+        fields["nilpotency_index_to_rounding"] = index
+    if exactly and exact_index is not None:
+        exact = (
+            f"A - L C with the printed L is exactly nilpotent with index {exact_index}: the "
+            f"error vanishes in {exact_index} step{'s' if exact_index != 1 else ''} without "
+            f"attack"
+        )
+        if exact_index == index:
+            return exact + "."
+        rounded = f"||(A - L C)^{index}|| <= {rel:.1e} ||A||^{index}"
+        return exact + f" (to rounding already in {index}: {rounded})."
+    return (
+        f"With the printed L, ||(A - L C)^{index}|| <= {rel:.1e} ||A||^{index} (powers "
+        f"computed exactly from the floats): the error vanishes to rounding in {index} "
+        f"step{'s' if index != 1 else ''} without attack{_fastest_note(details)}, and the "
+        f"spectral radius is certified <= {upper:.3g}."
+    )
+
+
+def _fastest_note(details: Mapping[str, Any]) -> str:
+    """Whether the deadbeat index is the observability index, the fastest possible."""
+    nu = details.get("observability_index")
+    if nu is None:
+        return ""
+    if details.get("minimal"):
+        return ", the observability index"
+    return f" (the observability index is {nu}: a faster deadbeat gain exists)"
+
+
+def _deadbeat_instability(design: ObserverDesign) -> dict[str, Any] | None:
+    """A verified instability witness of the printed A - L C, when its radius exceeds 1."""
+    lower = design.gain.details.get("spectral_radius_lower_bound")
+    if lower is None or not lower > 1:
+        return None
+    from .lyapunov import instability_witness
+
+    witness = instability_witness(design.error_matrix, parts=_parts(design))
+    if witness is not None and witness["verified"]:
+        return witness
+    return None
 
 
 def observer_stability_check(
@@ -276,58 +309,73 @@ def observer_stability_check(
         lyap = lyapunov_certificate(
             design.error_matrix, parts=_parts(design), clear=tol.certificate_clear
         )
-        verdict = Verdict(lyap.verdict)
-        if verdict is Verdict.HOLDS and lyap.method == "exact powers":
-            summary = f"The error dynamics are linear and stable: {lyap.reason}."
-        elif verdict is Verdict.HOLDS:
-            summary = (
-                f"The error dynamics are linear and certified stable by a Lyapunov matrix "
-                f"(contraction {sig(_known(lyap.contraction))} per step)."
-            )
-        elif verdict is Verdict.FAILS:
-            summary = f"The error dynamics are unstable: {lyap.reason}."
-        else:
-            summary = f"Stability could not be certified: {lyap.reason}."
-        return Check(
-            id="observer_stability",
-            title=title,
-            verdict=verdict,
-            summary=summary,
-            value=lyap.contraction,
-            margin=lyap.margin,
-            method="discrete Lyapunov" if lyap.method == "lyapunov" else "exact powers of A - L C",
-            fields={"decay_rate": None if lyap.contraction is None else 1 - lyap.contraction},
-            evidence=_lyapunov_evidence(lyap),
-            witness=lyap.witness if verdict is Verdict.FAILS else None,
-            tolerances=_decided_by(tol, error_bound=lyap.error_bound),
-        ), lyap
+        return _linear_stability_check(lyap, tol, title), lyap
     gap = design.observer_kind.lure_gap(design)
     if gap:
-        return Check(
-            id="observer_stability",
-            title=title,
-            verdict=Verdict.INCONCLUSIVE,
-            summary=gap,
-            method="circle criterion",
-            fields={},
-        ), None
-    refusal = (budget or Budget()).refusal(
-        f"the Lur'e model of the {design.kind} observer",
-        nbytes=lure_model_cost(design.system.n, design.sensing.shape[0], design.sensing.shape[0])[
-            0
-        ],
-    )
+        return _no_certificate(title, gap, "circle criterion"), None
+    refusal = _lure_model_refusal(design, budget)
     if refusal:
-        return Check(
-            id="observer_stability",
-            title=title,
-            verdict=Verdict.INCONCLUSIVE,
-            summary=f"No stability certificate: not attempted: {refusal}.",
-            method="circle criterion (LMI, Clarabel)",
-            fields={},
-        ), None
+        summary = f"No stability certificate: not attempted: {refusal}."
+        return _no_certificate(title, summary, "circle criterion (LMI, Clarabel)"), None
     model = design.observer_kind.lure_model(design)
     cert = circle_certificate(model, budget=budget, clear=tol.certificate_clear)
+    return _circle_stability_check(design, model, cert, tol, title), (model, cert)
+
+
+def _linear_stability_check(lyap: LyapunovCertificate, tol: Tolerances, title: str) -> Check:
+    """observer_stability of a linear observer, from its Lyapunov certificate."""
+    verdict = Verdict(lyap.verdict)
+    if verdict is Verdict.HOLDS and lyap.method == "exact powers":
+        summary = f"The error dynamics are linear and stable: {lyap.reason}."
+    elif verdict is Verdict.HOLDS:
+        summary = (
+            f"The error dynamics are linear and certified stable by a Lyapunov matrix "
+            f"(contraction {sig(_known(lyap.contraction))} per step)."
+        )
+    elif verdict is Verdict.FAILS:
+        summary = f"The error dynamics are unstable: {lyap.reason}."
+    else:
+        summary = f"Stability could not be certified: {lyap.reason}."
+    return Check(
+        id="observer_stability",
+        title=title,
+        verdict=verdict,
+        summary=summary,
+        value=lyap.contraction,
+        margin=lyap.margin,
+        method="discrete Lyapunov" if lyap.method == "lyapunov" else "exact powers of A - L C",
+        fields={"decay_rate": None if lyap.contraction is None else 1 - lyap.contraction},
+        evidence=_lyapunov_evidence(lyap),
+        witness=lyap.witness if verdict is Verdict.FAILS else None,
+        tolerances=_decided_by(tol, error_bound=lyap.error_bound),
+    )
+
+
+def _no_certificate(title: str, summary: str, method: str) -> Check:
+    """An inconclusive observer_stability: no certificate was attempted."""
+    return Check(
+        id="observer_stability",
+        title=title,
+        verdict=Verdict.INCONCLUSIVE,
+        summary=summary,
+        method=method,
+        fields={},
+    )
+
+
+def _lure_model_refusal(design: ObserverDesign, budget: Budget | None) -> str:
+    """Why the budget refuses the memory of the design's Lur'e model ('' when it fits)."""
+    m = design.sensing.shape[0]
+    return (budget or Budget()).refusal(
+        f"the Lur'e model of the {design.kind} observer",
+        nbytes=lure_model_cost(design.system.n, m, m)[0],
+    )
+
+
+def _circle_stability_check(
+    design: ObserverDesign, model: LureModel, cert: LMICertificate, tol: Tolerances, title: str
+) -> Check:
+    """observer_stability of a sparse observer, from its circle-criterion certificate."""
     verdict = Verdict(cert.verdict)
     fields = {
         "decay_rate": cert.decay,
@@ -335,23 +383,6 @@ def observer_stability_check(
         "shrink": design.shrink,
         "step": design.step,
         "threshold": design.threshold,
-    }
-    evidence = cert.evidence()
-    evidence["lmi"] = (
-        "[A B]' P [A B] - diag(P, 0) + [[0, q Cw' T], [q T Cw, -2 T]] <= -margin ||P|| I"
-        " with xi = (e, a_hat), A = [[F, -L], [0, 0]], B = [[0], [I]], "
-        "Cw = [-step L2 S, I - step L2]"
-    )
-    evidence["model"] = {
-        "A": model.A,
-        "B": model.B,
-        "Cw": model.Cw,
-        "E": model.E,
-        "Dw": model.Dw,
-        "Ce": model.Ce,
-        "q": model.q,
-        "n_e": model.n_e,
-        "threshold": model.threshold,
     }
     if verdict is Verdict.HOLDS:
         summary = (
@@ -374,10 +405,32 @@ def observer_stability_check(
         margin=cert.margin,
         method="circle criterion (LMI, Clarabel)",
         fields=fields,
-        evidence=evidence,
+        evidence=_circle_evidence(model, cert),
         witness=cert.details.get("witness") if verdict is Verdict.FAILS else None,
         tolerances=_decided_by(tol, error_bound=cert.error_bound, lmi_eta=ETA),
-    ), (model, cert)
+    )
+
+
+def _circle_evidence(model: LureModel, cert: LMICertificate) -> dict[str, Any]:
+    """The certificate's evidence with the LMI it solves and the Lur'e model's matrices."""
+    evidence = cert.evidence()
+    evidence["lmi"] = (
+        "[A B]' P [A B] - diag(P, 0) + [[0, q Cw' T], [q T Cw, -2 T]] <= -margin ||P|| I"
+        " with xi = (e, a_hat), A = [[F, -L], [0, 0]], B = [[0], [I]], "
+        "Cw = [-step L2 S, I - step L2]"
+    )
+    evidence["model"] = {
+        "A": model.A,
+        "B": model.B,
+        "Cw": model.Cw,
+        "E": model.E,
+        "Dw": model.Dw,
+        "Ce": model.Ce,
+        "q": model.q,
+        "n_e": model.n_e,
+        "threshold": model.threshold,
+    }
+    return evidence
 
 
 def iss_gain_check(
