@@ -36,7 +36,7 @@ nonnegative.  Otherwise the verdict is inconclusive.
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -279,11 +279,41 @@ def verify_certificate(
 def _solve(
     model: LureModel, kind: str, structure: str, alpha: float, options: dict[str, Any]
 ) -> tuple[np.ndarray | None, np.ndarray | None, float | None, dict[str, Any]]:
+    """One LMI solved with cvxpy and Clarabel: (P, t, g, info), the values None on failure.
+
+    g is None for the circle LMI; ``info`` records the solver, the structure,
+    the LMI's size, the status and the time.
+    """
     import cvxpy as cp
 
-    N, m, r, n = model.N, model.m, model.r, model.n_e
+    N, m = model.N, model.m
     start = time.perf_counter()
     t = cp.Variable(m) if m else None
+    P, cons = _lyapunov_variable(N, model.n_e, structure)
+    T = None
+    if t is not None:  # m > 0
+        cons.append(t >= 1e-6)
+        T = cp.diag(t)
+    g = None
+    if kind == "circle":
+        M, size = _circle_lmi(model, P, T, alpha)
+    else:
+        g = cp.Variable(nonneg=True)
+        M, size = _iss_lmi(model, P, T, alpha, g)
+    M = 0.5 * (M + M.T)
+    cons.append(M << -ETA * np.eye(size))
+    objective = cp.Minimize(g) if g is not None else cp.Minimize(0)
+    problem = cp.Problem(objective, cons)
+    info: dict[str, Any] = {"solver": "CLARABEL", "structure": structure, "lmi_size": size}
+    if not _run_clarabel(problem, options, info, start):
+        return None, None, None, info
+    return _solution(problem, P, t, g, info)
+
+
+def _lyapunov_variable(N: int, n: int, structure: str) -> tuple[Any, list[Any]]:
+    """P as cvxpy variables in the given structure, and its constraints (P >= I)."""
+    import cvxpy as cp
+
     if structure in ("block-diagonal", "cross") and n < N:
         P1 = cp.Variable((n, n), symmetric=True)
         d = cp.Variable(N - n)
@@ -296,49 +326,60 @@ def _solve(
     else:
         P = cp.Variable((N, N), symmetric=True)
         cons = [P >> np.eye(N)]
-    if t is not None:  # m > 0
-        cons.append(t >= 1e-6)
-        T = cp.diag(t)
-    g = None
-    if kind == "circle":
-        G = np.hstack([model.A, model.B])
-        M = G.T @ P @ G
-        Z = np.zeros
-        M = M - (1.0 - alpha) * cp.bmat([[P, Z((N, m))], [Z((m, N)), Z((m, m))]])
-        if m:
-            qCT = model.q * model.Cw.T @ T
-            M = M + cp.bmat([[Z((N, N)), qCT], [qCT.T, -2 * T]])
-        size = N + m
-    else:
-        g = cp.Variable(nonneg=True)
-        H = np.hstack([model.A, model.B, model.E])
-        Z = np.zeros
-        M = H.T @ P @ H
-        top = model.Ce.T @ model.Ce - (1.0 - alpha) * P
-        M = M + cp.bmat(
+    return P, cons
+
+
+def _circle_lmi(model: LureModel, P: Any, T: Any, alpha: float) -> tuple[Any, int]:
+    """The circle-criterion LMI as a cvxpy expression (``circle_matrix``), and its size."""
+    import cvxpy as cp
+
+    N, m = model.N, model.m
+    G = np.hstack([model.A, model.B])
+    M = G.T @ P @ G
+    Z = np.zeros
+    M = M - (1.0 - alpha) * cp.bmat([[P, Z((N, m))], [Z((m, N)), Z((m, m))]])
+    if m:
+        qCT = model.q * model.Cw.T @ T
+        M = M + cp.bmat([[Z((N, N)), qCT], [qCT.T, -2 * T]])
+    return M, N + m
+
+
+def _iss_lmi(model: LureModel, P: Any, T: Any, alpha: float, g: Any) -> tuple[Any, int]:
+    """The dissipation LMI as a cvxpy expression (``iss_matrix`` with g), and its size."""
+    import cvxpy as cp
+
+    N, m, r = model.N, model.m, model.r
+    H = np.hstack([model.A, model.B, model.E])
+    Z = np.zeros
+    M = H.T @ P @ H
+    top = model.Ce.T @ model.Ce - (1.0 - alpha) * P
+    M = M + cp.bmat(
+        [
+            [top, Z((N, m + r))],
             [
-                [top, Z((N, m + r))],
-                [
-                    Z((m + r, N)),
-                    cp.bmat([[Z((m, m)), Z((m, r))], [Z((r, m)), -g * np.eye(r)]])
-                    if m
-                    else -g * np.eye(r),
-                ],
-            ]
+                Z((m + r, N)),
+                cp.bmat([[Z((m, m)), Z((m, r))], [Z((r, m)), -g * np.eye(r)]])
+                if m
+                else -g * np.eye(r),
+            ],
+        ]
+    )
+    if m:
+        qTC = model.q * T @ model.Cw
+        qTD = model.q * T @ model.Dw
+        M = M + cp.bmat(
+            [[Z((N, N)), qTC.T, Z((N, r))], [qTC, -2 * T, qTD], [Z((r, N)), qTD.T, Z((r, r))]]
         )
-        if m:
-            qTC = model.q * T @ model.Cw
-            qTD = model.q * T @ model.Dw
-            M = M + cp.bmat(
-                [[Z((N, N)), qTC.T, Z((N, r))], [qTC, -2 * T, qTD], [Z((r, N)), qTD.T, Z((r, r))]]
-            )
-        size = N + m + r
-    M = 0.5 * (M + M.T)
-    cons.append(M << -ETA * np.eye(size))
-    objective = cp.Minimize(g) if g is not None else cp.Minimize(0)
-    problem = cp.Problem(objective, cons)
-    info: dict[str, Any] = {"solver": "CLARABEL", "structure": structure, "lmi_size": size}
+    return M, N + m + r
+
+
+def _run_clarabel(
+    problem: Any, options: dict[str, Any], info: dict[str, Any], start: float
+) -> bool:
+    """Solve with Clarabel, recording the status and time in ``info``; True when optimal."""
     import warnings
+
+    import cvxpy as cp
 
     try:
         with warnings.catch_warnings():
@@ -349,10 +390,15 @@ def _solve(
             status=f"solver error: {type(exc).__name__}: {exc}".rstrip(": "),
             seconds=time.perf_counter() - start,
         )
-        return None, None, None, info
+        return False
     info.update(status=str(problem.status), seconds=time.perf_counter() - start)
-    if problem.status not in ("optimal", "optimal_inaccurate"):
-        return None, None, None, info
+    return problem.status in ("optimal", "optimal_inaccurate")
+
+
+def _solution(
+    problem: Any, P: Any, t: Any, g: Any, info: dict[str, Any]
+) -> tuple[np.ndarray | None, np.ndarray | None, float | None, dict[str, Any]]:
+    """The solved P (symmetrised), t and g, or None when the solver returned no finite values."""
     values = [P.value, t.value if t is not None else np.zeros(0), g.value if g is not None else 0.0]
     if any(v is None for v in values) or not all(
         np.all(np.isfinite(np.asarray(v, dtype=float))) for v in values
@@ -666,47 +712,10 @@ def iss_from_circle(
         )
     P, t = circle.P, circle.multipliers if circle.multipliers is not None else np.zeros(0)
     alpha = 0.5 * float(circle.decay or 0.0)
-    N, m = model.N, model.m
+    k = model.N + model.m
     perf = iss_matrix(model, np.zeros_like(P), np.zeros_like(t), alpha, 0.0)  # |e|^2 only
     base = iss_matrix(model, P, t, alpha, 0.0) - perf
-    k = N + m
-
-    def gain(log_kappa: float) -> float:
-        with np.errstate(over="ignore", invalid="ignore"):
-            kappa = float(np.exp(log_kappa))
-            M = kappa * base + perf
-        if not np.all(np.isfinite(M)):
-            return np.inf
-        Z, X, Y = M[:k, :k], M[:k, k:], M[k:, k:]
-        try:
-            zmax = float(np.linalg.eigvalsh(Z)[-1])
-            if zmax >= 0:
-                return np.inf
-            S = Y - X.T @ np.linalg.solve(Z, X)
-            value = float(np.linalg.eigvalsh(0.5 * (S + S.T))[-1])
-        except np.linalg.LinAlgError:  # singular Z: this kappa gives no gain
-            return np.inf
-        return value if np.isfinite(value) else np.inf
-
-    # kappa must make Z negative definite: Z = kappa Zc + diag(Ce'Ce, 0)
-    zc = float(np.linalg.eigvalsh(base[:k, :k])[-1])
-    ce = float(np.linalg.norm(model.Ce, 2)) ** 2
-    lo = np.log(1.01 * ce / max(-zc, np.finfo(float).tiny))
-    grid = lo + np.linspace(0.0, np.log(1e8), 60)
-    values = np.array([gain(x) for x in grid])
-    best = int(np.argmin(values))
-    a, b = grid[max(best - 1, 0)], grid[min(best + 1, grid.size - 1)]
-    from scipy.optimize import minimize_scalar
-
-    if np.isfinite(values[best]):
-        refined = minimize_scalar(gain, bounds=(a, b), method="bounded")
-        x, g = (
-            (float(refined.x), float(refined.fun))
-            if refined.fun <= values[best]
-            else (float(grid[best]), float(values[best]))
-        )
-    else:
-        x, g = float(grid[best]), float(values[best])
+    x, g = _smallest_gain(_schur_gain(base, perf, k), _scale_grid(model, base, k))
     if not np.isfinite(g):
         return LMICertificate(
             Verdict.INCONCLUSIVE,
@@ -717,16 +726,9 @@ def iss_from_circle(
             ),
         )
     kappa = float(np.exp(x))
-    g_cert = max(g, 0.0) * (1 + 1e-6) + 1e-9
-    ok, margin, bound, problem = verify_certificate(
-        model, kappa * P, kappa * t, kind="iss", alpha=alpha, g=g_cert, clear=clear
+    ok, margin, bound, problem, g_cert = _verified_gain(
+        model, kappa * P, kappa * t, alpha, g, clear
     )
-    if not ok:
-        # the Schur complement is tight by construction: keep a relative margin
-        g_cert = max(g, 0.0) * 1.01 + 1e-6
-        ok, margin, bound, problem = verify_certificate(
-            model, kappa * P, kappa * t, kind="iss", alpha=alpha, g=g_cert, clear=clear
-        )
     if not ok:
         return LMICertificate(Verdict.INCONCLUSIVE, "iss", reason=f"gain not verified: {problem}")
     return LMICertificate(
@@ -745,3 +747,74 @@ def iss_from_circle(
             "gamma_squared": g_cert,
         },
     )
+
+
+def _schur_gain(base: np.ndarray, perf: np.ndarray, k: int) -> Callable[[float], float]:
+    """g(log kappa): the largest eigenvalue of the Schur complement of kappa base + perf.
+
+    Infinite where Z (its leading k x k block) is not negative definite.
+    """
+
+    def gain(log_kappa: float) -> float:
+        with np.errstate(over="ignore", invalid="ignore"):
+            kappa = float(np.exp(log_kappa))
+            M = kappa * base + perf
+        if not np.all(np.isfinite(M)):
+            return np.inf
+        Z, X, Y = M[:k, :k], M[:k, k:], M[k:, k:]
+        try:
+            zmax = float(np.linalg.eigvalsh(Z)[-1])
+            if zmax >= 0:
+                return np.inf
+            S = Y - X.T @ np.linalg.solve(Z, X)
+            value = float(np.linalg.eigvalsh(0.5 * (S + S.T))[-1])
+        except np.linalg.LinAlgError:  # singular Z: this kappa gives no gain
+            return np.inf
+        return value if np.isfinite(value) else np.inf
+
+    return gain
+
+
+def _scale_grid(model: LureModel, base: np.ndarray, k: int) -> np.ndarray:
+    """60 values of log kappa over 8 decades, from where Z can first be negative definite."""
+    # kappa must make Z negative definite: Z = kappa Zc + diag(Ce'Ce, 0)
+    zc = float(np.linalg.eigvalsh(base[:k, :k])[-1])
+    ce = float(np.linalg.norm(model.Ce, 2)) ** 2
+    lo = np.log(1.01 * ce / max(-zc, np.finfo(float).tiny))
+    return lo + np.linspace(0.0, np.log(1e8), 60)
+
+
+def _smallest_gain(gain: Callable[[float], float], grid: np.ndarray) -> tuple[float, float]:
+    """(log kappa, g) of the smallest gain: the grid's best, refined between its neighbours."""
+    from scipy.optimize import minimize_scalar
+
+    values = np.array([gain(x) for x in grid])
+    best = int(np.argmin(values))
+    a, b = grid[max(best - 1, 0)], grid[min(best + 1, grid.size - 1)]
+    if not np.isfinite(values[best]):
+        return float(grid[best]), float(values[best])
+    refined = minimize_scalar(gain, bounds=(a, b), method="bounded")
+    if refined.fun <= values[best]:
+        return float(refined.x), float(refined.fun)
+    return float(grid[best]), float(values[best])
+
+
+def _verified_gain(
+    model: LureModel, P: np.ndarray, t: np.ndarray, alpha: float, g: float, clear: float
+) -> tuple[bool, float, float, str, float]:
+    """``verify_certificate``'s answer for gamma^2 slightly above g, and that gamma^2.
+
+    The Schur complement is tight by construction, so a relative margin of
+    1e-6 is tried first, then one of 1 %.
+    """
+    g_cert = max(g, 0.0) * (1 + 1e-6) + 1e-9
+    ok, margin, bound, problem = verify_certificate(
+        model, P, t, kind="iss", alpha=alpha, g=g_cert, clear=clear
+    )
+    if not ok:
+        # the Schur complement is tight by construction: keep a relative margin
+        g_cert = max(g, 0.0) * 1.01 + 1e-6
+        ok, margin, bound, problem = verify_certificate(
+            model, P, t, kind="iss", alpha=alpha, g=g_cert, clear=clear
+        )
+    return ok, margin, bound, problem, g_cert
