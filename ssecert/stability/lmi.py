@@ -30,12 +30,13 @@ small enough, with a full P.  Nothing is taken from the solver's status:
 the LMI is recomputed in numpy from the returned P and T, symmetrised, and
 its largest eigenvalue must beat a floating-point error bound by a factor
 ``clear``; P must pass a Cholesky test with a margin and T must be
-nonnegative.  Otherwise the verdict is inconclusive.
+nonnegative.  Otherwise the verdict is inconclusive.  The cvxpy problems
+and their solve live in ``lmi_solver``, the recomputation and the
+re-verification in ``lmi_verification``; this module decides.
 """
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -45,7 +46,8 @@ import numpy as np
 from ..budget import Budget
 from ..observers.lure import LureModel
 from ..results import Verdict
-from ..tolerances import EPS
+from .lmi_solver import ETA, _solve, lmi_cost  # noqa: F401  (ETA stays importable here)
+from .lmi_verification import circle_matrix, iss_matrix, verify_certificate
 
 __all__ = [
     "LureModel",
@@ -60,7 +62,6 @@ __all__ = [
     "lure_model_cost",
 ]
 
-ETA = 1e-4  # margin imposed in the LMIs, relative to P >= I
 FULL_LIMIT = 80  # largest LMI dimension tried with a full P
 # Lyapunov structures, cheapest first: P = diag(P1, D) with D diagonal; the
 # same with a full cross block P12; a full P.
@@ -73,29 +74,6 @@ def lure_model_cost(n: int, m: int, r: int) -> tuple[float, float]:
     N = n + m
     nbytes = 8.0 * (3 * N * N + 2 * N * m + 2 * N * r + m * r + n * N + 2 * m * m)
     return nbytes, 30.0 * N**3
-
-
-def lmi_cost(model: LureModel, kind: str, structure: str) -> tuple[float, float]:
-    """Estimated peak bytes and operations of solving one LMI with cvxpy and Clarabel.
-
-    Fitted to measurements (2 cores, Clarabel 0.x) of circle and ISS LMIs of
-    24 to 312 rows: with T = size (size + 1) / 2 entries in the semidefinite
-    cone, the block-diagonal structure keeps the problem sparse (memory and
-    time grow like T * size), while a cross block or a full P makes the
-    factorised system dense in T plus the number of variables v (memory like
-    (T + v)^2, time like (T + v)^3).  The estimates err on the high side.
-    """
-    N, m, r, n = model.N, model.m, model.r, model.n_e
-    size = N + m + (r if kind == "iss" else 0)
-    T = size * (size + 1) / 2
-    if structure == "block-diagonal":
-        factor = 2.0 if kind == "iss" else 1.0
-        return 64 * 2**20 + factor * 450.0 * T * size, factor * 3e5 * T * size
-    if structure == "cross":
-        v = n * (n + 1) / 2 + n * (N - n) + (N - n) + m
-    else:
-        v = N * (N + 1) / 2 + m
-    return 64 * 2**20 + 48.0 * (T + v) ** 2, 10.0 * (T + v) ** 3
 
 
 @dataclass(frozen=True)
@@ -155,259 +133,6 @@ class LMICertificate:
             "structure": self.structure,
             **self.details,
         }
-
-
-# ---------------------------------------------------------------------------
-# recomputation outside the solver
-
-
-def circle_matrix(model: LureModel, P: np.ndarray, t: np.ndarray, alpha: float = 0.0) -> np.ndarray:
-    """The circle-criterion LMI in (xi, phi), recomputed in numpy and symmetrised.
-
-    [A B]' P [A B] - diag((1 - alpha) P, 0) + sym([[0, q Cw' T], [q T Cw, -2 T]])
-    """
-    G = np.hstack([model.A, model.B])
-    N = model.N
-    M = G.T @ P @ G
-    M[:N, :N] -= (1.0 - alpha) * P
-    T = np.diag(t)
-    M[:N, N:] += model.q * model.Cw.T @ T
-    M[N:, :N] += model.q * T @ model.Cw
-    M[N:, N:] -= 2.0 * T
-    return 0.5 * (M + M.T)
-
-
-def iss_matrix(
-    model: LureModel, P: np.ndarray, t: np.ndarray, alpha: float, g: float
-) -> np.ndarray:
-    """The dissipation LMI in (xi, phi, a), recomputed in numpy and symmetrised.
-
-    V(xi+) - (1 - alpha) V(xi) + |e|^2 - g |a|^2 plus the sector terms with
-    w = Cw xi + Dw a.
-    """
-    H = np.hstack([model.A, model.B, model.E])
-    N, m, r = model.N, model.m, model.r
-    M = H.T @ P @ H
-    M[:N, :N] += model.Ce.T @ model.Ce - (1.0 - alpha) * P
-    M[N + m :, N + m :] -= g * np.eye(r)
-    if m:
-        T = np.diag(t)
-        qTC = model.q * T @ model.Cw
-        qTD = model.q * T @ model.Dw
-        M[N : N + m, :N] += qTC
-        M[:N, N : N + m] += qTC.T
-        M[N : N + m, N + m :] += qTD
-        M[N + m :, N : N + m] += qTD.T
-        M[N : N + m, N : N + m] -= 2.0 * T
-    return 0.5 * (M + M.T)
-
-
-def _error_bound(model: LureModel, P: np.ndarray, t: np.ndarray, size: int) -> float:
-    """Rounding error bound on the eigenvalues of the recomputed LMI, relative to ||P||."""
-    normP = max(float(np.linalg.norm(P, 2)), np.finfo(float).tiny)
-    G = np.hstack([model.A, model.B, model.E])
-    normG = float(np.linalg.norm(G, 2))
-    tmax = float(np.abs(t).max(initial=0.0))
-    normC = float(np.linalg.norm(np.hstack([model.Cw, model.Dw]), 2)) if model.m else 0.0
-    normCe = float(np.linalg.norm(model.Ce, 2))
-    raw = (normG**2 + 2.0) * normP + (2 * model.q * normC + 2) * tmax + normCe**2
-    return 10.0 * size * EPS * raw / normP
-
-
-def verify_certificate(
-    model: LureModel,
-    P: np.ndarray,
-    t: np.ndarray,
-    *,
-    kind: str = "circle",
-    alpha: float = 0.0,
-    g: float = 0.0,
-    clear: float = 100.0,
-) -> tuple[bool, float, float, str]:
-    """Re-verify a certificate without the solver.
-
-    Returns
-    -------
-    ok : bool
-    margin : float
-        ``-lambda_max(LMI) / ||P||``.
-    bound : float
-        Error bound on that quantity.
-    problem : str
-        Empty when ok.
-    """
-    P = 0.5 * (np.asarray(P, dtype=float) + np.asarray(P, dtype=float).T)
-    t = np.asarray(t, dtype=float)
-    if not (np.all(np.isfinite(P)) and np.all(np.isfinite(t))):
-        return False, float("nan"), 0.0, "the certificate has non-finite entries"
-    if model.m and t.min(initial=0.0) < 0:
-        return False, float("nan"), 0.0, f"a multiplier is negative ({t.min():.2e})"
-    M = circle_matrix(model, P, t, alpha) if kind == "circle" else iss_matrix(model, P, t, alpha, g)
-    normP = max(float(np.linalg.norm(P, 2)), np.finfo(float).tiny)
-    lam = float(np.linalg.eigvalsh(M)[-1])
-    margin = -lam / normP
-    bound = _error_bound(model, P, t, M.shape[0])
-    p_eigs = np.linalg.eigvalsh(P)
-    if p_eigs[0] <= clear * 10 * P.shape[0] * EPS * normP:
-        return (
-            False,
-            margin,
-            bound,
-            f"P is not clearly positive definite (lambda_min {p_eigs[0]:.2e})",
-        )
-    try:
-        np.linalg.cholesky(P - 0.5 * p_eigs[0] * np.eye(P.shape[0]))
-    except np.linalg.LinAlgError:
-        return False, margin, bound, "P fails the Cholesky test"
-    if margin <= clear * bound:
-        return (
-            False,
-            margin,
-            bound,
-            (
-                f"the recomputed LMI has largest eigenvalue {-margin:.2e} ||P||, not below "
-                f"-{clear:g} x the error bound {bound:.2e}"
-            ),
-        )
-    return True, margin, bound, ""
-
-
-# ---------------------------------------------------------------------------
-# solving
-
-
-def _solve(
-    model: LureModel, kind: str, structure: str, alpha: float, options: dict[str, Any]
-) -> tuple[np.ndarray | None, np.ndarray | None, float | None, dict[str, Any]]:
-    """One LMI solved with cvxpy and Clarabel: (P, t, g, info), the values None on failure.
-
-    g is None for the circle LMI; ``info`` records the solver, the structure,
-    the LMI's size, the status and the time.
-    """
-    import cvxpy as cp
-
-    N, m = model.N, model.m
-    start = time.perf_counter()
-    t = cp.Variable(m) if m else None
-    P, cons = _lyapunov_variable(N, model.n_e, structure)
-    T = None
-    if t is not None:  # m > 0
-        cons.append(t >= 1e-6)
-        T = cp.diag(t)
-    g = None
-    if kind == "circle":
-        M, size = _circle_lmi(model, P, T, alpha)
-    else:
-        g = cp.Variable(nonneg=True)
-        M, size = _iss_lmi(model, P, T, alpha, g)
-    M = 0.5 * (M + M.T)
-    cons.append(M << -ETA * np.eye(size))
-    objective = cp.Minimize(g) if g is not None else cp.Minimize(0)
-    problem = cp.Problem(objective, cons)
-    info: dict[str, Any] = {"solver": "CLARABEL", "structure": structure, "lmi_size": size}
-    if not _run_clarabel(problem, options, info, start):
-        return None, None, None, info
-    return _solution(problem, P, t, g, info)
-
-
-def _lyapunov_variable(N: int, n: int, structure: str) -> tuple[Any, list[Any]]:
-    """P as cvxpy variables in the given structure, and its constraints (P >= I)."""
-    import cvxpy as cp
-
-    if structure in ("block-diagonal", "cross") and n < N:
-        P1 = cp.Variable((n, n), symmetric=True)
-        d = cp.Variable(N - n)
-        P12 = cp.Variable((n, N - n)) if structure == "cross" else np.zeros((n, N - n))
-        P = cp.bmat([[P1, P12], [P12.T, cp.diag(d)]])
-        cons = [P >> np.eye(N)] if structure == "cross" else [P1 >> np.eye(n), d >= 1]
-    elif structure == "block-diagonal":
-        P = cp.Variable((n, n), symmetric=True)
-        cons = [P >> np.eye(n)]
-    else:
-        P = cp.Variable((N, N), symmetric=True)
-        cons = [P >> np.eye(N)]
-    return P, cons
-
-
-def _circle_lmi(model: LureModel, P: Any, T: Any, alpha: float) -> tuple[Any, int]:
-    """The circle-criterion LMI as a cvxpy expression (``circle_matrix``), and its size."""
-    import cvxpy as cp
-
-    N, m = model.N, model.m
-    G = np.hstack([model.A, model.B])
-    M = G.T @ P @ G
-    Z = np.zeros
-    M = M - (1.0 - alpha) * cp.bmat([[P, Z((N, m))], [Z((m, N)), Z((m, m))]])
-    if m:
-        qCT = model.q * model.Cw.T @ T
-        M = M + cp.bmat([[Z((N, N)), qCT], [qCT.T, -2 * T]])
-    return M, N + m
-
-
-def _iss_lmi(model: LureModel, P: Any, T: Any, alpha: float, g: Any) -> tuple[Any, int]:
-    """The dissipation LMI as a cvxpy expression (``iss_matrix`` with g), and its size."""
-    import cvxpy as cp
-
-    N, m, r = model.N, model.m, model.r
-    H = np.hstack([model.A, model.B, model.E])
-    Z = np.zeros
-    M = H.T @ P @ H
-    top = model.Ce.T @ model.Ce - (1.0 - alpha) * P
-    M = M + cp.bmat(
-        [
-            [top, Z((N, m + r))],
-            [
-                Z((m + r, N)),
-                cp.bmat([[Z((m, m)), Z((m, r))], [Z((r, m)), -g * np.eye(r)]])
-                if m
-                else -g * np.eye(r),
-            ],
-        ]
-    )
-    if m:
-        qTC = model.q * T @ model.Cw
-        qTD = model.q * T @ model.Dw
-        M = M + cp.bmat(
-            [[Z((N, N)), qTC.T, Z((N, r))], [qTC, -2 * T, qTD], [Z((r, N)), qTD.T, Z((r, r))]]
-        )
-    return M, N + m + r
-
-
-def _run_clarabel(
-    problem: Any, options: dict[str, Any], info: dict[str, Any], start: float
-) -> bool:
-    """Solve with Clarabel, recording the status and time in ``info``; True when optimal."""
-    import warnings
-
-    import cvxpy as cp
-
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)  # verified below, not trusted
-            problem.solve(solver=cp.CLARABEL, **options)
-    except Exception as exc:  # solver failure is an answer: inconclusive
-        info.update(
-            status=f"solver error: {type(exc).__name__}: {exc}".rstrip(": "),
-            seconds=time.perf_counter() - start,
-        )
-        return False
-    info.update(status=str(problem.status), seconds=time.perf_counter() - start)
-    return problem.status in ("optimal", "optimal_inaccurate")
-
-
-def _solution(
-    problem: Any, P: Any, t: Any, g: Any, info: dict[str, Any]
-) -> tuple[np.ndarray | None, np.ndarray | None, float | None, dict[str, Any]]:
-    """The solved P (symmetrised), t and g, or None when the solver returned no finite values."""
-    values = [P.value, t.value if t is not None else np.zeros(0), g.value if g is not None else 0.0]
-    if any(v is None for v in values) or not all(
-        np.all(np.isfinite(np.asarray(v, dtype=float))) for v in values
-    ):
-        info["status"] = f"{problem.status}, but the solver returned no finite values"
-        return None, None, None, info
-    Pv = np.asarray(values[0], dtype=float)
-    tv = np.asarray(values[1], dtype=float).reshape(-1)
-    return 0.5 * (Pv + Pv.T), tv, (float(values[2]) if g is not None else None), info
 
 
 def _model_refusal(model: LureModel, budget: Budget) -> str:
