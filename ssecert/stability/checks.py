@@ -9,18 +9,32 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-import numpy as np
-
 from .._format import sig
 from ..budget import Budget, ResourceLimitError
 from ..context import OBSERVER, AnalysisContext, shared
 from ..design.gains import GainError
 from ..observers import ObserverDesign, build_observer
+from ..observers.lure import LureModel
 from ..results import Check, Verdict
 from ..system import System
 from ..tolerances import Tolerances
-from .lmi import ETA, circle_certificate, iss_certificate, iss_from_circle, lure_model_cost
-from .lyapunov import lyapunov_certificate
+from .gain_check import (
+    EXACT_LIMIT,  # noqa: F401  (stays importable here)
+    _decided_by,
+    _known,
+    _lyapunov_evidence,
+    _parts,
+    observer_gain_check,
+)
+from .lmi import (
+    ETA,
+    LMICertificate,
+    circle_certificate,
+    iss_certificate,
+    iss_from_circle,
+    lure_model_cost,
+)
+from .lyapunov import LyapunovCertificate, lyapunov_certificate
 from .thesis import thesis_assumptions
 
 __all__ = [
@@ -32,229 +46,6 @@ __all__ = [
 ]
 
 ISS_OPTIMIZE_LIMIT = 60  # largest dissipation LMI solved directly
-
-
-def _lyapunov_evidence(cert) -> dict[str, Any]:
-    return {
-        "P": cert.P,
-        "decrease_P_minus_FtPF": cert.decrease,
-        "margin": cert.margin,
-        "error_bound": cert.error_bound,
-        "contraction": cert.contraction,
-        "condition_number_P": cert.condition,
-        "residual": cert.residual,
-        "margin_definition": (
-            "lambda_min(P - F'PF) / ||P||, recomputed from P"
-            if cert.method == "lyapunov"
-            else "1 - (certified upper bound on the spectral radius of the exact F)"
-        ),
-        "certificate": cert.method,
-        "exact_decision": cert.proof,
-    }
-
-
-EXACT_LIMIT = 6  # largest n verified exactly in rational arithmetic
-
-
-def _exact_deadbeat(system: System) -> dict[str, Any]:
-    """The deadbeat construction redone in rationals on the exact values of the floats."""
-    from ..design.gains import exact_deadbeat_gain
-
-    try:
-        exact = exact_deadbeat_gain(system.A.tolist(), system.C.tolist())
-    except GainError as exc:
-        return {"verified": False, "reason": str(exc)}
-    return {
-        "verified": exact.verified,
-        "exact_index": exact.details["exact_index"],
-        "L_exact": exact.details["L_exact"],
-        "note": (
-            "A and C taken as the exact rational values of their floating-point entries; "
-            "F^k == 0 and F^(k-1) != 0 checked exactly"
-        ),
-    }
-
-
-def _decided_by(tol: Tolerances, **extra: Any) -> dict[str, Any]:
-    """The tolerances an observer check's verdict rests on, for its JSON."""
-    return {"clear_factor": tol.certificate_clear, **extra}
-
-
-def observer_gain_check(design: ObserverDesign, *, tolerances: Tolerances | None = None) -> Check:
-    """Is the gain what was asked for, and is the linear error matrix F = A - L S stable?
-
-    Every number is about the gain as printed: F is formed exactly from the
-    floats of A, L and S.  For a deadbeat gain on a small plant the exact
-    rational gain is also computed; it is evidence about the plant, and the
-    verdict never rests on it.  ``tolerances.certificate_clear`` is the
-    factor by which a Lyapunov decrease must beat its error bound.
-    """
-    tol = Tolerances.check(tolerances)
-    gain = design.gain
-    F = design.error_matrix
-    parts = _parts(design)
-    computed_radius = float(np.abs(np.linalg.eigvals(F)).max())
-    fields: dict[str, Any] = {"L": gain.L, "gain_method": gain.method, "kind": design.kind}
-    title = f"Observer gain ({gain.method})"
-    evidence: dict[str, Any] = {
-        "details": gain.details,
-        "computed_eigenvalue_radius": computed_radius,
-    }
-    if gain.method == "deadbeat":
-        return _deadbeat_check(design, fields, evidence, title)
-    cert = lyapunov_certificate(F, parts=parts, clear=tol.certificate_clear)
-    fields["spectral_radius"] = cert.spectral_radius
-    evidence.update(_lyapunov_evidence(cert))
-    verdict = Verdict(cert.verdict)
-    if verdict is Verdict.HOLDS and cert.method == "exact powers":
-        fields["spectral_radius"] = cert.contraction
-        summary = f"The linear error dynamics e+ = (A - L C) e are stable: {cert.reason}."
-    elif verdict is Verdict.HOLDS:
-        summary = (
-            f"The linear error dynamics e+ = (A - L C) e are stable (spectral radius "
-            f"{sig(_known(cert.spectral_radius))}), certified by a Lyapunov matrix P: the error "
-            f"contracts at least by {sig(_known(cert.contraction))} per step in the P-norm."
-        )
-    elif verdict is Verdict.FAILS:
-        summary = (
-            f"A - L C is not stable: {cert.reason}. With this gain the error does not "
-            f"vanish even without attack."
-        )
-    else:
-        summary = f"The stability of A - L C could not be certified: {cert.reason}."
-    return Check(
-        id="observer_gain",
-        title=title,
-        verdict=verdict,
-        summary=summary,
-        value=fields["spectral_radius"],
-        margin=cert.margin,
-        method="discrete Lyapunov (dlyap)"
-        if cert.method == "lyapunov"
-        else "exact powers of A - L C",
-        fields=fields,
-        evidence=evidence,
-        witness=cert.witness if verdict is Verdict.FAILS else None,
-        tolerances=_decided_by(tol, error_bound=cert.error_bound),
-    )
-
-
-def _known(value: float | None) -> float:
-    """A number a holding certificate always carries (its radius, contraction, gain)."""
-    if value is None:  # pragma: no cover - certificates that hold set it
-        raise RuntimeError("a holding certificate is missing the number it certifies")
-    return value
-
-
-def _parts(design: ObserverDesign) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-    """(A, L, S) whose exact combination A - L S is the error matrix, when it is one."""
-    return design.observer_kind.exact_parts(design)
-
-
-def _deadbeat_check(
-    design: ObserverDesign, fields: dict[str, Any], evidence: dict[str, Any], title: str
-) -> Check:
-    gain = design.gain
-    details = gain.details
-    index = details.get("nilpotency_index")
-    upper = details.get("spectral_radius_upper_bound")
-    lower = details.get("spectral_radius_lower_bound")
-    exact_note = ""
-    if design.system.n <= EXACT_LIMIT:
-        evidence["exact"] = _exact_deadbeat(design.system)
-        if evidence["exact"].get("verified"):
-            exact_note = (
-                f" In exact arithmetic the rational gain L_exact (evidence) is nilpotent "
-                f"with index {evidence['exact']['exact_index']}."
-            )
-    fields["nilpotency_index"] = index
-    fields["observability_index"] = details.get("observability_index")
-    fields["spectral_radius"] = upper
-    fields["spectral_radius_lower_bound"] = lower
-    method = "deadbeat (exact powers of the printed A - L C)"
-    # the power test ran when the gain was built, with the run's tolerances
-    tolerances = {
-        "deadbeat_rtol": details.get("deadbeat_rtol", Tolerances().deadbeat_rtol),
-        "clear_factor": details.get("clear_factor", Tolerances().certificate_clear),
-    }
-    if gain.verified:
-        index, upper = int(_known(index)), _known(upper)
-        rel = details["relative_power_norms"][index - 1]
-        exactly = details.get("exactly_nilpotent")
-        nu = details.get("observability_index")
-        if nu is None:
-            fastest = ""
-        elif details.get("minimal"):
-            fastest = ", the observability index"
-        else:
-            fastest = f" (the observability index is {nu}: a faster deadbeat gain exists)"
-        exact_index = details.get("exact_nilpotency_index")
-        if exactly and exact_index is not None and exact_index != index:
-            fields["nilpotency_index"] = exact_index
-            fields["nilpotency_index_to_rounding"] = index
-        summary = (
-            f"A - L C with the printed L is exactly nilpotent with index {exact_index}: the "
-            f"error vanishes in {exact_index} step{'s' if exact_index != 1 else ''} without "
-            f"attack"
-            + (
-                f" (to rounding already in {index}: ||(A - L C)^{index}|| <= {rel:.1e} "
-                f"||A||^{index})."
-                if exact_index != index
-                else "."
-            )
-            if exactly and exact_index is not None
-            else f"With the printed L, ||(A - L C)^{index}|| <= {rel:.1e} ||A||^{index} (powers "
-            f"computed exactly from the floats): the error vanishes to rounding in {index} "
-            f"step{'s' if index != 1 else ''} without attack{fastest}, and the spectral "
-            f"radius is certified <= {upper:.3g}."
-        ) + exact_note
-        return Check(
-            id="observer_gain",
-            title=title,
-            verdict=Verdict.HOLDS,
-            summary=summary,
-            value=fields["nilpotency_index"],
-            margin=1.0 - upper,
-            method=method,
-            fields=fields,
-            evidence=evidence,
-            tolerances=tolerances,
-        )
-    problem = details.get("problem") or "the power test did not conclude"
-    if lower is not None and lower > 1:
-        from .lyapunov import instability_witness
-
-        witness = instability_witness(design.error_matrix, parts=_parts(design))
-        if witness is not None and witness["verified"]:
-            return Check(
-                id="observer_gain",
-                title=title,
-                verdict=Verdict.FAILS,
-                summary=(
-                    f"The deadbeat construction's printed gain is not deadbeat: {problem}. "
-                    f"Rounding L to floats destroys the nilpotency of this plant's "
-                    f"deadbeat loop." + exact_note
-                ),
-                value=index,
-                margin=None,
-                method=method,
-                fields=fields,
-                evidence=evidence,
-                witness=witness,
-                tolerances=tolerances,
-            )
-    return Check(
-        id="observer_gain",
-        title=title,
-        verdict=Verdict.INCONCLUSIVE,
-        summary=f"The deadbeat gain could not be verified for the printed L: {problem}."
-        + exact_note,
-        value=index,
-        method=method,
-        fields=fields,
-        evidence=evidence,
-        tolerances=tolerances,
-    )
 
 
 def observer_stability_check(
@@ -276,58 +67,73 @@ def observer_stability_check(
         lyap = lyapunov_certificate(
             design.error_matrix, parts=_parts(design), clear=tol.certificate_clear
         )
-        verdict = Verdict(lyap.verdict)
-        if verdict is Verdict.HOLDS and lyap.method == "exact powers":
-            summary = f"The error dynamics are linear and stable: {lyap.reason}."
-        elif verdict is Verdict.HOLDS:
-            summary = (
-                f"The error dynamics are linear and certified stable by a Lyapunov matrix "
-                f"(contraction {sig(_known(lyap.contraction))} per step)."
-            )
-        elif verdict is Verdict.FAILS:
-            summary = f"The error dynamics are unstable: {lyap.reason}."
-        else:
-            summary = f"Stability could not be certified: {lyap.reason}."
-        return Check(
-            id="observer_stability",
-            title=title,
-            verdict=verdict,
-            summary=summary,
-            value=lyap.contraction,
-            margin=lyap.margin,
-            method="discrete Lyapunov" if lyap.method == "lyapunov" else "exact powers of A - L C",
-            fields={"decay_rate": None if lyap.contraction is None else 1 - lyap.contraction},
-            evidence=_lyapunov_evidence(lyap),
-            witness=lyap.witness if verdict is Verdict.FAILS else None,
-            tolerances=_decided_by(tol, error_bound=lyap.error_bound),
-        ), lyap
+        return _linear_stability_check(lyap, tol, title), lyap
     gap = design.observer_kind.lure_gap(design)
     if gap:
-        return Check(
-            id="observer_stability",
-            title=title,
-            verdict=Verdict.INCONCLUSIVE,
-            summary=gap,
-            method="circle criterion",
-            fields={},
-        ), None
-    refusal = (budget or Budget()).refusal(
-        f"the Lur'e model of the {design.kind} observer",
-        nbytes=lure_model_cost(design.system.n, design.sensing.shape[0], design.sensing.shape[0])[
-            0
-        ],
-    )
+        return _no_certificate(title, gap, "circle criterion"), None
+    refusal = _lure_model_refusal(design, budget)
     if refusal:
-        return Check(
-            id="observer_stability",
-            title=title,
-            verdict=Verdict.INCONCLUSIVE,
-            summary=f"No stability certificate: not attempted: {refusal}.",
-            method="circle criterion (LMI, Clarabel)",
-            fields={},
-        ), None
+        summary = f"No stability certificate: not attempted: {refusal}."
+        return _no_certificate(title, summary, "circle criterion (LMI, Clarabel)"), None
     model = design.observer_kind.lure_model(design)
     cert = circle_certificate(model, budget=budget, clear=tol.certificate_clear)
+    return _circle_stability_check(design, model, cert, tol, title), (model, cert)
+
+
+def _linear_stability_check(lyap: LyapunovCertificate, tol: Tolerances, title: str) -> Check:
+    """observer_stability of a linear observer, from its Lyapunov certificate."""
+    verdict = Verdict(lyap.verdict)
+    if verdict is Verdict.HOLDS and lyap.method == "exact powers":
+        summary = f"The error dynamics are linear and stable: {lyap.reason}."
+    elif verdict is Verdict.HOLDS:
+        summary = (
+            f"The error dynamics are linear and certified stable by a Lyapunov matrix "
+            f"(contraction {sig(_known(lyap.contraction))} per step)."
+        )
+    elif verdict is Verdict.FAILS:
+        summary = f"The error dynamics are unstable: {lyap.reason}."
+    else:
+        summary = f"Stability could not be certified: {lyap.reason}."
+    return Check(
+        id="observer_stability",
+        title=title,
+        verdict=verdict,
+        summary=summary,
+        value=lyap.contraction,
+        margin=lyap.margin,
+        method="discrete Lyapunov" if lyap.method == "lyapunov" else "exact powers of A - L C",
+        fields={"decay_rate": None if lyap.contraction is None else 1 - lyap.contraction},
+        evidence=_lyapunov_evidence(lyap),
+        witness=lyap.witness if verdict is Verdict.FAILS else None,
+        tolerances=_decided_by(tol, error_bound=lyap.error_bound),
+    )
+
+
+def _no_certificate(title: str, summary: str, method: str) -> Check:
+    """An inconclusive observer_stability: no certificate was attempted."""
+    return Check(
+        id="observer_stability",
+        title=title,
+        verdict=Verdict.INCONCLUSIVE,
+        summary=summary,
+        method=method,
+        fields={},
+    )
+
+
+def _lure_model_refusal(design: ObserverDesign, budget: Budget | None) -> str:
+    """Why the budget refuses the memory of the design's Lur'e model ('' when it fits)."""
+    m = design.sensing.shape[0]
+    return (budget or Budget()).refusal(
+        f"the Lur'e model of the {design.kind} observer",
+        nbytes=lure_model_cost(design.system.n, m, m)[0],
+    )
+
+
+def _circle_stability_check(
+    design: ObserverDesign, model: LureModel, cert: LMICertificate, tol: Tolerances, title: str
+) -> Check:
+    """observer_stability of a sparse observer, from its circle-criterion certificate."""
     verdict = Verdict(cert.verdict)
     fields = {
         "decay_rate": cert.decay,
@@ -335,23 +141,6 @@ def observer_stability_check(
         "shrink": design.shrink,
         "step": design.step,
         "threshold": design.threshold,
-    }
-    evidence = cert.evidence()
-    evidence["lmi"] = (
-        "[A B]' P [A B] - diag(P, 0) + [[0, q Cw' T], [q T Cw, -2 T]] <= -margin ||P|| I"
-        " with xi = (e, a_hat), A = [[F, -L], [0, 0]], B = [[0], [I]], "
-        "Cw = [-step L2 S, I - step L2]"
-    )
-    evidence["model"] = {
-        "A": model.A,
-        "B": model.B,
-        "Cw": model.Cw,
-        "E": model.E,
-        "Dw": model.Dw,
-        "Ce": model.Ce,
-        "q": model.q,
-        "n_e": model.n_e,
-        "threshold": model.threshold,
     }
     if verdict is Verdict.HOLDS:
         summary = (
@@ -374,10 +163,32 @@ def observer_stability_check(
         margin=cert.margin,
         method="circle criterion (LMI, Clarabel)",
         fields=fields,
-        evidence=evidence,
+        evidence=_circle_evidence(model, cert),
         witness=cert.details.get("witness") if verdict is Verdict.FAILS else None,
         tolerances=_decided_by(tol, error_bound=cert.error_bound, lmi_eta=ETA),
-    ), (model, cert)
+    )
+
+
+def _circle_evidence(model: LureModel, cert: LMICertificate) -> dict[str, Any]:
+    """The certificate's evidence with the LMI it solves and the Lur'e model's matrices."""
+    evidence = cert.evidence()
+    evidence["lmi"] = (
+        "[A B]' P [A B] - diag(P, 0) + [[0, q Cw' T], [q T Cw, -2 T]] <= -margin ||P|| I"
+        " with xi = (e, a_hat), A = [[F, -L], [0, 0]], B = [[0], [I]], "
+        "Cw = [-step L2 S, I - step L2]"
+    )
+    evidence["model"] = {
+        "A": model.A,
+        "B": model.B,
+        "Cw": model.Cw,
+        "E": model.E,
+        "Dw": model.Dw,
+        "Ce": model.Ce,
+        "q": model.q,
+        "n_e": model.n_e,
+        "threshold": model.threshold,
+    }
+    return evidence
 
 
 def iss_gain_check(

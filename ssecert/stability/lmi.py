@@ -30,13 +30,14 @@ small enough, with a full P.  Nothing is taken from the solver's status:
 the LMI is recomputed in numpy from the returned P and T, symmetrised, and
 its largest eigenvalue must beat a floating-point error bound by a factor
 ``clear``; P must pass a Cholesky test with a margin and T must be
-nonnegative.  Otherwise the verdict is inconclusive.
+nonnegative.  Otherwise the verdict is inconclusive.  The cvxpy problems
+and their solve live in ``lmi_solver``, the recomputation and the
+re-verification in ``lmi_verification``; this module decides.
 """
 
 from __future__ import annotations
 
-import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -45,7 +46,8 @@ import numpy as np
 from ..budget import Budget
 from ..observers.lure import LureModel
 from ..results import Verdict
-from ..tolerances import EPS
+from .lmi_solver import ETA, _solve, lmi_cost  # noqa: F401  (ETA stays importable here)
+from .lmi_verification import circle_matrix, iss_matrix, verify_certificate
 
 __all__ = [
     "LureModel",
@@ -60,7 +62,6 @@ __all__ = [
     "lure_model_cost",
 ]
 
-ETA = 1e-4  # margin imposed in the LMIs, relative to P >= I
 FULL_LIMIT = 80  # largest LMI dimension tried with a full P
 # Lyapunov structures, cheapest first: P = diag(P1, D) with D diagonal; the
 # same with a full cross block P12; a full P.
@@ -73,29 +74,6 @@ def lure_model_cost(n: int, m: int, r: int) -> tuple[float, float]:
     N = n + m
     nbytes = 8.0 * (3 * N * N + 2 * N * m + 2 * N * r + m * r + n * N + 2 * m * m)
     return nbytes, 30.0 * N**3
-
-
-def lmi_cost(model: LureModel, kind: str, structure: str) -> tuple[float, float]:
-    """Estimated peak bytes and operations of solving one LMI with cvxpy and Clarabel.
-
-    Fitted to measurements (2 cores, Clarabel 0.x) of circle and ISS LMIs of
-    24 to 312 rows: with T = size (size + 1) / 2 entries in the semidefinite
-    cone, the block-diagonal structure keeps the problem sparse (memory and
-    time grow like T * size), while a cross block or a full P makes the
-    factorised system dense in T plus the number of variables v (memory like
-    (T + v)^2, time like (T + v)^3).  The estimates err on the high side.
-    """
-    N, m, r, n = model.N, model.m, model.r, model.n_e
-    size = N + m + (r if kind == "iss" else 0)
-    T = size * (size + 1) / 2
-    if structure == "block-diagonal":
-        factor = 2.0 if kind == "iss" else 1.0
-        return 64 * 2**20 + factor * 450.0 * T * size, factor * 3e5 * T * size
-    if structure == "cross":
-        v = n * (n + 1) / 2 + n * (N - n) + (N - n) + m
-    else:
-        v = N * (N + 1) / 2 + m
-    return 64 * 2**20 + 48.0 * (T + v) ** 2, 10.0 * (T + v) ** 3
 
 
 @dataclass(frozen=True)
@@ -155,213 +133,6 @@ class LMICertificate:
             "structure": self.structure,
             **self.details,
         }
-
-
-# ---------------------------------------------------------------------------
-# recomputation outside the solver
-
-
-def circle_matrix(model: LureModel, P: np.ndarray, t: np.ndarray, alpha: float = 0.0) -> np.ndarray:
-    """The circle-criterion LMI in (xi, phi), recomputed in numpy and symmetrised.
-
-    [A B]' P [A B] - diag((1 - alpha) P, 0) + sym([[0, q Cw' T], [q T Cw, -2 T]])
-    """
-    G = np.hstack([model.A, model.B])
-    N = model.N
-    M = G.T @ P @ G
-    M[:N, :N] -= (1.0 - alpha) * P
-    T = np.diag(t)
-    M[:N, N:] += model.q * model.Cw.T @ T
-    M[N:, :N] += model.q * T @ model.Cw
-    M[N:, N:] -= 2.0 * T
-    return 0.5 * (M + M.T)
-
-
-def iss_matrix(
-    model: LureModel, P: np.ndarray, t: np.ndarray, alpha: float, g: float
-) -> np.ndarray:
-    """The dissipation LMI in (xi, phi, a), recomputed in numpy and symmetrised.
-
-    V(xi+) - (1 - alpha) V(xi) + |e|^2 - g |a|^2 plus the sector terms with
-    w = Cw xi + Dw a.
-    """
-    H = np.hstack([model.A, model.B, model.E])
-    N, m, r = model.N, model.m, model.r
-    M = H.T @ P @ H
-    M[:N, :N] += model.Ce.T @ model.Ce - (1.0 - alpha) * P
-    M[N + m :, N + m :] -= g * np.eye(r)
-    if m:
-        T = np.diag(t)
-        qTC = model.q * T @ model.Cw
-        qTD = model.q * T @ model.Dw
-        M[N : N + m, :N] += qTC
-        M[:N, N : N + m] += qTC.T
-        M[N : N + m, N + m :] += qTD
-        M[N + m :, N : N + m] += qTD.T
-        M[N : N + m, N : N + m] -= 2.0 * T
-    return 0.5 * (M + M.T)
-
-
-def _error_bound(model: LureModel, P: np.ndarray, t: np.ndarray, size: int) -> float:
-    """Rounding error bound on the eigenvalues of the recomputed LMI, relative to ||P||."""
-    normP = max(float(np.linalg.norm(P, 2)), np.finfo(float).tiny)
-    G = np.hstack([model.A, model.B, model.E])
-    normG = float(np.linalg.norm(G, 2))
-    tmax = float(np.abs(t).max(initial=0.0))
-    normC = float(np.linalg.norm(np.hstack([model.Cw, model.Dw]), 2)) if model.m else 0.0
-    normCe = float(np.linalg.norm(model.Ce, 2))
-    raw = (normG**2 + 2.0) * normP + (2 * model.q * normC + 2) * tmax + normCe**2
-    return 10.0 * size * EPS * raw / normP
-
-
-def verify_certificate(
-    model: LureModel,
-    P: np.ndarray,
-    t: np.ndarray,
-    *,
-    kind: str = "circle",
-    alpha: float = 0.0,
-    g: float = 0.0,
-    clear: float = 100.0,
-) -> tuple[bool, float, float, str]:
-    """Re-verify a certificate without the solver.
-
-    Returns
-    -------
-    ok : bool
-    margin : float
-        ``-lambda_max(LMI) / ||P||``.
-    bound : float
-        Error bound on that quantity.
-    problem : str
-        Empty when ok.
-    """
-    P = 0.5 * (np.asarray(P, dtype=float) + np.asarray(P, dtype=float).T)
-    t = np.asarray(t, dtype=float)
-    if not (np.all(np.isfinite(P)) and np.all(np.isfinite(t))):
-        return False, float("nan"), 0.0, "the certificate has non-finite entries"
-    if model.m and t.min(initial=0.0) < 0:
-        return False, float("nan"), 0.0, f"a multiplier is negative ({t.min():.2e})"
-    M = circle_matrix(model, P, t, alpha) if kind == "circle" else iss_matrix(model, P, t, alpha, g)
-    normP = max(float(np.linalg.norm(P, 2)), np.finfo(float).tiny)
-    lam = float(np.linalg.eigvalsh(M)[-1])
-    margin = -lam / normP
-    bound = _error_bound(model, P, t, M.shape[0])
-    p_eigs = np.linalg.eigvalsh(P)
-    if p_eigs[0] <= clear * 10 * P.shape[0] * EPS * normP:
-        return (
-            False,
-            margin,
-            bound,
-            f"P is not clearly positive definite (lambda_min {p_eigs[0]:.2e})",
-        )
-    try:
-        np.linalg.cholesky(P - 0.5 * p_eigs[0] * np.eye(P.shape[0]))
-    except np.linalg.LinAlgError:
-        return False, margin, bound, "P fails the Cholesky test"
-    if margin <= clear * bound:
-        return (
-            False,
-            margin,
-            bound,
-            (
-                f"the recomputed LMI has largest eigenvalue {-margin:.2e} ||P||, not below "
-                f"-{clear:g} x the error bound {bound:.2e}"
-            ),
-        )
-    return True, margin, bound, ""
-
-
-# ---------------------------------------------------------------------------
-# solving
-
-
-def _solve(
-    model: LureModel, kind: str, structure: str, alpha: float, options: dict[str, Any]
-) -> tuple[np.ndarray | None, np.ndarray | None, float | None, dict[str, Any]]:
-    import cvxpy as cp
-
-    N, m, r, n = model.N, model.m, model.r, model.n_e
-    start = time.perf_counter()
-    t = cp.Variable(m) if m else None
-    if structure in ("block-diagonal", "cross") and n < N:
-        P1 = cp.Variable((n, n), symmetric=True)
-        d = cp.Variable(N - n)
-        P12 = cp.Variable((n, N - n)) if structure == "cross" else np.zeros((n, N - n))
-        P = cp.bmat([[P1, P12], [P12.T, cp.diag(d)]])
-        cons = [P >> np.eye(N)] if structure == "cross" else [P1 >> np.eye(n), d >= 1]
-    elif structure == "block-diagonal":
-        P = cp.Variable((n, n), symmetric=True)
-        cons = [P >> np.eye(n)]
-    else:
-        P = cp.Variable((N, N), symmetric=True)
-        cons = [P >> np.eye(N)]
-    if t is not None:  # m > 0
-        cons.append(t >= 1e-6)
-        T = cp.diag(t)
-    g = None
-    if kind == "circle":
-        G = np.hstack([model.A, model.B])
-        M = G.T @ P @ G
-        Z = np.zeros
-        M = M - (1.0 - alpha) * cp.bmat([[P, Z((N, m))], [Z((m, N)), Z((m, m))]])
-        if m:
-            qCT = model.q * model.Cw.T @ T
-            M = M + cp.bmat([[Z((N, N)), qCT], [qCT.T, -2 * T]])
-        size = N + m
-    else:
-        g = cp.Variable(nonneg=True)
-        H = np.hstack([model.A, model.B, model.E])
-        Z = np.zeros
-        M = H.T @ P @ H
-        top = model.Ce.T @ model.Ce - (1.0 - alpha) * P
-        M = M + cp.bmat(
-            [
-                [top, Z((N, m + r))],
-                [
-                    Z((m + r, N)),
-                    cp.bmat([[Z((m, m)), Z((m, r))], [Z((r, m)), -g * np.eye(r)]])
-                    if m
-                    else -g * np.eye(r),
-                ],
-            ]
-        )
-        if m:
-            qTC = model.q * T @ model.Cw
-            qTD = model.q * T @ model.Dw
-            M = M + cp.bmat(
-                [[Z((N, N)), qTC.T, Z((N, r))], [qTC, -2 * T, qTD], [Z((r, N)), qTD.T, Z((r, r))]]
-            )
-        size = N + m + r
-    M = 0.5 * (M + M.T)
-    cons.append(M << -ETA * np.eye(size))
-    objective = cp.Minimize(g) if g is not None else cp.Minimize(0)
-    problem = cp.Problem(objective, cons)
-    info: dict[str, Any] = {"solver": "CLARABEL", "structure": structure, "lmi_size": size}
-    import warnings
-
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)  # verified below, not trusted
-            problem.solve(solver=cp.CLARABEL, **options)
-    except Exception as exc:  # solver failure is an answer: inconclusive
-        info.update(
-            status=f"solver error: {type(exc).__name__}: {exc}".rstrip(": "),
-            seconds=time.perf_counter() - start,
-        )
-        return None, None, None, info
-    info.update(status=str(problem.status), seconds=time.perf_counter() - start)
-    if problem.status not in ("optimal", "optimal_inaccurate"):
-        return None, None, None, info
-    values = [P.value, t.value if t is not None else np.zeros(0), g.value if g is not None else 0.0]
-    if any(v is None for v in values) or not all(
-        np.all(np.isfinite(np.asarray(v, dtype=float))) for v in values
-    ):
-        info["status"] = f"{problem.status}, but the solver returned no finite values"
-        return None, None, None, info
-    Pv = np.asarray(values[0], dtype=float)
-    tv = np.asarray(values[1], dtype=float).reshape(-1)
-    return 0.5 * (Pv + Pv.T), tv, (float(values[2]) if g is not None else None), info
 
 
 def _model_refusal(model: LureModel, budget: Budget) -> str:
@@ -666,47 +437,10 @@ def iss_from_circle(
         )
     P, t = circle.P, circle.multipliers if circle.multipliers is not None else np.zeros(0)
     alpha = 0.5 * float(circle.decay or 0.0)
-    N, m = model.N, model.m
+    k = model.N + model.m
     perf = iss_matrix(model, np.zeros_like(P), np.zeros_like(t), alpha, 0.0)  # |e|^2 only
     base = iss_matrix(model, P, t, alpha, 0.0) - perf
-    k = N + m
-
-    def gain(log_kappa: float) -> float:
-        with np.errstate(over="ignore", invalid="ignore"):
-            kappa = float(np.exp(log_kappa))
-            M = kappa * base + perf
-        if not np.all(np.isfinite(M)):
-            return np.inf
-        Z, X, Y = M[:k, :k], M[:k, k:], M[k:, k:]
-        try:
-            zmax = float(np.linalg.eigvalsh(Z)[-1])
-            if zmax >= 0:
-                return np.inf
-            S = Y - X.T @ np.linalg.solve(Z, X)
-            value = float(np.linalg.eigvalsh(0.5 * (S + S.T))[-1])
-        except np.linalg.LinAlgError:  # singular Z: this kappa gives no gain
-            return np.inf
-        return value if np.isfinite(value) else np.inf
-
-    # kappa must make Z negative definite: Z = kappa Zc + diag(Ce'Ce, 0)
-    zc = float(np.linalg.eigvalsh(base[:k, :k])[-1])
-    ce = float(np.linalg.norm(model.Ce, 2)) ** 2
-    lo = np.log(1.01 * ce / max(-zc, np.finfo(float).tiny))
-    grid = lo + np.linspace(0.0, np.log(1e8), 60)
-    values = np.array([gain(x) for x in grid])
-    best = int(np.argmin(values))
-    a, b = grid[max(best - 1, 0)], grid[min(best + 1, grid.size - 1)]
-    from scipy.optimize import minimize_scalar
-
-    if np.isfinite(values[best]):
-        refined = minimize_scalar(gain, bounds=(a, b), method="bounded")
-        x, g = (
-            (float(refined.x), float(refined.fun))
-            if refined.fun <= values[best]
-            else (float(grid[best]), float(values[best]))
-        )
-    else:
-        x, g = float(grid[best]), float(values[best])
+    x, g = _smallest_gain(_schur_gain(base, perf, k), _scale_grid(model, base, k))
     if not np.isfinite(g):
         return LMICertificate(
             Verdict.INCONCLUSIVE,
@@ -717,16 +451,9 @@ def iss_from_circle(
             ),
         )
     kappa = float(np.exp(x))
-    g_cert = max(g, 0.0) * (1 + 1e-6) + 1e-9
-    ok, margin, bound, problem = verify_certificate(
-        model, kappa * P, kappa * t, kind="iss", alpha=alpha, g=g_cert, clear=clear
+    ok, margin, bound, problem, g_cert = _verified_gain(
+        model, kappa * P, kappa * t, alpha, g, clear
     )
-    if not ok:
-        # the Schur complement is tight by construction: keep a relative margin
-        g_cert = max(g, 0.0) * 1.01 + 1e-6
-        ok, margin, bound, problem = verify_certificate(
-            model, kappa * P, kappa * t, kind="iss", alpha=alpha, g=g_cert, clear=clear
-        )
     if not ok:
         return LMICertificate(Verdict.INCONCLUSIVE, "iss", reason=f"gain not verified: {problem}")
     return LMICertificate(
@@ -745,3 +472,74 @@ def iss_from_circle(
             "gamma_squared": g_cert,
         },
     )
+
+
+def _schur_gain(base: np.ndarray, perf: np.ndarray, k: int) -> Callable[[float], float]:
+    """g(log kappa): the largest eigenvalue of the Schur complement of kappa base + perf.
+
+    Infinite where Z (its leading k x k block) is not negative definite.
+    """
+
+    def gain(log_kappa: float) -> float:
+        with np.errstate(over="ignore", invalid="ignore"):
+            kappa = float(np.exp(log_kappa))
+            M = kappa * base + perf
+        if not np.all(np.isfinite(M)):
+            return np.inf
+        Z, X, Y = M[:k, :k], M[:k, k:], M[k:, k:]
+        try:
+            zmax = float(np.linalg.eigvalsh(Z)[-1])
+            if zmax >= 0:
+                return np.inf
+            S = Y - X.T @ np.linalg.solve(Z, X)
+            value = float(np.linalg.eigvalsh(0.5 * (S + S.T))[-1])
+        except np.linalg.LinAlgError:  # singular Z: this kappa gives no gain
+            return np.inf
+        return value if np.isfinite(value) else np.inf
+
+    return gain
+
+
+def _scale_grid(model: LureModel, base: np.ndarray, k: int) -> np.ndarray:
+    """60 values of log kappa over 8 decades, from where Z can first be negative definite."""
+    # kappa must make Z negative definite: Z = kappa Zc + diag(Ce'Ce, 0)
+    zc = float(np.linalg.eigvalsh(base[:k, :k])[-1])
+    ce = float(np.linalg.norm(model.Ce, 2)) ** 2
+    lo = np.log(1.01 * ce / max(-zc, np.finfo(float).tiny))
+    return lo + np.linspace(0.0, np.log(1e8), 60)
+
+
+def _smallest_gain(gain: Callable[[float], float], grid: np.ndarray) -> tuple[float, float]:
+    """(log kappa, g) of the smallest gain: the grid's best, refined between its neighbours."""
+    from scipy.optimize import minimize_scalar
+
+    values = np.array([gain(x) for x in grid])
+    best = int(np.argmin(values))
+    a, b = grid[max(best - 1, 0)], grid[min(best + 1, grid.size - 1)]
+    if not np.isfinite(values[best]):
+        return float(grid[best]), float(values[best])
+    refined = minimize_scalar(gain, bounds=(a, b), method="bounded")
+    if refined.fun <= values[best]:
+        return float(refined.x), float(refined.fun)
+    return float(grid[best]), float(values[best])
+
+
+def _verified_gain(
+    model: LureModel, P: np.ndarray, t: np.ndarray, alpha: float, g: float, clear: float
+) -> tuple[bool, float, float, str, float]:
+    """``verify_certificate``'s answer for gamma^2 slightly above g, and that gamma^2.
+
+    The Schur complement is tight by construction, so a relative margin of
+    1e-6 is tried first, then one of 1 %.
+    """
+    g_cert = max(g, 0.0) * (1 + 1e-6) + 1e-9
+    ok, margin, bound, problem = verify_certificate(
+        model, P, t, kind="iss", alpha=alpha, g=g_cert, clear=clear
+    )
+    if not ok:
+        # the Schur complement is tight by construction: keep a relative margin
+        g_cert = max(g, 0.0) * 1.01 + 1e-6
+        ok, margin, bound, problem = verify_certificate(
+            model, P, t, kind="iss", alpha=alpha, g=g_cert, clear=clear
+        )
+    return ok, margin, bound, problem, g_cert

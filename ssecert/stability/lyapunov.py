@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -183,88 +183,70 @@ def lyapunov_certificate(
     >>> lyapunov_certificate(np.array([[1.1]])).verdict.value
     'fails'
     """
-    import control
-
-    from .spectral import schur_decision
-
     F = np.asarray(as_real_matrix(F, "F"), dtype=float)
     n = F.shape[0]
     Q = np.eye(n) if Q is None else np.asarray(as_real_matrix(Q, "Q", shape=(n, n)))
     Q = 0.5 * (Q + Q.T)
     rho = float(np.abs(np.linalg.eigvals(F)).max()) if n else 0.0
-    normF = float(np.linalg.norm(F, 2))
-
-    def exact_fallback(
-        why: str,
-        P: np.ndarray | None = None,
-        decrease: np.ndarray | None = None,
-        margin: float | None = None,
-        bound: float = 0.0,
-        condition: float | None = None,
-        residual: float | None = None,
-    ) -> LyapunovCertificate:
-        decision = schur_decision(F, parts=parts)
-        proof = decision.to_dict()
-        if decision.state == "stable":
-            if decision.radius_upper is None:  # pragma: no cover - set whenever stable
-                raise RuntimeError("a stable Schur decision carries its radius bound")
-            upper = float(decision.radius_upper)
-            return LyapunovCertificate(
-                Verdict.HOLDS,
-                None,
-                None,
-                1.0 - upper,
-                0.0,
-                upper,
-                None,
-                None,
-                rho,
-                f"{why}; instead, {decision.reason}",
-                None,
-                "exact powers",
-                proof,
-            )
-        witness = instability_witness(F, parts=parts, decision=decision)
-        if decision.state == "unstable":
-            return LyapunovCertificate(
-                Verdict.FAILS,
-                P,
-                decrease,
-                margin,
-                bound,
-                None,
-                condition,
-                residual,
-                rho,
-                decision.reason,
-                witness,
-                "lyapunov",
-                proof,
-            )
+    P, why = _lyapunov_solution(F, Q)
+    if P is None:
+        return _exact_fallback(F, parts, rho, why)
+    c = _check_solution(F, Q, P)
+    contraction = _verified_contraction(c, clear)
+    if contraction is not None:
         return LyapunovCertificate(
-            Verdict.INCONCLUSIVE,
-            P,
-            decrease,
-            margin,
-            bound,
-            None,
-            condition,
-            residual,
+            Verdict.HOLDS,
+            c.P,
+            c.decrease,
+            c.dec_min,
+            c.bound,
+            contraction,
+            c.condition,
+            c.residual,
             rho,
-            f"{why}; {decision.reason}",
-            witness,
-            "lyapunov",
-            proof,
         )
+    why = (
+        f"the Lyapunov solution cannot be verified with a margin (smallest decrease "
+        f"{c.dec_min:.2e}, smallest eigenvalue of P {c.p_min:.2e}, error bound {c.bound:.2e})"
+    )
+    margin = min(c.dec_min, c.p_min)  # negative when P or the decrease is indefinite
+    unverified = _Unverified(c.P, c.decrease, margin, c.bound, c.condition, c.residual)
+    return _exact_fallback(F, parts, rho, why, unverified)
+
+
+def _lyapunov_solution(F: np.ndarray, Q: np.ndarray) -> tuple[np.ndarray | None, str]:
+    """P solving F^T P F - P + Q = 0 (``control.dlyap``), or None and why there is none."""
+    import control
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # an ill-conditioned solve is judged below, not trusted
         try:
             P = np.asarray(control.dlyap(F.T, Q), dtype=float)
         except Exception as exc:  # singular Lyapunov operator (lambda_i lambda_j = 1)
-            return exact_fallback(f"the Lyapunov equation has no unique solution ({exc})")
+            return None, f"the Lyapunov equation has no unique solution ({exc})"
     if not np.all(np.isfinite(P)):
-        return exact_fallback("the Lyapunov solution is not finite")
+        return None, "the Lyapunov solution is not finite"
+    return P, ""
+
+
+class _Checked(NamedTuple):
+    """A symmetrised Lyapunov solution and the margins its verification rests on."""
+
+    P: np.ndarray
+    decrease: np.ndarray  # P - F^T P F, symmetrised
+    dec_min: float  # smallest eigenvalue of the decrease, relative to ||P||
+    p_min: float  # smallest eigenvalue of P, relative to ||P||
+    p_eigs: np.ndarray
+    normP: float
+    bound: float  # rounding error bound on those eigenvalues, relative to ||P||
+    condition: float
+    residual: float
+
+
+def _check_solution(F: np.ndarray, Q: np.ndarray, P: np.ndarray) -> _Checked:
+    """P symmetrised, its decrease, their smallest eigenvalues and the error bound."""
+    n = F.shape[0]
+    normF = float(np.linalg.norm(F, 2))
     P = 0.5 * (P + P.T)
     normP = max(float(np.linalg.norm(P, 2)), np.finfo(float).tiny)
     residual = float(np.linalg.norm(F.T @ P @ F - P + Q, 2)) / max(
@@ -278,25 +260,87 @@ def lyapunov_certificate(
     p_eigs = np.linalg.eigvalsh(P)
     p_min = float(p_eigs[0]) / normP
     condition = float(p_eigs[-1] / p_eigs[0]) if p_eigs[0] > 0 else np.inf
-    if dec_min > clear * bound and p_min > clear * bound:
-        try:
-            np.linalg.cholesky(P - 0.5 * p_min * normP * np.eye(n))
-            np.linalg.cholesky(decrease - 0.5 * dec_min * normP * np.eye(n))
-        except np.linalg.LinAlgError:
-            pass
-        else:
-            contraction = float(np.sqrt(max(0.0, 1.0 - dec_min * normP / p_eigs[-1])))
-            return LyapunovCertificate(
-                Verdict.HOLDS, P, decrease, dec_min, bound, contraction, condition, residual, rho
-            )
-    margin = min(dec_min, p_min)  # negative when P or the decrease is indefinite
-    return exact_fallback(
-        f"the Lyapunov solution cannot be verified with a margin (smallest decrease "
-        f"{dec_min:.2e}, smallest eigenvalue of P {p_min:.2e}, error bound {bound:.2e})",
-        P,
-        decrease,
-        margin,
-        bound,
-        condition,
-        residual,
+    return _Checked(P, decrease, dec_min, p_min, p_eigs, normP, bound, condition, residual)
+
+
+def _verified_contraction(c: _Checked, clear: float) -> float | None:
+    """The contraction factor when P and the decrease are positive definite with a margin.
+
+    Both smallest eigenvalues must exceed ``clear`` times the error bound
+    and survive a Cholesky factorisation shifted by half of them; None
+    otherwise.
+    """
+    if not (c.dec_min > clear * c.bound and c.p_min > clear * c.bound):
+        return None
+    n = c.P.shape[0]
+    try:
+        np.linalg.cholesky(c.P - 0.5 * c.p_min * c.normP * np.eye(n))
+        np.linalg.cholesky(c.decrease - 0.5 * c.dec_min * c.normP * np.eye(n))
+    except np.linalg.LinAlgError:
+        return None
+    return float(np.sqrt(max(0.0, 1.0 - c.dec_min * c.normP / c.p_eigs[-1])))
+
+
+class _Unverified(NamedTuple):
+    """What a Lyapunov solution that did not verify reports (nothing when there is none)."""
+
+    P: np.ndarray | None = None
+    decrease: np.ndarray | None = None
+    margin: float | None = None
+    bound: float = 0.0
+    condition: float | None = None
+    residual: float | None = None
+
+
+def _exact_fallback(
+    F: np.ndarray,
+    parts: tuple[np.ndarray, np.ndarray, np.ndarray] | None,
+    rho: float,
+    why: str,
+    unverified: _Unverified | None = None,
+) -> LyapunovCertificate:
+    """The certificate the exact F decides (``schur_decision``) when no P verifies."""
+    from .spectral import schur_decision
+
+    decision = schur_decision(F, parts=parts)
+    proof = decision.to_dict()
+    if decision.state == "stable":
+        if decision.radius_upper is None:  # pragma: no cover - set whenever stable
+            raise RuntimeError("a stable Schur decision carries its radius bound")
+        upper = float(decision.radius_upper)
+        return LyapunovCertificate(
+            Verdict.HOLDS,
+            None,
+            None,
+            1.0 - upper,
+            0.0,
+            upper,
+            None,
+            None,
+            rho,
+            f"{why}; instead, {decision.reason}",
+            None,
+            "exact powers",
+            proof,
+        )
+    witness = instability_witness(F, parts=parts, decision=decision)
+    if decision.state == "unstable":
+        verdict, reason = Verdict.FAILS, decision.reason
+    else:
+        verdict, reason = Verdict.INCONCLUSIVE, f"{why}; {decision.reason}"
+    u = _Unverified() if unverified is None else unverified
+    return LyapunovCertificate(
+        verdict,
+        u.P,
+        u.decrease,
+        u.margin,
+        u.bound,
+        None,
+        u.condition,
+        u.residual,
+        rho,
+        reason,
+        witness,
+        "lyapunov",
+        proof,
     )

@@ -26,6 +26,7 @@ import numpy as np
 
 from .._exact import (
     Dyadic,
+    PowerBound,
     dyadic,
     exact_error_matrix,
     exact_kernel_vector,
@@ -158,63 +159,96 @@ def schur_decision(
             exact_powers_complete=powers.complete,
         )
         source = "of the printed gain (F = A - L C from its floats)" if parts else "of F"
-        if upper < 1.0:
-            return SchurDecision(
-                "stable",
-                upper,
-                lower,
-                f"exact powers: rho <= ||F^{powers.radius_power}||^(1/{powers.radius_power})",
-                lam,
-                True,
-                f"the exact powers {source} bound its spectral radius by {_fmt(upper)} < 1",
-                details,
-            )
-        if powers.trace_reaches_n and not lower > 1.0:
-            m = powers.trace_reaches_n
+        decided = _decided_by_powers(powers, source, n, lam, details)
+        if decided is None:
+            decided = _exact_eigenvalue_on_circle(exact, n, powers, lam, details)
+        if decided is not None:
+            return decided
+    return _decided_to_first_order(lam, bound, upper, lower, details)
+
+
+def _decided_by_powers(
+    powers: PowerBound, source: str, n: int, lam: complex, details: dict[str, Any]
+) -> SchurDecision | None:
+    """Stable by the norm of an exact power, unstable by exact traces, or None."""
+    upper, lower = powers.radius_bound, powers.radius_lower
+    if upper < 1.0:
+        return SchurDecision(
+            "stable",
+            upper,
+            lower,
+            f"exact powers: rho <= ||F^{powers.radius_power}||^(1/{powers.radius_power})",
+            lam,
+            True,
+            f"the exact powers {source} bound its spectral radius by {_fmt(upper)} < 1",
+            details,
+        )
+    if powers.trace_reaches_n and not lower > 1.0:
+        m = powers.trace_reaches_n
+        return SchurDecision(
+            "unstable",
+            upper,
+            max(lower, 1.0),
+            f"exact traces: |tr F^{m}| >= n",
+            lam,
+            True,
+            f"the exact powers {source} give |trace F^{m}| >= n = {n}, so its spectral radius "
+            f"is at least 1: the error does not converge to 0 from every state",
+            details,
+        )
+    if lower > 1.0:
+        return SchurDecision(
+            "unstable",
+            upper,
+            lower,
+            f"exact traces: rho >= (|tr F^{powers.lower_power}| / n)^(1/{powers.lower_power})",
+            lam,
+            True,
+            f"the exact traces of the powers {source} bound its spectral radius below by "
+            f"{_fmt(lower)} > 1",
+            details,
+        )
+    return None
+
+
+def _exact_eigenvalue_on_circle(
+    exact: Dyadic, n: int, powers: PowerBound, lam: complex, details: dict[str, Any]
+) -> SchurDecision | None:
+    """Unstable by an exact eigenvalue of modulus >= 1 that is a float, or None.
+
+    The candidates are 1, -1 and the computed dominant eigenvalue when it is
+    real (a perturbation of 2^-40 is below what the first-order bound
+    resolves, but an exact kernel vector proves it); tried for n <= 40.
+    """
+    candidates: list[float] = [1.0, -1.0]
+    if np.isfinite(abs(lam)) and lam.imag == 0 and abs(lam.real) >= 1.0:
+        candidates.append(float(lam.real))
+    for value in candidates:
+        if n <= 40 and exact_kernel_vector(shift_by(exact, value)) is not None:
+            shown = sig(value, 6, versus=np.sign(value))  # 1 + 2^-40 is not "1"
             return SchurDecision(
                 "unstable",
-                upper,
-                max(lower, 1.0),
-                f"exact traces: |tr F^{m}| >= n",
+                powers.radius_bound,
+                max(powers.radius_lower, abs(value)),
+                f"exact eigenvalue {shown}",
                 lam,
                 True,
-                f"the exact powers {source} give |trace F^{m}| >= n = {n}, so its spectral radius "
-                f"is at least 1: the error does not converge to 0 from every state",
+                f"F has the eigenvalue {shown} exactly "
+                f"(F - lambda I has an exact kernel vector), of modulus >= 1: the error along "
+                f"it never decays",
                 details,
             )
-        if lower > 1.0:
-            return SchurDecision(
-                "unstable",
-                upper,
-                lower,
-                f"exact traces: rho >= (|tr F^{powers.lower_power}| / n)^(1/{powers.lower_power})",
-                lam,
-                True,
-                f"the exact traces of the powers {source} bound its spectral radius below by "
-                f"{_fmt(lower)} > 1",
-                details,
-            )
-        # an eigenvalue on or outside the unit circle that is exactly a float: 1, -1, or the
-        # computed dominant one when it is real (a perturbation of 2^-40 is below what the
-        # first-order bound resolves, but an exact kernel vector proves it)
-        candidates: list[float] = [1.0, -1.0]
-        if np.isfinite(abs(lam)) and lam.imag == 0 and abs(lam.real) >= 1.0:
-            candidates.append(float(lam.real))
-        for value in candidates:
-            if n <= 40 and exact_kernel_vector(shift_by(exact, value)) is not None:
-                shown = sig(value, 6, versus=np.sign(value))  # 1 + 2^-40 is not "1"
-                return SchurDecision(
-                    "unstable",
-                    upper,
-                    max(lower, abs(value)),
-                    f"exact eigenvalue {shown}",
-                    lam,
-                    True,
-                    f"F has the eigenvalue {shown} exactly "
-                    f"(F - lambda I has an exact kernel vector), of modulus >= 1: the error along "
-                    f"it never decays",
-                    details,
-                )
+    return None
+
+
+def _decided_to_first_order(
+    lam: complex,
+    bound: float,
+    upper: float | None,
+    lower: float | None,
+    details: dict[str, Any],
+) -> SchurDecision:
+    """Unstable when the dominant eigenvalue clears 1 by its first-order bound, else unknown."""
     if np.isfinite(abs(lam)) and abs(lam) - bound > 1 + 1e-9:
         return SchurDecision(
             "unstable",

@@ -28,9 +28,8 @@ counterexample or the reason) or inconclusive.  Findings on the text:
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -39,7 +38,26 @@ from ..budget import Budget
 from ..observers import ObserverDesign
 from ..results import Verdict, combine_verdicts
 from ..tolerances import EPS
+from .counterexample_search import (  # noqa: F401  (the search limits stay importable here)
+    LOCAL_SEARCH_DIM,
+    SEARCH_EVALUATIONS,
+    SEARCH_FLOPS,
+    SEARCH_MEMORY,
+    _lipschitz_search,
+    _local_search,
+    _Meter,
+    _sample_rows,
+    _Search,
+    _SearchExhausted,
+)
 from .lyapunov import lyapunov_certificate
+from .pi_series import (  # noqa: F401  (the series stays importable here)
+    MAX_SERIES_TERMS,
+    SeriesError,
+    _PiSeries,
+    pi_map,
+    series_terms,
+)
 
 __all__ = ["AssumptionResult", "thesis_assumptions", "pi_map"]
 
@@ -62,318 +80,6 @@ class AssumptionResult:
 
 def _psi(s: np.ndarray, q: float, lam: float) -> np.ndarray:
     return q * np.sign(s) * np.maximum(np.abs(s) - lam, 0.0)
-
-
-MAX_SERIES_TERMS = 10_000  # terms of the series for Pi summed per evaluation
-SEARCH_FLOPS = 2e9  # floating-point operations of the counterexample searches of one design
-SEARCH_EVALUATIONS = 6_000  # objective evaluations of the local refinements of one design
-SEARCH_MEMORY = 64 * 2**20  # bytes of the cached powers F^(-l-1) L1 and of one batch of terms
-LOCAL_SEARCH_DIM = 200  # largest dimension refined by Nelder-Mead
-
-
-class SeriesError(ArithmeticError):
-    """The series for Pi cannot be summed: too many terms, or the powers of F^-1 overflow."""
-
-
-class _SearchExhausted(Exception):
-    """The searches of one design used their budget (internal)."""
-
-
-def series_terms(magnitude: float, q: float, lam: float) -> float:
-    """Number of nonzero terms of the series for Pi at an a with max |a_i| = magnitude.
-
-    Psi_q^l(a) has largest entry m_l with m_0 = magnitude and
-    m_(l+1) = q max(m_l - lambda, 0): for q = 1, ceil(magnitude / lambda) terms;
-    for q < 1, m_l + c = q^l (m_0 + c) with c = q lambda / (1 - q).  Infinite
-    for lambda = 0 (the terms only shrink geometrically).
-    """
-    if not magnitude > 0:
-        return 0.0
-    if not math.isfinite(magnitude) or lam <= 0:
-        return math.inf
-    if q >= 1.0:
-        return float(math.ceil(magnitude / lam)) + 1.0
-    if q <= 0.0:
-        return 1.0
-    c = q * lam / (1.0 - q)
-    return float(max(1, math.ceil(math.log1p(magnitude / c) / -math.log(q)))) + 1.0
-
-
-class _Meter:
-    """Counts the work of the searches and stops them at their budget."""
-
-    def __init__(self, flops: float = math.inf, evaluations: float = math.inf) -> None:
-        self.max_flops, self.max_evaluations = flops, evaluations
-        self.flops = 0.0
-        self.evaluations = 0
-
-    def charge(self, flops: float, evaluations: int = 0) -> None:
-        self.flops += flops
-        self.evaluations += evaluations
-        if self.flops > self.max_flops or self.evaluations > self.max_evaluations:
-            raise _SearchExhausted
-
-
-class _PiSeries:
-    """Pi(a) = -sum_l W_l Psi_q^l(a) with W_l = F^(-l-1) L1 computed once per design.
-
-    Psi_q^l(a) is formed in closed form (see ``series_terms``), so an
-    evaluation is one tensor contraction instead of a loop over terms.  The
-    powers are cached up to ``max_terms`` terms within ``memory`` bytes;
-    rows that need more terms, or powers that overflow, give NaN and the
-    reason.
-    """
-
-    def __init__(
-        self,
-        F_inv: np.ndarray,
-        L1: np.ndarray,
-        q: float,
-        lam: float,
-        *,
-        max_terms: int = MAX_SERIES_TERMS,
-        memory: int = SEARCH_MEMORY,
-    ) -> None:
-        self.F_inv, self.L1, self.q, self.lam = F_inv, L1, float(q), float(lam)
-        n, p = L1.shape
-        self.memory = memory
-        self.max_terms = int(max(1, min(max_terms, memory // (8 * n * p))))
-        self.limit_reason = (
-            ""
-            if self.max_terms == max_terms
-            else f" (the cached powers F^-l L1 are bounded to {memory // 2**20} MiB)"
-        )
-        self.W = np.empty((0, p, n))  # W[l] = (F^(-l-1) L1)^T
-        self.overflow_at: int | None = None  # first l with a non-finite W_l
-        self._next = F_inv.copy()
-
-    def _extend(self, terms: int) -> None:
-        have = self.W.shape[0]
-        if terms <= have or self.overflow_at is not None:
-            return
-        want = min(self.max_terms, max(terms, 2 * have, 16))
-        new = np.empty((want - have,) + self.W.shape[1:])
-        P = self._next
-        with np.errstate(over="ignore", invalid="ignore"):
-            for j in range(want - have):
-                new[j] = (P @ self.L1).T
-                P = P @ self.F_inv
-        finite = np.all(np.isfinite(new), axis=(1, 2))
-        if not finite.all():
-            self.overflow_at = have + int(np.argmin(finite))
-            new = new[: self.overflow_at - have]
-        self.W = np.concatenate([self.W, new])
-        self._next = P
-
-    def _terms(self, a: np.ndarray, K: int) -> np.ndarray:
-        """Psi_q^l(a) for l < K, shape (rows, K, p)."""
-        q, lam = self.q, self.lam
-        mag = np.abs(a)[:, None, :]
-        ell = np.arange(K, dtype=float)[None, :, None]
-        with np.errstate(over="ignore", invalid="ignore"):
-            if q >= 1.0:
-                m = mag - ell * lam
-            else:
-                c = q * lam / (1.0 - q)
-                m = q**ell * (mag + c) - c
-        # term l is nonzero only while the previous one exceeds the threshold
-        dead = np.zeros(m.shape, dtype=bool)
-        np.less_equal(m[:, :-1], lam, out=dead[:, 1:])
-        np.maximum(m, 0.0, out=m)
-        m[dead] = 0.0
-        m[:, 0] = mag[:, 0]
-        m *= np.sign(a)[:, None, :]
-        return m
-
-    def __call__(self, a: np.ndarray, meter: _Meter | None = None) -> tuple[np.ndarray, str]:
-        a = np.atleast_2d(np.asarray(a, dtype=float))
-        rows = a.shape[0]
-        n, p = self.L1.shape
-        out = np.full((rows, n), np.nan)
-        mags = np.abs(a).max(axis=1, initial=0.0)
-        needed = np.array([series_terms(float(m), self.q, self.lam) for m in mags])
-        reason = ""
-        ok = needed <= self.max_terms
-        if not ok.all():
-            worst = int(np.argmax(needed))
-            reason = (
-                f"the series for Pi needs {needed[worst]:.3g} terms at max |a_i| = "
-                f"{mags[worst]:.3g} (threshold {self.lam:g}, shrink {self.q:g}); at most "
-                f"{self.max_terms:,} are summed{self.limit_reason}"
-            )
-        if ok.any():
-            K = int(needed[ok].max())
-            self._extend(K)
-            if self.overflow_at is not None and self.overflow_at < K:
-                over = ok & (needed > self.overflow_at)
-                ok &= ~over
-                reason = reason or (
-                    f"the powers of F^-1 overflow after {self.overflow_at} terms of the series "
-                    f"for Pi (||F^-1|| = {np.linalg.norm(self.F_inv, 2):.3g}); "
-                    f"max |a_i| = {mags[over].max():.3g} needs {needed[over].max():.3g}"
-                )
-        idx = np.flatnonzero(ok)
-        if idx.size:
-            K = max(1, int(needed[idx].max()))
-            if meter is not None:  # the elementwise work of _terms dominates for small n
-                meter.charge(idx.size * K * p * (2.0 * n + 30.0))
-            chunk = max(1, int(self.memory // (8 * 4 * K * p)))
-            W = self.W[:K].reshape(K * p, n)
-            with np.errstate(over="ignore", invalid="ignore"):
-                for start in range(0, idx.size, chunk):
-                    sel = idx[start : start + chunk]
-                    out[sel] = -np.dot(self._terms(a[sel], K).reshape(sel.size, K * p), W)
-            bad = ~np.all(np.isfinite(out[idx]), axis=1)
-            if bad.any():
-                out[idx[bad]] = np.nan
-                reason = reason or "the series for Pi overflows"
-        return out, reason
-
-
-def pi_map(
-    a: np.ndarray,
-    F_inv: np.ndarray,
-    L1: np.ndarray,
-    q: float,
-    lam: float,
-    *,
-    max_terms: int = MAX_SERIES_TERMS,
-) -> np.ndarray:
-    """Pi(a) = -sum_l F^(-l-1) L1 Psi_q^l(a) for a batch of a (rows).
-
-    The sum is finite: Psi_q^l(a) is exactly zero after finitely many
-    iterations when lambda > 0 (``series_terms`` counts them).
-
-    Raises
-    ------
-    SeriesError
-        (an ``ArithmeticError``) when some row needs more than ``max_terms``
-        terms or the powers of F^-1 overflow; the message says which.
-    """
-    out, reason = _PiSeries(F_inv, L1, q, lam, max_terms=max_terms)(a)
-    if reason or not np.all(np.isfinite(out)):
-        raise SeriesError(reason or "the series for Pi did not give finite values")
-    return out
-
-
-class _Search:
-    """Evaluations of one counterexample search: failures counted, best point kept."""
-
-    def __init__(self, meter: _Meter) -> None:
-        self.meter = meter
-        self.failed = 0
-        self.reason = ""
-        self.best_value = -math.inf
-        self.best_point: np.ndarray | None = None
-
-    def note(self, reason: str, count: int = 1) -> None:
-        if reason:
-            self.failed += count
-            self.reason = self.reason or reason
-
-    def objective(self, ratio) -> Any:
-        """-ratio(x) for minimisation; a point whose ratio cannot be evaluated counts as 0."""
-
-        def neg(x: np.ndarray) -> float:
-            self.meter.charge(0.0, 1)
-            value, reason = ratio(x)
-            if reason or not math.isfinite(value):
-                self.note(reason or "a non-finite ratio")
-                return 0.0
-            if value > self.best_value:
-                self.best_value, self.best_point = value, np.array(x, copy=True)
-            return -value
-
-        return neg
-
-
-def _local_search(neg, x0: np.ndarray, maxiter: int) -> str:
-    """Nelder-Mead from x0; returns why it stopped early ('' when it finished)."""
-    from scipy.optimize import minimize
-
-    if x0.size > LOCAL_SEARCH_DIM:
-        return f"no local refinement in dimension {x0.size} (> {LOCAL_SEARCH_DIM})"
-    try:
-        minimize(
-            neg,
-            x0,
-            method="Nelder-Mead",
-            options={"maxiter": maxiter, "xatol": 1e-10, "fatol": 1e-12},
-        )
-    except _SearchExhausted:
-        return "the search budget ran out during the local refinement"
-    return ""
-
-
-def _sample_rows(p: int) -> int:
-    """Samples per batch: 4000, fewer when p is large (SEARCH_MEMORY bounds a batch)."""
-    return int(min(4000, max(100, SEARCH_MEMORY // (8 * 8 * max(p, 1)))))
-
-
-def _lipschitz_search(
-    pi, dim: int, rng: np.random.Generator, scale: float, meter: _Meter, samples: int = 4000
-) -> tuple[float | None, np.ndarray | None, np.ndarray | None, dict[str, Any]]:
-    """Largest ||Pi(a1) - Pi(a2)|| / ||a1 - a2|| found by sampling and local refinement.
-
-    ``pi(a)`` returns (values with NaN rows, reason).  The ratio is None when
-    no pair could be evaluated.
-    """
-    search = _Search(meter)
-    mags = scale * np.exp(rng.uniform(np.log(0.05), np.log(50.0), (samples, 1)))
-    a1 = rng.standard_normal((samples, dim)) * mags
-    d = (
-        rng.standard_normal((samples, dim))
-        * mags
-        * np.exp(rng.uniform(np.log(1e-3), 0, (samples, 1)))
-    )
-    a2 = a1 + d
-    ratios = np.full(samples, np.nan)
-    stopped = ""
-    batch = max(1, samples // 8)
-    try:
-        for start in range(0, samples, batch):
-            sl = slice(start, start + batch)
-            f1, r1 = pi(a1[sl])
-            f2, r2 = pi(a2[sl])
-            with np.errstate(over="ignore", invalid="ignore"):
-                ratios[sl] = np.linalg.norm(f1 - f2, axis=1) / np.linalg.norm(
-                    a1[sl] - a2[sl], axis=1
-                )
-            search.note(r1 or r2, int(np.count_nonzero(~np.isfinite(ratios[sl]))))
-    except _SearchExhausted:
-        stopped = "the search budget ran out during sampling"
-    finite = np.flatnonzero(np.isfinite(ratios))
-    info: dict[str, Any] = {
-        "pairs_evaluated": int(finite.size),
-        "pairs_not_evaluated": int(samples - finite.size),
-    }
-    if finite.size == 0:
-        info["reason"] = search.reason or stopped or "no pair could be evaluated"
-        return None, None, None, info
-    best = int(finite[np.argmax(ratios[finite])])
-
-    def ratio(x: np.ndarray) -> tuple[float, str]:
-        x1, x2 = x[:dim], x[dim:]
-        den = float(np.linalg.norm(x1 - x2))
-        if den == 0:
-            return 0.0, ""
-        values, reason = pi(np.vstack([x1, x2]))
-        if reason:
-            return math.nan, reason
-        with np.errstate(over="ignore", invalid="ignore"):
-            return float(np.linalg.norm(values[0] - values[1])) / den, ""
-
-    if not stopped:
-        stopped = _local_search(search.objective(ratio), np.concatenate([a1[best], a2[best]]), 2000)
-    if stopped:
-        info["stopped"] = stopped
-    if search.failed:
-        info["evaluations_failed"] = search.failed
-        info["first_failure"] = search.reason
-    if search.best_point is not None and search.best_value > ratios[best]:
-        x = search.best_point
-        return float(search.best_value), x[:dim], x[dim:], info
-    return float(ratios[best]), a1[best], a2[best], info
 
 
 def thesis_assumptions(
@@ -405,6 +111,40 @@ def thesis_assumptions(
     items : list of AssumptionResult
     """
     rng = np.random.default_rng(seed)
+    inst = _instance(design)
+    items = [_assumption_1(observability_holds), _assumption_2(inst)]
+    refusal = _refusal(inst, budget)
+    if refusal:
+        for name in ("lemma_1", "assumption_3", "epsilon_bound"):
+            items.append(AssumptionResult(name, Verdict.INCONCLUSIVE, f"not attempted: {refusal}"))
+        return combine_verdicts([i.verdict for i in items]).value, items
+    lemma = _lemma_1(inst, rng)
+    assumption_3, rho_a = _assumption_3(inst, lemma, rng)
+    items += [lemma.item, assumption_3, _epsilon_bound(inst, lemma, rho_a)]
+    return combine_verdicts([i.verdict for i in items]).value, items
+
+
+@dataclass(frozen=True)
+class _Instance:
+    """A sparse design in the thesis's notation: F = A + L1 S, Psi_q = q S_lambda, step eps."""
+
+    A: np.ndarray
+    S: np.ndarray
+    L1: np.ndarray
+    F: np.ndarray
+    L2: np.ndarray
+    q: float
+    lam: float
+    eps: float
+
+    @property
+    def p(self) -> int:
+        """Entries of the attack estimate."""
+        return int(self.S.shape[0])
+
+
+def _instance(design: ObserverDesign) -> _Instance:
+    """The design's matrices and parameters; TypeError for an observer without a step."""
     S = design.sensing
     A = design.system.A
     L1 = -design.gain.L
@@ -417,350 +157,373 @@ def thesis_assumptions(
         )
     eps = float(design.step)
     L2 = design.L2 if design.L2 is not None else np.eye(S.shape[0])
-    p = S.shape[0]
-    items: list[AssumptionResult] = []
+    return _Instance(A=A, S=S, L1=L1, F=F, L2=L2, q=q, lam=lam, eps=eps)
 
-    # Assumption 1
+
+def _assumption_1(observability_holds: bool | None) -> AssumptionResult:
+    """Assumption 1 (observability), taken from the observability check's verdict."""
     if observability_holds is None:
-        items.append(
-            AssumptionResult("assumption_1", Verdict.INCONCLUSIVE, "observability not checked")
-        )
-    else:
-        items.append(
-            AssumptionResult(
-                "assumption_1",
-                Verdict.HOLDS if observability_holds else Verdict.FAILS,
-                "(A, C) is observable (see the observability check)"
-                if observability_holds
-                else "(A, C) is not observable (see the observability check)",
-            )
-        )
-
-    # Assumption 2 with Q = I (p x p)
-    items.append(
-        AssumptionResult(
-            "assumption_2",
-            Verdict.HOLDS,
-            "With Q = I (p x p; the thesis's n x n is a typo): Psi_q(0) = 0; |Psi_q(s)_i| = "
-            f"q max(|s_i| - lambda, 0) < |s_i| for s_i != 0 (q = {q:g}, lambda = {lam:g}), so "
-            "Psi_q(s)' Q Psi_q(s) < s' Q s for s != 0; and Psi_q is Lipschitz with constant q "
-            "because soft thresholding is 1-Lipschitz. The property (5.21) "
-            "Psi_q(s)' Q Psi_q(s) <= q^2 s' Q s also holds for this diagonal Q (it can fail for a "
-            "non-diagonal Q).",
-            {"Q": "identity", "lipschitz_psi": q},
-        )
+        return AssumptionResult("assumption_1", Verdict.INCONCLUSIVE, "observability not checked")
+    return AssumptionResult(
+        "assumption_1",
+        Verdict.HOLDS if observability_holds else Verdict.FAILS,
+        "(A, C) is observable (see the observability check)"
+        if observability_holds
+        else "(A, C) is not observable (see the observability check)",
     )
 
+
+def _assumption_2(inst: _Instance) -> AssumptionResult:
+    """Assumption 2 with Q = I (p x p): holds for the shrinkage Psi_q."""
+    q, lam = inst.q, inst.lam
+    return AssumptionResult(
+        "assumption_2",
+        Verdict.HOLDS,
+        "With Q = I (p x p; the thesis's n x n is a typo): Psi_q(0) = 0; |Psi_q(s)_i| = "
+        f"q max(|s_i| - lambda, 0) < |s_i| for s_i != 0 (q = {q:g}, lambda = {lam:g}), so "
+        "Psi_q(s)' Q Psi_q(s) < s' Q s for s != 0; and Psi_q is Lipschitz with constant q "
+        "because soft thresholding is 1-Lipschitz. The property (5.21) "
+        "Psi_q(s)' Q Psi_q(s) <= q^2 s' Q s also holds for this diagonal Q (it can fail for a "
+        "non-diagonal Q).",
+        {"Q": "identity", "lipschitz_psi": q},
+    )
+
+
+def _refusal(inst: _Instance, budget: Budget | None) -> str:
+    """Why the budget refuses the p x p work of Lemma 1 and Assumption 3 ('' when it allows it)."""
+    p = inst.p
     # the bounds below take 2-norms of p x p matrices (p = attack-estimate entries)
-    refusal = (budget or Budget()).refusal(
+    return (budget or Budget()).refusal(
         f"checking Lemma 1 and Assumption 3 with {p} attack-estimate entries",
         nbytes=8.0 * (4 * p * p + _sample_rows(p) * p * 6),
         flops=30.0 * p**3,
     )
-    if refusal:
-        for name in ("lemma_1", "assumption_3", "epsilon_bound"):
-            items.append(AssumptionResult(name, Verdict.INCONCLUSIVE, f"not attempted: {refusal}"))
-        return combine_verdicts([i.verdict for i in items]).value, items
 
-    # Lemma 1
+
+class _Lemma1(NamedTuple):
+    """Lemma 1's item and what Assumption 3 and the epsilon bound take from it."""
+
+    item: AssumptionResult
+    holds: bool  # Pi exists with a finite Lipschitz bound
+    lipschitz: float | None  # the proven Lipschitz constant of Pi
+    series: _PiSeries | None  # Pi; None when F is singular
+
+
+def _lemma_1(inst: _Instance, rng: np.random.Generator) -> _Lemma1:
+    """Lemma 1: Pi exists (F invertible) and has the claimed Lipschitz constant."""
+    F, L1 = inst.F, inst.L1
     s_F = np.linalg.svd(F, compute_uv=False)
     # singularity relative to the plant's scale (a deadbeat F can be zero to rounding)
     scale_F = max(
-        float(np.linalg.norm(A, 2)),
-        float(np.linalg.norm(L1 @ S, 2)),
+        float(np.linalg.norm(inst.A, 2)),
+        float(np.linalg.norm(L1 @ inst.S, 2)),
         float(s_F[0]),
         np.finfo(float).tiny,
     )
     singular = s_F[-1] <= 1e3 * F.shape[0] * EPS * scale_F
     rho_F = float(np.abs(np.linalg.eigvals(F)).max())
+    q = inst.q
     claimed = float(np.linalg.norm(L1, 2)) / abs(rho_F - q) if abs(rho_F - q) > 0 else np.inf
-    lemma_ok = False
-    ell_pi = None
-    F_inv = None
-    # the searches below only look for counterexamples; a budget keeps them short
-    # each search gets half of the budget, so that one cannot starve the other
-    lemma_meter = _Meter(SEARCH_FLOPS / 2, SEARCH_EVALUATIONS / 2)
-    rows = _sample_rows(p)
     if singular:
-        items.append(
-            AssumptionResult(
-                "lemma_1",
-                Verdict.FAILS,
-                f"F = A + L1 C is singular (smallest singular value {s_F[-1]:.2e}; every "
-                f"nilpotent F, as a deadbeat gain makes it, is singular), so "
-                f"Pi(a) = -sum F^(-l-1) L1 Psi_q^l(a) does not exist and the "
-                f"change of variable eta = e - Pi(a_hat) of the proof is unavailable.",
-                {"smallest_singular_value_F": float(s_F[-1]), "claimed_lipschitz": claimed},
-            )
+        return _Lemma1(_singular_F(float(s_F[-1]), claimed), False, None, None)
+    return _lemma_1_on_pi(inst, rng, claimed, rho_F)
+
+
+def _singular_F(smallest: float, claimed: float) -> AssumptionResult:
+    """Lemma 1 fails: F is singular, so Pi does not exist."""
+    return AssumptionResult(
+        "lemma_1",
+        Verdict.FAILS,
+        f"F = A + L1 C is singular (smallest singular value {smallest:.2e}; every "
+        f"nilpotent F, as a deadbeat gain makes it, is singular), so "
+        f"Pi(a) = -sum F^(-l-1) L1 Psi_q^l(a) does not exist and the "
+        f"change of variable eta = e - Pi(a_hat) of the proof is unavailable.",
+        {"smallest_singular_value_F": smallest, "claimed_lipschitz": claimed},
+    )
+
+
+def _lemma_1_on_pi(
+    inst: _Instance, rng: np.random.Generator, claimed: float, rho_F: float
+) -> _Lemma1:
+    """Lemma 1 for an invertible F: the corrected bound against a search for larger ratios."""
+    q, lam, L1, p = inst.q, inst.lam, inst.L1, inst.p
+    F_inv = np.linalg.inv(inst.F)
+    ninv = float(np.linalg.norm(F_inv, 2))
+    correct = (float(np.linalg.norm(L1, 2)) * ninv / (1 - q * ninv)) if q * ninv < 1 else np.inf
+    series = _PiSeries(F_inv, L1, q, lam)
+    # the searches only look for counterexamples; a budget keeps them short
+    # each search gets half of the budget, so that one cannot starve the other
+    meter = _Meter(SEARCH_FLOPS / 2, SEARCH_EVALUATIONS / 2)
+
+    def pi(a: np.ndarray) -> tuple[np.ndarray, str]:
+        return series(a, meter)
+
+    scale = max(lam, 1e-3)
+    ratio, a1, a2, search = _lipschitz_search(pi, p, rng, scale, meter, samples=_sample_rows(p))
+    details: dict[str, Any] = {
+        "claimed_lipschitz": claimed,
+        "correct_bound": correct,
+        "empirical_ratio": ratio,
+        "equation_5_9_residual": _equation_5_9_residual(inst, pi, rng, scale, search),
+        "norm_F_inv": ninv,
+        "spectral_radius_F": rho_F,
+        "search": search,
+    }
+    if ratio is not None and ratio > claimed * (1 + 1e-9):
+        # the claimed constant is wrong, but Pi exists and the corrected bound is valid
+        item = AssumptionResult(
+            "lemma_1",
+            Verdict.FAILS,
+            f"the claimed Lipschitz constant ||L1|| / |lambda_max(F) - q| = {claimed:.4g} is "
+            f"exceeded: |Pi(a1) - Pi(a2)| / |a1 - a2| = {ratio:.4g} for the pair in the "
+            f"counterexample",
+            {**details, "counterexample": {"a1": a1, "a2": a2}},
         )
-    else:
-        F_inv = np.linalg.inv(F)
-        ninv = float(np.linalg.norm(F_inv, 2))
-        correct = (float(np.linalg.norm(L1, 2)) * ninv / (1 - q * ninv)) if q * ninv < 1 else np.inf
-
-        series = _PiSeries(F_inv, L1, q, lam)
-
-        def pi(a: np.ndarray) -> tuple[np.ndarray, str]:
-            return series(a, lemma_meter)
-
-        scale = max(lam, 1e-3)
-        ratio, a1, a2, search = _lipschitz_search(pi, p, rng, scale, lemma_meter, samples=rows)
-        residual = None
-        try:
-            sample = rng.standard_normal((200, p)) * scale * 5
-            pi_a, _ = pi(sample)
-            pi_psi, _ = pi(_psi(sample, q, lam))
-            eq = F @ pi_a.T + L1 @ sample.T - pi_psi.T
-            ok = np.all(np.isfinite(eq), axis=0)
-            if np.any(ok):
-                residual = float(np.abs(eq[:, ok]).max() / max(1.0, np.abs(pi_a[ok]).max()))
-        except _SearchExhausted:
-            search.setdefault("stopped", "the search budget ran out before the (5.9) check")
-        details: dict[str, Any] = {
-            "claimed_lipschitz": claimed,
-            "correct_bound": correct,
-            "empirical_ratio": ratio,
-            "equation_5_9_residual": residual,
-            "norm_F_inv": ninv,
-            "spectral_radius_F": rho_F,
-            "search": search,
-        }
-        if ratio is not None and ratio > claimed * (1 + 1e-9):
-            # the claimed constant is wrong, but Pi exists and the corrected bound is valid
-            lemma_ok, ell_pi = (
-                bool(np.isfinite(correct)),
-                (correct if np.isfinite(correct) else None),
-            )
-            items.append(
-                AssumptionResult(
-                    "lemma_1",
-                    Verdict.FAILS,
-                    f"the claimed Lipschitz constant ||L1|| / |lambda_max(F) - q| = {claimed:.4g} is "
-                    f"exceeded: |Pi(a1) - Pi(a2)| / |a1 - a2| = {ratio:.4g} for the pair in the "
-                    f"counterexample",
-                    {**details, "counterexample": {"a1": a1, "a2": a2}},
-                )
-            )
-        elif correct <= claimed:
-            lemma_ok, ell_pi = True, correct
-            items.append(
-                AssumptionResult(
-                    "lemma_1",
-                    Verdict.HOLDS,
-                    f"Pi exists (the series is finite) and is Lipschitz with constant <= {correct:.4g} "
-                    f"(= ||L1|| ||F^-1|| / (1 - q ||F^-1||)) <= the claimed {claimed:.4g}",
-                    details,
-                )
-            )
-        else:
-            lemma_ok, ell_pi = True, correct if np.isfinite(correct) else None
-            found = (
-                f"sampling found ratios up to {ratio:.4g}"
-                if ratio is not None
-                else f"no ratio could be sampled: {search['reason']}"
-            )
-            items.append(
-                AssumptionResult(
-                    "lemma_1",
-                    Verdict.INCONCLUSIVE,
-                    f"Pi exists, but the claimed constant {claimed:.4g} is not proven: the series "
-                    f"gives {correct:.4g}; {found}",
-                    details,
-                )
-            )
-
-    # Assumption 3 with Q = I
-    rho_a = None
-    a3_meter = _Meter(SEARCH_FLOPS / 2, SEARCH_EVALUATIONS / 2)
-    if F_inv is None:
-        items.append(
-            AssumptionResult(
-                "assumption_3",
-                Verdict.INCONCLUSIVE,
-                "it is stated in terms of Pi from Lemma 1, which does not exist for this gain",
-            )
+        finite = bool(np.isfinite(correct))
+        return _Lemma1(item, finite, correct if finite else None, series)
+    if correct <= claimed:
+        item = AssumptionResult(
+            "lemma_1",
+            Verdict.HOLDS,
+            f"Pi exists (the series is finite) and is Lipschitz with constant <= {correct:.4g} "
+            f"(= ||L1|| ||F^-1|| / (1 - q ||F^-1||)) <= the claimed {claimed:.4g}",
+            details,
         )
-    else:
+        return _Lemma1(item, True, correct, series)
+    found = (
+        f"sampling found ratios up to {ratio:.4g}"
+        if ratio is not None
+        else f"no ratio could be sampled: {search['reason']}"
+    )
+    item = AssumptionResult(
+        "lemma_1",
+        Verdict.INCONCLUSIVE,
+        f"Pi exists, but the claimed constant {claimed:.4g} is not proven: the series "
+        f"gives {correct:.4g}; {found}",
+        details,
+    )
+    return _Lemma1(item, True, correct if np.isfinite(correct) else None, series)
 
-        def g(a: np.ndarray) -> tuple[np.ndarray, str]:
-            a = np.atleast_2d(a)
-            values, reason = series(a, a3_meter)
-            with np.errstate(over="ignore", invalid="ignore"):
-                v = a - eps * (S @ values.T + a.T).T @ L2.T
-                return _psi(v, q, lam), reason
 
-        def ratio_of(a: np.ndarray) -> tuple[np.ndarray, str]:
-            a = np.atleast_2d(a)
-            values, reason = g(a)
-            with np.errstate(over="ignore", invalid="ignore"):
-                r = np.sum(values**2, axis=1) / np.sum(a**2, axis=1)
-            return r, reason
+def _equation_5_9_residual(
+    inst: _Instance, pi: Any, rng: np.random.Generator, scale: float, search: dict[str, Any]
+) -> float | None:
+    """Relative residual of F Pi(a) + L1 a = Pi(Psi_q(a)) (5.9) on 200 random a.
 
-        a3 = _Search(a3_meter)
-        mags = max(lam, 1e-3) * np.exp(rng.uniform(np.log(0.05), np.log(100.0), (rows, 1)))
-        samples = rng.standard_normal((rows, p)) * mags
-        ratios = np.full(rows, np.nan)
-        stopped = ""
-        try:
-            batch = max(1, rows // 8)
-            for start in range(0, rows, batch):
-                sl = slice(start, start + batch)
-                ratios[sl], reason = ratio_of(samples[sl])
-                a3.note(reason, int(np.count_nonzero(~np.isfinite(ratios[sl]))))
-        except _SearchExhausted:
-            stopped = "the search budget ran out during sampling"
-        finite = np.flatnonzero(np.isfinite(ratios))
-        worst_value, worst_point = None, None
-        if finite.size:
-            worst = int(finite[np.argmax(ratios[finite])])
-            worst_value, worst_point = float(ratios[worst]), samples[worst]
+    None when no a could be evaluated; a search that runs out of budget is
+    noted in ``search``.
+    """
+    residual = None
+    try:
+        sample = rng.standard_normal((200, inst.p)) * scale * 5
+        pi_a, _ = pi(sample)
+        pi_psi, _ = pi(_psi(sample, inst.q, inst.lam))
+        eq = inst.F @ pi_a.T + inst.L1 @ sample.T - pi_psi.T
+        ok = np.all(np.isfinite(eq), axis=0)
+        if np.any(ok):
+            residual = float(np.abs(eq[:, ok]).max() / max(1.0, np.abs(pi_a[ok]).max()))
+    except _SearchExhausted:
+        search.setdefault("stopped", "the search budget ran out before the (5.9) check")
+    return residual
 
-            def one(a: np.ndarray) -> tuple[float, str]:
-                if not float(a @ a) > 0:
-                    return 0.0, ""
-                r, reason = ratio_of(a)
-                return float(r[0]), reason
 
-            # then local optimisation from the worst sample
-            if not stopped:
-                stopped = _local_search(a3.objective(one), samples[worst].copy(), 400)
-            if a3.best_point is not None and a3.best_value > worst_value:
-                worst_value, worst_point = a3.best_value, a3.best_point
-        details = {
-            "Q": "identity",
-            "largest_ratio_found": worst_value,
-            "search": f"{rows} samples over magnitudes 0.05-100 lambda, then Nelder-Mead",
-            "samples_evaluated": int(finite.size),
-        }
-        if stopped:
-            details["stopped"] = stopped
-        if a3.failed:
-            details["evaluations_failed"] = a3.failed
-            details["first_failure"] = a3.reason
-        bound = None
-        if ell_pi is not None:
-            bound = q * (
-                float(np.linalg.norm(np.eye(p) - eps * L2, 2))
-                + eps * float(np.linalg.norm(L2, 2)) * float(np.linalg.norm(S, 2)) * ell_pi
-            )
-            details["proven_bound_sqrt_rho"] = bound
-        if worst_value is not None and worst_value >= 1.0:
-            items.append(
-                AssumptionResult(
-                    "assumption_3",
-                    Verdict.FAILS,
-                    f"for the a_hat in the counterexample the left side is {worst_value:.4g} times "
-                    f"a_hat' Q a_hat, so no rho'' < 1 works",
-                    {**details, "counterexample": worst_point},
-                )
-            )
-        elif bound is not None and bound < 1.0:
-            rho_a = bound**2
-            items.append(
-                AssumptionResult(
-                    "assumption_3",
-                    Verdict.HOLDS,
-                    f"proven with rho'' = {rho_a:.4g} < 1 from |Psi_q(v)| <= q |v| and the Lipschitz "
-                    f"bound of Pi",
-                    details,
-                )
-            )
-        elif worst_value is None:
-            items.append(
-                AssumptionResult(
-                    "assumption_3",
-                    Verdict.INCONCLUSIVE,
-                    f"no proof, and no sample could be evaluated: "
-                    f"{a3.reason or stopped or 'the ratio is not finite'}",
-                    details,
-                )
-            )
-        else:
-            items.append(
-                AssumptionResult(
-                    "assumption_3",
-                    Verdict.INCONCLUSIVE,
-                    f"no counterexample found (largest ratio found {worst_value:.4g}) but no "
-                    f"proof either",
-                    details,
-                )
-            )
+def _assumption_3(
+    inst: _Instance, lemma: _Lemma1, rng: np.random.Generator
+) -> tuple[AssumptionResult, float | None]:
+    """Assumption 3 with Q = I, and rho'' when it is proven."""
+    if lemma.series is None:
+        return AssumptionResult(
+            "assumption_3",
+            Verdict.INCONCLUSIVE,
+            "it is stated in terms of Pi from Lemma 1, which does not exist for this gain",
+        ), None
+    search = _Search(_Meter(SEARCH_FLOPS / 2, SEARCH_EVALUATIONS / 2))
+    ratio_of = _attack_ratio(inst, lemma.series, search.meter)
+    rows = _sample_rows(inst.p)
+    worst_value, worst_point, evaluated, stopped = _largest_attack_ratio(
+        ratio_of, search, inst, rng, rows
+    )
+    details: dict[str, Any] = {
+        "Q": "identity",
+        "largest_ratio_found": worst_value,
+        "search": f"{rows} samples over magnitudes 0.05-100 lambda, then Nelder-Mead",
+        "samples_evaluated": evaluated,
+    }
+    if stopped:
+        details["stopped"] = stopped
+    if search.failed:
+        details["evaluations_failed"] = search.failed
+        details["first_failure"] = search.reason
+    bound = None
+    if lemma.lipschitz is not None:
+        bound = _attack_contraction_bound(inst, lemma.lipschitz)
+        details["proven_bound_sqrt_rho"] = bound
+    if worst_value is not None and worst_value >= 1.0:
+        return AssumptionResult(
+            "assumption_3",
+            Verdict.FAILS,
+            f"for the a_hat in the counterexample the left side is {worst_value:.4g} times "
+            f"a_hat' Q a_hat, so no rho'' < 1 works",
+            {**details, "counterexample": worst_point},
+        ), None
+    if bound is not None and bound < 1.0:
+        rho_a = bound**2
+        return AssumptionResult(
+            "assumption_3",
+            Verdict.HOLDS,
+            f"proven with rho'' = {rho_a:.4g} < 1 from |Psi_q(v)| <= q |v| and the Lipschitz "
+            f"bound of Pi",
+            details,
+        ), rho_a
+    if worst_value is None:
+        why = search.reason or stopped or "the ratio is not finite"
+        return AssumptionResult(
+            "assumption_3",
+            Verdict.INCONCLUSIVE,
+            f"no proof, and no sample could be evaluated: {why}",
+            details,
+        ), None
+    return AssumptionResult(
+        "assumption_3",
+        Verdict.INCONCLUSIVE,
+        f"no counterexample found (largest ratio found {worst_value:.4g}) but no proof either",
+        details,
+    ), None
 
-    # epsilon bound (5.20), with the eigenvalues the inequalities need
-    if not (lemma_ok and rho_a is not None and ell_pi is not None):
-        items.append(
-            AssumptionResult(
-                "epsilon_bound",
-                Verdict.INCONCLUSIVE,
-                "the bound (5.20) needs Lemma 1 and Assumption 3, which are not established here",
-            )
+
+def _attack_ratio(inst: _Instance, series: _PiSeries, meter: _Meter) -> Any:
+    """The map a -> (|g(a)|^2 / |a|^2 per row, reason), g(a) = Psi_q(a - eps L2 (S Pi(a) + a))."""
+    S, L2, eps, q, lam = inst.S, inst.L2, inst.eps, inst.q, inst.lam
+
+    def g(a: np.ndarray) -> tuple[np.ndarray, str]:
+        a = np.atleast_2d(a)
+        values, reason = series(a, meter)
+        with np.errstate(over="ignore", invalid="ignore"):
+            v = a - eps * (S @ values.T + a.T).T @ L2.T
+            return _psi(v, q, lam), reason
+
+    def ratio_of(a: np.ndarray) -> tuple[np.ndarray, str]:
+        a = np.atleast_2d(a)
+        values, reason = g(a)
+        with np.errstate(over="ignore", invalid="ignore"):
+            r = np.sum(values**2, axis=1) / np.sum(a**2, axis=1)
+        return r, reason
+
+    return ratio_of
+
+
+def _largest_attack_ratio(
+    ratio_of: Any, search: _Search, inst: _Instance, rng: np.random.Generator, rows: int
+) -> tuple[float | None, np.ndarray | None, int, str]:
+    """The largest ratio found, its a, the samples evaluated and why the search stopped early.
+
+    ``rows`` samples over magnitudes 0.05-100 lambda, then Nelder-Mead from
+    the worst one; the ratio and point are None when no sample is finite.
+    """
+    mags = max(inst.lam, 1e-3) * np.exp(rng.uniform(np.log(0.05), np.log(100.0), (rows, 1)))
+    samples = rng.standard_normal((rows, inst.p)) * mags
+    ratios = np.full(rows, np.nan)
+    stopped = ""
+    try:
+        batch = max(1, rows // 8)
+        for start in range(0, rows, batch):
+            sl = slice(start, start + batch)
+            ratios[sl], reason = ratio_of(samples[sl])
+            search.note(reason, int(np.count_nonzero(~np.isfinite(ratios[sl]))))
+    except _SearchExhausted:
+        stopped = "the search budget ran out during sampling"
+    finite = np.flatnonzero(np.isfinite(ratios))
+    if not finite.size:
+        return None, None, 0, stopped
+    worst = int(finite[np.argmax(ratios[finite])])
+    worst_value, worst_point = float(ratios[worst]), samples[worst]
+
+    def one(a: np.ndarray) -> tuple[float, str]:
+        if not float(a @ a) > 0:
+            return 0.0, ""
+        r, reason = ratio_of(a)
+        return float(r[0]), reason
+
+    # then local optimisation from the worst sample
+    if not stopped:
+        stopped = _local_search(search.objective(one), samples[worst].copy(), 400)
+    if search.best_point is not None and search.best_value > worst_value:
+        worst_value, worst_point = search.best_value, search.best_point
+    return worst_value, worst_point, int(finite.size), stopped
+
+
+def _attack_contraction_bound(inst: _Instance, ell_pi: float) -> float:
+    """sqrt(rho'') = q (||I - eps L2|| + eps ||L2|| ||S|| ell_Pi), from |Psi_q(v)| <= q |v|."""
+    L2, eps = inst.L2, inst.eps
+    return inst.q * (
+        float(np.linalg.norm(np.eye(inst.p) - eps * L2, 2))
+        + eps * float(np.linalg.norm(L2, 2)) * float(np.linalg.norm(inst.S, 2)) * ell_pi
+    )
+
+
+def _epsilon_bound(inst: _Instance, lemma: _Lemma1, rho_a: float | None) -> AssumptionResult:
+    """The epsilon bound (5.20), with the eigenvalues the inequalities need."""
+    if not (lemma.holds and rho_a is not None and lemma.lipschitz is not None):
+        return AssumptionResult(
+            "epsilon_bound",
+            Verdict.INCONCLUSIVE,
+            "the bound (5.20) needs Lemma 1 and Assumption 3, which are not established here",
         )
-    else:
-        lyap = lyapunov_certificate(F)
-        if lyap.verdict != Verdict.HOLDS or lyap.P is None:
-            items.append(
-                AssumptionResult(
-                    "epsilon_bound",
-                    Verdict.INCONCLUSIVE,
-                    "F is not certified stable, so no P exists",
-                )
-            )
-        else:
-            P = lyap.P
-            p_eigs = np.linalg.eigvalsh(P)
-            rho = 1.0 - 1.0 / float(p_eigs[-1])  # F'PF - P = -I  =>  F'PF <= rho P
-            l2, lc, lpsi = float(np.linalg.norm(L2, 2)), float(np.linalg.norm(S, 2)), q
-            normP = float(p_eigs[-1])
-            best_eps, best_par = 0.0, None
-            for g_eta in np.linspace(0.02, 0.98, 25) * (1 - rho) / max(rho, 1e-12):
-                gamma = 1.0 - (1.0 + g_eta) * rho
-                if gamma <= 0:
-                    continue
-                c_eta = 2 * (1 + 1 / g_eta) * normP * ell_pi**2 * lpsi**2 * l2**2 * lc**2
-                c_a = (
-                    2
-                    * (1 + 1 / g_eta)
-                    * normP
-                    * ell_pi**2
-                    * lpsi**2
-                    * l2**2
-                    * (1 + lc * ell_pi) ** 2
-                )
-                for g_a in np.linspace(0.02, 0.98, 25) * (1 / rho_a - 1):
-                    rho2 = (1 + g_a) * rho_a
-                    if rho2 >= 1:
-                        continue
-                    d_eta = (1 + 1 / g_a) * 1.0 * lpsi**2 * l2**2 * lc**2
-                    for mu in np.logspace(-4, 4, 33):
-                        e1 = gamma * float(p_eigs[0]) / (c_eta + mu * d_eta)
-                        e2 = mu * (1 - rho2) * 1.0 / c_a  # lambda_min(Q) = 1
-                        val = min(e1, e2, 1.0)
-                        if val > best_eps:
-                            best_eps, best_par = val, (float(g_eta), float(g_a), float(mu))
-            details = {
-                "epsilon_star": best_eps,
-                "step": eps,
-                "rho_P": rho,
-                "parameters_gamma_eta_gamma_a_mu": best_par,
-            }
-            if best_par is not None and eps <= best_eps:
-                items.append(
-                    AssumptionResult(
-                        "epsilon_bound",
-                        Verdict.HOLDS,
-                        f"step = {eps:g} <= epsilon* = {sig(best_eps, versus=eps)} (corrected constants)",
-                        details,
-                    )
-                )
-            else:
-                items.append(
-                    AssumptionResult(
-                        "epsilon_bound",
-                        Verdict.INCONCLUSIVE,
-                        f"step = {eps:g} exceeds epsilon* = {sig(best_eps, versus=eps)}; the bound is sufficient, "
-                        f"not necessary",
-                        details,
-                    )
-                )
+    lyap = lyapunov_certificate(inst.F)
+    if lyap.verdict != Verdict.HOLDS or lyap.P is None:
+        return AssumptionResult(
+            "epsilon_bound",
+            Verdict.INCONCLUSIVE,
+            "F is not certified stable, so no P exists",
+        )
+    p_eigs = np.linalg.eigvalsh(lyap.P)
+    rho = 1.0 - 1.0 / float(p_eigs[-1])  # F'PF - P = -I  =>  F'PF <= rho P
+    best_eps, best_par = _epsilon_star(inst, p_eigs, rho, lemma.lipschitz, rho_a)
+    eps = inst.eps
+    details = {
+        "epsilon_star": best_eps,
+        "step": eps,
+        "rho_P": rho,
+        "parameters_gamma_eta_gamma_a_mu": best_par,
+    }
+    star = sig(best_eps, versus=eps)
+    if best_par is not None and eps <= best_eps:
+        return AssumptionResult(
+            "epsilon_bound",
+            Verdict.HOLDS,
+            f"step = {eps:g} <= epsilon* = {star} (corrected constants)",
+            details,
+        )
+    return AssumptionResult(
+        "epsilon_bound",
+        Verdict.INCONCLUSIVE,
+        f"step = {eps:g} exceeds epsilon* = {star}; the bound is sufficient, not necessary",
+        details,
+    )
 
-    return combine_verdicts([i.verdict for i in items]).value, items
+
+def _epsilon_star(
+    inst: _Instance, p_eigs: np.ndarray, rho: float, ell_pi: float, rho_a: float
+) -> tuple[float, tuple[float, float, float] | None]:
+    """The largest epsilon* of (5.20) over a grid of (gamma_eta, gamma_a, mu), and those."""
+    l2, lc, lpsi = float(np.linalg.norm(inst.L2, 2)), float(np.linalg.norm(inst.S, 2)), inst.q
+    normP = float(p_eigs[-1])
+    best_eps, best_par = 0.0, None
+    for g_eta in np.linspace(0.02, 0.98, 25) * (1 - rho) / max(rho, 1e-12):
+        gamma = 1.0 - (1.0 + g_eta) * rho
+        if gamma <= 0:
+            continue
+        c_eta = 2 * (1 + 1 / g_eta) * normP * ell_pi**2 * lpsi**2 * l2**2 * lc**2
+        c_a = 2 * (1 + 1 / g_eta) * normP * ell_pi**2 * lpsi**2 * l2**2 * (1 + lc * ell_pi) ** 2
+        for g_a in np.linspace(0.02, 0.98, 25) * (1 / rho_a - 1):
+            rho2 = (1 + g_a) * rho_a
+            if rho2 >= 1:
+                continue
+            d_eta = (1 + 1 / g_a) * 1.0 * lpsi**2 * l2**2 * lc**2
+            for mu in np.logspace(-4, 4, 33):
+                e1 = gamma * float(p_eigs[0]) / (c_eta + mu * d_eta)
+                e2 = mu * (1 - rho2) * 1.0 / c_a  # lambda_min(Q) = 1
+                val = min(e1, e2, 1.0)
+                if val > best_eps:
+                    best_eps, best_par = val, (float(g_eta), float(g_a), float(mu))
+    return best_eps, best_par

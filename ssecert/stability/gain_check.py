@@ -1,0 +1,273 @@
+"""The observer_gain check: is the gain what was asked for, and is F = A - L S stable?
+
+Every number is about the gain as printed (F formed exactly from the floats
+of A, L and S).  A deadbeat gain is judged by the power test its build ran;
+the others by a Lyapunov certificate or the exact powers of F.  The helpers
+that say what a check's verdict rests on are shared with the other
+observer checks in ``ssecert.stability.checks``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from functools import partial
+from typing import Any
+
+import numpy as np
+
+from .._format import sig
+from ..design.gains import GainError
+from ..observers import ObserverDesign
+from ..results import Check, Verdict
+from ..system import System
+from ..tolerances import Tolerances
+from .lyapunov import lyapunov_certificate
+
+__all__ = ["observer_gain_check", "EXACT_LIMIT"]
+
+
+def _lyapunov_evidence(cert) -> dict[str, Any]:
+    return {
+        "P": cert.P,
+        "decrease_P_minus_FtPF": cert.decrease,
+        "margin": cert.margin,
+        "error_bound": cert.error_bound,
+        "contraction": cert.contraction,
+        "condition_number_P": cert.condition,
+        "residual": cert.residual,
+        "margin_definition": (
+            "lambda_min(P - F'PF) / ||P||, recomputed from P"
+            if cert.method == "lyapunov"
+            else "1 - (certified upper bound on the spectral radius of the exact F)"
+        ),
+        "certificate": cert.method,
+        "exact_decision": cert.proof,
+    }
+
+
+EXACT_LIMIT = 6  # largest n verified exactly in rational arithmetic
+
+
+def _exact_deadbeat(system: System) -> dict[str, Any]:
+    """The deadbeat construction redone in rationals on the exact values of the floats."""
+    from ..design.gains import exact_deadbeat_gain
+
+    try:
+        exact = exact_deadbeat_gain(system.A.tolist(), system.C.tolist())
+    except GainError as exc:
+        return {"verified": False, "reason": str(exc)}
+    return {
+        "verified": exact.verified,
+        "exact_index": exact.details["exact_index"],
+        "L_exact": exact.details["L_exact"],
+        "note": (
+            "A and C taken as the exact rational values of their floating-point entries; "
+            "F^k == 0 and F^(k-1) != 0 checked exactly"
+        ),
+    }
+
+
+def _decided_by(tol: Tolerances, **extra: Any) -> dict[str, Any]:
+    """The tolerances an observer check's verdict rests on, for its JSON."""
+    return {"clear_factor": tol.certificate_clear, **extra}
+
+
+def observer_gain_check(design: ObserverDesign, *, tolerances: Tolerances | None = None) -> Check:
+    """Is the gain what was asked for, and is the linear error matrix F = A - L S stable?
+
+    Every number is about the gain as printed: F is formed exactly from the
+    floats of A, L and S.  For a deadbeat gain on a small plant the exact
+    rational gain is also computed; it is evidence about the plant, and the
+    verdict never rests on it.  ``tolerances.certificate_clear`` is the
+    factor by which a Lyapunov decrease must beat its error bound.
+    """
+    tol = Tolerances.check(tolerances)
+    gain = design.gain
+    F = design.error_matrix
+    parts = _parts(design)
+    computed_radius = float(np.abs(np.linalg.eigvals(F)).max())
+    fields: dict[str, Any] = {"L": gain.L, "gain_method": gain.method, "kind": design.kind}
+    title = f"Observer gain ({gain.method})"
+    evidence: dict[str, Any] = {
+        "details": gain.details,
+        "computed_eigenvalue_radius": computed_radius,
+    }
+    if gain.method == "deadbeat":
+        return _deadbeat_check(design, fields, evidence, title)
+    cert = lyapunov_certificate(F, parts=parts, clear=tol.certificate_clear)
+    fields["spectral_radius"] = cert.spectral_radius
+    evidence.update(_lyapunov_evidence(cert))
+    verdict = Verdict(cert.verdict)
+    if verdict is Verdict.HOLDS and cert.method == "exact powers":
+        fields["spectral_radius"] = cert.contraction
+        summary = f"The linear error dynamics e+ = (A - L C) e are stable: {cert.reason}."
+    elif verdict is Verdict.HOLDS:
+        summary = (
+            f"The linear error dynamics e+ = (A - L C) e are stable (spectral radius "
+            f"{sig(_known(cert.spectral_radius))}), certified by a Lyapunov matrix P: the error "
+            f"contracts at least by {sig(_known(cert.contraction))} per step in the P-norm."
+        )
+    elif verdict is Verdict.FAILS:
+        summary = (
+            f"A - L C is not stable: {cert.reason}. With this gain the error does not "
+            f"vanish even without attack."
+        )
+    else:
+        summary = f"The stability of A - L C could not be certified: {cert.reason}."
+    return Check(
+        id="observer_gain",
+        title=title,
+        verdict=verdict,
+        summary=summary,
+        value=fields["spectral_radius"],
+        margin=cert.margin,
+        method="discrete Lyapunov (dlyap)"
+        if cert.method == "lyapunov"
+        else "exact powers of A - L C",
+        fields=fields,
+        evidence=evidence,
+        witness=cert.witness if verdict is Verdict.FAILS else None,
+        tolerances=_decided_by(tol, error_bound=cert.error_bound),
+    )
+
+
+def _known(value: float | None) -> float:
+    """A number a holding certificate always carries (its radius, contraction, gain)."""
+    if value is None:  # pragma: no cover - certificates that hold set it
+        raise RuntimeError("a holding certificate is missing the number it certifies")
+    return value
+
+
+def _parts(design: ObserverDesign) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """(A, L, S) whose exact combination A - L S is the error matrix, when it is one."""
+    return design.observer_kind.exact_parts(design)
+
+
+def _deadbeat_check(
+    design: ObserverDesign, fields: dict[str, Any], evidence: dict[str, Any], title: str
+) -> Check:
+    """The observer_gain check of a deadbeat gain, from the power test its build ran."""
+    details = design.gain.details
+    exact_note = _exact_deadbeat_note(design, evidence)
+    fields["nilpotency_index"] = details.get("nilpotency_index")
+    fields["observability_index"] = details.get("observability_index")
+    fields["spectral_radius"] = details.get("spectral_radius_upper_bound")
+    fields["spectral_radius_lower_bound"] = details.get("spectral_radius_lower_bound")
+    check = partial(
+        Check,
+        id="observer_gain",
+        title=title,
+        method="deadbeat (exact powers of the printed A - L C)",
+        fields=fields,
+        evidence=evidence,
+        tolerances=_deadbeat_tolerances(details),
+    )
+    if design.gain.verified:
+        summary = _nilpotent_summary(details, fields) + exact_note
+        upper = _known(details.get("spectral_radius_upper_bound"))
+        return check(
+            verdict=Verdict.HOLDS,
+            summary=summary,
+            value=fields["nilpotency_index"],  # the exact index when it differs
+            margin=1.0 - upper,
+        )
+    problem = details.get("problem") or "the power test did not conclude"
+    witness = _deadbeat_instability(design)
+    if witness is not None:
+        return check(
+            verdict=Verdict.FAILS,
+            summary=(
+                f"The deadbeat construction's printed gain is not deadbeat: {problem}. "
+                f"Rounding L to floats destroys the nilpotency of this plant's "
+                f"deadbeat loop." + exact_note
+            ),
+            value=details.get("nilpotency_index"),
+            margin=None,
+            witness=witness,
+        )
+    return check(
+        verdict=Verdict.INCONCLUSIVE,
+        summary=f"The deadbeat gain could not be verified for the printed L: {problem}."
+        + exact_note,
+        value=details.get("nilpotency_index"),
+    )
+
+
+def _exact_deadbeat_note(design: ObserverDesign, evidence: dict[str, Any]) -> str:
+    """The summary's sentence on the exact rational gain (small plants; '' otherwise).
+
+    The exact construction is recorded in ``evidence["exact"]``.
+    """
+    if design.system.n > EXACT_LIMIT:
+        return ""
+    evidence["exact"] = _exact_deadbeat(design.system)
+    if not evidence["exact"].get("verified"):
+        return ""
+    return (
+        f" In exact arithmetic the rational gain L_exact (evidence) is nilpotent "
+        f"with index {evidence['exact']['exact_index']}."
+    )
+
+
+def _deadbeat_tolerances(details: Mapping[str, Any]) -> dict[str, Any]:
+    """The tolerances of the power test, which ran when the gain was built with the run's."""
+    return {
+        "deadbeat_rtol": details.get("deadbeat_rtol", Tolerances().deadbeat_rtol),
+        "clear_factor": details.get("clear_factor", Tolerances().certificate_clear),
+    }
+
+
+def _nilpotent_summary(details: Mapping[str, Any], fields: dict[str, Any]) -> str:
+    """What a verified deadbeat gain's check says.
+
+    An exact nilpotency index that differs from the index to rounding
+    becomes ``fields["nilpotency_index"]``, beside
+    ``nilpotency_index_to_rounding``.
+    """
+    index = int(_known(details.get("nilpotency_index")))
+    upper = _known(details.get("spectral_radius_upper_bound"))
+    rel = details["relative_power_norms"][index - 1]
+    exactly = details.get("exactly_nilpotent")
+    exact_index = details.get("exact_nilpotency_index")
+    if exactly and exact_index is not None and exact_index != index:
+        fields["nilpotency_index"] = exact_index
+        fields["nilpotency_index_to_rounding"] = index
+    if exactly and exact_index is not None:
+        exact = (
+            f"A - L C with the printed L is exactly nilpotent with index {exact_index}: the "
+            f"error vanishes in {exact_index} step{'s' if exact_index != 1 else ''} without "
+            f"attack"
+        )
+        if exact_index == index:
+            return exact + "."
+        rounded = f"||(A - L C)^{index}|| <= {rel:.1e} ||A||^{index}"
+        return exact + f" (to rounding already in {index}: {rounded})."
+    return (
+        f"With the printed L, ||(A - L C)^{index}|| <= {rel:.1e} ||A||^{index} (powers "
+        f"computed exactly from the floats): the error vanishes to rounding in {index} "
+        f"step{'s' if index != 1 else ''} without attack{_fastest_note(details)}, and the "
+        f"spectral radius is certified <= {upper:.3g}."
+    )
+
+
+def _fastest_note(details: Mapping[str, Any]) -> str:
+    """Whether the deadbeat index is the observability index, the fastest possible."""
+    nu = details.get("observability_index")
+    if nu is None:
+        return ""
+    if details.get("minimal"):
+        return ", the observability index"
+    return f" (the observability index is {nu}: a faster deadbeat gain exists)"
+
+
+def _deadbeat_instability(design: ObserverDesign) -> dict[str, Any] | None:
+    """A verified instability witness of the printed A - L C, when its radius exceeds 1."""
+    lower = design.gain.details.get("spectral_radius_lower_bound")
+    if lower is None or not lower > 1:
+        return None
+    from .lyapunov import instability_witness
+
+    witness = instability_witness(design.error_matrix, parts=_parts(design))
+    if witness is not None and witness["verified"]:
+        return witness
+    return None

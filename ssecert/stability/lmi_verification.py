@@ -1,0 +1,128 @@
+"""The LMIs of the Lur'e certificates recomputed in numpy, and a certificate re-verified.
+
+Nothing is taken from the solver's status: the LMI is recomputed from the
+returned P and T, symmetrised, and its largest eigenvalue must beat a
+floating-point error bound by a factor ``clear``; P must pass a Cholesky
+test with a margin and T must be nonnegative.  ``ssecert.stability.lmi``
+uses these on every certificate it returns.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..observers.lure import LureModel
+from ..tolerances import EPS
+
+__all__ = ["circle_matrix", "iss_matrix", "verify_certificate"]
+
+
+def circle_matrix(model: LureModel, P: np.ndarray, t: np.ndarray, alpha: float = 0.0) -> np.ndarray:
+    """The circle-criterion LMI in (xi, phi), recomputed in numpy and symmetrised.
+
+    [A B]' P [A B] - diag((1 - alpha) P, 0) + sym([[0, q Cw' T], [q T Cw, -2 T]])
+    """
+    G = np.hstack([model.A, model.B])
+    N = model.N
+    M = G.T @ P @ G
+    M[:N, :N] -= (1.0 - alpha) * P
+    T = np.diag(t)
+    M[:N, N:] += model.q * model.Cw.T @ T
+    M[N:, :N] += model.q * T @ model.Cw
+    M[N:, N:] -= 2.0 * T
+    return 0.5 * (M + M.T)
+
+
+def iss_matrix(
+    model: LureModel, P: np.ndarray, t: np.ndarray, alpha: float, g: float
+) -> np.ndarray:
+    """The dissipation LMI in (xi, phi, a), recomputed in numpy and symmetrised.
+
+    V(xi+) - (1 - alpha) V(xi) + |e|^2 - g |a|^2 plus the sector terms with
+    w = Cw xi + Dw a.
+    """
+    H = np.hstack([model.A, model.B, model.E])
+    N, m, r = model.N, model.m, model.r
+    M = H.T @ P @ H
+    M[:N, :N] += model.Ce.T @ model.Ce - (1.0 - alpha) * P
+    M[N + m :, N + m :] -= g * np.eye(r)
+    if m:
+        T = np.diag(t)
+        qTC = model.q * T @ model.Cw
+        qTD = model.q * T @ model.Dw
+        M[N : N + m, :N] += qTC
+        M[:N, N : N + m] += qTC.T
+        M[N : N + m, N + m :] += qTD
+        M[N + m :, N : N + m] += qTD.T
+        M[N : N + m, N : N + m] -= 2.0 * T
+    return 0.5 * (M + M.T)
+
+
+def _error_bound(model: LureModel, P: np.ndarray, t: np.ndarray, size: int) -> float:
+    """Rounding error bound on the eigenvalues of the recomputed LMI, relative to ||P||."""
+    normP = max(float(np.linalg.norm(P, 2)), np.finfo(float).tiny)
+    G = np.hstack([model.A, model.B, model.E])
+    normG = float(np.linalg.norm(G, 2))
+    tmax = float(np.abs(t).max(initial=0.0))
+    normC = float(np.linalg.norm(np.hstack([model.Cw, model.Dw]), 2)) if model.m else 0.0
+    normCe = float(np.linalg.norm(model.Ce, 2))
+    raw = (normG**2 + 2.0) * normP + (2 * model.q * normC + 2) * tmax + normCe**2
+    return 10.0 * size * EPS * raw / normP
+
+
+def verify_certificate(
+    model: LureModel,
+    P: np.ndarray,
+    t: np.ndarray,
+    *,
+    kind: str = "circle",
+    alpha: float = 0.0,
+    g: float = 0.0,
+    clear: float = 100.0,
+) -> tuple[bool, float, float, str]:
+    """Re-verify a certificate without the solver.
+
+    Returns
+    -------
+    ok : bool
+    margin : float
+        ``-lambda_max(LMI) / ||P||``.
+    bound : float
+        Error bound on that quantity.
+    problem : str
+        Empty when ok.
+    """
+    P = 0.5 * (np.asarray(P, dtype=float) + np.asarray(P, dtype=float).T)
+    t = np.asarray(t, dtype=float)
+    if not (np.all(np.isfinite(P)) and np.all(np.isfinite(t))):
+        return False, float("nan"), 0.0, "the certificate has non-finite entries"
+    if model.m and t.min(initial=0.0) < 0:
+        return False, float("nan"), 0.0, f"a multiplier is negative ({t.min():.2e})"
+    M = circle_matrix(model, P, t, alpha) if kind == "circle" else iss_matrix(model, P, t, alpha, g)
+    normP = max(float(np.linalg.norm(P, 2)), np.finfo(float).tiny)
+    lam = float(np.linalg.eigvalsh(M)[-1])
+    margin = -lam / normP
+    bound = _error_bound(model, P, t, M.shape[0])
+    p_eigs = np.linalg.eigvalsh(P)
+    if p_eigs[0] <= clear * 10 * P.shape[0] * EPS * normP:
+        return (
+            False,
+            margin,
+            bound,
+            f"P is not clearly positive definite (lambda_min {p_eigs[0]:.2e})",
+        )
+    try:
+        np.linalg.cholesky(P - 0.5 * p_eigs[0] * np.eye(P.shape[0]))
+    except np.linalg.LinAlgError:
+        return False, margin, bound, "P fails the Cholesky test"
+    if margin <= clear * bound:
+        return (
+            False,
+            margin,
+            bound,
+            (
+                f"the recomputed LMI has largest eigenvalue {-margin:.2e} ||P||, not below "
+                f"-{clear:g} x the error bound {bound:.2e}"
+            ),
+        )
+    return True, margin, bound, ""
