@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -214,81 +214,21 @@ def stealthy_attack(
             f"breaking_set has {len(B)} sensors; a split into two attacks of at most "
             f"max_attacked = {s} sensors needs at most {2 * s}"
         )
-    z = np.array(as_real_matrix(z, "z", shape=(system.n,), ndim=1))
-    nz = np.linalg.norm(z)
-    if nz == 0.0:
-        raise ValueError("z must be nonzero")
-    z = z / nz
-    nonzero = np.flatnonzero(np.abs(z) > 1e-12)
-    if nonzero.size and z[nonzero[0]] < 0:
-        z = -z
+    z = _unit_direction(z, system.n)
     requested = system.n if horizon is None else as_int_option(horizon, "horizon", min_value=1)
     H = min(requested, max(system.n, min(WITNESS_MAX_STEPS, WITNESS_MAX_ENTRIES // system.p)))
     sensors_a = tuple(B[:s]) if B else ()
     sensors_b = tuple(B[s:]) if B else ()
-
-    A, C = system.A, system.C
-    p = system.p
-    mask_a = np.zeros(p)
-    mask_a[list(sensors_a)] = 1.0
-    mask_b = np.zeros(p)
-    mask_b[list(sensors_b)] = 1.0
     # unstable plants can overflow over long horizons: the mismatch is then
     # not finite and the witness simply fails verification
     with np.errstate(over="ignore", invalid="ignore"):
-        attack_a = np.empty((H, p))
-        attack_b = np.empty((H, p))
-        w = z.copy()
-        for k in range(H):
-            y = C @ w
-            attack_a[k] = mask_a * y
-            attack_b[k] = -mask_b * y
-            w = A @ w
-
+        attack_a, attack_b = _attack_signals(system, z, sensors_a, sensors_b, H)
         # independent simulation of the two explanations
-        rng = np.random.default_rng(seed)
-        x0 = initial_state(system.n, rng)
-        xa, xb = x0.copy(), x0 + z
-        outputs_a = np.empty((H, p))
-        outputs_b = np.empty((H, p))
-        scales = np.empty(H)
-        normC = float(np.linalg.norm(C, 2))
-        for k in range(H):
-            outputs_a[k] = C @ xa + attack_a[k]
-            outputs_b[k] = C @ xb + attack_b[k]
-            scales[k] = normC * float(np.linalg.norm(xb - xa))
-            xa, xb = A @ xa, A @ xb
-        # an unstable plant overflows after enough steps; the steps before the first
-        # overflow decide the witness when they are at least n (Cayley-Hamilton)
-        finite = (
-            np.all(np.isfinite(attack_a), axis=1)
-            & np.all(np.isfinite(attack_b), axis=1)
-            & np.all(np.isfinite(outputs_a), axis=1)
-            & np.all(np.isfinite(outputs_b), axis=1)
-            & np.isfinite(scales)
-        )
-        overflow_at = None
-        if not finite.all():
-            first = int(np.argmin(finite))
-            if first >= system.n:
-                overflow_at = first
-                attack_a, attack_b = attack_a[:first], attack_b[:first]
-                outputs_a, outputs_b, scales = outputs_a[:first], outputs_b[:first], scales[:first]
-        # the mismatch is measured over the first n steps only: C_i A^k z = 0 for k < n
-        # implies it for every k (Cayley-Hamilton), and later steps would only measure
-        # rounding growing with unstable modes, making the verdict depend on the horizon
-        window = min(outputs_a.shape[0], system.n)
-        diff = float(np.max(np.linalg.norm(outputs_a[:window] - outputs_b[:window], axis=1)))
-        # rounding in the simulated states themselves is of order eps * ||x||
-        floor = (
-            np.finfo(float).eps
-            * normC
-            * float(max(np.abs(outputs_a[:window]).max(initial=0.0), 1.0))
-        )
-        residual = diff / max(float(scales[:window].max()), floor, np.finfo(float).tiny)
-        if not np.isfinite(residual):
-            residual = float("inf")
-    if (not finite.all()) and overflow_at is None:
+        x0 = initial_state(system.n, np.random.default_rng(seed))
+        run = _explanations(system, x0, z, attack_a, attack_b)
+        run, overflow_at, all_finite = _before_overflow(run, system.n)
+        residual = _mismatch(run, system)
+    if not all_finite and overflow_at is None:
         scaled = _in_scaled_units(system, B, z, s, requested, seed, tol)
         if scaled is not None:
             return scaled
@@ -296,17 +236,119 @@ def stealthy_attack(
         z=z,
         sensors_a=sensors_a,
         sensors_b=sensors_b,
-        attack_a=attack_a,
-        attack_b=attack_b,
+        attack_a=run.attack_a,
+        attack_b=run.attack_b,
         x0=x0,
-        outputs_a=outputs_a,
-        outputs_b=outputs_b,
+        outputs_a=run.outputs_a,
+        outputs_b=run.outputs_b,
         residual=residual,
         verified=bool(residual <= tol.witness_rtol),
         rtol=tol.witness_rtol,
         horizon=requested,
         overflow_at=overflow_at,
     )
+
+
+class _Explanations(NamedTuple):
+    """The two explanations of the same outputs, simulated step by step."""
+
+    attack_a: np.ndarray
+    attack_b: np.ndarray
+    outputs_a: np.ndarray  # from x0 under attack_a
+    outputs_b: np.ndarray  # from x0 + z under attack_b
+    scales: np.ndarray  # ||C|| ||x_b(k) - x_a(k)||, what the mismatch is measured against
+
+
+def _unit_direction(z: np.ndarray, n: int) -> np.ndarray:
+    """z scaled to unit norm, its first clearly nonzero entry positive."""
+    z = np.array(as_real_matrix(z, "z", shape=(n,), ndim=1))
+    nz = np.linalg.norm(z)
+    if nz == 0.0:
+        raise ValueError("z must be nonzero")
+    z = z / nz
+    nonzero = np.flatnonzero(np.abs(z) > 1e-12)
+    if nonzero.size and z[nonzero[0]] < 0:
+        z = -z
+    return z
+
+
+def _attack_signals(
+    system: System,
+    z: np.ndarray,
+    sensors_a: tuple[int, ...],
+    sensors_b: tuple[int, ...],
+    steps: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """attack_a[k] = P_a C A^k z and attack_b[k] = -P_b C A^k z for the first steps."""
+    A, C, p = system.A, system.C, system.p
+    mask_a = np.zeros(p)
+    mask_a[list(sensors_a)] = 1.0
+    mask_b = np.zeros(p)
+    mask_b[list(sensors_b)] = 1.0
+    attack_a = np.empty((steps, p))
+    attack_b = np.empty((steps, p))
+    w = z.copy()
+    for k in range(steps):
+        y = C @ w
+        attack_a[k] = mask_a * y
+        attack_b[k] = -mask_b * y
+        w = A @ w
+    return attack_a, attack_b
+
+
+def _explanations(
+    system: System, x0: np.ndarray, z: np.ndarray, attack_a: np.ndarray, attack_b: np.ndarray
+) -> _Explanations:
+    """Outputs of the plant from x0 under attack_a and from x0 + z under attack_b."""
+    A, C = system.A, system.C
+    steps, p = attack_a.shape
+    xa, xb = x0.copy(), x0 + z
+    outputs_a = np.empty((steps, p))
+    outputs_b = np.empty((steps, p))
+    scales = np.empty(steps)
+    normC = float(np.linalg.norm(C, 2))
+    for k in range(steps):
+        outputs_a[k] = C @ xa + attack_a[k]
+        outputs_b[k] = C @ xb + attack_b[k]
+        scales[k] = normC * float(np.linalg.norm(xb - xa))
+        xa, xb = A @ xa, A @ xb
+    return _Explanations(attack_a, attack_b, outputs_a, outputs_b, scales)
+
+
+def _before_overflow(run: _Explanations, n: int) -> tuple[_Explanations, int | None, bool]:
+    """The run cut at its first overflow when that is at or after step n, that step, all finite."""
+    # an unstable plant overflows after enough steps; the steps before the first
+    # overflow decide the witness when they are at least n (Cayley-Hamilton)
+    finite = (
+        np.all(np.isfinite(run.attack_a), axis=1)
+        & np.all(np.isfinite(run.attack_b), axis=1)
+        & np.all(np.isfinite(run.outputs_a), axis=1)
+        & np.all(np.isfinite(run.outputs_b), axis=1)
+        & np.isfinite(run.scales)
+    )
+    if finite.all():
+        return run, None, True
+    first = int(np.argmin(finite))
+    if first < n:
+        return run, None, False
+    return _Explanations(*(part[:first] for part in run)), first, False
+
+
+def _mismatch(run: _Explanations, system: System) -> float:
+    """Largest output mismatch over the first n steps, relative to the states' gap."""
+    # the mismatch is measured over the first n steps only: C_i A^k z = 0 for k < n
+    # implies it for every k (Cayley-Hamilton), and later steps would only measure
+    # rounding growing with unstable modes, making the verdict depend on the horizon
+    window = min(run.outputs_a.shape[0], system.n)
+    outputs_a, outputs_b = run.outputs_a[:window], run.outputs_b[:window]
+    diff = float(np.max(np.linalg.norm(outputs_a - outputs_b, axis=1)))
+    # rounding in the simulated states themselves is of order eps * ||x||
+    normC = float(np.linalg.norm(system.C, 2))
+    floor = np.finfo(float).eps * normC * float(max(np.abs(outputs_a).max(initial=0.0), 1.0))
+    residual = diff / max(float(run.scales[:window].max()), floor, np.finfo(float).tiny)
+    if not np.isfinite(residual):
+        residual = float("inf")
+    return residual
 
 
 def _in_scaled_units(

@@ -37,7 +37,7 @@ def _eigenspace(
     exact: ExactPlant | None = None,
     deadline: float | None = None,
 ) -> _Outcome:
-    """The smallest breaking set from the supports of C v over the eigenspaces of A.
+    """The smallest breaking set over the eigenspaces, confirmed on the exact data when given.
 
     ``deadline`` (a ``time.monotonic()`` value) stops the hyperplane search
     of a large eigenspace: the outcome is then ``budget``, with the reason.
@@ -46,7 +46,41 @@ def _eigenspace(
     if eig.problems:
         out.problems.extend(eig.problems)
         return out
-    C = system.C
+    best, z, critical = _smallest_support(system.C, s, max_sets, tol, eig, out, deadline)
+    if out.problems:
+        out.status = "inconclusive" if out.status != "budget" else "budget"
+        return out
+    assert best is not None and z is not None
+    if np.iscomplexobj(z):
+        z = z.real if np.linalg.norm(z.real) >= np.linalg.norm(z.imag) else z.imag
+    z = np.real(z)
+    if exact is not None:
+        confirmed = _exactly_breaking(system, best[1], z, tol, eig, exact, out)
+        if confirmed is None:
+            return out
+        z = confirmed
+    out.status = "exact"
+    out.max_removable = best[0] - 1
+    out.breaking_set = best[1]
+    out.z = z
+    critical.sort()
+    out.critical = [kept for _, kept in critical[:_CRITICAL]]
+    return out
+
+
+def _smallest_support(
+    C: np.ndarray,
+    s: int,
+    max_sets: int,
+    tol: Tolerances,
+    eig: EigenAnalysis,
+    out: _Outcome,
+    deadline: float | None = None,
+) -> tuple[tuple[int, tuple[int, ...]] | None, np.ndarray | None, list]:
+    """(size, sensors) of the smallest support of C v over the eigenspaces, v, the critical sets.
+
+    Problems, the hyperplanes checked and the per-eigenvalue details go to ``out``.
+    """
     p, n = C.shape
     row_norms = np.linalg.norm(C, axis=1)
     safe = np.where(row_norms > 0, row_norms, 1.0)
@@ -61,30 +95,18 @@ def _eigenspace(
         # the eigenspace error is an estimate, not a bound: a factor 10 of safety
         thr = tol.rtol(p, n + g) + 10.0 * cluster.error
         if g == 1:
-            mags = np.abs(W[:, 0])
-            codes = classify(mags, thr, factor=tol.borderline_factor)
-            if np.any(codes == BORDERLINE):
-                out.problems.append(
-                    f"eigenvalue {eig.label(cluster.center)}: sensor(s) "
-                    f"{np.flatnonzero(codes == BORDERLINE).tolist()} see its eigenvector with a "
-                    f"borderline magnitude"
-                )
-                continue
-            support = tuple(int(i) for i in np.flatnonzero(codes == NONZERO))
-            candidates = [(len(support), support, V[:, 0])]
-            order = np.argsort(-mags, kind="stable")
-            critical.append(_critical_entry(mags, order, s, p))
+            candidates, crit, problem = _eigenvector_support(W, V, thr, s, tol)
         else:
             candidates, crit, problem, used = _hyperplanes(
                 W, V, thr, s, tol, max_sets - out.checked, deadline
             )
             out.checked += used
-            if problem:
-                out.problems.append(f"eigenvalue {eig.label(cluster.center)}: {problem}")
-                if problem.startswith("budget"):
-                    out.status = "budget"
-                continue
-            critical.extend(crit)
+        if problem:
+            out.problems.append(f"eigenvalue {eig.label(cluster.center)}: {problem}")
+            if problem.startswith("budget"):
+                out.status = "budget"
+            continue
+        critical.extend(crit)
         per_cluster.append(
             {
                 "eigenvalue": cluster.center,
@@ -97,39 +119,61 @@ def _eigenspace(
                 best = (size, support)
                 best_z = v
     out.details = {"eigenvalues": per_cluster}
-    if out.problems:
-        out.status = "inconclusive" if out.status != "budget" else "budget"
-        return out
-    assert best is not None and best_z is not None
-    z = best_z
-    if np.iscomplexobj(z):
-        z = z.real if np.linalg.norm(z.real) >= np.linalg.norm(z.imag) else z.imag
-    z = np.real(z)
-    if exact is not None:
-        gone = set(best[1])
-        decision = exact.observability(tuple(i for i in range(p) if i not in gone))
-        if decision.state == "observable":
-            kept = tuple(i for i in range(p) if i not in gone)
-            distance = _distance(system, kept, eig, tol)
-            out.details["distance_to_breaking"] = distance
-            out.problems.append(
-                f"its smallest support, sensors {list(best[1])}, does not break the exact data "
-                f"(relative distance {format_distance(distance)} to a plant it breaks: the data are within "
-                f"precision of one, or its eigenvectors are too ill-conditioned to trust)"
-            )
-            return out
-        out.details["breaking_set_exact"] = decision.state == "unobservable"
-        if decision.state == "unobservable":
-            if decision.z is None:  # pragma: no cover - an exact unobservable verdict has z
-                raise RuntimeError("the exact unobservable verdict carries no direction z")
-            z = decision.z
-    out.status = "exact"
-    out.max_removable = best[0] - 1
-    out.breaking_set = best[1]
-    out.z = z
-    critical.sort()
-    out.critical = [kept for _, kept in critical[:_CRITICAL]]
-    return out
+    return best, best_z, critical
+
+
+def _eigenvector_support(
+    W: np.ndarray, V: np.ndarray, thr: float, s: int, tol: Tolerances
+) -> tuple[list, list, str]:
+    """The sensors that see a simple eigenvalue's eigenvector, its critical set, or a problem."""
+    p = W.shape[0]
+    mags = np.abs(W[:, 0])
+    codes = classify(mags, thr, factor=tol.borderline_factor)
+    if np.any(codes == BORDERLINE):
+        return (
+            [],
+            [],
+            f"sensor(s) {np.flatnonzero(codes == BORDERLINE).tolist()} see its eigenvector "
+            f"with a borderline magnitude",
+        )
+    support = tuple(int(i) for i in np.flatnonzero(codes == NONZERO))
+    order = np.argsort(-mags, kind="stable")
+    return [(len(support), support, V[:, 0])], [_critical_entry(mags, order, s, p)], ""
+
+
+def _exactly_breaking(
+    system: System,
+    support: tuple[int, ...],
+    z: np.ndarray,
+    tol: Tolerances,
+    eig: EigenAnalysis,
+    exact: ExactPlant,
+    out: _Outcome,
+) -> np.ndarray | None:
+    """z (the exact kernel vector when there is one) if removing support breaks the exact data.
+
+    None, with the problem recorded in ``out``, when the exact data stay observable.
+    """
+    p = system.p
+    gone = set(support)
+    decision = exact.observability(tuple(i for i in range(p) if i not in gone))
+    if decision.state == "observable":
+        kept = tuple(i for i in range(p) if i not in gone)
+        distance = _distance(system, kept, eig, tol)
+        out.details["distance_to_breaking"] = distance
+        far = format_distance(distance)
+        out.problems.append(
+            f"its smallest support, sensors {list(support)}, does not break the exact data "
+            f"(relative distance {far} to a plant it breaks: the data are within "
+            f"precision of one, or its eigenvectors are too ill-conditioned to trust)"
+        )
+        return None
+    out.details["breaking_set_exact"] = decision.state == "unobservable"
+    if decision.state == "unobservable":
+        if decision.z is None:  # pragma: no cover - an exact unobservable verdict has z
+            raise RuntimeError("the exact unobservable verdict carries no direction z")
+        return decision.z
+    return z
 
 
 def _critical_entry(

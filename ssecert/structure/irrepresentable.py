@@ -21,25 +21,25 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from .._exact import exact_stacked_rank
 from .._format import sig
-from .._linalg import screen_positive_definite, stacked_rank, staircase
+from .._linalg import staircase
 from .._validation import as_choice, as_int_option
 from ..budget import Budget, bounded_comb, format_count, log10_comb
 from ..results import Check, Verdict
 from ..system import System
-from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances
-from ._combinatorics import DEFAULT_CHUNK_BYTES, DEFAULT_MEMORY, colex_blocks
+from ..tolerances import Tolerances
+from ._irrepresentable_scan import ScanPlan, SupportScan, plan_scan, scan_supports
 from .sparse import DEFAULT_MAX_SETS
 
 __all__ = ["irrepresentable", "irrepresentable_constant", "MODES"]
 
 MODES = ("block", "entrywise")
-_SUB = 128  # largest number of supports per dense product
 _LISTED = 10_000  # largest support listed in full in a result
 
 
@@ -75,6 +75,75 @@ def irrepresentable_constant(O: np.ndarray, support: list[int] | np.ndarray) -> 
         return math.inf
     M = np.linalg.pinv(O_Sbar).T @ O_S.T
     return float(np.abs(M).sum(axis=1).max()) if M.size else 0.0
+
+
+@dataclass(frozen=True)
+class _Verdicts:
+    """What every verdict of one call shows: its fields, evidence, tolerances and sensor names."""
+
+    system: System
+    mode: str
+    k: int
+    tau: int
+    evidence: dict[str, Any]  # filled in as the steps run
+    tolerances: dict[str, Any]
+
+    @property
+    def noun(self) -> str:
+        """What the support counts: sensors (block mode) or entries."""
+        return "sensors" if self.mode == "block" else "entries"
+
+    def names(self, support: tuple[int, ...]) -> list[Any]:
+        """Sensor names of a support (block) or ``name@step`` of its entries (entrywise)."""
+        sensors = self.system.sensors
+        if self.mode == "block":
+            return [sensors[i] for i in support]
+        p = self.system.p
+        return [f"{sensors[r % p]}@{r // p}" for r in support]
+
+    def label(self, support: tuple[int, ...]) -> str:
+        """The support's names, comma separated."""
+        return ", ".join(map(str, self.names(support)))
+
+    def rank_witness(self, support: tuple[int, ...]) -> dict[str, Any]:
+        """Witness of a support whose O_Sbar lacks full column rank."""
+        return {
+            "support": list(support),
+            "support_names": self.names(support),
+            "reason": "O_Sbar lacks full column rank",
+        }
+
+    def check(
+        self,
+        verdict: Verdict,
+        value: float,
+        support: tuple[int, ...] | None,
+        summary: str,
+        margin: float | None = None,
+        witness: dict | None = None,
+    ) -> Check:
+        """The irrepresentable Check with this verdict, worst value and support."""
+        return Check(
+            id="irrepresentable",
+            title="Irrepresentable condition (Lasso support recovery)",
+            verdict=verdict,
+            summary=summary,
+            value=value,
+            margin=margin,
+            method="enumeration",
+            required=False,
+            fields={
+                "support_size": self.k,
+                "horizon": self.tau,
+                "mode": self.mode,
+                "value": value,
+                "worst_support": list(support) if support is not None else None,
+                "worst_support_names": self.names(support) if support is not None else None,
+            },
+            evidence=self.evidence,
+            witness=witness,
+            tolerances=self.tolerances,
+        )
 
 
 def irrepresentable(
@@ -131,13 +200,60 @@ def irrepresentable(
     mode = as_choice(mode, "mode", MODES)
     tau = system.n if horizon is None else as_int_option(horizon, "horizon", min_value=1)
     max_sets = as_int_option(max_sets, "max_sets", min_value=1)
-    n, p = system.n, system.p
-    items = p if mode == "block" else p * tau
+    items = system.p if mode == "block" else system.p * tau
     k = as_int_option(support_size, "support_size", min_value=0)
-    fields: dict[str, Any] = {"support_size": k, "horizon": tau, "mode": mode}
-    title = "Irrepresentable condition (Lasso support recovery)"
-    method = "enumeration"
     total = bounded_comb(items, k, max_sets)
+    out = _start(system, mode, k, tau, items, total, budget, tol)
+    decided = _decided_by_size(out, items, total, max_sets, tol)
+    if decided is not None:
+        return decided
+    assert total is not None
+    plan = plan_scan(system.n, system.p, tau, items, k, total, mode, budget)
+    refused = _over_budget(out, plan, budget, total)
+    if refused is not None:
+        return refused
+
+    with np.errstate(over="ignore", invalid="ignore"):
+        O = system.observability_matrix(tau)  # row t * p + i: sensor i at step t
+    rows_of = _rows_of_items(system.p, tau, mode)
+    if not np.all(np.isfinite(O)):
+        return out.check(
+            Verdict.INCONCLUSIVE,
+            math.nan,
+            None,
+            f"The stacked observability matrix overflows over {tau} steps.",
+        )
+    deficient = _rank_deficient(out, tol)
+    if deficient is not None:
+        return deficient
+
+    Q, _ = np.linalg.qr(O)
+    scan = scan_supports(Q, rows_of, k, plan, tol, total, progress)
+    out.evidence["supports_without_full_rank"] = scan.n_inf
+    out.evidence["borderline_supports"] = scan.borderline
+    if scan.infinite is not None:
+        return _infinite_verdict(out, scan, rows_of, total)
+    if scan.borderline:
+        return out.check(
+            Verdict.INCONCLUSIVE,
+            math.nan,
+            None,
+            f"{scan.borderline} support(s) have a borderline rank decision for O_Sbar.",
+        )
+    return _worst_verdict(out, scan, O, rows_of, tol)
+
+
+def _start(
+    system: System,
+    mode: str,
+    k: int,
+    tau: int,
+    items: int,
+    total: int | None,
+    budget: Budget,
+    tol: Tolerances,
+) -> _Verdicts:
+    """The call's verdict maker, with the evidence known before any computation."""
     evidence: dict[str, Any] = {
         "method_detail": (
             "every support enumerated; rho from the QR-whitened stacked observability matrix; "
@@ -150,72 +266,28 @@ def irrepresentable(
     if total is None:
         evidence["supports_log10"] = log10_comb(items, k)
     tol_out = {"irrepresentable_rtol": tol.irrepresentable_rtol, **tol.to_dict()}
+    return _Verdicts(system, mode, k, tau, evidence, tol_out)
 
-    def describe_support(support: tuple[int, ...]) -> list[Any]:
-        if mode == "block":
-            return [system.sensors[i] for i in support]
-        return [f"{system.sensors[r % p]}@{r // p}" for r in support]
 
-    def make(
-        verdict: Verdict,
-        value: float,
-        support: tuple[int, ...] | None,
-        summary: str,
-        margin: float | None = None,
-        witness: dict | None = None,
-    ) -> Check:
-        return Check(
-            id="irrepresentable",
-            title=title,
-            verdict=verdict,
-            summary=summary,
-            value=value,
-            margin=margin,
-            method=method,
-            required=False,
-            fields={
-                **fields,
-                "value": value,
-                "worst_support": list(support) if support is not None else None,
-                "worst_support_names": (describe_support(support) if support is not None else None),
-            },
-            evidence=evidence,
-            witness=witness,
-            tolerances=tol_out,
-        )
-
+def _decided_by_size(
+    out: _Verdicts, items: int, total: int | None, max_sets: int, tol: Tolerances
+) -> Check | None:
+    """The verdict when the support size alone decides it (none, too many, all), or None."""
+    k = out.k
     if k == 0:
-        sc0 = staircase(system.A, system.C, max_steps=min(tau, n), tolerances=tol)
-        if sc0.rank < n and not sc0.problem:
-            doubt = _exact_doubt(system, range(p * min(tau, n)), min(tau, n), evidence)
-            if doubt:
-                return make(Verdict.INCONCLUSIVE, math.nan, None, f"O_tau (horizon {tau}) {doubt}")
-            return make(
-                Verdict.FAILS,
-                math.inf,
-                (),
-                f"O_tau (horizon {tau}) has rank {sc0.rank} < n = {n}: even without "
-                f"attack the state is not determined, so rho is inf.",
-            )
-        return make(
-            Verdict.HOLDS,
-            0.0,
-            (),
-            "With no attacked entries there is nothing to misidentify.",
-            margin=1.0,
-        )
+        return _without_attack(out, tol)
     if k > items:
         every = tuple(range(items)) if items <= _LISTED else None
-        return make(
+        return out.check(
             Verdict.FAILS,
             math.inf,
             every,
             f"The support size {k:,} exceeds the {items:,} available "
-            f"{'sensors' if mode == 'block' else 'entries'}: an attack on all of them "
+            f"{out.noun}: an attack on all of them "
             f"leaves nothing to estimate the state from.",
         )
     if total is None:
-        return make(
+        return out.check(
             Verdict.INCONCLUSIVE,
             math.nan,
             None,
@@ -224,196 +296,172 @@ def irrepresentable(
             f"(max_sets=...).",
         )
     if k == items:
-        return make(
+        every = tuple(range(items))
+        return out.check(
             Verdict.FAILS,
             math.inf,
-            tuple(range(items)),
-            f"With all {items} {'sensors' if mode == 'block' else 'entries'} attacked, "
+            every,
+            f"With all {items} {out.noun} attacked, "
             f"O_Sbar is empty and lacks full column rank (Theorem 1's assumption), so "
             f"rho is inf.",
-            witness={
-                "support": list(range(items)),
-                "support_names": describe_support(tuple(range(items))),
-                "reason": "O_Sbar lacks full column rank",
-            },
+            witness=out.rank_witness(every),
         )
-    h = k * tau if mode == "block" else k
-    colex_memory = int(min(DEFAULT_MEMORY, budget.memory // 8))
-    nbytes, flops, per_support = _cost(n, p, tau, items, h, total, mode, colex_memory)
-    evidence["estimate"] = {"bytes": nbytes, "flops": flops, "bytes_per_support": per_support}
-    refusal = budget.refusal(
-        f"the irrepresentable enumeration ({format_count(total)} supports of {h:,} rows of the "
-        f"{p * tau:,} x {n} matrix O_tau, horizon {tau:,})",
-        nbytes=nbytes,
-        flops=flops,
+    return None
+
+
+def _without_attack(out: _Verdicts, tol: Tolerances) -> Check:
+    """Support size 0: fails (rho inf) when O_tau is rank deficient, else holds with rho 0."""
+    system, tau = out.system, out.tau
+    n, steps = system.n, min(out.tau, system.n)
+    sc0 = staircase(system.A, system.C, max_steps=steps, tolerances=tol)
+    if sc0.rank < n and not sc0.problem:
+        doubt = _exact_doubt(system, range(system.p * steps), steps, out.evidence)
+        if doubt:
+            return out.check(Verdict.INCONCLUSIVE, math.nan, None, f"O_tau (horizon {tau}) {doubt}")
+        return out.check(
+            Verdict.FAILS,
+            math.inf,
+            (),
+            f"O_tau (horizon {tau}) has rank {sc0.rank} < n = {n}: even without "
+            f"attack the state is not determined, so rho is inf.",
+        )
+    return out.check(
+        Verdict.HOLDS,
+        0.0,
+        (),
+        "With no attacked entries there is nothing to misidentify.",
+        margin=1.0,
     )
-    if refusal:
-        hint = "; a shorter horizon (--horizon) makes it smaller" if tau > n else ""
-        return make(Verdict.INCONCLUSIVE, math.nan, None, f"Not attempted: {refusal}{hint}.")
-    batch = int(max(1, min(_SUB, (budget.memory // 4) // per_support)))
 
-    with np.errstate(over="ignore", invalid="ignore"):
-        O = system.observability_matrix(tau)  # row t * p + i: sensor i at step t
+
+def _over_budget(out: _Verdicts, plan: ScanPlan, budget: Budget, total: int) -> Check | None:
+    """Record the cost estimate; the inconclusive verdict when it exceeds the budget, or None."""
+    n, p, tau = out.system.n, out.system.p, out.tau
+    out.evidence["estimate"] = {
+        "bytes": plan.nbytes,
+        "flops": plan.flops,
+        "bytes_per_support": plan.per_support,
+    }
+    refusal = budget.refusal(
+        f"the irrepresentable enumeration ({format_count(total)} supports of {plan.rows:,} rows "
+        f"of the {p * tau:,} x {n} matrix O_tau, horizon {tau:,})",
+        nbytes=plan.nbytes,
+        flops=plan.flops,
+    )
+    if not refusal:
+        return None
+    hint = "; a shorter horizon (--horizon) makes it smaller" if tau > n else ""
+    return out.check(Verdict.INCONCLUSIVE, math.nan, None, f"Not attempted: {refusal}{hint}.")
+
+
+def _rows_of_items(p: int, tau: int, mode: str) -> np.ndarray:
+    """Rows of O_tau of each item: a sensor's tau rows (block) or one entry (entrywise)."""
     if mode == "block":
-        rows_of = (
-            np.arange(tau, dtype=np.int64)[None, :] * p + np.arange(p, dtype=np.int64)[:, None]
-        )
-    else:
-        rows_of = np.arange(p * tau, dtype=np.int64)[:, None]
-    if not np.all(np.isfinite(O)):
-        return make(
-            Verdict.INCONCLUSIVE,
-            math.nan,
-            None,
-            f"The stacked observability matrix overflows over {tau} steps.",
-        )
+        return np.arange(tau, dtype=np.int64)[None, :] * p + np.arange(p, dtype=np.int64)[:, None]
+    return np.arange(p * tau, dtype=np.int64)[:, None]
 
+
+def _rank_deficient(out: _Verdicts, tol: Tolerances) -> Check | None:
+    """The verdict when O_tau's rank is below n or undecided (so is every O_Sbar's), or None."""
+    system, tau = out.system, out.tau
+    n = system.n
     sc = staircase(system.A, system.C, max_steps=tau, tolerances=tol)
-    evidence["rank_O_tau"] = sc.rank
-    if sc.rank < n or sc.problem:
-        first = tuple(range(k))
-        if sc.problem:
-            return make(
-                Verdict.INCONCLUSIVE,
-                math.nan,
-                None,
-                f"The rank of O_tau cannot be decided: {sc.problem}.",
-            )
-        doubt = _exact_doubt(system, range(p * min(tau, n)), min(tau, n), evidence)
-        if doubt:
-            return make(Verdict.INCONCLUSIVE, math.nan, None, f"O_tau (horizon {tau}) {doubt}")
-        return make(
-            Verdict.FAILS,
-            math.inf,
-            first,
-            f"O_tau (horizon {tau}) has rank {sc.rank} < n = {n}, so no O_Sbar has full column "
-            f"rank as Theorem 1 requires; the first support {', '.join(map(str, describe_support(first)))} "
-            f"is a witness.",
-            witness={
-                "support": list(first),
-                "support_names": describe_support(first),
-                "reason": "O_Sbar lacks full column rank",
-            },
-        )
-
-    Q, _ = np.linalg.qr(O)
-    U = Q[rows_of]  # (items, r, n)
-    G = np.einsum("irn,irm->inm", U, U)
-    shift = tol.screen_rtol
-    base = np.eye(n)
-    worst = -1.0
-    worst_support: tuple[int, ...] | None = None
-    infinite: tuple[int, ...] | None = None
-    n_inf = 0
-    borderline = 0
-    done = 0
-    for block in colex_blocks(G, base, k, memory=colex_memory):
-        subsets = block.subsets()
-        ok = screen_positive_definite(block.matrices, shift)
-        rho = np.full(len(block), np.nan)
-        good = np.flatnonzero(ok)
-        for start in range(0, good.size, batch):
-            sel = good[start : start + batch]
-            rho[sel] = _rho_batch(Q, rows_of, block.matrices[sel], subsets[sel])
-        bad = np.flatnonzero(~ok)
-        if bad.size:
-            r_bad, codes = _rho_refine(Q, rows_of, subsets[bad], tol)
-            rho[bad] = r_bad
-            borderline += int(np.count_nonzero(codes == BORDERLINE))
-            inf_rows = bad[codes == ZERO]
-            n_inf += inf_rows.size
-            for j in inf_rows:
-                cand = tuple(int(x) for x in subsets[j])
-                if infinite is None or cand < infinite:
-                    infinite = cand
-        finite = np.flatnonzero(np.isfinite(rho))
-        if finite.size:
-            top = float(rho[finite].max())
-            ties = finite[rho[finite] >= top - 1e-12 * max(1.0, top)]
-            cand = min(tuple(int(x) for x in subsets[j]) for j in ties)
-            if worst_support is None or top > worst + 1e-12 * max(1.0, worst):
-                worst, worst_support = top, cand
-            elif top >= worst - 1e-12 * max(1.0, worst):
-                worst, worst_support = max(worst, top), min(worst_support, cand)
-        done += len(block)
-        if progress is not None:
-            progress(done, total)
-
-    evidence["supports_without_full_rank"] = n_inf
-    evidence["borderline_supports"] = borderline
-    if infinite is not None:
-        kept = np.setdiff1d(np.arange(p * tau), rows_of[list(infinite)].ravel())
-        doubt = _exact_doubt(system, kept, tau, evidence)
-        if doubt:
-            label = ", ".join(map(str, describe_support(infinite)))
-            return make(
-                Verdict.INCONCLUSIVE,
-                math.nan,
-                None,
-                f"O_Sbar for the support {label} {doubt}",
-            )
-        return make(
-            Verdict.FAILS,
-            math.inf,
-            infinite,
-            f"For {n_inf} of {total} supports O_Sbar lacks full column rank (Theorem 1's "
-            f"assumption); the first is {', '.join(map(str, describe_support(infinite)))}, so rho is inf "
-            f"there.",
-            witness={
-                "support": list(infinite),
-                "support_names": describe_support(infinite),
-                "reason": "O_Sbar lacks full column rank",
-            },
-        )
-    if borderline:
-        return make(
+    out.evidence["rank_O_tau"] = sc.rank
+    if sc.rank >= n and not sc.problem:
+        return None
+    if sc.problem:
+        return out.check(
             Verdict.INCONCLUSIVE,
             math.nan,
             None,
-            f"{borderline} support(s) have a borderline rank decision for O_Sbar.",
+            f"The rank of O_tau cannot be decided: {sc.problem}.",
         )
-    assert worst_support is not None
-    rows = rows_of[list(worst_support)].ravel()
-    direct = irrepresentable_constant(O, rows)
-    evidence["worst_support_recomputed_with_pinv"] = direct
+    steps = min(tau, n)
+    doubt = _exact_doubt(system, range(system.p * steps), steps, out.evidence)
+    if doubt:
+        return out.check(Verdict.INCONCLUSIVE, math.nan, None, f"O_tau (horizon {tau}) {doubt}")
+    first = tuple(range(out.k))
+    return out.check(
+        Verdict.FAILS,
+        math.inf,
+        first,
+        f"O_tau (horizon {tau}) has rank {sc.rank} < n = {n}, so no O_Sbar has full column "
+        f"rank as Theorem 1 requires; the first support {out.label(first)} "
+        f"is a witness.",
+        witness=out.rank_witness(first),
+    )
+
+
+def _infinite_verdict(out: _Verdicts, scan: SupportScan, rows_of: np.ndarray, total: int) -> Check:
+    """Fails on the first support whose O_Sbar is rank deficient, unless the exact data doubt it."""
+    infinite = scan.infinite
+    assert infinite is not None
+    kept = np.setdiff1d(np.arange(out.system.p * out.tau), rows_of[list(infinite)].ravel())
+    doubt = _exact_doubt(out.system, kept, out.tau, out.evidence)
+    label = out.label(infinite)
+    if doubt:
+        return out.check(
+            Verdict.INCONCLUSIVE,
+            math.nan,
+            None,
+            f"O_Sbar for the support {label} {doubt}",
+        )
+    return out.check(
+        Verdict.FAILS,
+        math.inf,
+        infinite,
+        f"For {scan.n_inf} of {total} supports O_Sbar lacks full column rank (Theorem 1's "
+        f"assumption); the first is {label}, so rho is inf "
+        f"there.",
+        witness=out.rank_witness(infinite),
+    )
+
+
+def _worst_verdict(
+    out: _Verdicts, scan: SupportScan, O: np.ndarray, rows_of: np.ndarray, tol: Tolerances
+) -> Check:
+    """The worst rho recomputed by pinv, then compared with 1 within the tolerance band."""
+    worst, support = scan.worst, scan.worst_support
+    assert support is not None
+    direct = irrepresentable_constant(O, rows_of[list(support)].ravel())
+    out.evidence["worst_support_recomputed_with_pinv"] = direct
     rel = abs(direct - worst) / max(1.0, abs(worst))
-    evidence["recompute_relative_difference"] = rel
-    names = describe_support(worst_support)
-    label = ", ".join(map(str, names))
+    out.evidence["recompute_relative_difference"] = rel
+    label = out.label(support)
     if not math.isfinite(direct) or rel > 1e-6:
-        return make(
+        return out.check(
             Verdict.INCONCLUSIVE,
             worst,
-            worst_support,
+            support,
             f"The worst constant {worst:.6g} on {label} does not match its direct "
             f"recomputation {direct:.6g}.",
         )
     margin = 1.0 - worst
     band = tol.irrepresentable_rtol
     if worst < 1.0 - band:
-        return make(
+        return out.check(
             Verdict.HOLDS,
             worst,
-            worst_support,
+            support,
             f"The worst irrepresentable constant is {sig(worst)} < 1 (support {label}): "
-            f"Lasso identifies every attack on {k} {'sensors' if mode == 'block' else 'entries'}"
+            f"Lasso identifies every attack on {out.k} {out.noun}"
             f" for small enough lambda.",
             margin=margin,
         )
     if worst > 1.0 + band:
-        return make(
+        return out.check(
             Verdict.FAILS,
             worst,
-            worst_support,
+            support,
             f"The irrepresentable constant reaches {sig(worst)} >= 1 on support {label}: "
             f"Lasso's support recovery is not guaranteed there.",
             margin=margin,
-            witness={"support": list(worst_support), "support_names": names, "value": worst},
+            witness={"support": list(support), "support_names": out.names(support), "value": worst},
         )
-    return make(
+    return out.check(
         Verdict.INCONCLUSIVE,
         worst,
-        worst_support,
+        support,
         f"The worst constant {worst:.12g} is within {band:g} of 1.",
         margin=margin,
     )
@@ -437,70 +485,3 @@ def _exact_doubt(system: System, rows: Any, steps: int, evidence: dict[str, Any]
         "data of one where Theorem 1's assumption fails, so rho depends on digits the data do "
         "not have."
     )
-
-
-def _cost(
-    n: int, p: int, tau: int, items: int, h: int, supports: int, mode: str, colex_memory: int
-) -> tuple[float, float, float]:
-    """Peak bytes, operations and bytes per support of the enumeration, from the shapes.
-
-    Peak: O_tau and its QR factor (4 copies of p tau x n), the per-item
-    Gramians, the colex engine's partial sums, one support's dense products
-    (2 copies of p tau x h, the rows of O_tau outside and inside it), and the
-    direct pinv recomputation of the worst support.  Work: the QR, the Gramians
-    and, per support, the p tau x n x h product, its absolute row sums and an
-    n x n factorisation; calibrated so that 1e12 is one to three minutes on
-    one core.
-    """
-    M = p * tau
-    per_support = 8.0 * (2 * M * h + 3 * h * n + M)
-    colex = min(colex_memory + DEFAULT_CHUNK_BYTES, 2 * 8.0 * supports * n * n)
-    nbytes = 8.0 * (4 * M * n + M + items * n * n) + colex + per_support + 8.0 * (2 * M * n + M * h)
-    # the elementwise passes over the p tau x h product (absolute value, sums, the
-    # memory traffic) cost far more than their count: 60 per entry, measured
-    flops = (
-        4.0 * M * n * n
-        + 2.0 * M * n * n
-        + supports * (2.0 * M * n * h + 60.0 * M * h + n**3 + 2.0 * n * n * h)
-    )
-    return nbytes, flops, per_support
-
-
-def _rho_batch(
-    Q: np.ndarray, rows_of: np.ndarray, M: np.ndarray, subsets: np.ndarray
-) -> np.ndarray:
-    """rho for supports whose Gramian M = Q_Sbar^T Q_Sbar passed screening."""
-    N = subsets.shape[0]
-    rows = rows_of[subsets].reshape(N, -1)  # (N, h)
-    QS = Q[rows]  # (N, h, n)
-    X = np.linalg.solve(M, QS.transpose(0, 2, 1))  # (N, n, h)
-    h = X.shape[2]
-    # one product for the whole batch: (p tau, n) x (n, N h)
-    full = Q @ X.transpose(1, 0, 2).reshape(Q.shape[1], N * h)
-    np.abs(full, out=full)
-    sums = full.reshape(Q.shape[0], N, h).sum(axis=2).T  # (N, p tau)
-    np.put_along_axis(sums, rows, 0.0, axis=1)  # keep only rows outside S
-    return sums.max(axis=1)
-
-
-def _rho_refine(
-    Q: np.ndarray, rows_of: np.ndarray, subsets: np.ndarray, tol: Tolerances
-) -> tuple[np.ndarray, np.ndarray]:
-    """Exact rank decision by SVD for supports that failed screening, and rho."""
-    N = subsets.shape[0]
-    m = Q.shape[0]
-    rho = np.empty(N)
-    codes = np.empty(N, dtype=np.int8)
-    for j in range(N):
-        mask = np.ones(m, dtype=bool)
-        rows = rows_of[subsets[j]].ravel()
-        mask[rows] = False
-        Qbar = Q[mask]
-        c, _, _ = stacked_rank(Qbar[None], tolerances=tol)
-        codes[j] = c[0]
-        if c[0] == NONZERO:
-            M = np.linalg.pinv(Qbar).T @ Q[rows].T
-            rho[j] = np.abs(M).sum(axis=1).max()
-        else:
-            rho[j] = math.inf if c[0] == ZERO else math.nan
-    return rho, codes

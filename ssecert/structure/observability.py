@@ -15,15 +15,19 @@ backward-stable methods are used instead and must agree:
 
 from __future__ import annotations
 
-from typing import Any
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
 from .._format import distance as format_distance
-from .._linalg import EigenAnalysis, eigen_clusters, matrix_norm, staircase
+from .._linalg import EigenAnalysis, Staircase, eigen_clusters, matrix_norm, staircase
 from ..results import Check, Verdict
 from ..system import System
 from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances, classify
+
+if TYPE_CHECKING:
+    from .._exact import ExactObservability
 
 __all__ = ["observability", "pbh_margins", "observability_index", "unobservable_residual"]
 
@@ -138,40 +142,132 @@ def observability(
     sc = staircase(A, C, tolerances=tol)
     exact = ExactPlant(system.A, system.C).observability(tuple(range(system.p)))
 
+    pbh = _pbh_test(A, C, eig, tol)
+    pbh_state = pbh.state
+    if sc.problem:
+        stair_state, stair_note = "unknown", sc.problem
+    else:
+        stair_state, stair_note = ("observable" if sc.rank == n else "unobservable"), ""
+    grouping = ""
+    if _grouping_cannot_matter(eig, pbh, stair_state, exact.state):
+        pbh_state, grouping = "observable", "; ".join(eig.problems)
+    out = _Verdicts(
+        margin=pbh.margin,
+        evidence=_evidence(eig, alpha, pbh, pbh_state, sc, stair_state, exact.to_dict()),
+        tolerances={
+            "rank_rtol": tol.rtol(n + system.p, n),
+            "borderline_factor": tol.borderline_factor,
+            "eigenvalue_threshold": eig.threshold,
+            "witness_rtol": tol.witness_rtol,
+        },
+    )
+
+    unobservable_in_floats = "unobservable" in (pbh_state, stair_state)
+    if exact.state == "unobservable" and not unobservable_in_floats:
+        return _exactly_unobservable(out, A, C, exact)
+    if exact.state == "observable" and unobservable_in_floats:
+        return _exactly_observable(out, n)
+    if pbh_state == "observable" and stair_state == "observable":
+        return _observable(out, sc.index, exact.state, grouping)
+    candidates, conservative = _candidate_directions(A, C, eig, alpha, pbh, pbh_state, tol)
+    unobs = n - sc.rank if stair_state == "unobservable" else n - conservative.rank
+    verified = _verified_direction(out, A, C, candidates, unobs, stair_state, exact, tol)
+    if verified is not None:
+        return verified
+    notes = [r for r in (pbh.note, stair_note) if r]
+    return _undecided(out, notes, pbh_state, stair_state, bool(candidates))
+
+
+class _PBH(NamedTuple):
+    """The PBH test at the eigenvalue groups and at every computed eigenvalue."""
+
+    margins: np.ndarray  # per group
+    codes: np.ndarray  # per group
+    raw_codes: np.ndarray  # per computed eigenvalue in the closed upper half plane
+    margin: float  # the smallest of all, as reported to users
+    state: str  # observable, unobservable or unknown
+    note: str  # why unknown
+
+
+@dataclass(frozen=True)
+class _Verdicts:
+    """What every verdict shows: the PBH margin, the evidence and the tolerances."""
+
+    margin: float
+    evidence: dict[str, Any]  # added to by the deciding step
+    tolerances: dict[str, Any]
+
+    def check(
+        self,
+        verdict: Verdict,
+        summary: str,
+        index: int | None,
+        unobs: int | None,
+        witness: dict | None = None,
+    ) -> Check:
+        """The observability Check with this verdict, index and unobservable dimension."""
+        return Check(
+            id="observability",
+            title="Observability of (A, C)",
+            verdict=verdict,
+            summary=summary,
+            value=index,
+            margin=self.margin,
+            method="pbh+staircase",
+            fields={"observability_index": index, "unobservable_dimension": unobs},
+            evidence=self.evidence,
+            witness=witness,
+            tolerances=self.tolerances,
+        )
+
+
+def _pbh_test(A: np.ndarray, C: np.ndarray, eig: EigenAnalysis, tol: Tolerances) -> _PBH:
+    """PBH margins and rank decisions at the groups and computed eigenvalues, and their answer."""
     centers = np.array([c.center for c in eig.clusters], dtype=complex)
     margins, codes = pbh_margins(A, C, centers, tolerances=tol)
     # margin over every computed eigenvalue, as reported to users
     raw = eig.eigenvalues[eig.eigenvalues.imag >= 0]
     raw_margins, raw_codes = pbh_margins(A, C, raw, tolerances=tol)
     margin = float(min(margins.min(initial=np.inf), raw_margins.min(initial=np.inf)))
-
     if eig.problems:
-        pbh_state, pbh_note = "unknown", "; ".join(eig.problems)
+        state, note = "unknown", "; ".join(eig.problems)
     elif np.any(codes == ZERO):
-        pbh_state, pbh_note = "unobservable", ""
+        state, note = "unobservable", ""
     elif np.any(codes == BORDERLINE):
-        pbh_state = "unknown"
-        pbh_note = f"a PBH singular value ({margins[codes == BORDERLINE].min():.2e}) is borderline"
+        state = "unknown"
+        note = f"a PBH singular value ({margins[codes == BORDERLINE].min():.2e}) is borderline"
     else:
-        pbh_state, pbh_note = "observable", ""
-    if sc.problem:
-        stair_state, stair_note = "unknown", sc.problem
-    else:
-        stair_state, stair_note = ("observable" if sc.rank == n else "unobservable"), ""
-    grouping = ""
-    if (
+        state, note = "observable", ""
+    return _PBH(margins, codes, raw_codes, margin, state, note)
+
+
+def _grouping_cannot_matter(
+    eig: EigenAnalysis, pbh: _PBH, stair_state: str, exact_state: str
+) -> bool:
+    """True when only the eigenvalue grouping is in doubt and no grouping changes the answer."""
+    # how the eigenvalues group (their multiplicities) is ambiguous, but PBH is clearly of
+    # full rank at every computed eigenvalue and every group, the staircase agrees, and the
+    # exact data are observable: the grouping cannot change the answer
+    return bool(
         eig.problems
         and stair_state == "observable"
-        and exact.state == "observable"
-        and np.all(codes == NONZERO)
-        and np.all(raw_codes == NONZERO)
-    ):
-        # how the eigenvalues group (their multiplicities) is ambiguous, but PBH is clearly of
-        # full rank at every computed eigenvalue and every group, the staircase agrees, and the
-        # exact data are observable: the grouping cannot change the answer
-        pbh_state, grouping = "observable", "; ".join(eig.problems)
+        and exact_state == "observable"
+        and np.all(pbh.codes == NONZERO)
+        and np.all(pbh.raw_codes == NONZERO)
+    )
 
-    evidence: dict[str, Any] = {
+
+def _evidence(
+    eig: EigenAnalysis,
+    alpha: float,
+    pbh: _PBH,
+    pbh_state: str,
+    sc: Staircase,
+    stair_state: str,
+    exact: dict[str, Any],
+) -> dict[str, Any]:
+    """Evidence of every verdict: eigenvalues, PBH per group, the staircase, the exact decision."""
+    return {
         "eigenvalues": eig.eigenvalues / alpha,
         "pbh": [
             {
@@ -185,14 +281,14 @@ def observability(
                     NONZERO: "full rank",
                 }[int(code)],
             }
-            for c, m, code in zip(eig.clusters, margins, codes)
+            for c, m, code in zip(eig.clusters, pbh.margins, pbh.codes)
         ],
         "staircase_block_sizes": list(sc.block_sizes),
         "staircase_step_margins": list(sc.step_margins),
         "observable_dimension": sc.rank,
         "pbh_state": pbh_state,
         "staircase_state": stair_state,
-        "exact": exact.to_dict(),
+        "exact": exact,
         "margin_definition": (
             "min over eigenvalues of sigma_min([A - lambda I; C]) / ||[A; C]||_2,"
             " in units where ||A||_max and every sensor row are within a factor "
@@ -205,113 +301,113 @@ def observability(
             "proves observability) or an exact kernel vector (proves the opposite)"
         ),
     }
-    tolerances_out = {
-        "rank_rtol": tol.rtol(n + system.p, n),
-        "borderline_factor": tol.borderline_factor,
-        "eigenvalue_threshold": eig.threshold,
-        "witness_rtol": tol.witness_rtol,
+
+
+def _exactly_unobservable(
+    out: _Verdicts, A: np.ndarray, C: np.ndarray, exact: ExactObservability
+) -> Check:
+    """Fails with the exact unobservable direction that floating point could not resolve."""
+    # floating point was fooled (error amplification); the exact direction is the proof
+    if exact.z is None:  # pragma: no cover - an exact unobservable verdict with proof has z
+        raise RuntimeError("the exact unobservable verdict carries no direction z")
+    witness = {
+        "z": exact.z,
+        "z_exact_integers": [str(v) for v in exact.z_exact or []],
+        "unobservable_dimension": None,
+        "unobservable_eigenvalues": [],
+        "residual": unobservable_residual(A, C, exact.z),
+        "meaning": "C A^k z = 0 exactly for every k (z_exact, checked in integer arithmetic): "
+        "x0 and x0 + z give identical outputs",
     }
-    method = "pbh+staircase"
-    title = "Observability of (A, C)"
+    return out.check(
+        Verdict.FAILS,
+        "(A, C) is not observable: exact arithmetic on the data finds a state direction that "
+        "produces no output (floating point could not resolve it).",
+        None,
+        None,
+        witness,
+    )
 
-    def check(
-        verdict: Verdict,
-        summary: str,
-        index: int | None,
-        unobs: int | None,
-        witness: dict | None = None,
-    ) -> Check:
-        return Check(
-            id="observability",
-            title=title,
-            verdict=verdict,
-            summary=summary,
-            value=index,
-            margin=margin,
-            method=method,
-            fields={"observability_index": index, "unobservable_dimension": unobs},
-            evidence=evidence,
-            witness=witness,
-            tolerances=tolerances_out,
-        )
 
-    if exact.state == "unobservable" and not (
-        pbh_state == "unobservable" or stair_state == "unobservable"
-    ):
-        # floating point was fooled (error amplification); the exact direction is the proof
-        if exact.z is None:  # pragma: no cover - an exact unobservable verdict with proof has z
-            raise RuntimeError("the exact unobservable verdict carries no direction z")
-        witness = {
-            "z": exact.z,
-            "z_exact_integers": [str(v) for v in exact.z_exact or []],
-            "unobservable_dimension": None,
-            "unobservable_eigenvalues": [],
-            "residual": unobservable_residual(A, C, exact.z),
-            "meaning": "C A^k z = 0 exactly for every k (z_exact, checked in integer arithmetic): "
-            "x0 and x0 + z give identical outputs",
-        }
-        return check(
-            Verdict.FAILS,
-            "(A, C) is not observable: exact arithmetic on the data finds a state direction that "
-            "produces no output (floating point could not resolve it).",
-            None,
-            None,
-            witness,
-        )
-    if exact.state == "observable" and (
-        pbh_state == "unobservable" or stair_state == "unobservable"
-    ):
-        evidence["distance_to_unobservability"] = margin
-        return check(
-            Verdict.INCONCLUSIVE,
-            f"In floating point (A, C) looks unobservable, but the exact data are observable "
-            f"(Krylov rank {n} modulo a prime): the plant is within a relative distance "
-            f"{format_distance(margin)} of an unobservable one, below the precision of its data, so the answer "
-            f"depends on digits the data do not have.",
-            None,
-            None,
-        )
-    if pbh_state == "observable" and stair_state == "observable":
-        confirmed = " (confirmed in exact arithmetic)" if exact.state == "observable" else ""
-        if grouping:
-            evidence["eigenvalue_grouping_ambiguous"] = grouping
-            confirmed = (
-                " (confirmed in exact arithmetic; how the eigenvalues group is ambiguous, but the "
-                "PBH test has full rank at every one of them)"
-            )
-        return check(
-            Verdict.HOLDS,
-            f"(A, C) is observable{confirmed}: x(0) is determined by {sc.index} "
-            f"step{'s' if sc.index != 1 else ''} of output; PBH margin {margin:.3g}.",
-            sc.index,
-            0,
-        )
+def _exactly_observable(out: _Verdicts, n: int) -> Check:
+    """Inconclusive: unobservable in floating point, observable with the data taken exactly."""
+    out.evidence["distance_to_unobservability"] = out.margin
+    distance = format_distance(out.margin)
+    return out.check(
+        Verdict.INCONCLUSIVE,
+        f"In floating point (A, C) looks unobservable, but the exact data are observable "
+        f"(Krylov rank {n} modulo a prime): the plant is within a relative distance "
+        f"{distance} of an unobservable one, below the precision of its data, so the answer "
+        f"depends on digits the data do not have.",
+        None,
+        None,
+    )
 
-    # candidate unobservable directions: PBH null vectors, then the
-    # conservative staircase, each verified by simulation
+
+def _observable(out: _Verdicts, index: int, exact_state: str, grouping: str) -> Check:
+    """Holds: PBH and the staircase agree on full rank, with the index and the margin."""
+    confirmed = " (confirmed in exact arithmetic)" if exact_state == "observable" else ""
+    if grouping:
+        out.evidence["eigenvalue_grouping_ambiguous"] = grouping
+        confirmed = (
+            " (confirmed in exact arithmetic; how the eigenvalues group is ambiguous, but the "
+            "PBH test has full rank at every one of them)"
+        )
+    return out.check(
+        Verdict.HOLDS,
+        f"(A, C) is observable{confirmed}: x(0) is determined by {index} "
+        f"step{'s' if index != 1 else ''} of output; PBH margin {out.margin:.3g}.",
+        index,
+        0,
+    )
+
+
+def _candidate_directions(
+    A: np.ndarray,
+    C: np.ndarray,
+    eig: EigenAnalysis,
+    alpha: float,
+    pbh: _PBH,
+    pbh_state: str,
+    tol: Tolerances,
+) -> tuple[list[tuple[np.ndarray, str, list]], Staircase]:
+    """Candidate unobservable directions (PBH null vectors, then the conservative staircase's)."""
     candidates: list[tuple[np.ndarray, str, list]] = []
     if pbh_state == "unobservable":
         unobservable = [
             {"eigenvalue": c.center / alpha, "pbh_margin": float(m)}
-            for c, m, code in zip(eig.clusters, margins, codes)
+            for c, m, code in zip(eig.clusters, pbh.margins, pbh.codes)
             if code == ZERO
         ]
-        for c, code in zip(eig.clusters, codes):
+        for c, code in zip(eig.clusters, pbh.codes):
             if code == ZERO:
                 candidates.append(
                     (_pbh_null_vector(A, C, c.center), "PBH null vector", unobservable)
                 )
     conservative = staircase(A, C, tolerances=tol, error_model="compound")
-    if not conservative.problem and conservative.rank < n:
+    if not conservative.problem and conservative.rank < A.shape[0]:
         direction = conservative.unobservable_direction()
         if direction is None:  # pragma: no cover - None only at full rank
             raise RuntimeError("a rank-deficient staircase has no unobservable direction")
         candidates.append((direction, "staircase", []))
+    return candidates, conservative
+
+
+def _verified_direction(
+    out: _Verdicts,
+    A: np.ndarray,
+    C: np.ndarray,
+    candidates: list[tuple[np.ndarray, str, list]],
+    unobs: int,
+    stair_state: str,
+    exact: ExactObservability,
+    tol: Tolerances,
+) -> Check | None:
+    """Fails on the first candidate that simulation confirms; None when none survives."""
     for z, source, eigenvalues in candidates:
         residual = unobservable_residual(A, C, z)
         if residual <= tol.witness_rtol:
-            unobs = n - sc.rank if stair_state == "unobservable" else n - conservative.rank
-            evidence["unobservable_direction_source"] = source
+            out.evidence["unobservable_direction_source"] = source
             witness = {
                 "z": z,
                 "unobservable_dimension": unobs,
@@ -326,7 +422,7 @@ def observability(
             if exact.state == "unobservable":
                 how.append("in exact arithmetic")
             note = f" (confirmed {' and '.join(how)})" if how else ""
-            return check(
+            return out.check(
                 Verdict.FAILS,
                 f"(A, C) is not observable: a {unobs}-dimensional subspace of states produces "
                 f"no output{note}.",
@@ -334,18 +430,24 @@ def observability(
                 unobs,
                 witness,
             )
-        evidence.setdefault("rejected_directions", []).append(
+        out.evidence.setdefault("rejected_directions", []).append(
             {"source": source, "residual": residual}
         )
+    return None
 
-    reasons = [r for r in (pbh_note, stair_note) if r]
+
+def _undecided(
+    out: _Verdicts, notes: list[str], pbh_state: str, stair_state: str, directions_tried: bool
+) -> Check:
+    """Inconclusive, with why neither method's answer could be trusted."""
+    reasons = list(notes)
     if pbh_state != stair_state and "unknown" not in (pbh_state, stair_state):
         reasons.append(f"PBH says {pbh_state} but the staircase says {stair_state}")
     if stair_state == "observable" and pbh_state == "unknown":
         reasons.append("the staircase finds full rank but the PBH test cannot confirm it")
-    if candidates:
+    if directions_tried:
         reasons.append("no unobservable direction survived the simulation check")
-    return check(
+    return out.check(
         Verdict.INCONCLUSIVE,
         "Observability could not be decided reliably: " + "; ".join(reasons) + ".",
         None,
