@@ -136,7 +136,7 @@ def eigen_clusters(
     (``kappa`` the eigenvalue condition number, huge for the perturbed
     copies of a defective eigenvalue) and (ii) the spread a defective
     eigenvalue of the group's size shows in floating point,
-    ``||A|| (n cluster_rtol)^(1/m)``.  Each group's eigenspace is the
+    ``||A|| (n 1e4 cluster_rtol)^(1/m)``.  Each group's eigenspace is the
     numerical null space of ``A - center I``.  A group is reported as a
     problem (and analyses that need it become inconclusive) when the null
     space is empty or borderline, larger than the group, or when a single

@@ -33,3 +33,9 @@ def test_a_radius_just_below_one_is_not_printed_as_one():
     assert check.verdict.value == "holds"
     assert "spectral radius 1)" not in check.summary and "by 1 per" not in check.summary
     assert "0.999999" in check.summary, check.summary
+
+
+def test_the_terminal_table_keeps_the_sign_of_infinity():
+    from ssecert.report.table import _fmt
+
+    assert (_fmt(float("inf")), _fmt(float("-inf")), _fmt(float("nan"))) == ("inf", "-inf", "-")

@@ -23,7 +23,7 @@ def _fmt(value: Any) -> str:
         if math.isnan(value):
             return "-"
         if math.isinf(value):
-            return "inf"
+            return "inf" if value > 0 else "-inf"
         return sig(value)
     return str(value)
 
