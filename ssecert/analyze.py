@@ -160,8 +160,8 @@ def analyze(
         verdict is decided (``sparse_observability``); None for the exact
         value however long it takes.
     client : dask.distributed.Client, optional
-        Split the sparse-observability enumeration over the client's workers
-        (the same answer as in-process).
+        Split the enumerations (sensor sets, attack supports) over the
+        client's workers, with the same answers as in-process.
     context : AnalysisContext, optional
         Where the run keeps what later steps share (the observer built from
         the design, the sparse-observability check whose stealthy attack the
@@ -216,6 +216,7 @@ def analyze(
             tolerances=tol,
             progress=relay("irrepresentable"),
             budget=budget,
+            client=client,
         ),
     ]
     if spec.observer is not None:

@@ -11,7 +11,14 @@ import contextlib
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
-__all__ = ["ChunkError", "dask_client", "map_chunks", "map_ordered", "worker_threads"]
+__all__ = [
+    "ChunkError",
+    "dask_client",
+    "map_chunks",
+    "map_ordered",
+    "rank_ranges",
+    "worker_threads",
+]
 
 
 @contextlib.contextmanager
@@ -122,3 +129,13 @@ def worker_threads(client: Any | None) -> int:
     if client is None:
         return 1
     return max(1, sum(client.nthreads().values()))
+
+
+def rank_ranges(total: int, client: Any | None, smallest: int) -> list[tuple[int, int]]:
+    """Ranges [lo, hi) covering 0..total: one without a client, else about four per worker
+    thread, none smaller than ``smallest`` (below it a task costs more than it saves)."""
+    if client is None or total <= 0:
+        return [(0, total)]
+    pieces = max(1, min(4 * worker_threads(client), total // max(smallest, 1)))
+    step = -(-total // pieces)
+    return [(lo, min(lo + step, total)) for lo in range(0, total, step)]

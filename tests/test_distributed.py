@@ -12,8 +12,9 @@ from ssecert.analyze import analyze
 from ssecert.cli import main
 from ssecert.report.json import certificate_json
 from ssecert.spec import spec_from_dict
-from ssecert.structure import enumeration
+from ssecert.structure import _irrepresentable_scan, enumeration
 from ssecert.structure._combinatorics import colex_blocks, colex_rank
+from ssecert.structure.irrepresentable import irrepresentable
 from ssecert.structure.sparse import sparse_observability
 
 pytest.importorskip("dask.distributed")
@@ -76,6 +77,7 @@ def small_chunks(monkeypatch):
     # split even these small levels into many ranges
     monkeypatch.setattr(enumeration, "MIN_CHUNK_SETS", 1)
     monkeypatch.setattr(enumeration, "_CHUNK_OVER_LEVEL", 0)
+    monkeypatch.setattr(_irrepresentable_scan, "MIN_CHUNK_SUPPORTS", 1)
 
 
 def test_colex_ranges_give_the_same_matrices_bit_for_bit():
@@ -164,3 +166,17 @@ def test_a_range_that_fails_once_is_retried(monkeypatch, small_chunks, tmp_path)
     assert len(list(tmp_path.glob("failed-2-*"))) > 1  # every range of the level failed once
     assert check.fields == expected.fields
     assert check.verdict.value == "fails"
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_the_irrepresentable_scan_on_dask_gives_the_in_process_answer(seed, client, small_chunks):
+    rng = np.random.default_rng(seed)
+    system = System(rng.standard_normal((3, 3)) / 2, rng.integers(-2, 3, size=(12, 3)))
+    local = irrepresentable(system, 2)
+    spread = irrepresentable(system, 2, client=client)
+    assert (spread.verdict, spread.value, spread.fields) == (
+        local.verdict,
+        local.value,
+        local.fields,
+    )
+    assert spread.evidence == local.evidence

@@ -12,12 +12,13 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from .._linalg import screen_positive_definite, stacked_rank
 from ..budget import Budget
+from ..parallel import map_chunks, rank_ranges
 from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances
 from ._combinatorics import DEFAULT_CHUNK_BYTES, DEFAULT_MEMORY, colex_blocks
 
@@ -102,11 +103,39 @@ class SupportScan:
             return
         top = float(rho[finite].max())
         ties = finite[rho[finite] >= top - 1e-12 * max(1.0, top)]
-        cand = min(tuple(int(x) for x in subsets[j]) for j in ties)
+        self._keep(top, min(tuple(int(x) for x in subsets[j]) for j in ties))
+
+    def merge(self, other: SupportScan) -> None:
+        """Add what another range of supports found (ranges merged in colex order)."""
+        self.borderline += other.borderline
+        self.n_inf += other.n_inf
+        if other.infinite is not None and (self.infinite is None or other.infinite < self.infinite):
+            self.infinite = other.infinite
+        if other.worst_support is not None:
+            self._keep(other.worst, other.worst_support)
+
+    def _keep(self, top: float, cand: tuple[int, ...]) -> None:
+        """The larger of the kept worst and ``top``, the first support among near-ties."""
         if self.worst_support is None or top > self.worst + 1e-12 * max(1.0, self.worst):
             self.worst, self.worst_support = top, cand
         elif top >= self.worst - 1e-12 * max(1.0, self.worst):
             self.worst, self.worst_support = max(self.worst, top), min(self.worst_support, cand)
+
+
+# supports per task on Dask workers, at least (fewer cost more to send than to decide)
+MIN_CHUNK_SUPPORTS = 20_000
+
+
+@dataclass(frozen=True)
+class _ScanTask:
+    """What every range of supports reads (sent once to Dask workers)."""
+
+    Q: np.ndarray
+    rows_of: np.ndarray
+    G: np.ndarray  # per-item Gramians U_i^T U_i
+    k: int
+    plan: ScanPlan
+    tol: Tolerances
 
 
 def scan_supports(
@@ -117,19 +146,50 @@ def scan_supports(
     tol: Tolerances,
     total: int,
     progress: Callable[[int, int], None] | None,
+    client: Any | None = None,
 ) -> SupportScan:
-    """rho over every support of k items, block by block in colex order."""
+    """rho over every support of k items, block by block in colex order.
+
+    With a Dask ``client`` the colex ranks are split into ranges decided on
+    the workers and merged in order: the same worst support, value and
+    counts as in-process.  A range that fails twice raises ``ChunkError``.
+    """
     U = Q[rows_of]  # (items, r, n)
-    G = np.einsum("irn,irm->inm", U, U)
-    scan = SupportScan()
+    task = _ScanTask(Q, rows_of, np.einsum("irn,irm->inm", U, U), k, plan, tol)
+    ranges = rank_ranges(total, client, MIN_CHUNK_SUPPORTS)
+    if len(ranges) == 1:
+        return _scan_range(task, ranges[0], progress)
     done = 0
-    for block in colex_blocks(G, np.eye(Q.shape[1]), k, memory=plan.colex_memory):
+
+    def arrived(index: int, part: SupportScan) -> None:
+        nonlocal done
+        done += ranges[index][1] - ranges[index][0]
+        if progress is not None:
+            progress(done, total)
+
+    scan = SupportScan()
+    for part in map_chunks(_scan_range, task, ranges, client, on_result=arrived):
+        scan.merge(part)
+    return scan
+
+
+def _scan_range(
+    task: _ScanTask, ranks: tuple[int, int], progress: Callable[[int, int], None] | None = None
+) -> SupportScan:
+    """rho over the supports whose colex ranks lie in ``ranks``."""
+    scan = SupportScan()
+    Q, rows_of = task.Q, task.rows_of
+    lo, hi = ranks
+    done = 0
+    base = np.eye(Q.shape[1])
+    blocks = colex_blocks(task.G, base, task.k, memory=task.plan.colex_memory, start=lo, stop=hi)
+    for block in blocks:
         subsets = block.subsets()
-        rho = _block_rho(Q, rows_of, block.matrices, subsets, plan.batch, tol, scan)
+        rho = _block_rho(Q, rows_of, block.matrices, subsets, task.plan.batch, task.tol, scan)
         scan.add_finite(rho, subsets)
         done += len(block)
         if progress is not None:
-            progress(done, total)
+            progress(done, hi - lo)
     return scan
 
 

@@ -36,7 +36,7 @@ from .._linalg import (
     unit_normalized,
 )
 from .._validation import as_int_option
-from ..parallel import ChunkError, map_chunks, worker_threads
+from ..parallel import ChunkError, map_chunks, rank_ranges, worker_threads
 from ..system import System
 from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances
 from ._combinatorics import cholesky_screen, colex_blocks, count_subsets, level_split
@@ -420,18 +420,12 @@ _CHUNK_OVER_LEVEL = 20
 
 
 def _chunks(task: _LevelTask, client: Any | None) -> list[tuple[int, int]]:
-    """Ranges of colex ranks covering the level: one without a client, else about four per
-    worker thread, none smaller than is worth a task."""
+    """Ranges of colex ranks covering the level (one without a client), none smaller than is
+    worth a task: the minimum, and many times the partial sums each range rebuilds."""
     q, n = task.rest.size, task.proj.shape[-1]
-    total = math.comb(q, task.k)
-    if client is None or total == 0:
-        return [(0, total)]
-    threads = worker_threads(client)
     m = level_split(q, task.k, 8 * n * n)
     smallest = max(MIN_CHUNK_SETS, _CHUNK_OVER_LEVEL * math.comb(q, m))
-    pieces = max(1, min(4 * threads, total // smallest))
-    step = -(-total // pieces)
-    return [(lo, min(lo + step, total)) for lo in range(0, total, step)]
+    return rank_ranges(math.comb(q, task.k), client, smallest)
 
 
 def _scan_range(

@@ -31,6 +31,7 @@ from .._format import sig
 from .._linalg import staircase
 from .._validation import as_choice, as_int_option
 from ..budget import Budget, bounded_comb, format_count, log10_comb
+from ..parallel import ChunkError
 from ..results import Check, Verdict
 from ..system import System
 from ..tolerances import Tolerances
@@ -156,6 +157,7 @@ def irrepresentable(
     tolerances: Tolerances | None = None,
     progress: Callable[[int, int], None] | None = None,
     budget: Budget | None = None,
+    client: Any | None = None,
 ) -> Check:
     """Worst irrepresentable constant over all attack supports of a given size.
 
@@ -178,6 +180,10 @@ def irrepresentable(
         supports before anything is allocated; beyond them the check is
         inconclusive with the estimate.  Supports are processed in batches
         sized to the memory budget.
+    client : dask.distributed.Client, optional
+        Split the supports over the client's workers (ranges of colex
+        ranks), with the in-process answer; a range that fails twice makes
+        the check inconclusive with the reason.
 
     Returns
     -------
@@ -228,7 +234,17 @@ def irrepresentable(
         return deficient
 
     Q, _ = np.linalg.qr(O)
-    scan = scan_supports(Q, rows_of, k, plan, tol, total, progress)
+    try:
+        scan = scan_supports(Q, rows_of, k, plan, tol, total, progress, client)
+    except ChunkError as exc:
+        lo, hi = exc.chunk
+        return out.check(
+            Verdict.INCONCLUSIVE,
+            math.nan,
+            None,
+            f"The Dask workers failed twice on the supports with colex ranks {lo:,} to "
+            f"{hi - 1:,} ({exc.cause!r}).",
+        )
     out.evidence["supports_without_full_rank"] = scan.n_inf
     out.evidence["borderline_supports"] = scan.borderline
     if scan.infinite is not None:
