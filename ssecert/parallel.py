@@ -16,6 +16,7 @@ __all__ = [
     "dask_client",
     "map_chunks",
     "map_ordered",
+    "map_ranges",
     "rank_ranges",
     "worker_threads",
 ]
@@ -139,3 +140,24 @@ def rank_ranges(total: int, client: Any | None, smallest: int) -> list[tuple[int
     pieces = max(1, min(4 * worker_threads(client), total // max(smallest, 1)))
     step = -(-total // pieces)
     return [(lo, min(lo + step, total)) for lo in range(0, total, step)]
+
+
+def map_ranges(
+    func: Callable[[Any, tuple[int, int]], Any],
+    payload: Any,
+    ranges: Sequence[tuple[int, int]],
+    client: Any | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> list[Any]:
+    """``map_chunks`` over ranges of ranks, with ``progress(ranks done, ranks in all)`` as
+    each range arrives."""
+    total = sum(hi - lo for lo, hi in ranges)
+    done = 0
+
+    def arrived(index: int, result: Any) -> None:
+        nonlocal done
+        done += ranges[index][1] - ranges[index][0]
+        if progress is not None:
+            progress(done, total)
+
+    return map_chunks(func, payload, ranges, client, on_result=arrived)

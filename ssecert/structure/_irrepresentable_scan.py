@@ -18,7 +18,7 @@ import numpy as np
 
 from .._linalg import screen_positive_definite, stacked_rank
 from ..budget import Budget
-from ..parallel import map_chunks, rank_ranges
+from ..parallel import map_ranges, rank_ranges
 from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances
 from ._combinatorics import DEFAULT_CHUNK_BYTES, DEFAULT_MEMORY, colex_blocks
 
@@ -159,16 +159,8 @@ def scan_supports(
     ranges = rank_ranges(total, client, MIN_CHUNK_SUPPORTS)
     if len(ranges) == 1:
         return _scan_range(task, ranges[0], progress)
-    done = 0
-
-    def arrived(index: int, part: SupportScan) -> None:
-        nonlocal done
-        done += ranges[index][1] - ranges[index][0]
-        if progress is not None:
-            progress(done, total)
-
     scan = SupportScan()
-    for part in map_chunks(_scan_range, task, ranges, client, on_result=arrived):
+    for part in map_ranges(_scan_range, task, ranges, client, progress):
         scan.merge(part)
     return scan
 

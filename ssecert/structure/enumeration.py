@@ -36,7 +36,7 @@ from .._linalg import (
     unit_normalized,
 )
 from .._validation import as_int_option
-from ..parallel import ChunkError, map_chunks, rank_ranges, worker_threads
+from ..parallel import ChunkError, map_ranges, rank_ranges, worker_threads
 from ..system import System
 from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances
 from ._combinatorics import cholesky_screen, colex_blocks, count_subsets, level_split
@@ -503,17 +503,8 @@ def _scan_level(
     chunks = _chunks(task, client)
     if len(chunks) == 1:
         return _scan_range(task, chunks[0], progress)
-    total = math.comb(q, k)
-    done = 0
-
-    def arrived(index: int, part: _Level) -> None:
-        nonlocal done
-        done += part.checked
-        if progress is not None:
-            progress(done, total)
-
     level = _Level()
-    for part in map_chunks(_scan_range, task, chunks, client, on_result=arrived):
+    for part in map_ranges(_scan_range, task, chunks, client, progress):
         level.merge(part)
     return level
 
