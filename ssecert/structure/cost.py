@@ -68,15 +68,16 @@ def _best_of(repeats: int, run: Any) -> float:
 def calibrate(n: int) -> Rates:
     """Measure the two rates for n x n Gramians (cached per process and n)."""
     rng = np.random.default_rng(0)
-    count = max(64, DEFAULT_CHUNK_BYTES // (8 * n * n))
+    count = max(8, DEFAULT_CHUNK_BYTES // (8 * n * n))
     X = rng.standard_normal((count, n, n))
-    gramians = X @ X.transpose(0, 2, 1) + n * np.eye(n)
+    # symmetric and diagonally dominant, so positive definite: built in O(n^2) per matrix
+    gramians = X + X.transpose(0, 2, 1) + 2.0 * n * np.eye(n)
     shift = np.eye(n)
     out = np.empty_like(gramians)
     per_set = _best_of(2, lambda: cholesky_screen(gramians + shift, 0.0, False, out)) / count
     # partial sums of m = 3 of q items, about 2e6 entries whatever n (beyond the caches, as
     # the levels that cost anything are)
-    q = 8
+    q = 3
     while math.comb(q + 1, 3) * n * n <= 2_000_000:
         q += 1
     items = rng.standard_normal((q, n, n))
