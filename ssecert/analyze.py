@@ -217,6 +217,7 @@ def analyze(
             progress=relay("irrepresentable"),
             budget=budget,
             client=client,
+            time_budget=time_budget,
         ),
     ]
     if spec.observer is not None:

@@ -103,3 +103,30 @@ def test_the_progress_line_shows_the_time_left_and_is_quiet_when_asked():
     silent.start -= 10.0
     silent("sparse_observability", 250, 1000)
     assert quiet.text == ""
+
+
+def test_a_failing_irrepresentable_scan_stops_at_the_time_budget(monkeypatch):
+    import functools
+
+    from ssecert.structure import _irrepresentable_scan
+    from ssecert.structure._combinatorics import colex_blocks
+    from ssecert.structure.irrepresentable import irrepresentable
+
+    # blocks of 64 supports, so that the scan can stop between them
+    monkeypatch.setattr(
+        _irrepresentable_scan, "colex_blocks", functools.partial(colex_blocks, chunk_bytes=1)
+    )
+    rng = np.random.default_rng(2)
+    system = System(rng.standard_normal((3, 3)) / 2, rng.integers(-3, 4, size=(16, 3)))
+    whole = irrepresentable(system, 2, time_budget=None)
+    cut = irrepresentable(system, 2, time_budget=0.0)
+    assert whole.verdict.value == cut.verdict.value == "fails"
+    assert "value_is_lower_bound" not in whole.fields
+    assert cut.fields["value_is_lower_bound"] is True
+    stopped = cut.evidence["stopped_by_time_budget"]
+    assert stopped["supports"] == math.comb(16, 2) and 0 < stopped["supports_checked"] < 120
+    assert 1.0 < cut.value <= whole.value
+    assert "the scan stopped at the time budget after 64 supports" in cut.summary
+    # a holding scan is never cut short
+    calm = System(np.eye(1), np.ones((7, 1)))
+    assert irrepresentable(calm, 1, horizon=1, time_budget=0.0).verdict.value == "holds"

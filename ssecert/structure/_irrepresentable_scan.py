@@ -10,6 +10,7 @@ the supports that fail screening are decided by an SVD of Q_Sbar.
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, NamedTuple
@@ -85,6 +86,7 @@ class SupportScan:
     infinite: tuple[int, ...] | None = None  # the first support whose O_Sbar is rank deficient
     n_inf: int = 0
     borderline: int = 0
+    stopped_after: int | None = None  # supports checked when the time budget stopped the scan
 
     def add_refined(self, codes: np.ndarray, subsets: np.ndarray) -> None:
         """Count the SVD rank decisions of refined supports; keep the first deficient one."""
@@ -147,18 +149,24 @@ def scan_supports(
     total: int,
     progress: Callable[[int, int], None] | None,
     client: Any | None = None,
+    deadline: float | None = None,
+    stop_above: float = math.inf,
 ) -> SupportScan:
     """rho over every support of k items, block by block in colex order.
 
     With a Dask ``client`` the colex ranks are split into ranges decided on
     the workers and merged in order: the same worst support, value and
     counts as in-process.  A range that fails twice raises ``ChunkError``.
+    In-process, once ``deadline`` (a ``time.monotonic()`` value) has passed
+    and a support with rho above ``stop_above`` is known, the scan stops
+    (``stopped_after``): the verdict is decided, the worst value is a lower
+    bound.
     """
     U = Q[rows_of]  # (items, r, n)
     task = _ScanTask(Q, rows_of, np.einsum("irn,irm->inm", U, U), k, plan, tol)
     ranges = rank_ranges(total, client, MIN_CHUNK_SUPPORTS)
     if len(ranges) == 1:
-        return _scan_range(task, ranges[0], progress)
+        return _scan_range(task, ranges[0], progress, deadline, stop_above)
     scan = SupportScan()
     for part in map_ranges(_scan_range, task, ranges, client, progress):
         scan.merge(part)
@@ -166,9 +174,14 @@ def scan_supports(
 
 
 def _scan_range(
-    task: _ScanTask, ranks: tuple[int, int], progress: Callable[[int, int], None] | None = None
+    task: _ScanTask,
+    ranks: tuple[int, int],
+    progress: Callable[[int, int], None] | None = None,
+    deadline: float | None = None,
+    stop_above: float = math.inf,
 ) -> SupportScan:
-    """rho over the supports whose colex ranks lie in ``ranks``."""
+    """rho over the supports whose colex ranks lie in ``ranks`` (see ``scan_supports`` for
+    the deadline)."""
     scan = SupportScan()
     Q, rows_of = task.Q, task.rows_of
     lo, hi = ranks
@@ -182,6 +195,9 @@ def _scan_range(
         done += len(block)
         if progress is not None:
             progress(done, hi - lo)
+        if deadline is not None and scan.worst > stop_above and time.monotonic() > deadline:
+            scan.stopped_after = done
+            break
     return scan
 
 

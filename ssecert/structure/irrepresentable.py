@@ -20,6 +20,7 @@ enumeration engine forms for many supports per numpy call.
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -29,14 +30,14 @@ import numpy as np
 from .._exact import exact_stacked_rank
 from .._format import sig
 from .._linalg import staircase
-from .._validation import as_choice, as_int_option
+from .._validation import as_choice, as_float_option, as_int_option
 from ..budget import Budget, bounded_comb, format_count, log10_comb
 from ..parallel import ChunkError
 from ..results import Check, Verdict
 from ..system import System
 from ..tolerances import Tolerances
 from ._irrepresentable_scan import ScanPlan, SupportScan, plan_scan, scan_supports
-from .sparse import DEFAULT_MAX_SETS
+from .sparse import DEFAULT_MAX_SETS, DEFAULT_TIME_BUDGET
 
 __all__ = ["irrepresentable", "irrepresentable_constant", "MODES"]
 
@@ -122,8 +123,10 @@ class _Verdicts:
         summary: str,
         margin: float | None = None,
         witness: dict | None = None,
+        extra: dict[str, Any] | None = None,
     ) -> Check:
-        """The irrepresentable Check with this verdict, worst value and support."""
+        """The irrepresentable Check with this verdict, worst value and support (and
+        ``extra`` fields)."""
         return Check(
             id="irrepresentable",
             title="Irrepresentable condition (Lasso support recovery)",
@@ -140,6 +143,7 @@ class _Verdicts:
                 "value": value,
                 "worst_support": list(support) if support is not None else None,
                 "worst_support_names": self.names(support) if support is not None else None,
+                **(extra or {}),
             },
             evidence=self.evidence,
             witness=witness,
@@ -158,6 +162,7 @@ def irrepresentable(
     progress: Callable[[int, int], None] | None = None,
     budget: Budget | None = None,
     client: Any | None = None,
+    time_budget: float | None = DEFAULT_TIME_BUDGET,
 ) -> Check:
     """Worst irrepresentable constant over all attack supports of a given size.
 
@@ -184,6 +189,12 @@ def irrepresentable(
         Split the supports over the client's workers (ranges of colex
         ranks), with the in-process answer; a range that fails twice makes
         the check inconclusive with the reason.
+    time_budget : float or None, default 5
+        Seconds after which an in-process scan that has already found a
+        support with rho clearly above 1 stops: the verdict (fails) is
+        decided, and the worst value is then a lower bound
+        (``value_is_lower_bound``, with the supports checked).  A holds
+        verdict needs every support and is never cut short; None scans all.
 
     Returns
     -------
@@ -234,8 +245,14 @@ def irrepresentable(
         return deficient
 
     Q, _ = np.linalg.qr(O)
+    deadline = None
+    if time_budget is not None and client is None:
+        deadline = time.monotonic() + as_float_option(time_budget, "time_budget", min_value=0.0)
     try:
-        scan = scan_supports(Q, rows_of, k, plan, tol, total, progress, client)
+        scan = scan_supports(
+            Q, rows_of, k, plan, tol, total, progress, client,
+            deadline=deadline, stop_above=1.0 + tol.irrepresentable_rtol,
+        )  # fmt: skip
     except ChunkError as exc:
         lo, hi = exc.chunk
         return out.check(
@@ -247,6 +264,12 @@ def irrepresentable(
         )
     out.evidence["supports_without_full_rank"] = scan.n_inf
     out.evidence["borderline_supports"] = scan.borderline
+    if scan.stopped_after is not None:
+        out.evidence["stopped_by_time_budget"] = {
+            "time_budget_seconds": time_budget,
+            "supports_checked": scan.stopped_after,
+            "supports": total,
+        }
     if scan.infinite is not None:
         return _infinite_verdict(out, scan, rows_of, total)
     if scan.borderline:
@@ -422,11 +445,13 @@ def _infinite_verdict(out: _Verdicts, scan: SupportScan, rows_of: np.ndarray, to
             None,
             f"O_Sbar for the support {label} {doubt}",
         )
+    checked = total if scan.stopped_after is None else scan.stopped_after
+    of = f"{checked}" if checked == total else f"the {checked} checked (of {total})"
     return out.check(
         Verdict.FAILS,
         math.inf,
         infinite,
-        f"For {scan.n_inf} of {total} supports O_Sbar lacks full column rank (Theorem 1's "
+        f"For {scan.n_inf} of {of} supports O_Sbar lacks full column rank (Theorem 1's "
         f"assumption); the first is {label}, so rho is inf "
         f"there.",
         witness=out.rank_witness(infinite),
@@ -465,14 +490,22 @@ def _worst_verdict(
             margin=margin,
         )
     if worst > 1.0 + band:
+        stopped = scan.stopped_after
+        cut = ""
+        if stopped is not None:
+            cut = (
+                f" (the scan stopped at the time budget after {stopped:,} supports: the worst "
+                f"value over all of them may be larger; --exact scans every support)"
+            )
         return out.check(
             Verdict.FAILS,
             worst,
             support,
             f"The irrepresentable constant reaches {sig(worst)} >= 1 on support {label}: "
-            f"Lasso's support recovery is not guaranteed there.",
+            f"Lasso's support recovery is not guaranteed there{cut}.",
             margin=margin,
             witness={"support": list(support), "support_names": out.names(support), "value": worst},
+            extra={"value_is_lower_bound": True} if stopped is not None else None,
         )
     return out.check(
         Verdict.INCONCLUSIVE,
