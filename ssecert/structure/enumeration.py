@@ -89,10 +89,11 @@ def _enumeration(
     ``client`` each level is split over the workers, with the same findings.
     """
     start = time.monotonic()
-    A, C = system.A, system.C
     n, p = system.n, system.p
     out = _Outcome(method="enumeration", status="inconclusive")
-    sub = subspaces if subspaces is not None else sensor_subspaces(A, C, tolerances=tol)
+    sub = (
+        subspaces if subspaces is not None else sensor_subspaces(system.A, system.C, tolerances=tol)
+    )
     if sub.borderline.any():
         bad = np.flatnonzero(sub.borderline).tolist()
         out.problems.append(
@@ -101,156 +102,232 @@ def _enumeration(
         return out
     full = np.flatnonzero(sub.ranks == n)  # must all be removed to break the plant
     rest = np.flatnonzero(sub.ranks < n)
-    q = rest.size
     out.details = {
         "sensor_observable_dimensions": sub.ranks.tolist(),
         "sensors_observing_everything": full.tolist(),
     }
-    if q == 0:
-        # every sensor alone observes the state: only removing all breaks it
-        out.status = "exact"
-        out.max_removable = p - 1
-        out.breaking_set = tuple(range(p))
-        z = np.zeros(n)
-        z[0] = 1.0
-        out.z = z
-        out.critical = [tuple(range(min(2 * s, p - 1), p))]
-        return out
-    P = sub.bases[rest]  # (q, n, n), zero-padded orthonormal rows
-    proj = np.einsum("qkn,qkm->qnm", P, P)
-    base = proj.sum(axis=0)
-    target = 2 * s - full.size  # level whose sets have 2s removed sensors
-    best_critical: list[tuple[float, int, tuple[int, ...]]] = []
-    undecided: int | None = None  # size of the first removal level with undecided sets
-    if target < 0:
-        # every set of 2s sensors keeps a sensor that alone observes the state
-        dropped = set(full[: 2 * s].tolist())
-        best_critical = [(0.0, 0, tuple(i for i in range(p) if i not in dropped))]
-    cost = _verdict_cost(q, n, target, client, time_budget)
+    if rest.size == 0:
+        return _only_all_sensors(out, n, p, s)
+    scan = _Levels(system, s, tol, eig, exact, client, progress, sub, full, rest, out, start)
+    cost = _verdict_cost(rest.size, n, scan.target, client, time_budget)
     if cost is not None:
         out.details["cost_estimate"] = cost
-    for k in range(q + 1):
-        count = math.comb(q, k)
-        if time_budget is not None and k > max(target, 0) and out.checked:
-            # the verdict is settled (no set of up to 2s sensors breaks the plant); refine
-            # max_removable only while the next level is predicted to end within the budget
-            elapsed = time.monotonic() - start
-            predicted = elapsed + count * elapsed / out.checked
-            if predicted > time_budget:
-                out.needed = count_subsets(q, range(k, q + 1))
-                out.status = "lower_bound"
-                out.max_removable = full.size + k - 1
-                out.details["stopped_by_time_budget"] = {
-                    "time_budget_seconds": time_budget,
-                    "elapsed_seconds": round(elapsed, 3),
-                    "next_level_sets": count,
-                    "next_level_predicted_seconds": round(predicted - elapsed, 3),
-                }
-                out.problems.append(
-                    f"the refinement stopped at the time budget of {time_budget:g} s before the "
-                    f"{count:,} sets of {full.size + k} sensors (about "
-                    f"{predicted - elapsed:.3g} s more); --exact computes the exact value"
-                )
-                break
-        if out.checked + count > max_sets:
-            out.needed = count_subsets(q, range(k, max(target, k) + 1))
-            out.status = "lower_bound"
-            out.max_removable = full.size + k - 1
-            out.problems.append(
-                f"enumeration budget of {max_sets:,} sets reached before sets of "
-                f"{full.size + k} sensor{'s' if full.size + k != 1 else ''}"
-                + _cost_of_the_rest(q, n, k, target, client, time_budget)
-            )
+    for k in range(rest.size + 1):
+        if scan.past_time_budget(k, time_budget) or scan.past_set_budget(k, max_sets, time_budget):
             break
+        level = scan.level(k)
+        if level is None:
+            break
+        if cost is not None and k == max(scan.target, 0):
+            cost["measured_seconds_for_verdict"] = _sig(time.monotonic() - start)
+        if not scan.go_on(k, level):
+            break
+    if out.status == "lower_bound" and scan.undecided is not None:
+        out.max_removable = scan.undecided - 1
+    out.critical = [kept for _, _, kept in scan.best_critical]
+    return out
+
+
+def _only_all_sensors(out: _Outcome, n: int, p: int, s: int) -> _Outcome:
+    """Every sensor alone observes the state: only removing all of them breaks the plant."""
+    out.status = "exact"
+    out.max_removable = p - 1
+    out.breaking_set = tuple(range(p))
+    z = np.zeros(n)
+    z[0] = 1.0
+    out.z = z
+    out.critical = [tuple(range(min(2 * s, p - 1), p))]
+    return out
+
+
+class _Levels:
+    """The enumeration's state: the levels of removals scanned so far and what they found.
+
+    Level k removes the sensors that alone observe the state (``full``) and
+    k of the others (``rest``); ``target`` is the level of 2s removals.
+    """
+
+    def __init__(
+        self,
+        system: System,
+        s: int,
+        tol: Tolerances,
+        eig: EigenAnalysis | None,
+        exact: ExactPlant | None,
+        client: Any | None,
+        progress: Progress | None,
+        sub: SensorSubspaces,
+        full: np.ndarray,
+        rest: np.ndarray,
+        out: _Outcome,
+        start: float,
+    ) -> None:
+        self.system, self.tol, self.eig, self.exact = system, tol, eig, exact
+        self.client, self.progress, self.sub = client, progress, sub
+        self.full, self.rest, self.out, self.start = full, rest, out, start
+        self.P = sub.bases[rest]  # (q, n, n), zero-padded orthonormal rows
+        self.proj = np.einsum("qkn,qkm->qnm", self.P, self.P)
+        self.base = self.proj.sum(axis=0)
+        self.target = 2 * s - full.size  # level whose sets have 2s removed sensors
+        self.undecided: int | None = None  # size of the first removal level with undecided sets
+        self.best_critical: list[tuple[float, int, tuple[int, ...]]] = []
+        if self.target < 0:
+            # every set of 2s sensors keeps a sensor that alone observes the state
+            dropped = set(full[: 2 * s].tolist())
+            kept = tuple(i for i in range(system.p) if i not in dropped)
+            self.best_critical = [(0.0, 0, kept)]
+
+    def removed(self, k: int) -> int:
+        """Sensors removed by each set of level k."""
+        return self.full.size + k
+
+    def past_time_budget(self, k: int, time_budget: float | None) -> bool:
+        """Whether to stop refining before level k: the verdict is settled (no set of up to 2s
+        sensors breaks the plant) and the level is predicted to end past the budget."""
+        out = self.out
+        if time_budget is None or k <= max(self.target, 0) or not out.checked:
+            return False
+        q, count = self.rest.size, math.comb(self.rest.size, k)
+        elapsed = time.monotonic() - self.start
+        predicted = elapsed + count * elapsed / out.checked
+        if predicted <= time_budget:
+            return False
+        out.needed = count_subsets(q, range(k, q + 1))
+        out.status = "lower_bound"
+        out.max_removable = self.removed(k) - 1
+        out.details["stopped_by_time_budget"] = {
+            "time_budget_seconds": time_budget,
+            "elapsed_seconds": round(elapsed, 3),
+            "next_level_sets": count,
+            "next_level_predicted_seconds": round(predicted - elapsed, 3),
+        }
+        out.problems.append(
+            f"the refinement stopped at the time budget of {time_budget:g} s before the "
+            f"{count:,} sets of {self.removed(k)} sensors (about "
+            f"{predicted - elapsed:.3g} s more); --exact computes the exact value"
+        )
+        return True
+
+    def past_set_budget(self, k: int, max_sets: int, time_budget: float | None) -> bool:
+        """Whether level k would take the enumeration past ``max_sets`` (then a lower bound,
+        with what the rest would cost)."""
+        out, q = self.out, self.rest.size
+        if out.checked + math.comb(q, k) <= max_sets:
+            return False
+        out.needed = count_subsets(q, range(k, max(self.target, k) + 1))
+        out.status = "lower_bound"
+        out.max_removable = self.removed(k) - 1
+        removed = self.removed(k)
+        out.problems.append(
+            f"enumeration budget of {max_sets:,} sets reached before sets of "
+            f"{removed} sensor{'s' if removed != 1 else ''}"
+            + _cost_of_the_rest(q, self.system.n, k, self.target, self.client, time_budget)
+        )
+        return True
+
+    def level(self, k: int) -> _Level | None:
+        """Scan level k (on the Dask workers when there is a client); None, with the reason,
+        when a range of it failed twice there."""
         try:
             level = _scan_level(
-                P,
-                sub.ranks[rest],
-                proj,
-                base,
+                self.P,
+                self.sub.ranks[self.rest],
+                self.proj,
+                self.base,
                 k,
-                rest,
-                full,
-                tol,
-                critical=(k == target),
-                progress=progress,
-                errors=sub.errors[rest],
-                client=client,
+                self.rest,
+                self.full,
+                self.tol,
+                critical=(k == self.target),
+                progress=self.progress,
+                errors=self.sub.errors[self.rest],
+                client=self.client,
             )
         except ChunkError as exc:
+            out = self.out
             out.status = "lower_bound"
-            out.max_removable = full.size + k - 1
-            out.details["failed_chunk"] = {"removed_sensors": full.size + k, "ranks": exc.chunk}
+            out.max_removable = self.removed(k) - 1
+            out.details["failed_chunk"] = {"removed_sensors": self.removed(k), "ranks": exc.chunk}
             out.problems.append(
-                f"the Dask workers failed twice on the sets of {full.size + k} sensors with "
+                f"the Dask workers failed twice on the sets of {self.removed(k)} sensors with "
                 f"colex ranks {exc.chunk[0]:,} to {exc.chunk[1] - 1:,} ({exc.cause!r})"
             )
-            break
-        out.checked += level.checked
-        if cost is not None and k == max(target, 0):
-            cost["measured_seconds_for_verdict"] = _sig(time.monotonic() - start)
+            return None
+        self.out.checked += level.checked
         if level.critical:
-            best_critical = level.critical
-        first, z_first, within = _resolve_failures(system, level.failures, eig, tol, exact, out)
+            self.best_critical = level.critical
+        return level
+
+    def go_on(self, k: int, level: _Level) -> bool:
+        """Record what level k decided; whether the next level must be scanned."""
+        out = self.out
+        first, z_first, within = _resolve_failures(
+            self.system, level.failures, self.eig, self.tol, self.exact, out
+        )
         if first is not None:
-            out.status = "exact"
-            out.max_removable = full.size + k - 1
-            out.breaking_set = first
-            out.z = z_first
-            if level.borderline or within:
-                out.details["borderline_sets_at_breaking_size"] = level.borderline + len(within)
-            if undecided is not None:
-                # smaller sets were undecided, so this set need not be the smallest: the
-                # verdict (a breaking set of at most 2s sensors) is certain, max_removable is
-                # only bounded
-                out.details["max_removable_is_upper_bound"] = True
-                out.details["max_removable_at_least"] = undecided - 1
-            break
-        if undecided is not None and not (level.borderline or within):
-            if k < target:
-                continue
-            break
+            self._breaking(k, level, first, z_first, within)
+            return False
+        if self.undecided is not None and not (level.borderline or within):
+            return k < self.target
         if level.borderline or within:
             out.status = "lower_bound"
-            out.max_removable = full.size + k - 1
-            if undecided is not None:  # reported at the first undecided level
-                if k < target:
-                    continue
-                out.max_removable = undecided - 1
-                break
-            undecided = full.size + k
-            if level.borderline:
-                out.problems.append(
-                    f"{level.borderline} set(s) of {full.size + k} sensors have a borderline "
-                    f"rank decision"
-                )
-            if within:
-                out.details["within_precision_of_breaking"] = [list(w) for w in within[:8]]
-                distance = out.details.get("distance_to_breaking")
-                out.problems.append(
-                    f"removing sensors {list(within[0])}"
-                    + (
-                        f" (and {len(within) - 1} other set(s) of that size)"
-                        if len(within) > 1
-                        else ""
-                    )
-                    + " leaves a plant that is observable in exact arithmetic but within "
-                    "floating-point precision of an unobservable one"
-                    + (
-                        f" (relative distance {format_distance(distance)})"
-                        if distance is not None
-                        else ""
-                    )
-                    + ": the answer depends on digits the data do not have"
-                )
-            if k < target:
-                # a larger set of at most 2s sensors may still break the plant for certain
-                continue
-            break
-    if out.status == "lower_bound" and undecided is not None:
-        out.max_removable = undecided - 1
-    out.critical = [kept for _, _, kept in best_critical]
-    return out
+            out.max_removable = self.removed(k) - 1
+            if self.undecided is not None:  # reported at the first undecided level
+                if k < self.target:
+                    return True
+                out.max_removable = self.undecided - 1
+                return False
+            self.undecided = self.removed(k)
+            self._undecided_reasons(k, level, within)
+            # a larger set of at most 2s sensors may still break the plant for certain
+            return k < self.target
+        return True
+
+    def _breaking(
+        self,
+        k: int,
+        level: _Level,
+        first: tuple[int, ...],
+        z_first: np.ndarray | None,
+        within: list[tuple[int, ...]],
+    ) -> None:
+        """Level k holds the smallest breaking set ``first`` (or, after undecided levels, a
+        breaking set that bounds max_removable from above)."""
+        out = self.out
+        out.status = "exact"
+        out.max_removable = self.removed(k) - 1
+        out.breaking_set = first
+        out.z = z_first
+        if level.borderline or within:
+            out.details["borderline_sets_at_breaking_size"] = level.borderline + len(within)
+        if self.undecided is not None:
+            # smaller sets were undecided, so this set need not be the smallest: the verdict
+            # (a breaking set of at most 2s sensors) is certain, max_removable only bounded
+            out.details["max_removable_is_upper_bound"] = True
+            out.details["max_removable_at_least"] = self.undecided - 1
+
+    def _undecided_reasons(self, k: int, level: _Level, within: list[tuple[int, ...]]) -> None:
+        """Why the first undecided level could not be decided: borderline rank decisions, or
+        sets within floating-point precision of breaking the plant."""
+        out = self.out
+        if level.borderline:
+            out.problems.append(
+                f"{level.borderline} set(s) of {self.removed(k)} sensors have a borderline "
+                f"rank decision"
+            )
+        if not within:
+            return
+        out.details["within_precision_of_breaking"] = [list(w) for w in within[:8]]
+        distance = out.details.get("distance_to_breaking")
+        others = f" (and {len(within) - 1} other set(s) of that size)" if len(within) > 1 else ""
+        how_far = (
+            f" (relative distance {format_distance(distance)})" if distance is not None else ""
+        )
+        out.problems.append(
+            f"removing sensors {list(within[0])}{others} leaves a plant that is observable in "
+            f"exact arithmetic but within floating-point precision of an unobservable one"
+            f"{how_far}: the answer depends on digits the data do not have"
+        )
 
 
 CALIBRATE_ABOVE = 200_000  # sets for the verdict: below, the enumeration takes about a second
