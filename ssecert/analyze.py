@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import datetime as _dt
+import importlib.metadata
 import platform
+import sys
 from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
@@ -116,11 +118,20 @@ def environment() -> dict[str, str]:
         "scipy": scipy.__version__,
     }
     for module in ("control", "cvxpy", "clarabel", "sympy"):
-        try:
-            versions[module] = __import__(module).__version__
-        except Exception:  # pragma: no cover - optional at analysis time
-            versions[module] = "not installed"
+        versions[module] = _installed_version(module)
     return versions
+
+
+def _installed_version(module: str) -> str:
+    """The version of a module, without importing it when it is not loaded yet (importing
+    python-control alone can take seconds)."""
+    loaded = sys.modules.get(module)
+    if loaded is not None and hasattr(loaded, "__version__"):
+        return str(loaded.__version__)
+    try:
+        return importlib.metadata.version(module)
+    except importlib.metadata.PackageNotFoundError:  # pragma: no cover - depends on the install
+        return "not installed"
 
 
 def analyze(

@@ -130,3 +130,17 @@ def test_a_failing_irrepresentable_scan_stops_at_the_time_budget(monkeypatch):
     # a holding scan is never cut short
     calm = System(np.eye(1), np.ones((7, 1)))
     assert irrepresentable(calm, 1, horizon=1, time_budget=0.0).verdict.value == "holds"
+
+
+def test_recording_the_versions_imports_no_library():
+    # python-control alone takes seconds to import: analyze of a plant without an observer
+    # must not pay for it to write its version in the meta
+    import subprocess
+    import sys
+
+    code = (
+        "import sys; from ssecert.analyze import environment; v = environment(); "
+        "print(v['control'] != 'not installed', 'control' in sys.modules, 'cvxpy' in sys.modules)"
+    )
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert run.stdout.split() == ["True", "False", "False"]
