@@ -734,9 +734,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``ssecert`` command; returns the exit status."""
     from .budget import ResourceLimitError
     from .design.gains import GainError
+    from .parallel import DaskUnavailable
     from .spec import SpecError, one_line
 
     parser = _build_parser()
+    args = None
     try:
         args = parser.parse_args(argv)
         if args.command is None:
@@ -761,6 +763,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         sys.stderr.write(
             f"ssecert: error: the spec's observer gain cannot be computed: {one_line(str(exc))}\n"
         )
+        return EXIT_BAD_INPUT
+    except DaskUnavailable as exc:
+        option = "--scheduler" if getattr(args, "scheduler", None) else "--workers"
+        sys.stderr.write(f"ssecert: error: {option}: {one_line(str(exc))}\n")
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         sys.stderr.write("ssecert: interrupted\n")

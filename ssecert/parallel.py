@@ -13,6 +13,7 @@ from typing import Any
 
 __all__ = [
     "ChunkError",
+    "DaskUnavailable",
     "dask_client",
     "map_chunks",
     "map_ordered",
@@ -22,6 +23,13 @@ __all__ = [
 ]
 
 
+class DaskUnavailable(RuntimeError):
+    """Dask cannot run the work: not installed, no scheduler at the address, or no workers."""
+
+
+CONNECT_SECONDS = 30  # to reach a scheduler, and again for it to have a worker
+
+
 @contextlib.contextmanager
 def dask_client(address: str | None = None, *, workers: int | None = None) -> Iterator[Any]:
     """A dask.distributed Client: an existing scheduler when ``address`` is given,
@@ -29,18 +37,30 @@ def dask_client(address: str | None = None, *, workers: int | None = None) -> It
 
     Raises
     ------
-    ImportError
-        With the install command, when dask.distributed is missing.
+    DaskUnavailable
+        With the install command when dask.distributed is missing; naming
+        the address when no scheduler answers there, or when it has no
+        worker, within ``CONNECT_SECONDS``.
     """
     try:
         from dask.distributed import Client, LocalCluster
     except ImportError as exc:  # pragma: no cover - depends on the extras installed
-        raise ImportError(
+        raise DaskUnavailable(
             "Dask is not installed; install it with: python -m pip install 'ssecert[dist]'"
         ) from exc
     if address:
-        client = Client(address)
         try:
+            client = Client(address, timeout=f"{CONNECT_SECONDS}s")
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise DaskUnavailable(f"no Dask scheduler answers at {address!r}: {exc}") from None
+        try:
+            try:
+                client.wait_for_workers(1, timeout=CONNECT_SECONDS)
+            except (OSError, TimeoutError) as exc:
+                raise DaskUnavailable(
+                    f"the Dask scheduler at {address!r} has no worker after "
+                    f"{CONNECT_SECONDS} s ({exc})"
+                ) from None
             yield client
         finally:
             client.close()

@@ -180,3 +180,15 @@ def test_the_irrepresentable_scan_on_dask_gives_the_in_process_answer(seed, clie
         local.fields,
     )
     assert spread.evidence == local.evidence
+
+
+def test_an_unreachable_scheduler_is_a_clear_error(tmp_path, capsys, monkeypatch):
+    from ssecert import parallel
+
+    monkeypatch.setattr(parallel, "CONNECT_SECONDS", 1)
+    path = tmp_path / "planted.json"
+    path.write_text(json.dumps(_two_planted_breaking_sets()))
+    assert main(["analyze", str(path), "--scheduler", "tcp://127.0.0.1:9"]) == 2
+    err = capsys.readouterr().err
+    assert "--scheduler: no Dask scheduler answers at 'tcp://127.0.0.1:9'" in err
+    assert "internal error" not in err
