@@ -54,14 +54,9 @@ from ._breaking_set import _failure
 from ._combinatorics import count_subsets
 from ._rechecks import _cross_check, _recheck_holds
 from .eigenspace import _eigenspace
-from .enumeration import (
-    Progress,
-    RemovalScan,
-    _enumeration,
-    _Outcome,
-    scan_removals,
-)
+from .enumeration import Progress, _enumeration, _Outcome
 from .observability import observability
+from .removals import RemovalScan, scan_removals
 
 __all__ = [
     "sparse_observability",
