@@ -306,9 +306,9 @@ def _simulations(
     from .simulation.engine import simulate_scenario
 
     simulations: dict[str, Any] = {}
+    if design is None:
+        return simulations
     for scenario in scenarios:
-        if design is None:
-            break
         say(f"simulating scenario {scenario['name']}")
         try:
             simulations[scenario["name"]] = simulate_scenario(
