@@ -198,12 +198,6 @@ def analyze(
     # shared by the structural checks, which decide in power-of-two units
     work, alpha = unit_normalized(system)
     eig = eigen_clusters(work.A, tolerances=tol, unit=alpha)
-
-    def relay(check_id: str) -> Callable[[int, int], None] | None:
-        if progress is None:
-            return None
-        return lambda done, total: progress(check_id, done, total)
-
     checks: list[Check] = [
         observability(system, tolerances=tol, eigen=eig),
         sparse_observability(
@@ -214,7 +208,7 @@ def analyze(
             horizon=spec.horizon,
             seed=seed,
             tolerances=tol,
-            progress=relay("sparse_observability"),
+            progress=_relay(progress, "sparse_observability"),
             eigen=eig,
             time_budget=time_budget,
             client=client,
@@ -225,7 +219,7 @@ def analyze(
             horizon=spec.horizon,
             max_sets=max_sets,
             tolerances=tol,
-            progress=relay("irrepresentable"),
+            progress=_relay(progress, "irrepresentable"),
             budget=budget,
             client=client,
             time_budget=time_budget,
@@ -248,18 +242,38 @@ def analyze(
     checks, notes = reconcile(checks)
     if context is not None:  # the final (reconciled) check: its witness is the one reported
         context.put(sparse_key(spec.max_attacked), checks[1])
-    index = checks[0].fields.get("observability_index")
-    if index is not None and spec.horizon < index:
-        steps = f"{spec.horizon} step{'s' if spec.horizon != 1 else ''} of output"
-        verb = "do" if spec.horizon != 1 else "does"
-        notes.append(
-            f"horizon = {spec.horizon} is shorter than the observability index {index}: "
-            f"{steps} {verb} not determine the state even without attack, so the "
-            f"irrepresentable check (on O_tau with tau = horizon) cannot hold; sparse "
-            f"observability is a property of the plant and does not depend on the horizon"
-        )
+    notes.extend(_short_horizon_notes(spec, checks[0]))
+    meta = _meta(spec, seed, budget, notes)
+    return Certificate(system=system, checks=tuple(checks), meta=meta)
 
-    meta: dict[str, Any] = {
+
+def _relay(
+    progress: Callable[[str, int, int], None] | None, check_id: str
+) -> Callable[[int, int], None] | None:
+    """``progress`` for one check, as the ``progress(done, total)`` its analysis calls."""
+    if progress is None:
+        return None
+    return lambda done, total: progress(check_id, done, total)
+
+
+def _short_horizon_notes(spec: Spec, observability_check: Check) -> list[str]:
+    """A note when the horizon is shorter than the observability index, else none."""
+    index = observability_check.fields.get("observability_index")
+    if index is None or spec.horizon >= index:
+        return []
+    steps = f"{spec.horizon} step{'s' if spec.horizon != 1 else ''} of output"
+    verb = "do" if spec.horizon != 1 else "does"
+    return [
+        f"horizon = {spec.horizon} is shorter than the observability index {index}: "
+        f"{steps} {verb} not determine the state even without attack, so the "
+        f"irrepresentable check (on O_tau with tau = horizon) cannot hold; sparse "
+        f"observability is a property of the plant and does not depend on the horizon"
+    ]
+
+
+def _meta(spec: Spec, seed: int, budget: Budget | None, notes: list[str]) -> dict[str, Any]:
+    """The certificate's meta: the spec, the run's options, the date, the versions and notes."""
+    return {
         "spec": {"source": spec.source, "sha256": spec.sha256, "name": spec.name},
         "max_attacked": spec.max_attacked,
         "horizon": spec.horizon,
@@ -269,4 +283,3 @@ def analyze(
         "versions": environment(),
         "notes": notes,
     }
-    return Certificate(system=system, checks=tuple(checks), meta=meta)

@@ -206,57 +206,22 @@ def certify(
     context = AnalysisContext()
     cert = analyze(spec, context=context, **kwargs)
     notes: list[str] = []
-    sparse = cert["sparse_observability"]
-    witness = sparse.witness if sparse.verdict is Verdict.FAILS else None
-    stealthy = None
-    if witness is not None and witness.get("verified"):
-        stealthy = _stealthy_demo(spec, witness, base_seed)
-    design = None
-    if spec.observer is not None:
-        from .design.gains import GainError
-        from .observers import build_observer
-
-        observer = spec.observer
-        try:
-            design = context.once(
-                OBSERVER,
-                lambda: build_observer(spec.system, observer, budget=budget, tolerances=tol),
-            )
-        except GainError as exc:
-            notes.append(f"no simulation or region: the observer gain cannot be computed ({exc})")
-        except ResourceLimitError as exc:
-            notes.append(f"no simulation or region: the observer was not built ({exc})")
+    stealthy = _stealthy_of(spec, cert, base_seed)
+    design = _observer_design(spec, context, budget, tol, notes)
     simulations: dict[str, Any] = {}
     if simulate and spec.observer is not None:
-        from .simulation.engine import simulate_scenario
-
-        scenarios = list(spec.scenarios)
-        if (
-            design is not None
-            and stealthy is not None
-            and not any(sc["attack"] == "stealthy" for sc in scenarios)
-        ):
-            scenarios.append(
-                {**SCENARIO_DEFAULTS, "name": "stealthy (automatic)", "attack": "stealthy"}
-            )
-        for scenario in scenarios:
-            if design is None:
-                break
-            say(f"simulating scenario {scenario['name']}")
-            try:
-                simulations[scenario["name"]] = simulate_scenario(
-                    design,
-                    scenario,
-                    runs=runs,
-                    steps=steps,
-                    seed=seed,
-                    max_attacked=spec.max_attacked,
-                    client=client,
-                    budget=budget,
-                    context=context,
-                )
-            except ValueError as exc:  # no stealthy attack to replay, or over the budget
-                simulations[scenario["name"]] = {"skipped": str(exc)}
+        simulations = _simulations(
+            design,
+            _scenarios(spec, design, stealthy),
+            say,
+            runs=runs,
+            steps=steps,
+            seed=seed,
+            max_attacked=spec.max_attacked,
+            client=client,
+            budget=budget,
+            context=context,
+        )
     elif simulate and spec.observer is None:
         notes.append("no simulations: the spec has no [observer] section")
     elif not simulate:
@@ -275,6 +240,91 @@ def certify(
         command=command or _command(spec, seed, simulate),
         notes=tuple(notes),
     )
+
+
+def _stealthy_of(spec: Spec, cert: Certificate, seed: int) -> dict[str, Any] | None:
+    """The stealthy attack's demonstration when sparse observability fails with a verified witness."""
+    sparse = cert["sparse_observability"]
+    witness = sparse.witness if sparse.verdict is Verdict.FAILS else None
+    if witness is not None and witness.get("verified"):
+        return _stealthy_demo(spec, witness, seed)
+    return None
+
+
+def _observer_design(
+    spec: Spec, context: AnalysisContext, budget: Budget, tol: Tolerances, notes: list[str]
+) -> Any | None:
+    """The spec's observer (built once in ``context``), or None with a note saying why not."""
+    if spec.observer is None:
+        return None
+    from .design.gains import GainError
+    from .observers import build_observer
+
+    observer = spec.observer
+    try:
+        return context.once(
+            OBSERVER,
+            lambda: build_observer(spec.system, observer, budget=budget, tolerances=tol),
+        )
+    except GainError as exc:
+        notes.append(f"no simulation or region: the observer gain cannot be computed ({exc})")
+    except ResourceLimitError as exc:
+        notes.append(f"no simulation or region: the observer was not built ({exc})")
+    return None
+
+
+def _scenarios(
+    spec: Spec, design: Any | None, stealthy: dict[str, Any] | None
+) -> list[Mapping[str, Any]]:
+    """The spec's scenarios, plus the stealthy attack when the plant has one and none replays it."""
+    scenarios = list(spec.scenarios)
+    if (
+        design is not None
+        and stealthy is not None
+        and not any(sc["attack"] == "stealthy" for sc in scenarios)
+    ):
+        scenarios.append(
+            {**SCENARIO_DEFAULTS, "name": "stealthy (automatic)", "attack": "stealthy"}
+        )
+    return scenarios
+
+
+def _simulations(
+    design: Any | None,
+    scenarios: list[Mapping[str, Any]],
+    say: Progress,
+    *,
+    runs: int | None,
+    steps: int | None,
+    seed: int | None,
+    max_attacked: int,
+    client: Any | None,
+    budget: Budget,
+    context: AnalysisContext,
+) -> dict[str, Any]:
+    """Scenario name -> its ``ScenarioResult``, or ``{"skipped": reason}``; none without a design."""
+    from .simulation.engine import simulate_scenario
+
+    simulations: dict[str, Any] = {}
+    if design is None:
+        return simulations
+    for scenario in scenarios:
+        say(f"simulating scenario {scenario['name']}")
+        try:
+            simulations[scenario["name"]] = simulate_scenario(
+                design,
+                scenario,
+                runs=runs,
+                steps=steps,
+                seed=seed,
+                max_attacked=max_attacked,
+                client=client,
+                budget=budget,
+                context=context,
+            )
+        except ValueError as exc:  # no stealthy attack to replay, or over the budget
+            simulations[scenario["name"]] = {"skipped": str(exc)}
+    return simulations
 
 
 def _region(design: Any, notes: list[str], say: Progress, budget: Budget) -> Any | None:

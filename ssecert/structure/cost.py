@@ -9,9 +9,10 @@ synthetic matrices of the same shape (a few tens of milliseconds), so the
 estimate follows this machine, its BLAS and its load.
 
 The estimate is what the enumeration records (``cost_estimate`` in the
-sparse-observability evidence, beside the time it took), what a refusal
-over the set budget quotes, and what the number of Dask workers suggested
-to bring the work under the time budget is computed from.
+sparse-observability evidence, beside the time it took: ``verdict_cost``),
+what a refusal over the set budget quotes (``cost_of_the_rest``), and what
+the number of Dask workers suggested to bring the work under the time
+budget is computed from.
 """
 
 from __future__ import annotations
@@ -24,9 +25,24 @@ from typing import Any
 
 import numpy as np
 
-from ._combinatorics import DEFAULT_CHUNK_BYTES, _level, cholesky_screen, level_split
+from ..parallel import worker_threads
+from ._combinatorics import (
+    DEFAULT_CHUNK_BYTES,
+    _level,
+    cholesky_screen,
+    count_subsets,
+    level_split,
+)
 
-__all__ = ["Rates", "calibrate", "level_seconds", "workers_for"]
+__all__ = [
+    "Rates",
+    "calibrate",
+    "level_seconds",
+    "workers_for",
+    "verdict_cost",
+    "cost_of_the_rest",
+    "rounded_seconds",
+]
 
 # the sets closest to breaking are ranked on the level that decides the verdict (argsort of
 # the pivots and the kept sets of each block's best): measured about a third more per set
@@ -103,3 +119,46 @@ def workers_for(seconds: float, budget: float | None) -> int | None:
     if budget is None or budget <= 0:
         return None
     return max(1, math.ceil(seconds / budget))
+
+
+def rounded_seconds(seconds: float) -> float:
+    """``seconds`` to three significant digits, as the evidence records times."""
+    return float(f"{seconds:.3g}")
+
+
+def verdict_cost(
+    q: int, n: int, target: int, client: Any | None, time_budget: float | None
+) -> dict[str, Any]:
+    """The estimated cost of the levels 0 to ``target`` (those that decide the verdict) of
+    removals of q sensors, on the client's threads, and the workers the time budget needs."""
+    levels = range(max(target, 0) + 1)
+    sets = count_subsets(q, levels)
+    seconds = sum(level_seconds(q, k, n, critical=(k == target)) for k in levels)
+    threads = worker_threads(client)
+    record: dict[str, Any] = {
+        "sets_for_verdict": sets,
+        "seconds_for_verdict": rounded_seconds(seconds / threads),
+        "worker_threads": threads,
+        "rates": calibrate(n).to_dict(),
+    }
+    workers = workers_for(seconds, time_budget)
+    if workers is not None and workers > threads:
+        record["workers_for_time_budget"] = workers
+    return record
+
+
+def cost_of_the_rest(
+    q: int, n: int, k: int, target: int, client: Any | None, time_budget: float | None
+) -> str:
+    """What the levels k to ``target`` (past the set budget, up to the verdict's) would cost
+    here, as the end of the refusal's sentence; empty past the verdict's level."""
+    if k > target:
+        return ""
+    seconds = sum(level_seconds(q, j, n, critical=(j == target)) for j in range(k, target + 1))
+    threads = worker_threads(client)
+    about = rounded_seconds(seconds / threads)
+    text = f" (the rest of the verdict's sets would take about {about:g} s here"
+    workers = workers_for(seconds, time_budget)
+    if workers is not None and workers > threads:
+        text += f"; about {workers:,} Dask workers would take them under {time_budget:g} s"
+    return text + "; --max-sets raises the budget)"

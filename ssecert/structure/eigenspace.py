@@ -13,6 +13,7 @@ from __future__ import annotations
 import itertools
 import math
 import time
+from typing import NamedTuple
 
 import numpy as np
 
@@ -186,6 +187,72 @@ def _critical_entry(
     return remaining, kept
 
 
+class _ChunkView(NamedTuple):
+    """What the sensors see of the hyperplanes through one chunk of (g-1)-subsets of rows."""
+
+    u: np.ndarray  # (N, g) the normal of each hyperplane, in eigenspace coordinates
+    mags: np.ndarray  # (N, p) |W u|: how much each sensor sees of it
+    codes: np.ndarray  # (N, p) mags classified against the threshold scaled by its condition
+    used: np.ndarray  # the hyperplanes through independent rows
+    borderline: bool  # some independence or some sensor's magnitude is borderline
+
+
+def _chunk_view(W: np.ndarray, idx: np.ndarray, thr: float, tol: Tolerances) -> _ChunkView:
+    """The hyperplanes through the rows ``idx`` of ``W`` and what each sensor sees of them."""
+    sub = W[idx]  # (N, g-1, g)
+    _, s_sub, vh_sub = np.linalg.svd(sub, full_matrices=True)
+    smax_sub = np.maximum(s_sub[:, 0], np.finfo(float).tiny)
+    independent = classify(s_sub[:, -1] / smax_sub, thr, factor=tol.borderline_factor)
+    u = vh_sub[:, -1, :].conj()  # (N, g)
+    mags = np.abs(u @ W.T)  # (N, p)
+    cond = smax_sub / np.maximum(s_sub[:, -1], np.finfo(float).tiny)
+    thr_u = thr * np.maximum(cond, 1.0)
+    codes = classify(mags, thr_u[:, None], factor=tol.borderline_factor)
+    use = independent == NONZERO
+    borderline = bool(np.any(independent == BORDERLINE) or np.any(codes[use] == BORDERLINE))
+    return _ChunkView(u, mags, codes, np.flatnonzero(use), borderline)
+
+
+def _smallest_so_far(
+    view: _ChunkView,
+    V: np.ndarray,
+    candidates: list[tuple[int, tuple[int, ...], np.ndarray]],
+    best_size: int | None,
+) -> tuple[list[tuple[int, tuple[int, ...], np.ndarray]], int | None]:
+    """The candidates and the smallest support size, with this chunk's smallest support added."""
+    used, p = view.used, view.mags.shape[1]
+    seen = view.codes[used] == NONZERO  # (N, p) supports
+    sizes = np.count_nonzero(seen, axis=1)
+    low = int(sizes.min())
+    if best_size is None or low <= best_size:
+        if best_size is None or low < best_size:
+            candidates, best_size = [], low
+        ties = np.flatnonzero(sizes == low)
+        # among supports of equal size, the lexicographically first index
+        # tuple is the lexicographically largest boolean row
+        keys = [~seen[ties, c] for c in range(p - 1, -1, -1)]
+        j = ties[np.lexsort(keys)[0]]
+        support = tuple(int(i) for i in np.flatnonzero(seen[j]))
+        candidates.append((low, support, V @ view.u[used[j]]))
+    return candidates, best_size
+
+
+def _most_critical(
+    view: _ChunkView, critical: list[tuple[float, tuple[int, ...]]], s: int
+) -> list[tuple[float, tuple[int, ...]]]:
+    """The critical entries so far and this chunk's (hyperplanes its (2s+1)-th sensor sees least)."""
+    mags, used, p = view.mags, view.used, view.mags.shape[1]
+    if 2 * s < p:
+        remaining = -np.partition(-mags[used], 2 * s, axis=1)[:, 2 * s]
+    else:
+        remaining = np.zeros(used.size)
+    for j in used[np.argsort(remaining, kind="stable")[:_CRITICAL]]:
+        order = np.argsort(-mags[j], kind="stable")
+        critical.append(_critical_entry(mags[j], order, s, p))
+    critical.sort()
+    return critical[:_CRITICAL]
+
+
 def _hyperplanes(
     W: np.ndarray,
     V: np.ndarray,
@@ -232,43 +299,12 @@ def _hyperplanes(
         if idx.shape[0] == 0:
             break
         done += idx.shape[0]
-        sub = W[idx]  # (N, g-1, g)
-        _, s_sub, vh_sub = np.linalg.svd(sub, full_matrices=True)
-        smax_sub = np.maximum(s_sub[:, 0], np.finfo(float).tiny)
-        independent = classify(s_sub[:, -1] / smax_sub, thr, factor=tol.borderline_factor)
-        u = vh_sub[:, -1, :].conj()  # (N, g)
-        mags = np.abs(u @ W.T)  # (N, p)
-        cond = smax_sub / np.maximum(s_sub[:, -1], np.finfo(float).tiny)
-        thr_u = thr * np.maximum(cond, 1.0)
-        codes = classify(mags, thr_u[:, None], factor=tol.borderline_factor)
-        use = independent == NONZERO
-        if np.any(independent == BORDERLINE) or np.any(codes[use] == BORDERLINE):
+        view = _chunk_view(W, idx, thr, tol)
+        if view.borderline:
             return [], [], "a hyperplane through its sensor rows is borderline", total
-        used = np.flatnonzero(use)
-        if used.size:
-            seen = codes[used] == NONZERO  # (N, p) supports
-            sizes = np.count_nonzero(seen, axis=1)
-            low = int(sizes.min())
-            if best_size is None or low <= best_size:
-                if best_size is None or low < best_size:
-                    candidates, best_size = [], low
-                ties = np.flatnonzero(sizes == low)
-                # among supports of equal size, the lexicographically first index
-                # tuple is the lexicographically largest boolean row
-                keys = [~seen[ties, c] for c in range(p - 1, -1, -1)]
-                j = ties[np.lexsort(keys)[0]]
-                support = tuple(int(i) for i in np.flatnonzero(seen[j]))
-                candidates.append((low, support, V @ u[used[j]]))
-            # the hyperplanes whose (2s+1)-th strongest sensor sees them least
-            if 2 * s < p:
-                remaining = -np.partition(-mags[used], 2 * s, axis=1)[:, 2 * s]
-            else:
-                remaining = np.zeros(used.size)
-            for j in used[np.argsort(remaining, kind="stable")[:_CRITICAL]]:
-                order = np.argsort(-mags[j], kind="stable")
-                critical.append(_critical_entry(mags[j], order, s, p))
-            critical.sort()
-            critical = critical[:_CRITICAL]
+        if view.used.size:
+            candidates, best_size = _smallest_so_far(view, V, candidates, best_size)
+            critical = _most_critical(view, critical, s)
     if not candidates:  # every (g-1)-subset dependent: only possible if rows.size < g - 1
         u = vh[-1].conj()
         support = tuple(int(i) for i in rows)

@@ -10,9 +10,9 @@ SVD where screening fails.  Sensors that alone observe the whole state must
 all be removed to break the plant, which prunes the search.  Float failures
 are confirmed on the exact data (``_resolve_failures``).
 
-``scan_removals`` reports, level by level, how close each removal comes to
-breaking the plant.  ``ssecert.structure.sparse`` combines this method with
-the eigenspace method.
+``ssecert.structure.sparse`` combines this method with the eigenspace
+method; ``ssecert.structure.removals`` scans one level of removals alone
+(``scan_removals``).
 """
 
 from __future__ import annotations
@@ -30,20 +30,17 @@ from .._format import distance as format_distance
 from .._linalg import (
     EigenAnalysis,
     SensorSubspaces,
-    eigen_clusters,
     sensor_subspaces,
     stacked_rank,
-    unit_normalized,
 )
-from .._validation import as_int_option
-from ..parallel import ChunkError, map_ranges, rank_ranges, worker_threads
+from ..parallel import ChunkError, map_ranges, rank_ranges
 from ..system import System
 from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances
 from ._combinatorics import cholesky_screen, colex_blocks, count_subsets, level_split
-from .cost import calibrate, level_seconds, workers_for
+from .cost import cost_of_the_rest, rounded_seconds, verdict_cost
 from .observability import pbh_margins
 
-__all__ = ["scan_removals", "RemovalScan"]
+__all__: list[str] = []
 
 _CRITICAL = 8  # critical sets re-checked per level
 
@@ -119,7 +116,7 @@ def _enumeration(
         if level is None:
             break
         if cost is not None and k == max(scan.target, 0):
-            cost["measured_seconds_for_verdict"] = _sig(time.monotonic() - start)
+            cost["measured_seconds_for_verdict"] = rounded_seconds(time.monotonic() - start)
         if not scan.go_on(k, level):
             break
     if out.status == "lower_bound" and scan.undecided is not None:
@@ -221,7 +218,7 @@ class _Levels:
         out.problems.append(
             f"enumeration budget of {max_sets:,} sets reached before sets of "
             f"{removed} sensor{'s' if removed != 1 else ''}"
-            + _cost_of_the_rest(q, self.system.n, k, self.target, self.client, time_budget)
+            + cost_of_the_rest(q, self.system.n, k, self.target, self.client, time_budget)
         )
         return True
 
@@ -333,45 +330,13 @@ class _Levels:
 CALIBRATE_ABOVE = 200_000  # sets for the verdict: below, the enumeration takes about a second
 
 
-def _sig(seconds: float) -> float:
-    return float(f"{seconds:.3g}")
-
-
 def _verdict_cost(
     q: int, n: int, target: int, client: Any | None, time_budget: float | None
 ) -> dict[str, Any] | None:
     """The estimated cost of the levels that decide the verdict, when they are many sets."""
-    levels = range(max(target, 0) + 1)
-    sets = count_subsets(q, levels)
-    if sets <= CALIBRATE_ABOVE:
+    if count_subsets(q, range(max(target, 0) + 1)) <= CALIBRATE_ABOVE:
         return None
-    seconds = sum(level_seconds(q, k, n, critical=(k == target)) for k in levels)
-    threads = worker_threads(client)
-    record: dict[str, Any] = {
-        "sets_for_verdict": sets,
-        "seconds_for_verdict": _sig(seconds / threads),
-        "worker_threads": threads,
-        "rates": calibrate(n).to_dict(),
-    }
-    workers = workers_for(seconds, time_budget)
-    if workers is not None and workers > threads:
-        record["workers_for_time_budget"] = workers
-    return record
-
-
-def _cost_of_the_rest(
-    q: int, n: int, k: int, target: int, client: Any | None, time_budget: float | None
-) -> str:
-    """What the sets beyond the set budget, up to the verdict's level, would cost here."""
-    if k > target:
-        return ""
-    seconds = sum(level_seconds(q, j, n, critical=(j == target)) for j in range(k, target + 1))
-    threads = worker_threads(client)
-    text = f" (the rest of the verdict's sets would take about {_sig(seconds / threads):g} s here"
-    workers = workers_for(seconds, time_budget)
-    if workers is not None and workers > threads:
-        text += f"; about {workers:,} Dask workers would take them under {time_budget:g} s"
-    return text + "; --max-sets raises the budget)"
+    return verdict_cost(q, n, target, client, time_budget)
 
 
 def _clearly_observable(
@@ -584,111 +549,6 @@ def _scan_level(
     for part in map_ranges(_scan_range, task, chunks, client, progress):
         level.merge(part)
     return level
-
-
-@dataclass(frozen=True)
-class RemovalScan:
-    """Result of ``scan_removals``.
-
-    Attributes
-    ----------
-    size : int
-        Number of removed sensors per set.
-    checked : int
-        Number of sets decided.
-    breaking_sets : tuple of tuple of int
-        Removed-sensor sets that leave the plant unobservable, sorted; each is
-        confirmed on the exact data when the plant is small enough (n <= 60):
-        its kept sensors have Krylov rank below n modulo two primes.
-    borderline : int
-        Sets whose rank decision was borderline, or that floating point
-        finds breaking while the exact data are observable within precision.
-    """
-
-    size: int
-    checked: int
-    breaking_sets: tuple[tuple[int, ...], ...]
-    borderline: int
-
-
-def scan_removals(
-    system: System,
-    size: int,
-    *,
-    prune: bool = True,
-    tolerances: Tolerances | None = None,
-    progress: Progress | None = None,
-) -> RemovalScan:
-    """Check every set of ``size`` removed sensors for observability of the rest.
-
-    Parameters
-    ----------
-    system : System
-    size : int
-        Number of sensors removed in each set, 0 <= size <= p.
-    prune : bool, default True
-        Skip sets that keep a sensor which alone observes the whole state
-        (they cannot break observability).  With ``prune=False`` all C(p,
-        size) sets are decided, which is what the enumeration benchmark
-        measures.
-    tolerances : Tolerances, optional
-    progress : callable, optional
-
-    Returns
-    -------
-    RemovalScan
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from ssecert import System
-    >>> ex2 = System(np.eye(3), [[1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1], [1, -1, 1]])
-    >>> scan_removals(ex2, 2).breaking_sets
-    ((0, 2),)
-    """
-    tol = Tolerances.check(tolerances)
-    size = as_int_option(size, "size", min_value=0, max_value=system.p)
-    original = system
-    system, _ = unit_normalized(system)
-    sub = sensor_subspaces(system.A, system.C, tolerances=tol)
-    n = system.n
-    if prune:
-        full = np.flatnonzero(sub.ranks == n)
-        rest = np.flatnonzero(sub.ranks < n)
-    else:
-        full = np.zeros(0, dtype=np.int64)
-        rest = np.arange(system.p)
-    k = size - full.size
-    if k < 0:
-        return RemovalScan(size, 0, (), 0)
-    P = sub.bases[rest]
-    proj = np.einsum("qkn,qkm->qnm", P, P)
-    level = _scan_level(
-        P,
-        sub.ranks[rest],
-        proj,
-        proj.sum(axis=0),
-        k,
-        rest,
-        full,
-        tol,
-        progress=progress,
-        errors=sub.errors[rest],
-    )
-    # every reported breaking set is confirmed on the exact data; refuted ones are dropped
-    # when independent float evidence shows a clear margin, else counted as borderline
-    exact = ExactPlant(original.A, original.C)
-    eig = eigen_clusters(system.A, tolerances=tol)
-    confirmed, borderline = [], level.borderline
-    for removed in sorted(level.failures):
-        gone = set(removed)
-        kept = tuple(i for i in range(system.p) if i not in gone)
-        state = exact.observability(kept, proof=False).state
-        if state != "observable":
-            confirmed.append(removed)
-        elif not _clearly_observable(system, kept, eig, tol):
-            borderline += 1
-    return RemovalScan(size, level.checked, tuple(confirmed), borderline)
 
 
 def _refine(

@@ -262,6 +262,19 @@ def irrepresentable(
             f"The Dask workers failed twice on the supports with colex ranks {lo:,} to "
             f"{hi - 1:,} ({exc.cause!r}).",
         )
+    return _scan_verdict(out, scan, O, rows_of, tol, total, time_budget)
+
+
+def _scan_verdict(
+    out: _Verdicts,
+    scan: SupportScan,
+    O: np.ndarray,
+    rows_of: np.ndarray,
+    tol: Tolerances,
+    total: int,
+    time_budget: float | None,
+) -> Check:
+    """The verdict of a scan (whole or stopped by the time budget), its counts in the evidence."""
     out.evidence["supports_without_full_rank"] = scan.n_inf
     out.evidence["borderline_supports"] = scan.borderline
     if scan.stopped_after is not None:

@@ -50,18 +50,13 @@ from .._validation import as_choice, as_float_option, as_int_option
 from ..results import Check, Verdict
 from ..system import System
 from ..tolerances import Tolerances
+from ._breaking_set import _failure
 from ._combinatorics import count_subsets
 from ._rechecks import _cross_check, _recheck_holds
-from .attacks import stealthy_attack
 from .eigenspace import _eigenspace
-from .enumeration import (
-    Progress,
-    RemovalScan,
-    _enumeration,
-    _Outcome,
-    scan_removals,
-)
+from .enumeration import Progress, _enumeration, _Outcome
 from .observability import observability
+from .removals import RemovalScan, scan_removals
 
 __all__ = [
     "sparse_observability",
@@ -503,102 +498,3 @@ class _Decision:
             self.fields(0, True, None),
             margin=plain.margin,
         )
-
-
-def _failure(
-    system: System,
-    work: System,
-    s: int,
-    outcome: _Outcome,
-    H: int,
-    seed: int,
-    tol: Tolerances,
-    evidence: dict[str, Any],
-    exact: ExactPlant,
-) -> tuple[Verdict, str, dict[str, Any] | None]:
-    """Verdict, summary and stealthy-attack witness of a failing check.
-
-    ``work`` is the plant in power-of-two units used for float decisions;
-    the witness is built on the user's ``system``.
-    """
-    from .._linalg import staircase
-
-    mr = outcome.max_removable
-    B = outcome.breaking_set
-    z = outcome.z
-    assert mr is not None and B is not None and z is not None
-    names = [system.sensors[i] for i in B]
-    # independent confirmation that the kept sensors do not observe the plant
-    kept = [i for i in range(system.p) if i not in set(B)]
-    sc_rank = (
-        staircase(work.A, work.C[kept], tolerances=tol, error_model="compound").rank if kept else 0
-    )
-    decision = exact.observability(tuple(kept))
-    evidence["breaking_set_check"] = {
-        "kept_sensors": kept,
-        "kept_observable_dimension": sc_rank,
-        "unobservable": sc_rank < system.n,
-        "exact": decision.to_dict(),
-    }
-    if decision.state == "observable":
-        return (
-            Verdict.INCONCLUSIVE,
-            (
-                f"The {outcome.method} method finds breaking set {list(B)}, but without those sensors "
-                f"the exact data are observable (Krylov rank {system.n} modulo a prime): the plant is "
-                f"within floating-point precision of one they break, and the answer depends on digits "
-                f"the data do not have."
-            ),
-            None,
-        )
-    witness = stealthy_attack(system, B, z, s, horizon=H, seed=seed, tolerances=tol)
-    witness_out = witness.to_dict()
-    if decision.state == "unobservable":
-        witness_out["exact_check"] = (
-            "removing the breaking set leaves the exact data "
-            "unobservable: z_exact_integers (up to scale) satisfies "
-            "C_i A^k z = 0 exactly for every kept sensor i"
-        )
-        witness_out["z_exact_integers"] = [str(v) for v in decision.z_exact or []]
-    if decision.state != "unobservable" and (
-        not witness.verified or (kept and sc_rank >= system.n)
-    ):
-        return (
-            Verdict.INCONCLUSIVE,
-            (
-                f"The {outcome.method} method finds breaking set {list(B)}, but the stealthy attack "
-                f"built from it does not verify (output mismatch {witness.residual:.2e}, kept sensors "
-                f"observable dimension {sc_rank})."
-            ),
-            witness_out,
-        )
-    if mr == -1:
-        what = "(A, C) itself is not observable: some states produce no output at all."
-    elif len(B) <= s:
-        what = (
-            f"Removing sensor{'s' if len(B) > 1 else ''} {', '.join(names)} leaves the plant "
-            f"unobservable, and {len(B)} <= s = {s}: an attacker on "
-            f"{'them' if len(B) > 1 else 'it'} can mimic a different initial state without "
-            f"being detected."
-        )
-    else:
-        what = (
-            f"Removing sensors {', '.join(names)} leaves the plant unobservable; split into two "
-            f"groups of at most s = {s}, they give two attacks under which different initial "
-            f"states produce the same outputs."
-        )
-    if outcome.details.get("max_removable_is_upper_bound"):
-        low = int(outcome.details.get("max_removable_at_least", -1))
-        summary = (
-            f"max_removable <= {mr} < 2s = {2 * s}: {s} attacked sensor"
-            f"{'s' if s != 1 else ''} cannot be corrected, whatever digits the data lack. "
-            f"{what} (Smaller sets, from {low + 1} sensors on, are within floating-point "
-            f"precision of breaking the plant, so the exact max_removable, between {low} and "
-            f"{mr}, is not decided; the verdict does not depend on it.)"
-        )
-        return Verdict.FAILS, summary, witness_out
-    summary = (
-        f"max_removable = {mr} < 2s = {2 * s}: {s} attacked sensor{'s' if s != 1 else ''} "
-        f"cannot be corrected. {what}"
-    )
-    return Verdict.FAILS, summary, witness_out

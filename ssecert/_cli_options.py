@@ -1,0 +1,217 @@
+"""The options of the ``ssecert`` command: their types, the budget and Dask options, progress.
+
+``ssecert.cli`` builds its parser from these: the option types refuse a bad
+value with one line naming what was expected, the shared option groups
+(analysis, budget, Dask) are added to each command that takes them, and
+``_Progress`` draws the enumerations' progress line on a terminal.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import math
+import time
+from typing import Any, TextIO
+
+__all__: list[str] = []
+
+_INT64_MAX = 2**63 - 1
+
+
+class _Progress:
+    """Throttled progress of the set enumerations on a terminal, with the time left;
+    silent otherwise (and when ``quiet``, e.g. under ``--json -``)."""
+
+    def __init__(self, stream: TextIO, *, quiet: bool = False) -> None:
+        self.stream = stream
+        self.enabled = stream.isatty() and not quiet
+        self.start = time.monotonic()
+        self.last = 0.0
+        self.shown = False
+        self.level: tuple[str, int] | None = None
+        self.level_start = self.start
+
+    def __call__(self, label: str, done: int, total: int) -> None:
+        if not self.enabled:
+            return
+        now = time.monotonic()
+        if self.level != (label, total) or done == 0:  # a new level of sets
+            self.level, self.level_start = (label, total), now
+        if now - self.start < 1.0 or (now - self.last < 0.25 and done < total):
+            return
+        self.last = now
+        pct = 100.0 * done / max(total, 1)
+        elapsed = now - self.level_start
+        left = ""
+        if 0 < done < total and elapsed > 0:
+            left = f", about {elapsed * (total - done) / done:.0f} s left"
+        self.stream.write(f"\r{label}: {done:,}/{total:,} sets ({pct:5.1f}%{left})      ")
+        self.stream.flush()
+        self.shown = True
+
+    def close(self) -> None:
+        """Clear the progress line (before other output, and at the end)."""
+        if self.shown:
+            self.stream.write("\r" + " " * 90 + "\r")
+            self.stream.flush()
+            self.shown = False
+
+
+def _shown(text: str) -> str:
+    return repr(text if len(text) <= 40 else text[:37] + "...")
+
+
+def _integer(text: str, minimum: int, *, scientific: bool = False) -> int:
+    """An integer option in [minimum, 2^63 - 1]; ``5e7`` too when ``scientific``."""
+    try:
+        if len(text) > 40:
+            raise ValueError(text)
+        if scientific and "e" in text.lower():  # 5e7
+            number = float(text)
+            if not number.is_integer():  # also refuses inf and nan
+                raise ValueError(text)
+            value = int(number)
+        else:
+            value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {_shown(text)}") from None
+    if value < minimum:
+        raise argparse.ArgumentTypeError(f"expected an integer >= {minimum}, got {value}")
+    if value > _INT64_MAX:
+        raise argparse.ArgumentTypeError(
+            f"expected an integer <= {_INT64_MAX:,} (64 bits), got {_shown(text)}"
+        )
+    return value
+
+
+def _nonnegative_int(text: str) -> int:
+    return _integer(text, 0)
+
+
+def _positive_int(text: str) -> int:
+    return _integer(text, 1, scientific=True)
+
+
+def _seconds(text: str) -> float:
+    """A finite, non-negative number of seconds."""
+    try:
+        if len(text) > 40:
+            raise ValueError(text)
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected seconds, got {_shown(text)}") from None
+    if not math.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"expected a finite number of seconds >= 0, got {text}")
+    return value
+
+
+def _add_budget_options(parser: argparse.ArgumentParser) -> None:
+    from .budget import parse_bytes, parse_operations
+
+    def checked(parse: Any) -> Any:
+        def convert(text: str) -> Any:
+            try:
+                return parse(text)
+            except ValueError as exc:
+                raise argparse.ArgumentTypeError(str(exc)) from None
+
+        return convert
+
+    parser.add_argument(
+        "--memory-budget",
+        type=checked(parse_bytes),
+        metavar="SIZE",
+        help="memory per analysis step, e.g. 512M or 8G (default 2G)",
+    )
+    parser.add_argument(
+        "--work-budget",
+        type=checked(parse_operations),
+        metavar="FLOPS",
+        help="floating-point operations per analysis step (default 1e12)",
+    )
+
+
+def _budget(args: argparse.Namespace) -> Any:
+    from .budget import Budget
+
+    return Budget(
+        **{
+            key: value
+            for key, value in (("memory", args.memory_budget), ("work", args.work_budget))
+            if value
+        }
+    )
+
+
+def _add_dask_options(parser: argparse.ArgumentParser, work: str) -> None:
+    parser.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help=f"run {work} on an existing Dask scheduler (needs the dist extra)",
+    )
+    parser.add_argument(
+        "--workers",
+        type=_positive_int,
+        metavar="N",
+        help=f"run {work} on a local Dask cluster of N worker processes",
+    )
+
+
+def _dask(args: argparse.Namespace) -> Any:
+    """A context giving the Dask client the options ask for, else None."""
+    if not (args.scheduler or args.workers):
+        return contextlib.nullcontext(None)
+    from .parallel import dask_client
+
+    return dask_client(args.scheduler, workers=args.workers)
+
+
+def _add_analysis_options(parser: argparse.ArgumentParser) -> None:
+    """Options shared by ``certify`` and ``analyze``."""
+    from .structure.sparse import DEFAULT_TIME_BUDGET
+
+    parser.add_argument(
+        "--max-attacked",
+        type=_nonnegative_int,
+        metavar="S",
+        help="number of attacked sensors s (required for .npz/.mat)",
+    )
+    parser.add_argument(
+        "--horizon",
+        type=_positive_int,
+        metavar="T",
+        help="stacked horizon tau (default: the spec's, else n)",
+    )
+    parser.add_argument(
+        "--max-sets",
+        type=_positive_int,
+        metavar="N",
+        default=50_000_000,
+        help="enumeration budget in sets (default 5e7)",
+    )
+    parser.add_argument(
+        "--method",
+        choices=("auto", "enumeration", "eigenspace"),
+        default="auto",
+        help="sparse-observability method (default auto)",
+    )
+    refine = parser.add_mutually_exclusive_group()
+    refine.add_argument(
+        "--time-budget",
+        type=_seconds,
+        metavar="SECONDS",
+        default=DEFAULT_TIME_BUDGET,
+        help=(
+            "seconds spent refining max_removable once the verdict is decided; beyond it "
+            f"max_removable is a lower bound (default {DEFAULT_TIME_BUDGET:g})"
+        ),
+    )
+    refine.add_argument(
+        "--exact",
+        action="store_const",
+        const=None,
+        dest="time_budget",
+        help="compute the exact max_removable however long it takes",
+    )
+    _add_budget_options(parser)
