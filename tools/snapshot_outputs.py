@@ -39,7 +39,8 @@ def main(out: Path) -> None:
         doc = json.loads(certify_json(result))
         doc["meta"].pop("timings", None)
         doc["meta"].pop("date", None)
-        (out / f"{name}.json").write_text(json.dumps(doc, indent=1)  # in the order written: a moved field shows)
+        # in the order written, so that a moved field shows
+        (out / f"{name}.json").write_text(json.dumps(doc, indent=1))
         (out / f"{name}.html").write_text(_without_times(render_report(result)))
         for command in ("analyze", "simulate"):
             run = subprocess.run(
