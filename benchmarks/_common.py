@@ -77,5 +77,8 @@ def cost_model_row(case: str, cost: dict[str, Any]) -> dict[str, Any]:
     measured = float(cost["measured_seconds_for_verdict"])
     within = within_factor(measured, estimate)
     sets = f"{cost['sets_for_verdict']:,} sets for the verdict"
-    note = f"{sets}; ratio is measured / estimate; within a factor of 2: {yes_no(within)}"
+    note = (
+        f"{sets}; measured / estimate = {measured / estimate:.2f}; within a factor of 2: "
+        f"{yes_no(within)}"
+    )
     return row("cost model", case, estimate, measured, "measured enumeration", note)

@@ -67,8 +67,9 @@ def test_numbers_have_a_few_significant_digits(table):
     assert table.format_seconds(25 * 3600.0) == "25.0 h"
     assert table.format_seconds(None) == "-"
     assert table.format_ratio(69.7) == "70x"
-    assert table.format_ratio(3.74) == "3.7x"
-    assert table.format_ratio(0.0234) == "0.023x"
+    assert table.format_ratio(3.744) == "3.74x"
+    assert table.format_ratio(2.034) == "2.03x"
+    assert table.format_ratio(0.02345) == "0.0234x"
     assert table.format_ratio(None) == "-"
     assert table.format_ratio(float("nan")) == "n/a"
 
