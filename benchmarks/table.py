@@ -9,10 +9,10 @@ benchmark measures, how to run it, the machine and the full table) and the
 compact table between ``<!-- benchmarks:start -->`` and
 ``<!-- benchmarks:end -->`` in the project README.
 
-    python benchmarks/table.py [--quick] [--only NAME ...]
+    python benchmarks/table.py [--quick] [--only NAME ...] [--no-run]
 
 ``--only`` reruns the named benchmarks and keeps the others' rows from
-results.json.
+results.json; ``--no-run`` only rewrites the files from results.json.
 """
 
 from __future__ import annotations
@@ -295,6 +295,7 @@ def benchmarks_readme(results: dict[str, Any]) -> str:
         "python benchmarks/table.py            # every benchmark, full sizes; rewrites this file\n"
         "python benchmarks/table.py --quick    # smaller sizes and repeats, a few minutes\n"
         "python benchmarks/table.py --only analyze distributed   # rerun some, keep the rest\n"
+        "python benchmarks/table.py --no-run   # rewrite the tables from results.json\n"
         "```\n",
         "Each script also runs alone and prints its own text "
         "(`python benchmarks/bench_enumeration.py --help`). From a source checkout, put it "
@@ -302,6 +303,7 @@ def benchmarks_readme(results: dict[str, Any]) -> str:
         "run are kept in `benchmarks/results.json`.\n",
         "## What each benchmark measures\n",
     ]
+    items = []
     for name, (script, what) in BENCHMARKS.items():
         entry = results["benchmarks"].get(name)
         if entry is None:
@@ -309,10 +311,11 @@ def benchmarks_readme(results: dict[str, Any]) -> str:
         else:
             mode = "quick" if entry["quick"] else "full"
             ran = f"{mode} run on {entry['date'][:10]}, {format_seconds(entry['seconds'])}"
-        parts.append(f"- **{name}** (`{script}`; {ran}): {what}\n")
+        items.append(f"- **{name}** (`{script}`; {ran}): {what}\n")
     total = sum(e["seconds"] for e in results["benchmarks"].values())
     parts += [
-        "\n## Machine\n",
+        "".join(items),
+        "## Machine\n",
         f"- {m['cpus']} CPUs: {m['cpu_model']} (from /proc/cpuinfo)\n"
         f"- Python {m['python']}, numpy {m['numpy']}, scipy {m['scipy']}\n"
         f"- BLAS threads: {m.get('blas_threads', '?')} (`table.py` sets OPENBLAS_NUM_THREADS, "
@@ -323,7 +326,7 @@ def benchmarks_readme(results: dict[str, Any]) -> str:
         "- The machine is shared and may be busy with other jobs: absolute times move from "
         "run to run. The two times of a ratio are measured in the same run, one after the "
         "other, so a busy machine slows both, though not always equally.\n",
-        "\n## Table\n",
+        "## Table\n",
         full_table(_all_rows(results)),
     ]
     return "\n".join(part.rstrip("\n") + "\n" for part in parts)
@@ -355,12 +358,19 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--only", nargs="+", choices=list(BENCHMARKS), metavar="NAME", help="run only these"
     )
+    parser.add_argument(
+        "--no-run",
+        action="store_true",
+        help="run nothing: rewrite the files from benchmarks/results.json",
+    )
     args = parser.parse_args(argv)
     results: dict[str, Any] = {"machine": machine(), "benchmarks": {}}
-    if args.only and RESULTS.is_file():
-        results["benchmarks"] = json.loads(RESULTS.read_text(encoding="utf-8"))["benchmarks"]
+    if (args.only or args.no_run) and RESULTS.is_file():
+        results = json.loads(RESULTS.read_text(encoding="utf-8"))
+        if not args.no_run:
+            results["machine"] = machine()
     failed = []
-    for name in args.only or list(BENCHMARKS):
+    for name in [] if args.no_run else args.only or list(BENCHMARKS):
         print(f"{name}: running {BENCHMARKS[name][0]}", file=sys.stderr, flush=True)
         try:
             entry = run_benchmark(name, quick=args.quick)
