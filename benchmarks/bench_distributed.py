@@ -18,9 +18,11 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import time
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from _common import best_of, cost_model_row, row, yes_no
 
 from ssecert import System
 from ssecert.parallel import dask_client
@@ -37,42 +39,111 @@ def _answer(check) -> str:
     return json.dumps([check.verdict.value, fields], sort_keys=True, default=str)
 
 
-def _timed(system: System, client=None) -> tuple[float, object]:
-    start = time.perf_counter()
-    check = sparse_observability(system, 3, method="enumeration", time_budget=0.0, client=client)
-    return time.perf_counter() - start, check
+def _timed(system: System, repeats: int, client=None) -> tuple[float, Any]:
+    return best_of(
+        lambda: sparse_observability(
+            system, 3, method="enumeration", time_budget=0.0, client=client
+        ),
+        repeats,
+    )
 
 
-def main(repeats: int) -> None:
+CASE = "A = I, n = 10, p = 30, s = 3"
+PROJECTED_WORKERS = 64
+
+
+@dataclass(frozen=True)
+class Results:
+    local: float
+    cost: dict[str, Any]
+    spread: dict[int, tuple[float, bool]]  # workers: (seconds, same answer)
+    projected_sets: int
+    projected_seconds: float  # on one core
+
+
+def measure(repeats: int, workers: tuple[int, ...] = (1, 2)) -> Results:
     system = _plant()
     calibrate(system.n)  # measured once per process, as in a real run
-    local = min(_timed(system) for _ in range(repeats))
-    cost = local[1].evidence["cost_estimate"]
-    print(
-        f"plant: A = I (n = 10), p = 30, s = 3; {cost['sets_for_verdict']:,} sets for the verdict"
+    local = _timed(system, repeats)
+    spread = {}
+    for count in workers:
+        with dask_client(workers=count) as client:
+            _timed(system, 1, client)  # the workers import ssecert and calibrate once
+            seconds, check = _timed(system, repeats, client)
+        spread[count] = (seconds, _answer(check) == _answer(local[1]))
+    return Results(
+        local=local[0],
+        cost=local[1].evidence["cost_estimate"],
+        spread=spread,
+        projected_sets=math.comb(60, 10),
+        projected_seconds=level_seconds(60, 10, 10),
     )
+
+
+def print_results(r: Results) -> None:
+    cost = r.cost
+    print(f"plant: {CASE}; {cost['sets_for_verdict']:,} sets for the verdict")
     print(
-        f"in-process: {local[0]:.2f} s (enumeration {cost['measured_seconds_for_verdict']:.2f} s; "
+        f"in-process: {r.local:.2f} s (enumeration {cost['measured_seconds_for_verdict']:.2f} s; "
         f"cost model estimate {cost['seconds_for_verdict']:.2f} s, ratio measured/estimate "
         f"{cost['measured_seconds_for_verdict'] / cost['seconds_for_verdict']:.2f})"
     )
-    for workers in (1, 2):
-        with dask_client(workers=workers) as client:
-            _timed(system, client)  # the workers import ssecert and calibrate once
-            spread = min(_timed(system, client) for _ in range(repeats))
-        same = _answer(spread[1]) == _answer(local[1])
+    for workers, (seconds, same) in r.spread.items():
         print(
-            f"{workers} Dask worker{'s' if workers > 1 else ''}: {spread[0]:.2f} s, "
-            f"{local[0] / spread[0]:.2f}x in-process; same answer: {same}"
+            f"{workers} Dask worker{'s' if workers > 1 else ''}: {seconds:.2f} s, "
+            f"{r.local / seconds:.2f}x in-process; same answer: {same}"
         )
-        if not same:
-            raise SystemExit("the Dask answer differs from the in-process one")
-    sets = math.comb(60, 10)
-    seconds = level_seconds(60, 10, 10)
+    hours = r.projected_seconds / 3600
     print(
-        f"projection: the {sets:.2e} sets of 10 of 60 sensors (n = 10) would take "
-        f"{seconds / 3600:.0f} h on one core here, {seconds / 64 / 3600:.1f} h on 64 workers"
+        f"projection: the {r.projected_sets:.2e} sets of 10 of 60 sensors (n = 10) would take "
+        f"{hours:.0f} h on one core here, {hours / PROJECTED_WORKERS:.1f} h on "
+        f"{PROJECTED_WORKERS} workers"
     )
+
+
+def to_rows(r: Results) -> list[dict[str, Any]]:
+    out = []
+    for workers, (seconds, same) in r.spread.items():
+        plural = "s" if workers > 1 else ""
+        note = f"same answer: {yes_no(same)}; ratio > 1 means faster than in-process"
+        out.append(
+            row(
+                "Dask workers vs in-process",
+                f"{CASE}, {workers} worker{plural}",
+                seconds,
+                r.local,
+                "in-process enumeration",
+                note,
+            )
+        )
+    out.append(cost_model_row(CASE + " (in-process)", r.cost))
+    note = (
+        f"not run: the cost model's rates measured in this run; {r.projected_seconds / 3600:.0f} h "
+        f"on one core here"
+    )
+    out.append(
+        row(
+            "cost model projection",
+            f"C(60, 10) = {r.projected_sets:.1e} sets, n = 10, {PROJECTED_WORKERS} workers",
+            r.projected_seconds / PROJECTED_WORKERS,
+            None,
+            "-",
+            note,
+        )
+    )
+    return out
+
+
+def rows(quick: bool = False) -> list[dict[str, Any]]:
+    """The figures as table rows (quick: one timed run each instead of the best of 2)."""
+    return to_rows(measure(1 if quick else 2))
+
+
+def main(repeats: int) -> None:
+    r = measure(repeats)
+    print_results(r)
+    if not all(same for _, same in r.spread.values()):
+        raise SystemExit("the Dask answer differs from the in-process one")
 
 
 if __name__ == "__main__":

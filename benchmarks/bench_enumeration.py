@@ -9,10 +9,17 @@ sample of the sets (it would take about 40 s for all); ssecert decides every
 set, without the pruning its sparse_observability applies (which answers
 this plant without enumerating anything).  A second plant of the same size,
 with many breaking sets and a well-conditioned observability matrix (so that
-the reference's ranks can be trusted), checks that both decide alike.  Also
-timed: the eigenspace method on a generic n = 50, p = 1000 plant.
+the reference's ranks can be trusted), checks that both decide alike.
 
-    python benchmarks/bench_enumeration.py [--sample N]
+The eigenspace method is timed against the enumeration on a plant where
+both must work: distinct integer eigenvalues, each sensor seeing about half
+of the modes (so no sensor alone observes the state and nothing is pruned),
+exact integer data; both are asked for the verdict only (time budget 0), so
+the enumeration checks every set of up to 2s = 6 sensors.  Also timed: the
+eigenspace method on a generic n = 50, p = 1000 plant, where the
+enumeration (C(1000, 6) sets) is out of reach.
+
+    python benchmarks/bench_enumeration.py [--sample N] [--repeat N]
 """
 
 from __future__ import annotations
@@ -20,12 +27,15 @@ from __future__ import annotations
 import argparse
 import itertools
 import math
-import time
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from _common import best_of, cost_model_row, row, yes_no
 
 from ssecert import System, scan_removals, sparse_observability
 from ssecert.examples import load_example
+from ssecert.structure.sparse import DEFAULT_TIME_BUDGET
 
 
 def reference(system: System, sets: list[tuple[int, ...]]) -> list[tuple[int, ...]]:
@@ -72,25 +82,71 @@ def structured_plant(seed: int = 0, n_rot: int = 7, p: int = 30) -> System:
     return System(T @ M @ T_inv, Cm @ T_inv, name="structured-n15-p30")
 
 
-def compare(system: System, size: int, sample_size: int, repeat: int, label: str) -> float:
-    """Time both on one plant; print a row and check that decisions agree."""
+def modal_plant(seed: int = 0, n: int = 10, p: int = 30, sees: float = 0.5) -> System:
+    """Distinct integer eigenvalues, each sensor seeing about half of the modes, exact data.
+
+    A = T diag(-4, ..., 5) T^-1 with an integer T of integer inverse, and
+    C = C_modes T^-1 with integer entries: no sensor alone observes the
+    state, every mode is seen by many sensors, and the breaking sets of the
+    floating-point data are those of the exact data.
+    """
+    rng = np.random.default_rng(seed)
+    M = np.diag(np.arange(1, n + 1) - n // 2).astype(float)
+    Cm = rng.integers(-3, 4, size=(p, n)).astype(float)
+    Cm[Cm == 0] = 1.0
+    Cm[rng.random((p, n)) >= sees] = 0.0
+    T = np.eye(n)
+    for _ in range(n):
+        i, j = rng.choice(n, 2, replace=False)
+        T[i] += rng.choice([-1.0, 1.0]) * T[j]
+    T_inv = np.round(np.linalg.inv(T))
+    assert np.array_equal(T @ T_inv, np.eye(n))
+    return System(T @ M @ T_inv, Cm @ T_inv, name=f"modal-n{n}-p{p}")
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """Enumeration against the per-set matrix_rank loop on one plant."""
+
+    label: str
+    size: int
+    total: int
+    sampled: int
+    reference_per_set: float
+    ssecert_per_set: float
+    breaking: int
+    reference_breaking: int
+    ssecert_breaking: int
+    agree: bool
+
+
+def compare(system: System, size: int, sample_size: int, repeat: int, label: str) -> Comparison:
+    """Time both on one plant and check that their decisions agree on the sample."""
     total = math.comb(system.p, size)
     rng = np.random.default_rng(0)
     all_sets = list(itertools.combinations(range(system.p), size))
     sample = [all_sets[i] for i in rng.choice(total, min(sample_size, total), replace=False)]
-    ref_times, ours_times = [], []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        ref_breaking = reference(system, sample)
-        ref_times.append((time.perf_counter() - t0) / len(sample))
-        t0 = time.perf_counter()
-        scan = scan_removals(system, size, prune=False)
-        ours_times.append((time.perf_counter() - t0) / scan.checked)
+    ref_seconds, ref_breaking = best_of(lambda: reference(system, sample), repeat)
+    ours_seconds, scan = best_of(lambda: scan_removals(system, size, prune=False), repeat)
     assert scan.checked == total
-    ref, ours = min(ref_times), min(ours_times)
     ours_on_sample = sorted(set(scan.breaking_sets) & set(sample))
-    agree = ours_on_sample == sorted(ref_breaking)
-    print(f"{label}: {total:,} sets of {size} removed sensors")
+    return Comparison(
+        label=label,
+        size=size,
+        total=total,
+        sampled=len(sample),
+        reference_per_set=ref_seconds / len(sample),
+        ssecert_per_set=ours_seconds / scan.checked,
+        breaking=len(scan.breaking_sets),
+        reference_breaking=len(ref_breaking),
+        ssecert_breaking=len(ours_on_sample),
+        agree=ours_on_sample == sorted(ref_breaking),
+    )
+
+
+def print_comparison(c: Comparison) -> None:
+    ref, ours = c.reference_per_set, c.ssecert_per_set
+    print(f"{c.label}: {c.total:,} sets of {c.size} removed sensors")
     print(
         f"  {'reference: matrix_rank per set (sampled)':<46} {ref * 1e6:9.2f} us/set "
         f"{1 / ref:12,.0f} sets/s"
@@ -101,10 +157,155 @@ def compare(system: System, size: int, sample_size: int, repeat: int, label: str
     )
     print(
         f"  speed-up per set: {ref / ours:.1f}x (target >= 30x); breaking sets: "
-        f"{len(scan.breaking_sets):,} of {total:,} (sample: {len(ref_breaking)} by the "
-        f"reference, {len(ours_on_sample)} by ssecert); decisions agree: {agree}"
+        f"{c.breaking:,} of {c.total:,} (sample: {c.reference_breaking} by the "
+        f"reference, {c.ssecert_breaking} by ssecert); decisions agree: {c.agree}"
     )
-    return ref / ours
+
+
+@dataclass(frozen=True)
+class Decision:
+    """One sparse_observability call: its answer and the best of its times."""
+
+    seconds: float
+    verdict: str
+    max_removable: int | None
+    lower_bound: bool
+    method: str
+    cost: dict[str, Any] | None
+
+
+def decide(
+    system: System, s: int, method: str, repeat: int, time_budget: float | None = 0.0
+) -> Decision:
+    """Best of ``repeat`` calls; time budget 0 asks for the verdict only."""
+    seconds, check = best_of(
+        lambda: sparse_observability(system, s, method=method, time_budget=time_budget), repeat
+    )
+    return Decision(
+        seconds=seconds,
+        verdict=check.verdict.value,
+        max_removable=check.fields["max_removable"],
+        lower_bound=bool(check.fields.get("max_removable_is_lower_bound")),
+        method=check.method,
+        cost=check.evidence.get("cost_estimate"),
+    )
+
+
+@dataclass(frozen=True)
+class Results:
+    comparisons: list[Comparison]
+    auto: Decision
+    modal_label: str
+    modal_eigenspace: Decision
+    modal_enumeration: Decision
+    big_label: str
+    big_sets: int
+    big_eigenspace: Decision
+
+
+def measure(*, sample: int, repeat: int) -> Results:
+    spec = load_example("random-n15-p30")
+    system, s = spec.system, spec.max_attacked
+    size = 2 * s
+    comparisons = [
+        compare(system, size, sample, repeat, f"{spec.name} (n = 15, p = 30, s = {s})"),
+        compare(
+            structured_plant(),
+            size,
+            sample,
+            repeat,
+            "structured-n15-p30 (rotations, sparse sensor patterns)",
+        ),
+    ]
+    auto = decide(system, s, "auto", 1, time_budget=DEFAULT_TIME_BUDGET)
+    modal = modal_plant()
+    rng = np.random.default_rng(1)
+    big = System(rng.standard_normal((50, 50)), rng.standard_normal((1000, 50)))
+    return Results(
+        comparisons=comparisons,
+        auto=auto,
+        modal_label=f"{modal.name} (n = 10, p = 30, s = 3, exact integer data)",
+        modal_eigenspace=decide(modal, 3, "eigenspace", repeat),
+        modal_enumeration=decide(modal, 3, "enumeration", repeat),
+        big_label="generic n = 50, p = 1000, s = 3",
+        big_sets=math.comb(1000, 6),
+        big_eigenspace=decide(big, 3, "eigenspace", repeat),
+    )
+
+
+def _removable(d: Decision) -> str:
+    return f"{'>= ' if d.lower_bound else ''}{d.max_removable}"
+
+
+def print_results(r: Results) -> None:
+    for c in r.comparisons:
+        print_comparison(c)
+    print(
+        f"sparse_observability(auto) on this plant: {r.auto.verdict}, max_removable = "
+        f"{r.auto.max_removable}, method {r.auto.method}, {r.auto.seconds * 1e3:.1f} ms"
+    )
+    eig, enum = r.modal_eigenspace, r.modal_enumeration
+    print(
+        f"{r.modal_label}, verdict only: eigenspace {eig.verdict} (max_removable "
+        f"{_removable(eig)}) in {eig.seconds:.3f} s; enumeration {enum.verdict} (max_removable "
+        f"{_removable(enum)}) in {enum.seconds:.3f} s; {enum.seconds / eig.seconds:.1f}x"
+    )
+    big = r.big_eigenspace
+    print(
+        f"eigenspace method, {r.big_label}: {big.verdict}, max_removable = "
+        f"{big.max_removable}, {big.seconds:.3f} s (target < 1 s)"
+    )
+
+
+def to_rows(r: Results) -> list[dict[str, Any]]:
+    out = []
+    for c in r.comparisons:
+        note = (
+            f"reference timed on {c.sampled:,} random sets and extrapolated; ssecert decides "
+            f"every set; decisions agree on the sample: {yes_no(c.agree)} "
+            f"({c.breaking:,} breaking sets in all)"
+        )
+        out.append(
+            row(
+                "enumeration vs rank loop",
+                f"{c.label}: {c.total:,} sets of {c.size}",
+                c.ssecert_per_set * c.total,
+                c.reference_per_set * c.total,
+                "numpy matrix_rank per set",
+                note,
+            )
+        )
+    eig, enum = r.modal_eigenspace, r.modal_enumeration
+    same = eig.verdict == enum.verdict
+    note = (
+        f"verdict only (time budget 0); same verdict: {yes_no(same)} ({eig.verdict}); "
+        f"max_removable {_removable(eig)} (eigenspace), {_removable(enum)} (enumeration)"
+    )
+    out.append(
+        row(
+            "eigenspace vs enumeration",
+            r.modal_label,
+            eig.seconds,
+            enum.seconds,
+            "enumeration (every set of up to 6)",
+            note,
+        )
+    )
+    big = r.big_eigenspace
+    note = (
+        f"{big.verdict}, max_removable = {big.max_removable}; no reference: the enumeration "
+        f"would check C(1000, 6) = {r.big_sets:.1e} sets"
+    )
+    out.append(row("eigenspace vs enumeration", r.big_label, big.seconds, None, "-", note))
+    if enum.cost is not None:
+        out.append(cost_model_row(r.modal_label, enum.cost))
+    return out
+
+
+def rows(quick: bool = False) -> list[dict[str, Any]]:
+    """The figures as table rows (quick: a smaller sample and the best of 2)."""
+    results = measure(sample=2000, repeat=2) if quick else measure(sample=20000, repeat=3)
+    return to_rows(results)
 
 
 def main() -> None:
@@ -114,38 +315,7 @@ def main() -> None:
     )
     parser.add_argument("--repeat", type=int, default=3, help="timing repetitions (best of)")
     args = parser.parse_args()
-
-    spec = load_example("random-n15-p30")
-    system, s = spec.system, spec.max_attacked
-    size = 2 * s
-    compare(system, size, args.sample, args.repeat, f"{spec.name} (n = 15, p = 30, s = {s})")
-    compare(
-        structured_plant(),
-        size,
-        args.sample,
-        args.repeat,
-        "structured-n15-p30 (rotations, sparse sensor patterns)",
-    )
-
-    t0 = time.perf_counter()
-    check = sparse_observability(system, s)
-    t_auto = time.perf_counter() - t0
-    print(
-        f"sparse_observability(auto) on this plant: {check.verdict.value}, max_removable = "
-        f"{check.fields['max_removable']}, method {check.method}, {t_auto * 1e3:.1f} ms"
-    )
-
-    rng = np.random.default_rng(1)
-    big = System(rng.standard_normal((50, 50)), rng.standard_normal((1000, 50)))
-    times = []
-    for _ in range(args.repeat):
-        t0 = time.perf_counter()
-        check = sparse_observability(big, 3, method="eigenspace")
-        times.append(time.perf_counter() - t0)
-    print(
-        f"eigenspace method, generic n = 50, p = 1000, s = 3: {check.verdict.value}, "
-        f"max_removable = {check.fields['max_removable']}, {min(times):.3f} s (target < 1 s)"
-    )
+    print_results(measure(sample=args.sample, repeat=args.repeat))
 
 
 if __name__ == "__main__":

@@ -42,9 +42,10 @@ os.environ.setdefault("MKL_NUM_THREADS", "1")
 
 import argparse
 import math
-import time
+from typing import Any
 
 import numpy as np
+from _common import best_of, row
 
 from ssecert import System
 from ssecert.estimators.decoders import fista, partial_lasso_cvxpy
@@ -56,6 +57,7 @@ VARIANTS = {
     "restart": {"restart": True, "orthonormalize": False},
     "orthonormal+restart": {"restart": True, "orthonormalize": True},
 }
+TABLE_VARIANTS = ("orthonormal+restart", "plain")  # the two of benchmarks/README.md
 
 
 def instance(seed: int, *, stacked: bool, n: int = 20, p: int = 30, s: int = 6):
@@ -107,34 +109,30 @@ def iterations_to_reach(
     return None
 
 
-def best_time(call, repeat: int):
-    times, result = [], None
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        result = call()
-        times.append(time.perf_counter() - t0)
-    return min(times), result
-
-
-def measure(M, y, x_true, lam, repeat, limit):
-    row = {}
-    row["cvxpy"], (x_ref, a_ref) = best_time(lambda: partial_lasso_cvxpy(M, y, lam), repeat)
-    row["state error"] = np.linalg.norm(x_ref - x_true) / np.linalg.norm(x_true)
-    row["clarabel"] = clarabel_solve_time(M, y, lam)
-    for label, options in VARIANTS.items():
+def measure_instance(
+    M, y, x_true, lam, repeat, limit, *, variants=tuple(VARIANTS), own_rule=True
+) -> dict:
+    """Times and accuracies of cvxpy and the FISTA variants on one instance and lambda."""
+    found = {}
+    found["cvxpy"], (x_ref, a_ref) = best_of(lambda: partial_lasso_cvxpy(M, y, lam), repeat)
+    found["state error"] = np.linalg.norm(x_ref - x_true) / np.linalg.norm(x_true)
+    found["clarabel"] = clarabel_solve_time(M, y, lam)
+    for label in variants:
+        options = VARIANTS[label]
         K = iterations_to_reach(M, y, lam, x_ref, a_ref, limit=limit, **options)
         if K is None:
-            row[label] = (None, math.nan, math.nan)
+            found[label] = (None, math.nan, math.nan)
             continue
-        seconds, sol = best_time(
+        seconds, sol = best_of(
             lambda K=K, options=options: fista(M, y, lam, iterations=K, tol=0.0, **options), repeat
         )
         reached = error(sol.x, sol.a, x_ref, a_ref)
         assert reached <= TARGET, (label, K, reached)
-        row[label] = (K, seconds, reached)
-    seconds, sol = best_time(lambda: fista(M, y, lam, iterations=limit), repeat)
-    row["own-rule"] = (sol.iterations, seconds, error(sol.x, sol.a, x_ref, a_ref))
-    return row
+        found[label] = (K, seconds, reached)
+    if own_rule:
+        seconds, sol = best_of(lambda: fista(M, y, lam, iterations=limit), repeat)
+        found["own-rule"] = (sol.iterations, seconds, error(sol.x, sol.a, x_ref, a_ref))
+    return found
 
 
 def clarabel_solve_time(M, y, lam) -> float:
@@ -160,26 +158,114 @@ def report(title: str, rows_by_lam: dict[float, list[dict]]) -> None:
     head += f" | {'own rule it':>11} {'ms':>7} {'err':>7} | {'x err':>7}"
     print(head)
     print("-" * len(head))
-    for lam, rows in rows_by_lam.items():
+    for lam, found in rows_by_lam.items():
         line = (
-            f"{lam:7.0e} {median([r['cvxpy'] for r in rows]) * 1e3:9.2f} "
-            f"{median([r['clarabel'] for r in rows]) * 1e3:10.2f}"
+            f"{lam:7.0e} {median([r['cvxpy'] for r in found]) * 1e3:9.2f} "
+            f"{median([r['clarabel'] for r in found]) * 1e3:10.2f}"
         )
         for label in VARIANTS:
-            Ks = [r[label][0] for r in rows]
+            Ks = [r[label][0] for r in found]
             missing = sum(K is None for K in Ks)
             K = f"K={median(Ks):.0f}" + (f" ({missing} never)" if missing else "")
-            ms = median([r[label][1] for r in rows]) * 1e3
-            ratio = median([r["cvxpy"] / r[label][1] for r in rows if r[label][0] is not None])
+            ms = median([r[label][1] for r in found]) * 1e3
+            ratio = median([r["cvxpy"] / r[label][1] for r in found if r[label][0] is not None])
             line += f" | {K:>19} {ms:7.2f} {ratio:7.2f}"
-        own = [r["own-rule"] for r in rows]
+        own = [r["own-rule"] for r in found]
         line += (
             f" | {median([o[0] for o in own]):11.0f} "
             f"{median([o[1] for o in own]) * 1e3:7.2f} {max(o[2] for o in own):7.1e}"
         )
-        line += f" | {median([r['state error'] for r in rows]):7.1e}"
+        line += f" | {median([r['state error'] for r in found]):7.1e}"
         print(line)
     print()
+
+
+def measure(
+    *,
+    instances: int = 5,
+    repeat: int = 5,
+    lams: tuple[float, ...] = (0.01, 0.1, 1.0),
+    limit: int = 100_000,
+    stacked: bool = True,
+    variants: tuple[str, ...] = tuple(VARIANTS),
+    own_rule: bool = True,
+) -> dict[str, tuple[tuple[int, int], dict[float, list[dict]]]]:
+    """{block: (shape of M, {lambda: one measured row per instance})}.
+
+    ``variants`` and ``own_rule`` say which FISTA runs are timed (the table
+    needs only two variants, the printed text all of them).
+    """
+    M, y, _, _ = instance(0, stacked=False)
+    partial_lasso_cvxpy(M, y, lams[0])  # warm-up: imports and first-call costs
+    fista(M, y, lams[0], iterations=10)
+    blocks = [("static", False)] + ([("stacked", True)] if stacked else [])
+    out = {}
+    for name, is_stacked in blocks:
+        rows_by_lam: dict[float, list[dict]] = {}
+        for lam in lams:
+            rows_by_lam[lam] = []
+            for seed in range(instances):
+                M, y, x_true, _ = instance(seed, stacked=is_stacked)
+                rows_by_lam[lam].append(
+                    measure_instance(
+                        M, y, x_true, lam, repeat, limit, variants=variants, own_rule=own_rule
+                    )
+                )
+        out[name] = (M.shape, rows_by_lam)
+    return out
+
+
+def print_results(results, instances: int) -> None:
+    for name, (shape, rows_by_lam) in results.items():
+        stacked = name == "stacked"
+        report(
+            f"{name}: M is {shape[0]} x 20 ({'O_tau, tau = 20' if stacked else 'M = C'}), "
+            f"s = 6 attacked sensors, {instances} instances, medians; "
+            f"K = iterations to reach {TARGET:g} of cvxpy; cvxpy/F > 1 means FISTA is faster",
+            rows_by_lam,
+        )
+
+
+def to_rows(results, instances: int) -> list[dict[str, Any]]:
+    """Medians over the instances; the ratio is median cvxpy over median FISTA."""
+    out = []
+    for name, (shape, rows_by_lam) in results.items():
+        model = "O_tau, tau = 20" if name == "stacked" else "M = C"
+        for lam, measured in rows_by_lam.items():
+            cvxpy_seconds = median([r["cvxpy"] for r in measured])
+            for label, fista_name in zip(
+                TABLE_VARIANTS, ("orthonormal coordinates + restart", "plain (the default)")
+            ):
+                Ks = [r[label][0] for r in measured]
+                missing = sum(K is None for K in Ks)
+                reached = [r[label][2] for r in measured if r[label][0] is not None]
+                note = (
+                    f"median of {instances} instances; K = {median(Ks):.0f} iterations to "
+                    f"{TARGET:g} of cvxpy (worst {max(reached, default=math.nan):.1e})"
+                )
+                if missing:
+                    note += f"; {missing} never reached it in the iteration cap"
+                out.append(
+                    row(
+                        "FISTA vs cvxpy",
+                        f"{name} {model} ({shape[0]} x {shape[1]}), lambda {lam:g}: {fista_name}",
+                        median([r[label][1] for r in measured]),
+                        cvxpy_seconds,
+                        "cvxpy + Clarabel",
+                        note,
+                    )
+                )
+    return out
+
+
+def rows(quick: bool = False) -> list[dict[str, Any]]:
+    """The figures as table rows (5 instances, best of 3; quick: 2 instances, best of 2).
+
+    Only the two variants of the table are timed, and not the stop by FISTA's own rule.
+    """
+    instances, repeat = (2, 2) if quick else (5, 3)
+    results = measure(instances=instances, repeat=repeat, variants=TABLE_VARIANTS, own_rule=False)
+    return to_rows(results, instances)
 
 
 def main() -> None:
@@ -190,26 +276,14 @@ def main() -> None:
     parser.add_argument("--limit", type=int, default=100_000, help="FISTA iteration cap")
     parser.add_argument("--no-stacked", action="store_true", help="skip the O_tau block")
     args = parser.parse_args()
-    lams = [float(v) for v in args.lams.split(",")]
-
-    M, y, _, _ = instance(0, stacked=False)
-    partial_lasso_cvxpy(M, y, lams[0])  # warm-up: imports and first-call costs
-    fista(M, y, lams[0], iterations=10)
-
-    blocks = [("static", False)] + ([] if args.no_stacked else [("stacked", True)])
-    for name, stacked in blocks:
-        rows_by_lam: dict[float, list[dict]] = {}
-        for lam in lams:
-            rows_by_lam[lam] = []
-            for seed in range(args.instances):
-                M, y, x_true, _ = instance(seed, stacked=stacked)
-                rows_by_lam[lam].append(measure(M, y, x_true, lam, args.repeat, args.limit))
-        report(
-            f"{name}: M is {M.shape[0]} x 20 ({'O_tau, tau = 20' if stacked else 'M = C'}), "
-            f"s = 6 attacked sensors, {args.instances} instances, medians; "
-            f"K = iterations to reach {TARGET:g} of cvxpy; cvxpy/F > 1 means FISTA is faster",
-            rows_by_lam,
-        )
+    results = measure(
+        instances=args.instances,
+        repeat=args.repeat,
+        lams=tuple(float(v) for v in args.lams.split(",")),
+        limit=args.limit,
+        stacked=not args.no_stacked,
+    )
+    print_results(results, args.instances)
 
 
 if __name__ == "__main__":

@@ -1,0 +1,395 @@
+"""Run the benchmarks and write their table: benchmarks/README.md and the project README's block.
+
+Each ``bench_*.py`` script returns its figures as rows (``rows(quick)``);
+every ratio is a reference against ssecert measured in the same run.  This
+script runs each one in its own Python process (so that one script's BLAS
+threads, Dask clusters and caches do not reach the next), keeps the rows in
+benchmarks/results.json, and writes benchmarks/README.md (what each
+benchmark measures, how to run it, the machine and the full table) and the
+compact table between ``<!-- benchmarks:start -->`` and
+``<!-- benchmarks:end -->`` in the project README.
+
+    python benchmarks/table.py [--quick] [--only NAME ...] [--no-run]
+
+``--only`` reruns the named benchmarks and keeps the others' rows from
+results.json; ``--no-run`` only rewrites the files from results.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import math
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from ssecert._io import atomic_write_text
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+RESULTS = HERE / "results.json"
+# one BLAS thread unless the environment says otherwise: on a shared machine, OpenBLAS
+# threads waiting for a busy core slowed numpy's SVD tenfold or more from run to run
+BLAS_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+START = "<!-- benchmarks:start -->"
+END = "<!-- benchmarks:end -->"
+
+# name: (script, what it measures)
+BENCHMARKS: dict[str, tuple[str, str]] = {
+    "enumeration": (
+        "bench_enumeration.py",
+        "The sparse-observability enumeration (every set of 2s = 6 removed sensors of two "
+        "15-state, 30-sensor plants, no pruning) against a Python loop calling "
+        "`numpy.linalg.matrix_rank` on the stacked observability matrix of the kept sensors, "
+        "one set at a time (timed on a random sample of the sets and extrapolated). The "
+        "eigenspace method against the enumeration on a plant both must work on (distinct "
+        "eigenvalues, no sensor observing the whole state, verdict only), and the eigenspace "
+        "method alone on n = 50, p = 1000.",
+    ),
+    "observers": (
+        "bench_observers.py",
+        "The sparse soft observer simulated for 100 Monte Carlo runs at once against a Python "
+        "loop over the runs (the Lasso paper's Sec. 5.2 set-up); the estimates must be equal.",
+    ),
+    "lmi": (
+        "bench_lmi.py",
+        "The circle-criterion certificate of an elastic-net observer with ssecert's structured "
+        "Lyapunov matrix against the plain formulation (full P, full LMI), both in cvxpy with "
+        "Clarabel; the certified (shrink, step) region map (full run only).",
+    ),
+    "fista": (
+        "bench_fista.py",
+        "FISTA on the partial Lasso (in orthonormal coordinates with adaptive restart, and "
+        "plain, the default) run until it is within 1e-6 of the cvxpy solution, against "
+        "cvxpy with Clarabel; medians over random instances.",
+    ),
+    "analyze": (
+        "bench_analyze.py",
+        "The whole `python -m ssecert analyze SPEC --json OUT` command, start-up and every "
+        "check included (best of a few runs), against a naive Python loop over every set of "
+        "up to 2s removed sensors calling `numpy.linalg.matrix_rank`, on static plants A = I "
+        "with many generic sensors; both must give the same verdict.",
+    ),
+    "distributed": (
+        "bench_distributed.py",
+        "The enumeration on local Dask clusters of 1 and 2 single-thread worker processes "
+        "against in-process (same answer required); the cost model's estimate against the "
+        "measured enumeration; C(60, 10) sensor sets projected onto 64 workers.",
+    ),
+    "computed_once": (
+        "bench_computed_once.py",
+        "What the shared analysis context saves in one `certify` run of the packaged examples "
+        "(the calls it avoids, timed in the same run).",
+    ),
+}
+
+# rows are grouped by their benchmark name, in this order
+ORDER = (
+    "enumeration vs rank loop",
+    "eigenspace vs enumeration",
+    "batched simulation vs loop",
+    "structured LMI vs plain",
+    "LMI region map",
+    "FISTA vs cvxpy",
+    "analyze vs naive loop",
+    "Dask workers vs in-process",
+    "cost model",
+    "cost model projection",
+    "shared analysis context",
+)
+
+CHILD = """
+import json, sys
+module = __import__(sys.argv[1])
+rows = module.rows(quick=sys.argv[2] == "quick")
+with open(sys.argv[3], "w", encoding="utf-8") as handle:
+    json.dump(rows, handle)
+"""
+
+
+def significant(value: float, digits: int = 3) -> str:
+    """``value`` rounded to ``digits`` significant digits, without an exponent."""
+    if value == 0 or not math.isfinite(value):
+        return f"{value:g}"
+    rounded = float(f"{value:.{digits}g}")
+    decimals = max(0, digits - 1 - math.floor(math.log10(abs(rounded))))
+    return f"{rounded:.{decimals}f}"
+
+
+def format_seconds(seconds: float | None) -> str:
+    """A duration with three significant digits and a unit (us, ms, s, min, h)."""
+    if seconds is None:
+        return "-"
+    if not math.isfinite(seconds):
+        return "n/a"
+    for limit, scale, unit in ((1e-3, 1e6, "us"), (1.0, 1e3, "ms"), (120.0, 1.0, "s")):
+        if seconds < limit:
+            return f"{significant(seconds * scale)} {unit}"
+    if seconds < 7200.0:
+        return f"{significant(seconds / 60)} min"
+    return f"{significant(seconds / 3600)} h"
+
+
+def format_ratio(ratio: float | None) -> str:
+    """The ratio as "12x", "3.74x" or "0.423x"; "-" without a reference.
+
+    Three significant digits below 10, so that a cost-model ratio of 2.03
+    does not read as 2.0 (within a factor of 2).
+    """
+    if ratio is None:
+        return "-"
+    if not math.isfinite(ratio):
+        return "n/a"
+    if ratio >= 10:
+        return f"{ratio:.0f}x"
+    return f"{significant(ratio)}x"
+
+
+def ordered(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Rows grouped by benchmark (in ORDER, unknown names last), each group in its order."""
+    rank = {name: i for i, name in enumerate(ORDER)}
+    return sorted(rows, key=lambda r: rank.get(r["benchmark"], len(ORDER)))
+
+
+def _cell(text: Any) -> str:
+    return str(text).replace("|", "\\|").replace("\n", " ")
+
+
+def markdown_table(header: list[str], lines: list[list[str]]) -> str:
+    out = ["| " + " | ".join(header) + " |", "|" + " --- |" * len(header)]
+    out += ["| " + " | ".join(_cell(c) for c in line) + " |" for line in lines]
+    return "\n".join(out) + "\n"
+
+
+def full_table(rows: list[dict[str, Any]]) -> str:
+    header = ["benchmark", "case", "ssecert", "reference", "ratio", "reference is", "note"]
+    lines = [
+        [
+            r["benchmark"],
+            r["case"],
+            format_seconds(r["ssecert"]),
+            format_seconds(r["reference"]),
+            format_ratio(r["ratio"]),
+            r["reference_name"],
+            r["note"],
+        ]
+        for r in ordered(rows)
+    ]
+    return markdown_table(header, lines)
+
+
+def compact_table(rows: list[dict[str, Any]]) -> str:
+    header = ["benchmark", "case", "ssecert", "reference", "ratio"]
+    lines = [
+        [
+            r["benchmark"],
+            r["case"],
+            format_seconds(r["ssecert"]),
+            format_seconds(r["reference"]),
+            format_ratio(r["ratio"]),
+        ]
+        for r in ordered(rows)
+    ]
+    return markdown_table(header, lines)
+
+
+def replace_block(text: str, block: str) -> str:
+    """``text`` with ``block`` between the markers.
+
+    Without the markers, the block is added at the end of the
+    "## Performance" section, or in a new such section before
+    "## References" (or at the end).
+    """
+    marked = f"{START}\n{block.rstrip()}\n{END}"
+    start, end = text.find(START), text.find(END)
+    if start >= 0 and end > start:
+        return text[:start] + marked + text[end + len(END) :]
+    if start >= 0 or end >= 0:
+        raise ValueError(f"the README has only one of {START} and {END}")
+    heading = text.find("\n## Performance\n")
+    if heading >= 0:
+        following = text.find("\n## ", heading + 1)
+        at = following + 1 if following >= 0 else len(text)
+        before = text[:at].rstrip("\n")
+        return before + "\n\n" + marked + "\n" + ("\n" + text[at:] if following >= 0 else "")
+    section = "## Performance\n\n" + marked + "\n"
+    references = text.find("\n## References\n")
+    if references >= 0:
+        return text[: references + 1] + section + "\n" + text[references + 1 :]
+    return text.rstrip("\n") + "\n\n" + section
+
+
+def machine() -> dict[str, Any]:
+    import numpy
+    import scipy
+
+    model = "unknown"
+    try:
+        for line in Path("/proc/cpuinfo").read_text(encoding="utf-8").splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return {
+        "cpus": os.cpu_count(),
+        "cpu_model": model,
+        "blas_threads": os.environ.get("OPENBLAS_NUM_THREADS", "1"),
+        "python": platform.python_version(),
+        "numpy": numpy.__version__,
+        "scipy": scipy.__version__,
+    }
+
+
+def _all_rows(results: dict[str, Any]) -> list[dict[str, Any]]:
+    return [r for name in BENCHMARKS for r in results["benchmarks"].get(name, {}).get("rows", [])]
+
+
+def _runs_line(results: dict[str, Any]) -> str:
+    entries = [results["benchmarks"][n] for n in BENCHMARKS if n in results["benchmarks"]]
+    dates = sorted({e["date"][:10] for e in entries})
+    modes = {bool(e["quick"]) for e in entries}
+    when = dates[0] if len(dates) == 1 else f"{dates[0]} to {dates[-1]}"
+    if modes == {True}:
+        return f"quick run (--quick), {when}"
+    if modes == {False}:
+        return f"full run, {when}"
+    return f"full and quick (--quick) runs, {when}"
+
+
+def compact_block(results: dict[str, Any]) -> str:
+    m = results["machine"]
+    where = (
+        f"{_runs_line(results)}; {m['cpus']} CPUs, {m['cpu_model']}, numpy {m['numpy']}, "
+        f"BLAS threads: {m.get('blas_threads', '?')}"
+    )
+    intro = (
+        f"Generated by `python benchmarks/table.py` ({where}). Ratio = reference / ssecert, "
+        "both timed in the same run: above 1x ssecert is faster. For the cost model, the "
+        "ssecert column is the estimate and the reference the measured time (the target: "
+        "within a factor of 2). What each row "
+        "compares, its notes and how to rerun it: [benchmarks/README.md](benchmarks/README.md)."
+    )
+    return intro + "\n\n" + compact_table(_all_rows(results))
+
+
+def benchmarks_readme(results: dict[str, Any]) -> str:
+    m = results["machine"]
+    parts = [
+        "# Benchmarks\n",
+        "This file is written by `python benchmarks/table.py`; do not edit it by hand. Every "
+        "figure is a ratio against a reference measured in the same run, on the same "
+        "machine: ratio = reference / ssecert, so above 1x ssecert is faster. For the cost "
+        "model rows the ssecert column is the cost model's estimate and the reference the "
+        "measured enumeration, so the ratio is measured / estimate (within a factor of 2 is "
+        "the target). Times are the best of a few runs unless the note says otherwise.\n",
+        "## How to run\n",
+        "```\n"
+        "python benchmarks/table.py            # every benchmark, full sizes; rewrites this file\n"
+        "python benchmarks/table.py --quick    # smaller sizes and repeats, a few minutes\n"
+        "python benchmarks/table.py --only analyze distributed   # rerun some, keep the rest\n"
+        "python benchmarks/table.py --no-run   # rewrite the tables from results.json\n"
+        "```\n",
+        "Each script also runs alone and prints its own text "
+        "(`python benchmarks/bench_enumeration.py --help`). From a source checkout, put it "
+        "first on the path (`PYTHONPATH=. python benchmarks/table.py`). The rows of the last "
+        "run are kept in `benchmarks/results.json`.\n",
+        "## What each benchmark measures\n",
+    ]
+    items = []
+    for name, (script, what) in BENCHMARKS.items():
+        entry = results["benchmarks"].get(name)
+        if entry is None:
+            ran = "not run yet"
+        else:
+            mode = "quick" if entry["quick"] else "full"
+            ran = f"{mode} run on {entry['date'][:10]}, {format_seconds(entry['seconds'])}"
+        items.append(f"- **{name}** (`{script}`; {ran}): {what}\n")
+    total = sum(e["seconds"] for e in results["benchmarks"].values())
+    parts += [
+        "".join(items),
+        "## Machine\n",
+        f"- {m['cpus']} CPUs: {m['cpu_model']} (from /proc/cpuinfo)\n"
+        f"- Python {m['python']}, numpy {m['numpy']}, scipy {m['scipy']}\n"
+        f"- BLAS threads: {m.get('blas_threads', '?')} (`table.py` sets OPENBLAS_NUM_THREADS, "
+        "OMP_NUM_THREADS and MKL_NUM_THREADS to 1 unless they are set: on this shared machine "
+        "OpenBLAS's threads waiting for a busy core made numpy's SVD, and so the eigenspace "
+        "method, many times slower from one run to the next)\n"
+        f"- {_runs_line(results)}; the benchmarks took {format_seconds(total)} in all\n"
+        "- The machine is shared and may be busy with other jobs: absolute times move from "
+        "run to run. The two times of a ratio are measured in the same run, one after the "
+        "other, so a busy machine slows both, though not always equally.\n",
+        "## Table\n",
+        full_table(_all_rows(results)),
+    ]
+    return "\n".join(part.rstrip("\n") + "\n" for part in parts)
+
+
+def run_benchmark(name: str, *, quick: bool) -> dict[str, Any]:
+    """Run one script's rows() in a new Python process; its rows, date and duration."""
+    module = BENCHMARKS[name][0].removesuffix(".py")
+    env = dict(os.environ)
+    for variable in BLAS_VARIABLES:
+        env.setdefault(variable, "1")
+    env["PYTHONPATH"] = os.pathsep.join(
+        [str(ROOT), str(HERE)] + ([env["PYTHONPATH"]] if env.get("PYTHONPATH") else [])
+    )
+    date = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
+    with tempfile.TemporaryDirectory() as folder:
+        out = Path(folder) / "rows.json"
+        start = time.perf_counter()
+        command = [sys.executable, "-c", CHILD, module, "quick" if quick else "full", str(out)]
+        subprocess.run(command, cwd=ROOT, env=env, check=True)
+        seconds = time.perf_counter() - start
+        rows = json.loads(out.read_text(encoding="utf-8"))
+    return {"rows": rows, "seconds": seconds, "date": date, "quick": quick}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="smaller sizes and repeats")
+    parser.add_argument(
+        "--only", nargs="+", choices=list(BENCHMARKS), metavar="NAME", help="run only these"
+    )
+    parser.add_argument(
+        "--no-run",
+        action="store_true",
+        help="run nothing: rewrite the files from benchmarks/results.json",
+    )
+    args = parser.parse_args(argv)
+    results: dict[str, Any] = {"machine": machine(), "benchmarks": {}}
+    if (args.only or args.no_run) and RESULTS.is_file():
+        results = json.loads(RESULTS.read_text(encoding="utf-8"))
+        if not args.no_run:
+            results["machine"] = machine()
+    failed = []
+    for name in [] if args.no_run else args.only or list(BENCHMARKS):
+        print(f"{name}: running {BENCHMARKS[name][0]}", file=sys.stderr, flush=True)
+        try:
+            entry = run_benchmark(name, quick=args.quick)
+        except subprocess.CalledProcessError as exc:
+            print(f"{name}: failed with exit status {exc.returncode}", file=sys.stderr)
+            failed.append(name)
+            continue
+        results["benchmarks"][name] = entry
+        print(f"{name}: {format_seconds(entry['seconds'])}", file=sys.stderr, flush=True)
+    if not results["benchmarks"]:
+        return 1
+    atomic_write_text(RESULTS, json.dumps(results, indent=1) + "\n")
+    atomic_write_text(HERE / "README.md", benchmarks_readme(results))
+    readme = ROOT / "README.md"
+    text = readme.read_text(encoding="utf-8")
+    atomic_write_text(readme, replace_block(text, compact_block(results)))
+    print(compact_table(_all_rows(results)))
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
