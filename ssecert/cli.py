@@ -543,7 +543,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``ssecert`` command; returns the exit status."""
     from .budget import ResourceLimitError
     from .design.gains import GainError
-    from .parallel import DaskUnavailable
+    from .parallel import ChunkError, DaskUnavailable
     from .spec import SpecError, one_line
 
     parser = _build_parser()
@@ -576,6 +576,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except DaskUnavailable as exc:
         option = "--scheduler" if getattr(args, "scheduler", None) else "--workers"
         sys.stderr.write(f"ssecert: error: {option}: {one_line(str(exc))}\n")
+        return EXIT_BAD_INPUT
+    except ChunkError as exc:  # a simulation chunk failed twice on the workers
+        sys.stderr.write(f"ssecert: error: {one_line(str(exc))}\n")
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         sys.stderr.write("ssecert: interrupted\n")

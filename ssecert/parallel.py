@@ -79,11 +79,15 @@ def dask_client(address: str | None = None, *, workers: int | None = None) -> It
 def map_ordered(
     func: Callable[..., Any], items: Sequence[Any], client: Any | None = None
 ) -> list[Any]:
-    """[func(item) for item in items], on Dask workers when a client is given."""
+    """[func(item) for item in items], on Dask workers when a client is given (each item
+    retried once; ``ChunkError`` when one fails twice)."""
     if client is None:
         return [func(item) for item in items]
-    futures = client.map(func, list(items), pure=False)
-    return client.gather(futures)
+    return map_chunks(_apply, func, items, client)
+
+
+def _apply(func: Callable[..., Any], item: Any) -> Any:
+    return func(item)
 
 
 class ChunkError(RuntimeError):
@@ -95,8 +99,10 @@ class ChunkError(RuntimeError):
         The chunk that failed (for an enumeration, its range of ranks).
     """
 
-    def __init__(self, chunk: Any, cause: BaseException) -> None:
-        super().__init__(f"chunk {chunk!r} failed twice on the Dask workers: {cause!r}")
+    def __init__(self, chunk: Any, cause: BaseException, index: int = 0, count: int = 1) -> None:
+        super().__init__(
+            f"part {index + 1} of {count} of the work failed twice on the Dask workers: {cause!r}"
+        )
         self.chunk = chunk
         self.cause = cause
 
@@ -134,7 +140,7 @@ def map_chunks(
         for future in as_completed(futures):
             i = index_of[future.key]
             if future.status == "error":
-                raise ChunkError(chunks[i], future.exception())
+                raise ChunkError(chunks[i], future.exception(), i, len(chunks))
             results[i] = future.result()
             if on_result is not None:
                 on_result(i, results[i])

@@ -192,3 +192,38 @@ def test_an_unreachable_scheduler_is_a_clear_error(tmp_path, capsys, monkeypatch
     err = capsys.readouterr().err
     assert "--scheduler: no Dask scheduler answers at 'tcp://127.0.0.1:9'" in err
     assert "internal error" not in err
+
+
+def test_a_simulation_chunk_is_retried_once_then_reported(monkeypatch, tmp_path):
+    from ssecert.examples import load_example
+    from ssecert.observers import build_observer
+    from ssecert.parallel import ChunkError
+    from ssecert.simulation import engine
+
+    spec = load_example("ugv")
+    design = build_observer(spec.system, spec.observer)
+    scenario = spec.scenarios[0]
+    expected = engine.simulate_scenario(design, scenario, runs=8, steps=20, chunk_runs=2)
+    chunk = engine._chunk
+
+    def once(args):
+        mark = tmp_path / f"failed-{args[2][0]}"  # the chunk's first run index
+        if not mark.exists():
+            mark.write_text("")
+            raise RuntimeError("worker lost")
+        return chunk(args)
+
+    monkeypatch.setattr(engine, "_chunk", once)
+    with _in_process_cluster() as client:
+        again = engine.simulate_scenario(
+            design, scenario, runs=8, steps=20, chunk_runs=2, client=client
+        )
+    assert len(list(tmp_path.glob("failed-*"))) == 4
+    np.testing.assert_array_equal(again.relative_error, expected.relative_error)
+
+    def always(args):
+        raise RuntimeError("worker lost")
+
+    monkeypatch.setattr(engine, "_chunk", always)
+    with _in_process_cluster() as client, pytest.raises(ChunkError, match="of 4 of the work"):
+        engine.simulate_scenario(design, scenario, runs=8, steps=20, chunk_runs=2, client=client)
