@@ -17,7 +17,7 @@ import re
 import tomllib
 import warnings
 import zipfile
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from typing import Any
 
 import numpy as np
@@ -156,16 +156,10 @@ def _read_npz(raw: bytes, source: str) -> dict[str, Any]:
         members = archive.namelist()
     except Exception as exc:
         raise SpecError(f"{source}: cannot read the .npz file: {_reason(exc)}") from None
-    keys = []
+    keys: list[str] = []
     for member in members:
         key = member[:-4] if member.endswith(".npy") else member
-        if key not in _SYSTEM_KEYS:
-            hint = suggest(key, _SYSTEM_KEYS)
-            raise spec_error(
-                source, key, f"unknown variable{hint}; expected A, C and optionally sensors"
-            )
-        if key in keys:
-            raise spec_error(source, key, "the archive holds this variable twice")
+        _check_variable(source, key, keys, "the archive")
         keys.append(key)
     data: dict[str, Any] = {}
     for member, key in zip(members, keys):
@@ -253,15 +247,9 @@ def _read_mat(raw: bytes, source: str) -> dict[str, Any]:
         raise SpecError(f"{source}: cannot read the .mat file: {exc}") from None
     except Exception as exc:
         raise SpecError(f"{source}: cannot read the .mat file: {_reason(exc)}") from None
-    seen = set()
+    seen: set[str] = set()
     for name, class_name, shape in found:
-        if name not in _SYSTEM_KEYS:
-            hint = suggest(name, _SYSTEM_KEYS)
-            raise spec_error(
-                source, name, f"unknown variable{hint}; expected A, C and optionally sensors"
-            )
-        if name in seen:
-            raise spec_error(source, name, "the file holds this variable twice")
+        _check_variable(source, name, seen, "the file")
         seen.add(name)
         numeric = class_name in ("double", "single") or class_name.startswith(("int", "uint"))
         if name != "sensors" and not numeric:
@@ -390,3 +378,14 @@ def _json_int(text: str) -> int | _TooLongInteger:
     if len(text) > 40:
         return _TooLongInteger(text)
     return int(text)
+
+
+def _check_variable(source: str, name: str, seen: Collection[str], holder: str) -> None:
+    """SpecError unless ``name`` is a system variable (A, C, sensors) not already read."""
+    if name not in _SYSTEM_KEYS:
+        hint = suggest(name, _SYSTEM_KEYS)
+        raise spec_error(
+            source, name, f"unknown variable{hint}; expected A, C and optionally sensors"
+        )
+    if name in seen:
+        raise spec_error(source, name, f"{holder} holds this variable twice")

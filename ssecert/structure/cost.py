@@ -121,6 +121,14 @@ def workers_for(seconds: float, budget: float | None) -> int | None:
     return max(1, math.ceil(seconds / budget))
 
 
+def _levels_seconds(q: int, n: int, first: int, target: int) -> float:
+    """Estimated seconds of the levels ``first`` to ``target`` (at least level ``first``); the
+    sets closest to breaking are ranked on level ``target``."""
+    return sum(
+        level_seconds(q, k, n, critical=(k == target)) for k in range(first, max(target, first) + 1)
+    )
+
+
 def rounded_seconds(seconds: float) -> float:
     """``seconds`` to three significant digits, as the evidence records times."""
     return float(f"{seconds:.3g}")
@@ -131,9 +139,8 @@ def verdict_cost(
 ) -> dict[str, Any]:
     """The estimated cost of the levels 0 to ``target`` (those that decide the verdict) of
     removals of q sensors, on the client's threads, and the workers the time budget needs."""
-    levels = range(max(target, 0) + 1)
-    sets = count_subsets(q, levels)
-    seconds = sum(level_seconds(q, k, n, critical=(k == target)) for k in levels)
+    sets = count_subsets(q, range(max(target, 0) + 1))
+    seconds = _levels_seconds(q, n, 0, target)
     threads = worker_threads(client)
     record: dict[str, Any] = {
         "sets_for_verdict": sets,
@@ -154,7 +161,7 @@ def cost_of_the_rest(
     here, as the end of the refusal's sentence; empty past the verdict's level."""
     if k > target:
         return ""
-    seconds = sum(level_seconds(q, j, n, critical=(j == target)) for j in range(k, target + 1))
+    seconds = _levels_seconds(q, n, k, target)
     threads = worker_threads(client)
     about = rounded_seconds(seconds / threads)
     text = f" (the rest of the verdict's sets would take about {about:g} s here"
