@@ -6,6 +6,7 @@ import datetime as _dt
 import importlib.metadata
 import platform
 import sys
+import time
 from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
@@ -16,6 +17,7 @@ from .context import AnalysisContext, sparse_key
 from .observers import get_kind, observer_kinds
 from .results import Certificate, Check, Verdict
 from .spec import Spec
+from .structure.cost import rounded_seconds
 from .structure.irrepresentable import irrepresentable
 from .structure.observability import observability
 from .structure.sparse import DEFAULT_MAX_SETS, DEFAULT_TIME_BUDGET, sparse_observability
@@ -195,12 +197,15 @@ def analyze(
     """
     tol = Tolerances.check(tolerances)
     system = spec.system
+    clock = _Clock()
     # shared by the structural checks, which decide in power-of-two units
     work, alpha = unit_normalized(system)
     eig = eigen_clusters(work.A, tolerances=tol, unit=alpha)
+    clock.lap("eigenvalues", None)
+    sparse_timing: dict[str, float] = {}
     checks: list[Check] = [
-        observability(system, tolerances=tol, eigen=eig),
-        sparse_observability(
+        clock.lap("observability", observability(system, tolerances=tol, eigen=eig)),
+        clock.lap("sparse_observability", sparse_observability(
             system,
             spec.max_attacked,
             method=method,
@@ -212,8 +217,9 @@ def analyze(
             eigen=eig,
             time_budget=time_budget,
             client=client,
-        ),
-        irrepresentable(
+            timing=sparse_timing,
+        )),
+        clock.lap("irrepresentable", irrepresentable(
             system,
             spec.max_attacked,
             horizon=spec.horizon,
@@ -223,20 +229,23 @@ def analyze(
             budget=budget,
             client=client,
             time_budget=time_budget,
-        ),
-    ]
+        )),
+    ]  # fmt: skip
     if spec.observer is not None:
         from .stability.checks import observer_checks
 
         checks.extend(
-            observer_checks(
-                system,
-                spec.observer,
-                observability=checks[0],
-                seed=seed,
-                budget=budget,
-                context=context,
-                tolerances=tol,
+            clock.lap(
+                "observer_checks",
+                observer_checks(
+                    system,
+                    spec.observer,
+                    observability=checks[0],
+                    seed=seed,
+                    budget=budget,
+                    context=context,
+                    tolerances=tol,
+                ),
             )
         )
     checks, notes = reconcile(checks)
@@ -244,7 +253,33 @@ def analyze(
         context.put(sparse_key(spec.max_attacked), checks[1])
     notes.extend(_short_horizon_notes(spec, checks[0]))
     meta = _meta(spec, seed, budget, notes)
+    meta["timings"] = clock.record(sparse_timing)
     return Certificate(system=system, checks=tuple(checks), meta=meta)
+
+
+class _Clock:
+    """Wall-clock seconds of each step of a run, for the certificate's ``meta.timings``."""
+
+    def __init__(self) -> None:
+        self.start = self.last = time.monotonic()
+        self.seconds: dict[str, float] = {}
+
+    def lap(self, name: str, result: Any) -> Any:
+        """Record the seconds since the previous lap under ``name``; return ``result``."""
+        now = time.monotonic()
+        self.seconds[name] = now - self.last
+        self.last = now
+        return result
+
+    def record(self, sparse: dict[str, float]) -> dict[str, float]:
+        """Seconds of each step and of the whole run (``analyze``), and the sparse-observability
+        check's split into deciding the verdict and refining max_removable past it."""
+        out = {"analyze": rounded_seconds(time.monotonic() - self.start)}
+        out.update((name, rounded_seconds(t)) for name, t in self.seconds.items())
+        if sparse:
+            out["sparse_observability.to_verdict"] = rounded_seconds(sparse["seconds_to_verdict"])
+            out["sparse_observability.refinement"] = rounded_seconds(sparse["refinement_seconds"])
+        return out
 
 
 def _relay(

@@ -22,7 +22,6 @@ import warnings
 from collections.abc import Sequence
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from .._validation import as_float_option
 from ..system import System
@@ -57,6 +56,9 @@ __all__ = [
 def _match_poles(got: np.ndarray, want: np.ndarray, scale: float) -> tuple[float, np.ndarray]:
     """Largest distance after optimally pairing computed and requested poles,
     and the per-pole tolerance allowing for repeated poles."""
+    # scipy.optimize is imported here: it is a quarter of a second of every command's start
+    from scipy.optimize import linear_sum_assignment
+
     cost = np.abs(got[:, None] - want[None, :])
     rows, cols = linear_sum_assignment(cost)
     dist = cost[rows, cols]

@@ -3,10 +3,14 @@
 A level of the enumeration (every removal of k of the q screened sensors)
 costs two things: the precomputed partial sums of its m smallest sensors
 (``_combinatorics.level_split``: C(q, m) matrices of n x n, built by
-broadcast additions), and one addition and one Cholesky screening per set.
-Both rates are measured once per process and state dimension n on
-synthetic matrices of the same shape (a few tens of milliseconds), so the
-estimate follows this machine, its BLAS and its load.
+broadcast additions), and the work per set (its sum, its Cholesky
+screening, and the share of each block's bookkeeping).  Both rates are
+measured once per process and state dimension n: the partial sums on
+synthetic matrices, the work per set by scanning a small real level of
+synthetic sensors (tens of thousands of sets, about a tenth of a second),
+with and without the ranking of the sets closest to breaking that the
+verdict's level does.  The estimate so follows this machine, its BLAS and
+its load, and every overhead of the enumeration's own loop.
 
 The estimate is what the enumeration records (``cost_estimate`` in the
 sparse-observability evidence, beside the time it took: ``verdict_cost``),
@@ -26,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from ..parallel import worker_threads
+from ..tolerances import Tolerances
 from ._combinatorics import (
     DEFAULT_CHUNK_BYTES,
     _level,
@@ -33,6 +38,7 @@ from ._combinatorics import (
     count_subsets,
     level_split,
 )
+from ._level_scan import _LevelTask, _scan_range
 
 __all__ = [
     "Rates",
@@ -44,9 +50,8 @@ __all__ = [
     "rounded_seconds",
 ]
 
-# the sets closest to breaking are ranked on the level that decides the verdict (argsort of
-# the pivots and the kept sets of each block's best): measured about a third more per set
-CRITICAL_OVERHEAD = 1.35
+# seconds of screening the calibration's small level aims at (each of its four runs takes about two to three times this)
+CALIBRATION_SECONDS = 0.01
 
 
 @dataclass(frozen=True)
@@ -61,14 +66,23 @@ class Rates:
         enumeration's size).
     per_element : float
         Seconds per matrix entry of the precomputed partial sums.
+    critical_factor : float
+        How much more a set costs on the level that decides the verdict,
+        where the sets closest to breaking are ranked too (at least 1).
     """
 
     n: int
     per_set: float
     per_element: float
+    critical_factor: float = 1.0
 
     def to_dict(self) -> dict[str, Any]:
-        return {"n": self.n, "seconds_per_set": self.per_set, "seconds_per_entry": self.per_element}
+        return {
+            "n": self.n,
+            "seconds_per_set": self.per_set,
+            "seconds_per_entry": self.per_element,
+            "critical_factor": self.critical_factor,
+        }
 
 
 def _best_of(repeats: int, run: Any) -> float:
@@ -82,24 +96,64 @@ def _best_of(repeats: int, run: Any) -> float:
 
 @functools.lru_cache(maxsize=64)
 def calibrate(n: int) -> Rates:
-    """Measure the two rates for n x n Gramians (cached per process and n)."""
+    """Measure the rates for n x n Gramians (cached per process and n)."""
     rng = np.random.default_rng(0)
+    per_element = _partial_sums_rate(n, rng)
     count = max(8, DEFAULT_CHUNK_BYTES // (8 * n * n))
     X = rng.standard_normal((count, n, n))
     # symmetric and diagonally dominant, so positive definite: built in O(n^2) per matrix
     gramians = X + X.transpose(0, 2, 1) + 2.0 * n * np.eye(n)
     shift = np.eye(n)
     out = np.empty_like(gramians)
-    per_set = _best_of(2, lambda: cholesky_screen(gramians + shift, 0.0, False, out)) / count
-    # partial sums of m = 3 of q items, about 2e6 entries whatever n (beyond the caches, as
-    # the levels that cost anything are)
+    screen = _best_of(2, lambda: cholesky_screen(gramians + shift, 0.0, False, out)) / count
+    plain, critical = _small_level_rates(n, screen, per_element, rng)
+    return Rates(n, plain, per_element, max(1.0, critical / plain))
+
+
+def _partial_sums_rate(n: int, rng: np.random.Generator) -> float:
+    """Seconds per entry of the partial sums of m = 3 of q items, about 2e6 entries whatever n
+    (beyond the caches, as the levels that cost anything are)."""
     q = 3
     while math.comb(q + 1, 3) * n * n <= 2_000_000:
         q += 1
     items = rng.standard_normal((q, n, n))
     entries = sum(math.comb(q, j) for j in range(4)) * n * n
-    per_element = _best_of(2, lambda: _level(items, shift, -1.0, 3)) / entries
-    return Rates(n, per_set, per_element)
+    return _best_of(2, lambda: _level(items, np.eye(n), -1.0, 3)) / entries
+
+
+def _small_level_rates(
+    n: int, screen: float, per_element: float, rng: np.random.Generator
+) -> tuple[float, float]:
+    """Seconds per set of a real level scan (blocks, sums, screening, bookkeeping) of synthetic
+    sensors, without and with the ranking of the sets closest to breaking.
+
+    The level removes k of q = 24 sensors, k chosen for about
+    ``CALIBRATION_SECONDS`` of screening; each sensor observes enough of the
+    state that every kept set observes all of it, as in the levels that
+    cost anything (a set that fails the screening is decided apart).
+    """
+    q = 24
+    wanted = CALIBRATION_SECONDS / max(screen, 1e-12)
+    k = next((k for k in range(1, q // 2 + 1) if math.comb(q, k) >= wanted), q // 2)
+    rank = min(n, max(1, math.ceil(2 * n / (q - k))))
+    P = np.zeros((q, n, n))
+    for i in range(q):
+        P[i, :rank] = np.linalg.qr(rng.standard_normal((n, rank)))[0].T
+    proj = np.einsum("qkn,qkm->qnm", P, P)
+    tol = Tolerances()
+    shift = tol.screen_rtol * q
+    sets = math.comb(q, k)
+    partial = sum(math.comb(q, j) for j in range(level_split(q, k, 8 * n * n) + 1)) * n * n
+    rates = []
+    for critical in (False, True):
+        task = _LevelTask(
+            P, np.full(q, rank), proj, proj.sum(axis=0) - shift * np.eye(n), shift, k,
+            np.arange(q), np.arange(0), tol, critical, np.zeros(q),
+        )  # fmt: skip
+        # one run, as the enumeration makes one pass (a second would find warm memory)
+        seconds = _best_of(1, functools.partial(_scan_range, task, (0, sets)))
+        rates.append(max(seconds - partial * per_element, 0.5 * seconds) / sets)
+    return rates[0], rates[1]
 
 
 def level_seconds(q: int, k: int, n: int, *, critical: bool = False) -> float:
@@ -109,7 +163,7 @@ def level_seconds(q: int, k: int, n: int, *, critical: bool = False) -> float:
     rates = calibrate(n)
     m = level_split(q, k, 8 * n * n)
     entries = sum(math.comb(q, j) for j in range(m + 1)) * n * n
-    per_set = rates.per_set * (CRITICAL_OVERHEAD if critical else 1.0)
+    per_set = rates.per_set * (rates.critical_factor if critical else 1.0)
     return math.comb(q, k) * per_set + entries * rates.per_element
 
 

@@ -24,7 +24,8 @@ from .._linalg import (
 )
 from ..system import System
 from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances, classify
-from .enumeration import _CRITICAL, _distance, _Outcome
+from ._level_scan import _CRITICAL
+from .enumeration import _distance, _Outcome
 
 __all__: list[str] = []
 

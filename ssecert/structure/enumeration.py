@@ -31,18 +31,20 @@ from .._linalg import (
     EigenAnalysis,
     SensorSubspaces,
     sensor_subspaces,
-    stacked_rank,
 )
 from ..parallel import ChunkError, map_ranges, rank_ranges
 from ..system import System
-from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances
-from ._combinatorics import cholesky_screen, colex_blocks, count_subsets, level_split
+from ..tolerances import NONZERO, Tolerances
+from ._combinatorics import (
+    count_subsets,
+    level_split,
+)
+from ._level_scan import _Level, _LevelTask, _scan_range
 from .cost import cost_of_the_rest, rounded_seconds, verdict_cost
 from .observability import pbh_margins
 
 __all__: list[str] = []
 
-_CRITICAL = 8  # critical sets re-checked per level
 
 Progress = Callable[[int, int], None]
 
@@ -63,6 +65,7 @@ class _Outcome:
     problems: list[str] = field(default_factory=list)
     critical: list[tuple[int, ...]] = field(default_factory=list)  # kept-sensor sets
     details: dict[str, Any] = field(default_factory=dict)
+    refinement_seconds: float = 0.0  # spent past the verdict (not in the evidence: it varies)
 
 
 def _enumeration(
@@ -109,16 +112,20 @@ def _enumeration(
     cost = _verdict_cost(rest.size, n, scan.target, client, time_budget)
     if cost is not None:
         out.details["cost_estimate"] = cost
+    refining = 0.0  # seconds spent on the levels past the verdict's
     for k in range(rest.size + 1):
         if scan.past_time_budget(k, time_budget) or scan.past_set_budget(k, max_sets, time_budget):
             break
+        began = time.monotonic()
         level = scan.level(k)
-        if level is None:
-            break
-        if cost is not None and k == max(scan.target, 0):
+        if level is not None and cost is not None and k == max(scan.target, 0):
             cost["measured_seconds_for_verdict"] = rounded_seconds(time.monotonic() - start)
-        if not scan.go_on(k, level):
+        going = level is not None and scan.go_on(k, level)
+        if k > max(scan.target, 0):
+            refining += time.monotonic() - began
+        if not going:
             break
+    out.refinement_seconds = refining
     if out.status == "lower_bound" and scan.undecided is not None:
         out.max_removable = scan.undecided - 1
     out.critical = [kept for _, _, kept in scan.best_critical]
@@ -421,40 +428,6 @@ def _resolve_failures(
     return None, None, within
 
 
-@dataclass
-class _Level:
-    checked: int = 0
-    failures: dict[tuple[int, ...], np.ndarray] = field(default_factory=dict)
-    borderline: int = 0
-    # (proxy, colex rank, kept sensors) of the sets closest to breaking: the smallest by
-    # (proxy, rank), whatever the split of the level into ranges
-    critical: list[tuple[float, int, tuple[int, ...]]] = field(default_factory=list)
-
-    def merge(self, other: _Level) -> None:
-        """Add the findings of another range of the same level."""
-        self.checked += other.checked
-        self.failures.update(other.failures)
-        self.borderline += other.borderline
-        self.critical = sorted(self.critical + other.critical)[:_CRITICAL]
-
-
-@dataclass(frozen=True)
-class _LevelTask:
-    """What every range of one level's sets reads (sent once to Dask workers)."""
-
-    P: np.ndarray
-    ranks: np.ndarray
-    proj: np.ndarray
-    shifted: np.ndarray  # sum of all projectors minus the screening shift
-    shift: float
-    k: int
-    rest: np.ndarray
-    full: np.ndarray
-    tol: Tolerances
-    critical: bool
-    errors: np.ndarray
-
-
 # a level is split over Dask workers in ranges of at least this many sets, and of at least
 # this many times the precomputed partial sums every range recomputes
 MIN_CHUNK_SETS = 200_000
@@ -468,45 +441,6 @@ def _chunks(task: _LevelTask, client: Any | None) -> list[tuple[int, int]]:
     m = level_split(q, task.k, 8 * n * n)
     smallest = max(MIN_CHUNK_SETS, _CHUNK_OVER_LEVEL * math.comb(q, m))
     return rank_ranges(math.comb(q, task.k), client, smallest)
-
-
-def _scan_range(
-    task: _LevelTask, ranks: tuple[int, int], progress: Progress | None = None
-) -> _Level:
-    """Check the removals whose colex ranks lie in ``ranks`` (one chunk of a level)."""
-    P, proj, rest, full, tol = task.P, task.proj, task.rest, task.full, task.tol
-    n = proj.shape[-1]
-    q = rest.size
-    level = _Level()
-    candidates: list[tuple[float, int, tuple[int, ...]]] = []
-    buffer = np.empty((0, n, n))
-    lo, hi = ranks
-    for block in colex_blocks(proj, task.shifted, task.k, start=lo, stop=hi):
-        if buffer.shape[0] < len(block):
-            buffer = np.empty((len(block), n, n))
-        ok, proxy = cholesky_screen(block.matrices, task.shift, task.critical, buffer[: len(block)])
-        if task.critical:
-            for j in np.argsort(proxy, kind="stable")[:_CRITICAL]:
-                dropped = set(rest[block.subsets(np.array([j]))[0]].tolist())
-                kept = tuple(int(i) for i in rest if i not in dropped)
-                candidates.append((float(proxy[j]), block.offset + int(j), kept))
-            candidates.sort()
-            del candidates[_CRITICAL:]
-        bad = np.flatnonzero(~ok)
-        if bad.size:
-            subsets = block.subsets(bad)
-            codes, _, nulls = _refine(P, task.ranks, subsets, q, tol, task.errors)
-            for row, code, zvec in zip(subsets, codes, nulls):
-                removed = tuple(sorted(full.tolist() + rest[row].tolist()))
-                if code == ZERO:
-                    level.failures[removed] = zvec
-                elif code == BORDERLINE:
-                    level.borderline += 1
-        level.checked += len(block)
-        if progress is not None:
-            progress(level.checked, hi - lo)
-    level.critical = candidates
-    return level
 
 
 def _scan_level(
@@ -549,44 +483,3 @@ def _scan_level(
     for part in map_ranges(_scan_range, task, chunks, client, progress):
         level.merge(part)
     return level
-
-
-def _refine(
-    P: np.ndarray,
-    ranks: np.ndarray,
-    removed: np.ndarray,
-    q: int,
-    tol: Tolerances,
-    errors: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Exact rank decision for the kept sensors of each removed subset.
-
-    The tolerance adds the basis errors of the kept sensors: a sum of
-    subspaces that is rank deficient in exact arithmetic shows a smallest
-    singular value up to about their sum.
-    """
-    n = P.shape[-1]
-    codes = np.empty(removed.shape[0], dtype=np.int8)
-    rel = np.empty(removed.shape[0])
-    nulls = np.zeros((removed.shape[0], n))
-    for start in range(0, removed.shape[0], 256):
-        chunk = removed[start : start + 256]
-        keep = np.ones((chunk.shape[0], q), dtype=bool)
-        np.put_along_axis(keep, chunk, False, axis=1)
-        kept = [np.flatnonzero(row) for row in keep]
-        width = max((len(k) for k in kept), default=0)
-        if width == 0:
-            codes[start : start + len(chunk)] = ZERO
-            nulls[start : start + len(chunk), 0] = 1.0
-            continue
-        idx = np.array([np.pad(k, (0, width - len(k)), constant_values=-1) for k in kept])
-        stacks = P[idx]  # (N, width, n, n)
-        stacks[idx < 0] = 0.0
-        stacks = stacks.reshape(len(chunk), width * n, n)
-        rows = int(max(ranks[k].sum() for k in kept))
-        data_error = np.array([errors[k].sum() for k in kept])
-        c, r, z = stacked_rank(stacks, tolerances=tol, rows=max(rows, 1), data_error=data_error)
-        codes[start : start + len(chunk)] = c
-        rel[start : start + len(chunk)] = r
-        nulls[start : start + len(chunk)] = z
-    return codes, rel, nulls
