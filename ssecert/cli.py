@@ -27,6 +27,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, NoReturn
 
+from ._cli_audit import add_audit_parser, cmd_audit
 from ._cli_options import (
     _add_analysis_options,
     _add_budget_options,
@@ -169,6 +170,7 @@ def _build_parser() -> argparse.ArgumentParser:
         description="List packaged example specs, or print one.",
     )
     examples.add_argument("name", nargs="?", help="example to print")
+    add_audit_parser(sub)
     return parser
 
 
@@ -564,6 +566,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _cmd_examples(args)
         if args.command == "simulate":
             return _cmd_simulate(args)
+        if args.command == "audit":
+            return cmd_audit(args, _output_folder, _write, UsageError)
         raise UsageError(f"unknown command {args.command!r}")  # pragma: no cover
     except (UsageError, SpecError, ResourceLimitError) as exc:
         sys.stderr.write(f"ssecert: error: {one_line(str(exc))}\n")
