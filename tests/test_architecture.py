@@ -47,7 +47,14 @@ LAYERS = {
     3: ("ssecert.structure", "ssecert.stability", "ssecert.simulation", "ssecert.estimators"),
     4: ("ssecert.analyze", "ssecert.certify"),
     5: ("ssecert.report",),
-    6: ("ssecert.cli", "ssecert._cli_options", "ssecert.testing", "ssecert.__main__", "ssecert"),
+    6: (
+        "ssecert.cli",
+        "ssecert._cli_options",
+        "ssecert._cli_audit",
+        "ssecert.testing",
+        "ssecert.__main__",
+        "ssecert",
+    ),
 }
 
 

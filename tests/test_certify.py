@@ -69,3 +69,20 @@ def test_results_render_in_jupyter():
     assert "max_removable = 1" in card
     full = certify(load_example("notes-example-2"), simulate=False)._repr_html_()
     assert "why-not-correctable" in full and "<html" not in full
+
+
+def test_the_run_times_are_in_meta_timings_only(tmp_path):
+    cert = analyze(load_example("random-n15-p30"), time_budget=0.5)
+    timings = cert.meta["timings"]
+    steps = ("eigenvalues", "observability", "sparse_observability", "irrepresentable")
+    assert all(timings[step] >= 0 for step in steps)
+    split = timings["sparse_observability.to_verdict"] + timings["sparse_observability.refinement"]
+    assert (
+        abs(split - timings["sparse_observability"])
+        <= 0.01 * timings["sparse_observability"] + 1e-3
+    )
+    assert timings["analyze"] >= sum(timings[step] for step in steps) * 0.99
+    # certify keeps them beside the solver and simulation times it moves to meta.timings
+    assert main(["certify", "ugv", "--out", str(tmp_path), "--seed", "0"]) == 1
+    doc = json.loads((tmp_path / "ugv.json").read_text())
+    assert "observer_checks" in doc["meta"]["timings"] and "timing" not in doc["meta"]

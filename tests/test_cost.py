@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from ssecert import System
-from ssecert.structure import enumeration
+from ssecert.structure import enumeration, sparse
 from ssecert.structure.cost import calibrate, level_seconds, workers_for
 from ssecert.structure.sparse import sparse_observability
 
@@ -144,3 +144,26 @@ def test_recording_the_versions_imports_no_library():
     )
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert run.stdout.split() == ["True", "False", "False"]
+
+
+def test_calibration_scans_a_small_level_with_and_without_the_ranking():
+    rates = calibrate(7)
+    assert rates.per_set > 0 and rates.per_element > 0 and rates.critical_factor >= 1.0
+    assert rates.to_dict()["critical_factor"] == rates.critical_factor
+
+
+def test_auto_compares_calibrated_seconds_when_both_methods_cost(monkeypatch):
+    monkeypatch.setattr(sparse, "SECONDS_MODEL_ABOVE", 0.0)
+    A = np.diag([1.0, 1.0, 1.0, 0.5, 0.5, 0.25])  # eigenspaces of dimension 3, 2 and 1
+    C = np.random.default_rng(3).standard_normal((14, 6))
+    check = sparse_observability(System(A, C), 2, time_budget=None)
+    seconds = check.evidence["cost_estimates_seconds"]
+    assert set(seconds) == {"eigenspace", "enumeration"} and min(seconds.values()) > 0
+    first = check.evidence["methods_tried"][0]["method"]
+    assert first == min(seconds, key=seconds.get)
+    assert check.verdict.value == "holds"
+
+
+def test_small_questions_are_ordered_by_flops_without_calibrating():
+    check = sparse_observability(_generic(4, 10), 1, time_budget=None)
+    assert "cost_estimates_seconds" not in check.evidence

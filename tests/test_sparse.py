@@ -312,3 +312,36 @@ def test_time_budget_never_cuts_a_failing_verdict_short():
 def test_time_budget_is_validated():
     with pytest.raises(ValueError, match="time_budget must be >= 0"):
         sparse_observability(System(np.eye(2), np.eye(2)), 0, time_budget=-1.0)
+
+
+class _Block:
+    """A block of a level for ``_keep_closest``: ranks from ``offset``, subsets by row."""
+
+    def __init__(self, offset: int, subsets: np.ndarray) -> None:
+        self.offset, self._subsets = offset, subsets
+
+    def subsets(self, rows: np.ndarray) -> np.ndarray:
+        return self._subsets[rows]
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_the_closest_sets_kept_block_by_block_are_the_smallest_overall(seed):
+    from ssecert.structure._level_scan import _CRITICAL, _keep_closest
+
+    rng = np.random.default_rng(seed)
+    q, k = 9, 3
+    rest = np.arange(q)
+    candidates: list = []
+    everything = []
+    offset = 0
+    for _ in range(rng.integers(1, 6)):
+        size = int(rng.integers(1, 30))
+        # few distinct values, so that ties between and within blocks are common
+        proxy = rng.integers(0, 4, size).astype(float)
+        subsets = np.array([np.sort(rng.choice(q, k, replace=False)) for _ in range(size)])
+        _keep_closest(candidates, _Block(offset, subsets), proxy, rest)
+        for j in range(size):
+            kept = tuple(int(i) for i in rest if i not in set(subsets[j].tolist()))
+            everything.append((float(proxy[j]), offset + j, kept))
+        offset += size
+    assert candidates == sorted(everything)[:_CRITICAL]

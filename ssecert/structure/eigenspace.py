@@ -10,6 +10,7 @@ cross-checks them by enumeration.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 import time
@@ -312,3 +313,36 @@ def _hyperplanes(
         candidates = [(len(support), support, V @ u)]
     candidates.sort(key=lambda c: (c[0], c[1]))
     return candidates[:1], critical, "", total
+
+
+@functools.lru_cache(maxsize=64)
+def _hyperplane_rate(p: int, g: int) -> float:
+    """Seconds per hyperplane of the search over an eigenspace of dimension g seen by p sensors,
+    measured once per process on a synthetic chunk (the index tuples built as the search builds
+    them, then ``_chunk_view``)."""
+    rng = np.random.default_rng(0)
+    W = rng.standard_normal((p, g))
+    combos = itertools.combinations(range(p), g - 1)
+    count = min(2048, math.comb(p, g - 1))
+
+    def chunk() -> None:
+        idx = np.array(list(itertools.islice(combos, count)), dtype=np.int64)
+        _chunk_view(W, idx.reshape(-1, g - 1), 1e-12, Tolerances())
+
+    best = math.inf
+    for _ in range(2):
+        combos = itertools.combinations(range(p), g - 1)
+        start = time.perf_counter()
+        chunk()
+        best = min(best, time.perf_counter() - start)
+    return best / max(count, 1)
+
+
+def search_seconds(p: int, eig: EigenAnalysis) -> float:
+    """Estimated seconds of the eigenspace method's hyperplane searches on this machine (at most
+    C(p, g - 1) hyperplanes for each eigenspace of dimension g > 1)."""
+    return sum(
+        math.comb(p, c.geometric - 1) * _hyperplane_rate(p, c.geometric)
+        for c in eig.clusters
+        if c.geometric > 1
+    )

@@ -53,7 +53,8 @@ from ..tolerances import Tolerances
 from ._breaking_set import _failure
 from ._combinatorics import count_subsets
 from ._rechecks import _cross_check, _recheck_holds
-from .eigenspace import _eigenspace
+from .cost import rounded_seconds, verdict_cost
+from .eigenspace import _eigenspace, search_seconds
 from .enumeration import Progress, _enumeration, _Outcome
 from .observability import observability
 from .removals import RemovalScan, scan_removals
@@ -95,6 +96,24 @@ def _estimates(
     return {"eigenspace": float(eigen_cost), "enumeration": float(enum_cost)}
 
 
+# above this many flops for the cheaper method, ``auto`` picks by calibrated seconds
+SECONDS_MODEL_ABOVE = 1e8
+
+
+def _seconds(
+    system: System, s: int, eig: EigenAnalysis, sub: SensorSubspaces, client: Any | None
+) -> dict[str, float]:
+    """Estimated seconds of the eigenspace method (its hyperplane searches) and of the
+    enumeration's levels up to the verdict (on the client's threads), on this machine."""
+    n = system.n
+    full = int(np.count_nonzero(sub.ranks == n))
+    enumeration = verdict_cost(system.p - full, n, 2 * s - full, client, None)
+    return {
+        "eigenspace_s": rounded_seconds(search_seconds(system.p, eig)),
+        "enumeration_s": enumeration["seconds_for_verdict"],
+    }
+
+
 def _run(
     system: System,
     s: int,
@@ -122,7 +141,15 @@ def _run(
         else:
             sub = sensor_subspaces(system.A, system.C, tolerances=tol)
             estimates = _estimates(system, s, eig, sub)
-            order = sorted(["eigenspace", "enumeration"], key=lambda m: estimates[m])
+            if min(estimates.values()) > SECONDS_MODEL_ABOVE and math.isfinite(
+                max(estimates.values())
+            ):
+                # both cost something: compare the seconds each takes here (rates measured on
+                # this machine), not flop counts, whose rates differ by orders of magnitude
+                estimates = {**estimates, **_seconds(system, s, eig, sub, client)}
+                order = sorted(["eigenspace", "enumeration"], key=lambda m: estimates[f"{m}_s"])
+            else:
+                order = sorted(["eigenspace", "enumeration"], key=lambda m: estimates[m])
     tried: list[_Outcome] = []
     for name in order:
         if name == "enumeration":
@@ -317,8 +344,17 @@ def _evidence(
             }
             for o in tried
         ],
-        "cost_estimates_flops": estimates,
+        "cost_estimates_flops": {k: v for k, v in estimates.items() if not k.endswith("_s")},
         "max_sets": max_sets,
+        **(
+            {
+                "cost_estimates_seconds": {
+                    k[:-2]: v for k, v in estimates.items() if k.endswith("_s")
+                }
+            }
+            if any(k.endswith("_s") for k in estimates)
+            else {}
+        ),
         "assumption": "the attacked sensor set is fixed over the observation window",
         "condition": f"secure estimation with s = {s} attacked sensors needs 2s = {2 * s} <= max_removable",
     }
