@@ -114,6 +114,7 @@ def map_chunks(
     client: Any | None = None,
     *,
     on_result: Callable[[int, Any], None] | None = None,
+    stop: Callable[[Any], bool] | None = None,
 ) -> list[Any]:
     """[func(payload, chunk) for chunk in chunks], on Dask workers when a client is given.
 
@@ -122,6 +123,12 @@ def map_chunks(
     in, and ``on_result(index, result)`` is called as each arrives (for
     progress).  A chunk that fails on a worker is retried once; if it fails
     again, ``ChunkError`` names it.
+
+    ``stop(result)``, when given, is called on the results in the order of
+    ``chunks`` (each once every earlier chunk has arrived); once it returns
+    True the later chunks are not run (on Dask, cancelled) and the results up
+    to that chunk are returned: the early exit of a search whose answer is
+    the first in the chunks' order.
     """
     if client is None:
         out = []
@@ -129,6 +136,8 @@ def map_chunks(
             out.append(func(payload, chunk))
             if on_result is not None:
                 on_result(index, out[-1])
+            if stop is not None and stop(out[-1]):
+                break
         return out
     from dask.distributed import as_completed
 
@@ -136,14 +145,27 @@ def map_chunks(
     futures = [client.submit(func, shared, chunk, pure=False, retries=1) for chunk in chunks]
     index_of = {future.key: i for i, future in enumerate(futures)}
     results: list[Any] = [None] * len(futures)
+    arrived = [False] * len(futures)
+    failed: dict[int, BaseException] = {}
+    following = 0  # the first chunk not yet offered to ``stop``
     try:
         for future in as_completed(futures):
             i = index_of[future.key]
             if future.status == "error":
-                raise ChunkError(chunks[i], future.exception(), i, len(chunks))
-            results[i] = future.result()
-            if on_result is not None:
-                on_result(i, results[i])
+                if stop is None:
+                    raise ChunkError(chunks[i], future.exception(), i, len(chunks))
+                # reported only if no earlier chunk ends the search
+                failed[i], arrived[i] = future.exception(), True
+            else:
+                results[i], arrived[i] = future.result(), True
+                if on_result is not None:
+                    on_result(i, results[i])
+            while following < len(futures) and arrived[following]:
+                if following in failed:
+                    raise ChunkError(chunks[following], failed[following], following, len(chunks))
+                if stop is not None and stop(results[following]):
+                    return results[: following + 1]
+                following += 1
     finally:
         for future in futures:
             if not future.done():
@@ -174,9 +196,10 @@ def map_ranges(
     ranges: Sequence[tuple[int, int]],
     client: Any | None = None,
     progress: Callable[[int, int], None] | None = None,
+    stop: Callable[[Any], bool] | None = None,
 ) -> list[Any]:
     """``map_chunks`` over ranges of ranks, with ``progress(ranks done, ranks in all)`` as
-    each range arrives."""
+    each range arrives, and its early exit ``stop``."""
     total = sum(hi - lo for lo, hi in ranges)
     done = 0
 
@@ -186,4 +209,4 @@ def map_ranges(
         if progress is not None:
             progress(done, total)
 
-    return map_chunks(func, payload, ranges, client, on_result=arrived)
+    return map_chunks(func, payload, ranges, client, on_result=arrived, stop=stop)

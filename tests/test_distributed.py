@@ -130,7 +130,9 @@ def test_a_range_that_fails_twice_ends_the_enumeration_with_the_reason(monkeypat
 
     def flaky(task, ranks, progress=None):
         calls["n"] += 1
-        if task.k == 2 and ranks[0] == 0:
+        # the lexicographically first sets of 2 sensors: the last colex ranks of the sensors in
+        # reverse order, the first range a level looks at
+        if task.k == 2 and ranks[1] == math.comb(task.rest.size, 2):
             raise RuntimeError("worker lost")
         return scan(task, ranks, progress)
 
@@ -141,9 +143,10 @@ def test_a_range_that_fails_twice_ends_the_enumeration_with_the_reason(monkeypat
     assert check.verdict.value == "inconclusive"
     assert check.fields["max_removable"] == 1
     assert check.fields["max_removable_is_lower_bound"] is True
-    assert "failed twice on the sets of 2 sensors with colex ranks 0 to" in check.summary + str(
+    assert "failed twice on the sets of 2 sensors at positions 0 to" in check.summary + str(
         check.evidence
     )
+    assert check.evidence["failed_chunk"]["lexicographic_positions"][0] == 0
     assert check.evidence["failed_chunk"]["removed_sensors"] == 2
 
 
@@ -163,7 +166,7 @@ def test_a_range_that_fails_once_is_retried(monkeypatch, small_chunks, tmp_path)
     monkeypatch.setattr(enumeration, "_scan_range", once)
     with _in_process_cluster() as client:  # the patched function reaches the worker
         check = sparse_observability(system, 1, method="enumeration", client=client)
-    assert len(list(tmp_path.glob("failed-2-*"))) > 1  # every range of the level failed once
+    assert list(tmp_path.glob("failed-2-*"))  # the ranges the level needed failed once
     assert check.fields == expected.fields
     assert check.verdict.value == "fails"
 
@@ -227,3 +230,28 @@ def test_a_simulation_chunk_is_retried_once_then_reported(monkeypatch, tmp_path)
     monkeypatch.setattr(engine, "_chunk", always)
     with _in_process_cluster() as client, pytest.raises(ChunkError, match="of 4 of the work"):
         engine.simulate_scenario(design, scenario, runs=8, steps=20, chunk_runs=2, client=client)
+
+
+def test_a_level_ends_at_its_first_breaking_set_in_process_and_on_dask(client, small_chunks):
+    # (0, 9) is the 9th set of 2 in lexicographic order: the scan of the 45 sets of 2 stops
+    # there, whether in one range per set (in-process) or in ranges on the workers
+    system = System(**{k: np.array(v) for k, v in _two_planted_breaking_sets()["system"].items()})
+    local = sparse_observability(system, 1, method="enumeration")
+    spread = sparse_observability(system, 1, method="enumeration", client=client)
+    for check in (local, spread):
+        assert check.fields["breaking_set"] == [0, 9]
+        assert check.evidence["methods_tried"][0]["sets_checked"] == 1 + 10 + 9
+    assert spread.evidence == local.evidence and spread.fields == local.fields
+
+
+def test_map_chunks_stops_at_the_first_chunk_in_order_that_ends_the_search(client):
+    from ssecert.parallel import map_chunks
+
+    chunks = list(range(12))
+    for c in (None, client):
+        out = map_chunks(_square, None, chunks, c, stop=lambda r: r >= 25)
+        assert out == [0, 1, 4, 9, 16, 25]
+
+
+def _square(payload, x):
+    return x * x

@@ -333,15 +333,17 @@ def test_the_closest_sets_kept_block_by_block_are_the_smallest_overall(seed):
     rest = np.arange(q)
     candidates: list = []
     everything = []
-    offset = 0
-    for _ in range(rng.integers(1, 6)):
-        size = int(rng.integers(1, 30))
+    sizes = rng.integers(1, 30, rng.integers(1, 6))
+    total = int(sizes.sum())
+    # the ranges of a level arrive from the last ranks down, blocks ascending within each
+    offset = total
+    for size in sizes.tolist():
+        offset -= size
         # few distinct values, so that ties between and within blocks are common
         proxy = rng.integers(0, 4, size).astype(float)
         subsets = np.array([np.sort(rng.choice(q, k, replace=False)) for _ in range(size)])
-        _keep_closest(candidates, _Block(offset, subsets), proxy, rest)
+        _keep_closest(candidates, _Block(offset, subsets), proxy, rest, total)
         for j in range(size):
             kept = tuple(int(i) for i in rest if i not in set(subsets[j].tolist()))
-            everything.append((float(proxy[j]), offset + j, kept))
-        offset += size
+            everything.append((float(proxy[j]), total - 1 - offset - j, kept))
     assert candidates == sorted(everything)[:_CRITICAL]

@@ -12,6 +12,7 @@ synthetic level) in the cost model's calibration give the same answers.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -32,16 +33,21 @@ Progress = Callable[[int, int], None]
 class _Level:
     checked: int = 0
     failures: dict[tuple[int, ...], np.ndarray] = field(default_factory=dict)
-    borderline: int = 0
-    # (proxy, colex rank, kept sensors) of the sets closest to breaking: the smallest by
-    # (proxy, rank), whatever the split of the level into ranges
+    # positions in lexicographic order of the sets with a borderline rank decision
+    borderline_at: list[int] = field(default_factory=list)
+    # (proxy, lexicographic position, kept sensors) of the sets closest to breaking: the
+    # smallest by (proxy, position), whatever the split of the level into ranges
     critical: list[tuple[float, int, tuple[int, ...]]] = field(default_factory=list)
+
+    @property
+    def borderline(self) -> int:
+        return len(self.borderline_at)
 
     def merge(self, other: _Level) -> None:
         """Add the findings of another range of the same level."""
         self.checked += other.checked
         self.failures.update(other.failures)
-        self.borderline += other.borderline
+        self.borderline_at.extend(other.borderline_at)
         self.critical = sorted(self.critical + other.critical)[:_CRITICAL]
 
 
@@ -65,7 +71,9 @@ class _LevelTask:
 def _scan_range(
     task: _LevelTask, ranks: tuple[int, int], progress: Progress | None = None
 ) -> _Level:
-    """Check the removals whose colex ranks lie in ``ranks`` (one chunk of a level)."""
+    """Check the removals whose colex ranks lie in ``ranks`` (one chunk of a level; the
+    sensors in ``task`` in reverse order, so a set of colex rank r is at position
+    ``C(q, k) - 1 - r`` in the lexicographic order of the removed sets)."""
     P, proj, rest, full, tol = task.P, task.proj, task.rest, task.full, task.tol
     n = proj.shape[-1]
     q = rest.size
@@ -73,22 +81,23 @@ def _scan_range(
     candidates: list[tuple[float, int, tuple[int, ...]]] = []
     buffer = np.empty((0, n, n))
     lo, hi = ranks
+    total = math.comb(q, task.k)
     for block in colex_blocks(proj, task.shifted, task.k, start=lo, stop=hi):
         if buffer.shape[0] < len(block):
             buffer = np.empty((len(block), n, n))
         ok, proxy = cholesky_screen(block.matrices, task.shift, task.critical, buffer[: len(block)])
         if task.critical:
-            _keep_closest(candidates, block, proxy, rest)
+            _keep_closest(candidates, block, proxy, rest, total)
         bad = np.flatnonzero(~ok)
         if bad.size:
             subsets = block.subsets(bad)
             codes, _, nulls = _refine(P, task.ranks, subsets, q, tol, task.errors)
-            for row, code, zvec in zip(subsets, codes, nulls):
+            for j, row, code, zvec in zip(bad, subsets, codes, nulls):
                 removed = tuple(sorted(full.tolist() + rest[row].tolist()))
                 if code == ZERO:
                     level.failures[removed] = zvec
                 elif code == BORDERLINE:
-                    level.borderline += 1
+                    level.borderline_at.append(total - 1 - block.offset - int(j))
         level.checked += len(block)
         if progress is not None:
             progress(level.checked, hi - lo)
@@ -101,22 +110,24 @@ def _keep_closest(
     block: SubsetBlock,
     proxy: np.ndarray,
     rest: np.ndarray,
+    total: int,
 ) -> None:
-    """Merge the block's sets into ``candidates``, the ``_CRITICAL`` smallest (proxy, colex
-    rank, kept sensors) so far.  The block's ranks follow every rank already kept, so once
-    the list is full only a proxy below its largest can enter it: most blocks add nothing."""
+    """Merge the block's sets into ``candidates``, the ``_CRITICAL`` smallest (proxy,
+    lexicographic position, kept sensors) so far; a set of colex rank r (sensors in reverse
+    order) is at position ``total - 1 - r``.  Once the list is full only a proxy up to its
+    largest can enter it: most blocks add nothing."""
     if len(candidates) >= _CRITICAL:
-        rows = np.flatnonzero(proxy < candidates[-1][0])
+        rows = np.flatnonzero(proxy <= candidates[-1][0])
     else:
         rows = np.arange(proxy.size)
     if rows.size == 0:
         return
-    # the smallest proxies of the block, ties in rank order (a stable sort of the rows)
-    rows = rows[np.argsort(proxy[rows], kind="stable")[:_CRITICAL]]
+    position = total - 1 - (block.offset + rows)
+    rows = rows[np.lexsort((position, proxy[rows]))[:_CRITICAL]]
     for j, removed in zip(rows, block.subsets(rows)):
         dropped = set(rest[removed].tolist())
-        kept = tuple(int(i) for i in rest if i not in dropped)
-        candidates.append((float(proxy[j]), block.offset + int(j), kept))
+        kept = tuple(sorted(int(i) for i in rest if i not in dropped))
+        candidates.append((float(proxy[j]), total - 1 - block.offset - int(j), kept))
     candidates.sort()
     del candidates[_CRITICAL:]
 

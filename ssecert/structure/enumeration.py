@@ -36,6 +36,7 @@ from ..parallel import ChunkError, map_ranges, rank_ranges
 from ..system import System
 from ..tolerances import NONZERO, Tolerances
 from ._combinatorics import (
+    colex_rank,
     count_subsets,
     level_split,
 )
@@ -144,6 +145,15 @@ def _only_all_sensors(out: _Outcome, n: int, p: int, s: int) -> _Outcome:
     return out
 
 
+@dataclass
+class _Found:
+    """What the exact confirmation of a level's float failures found so far."""
+
+    first: tuple[int, ...] | None = None  # the first breaking set, lexicographically
+    z: np.ndarray | None = None  # its unobservable direction
+    within: list[tuple[int, ...]] = field(default_factory=list)  # within precision of breaking
+
+
 class _Levels:
     """The enumeration's state: the levels of removals scanned so far and what they found.
 
@@ -174,6 +184,7 @@ class _Levels:
         self.base = self.proj.sum(axis=0)
         self.target = 2 * s - full.size  # level whose sets have 2s removed sensors
         self.undecided: int | None = None  # size of the first removal level with undecided sets
+        self.found = _Found()  # the current level's confirmed failures
         self.best_critical: list[tuple[float, int, tuple[int, ...]]] = []
         if self.target < 0:
             # every set of 2s sensors keeps a sensor that alone observes the state
@@ -232,6 +243,7 @@ class _Levels:
     def level(self, k: int) -> _Level | None:
         """Scan level k (on the Dask workers when there is a client); None, with the reason,
         when a range of it failed twice there."""
+        self.found = _Found()
         try:
             level = _scan_level(
                 self.P,
@@ -246,15 +258,23 @@ class _Levels:
                 progress=self.progress,
                 errors=self.sub.errors[self.rest],
                 client=self.client,
+                stop=self._confirms,
             )
         except ChunkError as exc:
             out = self.out
             out.status = "lower_bound"
             out.max_removable = self.removed(k) - 1
-            out.details["failed_chunk"] = {"removed_sensors": self.removed(k), "ranks": exc.chunk}
+            # the level's ranges are colex ranks of the sensors in reverse order: as positions
+            # in the lexicographic order of the removed sets, they are counted from the end
+            total = math.comb(self.rest.size, k)
+            first, last = total - exc.chunk[1], total - 1 - exc.chunk[0]
+            out.details["failed_chunk"] = {
+                "removed_sensors": self.removed(k),
+                "lexicographic_positions": [first, last],
+            }
             out.problems.append(
-                f"the Dask workers failed twice on the sets of {self.removed(k)} sensors with "
-                f"colex ranks {exc.chunk[0]:,} to {exc.chunk[1] - 1:,} ({exc.cause!r})"
+                f"the Dask workers failed twice on the sets of {self.removed(k)} sensors at "
+                f"positions {first:,} to {last:,} in lexicographic order ({exc.cause!r})"
             )
             return None
         self.out.checked += level.checked
@@ -262,12 +282,23 @@ class _Levels:
             self.best_critical = level.critical
         return level
 
+    def _confirms(self, part: _Level) -> bool:
+        """Confirm the float failures of the next range of the level (in lexicographic order,
+        after those of every earlier range) on the exact data; whether one breaks the plant,
+        which ends the level: the first breaking set in lexicographic order is found."""
+        first, z, within = _resolve_failures(
+            self.system, part.failures, self.eig, self.tol, self.exact, self.out
+        )
+        self.found.within.extend(within)
+        if first is None:
+            return False
+        self.found.first, self.found.z = first, z
+        return True
+
     def go_on(self, k: int, level: _Level) -> bool:
         """Record what level k decided; whether the next level must be scanned."""
         out = self.out
-        first, z_first, within = _resolve_failures(
-            self.system, level.failures, self.eig, self.tol, self.exact, out
-        )
+        first, z_first, within = self.found.first, self.found.z, self.found.within
         if first is not None:
             self._breaking(k, level, first, z_first, within)
             return False
@@ -302,13 +333,25 @@ class _Levels:
         out.max_removable = self.removed(k) - 1
         out.breaking_set = first
         out.z = z_first
-        if level.borderline or within:
-            out.details["borderline_sets_at_breaking_size"] = level.borderline + len(within)
+        # what the level needed: the sets up to the first breaking one, lexicographically (a
+        # split into ranges may have checked a few more, which are not counted)
+        position = self._position(first, k)
+        out.checked -= level.checked - (position + 1)
+        borderline = sum(1 for b in level.borderline_at if b < position)
+        if borderline or within:
+            out.details["borderline_sets_at_breaking_size"] = borderline + len(within)
         if self.undecided is not None:
             # smaller sets were undecided, so this set need not be the smallest: the verdict
             # (a breaking set of at most 2s sensors) is certain, max_removable only bounded
             out.details["max_removable_is_upper_bound"] = True
             out.details["max_removable_at_least"] = self.undecided - 1
+
+    def _position(self, removed: tuple[int, ...], k: int) -> int:
+        """Position of the removed set in the lexicographic order of level k's sets."""
+        q = self.rest.size
+        index = {int(sensor): i for i, sensor in enumerate(self.rest)}
+        reverse = sorted(q - 1 - index[i] for i in removed if i in index)
+        return math.comb(q, k) - 1 - colex_rank(reverse)
 
     def _undecided_reasons(self, k: int, level: _Level, within: list[tuple[int, ...]]) -> None:
         """Why the first undecided level could not be decided: borderline rank decisions, or
@@ -434,13 +477,17 @@ MIN_CHUNK_SETS = 200_000
 _CHUNK_OVER_LEVEL = 20
 
 
-def _chunks(task: _LevelTask, client: Any | None) -> list[tuple[int, int]]:
-    """Ranges of colex ranks covering the level (one without a client), none smaller than is
-    worth a task: the minimum, and many times the partial sums each range rebuilds."""
+def _chunks(task: _LevelTask, client: Any | None, segments: bool = False) -> list[tuple[int, int]]:
+    """Ascending ranges of colex ranks covering the level, none smaller than is worth a task:
+    the minimum, and many times the partial sums each range rebuilds.  Without a client, one
+    range, or with ``segments`` (a search that may end early) ranges of that smallest size."""
     q, n = task.rest.size, task.proj.shape[-1]
     m = level_split(q, task.k, 8 * n * n)
     smallest = max(MIN_CHUNK_SETS, _CHUNK_OVER_LEVEL * math.comb(q, m))
-    return rank_ranges(math.comb(q, task.k), client, smallest)
+    total = math.comb(q, task.k)
+    if client is None and segments:
+        return [(lo, min(lo + smallest, total)) for lo in range(0, total, smallest)]
+    return rank_ranges(total, client, smallest)
 
 
 def _scan_level(
@@ -457,12 +504,18 @@ def _scan_level(
     progress: Progress | None = None,
     errors: np.ndarray | None = None,
     client: Any | None = None,
+    stop: Callable[[_Level], bool] | None = None,
 ) -> _Level:
-    """Check every removal of ``full`` plus k sensors of ``rest``.
+    """Check the removals of ``full`` plus k sensors of ``rest``, in lexicographic order.
 
-    With a Dask ``client`` the level's colex ranks are split into ranges
-    checked on the workers; the sums, screening and refinement of each set
-    do not depend on the split, so the findings are the in-process ones.
+    The sets are visited in lexicographic order of the removed sensors: the
+    colex ranks of the sensors taken in reverse order, from the last rank
+    down.  The level is split into ranges of ranks (on the Dask workers with
+    a ``client``); the sums, screening and refinement of each set do not
+    depend on the split, so the findings are the in-process ones.
+    ``stop(part)`` is offered each range's findings in that order; once it
+    returns True, the later ranges (lexicographically later sets) are not
+    checked, and the level holds the findings so far.
     """
     q = rest.size
     n = proj.shape[-1]
@@ -472,14 +525,20 @@ def _scan_level(
     # eigenvalue up to about sum(err_i^2) <= (sum err_i)^2 when the sensors'
     # bases carry errors err_i: screen at least that far from zero.
     shift = max(tol.screen_rtol * max(q, 1), 10.0 * float(np.sum(errors)) ** 2)
-    # the screening shift is folded into the base once, not per block
+    # the screening shift is folded into the base once, not per block; the sensors in reverse
+    # order, so that descending colex ranks are ascending lexicographic order
+    back = slice(None, None, -1)
     task = _LevelTask(
-        P, ranks, proj, base - shift * np.eye(n), shift, k, rest, full, tol, critical, errors
-    )
-    chunks = _chunks(task, client)
+        P[back], ranks[back], proj[back], base - shift * np.eye(n), shift, k, rest[back], full,
+        tol, critical, errors[back],
+    )  # fmt: skip
+    chunks = _chunks(task, client, segments=stop is not None)[::-1]
     if len(chunks) == 1:
-        return _scan_range(task, chunks[0], progress)
+        level = _scan_range(task, chunks[0], progress)
+        if stop is not None:
+            stop(level)
+        return level
     level = _Level()
-    for part in map_ranges(_scan_range, task, chunks, client, progress):
+    for part in map_ranges(_scan_range, task, chunks, client, progress, stop=stop):
         level.merge(part)
     return level
