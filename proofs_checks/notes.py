@@ -1,5 +1,6 @@
-"""Claims of 002, Migliaccio's lecture notes, Chapter 2: correctability (Proposition 1),
-Examples 0-3, q >= 2h + n and ISTA (Sec. 2.5).
+"""Claims of 002, Migliaccio's lecture notes: correctability (Proposition 1), Examples 0-3 and
+q >= 2h + n (Ch. 2), ISTA (Sec. 2.5), the online-gradient observer (Sec. 4.2) and the
+constant-attack proposition (Sec. 4.3).
 
 The notes write x(k+1) = A x(k), y(k) = C x(k) + a(k) with q sensors (one scalar output each),
 n states, at most h attacked sensors and a window of T steps: ssecert's p, s and tau (window) are
@@ -536,5 +537,216 @@ def ista_descent() -> Finding:
             "worst_gap_over_rate_bound": rate,
             "runs": runs,
             "beyond_the_statement": {"theta": "U(1, 1.95)", "iterations": 300, **beyond},
+        },
+    )
+
+
+# ---------------------------------------------------------------- online gradient descent
+def _ogd_error(A: Matrix, C: Matrix, tau: Fraction) -> tuple[Matrix, Matrix]:
+    """I - tau C^T C and A - L_g C = A - tau A C^T C (4.13)-(4.14), exactly."""
+    CtC = _mul([list(col) for col in zip(*C)], C)
+    M = [[e - tau * g for e, g in zip(er, gr)] for er, gr in zip(_identity(len(A)), CtC)]
+    L_g = [[tau * v for v in row] for row in _mul(A, [list(col) for col in zip(*C)])]
+    return M, [[a - lc for a, lc in zip(ar, lr)] for ar, lr in zip(A, _mul(L_g, C))]
+
+
+def _eigenvalues_2x2(M: Matrix) -> tuple[Fraction, Fraction]:
+    """(trace, determinant): the eigenvalues solve s^2 - trace s + det = 0."""
+    return M[0][0] + M[1][1], M[0][0] * M[1][1] - M[0][1] * M[1][0]
+
+
+def _ogd_random(rng: np.random.Generator, N: int) -> dict[str, float]:
+    """rho(A (I - tau C^T C)) for ||A||_2 <= 1 (orthogonal or normal A), C of full column rank and
+    0 < tau < 1/||C||^2; and how often a non-normal marginally stable A breaks it."""
+    out = dict(instances=N, max_norm_I_minus_tau_CtC=0.0, max_spectral_radius=0.0)
+    out.update(max_rho_minus_norm=-np.inf, min_norm_rank_deficient_C=1.0, non_normal_unstable=0)
+    for i in range(N):
+        n = int(rng.integers(2, 6))
+        Q = np.linalg.qr(rng.standard_normal((n, n)))[0]
+        D = np.diag(np.r_[1.0, rng.uniform(-1, 1, n - 1)])
+        if n >= 3:  # a pair of complex eigenvalues of modulus U(0.5, 1)
+            t, r = rng.uniform(0, np.pi), rng.uniform(0.5, 1)
+            D[1:3, 1:3] = r * np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]])
+        A = Q @ D @ Q.T if i % 2 else Q  # normal, or orthogonal
+        C = rng.standard_normal((n + int(rng.integers(0, 3)), n)) @ np.diag(
+            10 ** rng.uniform(-1, 1, n)
+        )
+        tau = (1 - 1e-6 if i % 5 == 0 else rng.uniform(0.01, 1)) / np.linalg.norm(C, 2) ** 2
+        M = np.eye(n) - tau * C.T @ C
+        norm, rho = float(np.linalg.norm(M, 2)), float(np.abs(np.linalg.eigvals(A @ M)).max())
+        out["max_norm_I_minus_tau_CtC"] = max(out["max_norm_I_minus_tau_CtC"], norm)
+        out["max_spectral_radius"] = max(out["max_spectral_radius"], rho)
+        out["max_rho_minus_norm"] = max(out["max_rho_minus_norm"], rho - norm)  # rho <= ||M||
+        C[:, -1] = C[:, 0]  # rank deficient: ||I - tau C^T C|| = 1
+        Md = np.eye(n) - tau / 4 * C.T @ C
+        out["min_norm_rank_deficient_C"] = min(
+            out["min_norm_rank_deficient_C"], float(np.linalg.norm(Md, 2))
+        )
+        P = rng.standard_normal((n, n)) + 3 * np.eye(n)  # non-normal, marginally stable
+        An = P @ np.diag(np.r_[1.0, rng.uniform(-1, 1, n - 1)]) @ np.linalg.inv(P)
+        out["non_normal_unstable"] += int(np.abs(np.linalg.eigvals(An @ M)).max() > 1 + 1e-9)
+    return out
+
+
+@claim(
+    "notes.ogd_stability",
+    where="002 Sec. 4.2, (4.13)-(4.14) and the two cases after them",
+    statement="For the OGD observer (4.13), L_g = tau A C^T and A - L_g C = A (I - tau C^T C); with "
+    "tau < 1/||C||_2^2, ||I - tau C^T C|| <= 1, and if ||I - tau C^T C|| < 1 and A is marginally "
+    "stable, then A - L_g C is asymptotically stable.",
+    recorded="conditional",
+)
+def ogd_stability() -> Finding:
+    from ssecert import System
+    from ssecert.design.gains import ogd_gain
+
+    # exact: tau = 1/8 < 1/||C||^2 = 1/4 (C diagonal), A has eigenvalues 1 and 0
+    A = _exact([[3, -2], [3, -2]])
+    shrink, err = _ogd_error(A, _exact([[1, 0], [0, 2]]), Fraction(1, 8))
+    exact = shrink == _exact([[Fraction(7, 8), 0], [0, Fraction(1, 2)]]) and err == _mul(A, shrink)
+    exact = (
+        exact and _eigenvalues_2x2(A) == (1, 0) and _eigenvalues_2x2(err) == (Fraction(13, 8), 0)
+    )
+    gain = ogd_gain(System(np.array([[3.0, -2.0], [3.0, -2.0]]), np.diag([1.0, 2.0])), 0.125)
+    ssecert_rho = float(np.abs(np.linalg.eigvals(gain.error_matrix)).max())
+    # the notes' other case, ||I - tau C^T C|| = 1: C = (1, 0), tau = 1/2, A = [[-2, 3], [-2, 3]]
+    shrink1, err1 = _ogd_error(_exact([[-2, 3], [-2, 3]]), _exact([[1, 0]]), Fraction(1, 2))
+    exact = exact and shrink1 == _exact([[Fraction(1, 2), 0], [0, 1]])
+    stats = _ogd_random(np.random.default_rng(42), 400)
+    ok = stats["max_spectral_radius"] < 1 and stats["max_rho_minus_norm"] < 1e-12
+    if not (exact and _eigenvalues_2x2(err1) == (2, 0) and abs(ssecert_rho - 1.625) < 1e-12 and ok):
+        raise AssertionError(f"the OGD check did not come out as expected: {stats}")
+    return Finding(
+        "conditional",
+        "A - L_g C = A (I - tau C^T C) (4.14) is right, and for 0 < tau < 1/||C||^2 the "
+        "eigenvalues 1 - tau sigma_i^2 of I - tau C^T C lie in (0, 1], so ||I - tau C^T C|| <= 1, "
+        "with < 1 exactly when C has full column rank (the premise of the second case). But a "
+        "marginally stable A can have ||A|| > 1, and then the product can have spectral radius "
+        "above 1: in the counterexample A (eigenvalues 1 and 0, a projection, A^2 = A) is "
+        "marginally stable, ||I - tau C^T C|| = 7/8 < 1, tau = 1/8 < 1/||C||^2 = 1/4, yet "
+        "A - L_g C has eigenvalue 13/8, so the OGD observer diverges. The bound "
+        "rho(A M) <= ||A|| ||M|| < 1 does give the conclusion when ||A||_2 <= 1, e.g. A orthogonal "
+        "or normal with eigenvalues in the closed unit disc: in 400 such random instances the "
+        "spectral radius never exceeded ||I - tau C^T C|| < 1 (it comes close to 1 only when "
+        "tau sigma_min(C)^2 is small), while the same C and tau made "
+        f"{stats['non_normal_unstable']} of 400 non-normal marginally stable A unstable. "
+        "The first case (||I - tau C^T C|| = 1 gives marginal stability) fails the same way "
+        "(evidence). ssecert's ogd_gain(step = 1/8) gives the same error matrix.",
+        {
+            "method": "certificate+randomised",
+            "certificate": "exact rationals: tr(A) = 1, det(A) = 0; I - tau C^T C = diag(7/8, 1/2); "
+            "A - L_g C = [[21/8, -1], [21/8, -1]], tr = 13/8, det = 0",
+            "margin": "rho(A - L_g C) - 1 = 5/8",
+            "ssecert_ogd_gain_spectral_radius": ssecert_rho,
+            "distribution": "n ~ U{2..5}; A = Q (orthogonal, half) or Q D Q^T (normal, D with 1, "
+            "U(-1, 1) and for n >= 3 a rotation block of radius U(0.5, 1)); q = n..n+2; C gaussian "
+            "times diag(10^U(-1, 1)); tau = theta / ||C||^2, theta ~ U(0.01, 1), a fifth at "
+            "1 - 1e-6; non-normal A = P diag(1, U(-1, 1)) P^-1, P gaussian + 3 I; seed 42",
+            **stats,
+            "first_case_counterexample": {
+                "A": [[-2, 3], [-2, 3]],
+                "C": [[1, 0]],
+                "tau": 0.5,
+                "shows": "tau = 1/2 < 1/||C||^2 = 1, ||I - tau C^T C|| = ||diag(1/2, 1)|| = 1 and A "
+                "marginally stable (eigenvalues 1, 0), yet A - L_g C = [[-1, 3], [-1, 3]] has "
+                "eigenvalue 2: not marginally stable",
+            },
+        },
+        counterexample={
+            "A": [[3, -2], [3, -2]],
+            "C": [[1, 0], [0, 2]],
+            "tau": 0.125,
+            "L_g": [[0.375, -0.5], [0.375, -0.5]],
+            "I - tau C^T C": [[0.875, 0], [0, 0.5]],
+            "A - L_g C": [[2.625, -1], [2.625, -1]],
+            "shows": "A has eigenvalues 1 and 0 (marginally stable), ||C||^2 = 4 so tau = 1/8 < 1/4, "
+            "||I - tau C^T C|| = 7/8 < 1, yet A - L_g C = A (I - tau C^T C) has trace 13/8 and "
+            "determinant 0: eigenvalue 13/8 > 1, not asymptotically stable",
+        },
+        condition="||A||_2 <= 1 (e.g. A orthogonal, or normal with its eigenvalues in the closed "
+        "unit disc), besides C of full column rank (which is what makes ||I - tau C^T C|| < 1)",
+    )
+
+
+# ---------------------------------------------------------------- constant attack
+def _augmented_O(A: Matrix, C: Matrix, T: int) -> Matrix:
+    """O'_T of (4.18): block rows (C A^k, I_q), k = 0, ..., T-1."""
+    rows, P = [], _identity(len(A))
+    for _ in range(T):
+        rows += [c + e for c, e in zip(_mul(C, P), _identity(len(C)))]
+        P = _mul(P, A)
+    return rows
+
+
+def _with_eigenvalue_1(rng: np.random.Generator, n: int, shape: str) -> Matrix:
+    """A = P J P^-1, J upper triangular with a simple 1, a repeated 1 or a Jordan block at 1 and
+    other diagonal entries p/r (p in -3..3, r in 1..3), P a random invertible integer matrix."""
+    J = [[Fraction(0)] * n for _ in range(n)]
+    for i in range(n):
+        J[i][i] = Fraction(int(rng.integers(-3, 4)), int(rng.integers(1, 4)))
+    J[0][0] = Fraction(1)
+    if shape != "simple":
+        J[1][1], J[0][1] = Fraction(1), Fraction(int(shape == "jordan"))
+    P = _exact(rng.integers(-2, 3, size=(n, n)).tolist())
+    while _rank(P) < n:
+        P = _exact(rng.integers(-2, 3, size=(n, n)).tolist())
+    P_inv = [r[n:] for r in _rref([p + e for p, e in zip(P, _identity(n))])[0]]
+    return _mul(_mul(P, J), P_inv)
+
+
+@claim(
+    "notes.constant_attack",
+    where="002 Sec. 4.3, (4.17)-(4.24) and the Proposition",
+    statement="For x(k+1) = A x(k), y(k) = C x(k) + a with a constant attack a in R^q, i.e. "
+    "(y(0); ...; y(T-1)) = O'_T (x(0); a) with O'_T = [C I; CA I; ...; CA^(T-1) I] (4.17)-(4.18): "
+    "if A has an eigenvalue equal to 1, the dynamic CPS with constant attack is not observable.",
+    recorded="holds",
+)
+def constant_attack() -> Finding:
+    # symbolic: in a basis whose first vector is the eigenvector v (A e1 = e1), every block row
+    # of O'_T (v; -C v) is C A^k v - C v = 0
+    A = sp.Matrix(3, 3, lambda i, j: int(i == 0) if j == 0 else sp.Symbol(f"a{i}{j}"))
+    C, v = sp.Matrix(2, 3, lambda i, j: sp.Symbol(f"c{i}{j}")), sp.Matrix([1, 0, 0])
+    symbolic = all(sp.expand(C * A**k * v - C * v) == sp.zeros(2, 1) for k in range(5))
+    rng = np.random.default_rng(7)
+    deficiency, in_kernel, instances = [], True, 0
+    for shape in ("simple", "repeated", "jordan"):
+        for _ in range(6):
+            n, q = int(rng.integers(2, 5)), int(rng.integers(1, 4))
+            A_ = _with_eigenvalue_1(rng, n, shape)
+            C_ = rng.integers(-2, 3, size=(q, n))
+            C_[0] *= int(rng.random() > 0.3)  # a zero row 30% of the time
+            Cx = _exact(C_.tolist())
+            u = _kernel_vector([[A_[i][j] - int(i == j) for j in range(n)] for i in range(n)])
+            z = [[c] for c in u] + [[-r[0]] for r in _mul(Cx, [[c] for c in u])]  # (v; -C v)
+            for T in (1, n, n + 2):
+                O = _augmented_O(A_, Cx, T)
+                deficiency.append(n + q - _rank(O))
+                in_kernel &= all(r[0] == 0 for r in _mul(O, z))
+            instances += 1
+    if not (symbolic and in_kernel and min(deficiency) >= 1):
+        raise AssertionError("the constant-attack check did not come out as expected")
+    return Finding(
+        "holds",
+        "If A v = v with v != 0, then (x(0); a) = (v; -C v) gives y(k) = C A^k v - C v = 0 for "
+        "every k, the same outputs as x(0) = 0, a = 0: O'_T has a kernel vector with nonzero "
+        "x-part for every T, so x(0) cannot be recovered (sympy verifies the block rows for a "
+        "symbolic A and C). Exact rational checks on random A with a simple, repeated or "
+        "defective (Jordan) eigenvalue 1, C with zero rows, T = 1, n, n + 2, found (v; -C v) in "
+        "the kernel every time. (By the PBH test the converse also holds for observable (A, C): "
+        "without an eigenvalue 1 the augmented pair is observable.) Slips in the derivation, none "
+        "affecting the proposition: (4.17) writes O_n for O_T, and in (4.24) the second block row "
+        "should be (C(A - I), 0), not (C(A - I), I).",
+        {
+            "method": "symbolic+randomised",
+            "symbolic": "sympy: C A^k e1 - C e1 = 0 for k = 0, ..., 4, A with first column e1 "
+            "and its other entries symbols, C a symbolic 2 x 3 matrix",
+            "distribution": "A = P J P^-1, J upper triangular with a simple 1, a repeated 1 or a "
+            "Jordan block at 1 and other rationals p/r, p in -3..3, r in 1..3; P integer in -2..2 "
+            "(invertible); C integer in -2..2 with a zero first row 30% of the time; n in 2..4, q in "
+            "1..3; seed 7",
+            "instances": instances,
+            "min_rank_deficiency_of_O_prime_T": min(deficiency),
+            "how": "exact rational arithmetic (fractions)",
         },
     )
