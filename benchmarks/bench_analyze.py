@@ -16,8 +16,9 @@ over every set of up to 2s removed sensors, smallest first, calling
 numpy.linalg.matrix_rank on the stacked observability matrix of the kept
 sensors (per-sensor blocks precomputed once), stopping at the first set
 that breaks observability.  A level with more sets than ``--sample`` is
-timed on that many random sets and extrapolated to all of them.  Both must
-give the same verdict.
+timed on its first that many sets in the loop's order (where the loop
+stops if one of them breaks the plant) and extrapolated to all of them.
+Both must give the same verdict.
 
 Two comparisons are made.  The time to the verdict: the seconds the
 sparse-observability check took to decide it inside the command (its JSON's
@@ -53,15 +54,21 @@ from _common import best_of, cost_model_row, row, yes_no
 from ssecert import System
 
 ROOT = Path(__file__).resolve().parents[1]
-# (n, p, s): the verdict needs every set of up to 2s of the p sensors
-PLANTS = ((10, 30, 3), (12, 28, 3), (8, 30, 1), (6, 24, 2))
+# (n, p, s, planted): the verdict needs every set of up to 2s of the p sensors; with planted = m,
+# the plant fails: only its first m sensors see outside a hyperplane, so removing them (the
+# lexicographically first set of its size) breaks it, and no smaller set does
+PLANTS = ((10, 30, 3, 0), (12, 28, 3, 0), (8, 30, 1, 0), (6, 24, 2, 0), (10, 30, 3, 6))
 VARIANTS = {"default options": (), "--time-budget 0": ("--time-budget", "0")}
 
 
-def static_plant(n: int, p: int, seed: int = 0) -> System:
-    """A = I with p generic sensors."""
+def static_plant(n: int, p: int, seed: int = 0, planted: int = 0) -> System:
+    """A = I with p generic sensors; with ``planted`` = m, sensors m, m + 1, ... do not see the
+    first state (generic in the hyperplane x_1 = 0), so removing sensors 0..m-1 breaks it."""
     C = np.random.default_rng(seed).standard_normal((p, n))
-    return System(np.eye(n), C, name=f"static-n{n}-p{p}")
+    if planted:
+        C[planted:, 0] = 0.0
+    suffix = f"-planted{planted}" if planted else ""
+    return System(np.eye(n), C, name=f"static-n{n}-p{p}{suffix}")
 
 
 def write_spec(folder: Path, system: System, s: int) -> Path:
@@ -111,7 +118,6 @@ def naive(system: System, s: int, *, sample: int, repeat: int) -> Naive:
     n, p = system.n, system.p
     blocks = system.sensor_blocks(n)  # (p, n, n): C[i] A^k
     everyone = np.arange(p)
-    rng = np.random.default_rng(0)
 
     def first_breaking(sets) -> tuple[int, tuple[int, ...] | None]:
         count = 0
@@ -125,22 +131,21 @@ def naive(system: System, s: int, *, sample: int, repeat: int) -> Naive:
     seconds, checked, sets, sampled = 0.0, 0, 0, []
     for size in range(2 * s + 1):
         total = math.comb(p, size)
-        if total <= sample:
-            elapsed, (count, breaking) = best_of(
-                lambda size=size: first_breaking(itertools.combinations(range(p), size)), repeat
-            )
+        # the loop's own order (lexicographic), over the whole level or its first ``sample`` sets
+        elapsed, (count, breaking) = best_of(
+            lambda size=size: first_breaking(
+                itertools.islice(itertools.combinations(range(p), size), sample)
+            ),
+            repeat,
+        )
+        checked += count
+        if breaking is not None or total <= sample:
             seconds += elapsed
-            checked += count
             sets += count
         else:
-            chosen = [np.sort(rng.choice(p, size, replace=False)) for _ in range(sample)]
-            elapsed, (count, breaking) = best_of(
-                lambda chosen=chosen: first_breaking(chosen), repeat
-            )
-            # extrapolated to the whole level; where the sample breaks the plant, the loop
-            # would stop at an unknown place in the level: its time so far is a lower bound
-            seconds += elapsed if breaking is not None else elapsed / count * total
-            checked += count
+            # extrapolated to the whole level (a breaking set later in it would stop the loop
+            # sooner: for a plant that holds there is none)
+            seconds += elapsed / count * total
             sets += total
             sampled.append(size)
         if breaking is not None:
@@ -167,10 +172,14 @@ class PlantResult:
     commands: dict[str, CommandRun]
     fixed_cost: float  # the command on the 2-state ugv example: start-up, imports, checks
     start: float  # Python and numpy start-up, added to the loop for the command's comparison
+    planted: int = 0
 
     @property
     def case(self) -> str:
-        return f"static A = I, n = {self.n}, p = {self.p}, s = {self.s}"
+        case = f"static A = I, n = {self.n}, p = {self.p}, s = {self.s}"
+        if self.planted:
+            case += f", sensors 0-{self.planted - 1} a planted breaking set (fails)"
+        return case
 
 
 def measure(
@@ -184,8 +193,8 @@ def measure(
         fixed_cost, _ = best_of(lambda: run_analyze("ugv", out), runs)
         start = interpreter_start(runs)
         results = []
-        for n, p, s in PLANTS:
-            system = static_plant(n, p)
+        for n, p, s, planted in PLANTS:
+            system = static_plant(n, p, planted=planted)
             spec = write_spec(folder, system, s)
             commands = {}
             for variant, options in VARIANTS.items():
@@ -208,7 +217,7 @@ def measure(
                     ),
                 )
             reference = naive(system, s, sample=sample, repeat=repeat)
-            results.append(PlantResult(n, p, s, reference, commands, fixed_cost, start))
+            results.append(PlantResult(n, p, s, reference, commands, fixed_cost, start, planted))
     return results
 
 
@@ -241,8 +250,8 @@ def print_results(results: list[PlantResult], sample: int) -> None:
         if r.naive.sampled_levels:
             print(
                 f"{'':<36} naive loop: {r.naive.sets:,} sets, levels "
-                f"{', '.join(map(str, r.naive.sampled_levels))} timed on {sample:,} random sets "
-                "each and extrapolated"
+                f"{', '.join(map(str, r.naive.sampled_levels))} timed on their first {sample:,} "
+                "sets and extrapolated"
             )
     if results:
         print(
@@ -264,8 +273,8 @@ def _sampled(r: PlantResult, sample: int) -> str:
         return ""
     levels = ", ".join(map(str, r.naive.sampled_levels))
     return (
-        f"; reference: {r.naive.sets:,} sets, levels {levels} timed on {sample:,} random sets "
-        "each and extrapolated"
+        f"; reference: {r.naive.sets:,} sets, levels {levels} timed on their first {sample:,} "
+        "sets in the loop's order and extrapolated"
     )
 
 

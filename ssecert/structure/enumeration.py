@@ -466,7 +466,9 @@ def _resolve_failures(
             )
         else:
             within.append(removed)
-            if len(within) == 1:
+            if "distance_to_breaking" not in out.details:
+                # of the lexicographically first such set of the first level that has one: the
+                # set the summary names, whatever the split of the level into ranges
                 out.details["distance_to_breaking"] = _distance(system, kept, eig, tol)
     return None, None, within
 
