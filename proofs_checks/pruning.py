@@ -178,7 +178,9 @@ def thm2_1() -> Finding:
         "attack (8) e = (6, 0, 0) built from (7) with eps = 5 is rejected by the l1 decoder "
         "(the safe rows outweigh the attacked one: D(y_T) = x*) and sets the detector off "
         "(residual 6 > eps). The proof's two bounds are wrong (pruning.thm2_1_alpha, "
-        f"pruning.thm2_1_detector). On {len(dev)} random instances meeting the hypothesis the "
+        "pruning.thm2_1_detector). (With fewer than n safe rows, or safe rows of deficient "
+        "rank, (7) is unbounded and has no optimal z_e: the theorem then says nothing.) On "
+        f"{len(dev)} random instances meeting the hypothesis the "
         f"deviation fell short of alpha in {int(short.sum())} (worst margin "
         f"{float((dev - alp).min()):.2g}) and the detector fired in {int(loud.sum())}.",
         {
@@ -250,7 +252,7 @@ def thm2_1_alpha() -> Finding:
             "corrected_alpha_violated": int((dev < alc - 1e-9).sum()),
             "corrected_alpha_positive": int((alc > 0).sum()),
             "corrected_alpha_worst_margin": float((dev - alc).min()),
-            "corrected_bound_||z_perp||_2<=2||w||_1_worst_margin": float((2 * wl1 - zl2).min()),
+            "corrected_z_perp_bound_worst_margin": float((2 * wl1 - zl2).min()),
         },
         counterexample={
             "T": 1,
@@ -660,8 +662,8 @@ def fifty_percent() -> Finding:
         "50 %. Under the model of the code published with the paper (p_i >= 1/2 with "
         "probability T_r and the prior right exactly when p_i > 1/2, so the most confident "
         f"rows are always right) it succeeds in {pct(rates['code'])}: Fig. 1's behaviour needs "
-        f"that model, and holds up to about P_A = {upto:.1f}. The rates come from a few runs "
-        "(the check must stay fast); benchmarks/exp_pruning.py gives the full curves.",
+        f"that model, and holds up to about P_A = {upto:.1f}. The rates come from {_RUNS} runs "
+        "per level (about +-0.1 each); benchmarks/exp_pruning.py gives the full curves.",
         {
             "method": "randomised",
             "setup": dict(m=_M, n=_N, T=_WINDOW, runs=_RUNS, T_r=_T_R, eta=_ETA, omega=_OMEGA),

@@ -337,7 +337,13 @@ def near_oracle() -> Finding:
     rho = [float(np.max(np.abs(np.linalg.eigvals(pl["A"])))) for pl in (*plants, stable)]
     close = ratio_x <= 1.2 and ratio_u <= 1.2 and after["SISE_input"] < 0.1
     over_sise = noisy[-1] / float(sise_abs[-1].mean())
-    diverges = bool(growth.min() >= 5 and over_sise.min() >= 5 and clean.max() < 1e-6)
+    mean_rel = (float(rel14[1].mean()), float(rel14[-1].mean()))  # the paper's Fig. 4 metric
+    diverges = bool(
+        growth.min() >= 5
+        and over_sise.min() >= 5
+        and mean_rel[1] >= 5 * mean_rel[0]
+        and clean.max() < 1e-6
+    )
     evidence = {
         "method": "randomised",
         "setup": dict(
@@ -370,7 +376,9 @@ def near_oracle() -> Finding:
         "[14]_log_growth_per_step": (np.log(growth) / (steps - 2)).tolist(),
         "[14]_last_over_SISE_mean_abs_error": over_sise.tolist(),
         "divergence_test": "error at the last step >= 5 x its value at k = 1 and >= 5 x SISE's "
-        "mean absolute error, on every plant; noise-free error < 1e-6",
+        "mean absolute error on every plant, mean relative error over the plants >= 5 x its "
+        "value at k = 1, noise-free error < 1e-6",
+        "[14]_mean_relative_error_k1_and_last": list(mean_rel),
         "[14]_relative_error_k1": rel14[1].tolist(),
         "[14]_relative_error_last": rel14[-1].tolist(),
         "[14]_noise_free_max_abs_error": float(clean.max()),
@@ -384,12 +392,13 @@ def near_oracle() -> Finding:
         f"right in {100 * after['SISE_support_right']:.0f}% of the steps. The recursion of [14], "
         "exact without noise (error below 1e-6 from the exact x(0)), has with noise a state "
         f"error that grows {growth.min():.0f} to {growth.max():.0f} times from k = 1 to k = "
-        f"{steps - 1} on every plant tested (relative errors at k = {steps - 1}: "
-        f"{', '.join(f'{r:.2g}' for r in rel14[-1])}), including the plant whose A is stable "
-        f"(spectral radius {rho[-1]:.3f}): Sec. II-C's 'unless A is stable' is not the "
-        "criterion: with basis pursuit's support S containing the true one, the error is "
-        "propagated by (I - B_S (C B_S)^+ C) A, not by A. Where the state itself grows fast the relative error "
-        "of [14] can stay moderate over a short horizon; the absolute error always grew."
+        f"{steps - 1} on every plant tested, and its mean relative error (Fig. 4's metric) "
+        f"from {mean_rel[0]:.2g} to {mean_rel[1]:.2g}. Per plant the relative error need not "
+        "grow over a short horizon when the state itself grows fast (at k = "
+        f"{steps - 1}: {', '.join(f'{r:.2g}' for r in rel14[-1])}). The error grew also on "
+        f"the plant whose A is stable (spectral radius {rho[-1]:.3f}), so Sec. II-C's 'unless "
+        "A is stable' is not the criterion: with basis pursuit's support S containing the true "
+        "one, the error is propagated by (I - B_S (C B_S)^+ C) A, not by A."
     )
     if close and diverges:
         return Finding("holds", summary, evidence)
