@@ -147,9 +147,11 @@ def _load() -> None:
 
 
 def all_claims() -> dict[str, Claim]:
-    """Every registered claim, by document then in the order of the documents' modules."""
+    """Every registered claim, by document (000 to 004), each in the order it is registered."""
     _load()
-    return dict(_CLAIMS)
+    order = list(DOCUMENTS)
+    ids = sorted(_CLAIMS, key=lambda i: order.index(i.split(".", 1)[0]))  # stable
+    return {i: _CLAIMS[i] for i in ids}
 
 
 def get_claim(claim_id: str) -> Claim:

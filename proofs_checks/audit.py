@@ -91,9 +91,13 @@ def render_audit(outcomes: list[Outcome]) -> str:
 
 
 def _pretty(value: Any) -> str | None:
+    """A mapping as JSON with one key per line (matrices stay on their line, as in the file)."""
     if value is None:
         return None
-    return json.dumps(value, indent=1, allow_nan=False)
+    if not isinstance(value, dict):
+        return json.dumps(value, allow_nan=False)
+    lines = [f"  {json.dumps(k)}: {json.dumps(v, allow_nan=False)}" for k, v in value.items()]
+    return "{\n" + ",\n".join(lines) + "\n}"
 
 
 def write_audit(outcomes: list[Outcome], out: str | Path) -> tuple[Path, Path]:

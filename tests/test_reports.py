@@ -27,3 +27,17 @@ def test_regenerating_gives_the_same_verdicts(name):
     assert {k: v["verdict"] for k, v in fresh["checks"].items()} == {
         k: v["verdict"] for k, v in committed["checks"].items()
     }
+
+
+def test_the_committed_audit_has_every_claim_with_its_recorded_verdict():
+    from proofs_checks import all_claims
+
+    doc = json.loads((REPORTS / "audit.json").read_text(encoding="utf-8"))
+    claims = all_claims()
+    assert list(doc["claims"]) == list(claims)
+    assert {i: e["verdict"] for i, e in doc["claims"].items()} == {
+        i: c.recorded for i, c in claims.items()
+    }
+    assert (REPORTS / "audit.html").read_text(encoding="utf-8").count('class="claim v-') == len(
+        claims
+    )

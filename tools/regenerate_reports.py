@@ -1,10 +1,12 @@
-"""Regenerate reports/ for every packaged example: NAME.html and NAME.json.
+"""Regenerate reports/: NAME.html and NAME.json for every packaged example, and the audit of the
+documents' claims (audit.html and audit.json, as ``ssecert audit`` writes them).
 
 python tools/regenerate_reports.py
 """
 
 from pathlib import Path
 
+from proofs_checks import audit_json, render_audit, run_audit
 from ssecert._io import atomic_write_text
 from ssecert.certify import certify
 from ssecert.examples import list_examples, load_example
@@ -21,6 +23,11 @@ def main() -> None:
         # the same layout as `ssecert certify` (run times kept apart in meta.timings)
         atomic_write_text(out / f"{name}.json", certify_json(result))
         print(f"{name}: {result.certificate.verdict.value}")
+    outcomes = run_audit()
+    atomic_write_text(out / "audit.html", render_audit(outcomes))
+    atomic_write_text(out / "audit.json", audit_json(outcomes))
+    counts = {v: sum(o.finding.verdict == v for o in outcomes) for v in ("holds", "conditional")}
+    print(f"audit: {len(outcomes)} claims, {counts}")
 
 
 if __name__ == "__main__":
