@@ -530,7 +530,11 @@ def example1() -> Finding:
         assert _outcome(alpha * np.ones((3, 1)), (k,), y, 1e-3 * abs(a[k])) == "success"
     return Finding(
         "conditional",
-        "For alpha != 0 all checks (sympy): O_Sbar^{dagger T} = (1/(2 alpha)) (1, 1)^T and rho "
+        "As printed the example writes O_Sbar^T = alpha, which does not conform (O_Sbar^T is "
+        "1 x 2), and ||O_Sbar^{dagger T} O_Sbar^T||_inf = 1/2, whose left side is 1 (an evident "
+        "misprint, or lost in the plain-text conversion); read with O_S^T = alpha, as the "
+        "statement does: "
+        "for alpha != 0 all checks (sympy): O_Sbar^{dagger T} = (1/(2 alpha)) (1, 1)^T and rho "
         "= 1/2 on each support; the Lasso found the attack in 30 instances (alpha from 1e-3 to "
         "1e3); (O I)^T (O I) has characteristic polynomial mu (mu - 1)^2 (mu - q); each "
         "(O I_Gamma)^T (O I_Gamma), |Gamma| = 2, has (mu - 1)(mu^2 - q mu + alpha^2), smallest "
