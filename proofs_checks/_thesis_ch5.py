@@ -106,6 +106,10 @@ def _l2_of_5_22(F: np.ndarray, L1: np.ndarray, C: np.ndarray, q: float) -> np.nd
     return scale * np.eye(C.shape[0])
 
 
+def _eye_fr(n: int) -> list[list[Fr]]:
+    return [[Fr(int(i == j)) for j in range(n)] for i in range(n)]
+
+
 def _symbols(names: str, values: tuple[Any, ...], shows: str) -> dict[str, Any]:
     """A counterexample: the document's symbols (names separated by spaces) and what it shows."""
     return {**dict(zip(names.split(), values, strict=True)), "shows": shows}
@@ -158,8 +162,10 @@ def assumption2() -> Finding:
         "literally no Q satisfies it (and Theorems 6-7, which assume it, are vacuous). For s != 0 "
         "it holds with Q = I_p or any positive diagonal Q: per component q^2 S_lambda(s_i)^2 <= "
         "q^2 s_i^2 < s_i^2 when s_i != 0 (sympy); for Q = I the ratio is even at most q^2 < 1, "
-        "uniformly. Q must be p x p: Psi_q acts on the attack estimate in R^p, while the thesis "
-        "writes Psi_q: R^n -> R^p and Q in R^{n x n}. The 'there exists' matters: Q = [[1, -2], "
+        "uniformly. As printed, Psi_q: R^n -> R^p and Q in R^{n x n} do not conform "
+        "(Psi_q(s)'Q Psi_q(s) pairs a p-vector with an n x n matrix; an evident misprint, or "
+        "lost in the plain-text conversion); read with s in R^p and Q p x p, as Psi_q acts on "
+        "the attack estimate, the verdict above holds. The 'there exists' matters: Q = [[1, -2], "
         "[-2, 5]], s = (3, 1), lambda = 1 give Psi_q(s)'Q Psi_q(s) = 4 q^2 > s'Qs = 2 once "
         "q > 1/sqrt(2) (thesis.eq5_21). Items 1 and 3 hold (thesis.psi_lipschitz).",
         {
@@ -311,27 +317,38 @@ def pi_existence() -> Finding:
     )
 
 
-@claim(
-    "thesis.lemma1",
-    where="001 Lemma 1, (5.9)-(5.11)",
-    statement="There is Pi: R^p -> R^n with (A + L1 C) Pi(a) + L1 a - Pi(Psi_q(a)) = 0 (5.9), "
-    "and Pi is Lipschitz with constant l_Pi = ||L1|| / |lambda_max(A + L1 C) - q| (5.11), q the "
-    "Lipschitz constant of Psi_q.",
-    recorded="fails",
-)
-def lemma1() -> Finding:
-    F, L1, q, lam = Fr(1, 5), Fr(-4, 5), Fr(9, 10), Fr(1)
-    claimed = abs(L1) / abs(F - q)
-    ratio = abs(_pi_exact([Fr(1, 2)], [[1 / F]], [[L1]], q, lam)[0][0]) / Fr(1, 2)
-    # slope of Pi on the a > 0 where exactly N iterates Psi_q^l(a) are nonzero
-    slopes = [-L1 * sum((q**l / F ** (l + 1) for l in range(N)), Fr(0)) for N in range(1, 7)]
-    if not ratio > claimed:
-        raise AssertionError("the counterexample to (5.11) no longer fails")
-    rng = np.random.default_rng(11)
+# the plant of the counterexamples inside the proof's condition q / lambda_max(F) < 1:
+# A = diag(11/10, 39/20), C = I, L1 = -I, so F = A + L1 C = diag(1/10, 19/20), q = 9/10
+_F_IN = [[Fr(1, 10), Fr(0)], [Fr(0), Fr(19, 20)]]
+_F_IN_INV = [[Fr(10), Fr(0)], [Fr(0), Fr(20, 19)]]
+_MINUS_I = [[Fr(-1), Fr(0)], [Fr(0), Fr(-1)]]
+_Q_IN = Fr(9, 10)
+_L_PI_CLAIMED = Fr(1) / (Fr(19, 20) - _Q_IN)  # (5.11): ||L1|| = 1, lambda_max(F) = 19/20
+_PLANT_IN = ([[1.1, 0], [0, 1.95]], [[1, 0], [0, 1]], [[-1, 0], [0, -1]], 0.9, 1)
+
+
+def _pi_in(a: Sequence[Fr]) -> list[Fr]:
+    """Pi(a) of (5.10) on the plant above (lambda = 1), checking (5.9) there exactly."""
+    pi_a, _ = _pi_exact(a, _F_IN_INV, _MINUS_I, _Q_IN, Fr(1))
+    pi_psi, _ = _pi_exact(_psi_exact(a, _Q_IN, Fr(1)), _F_IN_INV, _MINUS_I, _Q_IN, Fr(1))
+    if [f - x for f, x in zip(_matvec(_F_IN, pi_a), a)] != pi_psi:
+        raise AssertionError(f"(5.9) fails at a = {a}")
+    return pi_a
+
+
+def _lipschitz_ratios(rng: np.random.Generator, count: int, scalar: bool) -> tuple[int, float]:
+    """Random designs inside q < rho(F) (Kalman predictor gain, or n = 1 with F of either sign):
+    how many break (5.11) on 200 pairs a1, a2 = a1 + 0.01 N(0, I), and the worst ratio."""
     violated, worst = 0, 0.0
-    for _ in range(60):
-        A, C, Lg = _random_design(rng)
-        Fm, qf, p = A + Lg @ C, float(rng.uniform(0.05, 0.95)), C.shape[0]
+    for _ in range(count):
+        if scalar:
+            p = int(rng.integers(1, 4))
+            Fm = np.array([[rng.choice([-1.0, 1.0]) * rng.uniform(0.1, 1.0)]])
+            Lg = rng.standard_normal((1, p))
+        else:
+            A, C, Lg = _random_design(rng)
+            Fm, p = A + Lg @ C, C.shape[0]
+        qf = float(rng.uniform(0.05, 0.95)) * float(np.abs(np.linalg.eigvals(Fm)).max())
         a1 = rng.standard_normal((200, p)) * np.exp(rng.uniform(-1, 1.5, (200, 1)))
         a2 = a1 + 0.01 * rng.standard_normal((200, p))
         Fi = np.linalg.inv(Fm)
@@ -339,32 +356,89 @@ def lemma1() -> Finding:
             r = np.linalg.norm(_pi_float(a1, Fi, Lg, qf) - _pi_float(a2, Fi, Lg, qf), axis=1)
             r = r / np.linalg.norm(a1 - a2, axis=1) / _claimed_l_pi(Fm, Lg, qf)
         r = r[np.isfinite(r)]
-        if r.size and r.max() > 1 + 1e-9:
-            violated, worst = violated + 1, max(worst, float(r.max()))
+        worst = max(worst, float(r.max(initial=0.0)))
+        violated += int(r.size > 0 and r.max() > 1 + 1e-9)
+    return violated, worst
+
+
+@claim(
+    "thesis.lemma1",
+    where="001 Lemma 1, (5.9)-(5.11)",
+    statement="There is Pi: R^p -> R^n with (A + L1 C) Pi(a) + L1 a - Pi(Psi_q(a)) = 0 (5.9), "
+    "and Pi is Lipschitz with constant l_Pi = ||L1|| / |lambda_max(A + L1 C) - q| (5.11), q the "
+    "Lipschitz constant of Psi_q (the proof: 'the series converges when q / lambda_max(F) < 1').",
+    recorded="fails",
+)
+def lemma1() -> Finding:
+    # inside the proof's condition: q / lambda_max(F) = 18/19 < 1
+    a1, a2 = [Fr(3, 2), Fr(0)], [Fr(2), Fr(0)]
+    (p1, z1), (p2, z2) = _pi_in(a1), _pi_in(a2)
+    slope = abs(p2 - p1) / (a2[0] - a1[0])
+    if not (z1 == z2 == 0 and slope == 100 and _L_PI_CLAIMED == 20 and _Q_IN / Fr(19, 20) < 1):
+        raise AssertionError("the counterexample to (5.11) no longer fails")
+    # scalar F inside the condition: (5.11) is a Lipschitz constant (|F^(-l-1)| = |F|^(-l-1)),
+    # the least one when F > 0: where N iterates stay above the threshold the slope is
+    # ||L1|| (1 - (q/F)^N) / (F - q); here the mode 19/20 of the plant above, L1 = -1
+    f = Fr(19, 20)
+    mode = [sum((_Q_IN**l / f ** (l + 1) for l in range(N)), Fr(0)) for N in (1, 5, 20, 80)]
+    if not all(m == (1 - (_Q_IN / f) ** N) / (f - _Q_IN) for m, N in zip(mode, (1, 5, 20, 80))):
+        raise AssertionError("the scalar slopes are not the partial geometric sums")
+    rng = np.random.default_rng(11)
+    scalar_violated, scalar_worst = _lipschitz_ratios(rng, 40, scalar=True)
+    violated, worst = _lipschitz_ratios(rng, 60, scalar=False)
+    if scalar_violated or not violated:
+        raise AssertionError("the randomised check of (5.11) did not come out as expected")
+    # outside the condition (remark): F = 1/5 < q = 9/10, L1 = -4/5
+    F, L1 = Fr(1, 5), Fr(-4, 5)
+    slopes = [-L1 * sum((_Q_IN**l / F ** (l + 1) for l in range(N)), Fr(0)) for N in range(1, 7)]
     return Finding(
         "fails",
-        "The constant (5.11) is wrong even for a scalar invertible F. The proof bounds "
-        "||F^(-l-1)|| by 1/lambda_max(F)^(l+1), but for a Schur F the inverse powers grow like "
-        "1/|smallest eigenvalue|^l; the series supports ||L1|| ||F^-1|| / (1 - q ||F^-1||), and "
-        "only when q ||F^-1|| < 1. In the counterexample the dead-zone slope of Pi alone, "
-        "|F^-1 L1| = 4, exceeds the claimed 8/7, and Pi is not Lipschitz at all: where N iterates "
-        "of Psi_q are nonzero its slope is 4 (1 + 4.5 + ... + 4.5^(N-1)). The existence part "
-        "needs F invertible (thesis.pi_existence). lambda_max(F) is read as the spectral radius "
-        "(it is undefined for complex eigenvalues); the scalar case does not depend on it.",
+        "Lemma 1 states (5.11) without a condition; its proof needs q / lambda_max(F) < 1 ('the "
+        "series converges when q / lambda_max(F) < 1'). For a scalar F inside that condition "
+        "(5.11) is exactly right (lambda_max(F) read as |F|): |F^(-l-1)| = |F|^(-l-1), so the "
+        "proof's chain of bounds holds and ||L1|| / (|F| - q) is a Lipschitz constant, the least "
+        "one when F > 0 (where N iterates of Psi_q stay above the threshold the slope is "
+        "||L1|| (1 - (q/F)^N) / (F - q)); 40 random scalar designs, F of either sign, never "
+        "broke it. For n >= 2 it fails inside the condition: the proof bounds ||F^(-l-1)|| by "
+        "lambda_max(F)^(-l-1), but the inverse powers grow like 1/|smallest eigenvalue|^l. In "
+        "the counterexample F = diag(1/10, 19/20) and q = 9/10 < lambda_max(F), (5.11) gives 20, "
+        "yet Pi has slope 100 between a1 = (3/2, 0) and a2 = (2, 0) ((5.9) holds there "
+        "exactly), and along the first mode, where q > 1/10, Pi is not Lipschitz at all; "
+        f"{violated} of 60 random designs inside the condition broke (5.11) too. The series "
+        "supports ||L1|| ||F^-1|| / (1 - q ||F^-1||), when q ||F^-1|| < 1. Remark: outside "
+        "the condition a scalar F already fails (F = 1/5, q = 9/10: Pi's slope is 4 (1 + 4.5 + "
+        "... + 4.5^(N-1)) where N iterates are nonzero, evidence). The existence part needs F "
+        "invertible (thesis.pi_existence). lambda_max(F) is read as the spectral radius (it is "
+        "undefined for complex eigenvalues).",
         {
             "method": "exact+randomised",
-            "slopes_of_Pi_N_1_to_6": [str(s) for s in slopes],
+            "counterexample_Pi": {"Pi(a1)": [float(p1), 0.0], "Pi(a2)": [float(p2), 0.0]},
+            "scalar_mode_19/20_slopes_N_1_5_20_80": [float(m) for m in mode],
+            "scalar_mode_bound_(5.11)": float(1 / (f - _Q_IN)),
+            "scalar_designs": f"{scalar_violated} of 40 random scalar designs (F = +-U(0.1, 1), "
+            "L1 Gaussian 1 x p, p in 1..3, q = U(0.05, 0.95) |F|) break (5.11); worst ratio "
+            f"{scalar_worst:.6f}",
             "random_designs": f"{violated} of 60 random designs (Kalman predictor gain, Gaussian "
-            "A, C, n, p in 1..3, q uniform in (0.05, 0.95), lambda = 1, seed 11) break (5.11) on "
-            "200 pairs a1, a2 = a1 + 0.01 N(0, I) each",
+            "A, C, n, p in 1..3, q = U(0.05, 0.95) rho(F), inside the proof's condition, lambda "
+            "= 1, seed 11) break (5.11) on 200 pairs a1, a2 = a1 + 0.01 N(0, I) each",
             "worst_ratio_to_claimed": worst,
+            "remark_outside_the_condition": {
+                "F": 0.2,
+                "L1": -0.8,
+                "q": 0.9,
+                "slopes_of_Pi_N_1_to_6": [str(s) for s in slopes],
+                "claimed": str(abs(L1) / abs(F - _Q_IN)),
+            },
         },
         counterexample=_symbols(
             "A C L1 q lambda a1 a2",
-            ([[1]], [[1]], [[-0.8]], 0.9, 1, [0], [0.5]),
-            "F = A + L1 C = 1/5; in the dead zone Psi_q(a) = 0 and Pi(a) = -F^-1 L1 a = "
-            f"4 a: |Pi(a2) - Pi(a1)| / |a2 - a1| = {ratio} > ||L1|| / |lambda_max(F) - q| = "
-            f"(4/5) / (7/10) = {claimed}",
+            (*_PLANT_IN, [1.5, 0], [2, 0]),
+            "F = A + L1 C = diag(1/10, 19/20): q / lambda_max(F) = 18/19 < 1, the proof's "
+            "condition. (5.10) with L1 = -I: Pi(a) = sum_l F^(-l-1) Psi_q^l(a); Psi_q(3/2) = "
+            "9/20 and Psi_q(2) = 9/10, then 0, so Pi(a1) = (10 (3/2) + 100 (9/20), 0) = "
+            f"({p1}, 0) and Pi(a2) = (10 (2) + 100 (9/10), 0) = ({p2}, 0), and (5.9) holds at "
+            f"both. |Pi(a2) - Pi(a1)| / |a2 - a1| = {slope} > ||L1|| / |lambda_max(F) - q| = "
+            f"1 / (1/20) = {_L_PI_CLAIMED}",
         ),
     )
 
@@ -399,23 +473,37 @@ def l2_choice() -> Finding:
         if not (sampled.max() <= bound * (1 + 1e-9) and bound < 1):
             raise AssertionError("a sampled ratio exceeds the proven bound of Assumption 3")
         worst_gap = min(worst_gap, 1 - float(bound))
-    # F = 1/5, L1 = -4/5, q = 9/10, lambda = 1; L2 = 7/16 is (5.22) with the thesis's l_Pi = 8/7
-    L2x, epsx, ax = Fr(7, 16), Fr(1, 1000), Fr(10)
-    (pi_a,), terms = _pi_exact([ax], [[Fr(5)]], [[Fr(-4, 5)]], Fr(9, 10), Fr(1))
-    ratio = (Fr(9, 10) * _soft(ax - epsx * L2x * (pi_a + ax), Fr(1))) ** 2 / ax**2
-    if not (ratio > 1 and L2x == 1 / (2 * Fr(8, 7))):
+    # inside q / lambda_max(F) < 1: the plant of thesis.lemma1, L2 = I/40 from (5.22) with the
+    # thesis's l_Pi = 20 and l_C = ||I|| = 1; Q = I; a = (t, 0), so only the first mode moves
+    L2x = min(1 / (2 * _L_PI_CLAIMED), Fr(1))
+    fails = {}
+    for epsx, t in ((Fr(1, 100), 6), (Fr(1, 1000), 8), (Fr(1, 10**4), 10)):
+        at = [Fr(t), Fr(0)]
+        v = [x - epsx * L2x * (pi + x) for x, pi in zip(at, _pi_in(at))]  # C = I
+        psi = _psi_exact(v, _Q_IN, Fr(1))
+        fails[str(epsx)] = (t, _quad(psi, _eye_fr(2)) / _quad(at, _eye_fr(2)))
+    if not (L2x == Fr(1, 40) and all(r > 1 for _, r in fails.values())):
         raise AssertionError("the counterexample to Assumption 3 no longer fails")
+    # the earlier instance, outside the proof's condition (remark): F = 1/5, q = 9/10
+    (pi_old,), _ = _pi_exact([Fr(10)], [[Fr(5)]], [[Fr(-4, 5)]], _Q_IN, Fr(1))
+    v_old = 10 - Fr(1, 1000) * Fr(7, 16) * (pi_old + 10)
+    ratio_old = (_Q_IN * _soft(v_old, Fr(1))) ** 2 / 100
+    (t1, r1), (t3, r3) = fails["1/100"], fails["1/10000"]
     return Finding(
         "conditional",
         "With Q = I and Pi globally Lipschitz (Pi(0) = 0), Assumption 3 holds for small eps with "
         "any L2: |Psi_q(v)| <= q |v| and |v| <= (||I - eps L2|| + eps ||L2|| l_C l_Pi) |a| give "
         "rho'' -> q^2 < 1 as eps -> 0. So q < 1, not the choice (5.22), does the work; and (5.23) "
         "drops the positive eps^2 Pi'C'QC Pi terms after Young's inequality (a gap the bound "
-        "above repairs). But Pi need not be Lipschitz: for a scalar F with q > |F| it grows "
-        "faster than any linear function (thesis.lemma1), eps L2 C Pi(a) then dominates a for large a, and "
-        "Assumption 3 fails for every eps > 0, with L2 from (5.22) computed from the thesis's "
-        "l_Pi as in the counterexample (the true l_Pi, infinite, would give L2 = 0: Assumption 3 "
-        "then holds, but the attack estimate ignores the measurements).",
+        "above repairs). But Pi need not be Lipschitz, even inside the proof's own condition "
+        "q / lambda_max(F) < 1 (thesis.lemma1): with F = diag(1/10, 19/20) and q = 9/10 the "
+        "first component of Pi grows faster than any linear function (q > 1/10), so eps L2 C "
+        "Pi(a) dominates a for large a and Assumption 3 fails for every eps > 0 with L2 = I/40, "
+        "(5.22) computed from the thesis's l_Pi = 20: Psi_q(...)'Psi_q(...) / a'a = "
+        f"{float(r1):.4g} at eps = 1/100, a = ({t1}, 0), and {float(r3):.4g} at eps = 1e-4, "
+        f"a = ({t3}, 0); a smaller eps fails at a larger a (the true l_Pi, infinite, would give "
+        "L2 = 0: Assumption 3 then holds, but the attack estimate ignores the measurements). "
+        "Remark: outside the condition a scalar F = 1/5 < q fails the same way (evidence).",
         {
             "method": "certificate+randomised",
             "instances": "25 random designs (Kalman predictor gain, Gaussian A, C, n, p in 1..3, "
@@ -423,14 +511,21 @@ def l2_choice() -> Finding:
             "eps = (1 - q) / (2 q ||L2|| (1 + l_C l_Pi)): proven rho'' < 1, never exceeded by "
             "300 sampled a (magnitudes 0.05-100 lambda) each",
             "smallest_1_minus_rho": float(worst_gap),
+            "counterexample_eps_a_ratio": [
+                {"eps": e, "a": [t, 0], "ratio": float(r)} for e, (t, r) in fails.items()
+            ],
+            "remark_outside_the_condition": "F = 1/5 (A = C = 1, L1 = -4/5), q = 9/10, L2 = "
+            f"7/16 ((5.22) with l_Pi = 8/7), eps = 1/1000, a = 10: ratio {float(ratio_old):.6g}",
         },
         counterexample=_symbols(
             "A C L1 q lambda L2 epsilon Q a",
-            ([[1]], [[1]], [[-0.8]], 0.9, 1, [[float(L2x)]], float(epsx), [[1]], [10]),
-            f"F = 1/5 (q ||F^-1|| = 4.5); L2 = 7/16 is (5.22) with l_Pi = 8/7. Pi(10) = "
-            f"{float(pi_a):.10g} ({terms} terms of (5.10)), and "
-            f"Psi_q(a - eps L2 (C Pi(a) + a))^2 / a^2 = {float(ratio):.6g} > 1; a smaller eps "
-            "fails at a larger a",
+            (*_PLANT_IN, [[0.025, 0], [0, 0.025]], 0.01, [[1, 0], [0, 1]], [t1, 0]),
+            "F = A + L1 C = diag(1/10, 19/20), q / lambda_max(F) = 18/19 < 1; (5.11) gives "
+            "l_Pi = 20 and (5.22) L2 = min{1/(2 l_C l_Pi), 1} I = I/40. Pi(a) = "
+            f"({float(_pi_in([Fr(t1), Fr(0)])[0]):.10g}, 0) by (5.10), (5.9) checked exactly, "
+            f"and Psi_q(a - eps L2 (C Pi(a) + a))' Q Psi_q(...) / a' Q a = {float(r1):.6g} > 1; "
+            f"at eps = 1e-4, a = ({t3}, 0) gives {float(r3):.6g}: a smaller eps fails at a "
+            "larger a",
         ),
         condition="Pi globally Lipschitz (e.g. F invertible with q ||(A + L1 C)^-1|| < 1) and Q "
         "diagonal, e.g. Q = I; then every L2, (5.22) included, satisfies it for small eps",
@@ -469,8 +564,19 @@ def eq5_20() -> Finding:
     rho_a = (1 + g_a) * rho_3  # the larger of the two readings of rho_a''
     eps_star = min(gamma * kappa / (c_eta + mu * d_eta), mu * (1 - rho_a) / c_a)
     eps_min = gamma / (c_eta + mu * d_eta)  # the first term with lambda_min(P) = 1
-    if not (W_next > W and eps_star > 2 * float(eps) and rho_a < 1):
+    eps_star_3 = min(gamma * kappa / (c_eta + mu * d_eta), mu * (1 - rho_3) / c_a)  # rho_3 as is
+    # l_Pi = ||L1|| / (f - q) = 2 (1 + sqrt 2) is Pi's true Lipschitz constant (F = f I): the slope
+    # where N iterates of Psi_q stay above the threshold is l_Pi (1 - (q/f)^N); e.g. at
+    # a = 10^4 (1, 1) along the top right singular vector of L1
+    L1f, top = np.array(L1, dtype=float), np.linalg.svd(np.array(L1, dtype=float))[2][0]
+    base = np.array([[1e4, 1e4], [1e4 + 1e-3 * top[0], 1e4 + 1e-3 * top[1]]])
+    two = _pi_float(base, 2 * np.eye(2), L1f, float(q))
+    slope = float(np.linalg.norm(two[1] - two[0]) / 1e-3)
+    exact_l_pi = abs(l_pi - 2 * (1 + np.sqrt(2))) < 1e-12 and l_pi * 0.99 < slope <= l_pi
+    if not (W_next > W and eps_star > 2 * float(eps) and rho_a < 1 and exact_l_pi):
         raise AssertionError("the counterexample to (5.20) no longer fails")
+    if not (eps_star_3 > 4 and abs(gamma - 0.5) < 1e-12 and abs(rho_3 - 0.1195) < 1e-4):
+        raise AssertionError("the derivation of eps* did not come out as expected")
     return Finding(
         "fails",
         "Before (5.20) the decrease -gamma eta'P eta is bounded by -gamma lambda_max(P) ||eta||^2 "
@@ -486,7 +592,13 @@ def eq5_20() -> Finding:
             "W": float(W),
             "W_plus": float(W_next),
             "eps_star_thesis": eps_star,
+            "eps_star_with_rho_a''_=_rho''": eps_star_3,
             "eps_star_with_lambda_min": eps_min,
+            "l_Pi": l_pi,
+            "slope_of_Pi_at_1e4_(1,1)": slope,
+            "c_eta_d_eta_c_a": [c_eta, d_eta, c_a],
+            "gamma": gamma,
+            "rho''_bound": rho_3,
             "arithmetic": "W, W+ in rationals; eps* in floats (about 3.8 against eps = 1)",
         },
         counterexample=_symbols(
@@ -509,10 +621,20 @@ def eq5_20() -> Finding:
                 [20, 0],
                 [0, 0],
             ),
-            f"F = I/2, F'PF = P/4 (rho = 3/4), l_Pi = 2 (1 + sqrt 2); Assumption 3 holds "
-            f"with rho'' <= {rho_3:.4f}; (5.20) gives eps* = {eps_star:.4g} > eps = 1. One step of "
-            "(5.14): a_hat+ = Psi_q(-eps L2 eta) = (-1/4, 0), eta+ = F eta - Pi(a_hat+) = "
-            f"({eta_next[0]}, {eta_next[1]}); W = {W} but W+ = {W_next}",
+            "F = A + L1 C = I/2, so F'PF = P/4 = (1 - rho) P with rho = 3/4, and gamma = "
+            f"gamma_eta (rho - 1) + rho = {gamma:g}. Pi's Lipschitz constant (the true one, F = "
+            f"f I: the slope where N iterates stay above lambda is l_Pi (1 - 2^-N), {slope:.4f} "
+            f"at a = 10^4 (1, 1)) is l_Pi = ||L1|| / (f - q) = 2 (1 + sqrt 2) = {l_pi:.4f}, "
+            "Lemma 1's value. Assumption 3 (Q = I, l_C = 1): rho'' <= (q (||I - eps L2|| + eps "
+            f"||L2|| l_C l_Pi))^2 = (0.25 (0.9 + 0.1 l_Pi))^2 = {rho_3:.4f}; rho_a'' = (1 + "
+            f"gamma_a) rho'' = {rho_a:.4f} (the larger reading of the thesis's rho_a'' = rho_a / "
+            f"(1 + gamma_a)). With ||P|| = lambda_max(P) = {kappa}, ||Q|| = 1: c_eta = "
+            f"{c_eta:.4g}, d_eta = {d_eta:.4g}, c_a = c_eta (1 + l_Pi)^2 = {c_a:.5g}, and (5.20) "
+            f"gives eps* = min({gamma * kappa / (c_eta + mu * d_eta):.4g}, "
+            f"{mu * (1 - rho_a) / c_a:.4g}) = {eps_star:.4g} > eps = 1 (with rho_a'' = "
+            f"{rho_3:.4f} itself, {eps_star_3:.4g}, still above 1). One step of (5.14) from "
+            "eta = (20, 0), a_hat = 0: a_hat+ = Psi_q(-eps L2 eta) = (-1/4, 0), eta+ = F eta - "
+            f"Pi(a_hat+) = ({eta_next[0]}, {eta_next[1]}); W = {W} but W+ = {W_next}: W grows",
         ),
     )
 

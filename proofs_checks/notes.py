@@ -188,24 +188,24 @@ def prop1() -> Finding:
         raise AssertionError(f"the check of Proposition 1 did not come out as expected: {ex}")
     return Finding(
         "conditional",
-        "Proposition 1 is the right criterion once its norm is read per sensor. Read literally, "
-        "||O_T z||_0 counts nonzero entries of O_T z in R^{qT}, while Definition 1 allows h of the q "
-        "sensors to be attacked at each k; then the 'if' direction fails for T >= 2. With n = 1, "
-        "q = 2, A = 1, C = (1; 1), h = 1, T = 2, ||O_2 z||_0 = 4 > 2h for every z != 0, yet "
-        "y(0) = y(1) = (1, 0) comes from x' = 1 with sensor 2 attacked (a' = (0, -1)) and from "
-        "x'' = 0 with sensor 1 attacked (a'' = (1, 0)): x(0) cannot be recovered. The 'only if' "
-        "direction holds (correctability forces more than 2h nonzero entries, and more than 2h "
-        "sensors), and z = 0 must be excluded (||O_T 0||_0 = 0). The "
-        "statement holds, and Proof 1 carries over word for word, when ||O_T z||_0 counts the "
-        "sensors i whose outputs C_i A^k z (k < T) are not all zero and the attacked sensors are "
-        "the same at every k (ssecert's reading: s attacked sensors are correctable iff 2s <= "
-        "max_removable); in the static case T = 1 that the notes prove, all readings agree. If the "
-        "attacked sensors may change with k, the sensor count is not enough either (evidence: A "
-        "swapping two states, four sensors); the criterion is then that every z != 0 has some "
-        f"k < T with ||C A^k z||_0 > 2h. Over {ex['systems']} small systems decided exhaustively, "
-        "both corrected forms agree with Definition 1 everywhere (the moving-attack one checked for "
-        "T <= 2) and the literal one is wrong in "
-        f"{ex['literal_wrong']}, none with T = 1.",
+        "Read literally, ||O_T z||_0 counts nonzero entries of O_T z in R^{qT}, while Definition 1 "
+        "allows h of the q sensors to be attacked at each k; then the 'if' direction fails for "
+        "T >= 2. With n = 1, q = 2, A = 1, C = (1; 1), h = 1, T = 2, ||O_2 z||_0 = 4 > 2h for every "
+        "z != 0, yet y(0) = y(1) = (1, 0) comes from x' = 1 with sensor 2 attacked (a' = (0, -1)) "
+        "and from x'' = 0 with sensor 1 attacked (a'' = (1, 0)): x(0) cannot be recovered. The "
+        "'only if' direction holds (correctability forces more than 2h nonzero entries), and "
+        "z = 0 must be excluded (||O_T 0||_0 = 0). Keeping Definition 1 as written (any h "
+        "sensors at each k), the criterion that holds is per step: every z != 0 has some k < T "
+        "with ||C A^k z||_0 > 2h (two explanations differ by a z whose C A^k z = a''(k) - a'(k) "
+        "is 2h-sparse at every k, and conversely such a z splits into two attacks). If instead "
+        "the attacked sensors are the same at every k, the statement holds, and Proof 1 carries "
+        "over word for word, when ||O_T z||_0 counts the sensors i whose outputs C_i A^k z "
+        "(k < T) are not all zero (ssecert's reading: s attacked sensors are correctable iff "
+        "2s <= max_removable); that sensor count is not enough for attacks that move (evidence: "
+        "A swapping two states, four sensors). In the static case T = 1 that the notes prove, "
+        f"all readings agree. Over {ex['systems']} small systems decided exhaustively, both "
+        "corrected forms agree with Definition 1 everywhere (the per-step one checked for "
+        f"T <= 2) and the literal one is wrong in {ex['literal_wrong']}, none with T = 1.",
         {
             "method": "exhaustive",
             "family": "n = 2; C: every multiset of 1-4 rows from (0,0), (1,0), (0,1), (1,1), "
@@ -246,10 +246,11 @@ def prop1() -> Finding:
             "C x'' + a''(k) = (1, 0) for k = 0, 1 with ||a'(k)||_0 = ||a''(k)||_0 = 1 = h: x(0) is "
             "either 1 or 0, so h = 1 error is not correctable (2 sensors see z, and 2 = 2h)",
         },
-        condition="||O_T z||_0 counts the sensors i whose output sequence (C_i z, C_i A z, ..., "
-        "C_i A^(T-1) z) is nonzero, the set of at most h attacked sensors is the same for "
-        "k = 0, ..., T-1, and z ranges over z != 0 (for T = 1, the static case of Proof 1, every "
-        "reading agrees)",
+        condition="z != 0 and, keeping Definition 1 as written (any h sensors attacked at each "
+        "k), the norm taken per step: every z != 0 has some k < T with ||C A^k z||_0 > 2h; or, "
+        "if the at most h attacked sensors are the same for k = 0, ..., T-1, ||O_T z||_0 counting "
+        "the sensors i whose output sequence (C_i z, C_i A z, ..., C_i A^(T-1) z) is nonzero "
+        "(for T = 1, the static case of Proof 1, every reading agrees)",
     )
 
 
@@ -342,23 +343,23 @@ def _sensor_ranks(A: Matrix, C: Matrix, T: int) -> list[int]:
     return [_rank([_mul([row], P)[0] for P in powers]) for row in C]
 
 
-@claim(
-    "notes.q_ge_2h_plus_n",
-    where="002 Sec. 2.3.2",
-    statement="For C in R^{q,n} with rank(C) = n and q > n, correcting h errors needs q >= 2h + n "
-    "(any n - 1 rows have a nontrivial kernel, so 2h < q - (n - 1)); e.g. h = 1, n = 3 needs at "
-    "least q = 5 sensors.",
-    recorded="conditional",
-)
-def q_ge_2h_plus_n() -> Finding:
-    # the counterexample: three identical sensors on a rotation by 90 degrees; and a larger one,
-    # n = 3 and q = 3 < 2h + n = 5 identical sensors on a cyclic shift
-    A, C = _exact([[0, -1], [1, 0]]), _exact([[1, 0], [1, 0], [1, 0]])
-    per_sensor, CA = _sensor_ranks(A, C, 2), _mul(C, A)
-    same = all(r == C[0] for r in C) and all(r == CA[0] for r in CA)  # C A^k z = (c_k z)(1, 1, 1)
-    shift = _exact([[0, 1, 0], [0, 0, 1], [1, 0, 0]])
-    larger = _sensor_ranks(shift, _exact([[1, 0, 0]] * 3), 3)
-    # the static case: necessary by the counting argument, and attained (Vandermonde rows)
+def _min_support_n2(q: int) -> tuple[int, int]:
+    """Every C in {-1, 0, 1}^(q x 2) of rank 2: (how many, largest min_z ||Cz||_0 - (q - 1)).
+
+    Exact in integers: a z != 0 orthogonal to no nonzero row (here (1, 10)) leaves no zero
+    entry but the zero rows, any other z is parallel to the normal (c2, -c1) of a row."""
+    C = np.array(list(itertools.product((-1, 0, 1), repeat=2 * q))).reshape(-1, q, 2)
+    full = C[:, :, 0, None] * C[:, None, :, 1] - C[:, :, 1, None] * C[:, None, :, 0]
+    C = C[np.any(full != 0, axis=(1, 2))]  # rank 2: two rows with a nonzero determinant
+    Z = np.concatenate(
+        [np.stack([C[:, :, 1], -C[:, :, 0]], 1), np.tile([[[1], [10]]], (len(C), 1, 1))], 2
+    )
+    counts = np.where(np.any(Z != 0, axis=1), np.count_nonzero(C @ Z, axis=1), q + 1)
+    return len(C), int((counts.min(axis=1) - (q - 1)).max())
+
+
+def _vandermonde_static() -> list[dict[str, int]]:
+    """min ||Cz||_0 for Vandermonde rows (1, t, ..., t^(n-1)), q = 2h + n and one row fewer."""
     static = []
     for n, h in ((1, 1), (2, 1), (3, 1), (2, 2), (3, 2)):
         below, at = (
@@ -366,46 +367,126 @@ def q_ge_2h_plus_n() -> Finding:
             for d in (-1, 0)
         )
         static.append({"n": n, "h": h, "min_support_q_2h_n_minus_1": below, "at_q_2h_n": at})
+    return static
+
+
+@claim(
+    "notes.q_ge_2h_plus_n",
+    where="002 Sec. 2.3.2 (within Sec. 2.3, the static case)",
+    statement="Static case (Sec. 2.3: A = I, y = C x + a): for C in R^{q,n} with rank(C) = n and "
+    "q > n, correcting h errors needs q >= 2h + n (any n - 1 rows have a nontrivial kernel, so "
+    "2h < q - (n - 1)); e.g. h = 1, n = 3 needs at least q = 5 sensors.",
+    recorded="holds",
+)
+def q_ge_2h_plus_n() -> Finding:
+    static = _vandermonde_static()
     tight = all(s["min_support_q_2h_n_minus_1"] == 2 * s["h"] < s["at_q_2h_n"] for s in static)
-    if not (per_sensor == [2, 2, 2] and same and larger == [3, 3, 3] and tight):
-        raise AssertionError("the check of q >= 2h + n did not come out as expected")
+    exhaustive = {f"q={q}": _min_support_n2(q) for q in (3, 4)}
+    # the remark: three identical sensors on a rotation by 90 degrees; and n = 3, q = 3 < 5
+    # identical sensors on a cyclic shift
+    A, C = _exact([[0, -1], [1, 0]]), _exact([[1, 0], [1, 0], [1, 0]])
+    per_sensor, CA = _sensor_ranks(A, C, 2), _mul(C, A)
+    same = all(r == C[0] for r in C) and all(r == CA[0] for r in CA)  # C A^k z = (c_k z)(1, 1, 1)
+    shift = _exact([[0, 1, 0], [0, 0, 1], [1, 0, 0]])
+    larger = _sensor_ranks(shift, _exact([[1, 0, 0]] * 3), 3)
+    if not (tight and all(w <= 0 for _, w in exhaustive.values())):
+        raise AssertionError("the static bound q >= 2h + n did not come out as expected")
+    if not (per_sensor == [2, 2, 2] and same and larger == [3, 3, 3]):
+        raise AssertionError("the dynamic remark did not come out as expected")
     return Finding(
-        "conditional",
-        "The bound is right for the static plant of Sec. 2.3 (A = I, or a single snapshot T = 1) "
-        "with one scalar output per sensor: any n - 1 rows of C share a kernel vector z != 0, so "
-        "||Cz||_0 <= q - n + 1 and Proposition 1 needs q - n + 1 > 2h, i.e. q >= 2h + n (the notes' "
-        "'equivalently h <= q - n' should read 2h <= q - n); Vandermonde rows attain it. It is not "
-        "necessary for a dynamic plant observed over T steps: there a sensor's T outputs (C_i; "
-        "C_i A; ...) can see the whole state, and only q >= 2h + 1 is needed. In the "
-        "counterexample, n = 2, h = 1 and q = 3 < 2h + n = 4 sensors all measure x1 of a rotation "
-        "by 90 degrees; after T = 2 steps each sensor alone sees x(0), and at each k the three "
-        "sensors read the same value plus the attack, so a majority vote recovers x1(0) from k = 0 "
-        "and x2(0) from k = 1, even if the attacked sensor changes with k. With three states and a "
-        "cyclic shift, q = 3 < 5 sensors likewise suffice.",
+        "holds",
+        "In the static case of Sec. 2.3, where the notes state it, it holds: any n - 1 rows of C "
+        "are n - 1 homogeneous equations in n unknowns, so some z != 0 makes them vanish; as "
+        "rank C = n, Cz != 0 and ||Cz||_0 <= q - n + 1. Proposition 1 (static case, where it "
+        "holds as stated: notes.prop1) needs ||Cz||_0 > 2h for every z != 0, hence "
+        "q - n + 1 > 2h, i.e. q >= 2h + n, and h = 1, n = 3 need q >= 5. The bound is attained "
+        "(Vandermonde rows give min ||Cz||_0 = 2h + 1 with q = 2h + n sensors, 2h with one "
+        "fewer), and every C in {-1, 0, 1}^(q x 2) of rank 2, q = 3, 4, has min ||Cz||_0 <= "
+        "q - 1 (exhaustive). The printed 'or equivalently h <= q - n' is wrong "
+        "(notes.h_le_q_minus_n), but q >= 2h + n follows from 2h < q - (n - 1) directly. "
+        "Remark: the bound is the static case's. For a dynamic plant observed over T >= 2 "
+        "steps it is not necessary (only q >= 2h + 1 is): a sensor's outputs (C_i; C_i A; ...) "
+        "can see the whole state, e.g. n = 2, h = 1 and q = 3 < 2h + n identical sensors "
+        "measuring x1 of a rotation by 90 degrees correct one attacked sensor, fixed or moving, "
+        "after T = 2 steps by a majority vote at each k (evidence).",
         {
             "method": "symbolic+exhaustive",
             "argument": "n - 1 homogeneous equations in n unknowns have a solution z != 0, and Cz is "
             "zero on those n - 1 rows: min over z != 0 of ||Cz||_0 <= q - n + 1",
             "static_vandermonde": static,
-            "counterexample_sensor_ranks_T2": per_sensor,
-            "cyclic_shift_n3_q3_sensor_ranks_T3": larger,
-            "how": "exact rational ranks of every row subset and of each sensor's observability matrix",
+            "exhaustive_n2_entries_-1_0_1": {
+                k: {"rank_2_matrices": m, "max_of_min_support_minus_(q-n+1)": w}
+                for k, (m, w) in exhaustive.items()
+            },
+            "how": "exact rational ranks of every row subset, and integer counts for n = 2",
+            "remark_dynamic_plant": {
+                "n": 2,
+                "q": 3,
+                "h": 1,
+                "T": 2,
+                "A": [[0, -1], [1, 0]],
+                "C": [[1, 0], [1, 0], [1, 0]],
+                "O_T": [[1, 0], [1, 0], [1, 0], [0, -1], [0, -1], [0, -1]],
+                "sensor_ranks_T2": per_sensor,
+                "cyclic_shift_n3_q3_sensor_ranks_T3": larger,
+                "shows": "q = 3 < 2h + n = 4, yet C z = z1 (1, 1, 1) and C A z = -z2 (1, 1, 1): "
+                "every z != 0 has ||C A^k z||_0 = 3 > 2h for k = 0 or k = 1, so each sensor "
+                "alone observes x(0) and one attacked sensor (fixed or moving) is corrected "
+                "after T = 2 steps; outside Sec. 2.3's static setting",
+            },
+        },
+    )
+
+
+@claim(
+    "notes.h_le_q_minus_n",
+    where="002 Sec. 2.3.2",
+    statement="For integers q > n >= 1 and h >= 0: '2h < q - (n - 1), or equivalently h <= q - n'.",
+    recorded="fails",
+)
+def h_le_q_minus_n() -> Finding:
+    triples = wrong = fixed_wrong = 0
+    for q in range(2, 41):
+        for n, h in itertools.product(range(1, q), range(q + 1)):
+            strict = 2 * h < q - (n - 1)
+            triples += 1
+            wrong += int(strict != (h <= q - n))
+            fixed_wrong += int(strict != (2 * h <= q - n))
+    vandermonde = _exact([[t**j for j in range(3)] for t in range(4)])  # q = 4, n = 3
+    least, rows = _min_support(vandermonde)
+    Cz = [row[0] for row in _mul(vandermonde, _exact([[0], [1], [-1]]))]
+    if not (wrong and fixed_wrong == 0 and least == 2 and Cz == [0, 0, -2, -6]):
+        raise AssertionError("the check of 'equivalently h <= q - n' did not come out")
+    return Finding(
+        "fails",
+        "The printed step is well-formed and false, so it fails: for integers 2h < q - (n - 1) "
+        "means 2h <= q - n, not h <= q - n. With q = 4, n = 3, h = 1, h <= q - n holds (1 <= 1) "
+        "but 2h < q - n + 1 does not (2 < 2 is false); and indeed no 4 x 3 C of rank 3 corrects "
+        "one error: any two rows share a kernel vector, so min ||Cz||_0 <= 2 = 2h (Vandermonde "
+        "rows (1, t, t^2), t = 0..3: exactly 2). It looks like a misprint for 2h <= q - n, "
+        f"which is equivalent to 2h < q - (n - 1) (all {triples} integer triples with "
+        "q <= 40 checked) and gives the notes' q >= 2h + n; the conclusion is unaffected "
+        f"(notes.q_ge_2h_plus_n). 'h <= q - n' disagrees with 2h < q - (n - 1) on {wrong} of "
+        "those triples.",
+        {
+            "method": "exhaustive",
+            "triples": triples,
+            "range": "q = 2..40, n = 1..q-1, h = 0..q",
+            "disagreements_with_h_le_q_minus_n": wrong,
+            "disagreements_with_2h_le_q_minus_n": fixed_wrong,
+            "vandermonde_q4_n3_min_support": least,
+            "vandermonde_largest_rank_deficient_rows": [r + 1 for r in rows],
         },
         counterexample={
-            "n": 2,
-            "q": 3,
+            "q": 4,
+            "n": 3,
             "h": 1,
-            "T": 2,
-            "A": [[0, -1], [1, 0]],
-            "C": [[1, 0], [1, 0], [1, 0]],
-            "O_T": [[1, 0], [1, 0], [1, 0], [0, -1], [0, -1], [0, -1]],
-            "shows": "q = 3 < 2h + n = 4, yet C z = z1 (1, 1, 1) and C A z = -z2 (1, 1, 1): every "
-            "z != 0 has ||C A^k z||_0 = 3 > 2h for k = 0 or k = 1, so each sensor alone observes "
-            "x(0) and one attacked sensor (fixed or moving) is corrected after T = 2 steps",
+            "C": [[1, 0, 0], [1, 1, 1], [1, 2, 4], [1, 3, 9]],
+            "shows": "h <= q - n reads 1 <= 1 (true), 2h < q - (n - 1) reads 2 < 2 (false): the "
+            "two are not equivalent. The second is the one that matters: rows 1 and 2 of this C "
+            "(rank 3) vanish on z = (0, 1, -1), and Cz = (0, 0, -2, -6) has 2 = 2h nonzero "
+            "entries, so h = 1 error is not correctable with q = 4 < 2h + n = 5 sensors.",
         },
-        condition="the plant is static (A = I, the setting of Sec. 2.3, or T = 1) and each of the "
-        "q sensors gives one scalar output; for a dynamic plant observed over T >= 2 steps only "
-        "q >= 2h + 1 is necessary",
     )
 
 
