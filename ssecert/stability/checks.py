@@ -9,6 +9,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+import numpy as np
+
 from .._format import sig
 from ..budget import Budget, ResourceLimitError
 from ..context import OBSERVER, AnalysisContext, shared
@@ -18,6 +20,7 @@ from ..observers.lure import LureModel
 from ..results import Check, Verdict
 from ..system import System
 from ..tolerances import Tolerances
+from .divergence import divergence_witness
 from .gain_check import (
     EXACT_LIMIT,  # noqa: F401  (stays importable here)
     _decided_by,
@@ -77,7 +80,57 @@ def observer_stability_check(
         return _no_certificate(title, summary, "circle criterion (LMI, Clarabel)"), None
     model = design.observer_kind.lure_model(design)
     cert = circle_certificate(model, budget=budget, clear=tol.certificate_clear)
+    if cert.verdict == "inconclusive":
+        witness = divergence_witness(model)
+        if witness is not None:
+            return _divergence_check(design, model, cert, witness, tol, title), (model, cert)
     return _circle_stability_check(design, model, cert, tol, title), (model, cert)
+
+
+def _divergence_check(
+    design: ObserverDesign,
+    model: LureModel,
+    cert: LMICertificate,
+    witness: dict[str, Any],
+    tol: Tolerances,
+    title: str,
+) -> Check:
+    """observer_stability fails: the large-signal loop has a replayed divergent trajectory."""
+    mu = witness["large_signal_eigenvalue"]
+    summary = (
+        f"The observer is not globally asymptotically stable: far from the origin the soft "
+        f"threshold is the identity minus a bounded term, and that large-signal loop has the "
+        f"eigenvalue {sig(mu.real) if mu.imag == 0 else f'{mu.real:.4g} {mu.imag:+.4g}i'} "
+        f"(modulus {abs(mu):.6g} > 1). "
+        f"Along its left eigenvector w the error obeys |w' xi+| >= {abs(mu):.6g} |w' xi| - "
+        f"{witness['beta']:.3g}, so it grows without bound once |w' xi| > "
+        f"{witness['escape_level']:.3g}; replayed: from an initial error of norm "
+        f"{witness['norms'][0]:.3g} (a_hat(0) = "
+        f"{'0' if not np.any(witness['initial_attack_estimate']) else 'as given'}) it reaches "
+        f"{witness['norms'][1]:.3g} in {witness['steps']} steps without attack."
+    )
+    evidence = _circle_evidence(model, cert)
+    evidence["no_certificate"] = cert.reason
+    evidence["large_signal_loop"] = model.vertex(model.q)
+    return Check(
+        id="observer_stability",
+        title=title,
+        verdict=Verdict.FAILS,
+        summary=summary,
+        value=None,
+        margin=abs(mu) - 1.0,
+        method="large-signal divergence (eigenvector bound, replayed)",
+        fields={
+            "decay_rate": None,
+            "structure": cert.structure,
+            "shrink": design.shrink,
+            "step": design.step,
+            "threshold": design.threshold,
+        },
+        evidence=evidence,
+        witness=witness,
+        tolerances=_decided_by(tol, error_bound=witness["eigenvalue_error_bound"], lmi_eta=ETA),
+    )
 
 
 def _linear_stability_check(lyap: LyapunovCertificate, tol: Tolerances, title: str) -> Check:
