@@ -1,5 +1,6 @@
 """observer_stability fails with a replayed divergent trajectory when the large-signal loop of a
-sparse observer has an eigenvalue outside the unit circle, and only then."""
+sparse observer has an eigenvalue outside the unit circle, and only then; region_of_attraction
+certifies the invariant part of the dead zone."""
 
 import numpy as np
 from hypothesis import given, settings
@@ -11,6 +12,7 @@ from ssecert.observers import build_observer
 from ssecert.observers.lure import LureModel
 from ssecert.stability.checks import observer_stability_check
 from ssecert.stability.divergence import GROWTH, divergence_witness
+from ssecert.stability.roa import region_of_attraction
 
 
 def _ugv_dsso(step: float) -> dict:
@@ -92,6 +94,14 @@ def test_a_divergence_witness_diverges_and_a_holds_converges(seed, step, thresho
         starts = rng.standard_normal((20, model.N)) * 10.0 ** rng.uniform(-2, 3, (20, 1))
         end = model.simulate(starts, 3000)[-1]
         assert np.all(np.linalg.norm(end, axis=1) <= 1e-6 * np.linalg.norm(starts, axis=1) + 1e-9)
+    region = region_of_attraction(model, seed=seed)
+    if region["radius"] > 0:  # a certified region: errors inside it never leave it
+        e0 = rng.standard_normal((20, model.n_e))
+        e0 *= region["radius"] / np.linalg.norm(e0, axis=1, keepdims=True)
+        xi0 = np.concatenate([e0, np.zeros((20, model.N - model.n_e))], axis=1)
+        path = model.simulate(xi0, 300)
+        V = np.einsum("ksi,ij,ksj->ks", path, region["P"], path)
+        assert V.max() <= region["level"] * (1 + 1e-6)
 
 
 def test_no_witness_without_an_eigenvalue_outside_the_unit_circle():
@@ -109,3 +119,30 @@ def test_no_witness_without_an_eigenvalue_outside_the_unit_circle():
     assert max(abs(np.linalg.eigvals(model.vertex(1.0)))) < 1
     assert divergence_witness(model) is None
     assert GROWTH >= 100
+
+
+def test_the_ugv_dsso_converges_from_its_certified_region():
+    cert = analyze(load_example("ugv"))
+    region = cert["region_of_attraction"]
+    assert region.verdict.value == "holds" and not region.required
+    radius = region.fields["radius"]
+    assert 0 < radius < 10
+    assert f"{radius:.3g}" in cert["observer_stability"].summary
+    # independent replay: initial errors inside the radius, a_hat(0) = 0, converge
+    spec = load_example("ugv")
+    model = LureModel.from_design(build_observer(spec.system, spec.observer))
+    rng = np.random.default_rng(7)
+    e0 = rng.standard_normal((200, model.n_e))
+    e0 *= radius * rng.uniform(0, 1, (200, 1)) / np.linalg.norm(e0, axis=1, keepdims=True)
+    xi0 = np.concatenate([e0, np.zeros((200, model.N - model.n_e))], axis=1)
+    end = model.simulate(xi0, 50)[-1]
+    assert np.max(np.linalg.norm(end, axis=1)) <= 1e-9 * radius
+
+
+def test_no_region_when_the_dead_zone_dynamics_are_unstable():
+    spec = _ugv_dsso(0.7)
+    spec["observer"]["gain"] = [[2.5, 0.0, 0.0], [0.0, 0.5, 0.5]]  # rho(A - L C) = 1.5
+    cert = analyze(spec_from_dict(spec))
+    assert cert["region_of_attraction"].verdict.value == "fails"
+    assert cert["region_of_attraction"].fields["radius"] == 0.0
+    assert cert["observer_stability"].verdict.value == "fails"

@@ -7,6 +7,7 @@ JSON ids: ``observer_gain`` and ``observer_stability`` (required),
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -38,6 +39,7 @@ from .lmi import (
     lure_model_cost,
 )
 from .lyapunov import LyapunovCertificate, lyapunov_certificate
+from .roa import region_of_attraction
 from .thesis import thesis_assumptions
 
 __all__ = [
@@ -385,7 +387,8 @@ def observer_checks(
     -------
     list of Check
         ``observer_gain``, ``observer_stability`` and, when a gain exists,
-        ``iss_gain`` and (sparse observers) ``thesis_assumptions``.
+        ``iss_gain`` and (sparse observers) ``thesis_assumptions`` and
+        ``region_of_attraction``.
 
     Examples
     --------
@@ -394,7 +397,8 @@ def observer_checks(
     >>> [(c.id, c.verdict.value) for c in observer_checks(spec.system, spec.observer)]
     ... # doctest: +NORMALIZE_WHITESPACE
     [('observer_gain', 'holds'), ('observer_stability', 'inconclusive'),
-     ('iss_gain', 'inconclusive'), ('thesis_assumptions', 'fails')]
+     ('iss_gain', 'inconclusive'), ('thesis_assumptions', 'fails'),
+     ('region_of_attraction', 'holds')]
     """
     tol = Tolerances.check(tolerances)
     try:
@@ -443,8 +447,56 @@ def observer_checks(
         return [gain, stab]
     checks = [observer_gain_check(design, tolerances=tol)]
     stability, cert = observer_stability_check(design, budget=budget, tolerances=tol)
+    region = region_of_attraction_check(design, seed=seed) if design.sparse else None
+    if region is not None and stability.verdict is Verdict.INCONCLUSIVE and region.value:
+        stability = replace(
+            stability,
+            summary=f"{stability.summary} What is proved: the error converges from every initial "
+            f"error with ||e(0)|| <= {region.value:.3g} and a_hat(0) = 0 (region_of_attraction).",
+            evidence={**stability.evidence, "certified_region_radius": region.value},
+        )
     checks.append(stability)
     checks.append(iss_gain_check(design, cert, budget=budget, tolerances=tol))
     if design.sparse:
         checks.append(thesis_assumptions_check(design, observability, seed=seed, budget=budget))
+    if region is not None:
+        checks.append(region)
     return checks
+
+
+def region_of_attraction_check(design: ObserverDesign, *, seed: int = 0) -> Check | None:
+    """Advisory: the radius of initial estimation errors from which a sparse observer provably
+    converges without attack (the invariant part of its dead zone); None for a design without
+    a Lur'e model."""
+    try:
+        model = design.observer_kind.lure_model(design)
+    except NotImplementedError:
+        return None
+    found = region_of_attraction(model, seed=seed)
+    radius = float(found["radius"])
+    evidence = {k: v for k, v in found.items() if k != "radius"}
+    if radius > 0:
+        verdict = Verdict.HOLDS
+        summary = (
+            f"From every initial estimation error with ||e(0)|| <= {radius:.4g} (a_hat(0) = 0) the "
+            f"error converges to 0 without attack: the largest sublevel set of a verified "
+            f"Lyapunov function of the dead zone's linear dynamics that fits in the dead zone "
+            f"(|Cw_i xi| <= threshold) is invariant; {evidence['replay']['samples']} initial "
+            f"errors on that sphere, simulated, stay in it."
+        )
+    else:
+        unstable = "is not stable" in str(found.get("reason", ""))
+        verdict = Verdict.FAILS if unstable else Verdict.INCONCLUSIVE
+        summary = f"No region of attraction is certified: {found['reason']}."
+    return Check(
+        id="region_of_attraction",
+        title="Certified region of attraction",
+        verdict=verdict,
+        summary=summary,
+        value=radius,
+        margin=evidence.get("lyapunov_margin"),
+        method="invariant sublevel set of the dead zone (Lyapunov)",
+        required=False,
+        fields={"radius": radius},
+        evidence=evidence,
+    )
