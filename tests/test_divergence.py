@@ -12,6 +12,7 @@ from ssecert.observers import build_observer
 from ssecert.observers.lure import LureModel
 from ssecert.stability.checks import observer_stability_check
 from ssecert.stability.divergence import GROWTH, divergence_witness
+from ssecert.stability.equilibria import nonzero_equilibrium
 from ssecert.stability.roa import region_of_attraction
 
 
@@ -90,10 +91,25 @@ def test_a_divergence_witness_diverges_and_a_holds_converges(seed, step, thresho
         xi0 = np.concatenate([w["initial_error"], w["initial_attack_estimate"]])
         path = model.simulate(xi0, w["steps"])
         assert np.linalg.norm(path[-1]) >= 10 * np.linalg.norm(xi0)
+    if check.verdict.value == "fails" and check.witness.get("kind") == "nonzero equilibrium":
+        w = check.witness
+        xi0 = np.concatenate([w["initial_error"], w["initial_attack_estimate"]])
+        assert np.linalg.norm(xi0) > 0
+        after = model.simulate(xi0, 50)[-1]
+        assert np.linalg.norm(after - xi0) <= 1e-9 * np.linalg.norm(xi0)
     if check.verdict.value == "holds":
+        # converges: to zero within the steps simulated, or (a weak certificate, slow for large
+        # errors) with the certificate's V = xi' P xi decreasing all along and well on its way
         starts = rng.standard_normal((20, model.N)) * 10.0 ** rng.uniform(-2, 3, (20, 1))
-        end = model.simulate(starts, 3000)[-1]
-        assert np.all(np.linalg.norm(end, axis=1) <= 1e-6 * np.linalg.norm(starts, axis=1) + 1e-9)
+        path = model.simulate(starts, 20_000)
+        norms = np.linalg.norm(path, axis=2)
+        P = np.asarray(check.evidence["P"])
+        V = np.einsum("ksi,ij,ksj->ks", path, P, path)
+        done = norms[-1] <= 1e-6 * norms[0] + 1e-9
+        on_its_way = np.all(np.diff(V, axis=0) <= 1e-12 * V[:-1] + 1e-300, axis=0) & (
+            V[-1] <= 0.5 * V[0]
+        )
+        assert np.all(done | on_its_way)
     region = region_of_attraction(model, seed=seed)
     if region["radius"] > 0:  # a certified region: errors inside it never leave it
         e0 = rng.standard_normal((20, model.n_e))
@@ -146,3 +162,22 @@ def test_no_region_when_the_dead_zone_dynamics_are_unstable():
     assert cert["region_of_attraction"].verdict.value == "fails"
     assert cert["region_of_attraction"].fields["radius"] == 0.0
     assert cert["observer_stability"].verdict.value == "fails"
+
+
+def test_a_planted_nonzero_equilibrium_is_found_and_confirmed_exactly():
+    # xi+ = xi / 2 + S(xi), threshold 1/10: xi = +-1/5 are fixed points (1/10 + 1/10)
+    model = LureModel(
+        A=np.array([[0.5]]), B=np.array([[1.0]]), Cw=np.array([[1.0]]), E=np.zeros((1, 1)),
+        Dw=np.zeros((1, 1)), Ce=np.array([[1.0]]), q=1.0, n_e=1, threshold=0.1,
+    )  # fmt: skip
+    witness, searched = nonzero_equilibrium(model)
+    assert witness is not None and witness["exact"]
+    assert abs(abs(witness["initial_error"][0]) - 0.2) < 1e-15
+    assert witness["float_residual"] <= 1e-15 and "patterns tried" in searched
+
+
+def test_the_ugv_search_finds_no_equilibrium_and_says_what_it_searched():
+    check = analyze(load_example("ugv"))["observer_stability"]
+    searches = check.evidence["searches"]
+    assert "none among the 27 active/sign patterns" in searches["nonzero_equilibrium"]
+    assert "spectral radius 1" in searches["divergent_trajectory"]

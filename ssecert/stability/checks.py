@@ -22,6 +22,7 @@ from ..results import Check, Verdict
 from ..system import System
 from ..tolerances import Tolerances
 from .divergence import divergence_witness
+from .equilibria import nonzero_equilibrium
 from .gain_check import (
     EXACT_LIMIT,  # noqa: F401  (stays importable here)
     _decided_by,
@@ -86,7 +87,59 @@ def observer_stability_check(
         witness = divergence_witness(model)
         if witness is not None:
             return _divergence_check(design, model, cert, witness, tol, title), (model, cert)
+        equilibrium, searched = nonzero_equilibrium(model)
+        if equilibrium is not None:
+            check = _equilibrium_check(design, model, cert, equilibrium, tol, title)
+            return check, (model, cert)
+        check = _circle_stability_check(design, model, cert, tol, title)
+        radius = float(np.max(np.abs(np.linalg.eigvals(model.vertex(model.q)))))
+        searches = {
+            "divergent_trajectory": "none: the large-signal loop A + shrink B Cw has spectral "
+            f"radius {radius:.6g}, not clearly above 1",
+            "nonzero_equilibrium": searched,
+        }
+        return replace(check, evidence={**check.evidence, "searches": searches}), (model, cert)
     return _circle_stability_check(design, model, cert, tol, title), (model, cert)
+
+
+def _equilibrium_check(
+    design: ObserverDesign,
+    model: LureModel,
+    cert: LMICertificate,
+    witness: dict[str, Any],
+    tol: Tolerances,
+    title: str,
+) -> Check:
+    """observer_stability fails: the error dynamics have an exactly confirmed nonzero
+    equilibrium (the observer settles on a wrong estimate with no attack)."""
+    e = np.asarray(witness["initial_error"])
+    summary = (
+        f"The observer is not globally asymptotically stable: it has a nonzero equilibrium, "
+        f"confirmed in exact arithmetic: from the estimation error e = {np.array2string(e, precision=4)}"
+        f" and the attack estimate it pairs with, the error stays there forever without attack "
+        f"(active soft-threshold channels {np.flatnonzero(witness['active_signs']).tolist()})."
+    )
+    evidence = _circle_evidence(model, cert)
+    evidence["no_certificate"] = cert.reason
+    return Check(
+        id="observer_stability",
+        title=title,
+        verdict=Verdict.FAILS,
+        summary=summary,
+        value=None,
+        margin=None,
+        method="equilibrium search (active/sign patterns, exact)",
+        fields={
+            "decay_rate": None,
+            "structure": cert.structure,
+            "shrink": design.shrink,
+            "step": design.step,
+            "threshold": design.threshold,
+        },
+        evidence=evidence,
+        witness=witness,
+        tolerances=_decided_by(tol, error_bound=0.0, lmi_eta=ETA),
+    )
 
 
 def _divergence_check(

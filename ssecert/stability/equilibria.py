@@ -1,0 +1,137 @@
+"""Nonzero equilibria of a sparse observer's error dynamics without attack.
+
+The nonlinearity q S(w) of the Lur'e model (``ssecert.observers.lure``) is
+affine on each region of w where every entry is either in the dead zone
+(|w_i| <= threshold, output 0) or active with a sign s_i (output
+q (w_i - threshold s_i)).  On the region of a pattern s in {-1, 0, 1}^m the
+fixed points solve the linear equations
+
+    (I - A - q B D Cw) xi = -q threshold B s,   D = diag(|s|),
+
+and a solution is an equilibrium when it lies in its own region.  Every
+pattern is tried (3^m, batched) for small m; an equilibrium other than the
+origin is confirmed in exact rational arithmetic on the model's floats
+before it is reported: the observer then settles on a wrong estimate with no
+attack, and is not globally asymptotically stable.
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from typing import Any
+
+import numpy as np
+
+from ..observers.lure import LureModel
+
+__all__ = ["nonzero_equilibrium", "MAX_PATTERNS"]
+
+MAX_PATTERNS = 3**10  # patterns tried exhaustively (59,049)
+_BATCH = 4096
+
+
+def nonzero_equilibrium(model: LureModel) -> tuple[dict[str, Any] | None, str]:
+    """An exactly confirmed nonzero equilibrium (the witness) or None, with what was searched."""
+    m = model.m
+    if m == 0 or model.q <= 0:
+        return None, "no nonlinearity: the only equilibrium of a stable linear map is 0"
+    count = 3**m
+    if count > MAX_PATTERNS:
+        return None, f"not searched: 3^{m} = {count:,} active/sign patterns exceed {MAX_PATTERNS:,}"
+    N, lam, q = model.N, model.threshold, model.q
+    singular = 0
+    for start in range(0, count, _BATCH):
+        signs = _patterns(m, start, min(start + _BATCH, count))
+        active = np.abs(signs)
+        K = np.eye(N) - model.A - q * np.einsum("ij,pj,jk->pik", model.B, active, model.Cw)
+        rhs = -q * lam * signs @ model.B.T
+        cond = np.linalg.cond(K)
+        ok = np.isfinite(cond) & (cond < 1e12)
+        singular += int(np.count_nonzero(~ok))
+        if not ok.any():
+            continue
+        xi = np.linalg.solve(K[ok], rhs[ok][..., None])[..., 0]
+        w = xi @ model.Cw.T
+        s = signs[ok]
+        slack = 1e-9 * max(lam, 1.0)
+        inside = np.where(s != 0, s * w > lam + slack, np.abs(w) < lam - slack).all(axis=1)
+        nonzero = np.linalg.norm(xi, axis=1) > 0
+        for i in np.flatnonzero(inside & nonzero):
+            witness = _confirm(model, s[i])
+            if witness is not None:
+                return witness, f"{start + i + 1:,} of {count:,} active/sign patterns tried"
+    note = f"none among the {count:,} active/sign patterns of the soft threshold"
+    if singular:
+        note += f" ({singular:,} with a singular or ill-conditioned system, not decided)"
+    return None, note
+
+
+def _patterns(m: int, start: int, stop: int) -> np.ndarray:
+    """Patterns ``start`` to ``stop`` of {-1, 0, 1}^m (base-3 digits), shape (stop - start, m)."""
+    index = np.arange(start, stop)[:, None]
+    digits = (index // 3 ** np.arange(m)[None, :]) % 3
+    return (digits - 1).astype(float)
+
+
+def _confirm(model: LureModel, signs: np.ndarray) -> dict[str, Any] | None:
+    """Solve the pattern's fixed-point equations exactly; the witness if the solution is a
+    nonzero equilibrium in its region, else None."""
+    N = model.N
+    F = _exact_matrix(model, signs)
+    lam, q = Fraction(model.threshold), Fraction(model.q)
+    B = [[Fraction(float(v)) for v in row] for row in model.B]
+    rhs = [-q * lam * sum((B[i][j] * int(signs[j]) for j in range(model.m)), Fraction(0))
+           for i in range(N)]  # fmt: skip
+    xi = _solve(F, rhs)
+    if xi is None or not any(xi):
+        return None
+    Cw = [[Fraction(float(v)) for v in row] for row in model.Cw]
+    w = [sum((Cw[i][k] * xi[k] for k in range(N)), Fraction(0)) for i in range(model.m)]
+    for wi, si in zip(w, signs):
+        if (si != 0 and not si * wi > lam) or (si == 0 and not abs(wi) <= lam):
+            return None
+    point = np.array([float(v) for v in xi])
+    step = model.simulate(point, 1)[-1]
+    return {
+        "kind": "nonzero equilibrium",
+        "initial_error": point[: model.n_e],
+        "initial_attack_estimate": point[model.n_e :],
+        "active_signs": signs.astype(int),
+        "exact": True,
+        "float_residual": float(np.linalg.norm(step - point)),
+        "replay": "xi is a fixed point of xi+ = A xi + B q S(Cw xi) (no attack): the observer "
+        "stays at this wrong estimate",
+    }
+
+
+def _exact_matrix(model: LureModel, signs: np.ndarray) -> list[list[Fraction]]:
+    """I - A - q B D Cw in exact arithmetic on the model's floats."""
+    N, m = model.N, model.m
+    q = Fraction(model.q)
+    A = [[Fraction(float(v)) for v in row] for row in model.A]
+    B = [[Fraction(float(v)) for v in row] for row in model.B]
+    Cw = [[Fraction(float(v)) for v in row] for row in model.Cw]
+    on = [j for j in range(m) if signs[j] != 0]
+    return [
+        [
+            (1 if i == k else 0) - A[i][k] - q * sum((B[i][j] * Cw[j][k] for j in on), Fraction(0))
+            for k in range(N)
+        ]
+        for i in range(N)
+    ]
+
+
+def _solve(M: list[list[Fraction]], b: list[Fraction]) -> list[Fraction] | None:
+    """Gaussian elimination in Fractions; None when M is singular."""
+    n = len(M)
+    a = [list(row) + [b[i]] for i, row in enumerate(M)]
+    for col in range(n):
+        pivot = next((r for r in range(col, n) if a[r][col] != 0), None)
+        if pivot is None:
+            return None
+        a[col], a[pivot] = a[pivot], a[col]
+        for r in range(n):
+            if r != col and a[r][col] != 0:
+                f = a[r][col] / a[col][col]
+                a[r] = [x - f * y for x, y in zip(a[r], a[col])]
+    return [a[i][n] / a[i][i] for i in range(n)]
