@@ -93,9 +93,10 @@ def observer_stability_check(
             return check, (model, cert)
         check = _circle_stability_check(design, model, cert, tol, title)
         radius = float(np.max(np.abs(np.linalg.eigvals(model.vertex(model.q)))))
+        why = "not clearly above 1" if radius <= 1 + 1e-6 else "but no replay confirmed growth"
         searches = {
             "divergent_trajectory": "none: the large-signal loop A + shrink B Cw has spectral "
-            f"radius {radius:.6g}, not clearly above 1",
+            f"radius {radius:.6g}, {why}",
             "nonzero_equilibrium": searched,
         }
         return replace(check, evidence={**check.evidence, "searches": searches}), (model, cert)
