@@ -120,26 +120,9 @@ def _equilibrium_check(
         f" and the attack estimate it pairs with, the error stays there forever without attack "
         f"(active soft-threshold channels {np.flatnonzero(witness['active_signs']).tolist()})."
     )
-    evidence = _circle_evidence(model, cert)
-    evidence["no_certificate"] = cert.reason
-    return Check(
-        id="observer_stability",
-        title=title,
-        verdict=Verdict.FAILS,
-        summary=summary,
-        value=None,
-        margin=None,
-        method="equilibrium search (active/sign patterns, exact)",
-        fields={
-            "decay_rate": None,
-            "structure": cert.structure,
-            "shrink": design.shrink,
-            "step": design.step,
-            "threshold": design.threshold,
-        },
-        evidence=evidence,
-        witness=witness,
-        tolerances=_decided_by(tol, error_bound=0.0, lmi_eta=ETA),
+    method = "equilibrium search (active/sign patterns, exact)"
+    return _witnessed_failure(
+        design, model, cert, witness, (summary, method, None, 0.0), tol, title
     )
 
 
@@ -165,17 +148,35 @@ def _divergence_check(
         f"{'0' if not np.any(witness['initial_attack_estimate']) else 'as given'}) it reaches "
         f"{witness['norms'][1]:.3g} in {witness['steps']} steps without attack."
     )
+    method = "large-signal divergence (eigenvector bound, replayed)"
+    decided = (summary, method, abs(mu) - 1.0, witness["eigenvalue_error_bound"])
+    check = _witnessed_failure(design, model, cert, witness, decided, tol, title)
+    return replace(check, evidence={**check.evidence, "large_signal_loop": model.vertex(model.q)})
+
+
+def _witnessed_failure(
+    design: ObserverDesign,
+    model: LureModel,
+    cert: LMICertificate,
+    witness: dict[str, Any],
+    decided: tuple[str, str, float | None, float],
+    tol: Tolerances,
+    title: str,
+) -> Check:
+    """A failing observer_stability with the witness a search found: ``decided`` is (summary,
+    method, margin, error bound); the circle certificate that was not found stays in the
+    evidence."""
+    summary, method, margin, error_bound = decided
     evidence = _circle_evidence(model, cert)
     evidence["no_certificate"] = cert.reason
-    evidence["large_signal_loop"] = model.vertex(model.q)
     return Check(
         id="observer_stability",
         title=title,
         verdict=Verdict.FAILS,
         summary=summary,
         value=None,
-        margin=abs(mu) - 1.0,
-        method="large-signal divergence (eigenvector bound, replayed)",
+        margin=margin,
+        method=method,
         fields={
             "decay_rate": None,
             "structure": cert.structure,
@@ -185,7 +186,7 @@ def _divergence_check(
         },
         evidence=evidence,
         witness=witness,
-        tolerances=_decided_by(tol, error_bound=witness["eigenvalue_error_bound"], lmi_eta=ETA),
+        tolerances=_decided_by(tol, error_bound=error_bound, lmi_eta=ETA),
     )
 
 
