@@ -10,8 +10,10 @@ dead zone, c* = min_i threshold^2 / (Cw_i P^-1 Cw_i'), is invariant under the
 observer itself: from any initial state in it the error converges to zero.
 An observer starts with a_hat(0) = 0, so the region is reported as the
 radius r of initial estimation errors: ||e(0)|| <= r puts xi(0) in the set.
-Each radius is checked by simulating initial errors on its sphere before it
-is reported.
+P is the Lyapunov matrix with Q = I, or, when it certifies a larger radius,
+one proposed by an LMI that maximises the radius (cvxpy with Clarabel; the
+solver's answer is only a candidate, re-verified in numpy).  Each radius is
+checked by simulating initial errors on its sphere before it is reported.
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ __all__ = ["region_of_attraction"]
 SAFETY = 1.0 - 1e-9  # the level used, a hair inside the dead zone's largest invariant set
 SAMPLES = 64  # initial errors on the sphere of the radius, simulated
 STEPS = 200
+LMI_LIMIT = 40  # largest error state whose P is also chosen by an LMI (a second or two)
 
 
 def region_of_attraction(model: LureModel, *, seed: int = 0) -> dict[str, Any]:
@@ -43,7 +46,24 @@ def region_of_attraction(model: LureModel, *, seed: int = 0) -> dict[str, Any]:
             "radius": 0.0,
             "reason": f"the linear dynamics of the dead zone (xi+ = A xi) {why}: {lyap.reason}",
         }
-    P = 0.5 * (lyap.P + lyap.P.T)
+    found = _region(model, 0.5 * (lyap.P + lyap.P.T), lyap.margin, lyap.error_bound, seed)
+    found["P_from"] = "discrete Lyapunov equation with Q = I"
+    wider = _lmi_matrix(model) if model.N <= LMI_LIMIT and found["radius"] > 0 else None
+    if wider is not None:
+        margin, bound = _verified_decrease(model.A, wider)
+        if margin is not None and margin > 100 * bound:
+            other = _region(model, wider, margin, bound, seed)
+            if other["radius"] > found["radius"]:
+                other["P_from"] = "LMI maximising the radius (cvxpy, Clarabel), verified in numpy"
+                other["radius_with_Q_identity"] = found["radius"]
+                return other
+    return found
+
+
+def _region(
+    model: LureModel, P: np.ndarray, margin: float | None, bound: float, seed: int
+) -> dict[str, Any]:
+    """The radius that the verified Lyapunov matrix ``P`` of the dead zone certifies."""
     Pinv_Cw = np.linalg.solve(P, model.Cw.T)  # columns P^-1 Cw_i'
     spread = np.einsum("ij,ji->i", model.Cw, Pinv_Cw)  # Cw_i P^-1 Cw_i'
     spread = np.where(spread > 0, spread, np.inf)
@@ -65,12 +85,61 @@ def region_of_attraction(model: LureModel, *, seed: int = 0) -> dict[str, Any]:
         "radius": radius,
         "level": level,
         "P": P,
-        "lyapunov_margin": lyap.margin,
-        "lyapunov_error_bound": lyap.error_bound,
+        "lyapunov_margin": margin,
+        "lyapunov_error_bound": bound,
         "binding_row": int(np.argmin(model.threshold**2 / spread)),
         "method": "largest invariant sublevel set of the dead zone's Lyapunov function",
         "replay": replay,
     }
+
+
+def _lmi_matrix(model: LureModel) -> np.ndarray | None:
+    """A candidate P with a larger certified radius: Y = P^-1 with A Y A' - Y <= -eps I, the dead
+    zone's rows Cw_i Y Cw_i' <= threshold^2 and Y >= t E E' (E the estimation-error coordinates),
+    t maximised; None when the solver fails.  Nothing here is trusted: the caller verifies."""
+    try:
+        import cvxpy as cp
+    except ImportError:  # pragma: no cover - a dependency
+        return None
+    N, n_e = model.N, model.n_e
+    E = np.zeros((N, n_e))
+    E[:n_e] = np.eye(n_e)
+    Y = cp.Variable((N, N), symmetric=True)
+    t = cp.Variable()
+    scale = model.threshold**2
+    cons = [
+        model.A @ Y @ model.A.T - Y << -1e-6 * scale * np.eye(N),
+        Y - t * (E @ E.T) >> 0,
+        Y >> 1e-9 * scale * np.eye(N),
+    ]
+    cons += [model.Cw[i] @ Y @ model.Cw[i] <= scale for i in range(model.m)]
+    problem = cp.Problem(cp.Maximize(t), cons)
+    try:
+        problem.solve(solver=cp.CLARABEL)
+    except (cp.error.SolverError, ArithmeticError, ValueError):
+        return None
+    if Y.value is None or not np.all(np.isfinite(Y.value)):
+        return None
+    Yv = 0.5 * (Y.value + Y.value.T)
+    try:
+        np.linalg.cholesky(Yv)
+    except np.linalg.LinAlgError:
+        return None
+    P = np.linalg.inv(Yv)
+    return 0.5 * (P + P.T)
+
+
+def _verified_decrease(A: np.ndarray, P: np.ndarray) -> tuple[float | None, float]:
+    """Smallest eigenvalue of P - A' P A relative to ||P||, and a floating-point error bound of it
+    (None when P is not positive definite)."""
+    norm = float(np.linalg.norm(P, 2))
+    if norm == 0 or float(np.linalg.eigvalsh(P)[0]) <= 0:
+        return None, math.inf
+    decrease = P - A.T @ P @ A
+    decrease = 0.5 * (decrease + decrease.T)
+    n = P.shape[0]
+    bound = 10.0 * n * np.finfo(float).eps * (1.0 + float(np.linalg.norm(A, 2)) ** 2)
+    return float(np.linalg.eigvalsh(decrease)[0]) / norm, bound
 
 
 def _replay(model: LureModel, radius: float, P: np.ndarray, level: float, seed: int) -> dict:
