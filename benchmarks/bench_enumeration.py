@@ -51,6 +51,18 @@ def reference(system: System, sets: list[tuple[int, ...]]) -> list[tuple[int, ..
     return breaking
 
 
+def _unimodular(rng: np.random.Generator, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """An integer change of coordinates T and its integer inverse (n random row operations), so
+    that T M T^-1 keeps integer data exact."""
+    T = np.eye(n)
+    for _ in range(n):
+        i, j = rng.choice(n, 2, replace=False)
+        T[i] += rng.choice([-1.0, 1.0]) * T[j]
+    T_inv = np.round(np.linalg.inv(T))
+    assert np.array_equal(T @ T_inv, np.eye(n))
+    return T, T_inv
+
+
 def structured_plant(seed: int = 0, n_rot: int = 7, p: int = 30) -> System:
     """n = 15 plant with many breaking sets of 6 sensors, exact in floating point.
 
@@ -73,12 +85,7 @@ def structured_plant(seed: int = 0, n_rot: int = 7, p: int = 30) -> System:
     for j in range(n_rot):
         Cm[~sees[:, j], 2 * j : 2 * j + 2] = 0.0
     Cm[~sees[:, n_rot], -1] = 0.0
-    T = np.eye(n)
-    for _ in range(n):
-        i, j = rng.choice(n, 2, replace=False)
-        T[i] += rng.choice([-1.0, 1.0]) * T[j]
-    T_inv = np.round(np.linalg.inv(T))
-    assert np.array_equal(T @ T_inv, np.eye(n))
+    T, T_inv = _unimodular(rng, n)
     return System(T @ M @ T_inv, Cm @ T_inv, name="structured-n15-p30")
 
 
@@ -95,12 +102,7 @@ def modal_plant(seed: int = 0, n: int = 10, p: int = 30, sees: float = 0.5) -> S
     Cm = rng.integers(-3, 4, size=(p, n)).astype(float)
     Cm[Cm == 0] = 1.0
     Cm[rng.random((p, n)) >= sees] = 0.0
-    T = np.eye(n)
-    for _ in range(n):
-        i, j = rng.choice(n, 2, replace=False)
-        T[i] += rng.choice([-1.0, 1.0]) * T[j]
-    T_inv = np.round(np.linalg.inv(T))
-    assert np.array_equal(T @ T_inv, np.eye(n))
+    T, T_inv = _unimodular(rng, n)
     return System(T @ M @ T_inv, Cm @ T_inv, name=f"modal-n{n}-p{p}")
 
 

@@ -29,6 +29,7 @@ LAYERS = {
         "ssecert._io",
         "ssecert._exact",
         "ssecert._exact_powers",
+        "ssecert._rational",
         "ssecert._eigen",
         "ssecert._linalg",
         "ssecert._spec_table",

@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from .._rational import fractions, product, solve
 from ..observers.lure import LureModel
 
 __all__ = ["nonzero_equilibrium", "MAX_PATTERNS"]
@@ -77,16 +78,17 @@ def _confirm(model: LureModel, signs: np.ndarray) -> dict[str, Any] | None:
     """Solve the pattern's fixed-point equations exactly; the witness if the solution is a
     nonzero equilibrium in its region, else None."""
     N = model.N
-    F = _exact_matrix(model, signs)
     lam, q = Fraction(model.threshold), Fraction(model.q)
-    B = [[Fraction(float(v)) for v in row] for row in model.B]
-    rhs = [-q * lam * sum((B[i][j] * int(signs[j]) for j in range(model.m)), Fraction(0))
-           for i in range(N)]  # fmt: skip
-    xi = _solve(F, rhs)
+    A, B, Cw = fractions(model.A), fractions(model.B), fractions(model.Cw)
+    on = [j for j in range(model.m) if signs[j] != 0]
+    BDCw = product([[B[i][j] for j in on] for i in range(N)], [Cw[j] for j in on]) if on else None
+    K = [[(1 if i == k else 0) - A[i][k] - (q * BDCw[i][k] if BDCw else 0) for k in range(N)]
+         for i in range(N)]  # fmt: skip
+    rhs = [-q * lam * sum((B[i][j] * int(signs[j]) for j in on), Fraction(0)) for i in range(N)]
+    xi = solve(K, rhs)
     if xi is None or not any(xi):
         return None
-    Cw = [[Fraction(float(v)) for v in row] for row in model.Cw]
-    w = [sum((Cw[i][k] * xi[k] for k in range(N)), Fraction(0)) for i in range(model.m)]
+    w = [row[0] for row in product(Cw, [[v] for v in xi])]
     for wi, si in zip(w, signs):
         if (si != 0 and not si * wi > lam) or (si == 0 and not abs(wi) <= lam):
             return None
@@ -102,36 +104,3 @@ def _confirm(model: LureModel, signs: np.ndarray) -> dict[str, Any] | None:
         "replay": "xi is a fixed point of xi+ = A xi + B q S(Cw xi) (no attack): the observer "
         "stays at this wrong estimate",
     }
-
-
-def _exact_matrix(model: LureModel, signs: np.ndarray) -> list[list[Fraction]]:
-    """I - A - q B D Cw in exact arithmetic on the model's floats."""
-    N, m = model.N, model.m
-    q = Fraction(model.q)
-    A = [[Fraction(float(v)) for v in row] for row in model.A]
-    B = [[Fraction(float(v)) for v in row] for row in model.B]
-    Cw = [[Fraction(float(v)) for v in row] for row in model.Cw]
-    on = [j for j in range(m) if signs[j] != 0]
-    return [
-        [
-            (1 if i == k else 0) - A[i][k] - q * sum((B[i][j] * Cw[j][k] for j in on), Fraction(0))
-            for k in range(N)
-        ]
-        for i in range(N)
-    ]
-
-
-def _solve(M: list[list[Fraction]], b: list[Fraction]) -> list[Fraction] | None:
-    """Gaussian elimination in Fractions; None when M is singular."""
-    n = len(M)
-    a = [list(row) + [b[i]] for i, row in enumerate(M)]
-    for col in range(n):
-        pivot = next((r for r in range(col, n) if a[r][col] != 0), None)
-        if pivot is None:
-            return None
-        a[col], a[pivot] = a[pivot], a[col]
-        for r in range(n):
-            if r != col and a[r][col] != 0:
-                f = a[r][col] / a[col][col]
-                a[r] = [x - f * y for x, y in zip(a[r], a[col])]
-    return [a[i][n] / a[i][i] for i in range(n)]

@@ -9,6 +9,7 @@ with a margin above a floating-point error bound.
 
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
@@ -19,7 +20,12 @@ from .._validation import as_real_matrix
 from ..results import Verdict
 from ..tolerances import EPS
 
-__all__ = ["LyapunovCertificate", "lyapunov_certificate", "instability_witness"]
+__all__ = [
+    "LyapunovCertificate",
+    "lyapunov_certificate",
+    "instability_witness",
+    "verified_decrease",
+]
 
 
 @dataclass(frozen=True)
@@ -243,15 +249,18 @@ class _Checked(NamedTuple):
     residual: float
 
 
-def _check_solution(F: np.ndarray, Q: np.ndarray, P: np.ndarray) -> _Checked:
-    """P symmetrised, its decrease, their smallest eigenvalues and the error bound."""
+def _check_solution(F: np.ndarray, Q: np.ndarray | None, P: np.ndarray) -> _Checked:
+    """P symmetrised, its decrease, their smallest eigenvalues and the error bound (and the
+    residual of the Lyapunov equation P solves for Q, NaN without Q)."""
     n = F.shape[0]
     normF = float(np.linalg.norm(F, 2))
     P = 0.5 * (P + P.T)
     normP = max(float(np.linalg.norm(P, 2)), np.finfo(float).tiny)
-    residual = float(np.linalg.norm(F.T @ P @ F - P + Q, 2)) / max(
-        float(np.linalg.norm(Q, 2)), np.finfo(float).tiny
-    )
+    residual = math.nan
+    if Q is not None:
+        residual = float(np.linalg.norm(F.T @ P @ F - P + Q, 2)) / max(
+            float(np.linalg.norm(Q, 2)), np.finfo(float).tiny
+        )
     decrease = P - F.T @ P @ F
     decrease = 0.5 * (decrease + decrease.T)
     # rounding in forming F^T P F and in eigvalsh, relative to ||P||
@@ -279,6 +288,18 @@ def _verified_contraction(c: _Checked, clear: float) -> float | None:
     except np.linalg.LinAlgError:
         return None
     return float(np.sqrt(max(0.0, 1.0 - c.dec_min * c.normP / c.p_eigs[-1])))
+
+
+def verified_decrease(
+    F: np.ndarray, P: np.ndarray, *, clear: float = 100.0
+) -> tuple[float, float] | None:
+    """(margin, error bound) when V = e' P e is verified to decrease along e+ = F e, as
+    ``lyapunov_certificate`` verifies its own P (both P and P - F' P F positive definite by
+    more than ``clear`` times a rounding-error bound, relative to ||P||); None otherwise."""
+    c = _check_solution(np.asarray(F, float), None, np.asarray(P, float))
+    if _verified_contraction(c, clear) is None:
+        return None
+    return c.dec_min, c.bound
 
 
 class _Unverified(NamedTuple):

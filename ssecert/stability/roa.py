@@ -20,12 +20,14 @@ from __future__ import annotations
 
 import math
 import warnings
+from fractions import Fraction
 from typing import Any
 
 import numpy as np
 
+from .._rational import fractions, is_positive_definite, product, solve
 from ..observers.lure import LureModel
-from .lyapunov import lyapunov_certificate
+from .lyapunov import lyapunov_certificate, verified_decrease
 
 __all__ = ["region_of_attraction"]
 
@@ -33,6 +35,7 @@ SAFETY = 1.0 - 1e-9  # the level used, a hair inside the dead zone's largest inv
 SAMPLES = 64  # initial errors on the sphere of the radius, simulated
 STEPS = 200
 LMI_LIMIT = 40  # largest error state whose P is also chosen by an LMI (a second or two)
+EXACT_LIMIT = 20  # largest error state whose region is re-checked in exact arithmetic
 
 
 def region_of_attraction(model: LureModel, *, seed: int = 0) -> dict[str, Any]:
@@ -50,14 +53,13 @@ def region_of_attraction(model: LureModel, *, seed: int = 0) -> dict[str, Any]:
     found = _region(model, 0.5 * (lyap.P + lyap.P.T), lyap.margin, lyap.error_bound, seed)
     found["P_from"] = "discrete Lyapunov equation with Q = I"
     wider = _lmi_matrix(model) if model.N <= LMI_LIMIT and found["radius"] > 0 else None
-    if wider is not None:
-        margin, bound = _verified_decrease(model.A, wider)
-        if margin is not None and margin > 100 * bound:
-            other = _region(model, wider, margin, bound, seed)
-            if other["radius"] > found["radius"]:
-                other["P_from"] = "LMI maximising the radius (cvxpy, Clarabel), verified in numpy"
-                other["radius_with_Q_identity"] = found["radius"]
-                return other
+    verified = verified_decrease(model.A, wider) if wider is not None else None
+    if wider is not None and verified is not None:
+        other = _region(model, wider, verified[0], verified[1], seed)
+        if other["radius"] > found["radius"]:
+            other["P_from"] = "LMI maximising the radius (cvxpy, Clarabel), verified in numpy"
+            other["radius_with_Q_identity"] = found["radius"]
+            return other
     return found
 
 
@@ -71,9 +73,18 @@ def _region(
     level = SAFETY * float(np.min(model.threshold**2 / spread))
     n_e = model.n_e
     top = float(np.linalg.eigvalsh(P[:n_e, :n_e])[-1])
-    radius = math.sqrt(level / top) if math.isfinite(level) and top > 0 else 0.0
+    # a hair inside, so that the ball lies strictly in the level set on the printed numbers
+    radius = math.sqrt(level / top) * (1 - 1e-12) if math.isfinite(level) and top > 0 else 0.0
     if radius <= 0:
         return {"radius": 0.0, "reason": "the dead zone holds no invariant sublevel set"}
+    exact = _exact_recheck(model, P, level, radius) if model.N <= EXACT_LIMIT else None
+    if exact is not None and not all(exact.values()):
+        return {
+            "radius": 0.0,
+            "reason": "the region did not survive its exact re-check "
+            f"({', '.join(k for k, ok in exact.items() if not ok)})",
+            "exact_recheck": exact,
+        }
     replay = _replay(model, radius, P, level, seed)
     if not replay["confirmed"]:
         return {
@@ -89,6 +100,9 @@ def _region(
         "lyapunov_margin": margin,
         "lyapunov_error_bound": bound,
         "binding_row": int(np.argmin(model.threshold**2 / spread)),
+        "exact_recheck": exact
+        if exact is not None
+        else f"not run: error states above {EXACT_LIMIT} are verified in floating point only",
         "method": "largest invariant sublevel set of the dead zone's Lyapunov function",
         "replay": replay,
     }
@@ -133,17 +147,28 @@ def _lmi_matrix(model: LureModel) -> np.ndarray | None:
     return 0.5 * (P + P.T)
 
 
-def _verified_decrease(A: np.ndarray, P: np.ndarray) -> tuple[float | None, float]:
-    """Smallest eigenvalue of P - A' P A relative to ||P||, and a floating-point error bound of it
-    (None when P is not positive definite)."""
-    norm = float(np.linalg.norm(P, 2))
-    if norm == 0 or float(np.linalg.eigvalsh(P)[0]) <= 0:
-        return None, math.inf
-    decrease = P - A.T @ P @ A
-    decrease = 0.5 * (decrease + decrease.T)
-    n = P.shape[0]
-    bound = 10.0 * n * np.finfo(float).eps * (1.0 + float(np.linalg.norm(A, 2)) ** 2)
-    return float(np.linalg.eigvalsh(decrease)[0]) / norm, bound
+def _exact_recheck(model: LureModel, P: np.ndarray, level: float, radius: float) -> dict[str, bool]:
+    """The three facts the region rests on, decided exactly on the printed floats P, level and
+    radius: V decreases (P - A' P A > 0, and P > 0), the level set lies in the dead zone
+    (level Cw_i P^-1 Cw_i' <= threshold^2 for every i), and the ball of initial errors lies in
+    the level set (level I - radius^2 P_ee > 0, a_hat(0) = 0)."""
+    Pq, Aq, Cw = fractions(P), fractions(model.A), fractions(model.Cw)
+    n_e = model.n_e
+    decrease = [[p - v for p, v in zip(rp, rv)] for rp, rv in zip(Pq, product(
+        [list(col) for col in zip(*Aq)], product(Pq, Aq)))]  # fmt: skip
+    lam2, c, r2 = Fraction(model.threshold) ** 2, Fraction(level), Fraction(radius) ** 2
+    inside = True
+    for row in Cw:
+        x = solve(Pq, row)  # P^-1 Cw_i'
+        if x is None or c * sum((a * b for a, b in zip(row, x)), Fraction(0)) > lam2:
+            inside = False
+            break
+    ball = [[(c if i == k else 0) - r2 * Pq[i][k] for k in range(n_e)] for i in range(n_e)]
+    return {
+        "lyapunov_decrease": is_positive_definite(Pq) and is_positive_definite(decrease),
+        "level_set_in_dead_zone": inside,
+        "ball_in_level_set": is_positive_definite(ball),
+    }
 
 
 def _replay(model: LureModel, radius: float, P: np.ndarray, level: float, seed: int) -> dict:
