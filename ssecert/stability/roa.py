@@ -28,6 +28,7 @@ import numpy as np
 from .._rational import fractions, is_positive_definite, product, solve
 from ..observers.lure import LureModel
 from .lyapunov import lyapunov_certificate, verified_decrease
+from .piecewise import piecewise_region
 
 __all__ = ["region_of_attraction"]
 
@@ -38,9 +39,27 @@ LMI_LIMIT = 40  # largest error state whose P is also chosen by an LMI (a second
 EXACT_LIMIT = 20  # largest error state whose region is re-checked in exact arithmetic
 
 
-def region_of_attraction(model: LureModel, *, seed: int = 0) -> dict[str, Any]:
+def region_of_attraction(
+    model: LureModel, *, seed: int = 0, piecewise: bool = False
+) -> dict[str, Any]:
     """The certified radius of initial estimation errors (a_hat(0) = 0) from which the observer
-    converges without attack, with how it was found; radius 0 with the reason when none is."""
+    converges without attack, with how it was found; radius 0 with the reason when none is.
+
+    With ``piecewise``, a piecewise-quadratic Lyapunov function over the soft threshold's
+    regions (``ssecert.stability.piecewise``, up to 3 channels) is also searched, and the
+    larger verified radius is kept (``dead_zone_radius`` then records the other).
+    """
+    found = _dead_zone_region(model, seed)
+    if not piecewise or model.m == 0:
+        return found
+    wider = piecewise_region(model, seed=seed, floor=float(found["radius"]))
+    if wider["radius"] > found["radius"]:
+        return {**wider, "dead_zone_radius": found["radius"]}
+    return {**found, "piecewise": {k: v for k, v in wider.items() if k != "radius"}}
+
+
+def _dead_zone_region(model: LureModel, seed: int) -> dict[str, Any]:
+    """The radius of the largest invariant sublevel set of the dead zone's Lyapunov function."""
     if model.m == 0 or model.threshold <= 0:
         return {"radius": 0.0, "reason": "the observer has no dead zone (no soft threshold)"}
     lyap = lyapunov_certificate(model.A)

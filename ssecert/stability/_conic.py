@@ -1,0 +1,150 @@
+"""Many small LMIs in symmetric matrix variables, passed to Clarabel without a modelling layer.
+
+A problem with hundreds of small LMIs (the piecewise-quadratic certificates)
+spends most of its time in cvxpy's canonicalisation; here each LMI is a sum
+of congruences F' X F of symmetric variables X plus scalar variables times
+constant matrices, and its coefficients are assembled in a few numpy calls
+into Clarabel's form A x + s = b, s in the cone.  Variables are symmetric
+blocks (free, or entrywise nonnegative) and nonnegative scalars.  Only the
+solver's candidate comes out of here: callers verify it.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+
+__all__ = ["LMIProblem"]
+
+
+def _triu(d: int) -> tuple[np.ndarray, np.ndarray]:
+    """Row and column indices of the upper triangle, column by column (Clarabel's order)."""
+    cols, rows = np.tril_indices(d)  # the lower triangle row by row, transposed
+    return rows, cols
+
+
+class LMIProblem:
+    """Feasibility of LMIs ``sum_k F_k' X_k F_k + sum_j s_j M_j + C >= delta I``."""
+
+    def __init__(self) -> None:
+        # (offset, size, nonneg, rows, columns of the entries that are variables)
+        self._blocks: list[tuple[int, int, bool, np.ndarray, np.ndarray]] = []
+        self._size = 0
+        self._lmis: list[tuple[int, list[tuple[int, np.ndarray, float]], list, np.ndarray]] = []
+
+    def block(self, size: int, *, nonneg: bool = False, mask: np.ndarray | None = None) -> int:
+        """A symmetric size x size variable (its upper triangle; with ``mask``, only the entries
+        it marks, the others zero); returns its handle."""
+        rows, cols = _triu(size)
+        if mask is not None:
+            keep = np.asarray(mask, bool)[rows, cols] | np.asarray(mask, bool)[cols, rows]
+            rows, cols = rows[keep], cols[keep]
+        self._blocks.append((self._size, size, nonneg, rows, cols))
+        self._size += len(rows)
+        return len(self._blocks) - 1
+
+    def scalar(self) -> int:
+        """A nonnegative scalar variable (a 1 x 1 nonnegative block)."""
+        return self.block(1, nonneg=True)
+
+    def lmi(
+        self,
+        constant: np.ndarray,
+        terms: list[tuple[int, np.ndarray, float]],
+        scalars: list[tuple[int, np.ndarray, float]] = (),  # type: ignore[assignment]
+        *,
+        delta: float = 0.0,
+    ) -> None:
+        """Require ``constant + sum sign F' X F + sum sign s M >= delta I`` (terms (handle, F,
+        sign) with X the block's matrix, scalars (handle, M, sign))."""
+        d = constant.shape[0]
+        self._lmis.append((d, list(terms), list(scalars), constant - delta * np.eye(d)))
+
+    def matrix(self, x: np.ndarray, handle: int) -> np.ndarray:
+        """A block's symmetric matrix from the solution vector."""
+        offset, size, _, rows, cols = self._blocks[handle]
+        X = np.zeros((size, size))
+        X[rows, cols] = x[offset : offset + len(rows)]
+        X[cols, rows] = X[rows, cols]
+        return X
+
+    def value(self, x: np.ndarray, handle: int) -> float:
+        return float(x[self._blocks[handle][0]])
+
+    def solve(
+        self, *, time_limit: float = 60.0, max_iter: int = 50
+    ) -> tuple[np.ndarray | None, dict[str, Any]]:
+        """Clarabel's candidate x (None on failure) and what it reported."""
+        import clarabel
+        from scipy import sparse
+
+        start = time.perf_counter()
+        data: list[np.ndarray] = []
+        row_index: list[np.ndarray] = []
+        col_index: list[np.ndarray] = []
+        b_parts: list[np.ndarray] = []
+        cones: list[Any] = []
+        row = 0
+        nonneg = [(o, len(r)) for o, _, nn, r, _ in self._blocks if nn]
+        if nonneg:
+            idx = np.concatenate([np.arange(o, o + k) for o, k in nonneg])
+            data.append(-np.ones(len(idx)))
+            row_index.append(np.arange(len(idx)))
+            col_index.append(idx)
+            b_parts.append(np.zeros(len(idx)))
+            cones.append(clarabel.NonnegativeConeT(len(idx)))
+            row = len(idx)
+        for d, terms, scalars, constant in self._lmis:
+            r_out, c_out = _triu(d)
+            scale = np.where(r_out == c_out, 1.0, np.sqrt(2.0))
+            b_parts.append(scale * constant[r_out, c_out])
+            for handle, F, sign in terms:
+                offset, _, _, ra, ca = self._blocks[handle]
+                # F' E_ab F for the basis E_ab of the block's entry (a, b)
+                outer = np.einsum("ai,bj->abij", F, F)
+                basis = outer[ra, ca] + np.where((ra != ca)[:, None, None], outer[ca, ra], 0.0)
+                coeff = -sign * scale[None, :] * basis[:, r_out, c_out]  # (entries, svec)
+                entry, out = np.nonzero(coeff)
+                data.append(coeff[entry, out])
+                row_index.append(row + out)
+                col_index.append(offset + entry)
+            for handle, M, sign in scalars:
+                v = -sign * scale * M[r_out, c_out]
+                (where,) = np.nonzero(v)
+                data.append(v[where])
+                row_index.append(row + where)
+                col_index.append(np.full(len(where), self._blocks[handle][0]))
+            cones.append(clarabel.PSDTriangleConeT(d))
+            row += len(r_out)
+        A = sparse.csc_matrix(
+            (np.concatenate(data), (np.concatenate(row_index), np.concatenate(col_index))),
+            shape=(row, self._size),
+        )
+        settings = clarabel.DefaultSettings()
+        settings.verbose = False
+        settings.time_limit = float(time_limit)
+        settings.max_iter = int(max_iter)
+        solver = clarabel.DefaultSolver(
+            sparse.csc_matrix((self._size, self._size)),
+            np.zeros(self._size),
+            A,
+            np.concatenate(b_parts),
+            cones,
+            settings,
+        )
+        solution = solver.solve()
+        status = str(solution.status)
+        info = {
+            "solver": "CLARABEL",
+            "status": status,
+            "variables": self._size,
+            "lmis": len(self._lmis),
+            "iterations": int(solution.iterations),
+            "seconds": round(time.perf_counter() - start, 3),
+        }
+        if status not in ("Solved", "AlmostSolved"):
+            return None, info
+        x = np.asarray(solution.x, dtype=float)
+        return (x if np.all(np.isfinite(x)) else None), info

@@ -1,0 +1,521 @@
+"""A larger certified region of attraction: a piecewise-quadratic Lyapunov function.
+
+The soft threshold splits the error state of the Lur'e model
+(``ssecert.observers.lure``) into 3^m polyhedral regions, one per pattern
+s in {-1, 0, 1}^m (channel i in the dead zone, |w_i| <= threshold, or
+active with the sign s_i); on each the dynamics are affine,
+
+    xi+ = A_s xi + b_s,   A_s = A + q B diag(|s|) Cw,   b_s = -q threshold B s.
+
+With z = (xi, 1), each region carries its own quadratic function
+V_s(xi) = z' P_s z (the dead zone's has no affine part, so V(0) = 0), and
+with a ball of radius R and a level c = R^2 the LMIs (S-procedure
+multipliers W >= 0 entrywise on the products of the regions' inequalities)
+ask:
+
+1. decrease: for every pair of regions (s, t) that one step can join inside
+   the ball, V_t(xi+) <= V_s(xi) - alpha |xi|^2 (the dead zone to itself:
+   A' P_0 A - P_0 <= -alpha I);
+2. the level set stays in the ball: V_s(xi) > c on region s outside the ball;
+3. the initial errors are in it: V_s(xi) <= c on region s for xi = (e, 0)
+   with |e| <= r.
+
+Then S = {|xi| < R : V_s(xi) <= c for a region s of xi} is invariant (by 1,
+V_t(xi+) <= c, so by 2 xi+ is back in the ball) and V decreases along every
+trajectory in it by alpha |xi|^2 while staying bounded below on the ball, so
+the error converges to zero from every initial error with |e(0)| <= r and
+a_hat(0) = 0.  The function may jump across region boundaries: every
+region containing a point is covered, so the argument does not need it
+continuous.  Pairs of regions that no step joins inside the ball's bounding
+box are left out with a Farkas certificate of emptiness, checked in exact
+arithmetic.
+
+The problem is posed in units of the threshold (the dynamics scale with it),
+solved with cvxpy and Clarabel, and nothing of the solver is trusted: every
+LMI is recomputed in numpy from the returned matrices with the multipliers
+clipped to be nonnegative, and must beat a rounding-error bound by the
+factor ``clear``.  The model is symmetric (the soft threshold is odd), so the
+functions of s and -s are tied, P_(-s) = J P_s J with J = diag(-I, 1), and
+each LMI of a pair (-s, -t) is the one of (s, t) conjugated by J (sign
+changes, exact in floating point): one of each is verified.
+
+This certifies what a quadratic function cannot when shrink = 1 and the
+plant has an eigenvalue at 1: there the observer's error falls only by a
+constant amount per step far from the origin, and on a bounded ball the
+S-procedure can still make every LMI strict.
+"""
+
+from __future__ import annotations
+
+import copy
+import itertools
+import math
+import time
+from collections.abc import Callable
+from dataclasses import replace
+from fractions import Fraction
+from functools import partial
+from typing import Any
+
+import numpy as np
+
+from ..observers.lure import LureModel
+from ..tolerances import EPS
+
+__all__ = ["piecewise_region", "MAX_CHANNELS", "MAX_STATES"]
+
+MAX_CHANNELS = 3  # 27 regions and at most 729 transitions (one LMI each)
+MAX_STATES = 12
+ALPHA = 1e-4  # decrease imposed, alpha |xi|^2, xi in thresholds
+DELTA = 1e-7  # strictness imposed on every LMI
+OUTER = 2.0  # the ball's radius R over the radius r of initial errors
+LADDER = (3.0, 10.0, 30.0, 100.0, 300.0, 1000.0)  # radii r searched, in thresholds
+MAX_ITER = 30  # interior-point iterations (a certificate that verifies takes 10 to 20)
+SAMPLES = 64
+STEPS = 5000
+
+
+class _Regions:
+    """The soft threshold's regions of one model, in units of the threshold."""
+
+    def __init__(self, model: LureModel) -> None:
+        N, m, q = model.N, model.m, model.q
+        self.N, self.m = N, m
+        self.signs = np.array(list(itertools.product((-1.0, 0.0, 1.0), repeat=m)))
+        self.zero = (3**m - 1) // 2
+        self.index = {tuple(s): k for k, s in enumerate(self.signs)}
+        self.G: list[np.ndarray] = []
+        self.T: list[np.ndarray] = []
+        for s in self.signs:
+            rows = []
+            for i, si in enumerate(s):
+                c = model.Cw[i]
+                if si == 0:
+                    rows += [np.r_[-c, 1.0], np.r_[c, 1.0]]
+                else:
+                    rows.append(np.r_[si * c, -1.0])
+            self.G.append(np.array(rows))
+            T = np.zeros((N + 1, N + 1))
+            T[:N, :N] = model.A + q * model.B @ np.diag(np.abs(s)) @ model.Cw
+            T[:N, N] = -q * model.B @ s
+            T[N, N] = 1.0
+            self.T.append(T)
+
+    def mirror(self, k: int) -> int:
+        return self.index[tuple(-self.signs[k])]
+
+    def representatives(self) -> list[int]:
+        """One region of each pair (s, -s); the dead zone is its own."""
+        return [k for k in range(len(self.signs)) if k <= self.mirror(k)]
+
+
+def piecewise_region(
+    model: LureModel, *, seed: int = 0, floor: float = 0.0, clear: float = 100.0
+) -> dict[str, Any]:
+    """The largest radius of initial errors (a_hat(0) = 0) from which a verified
+    piecewise-quadratic Lyapunov function proves convergence without attack.
+
+    Searches the radii of ``LADDER`` (in thresholds) by bisection: a radius
+    that verifies sends the search up, one that does not (the LMIs grow
+    harder as the ball grows) sends it down; radii not above ``floor`` (the
+    radius already certified otherwise) are not tried.  Returns
+    ``{"radius": 0.0, "reason": ...}`` when none verifies or the model is out
+    of reach.
+    """
+    key = _key(model, seed, floor, clear)
+    if key in _CACHE:
+        return copy.deepcopy(_CACHE[key])
+    found = _search(model, seed, floor, clear)
+    if len(_CACHE) >= 32:
+        _CACHE.pop(next(iter(_CACHE)))
+    _CACHE[key] = found
+    return copy.deepcopy(found)
+
+
+_CACHE: dict[bytes, dict[str, Any]] = {}  # the search is a pure function of these
+
+
+def _key(model: LureModel, *numbers: float) -> bytes:
+    parts = [model.A, model.B, model.Cw, np.array([model.q, model.threshold, *numbers])]
+    return b"|".join(
+        np.ascontiguousarray(p, dtype=float).tobytes() + bytes(str(p.shape), "ascii") for p in parts
+    )
+
+
+def _search(model: LureModel, seed: int, floor: float, clear: float) -> dict[str, Any]:
+    """``piecewise_region`` without its cache."""
+    if model.m == 0 or model.threshold <= 0:
+        return {"radius": 0.0, "reason": "the observer has no soft threshold"}
+    if model.m > MAX_CHANNELS or model.N > MAX_STATES:
+        return {
+            "radius": 0.0,
+            "reason": f"not attempted: {model.m} soft-threshold channels and {model.N} error "
+            f"states (the piecewise search handles up to {MAX_CHANNELS} and {MAX_STATES})",
+        }
+    lam = model.threshold
+    ladder = [r for r in LADDER if r * lam > floor]
+    if not ladder:
+        return {"radius": 0.0, "reason": f"every radius tried is within {floor:.4g}"}
+    regions = _Regions(model)
+    unit = replace(model, threshold=1.0)  # the same dynamics, in units of the threshold
+    # emptiness in the largest box holds in every smaller one
+    empty_pairs = _empty_pairs(regions, unit, OUTER * ladder[-1])
+    empty_inner = {
+        k
+        for k in regions.representatives()
+        if _empty_in_box(regions.G[k] @ _inner_map(model), ladder[-1]) is not None
+    }
+    attempts: list[dict[str, Any]] = []
+    best: dict[str, Any] | None = None
+    lo, hi = -1, len(ladder)  # ladder[lo] verified, ladder[hi] did not
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        r = ladder[mid]
+        found = _attempt(model, regions, r, OUTER * r, clear, empty_pairs, empty_inner)
+        attempts.append({"radius": r * lam, **found["record"]})
+        if found["ok"]:
+            best, lo = {**found, "r": r}, mid
+        else:
+            hi = mid
+    if best is None:
+        return {
+            "radius": 0.0,
+            "reason": "no piecewise-quadratic Lyapunov function verified",
+            "attempts": attempts,
+        }
+    r = best["r"]
+    replay = _replay(model, r * lam, OUTER * r * lam, seed)
+    if not replay["confirmed"]:
+        return {
+            "radius": 0.0,
+            "reason": "a simulated initial error inside the certified radius did not converge "
+            "(please report this design)",
+            "attempts": attempts,
+            "replay": replay,
+        }
+    return {
+        "radius": r * lam * (1 - 1e-12),
+        "ball": OUTER * r * lam,
+        "method": "piecewise-quadratic Lyapunov function over the soft threshold's "
+        f"{3**model.m} regions (S-procedure LMIs, cvxpy and Clarabel), verified in numpy",
+        "transitions": best["transitions"],
+        "transitions_empty": best["empty"],
+        "margin": best["margin"],
+        "error_bound": best["bound"],
+        "attempts": attempts,
+        "replay": replay,
+    }
+
+
+def _attempt(
+    model: LureModel,
+    regions: _Regions,
+    r: float,
+    R: float,
+    clear: float,
+    empty_pairs: set[tuple[int, int]],
+    empty_inner: set[int],
+) -> dict[str, Any]:
+    """Pose, solve and verify the LMIs for initial errors of radius r inside the ball R
+    (both in thresholds)."""
+    from ._conic import LMIProblem
+
+    start = time.perf_counter()
+    N, n = model.N, model.n_e
+    K = len(regions.signs)
+    one = np.r_[np.zeros(N), 1.0]
+    Iq = np.diag(np.r_[np.ones(N), 0.0])
+    E1 = np.diag(np.r_[np.zeros(N), 1.0])
+    Z = _inner_map(model)
+    In = np.diag(np.r_[np.ones(n), 0.0])
+    e1 = np.diag(np.r_[np.zeros(n), 1.0])
+    J = np.diag(np.r_[-np.ones(N), 1.0])
+    E = np.eye(N, N + 1)
+    level = R**2
+
+    lp = LMIProblem()
+    P0 = lp.block(N)
+    reps = regions.representatives()
+    handle = {k: lp.block(N + 1) for k in reps if k != regions.zero}
+
+    def V(k: int, F: np.ndarray, sign: float) -> tuple[int, np.ndarray, float]:
+        """The term sign F' P_k F, through the variable that holds P_k."""
+        if k == regions.zero:
+            return P0, E @ F, sign
+        if k in handle:
+            return handle[k], F, sign
+        return handle[regions.mirror(k)], J @ F, sign
+
+    lp.lmi(-ALPHA * np.eye(N), [(P0, np.eye(N), 1.0), (P0, model.A, -1.0)], delta=DELTA)
+    lmis: list[tuple[str, int, int, np.ndarray, int, int]] = []
+    empty = 0
+    for k in reps:
+        G = np.vstack([regions.G[k], one])
+        U, kap = lp.block(len(G), nonneg=True, mask=_multiplier_mask(len(G))), lp.scalar()
+        lp.lmi(
+            -level * E1,
+            [V(k, np.eye(N + 1), 1.0), (U, G, -1.0)],
+            [(kap, Iq - level * E1, -1.0)],
+            delta=DELTA,
+        )
+        lmis.append(("outer", k, k, G, U, kap))
+        GZ = G @ Z
+        if k not in empty_inner:
+            U2, kap2 = lp.block(len(G), nonneg=True, mask=_multiplier_mask(len(G))), lp.scalar()
+            lp.lmi(
+                level * e1,
+                [V(k, Z, -1.0), (U2, GZ, -1.0)],
+                [(kap2, r**2 * e1 - In, -1.0)],
+                delta=DELTA,
+            )
+            lmis.append(("inner", k, k, GZ, U2, kap2))
+        else:
+            empty += 1
+        T = regions.T[k]
+        for j in range(K):
+            if k == regions.zero and j == regions.zero:
+                continue
+            if (k, j) in empty_pairs:
+                empty += 1
+                continue
+            H = np.vstack([regions.G[k], regions.G[j] @ T, one])
+            W, nu = lp.block(len(H), nonneg=True, mask=_multiplier_mask(len(H))), lp.scalar()
+            lp.lmi(
+                -ALPHA * Iq,
+                [V(j, T, -1.0), V(k, np.eye(N + 1), 1.0), (W, H, -1.0)],
+                [(nu, level * E1 - Iq, -1.0)],
+                delta=DELTA,
+            )
+            lmis.append(("decrease", k, j, H, W, nu))
+    x, info = lp.solve(max_iter=MAX_ITER)
+    record: dict[str, Any] = {
+        "transitions": sum(1 for item in lmis if item[0] == "decrease"),
+        "status": info["status"],
+    }
+    if x is None:
+        record["seconds"] = round(time.perf_counter() - start, 3)
+        return {"ok": False, "record": record}
+    values: list[np.ndarray] = []
+    for k in range(K):
+        if k == regions.zero:
+            values.append(E.T @ lp.matrix(x, P0) @ E)
+        elif k in handle:
+            values.append(lp.matrix(x, handle[k]))
+        else:
+            values.append(J @ lp.matrix(x, handle[regions.mirror(k)]) @ J)
+    solved = [
+        (kind, k, j, H, np.maximum(lp.matrix(x, w), 0.0), max(lp.value(x, sc), 0.0))
+        for kind, k, j, H, w, sc in lmis
+    ]
+    margin, bound, problem_text = _verify(model, regions, values, solved, r, R, clear)
+    record.update(
+        margin=margin,
+        error_bound=bound,
+        verified=not problem_text,
+        seconds=round(time.perf_counter() - start, 3),
+    )
+    if problem_text:
+        record["problem"] = problem_text
+        return {"ok": False, "record": record}
+    return {
+        "ok": True,
+        "record": record,
+        "transitions": record["transitions"],
+        "empty": empty,
+        "margin": margin,
+        "bound": bound,
+        "functions": values,  # the verified P_s, for the tests and the curious
+        "lmis": solved,
+    }
+
+
+def _multiplier_mask(size: int) -> np.ndarray:
+    """The S-procedure's multipliers: each inequality g_i(xi) >= 0 times the constant 1 (the
+    last row of H); products of two inequalities certified no more on the examples tried and
+    cost three times the variables."""
+    mask = np.zeros((size, size), bool)
+    mask[-1, :] = mask[:, -1] = True
+    return mask
+
+
+def _inner_map(model: LureModel) -> np.ndarray:
+    """Z with (xi, 1) = Z (e, 1) for the initial states (e, a_hat = 0)."""
+    N, n = model.N, model.n_e
+    Z = np.zeros((N + 1, n + 1))
+    Z[:n, :n] = np.eye(n)
+    Z[N, n] = 1.0
+    return Z
+
+
+def _sym(M: np.ndarray) -> np.ndarray:
+    return 0.5 * (M + M.T)
+
+
+def _verify(
+    model: LureModel,
+    regions: _Regions,
+    P: list[np.ndarray],
+    lmis: list[tuple[str, int, int, np.ndarray, np.ndarray, float]],
+    r: float,
+    R: float,
+    clear: float,
+) -> tuple[float, float, str]:
+    """Recompute every LMI from the solver's matrices (multipliers clipped to >= 0):
+    (smallest margin, largest error bound, the first problem or '')."""
+    N, n = model.N, model.n_e
+    level = R**2
+    Iq = np.eye(N + 1)
+    Iq[N, N] = 0.0
+    E1 = np.zeros((N + 1, N + 1))
+    E1[N, N] = 1.0
+    if not all(np.all(np.isfinite(p)) for p in P):
+        return math.nan, 0.0, "the solver returned non-finite matrices"
+    P0 = P[regions.zero][:N, :N]
+    dead = model.A.T @ P0 @ model.A - P0 + ALPHA * np.eye(N)
+    worst = -float(np.linalg.eigvalsh(_sym(dead))[-1])
+    top = max(float(np.abs(model.A).max()), 1.0)
+    bound = 10 * N * EPS * (top**2 + 1) * float(np.abs(P0).max()) * N
+    where = "the dead zone's decrease"
+    for kind, k, j, H, W, s in lmis:
+        if kind == "outer":
+            M = P[k] - level * E1 - s * (Iq - level * E1) - H.T @ W @ H
+            sign, terms = -1.0, [P[k], level * E1, s * (level + 1) * np.eye(N + 1)]
+        elif kind == "inner":
+            Z = np.zeros((N + 1, n + 1))
+            Z[:n, :n] = np.eye(n)
+            Z[N, n] = 1.0
+            In = np.eye(n + 1)
+            In[n, n] = 0.0
+            e1 = np.zeros((n + 1, n + 1))
+            e1[n, n] = 1.0
+            M = level * e1 - Z.T @ P[k] @ Z - s * (r**2 * e1 - In) - H.T @ W @ H
+            sign, terms = -1.0, [P[k], level * E1, s * (r**2 + 1) * np.eye(N + 1)]
+        else:
+            T = regions.T[k]
+            M = T.T @ P[j] @ T - P[k] + ALPHA * Iq + H.T @ W @ H + s * (level * E1 - Iq)
+            sign = 1.0
+            terms = [np.abs(T).T @ np.abs(P[j]) @ np.abs(T), P[k], s * (level + 1) * np.eye(N + 1)]
+        terms.append(np.abs(H).T @ W @ np.abs(H))
+        size = M.shape[0] + H.shape[0]
+        err = 10 * size * EPS * sum(float(np.abs(t).sum()) for t in terms)
+        eig = np.linalg.eigvalsh(_sym(M))
+        margin = float(-eig[-1]) if sign > 0 else float(eig[0])
+        if margin < worst:
+            worst, where = (
+                margin,
+                f"{kind} {regions.signs[k].astype(int).tolist()}"
+                + (f" -> {regions.signs[j].astype(int).tolist()}" if kind == "decrease" else ""),
+            )
+        bound = max(bound, err)
+        if margin <= clear * err:
+            return worst, bound, f"{where}: margin {margin:.2e} not above {clear:g} x {err:.2e}"
+    return worst, bound, ""
+
+
+def _empty_in_box(
+    H: np.ndarray, box: float, exact: Callable[[], list[list[Fraction]]] | None = None
+) -> list[Fraction] | None:
+    """A Farkas certificate that {x : H (x, 1) >= 0, |x_i| <= box} is empty, checked exactly:
+    y >= 0 with y' h + box ||H_x' y||_1 < 0.  ``exact`` gives the rows of H in exact
+    arithmetic when the floats of H were rounded (products of matrices).  None when the set
+    is not proved empty."""
+    from scipy.optimize import linprog
+
+    rows, cols = H.shape
+    Hx, h = H[:, :-1], H[:, -1]
+    # minimise y' h + box sum(u) with -u <= Hx' y <= u, y >= 0, sum(y) = 1
+    c = np.r_[h, box * np.ones(cols - 1)]
+    A_ub = np.block([[Hx.T, -np.eye(cols - 1)], [-Hx.T, -np.eye(cols - 1)]])
+    res = linprog(
+        c,
+        A_ub=A_ub,
+        b_ub=np.zeros(2 * (cols - 1)),
+        A_eq=np.r_[np.ones(rows), np.zeros(cols - 1)][None],
+        b_eq=[1.0],
+        bounds=[(0, None)] * (rows + cols - 1),
+        method="highs",
+    )
+    if res.status != 0 or res.fun >= 0:
+        return None
+    y = [Fraction(max(float(v), 0.0)) for v in res.x[:rows]]
+    Hq = exact() if exact is not None else [[Fraction(float(v)) for v in row] for row in H]
+    combo = [sum((y[i] * Hq[i][c] for i in range(rows)), Fraction(0)) for c in range(cols)]
+    spread = sum((abs(v) for v in combo[:-1]), Fraction(0))
+    return y if combo[-1] + Fraction(box) * spread < 0 else None
+
+
+def _exact_rows(G_now: np.ndarray, G_next: np.ndarray, T: np.ndarray) -> list[list[Fraction]]:
+    """The rows of [G_now; G_next T] in exact arithmetic (G_next T is rounded in floats)."""
+    from .._rational import fractions, product
+
+    return fractions(G_now) + product(fractions(G_next), fractions(T))
+
+
+def _empty_pairs(regions: _Regions, model: LureModel, box: float) -> set[tuple[int, int]]:
+    """The transitions (k, j) that no step makes inside the box, for representatives k, each
+    with its Farkas certificate checked.  Transitions seen on sampled states need no LP (a
+    transition kept that is in fact empty only costs an LMI)."""
+    seen = _sampled_pairs(model, regions, box)
+    out = set()
+    for k in regions.representatives():
+        T = regions.T[k]
+        for j in range(len(regions.signs)):
+            if (k == regions.zero and j == regions.zero) or (k, j) in seen:
+                continue
+            H = np.vstack([regions.G[k], regions.G[j] @ T])
+            exact = partial(_exact_rows, regions.G[k], regions.G[j], T)
+            if _empty_in_box(H, box, exact) is not None:
+                out.add((k, j))
+    return out
+
+
+def _sampled_pairs(
+    model: LureModel, regions: _Regions, box: float, per_region: int = 2000
+) -> set[tuple[int, int]]:
+    """(region, next region) seen on random states of every region (threshold 1): w = Cw xi
+    drawn in the region's intervals (active entries log-spread up to the box), plus a random
+    component in the null space of Cw."""
+    rng = np.random.default_rng(0)
+    m, N = model.m, model.N
+    pinv = np.linalg.pinv(model.Cw)
+    null = np.eye(N) - pinv @ model.Cw
+    out: set[tuple[int, int]] = set()
+    weights = 3 ** np.arange(m - 1, -1, -1)
+    for k, s in enumerate(regions.signs):
+        size = np.exp(rng.uniform(0.0, np.log(box), (per_region, m)))
+        w = np.where(s == 0, rng.uniform(-1.0, 1.0, (per_region, m)), s * size)
+        z = rng.standard_normal((per_region, N)) * np.exp(
+            rng.uniform(np.log(1e-2), np.log(box), (per_region, 1))
+        )
+        xi = w @ pinv.T + z @ null.T
+        inside = _codes(xi @ model.Cw.T, weights) == k
+        nxt = xi @ model.A.T + model.phi(xi @ model.Cw.T) @ model.B.T
+        for j in np.unique(_codes(nxt @ model.Cw.T, weights)[inside]).tolist():
+            out.add((k, j))
+    return out
+
+
+def _codes(w: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """The index of the region of each row of w (threshold 1)."""
+    return np.where(w > 1.0, 2, np.where(w < -1.0, 0, 1)) @ weights
+
+
+def _replay(model: LureModel, radius: float, ball: float, seed: int) -> dict[str, Any]:
+    """Simulate initial errors of norm ``radius`` (a_hat(0) = 0, no attack): the certificate
+    says they stay in the ball and converge to zero."""
+    rng = np.random.default_rng(seed)
+    e0 = rng.standard_normal((SAMPLES, model.n_e))
+    e0 *= radius / np.linalg.norm(e0, axis=1, keepdims=True)
+    xi = np.concatenate([e0, np.zeros((SAMPLES, model.N - model.n_e))], axis=1)
+    highest = 0.0
+    for _ in range(STEPS):
+        xi = model.simulate(xi, 1)[-1]
+        highest = max(highest, float(np.linalg.norm(xi, axis=1).max()))
+    final = float(np.linalg.norm(xi, axis=1).max())
+    return {
+        "samples": SAMPLES,
+        "steps": STEPS,
+        "largest_norm_reached": highest,
+        "final_largest_norm": final,
+        "confirmed": highest <= ball and final <= 1e-6 * max(radius, 1.0),
+    }

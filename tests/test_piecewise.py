@@ -1,0 +1,146 @@
+"""The piecewise-quadratic region of attraction (ssecert.stability.piecewise) and the small
+LMI layer under it (ssecert.stability._conic)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from ssecert import spec_from_dict
+from ssecert.examples import load_example
+from ssecert.observers import build_observer
+from ssecert.observers.lure import LureModel
+from ssecert.stability import piecewise as pw
+from ssecert.stability._conic import LMIProblem
+from ssecert.stability.checks import region_of_attraction_check
+from ssecert.stability.divergence import divergence_witness
+
+
+def _ugv_model(step: float) -> LureModel:
+    spec = load_example("ugv")
+    observer = {**spec.observer, "step": step}
+    return LureModel.from_design(build_observer(spec.system, observer))
+
+
+def test_the_lmi_layer_uses_clarabels_triangle_convention():
+    # X >= C and -X >= -C force X = C: a wrong scaling of the off-diagonal entries shows
+    rng = np.random.default_rng(0)
+    R = rng.standard_normal((4, 4))
+    C = R @ R.T
+    lp = LMIProblem()
+    X = lp.block(4)
+    lp.lmi(-C, [(X, np.eye(4), 1.0)])
+    lp.lmi(C, [(X, np.eye(4), -1.0)])
+    x, info = lp.solve()
+    assert x is not None, info
+    np.testing.assert_allclose(lp.matrix(x, X), C, atol=1e-6)
+
+
+def test_the_lmi_layer_finds_a_lyapunov_matrix():
+    A = np.array([[0.5, 2.0, 0.0], [0.0, 0.3, 1.0], [0.0, 0.0, -0.6]])
+    lp = LMIProblem()
+    P = lp.block(3)
+    lp.lmi(-np.eye(3), [(P, np.eye(3), 1.0), (P, A, -1.0)])  # P - A' P A >= I
+    x, _ = lp.solve()
+    Pv = lp.matrix(x, P)
+    assert np.linalg.eigvalsh(Pv - A.T @ Pv @ A)[0] >= 1 - 1e-6
+
+
+def test_a_masked_nonnegative_block_has_only_its_entries():
+    mask = np.zeros((3, 3), bool)
+    mask[2, :] = mask[:, 2] = True
+    lp = LMIProblem()
+    W = lp.block(3, nonneg=True, mask=mask)
+    lp.lmi(-np.ones((1, 1)), [(W, np.array([[0.0], [0.0], [1.0]]), 1.0)])  # W_33 >= 1
+    x, _ = lp.solve()
+    Wv = lp.matrix(x, W)
+    assert Wv[2, 2] >= 1 - 1e-7 and Wv[0, 0] == Wv[0, 1] == Wv[1, 1] == 0.0
+    assert len(x) == 3
+
+
+def test_mirror_regions_are_the_same_lmis_conjugated():
+    model = _ugv_model(0.7)
+    regions = pw._Regions(model)
+    J = np.diag(np.r_[-np.ones(model.N), 1.0])
+    for k in range(len(regions.signs)):
+        mirror = regions.mirror(k)
+        np.testing.assert_array_equal(regions.T[mirror], J @ regions.T[k] @ J)
+        rows = {tuple(r) for r in regions.G[k] @ J}
+        assert rows == {tuple(r) for r in regions.G[mirror]}
+
+
+def test_emptiness_certificates_are_exact_and_respect_the_box():
+    # x >= 2 and x <= 1: empty anywhere
+    H = np.array([[1.0, -2.0], [-1.0, 1.0]])
+    assert pw._empty_in_box(H, 100.0) is not None
+    # x >= 5: empty in the box |x| <= 3, not in |x| <= 10
+    H = np.array([[1.0, -5.0]])
+    assert pw._empty_in_box(H, 3.0) is not None
+    assert pw._empty_in_box(H, 10.0) is None
+    # 0 <= x <= 1 is not empty
+    assert pw._empty_in_box(np.array([[1.0, 0.0], [-1.0, 1.0]]), 10.0) is None
+
+
+def test_the_ugv_dsso_region_is_far_larger_than_its_dead_zone():
+    model = _ugv_model(0.7)
+    found = pw.piecewise_region(model, floor=0.1429)
+    assert found["radius"] >= 5.0 and found["ball"] == pytest.approx(2 * found["radius"])
+    assert found["replay"]["confirmed"] and found["margin"] > 100 * found["error_bound"]
+    assert all("seconds" in a for a in found["attempts"])
+    # independent: errors inside the radius stay in the ball and converge
+    rng = np.random.default_rng(3)
+    e0 = rng.standard_normal((100, model.n_e))
+    e0 *= found["radius"] * rng.uniform(0.5, 1, (100, 1)) / np.linalg.norm(e0, axis=1)[:, None]
+    xi0 = np.concatenate([e0, np.zeros((100, model.N - model.n_e))], axis=1)
+    path = model.simulate(xi0, 2000)
+    assert np.linalg.norm(path, axis=2).max() <= found["ball"]
+    assert np.linalg.norm(path[-1], axis=1).max() <= 1e-9
+
+
+def test_the_verification_rejects_a_tampered_function():
+    model = _ugv_model(0.7)
+    regions = pw._Regions(model)
+    unit = replace(model, threshold=1.0)
+    empty = pw._empty_pairs(regions, unit, 20.0)
+    found = pw._attempt(model, regions, 3.0, 6.0, 100.0, empty, set())
+    assert found["ok"]
+    functions = [P.copy() for P in found["functions"]]
+    ok = pw._verify(model, regions, functions, found["lmis"], 3.0, 6.0, 100.0)
+    assert ok[2] == ""
+    active = next(k for k in range(len(functions)) if k != regions.zero)
+    functions[active][-1, -1] += 50.0  # a region's function raised: some decrease breaks
+    bad = pw._verify(model, regions, functions, found["lmis"], 3.0, 6.0, 100.0)
+    assert bad[2] and bad[0] < 0
+
+
+def test_a_divergent_design_gets_no_region_beyond_its_divergence():
+    model = _ugv_model(1.5)
+    witness = divergence_witness(model)
+    assert witness is not None
+    found = pw.piecewise_region(model)
+    assert found["radius"] < np.linalg.norm(witness["initial_error"])
+
+
+def test_out_of_reach_models_are_refused_with_the_reason():
+    spec = load_example("random-n15-p30")
+    data = {
+        "name": "big",
+        "system": {"A": spec.system.A.tolist(), "C": spec.system.C.tolist()},
+        "attack": {"max_attacked": 1, "horizon": 15},
+        "observer": {"kind": "dsso", "step": 0.5, "threshold": 0.1},
+    }
+    design = build_observer(spec.system, spec_from_dict(data).observer)
+    found = pw.piecewise_region(LureModel.from_design(design))
+    assert found["radius"] == 0.0 and "not attempted" in found["reason"]
+
+
+def test_the_check_reports_the_piecewise_region_only_when_asked():
+    spec = load_example("ugv")
+    design = build_observer(spec.system, spec.observer)
+    plain = region_of_attraction_check(design)
+    wide = region_of_attraction_check(design, piecewise=True)
+    assert plain.value == pytest.approx(0.1429, abs=1e-4)
+    assert wide.value >= 5 and wide.verdict.value == "holds"
+    assert "piecewise-quadratic" in wide.summary and "ball of radius" in wide.summary
