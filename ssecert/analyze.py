@@ -233,6 +233,7 @@ def analyze(
     ]  # fmt: skip
     if spec.observer is not None:
         from .stability.checks import observer_checks
+        from .stability.constant_attack import default_attacks
 
         checks.extend(
             clock.lap(
@@ -245,6 +246,7 @@ def analyze(
                     budget=budget,
                     context=context,
                     tolerances=tol,
+                    constant_attacks=default_attacks(system.p, spec.max_attacked, spec.scenarios),
                 ),
             )
         )

@@ -6,7 +6,7 @@ JSON ids: ``observer_gain`` and ``observer_stability`` (required),
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from typing import Any
 
@@ -21,6 +21,7 @@ from ..observers.lure import LureModel
 from ..results import Check, Verdict
 from ..system import System
 from ..tolerances import Tolerances
+from .constant_attack import constant_attack_outcomes
 from .divergence import divergence_witness
 from .equilibria import nonzero_equilibrium
 from .gain_check import (
@@ -307,8 +308,53 @@ def iss_gain_check(
     *,
     budget: Budget | None = None,
     tolerances: Tolerances | None = None,
+    constant_attacks: Sequence[tuple[str, np.ndarray]] = (),
 ) -> Check:
-    """l2 gain from attack to estimation error (and ISS decay), advisory."""
+    """l2 gain from attack to estimation error (and ISS decay), advisory; with
+    ``constant_attacks`` ((name, attack vector) pairs), where the error goes under each
+    (``constant_attacks`` in the evidence, ``ssecert.stability.constant_attack``)."""
+    check = _iss_gain(design, stability, budget=budget, tolerances=tolerances)
+    if not constant_attacks:
+        return check
+    if not design.sparse:
+        model, certified = (
+            design.observer_kind.lure_model(design),
+            stability is not None and (stability.verdict == Verdict.HOLDS),
+        )
+    elif stability is not None:
+        model, certified = stability[0], stability[1].verdict == Verdict.HOLDS
+    else:
+        return check
+    records = constant_attack_outcomes(model, constant_attacks, certified=certified)
+    if not records:
+        return check
+    return replace(
+        check,
+        summary=f"{check.summary} {_constant_attack_sentence(records)}",
+        evidence={**check.evidence, "constant_attacks": records},
+    )
+
+
+def _constant_attack_sentence(records: list[dict[str, Any]]) -> str:
+    """One sentence on where the error goes under the constant attacks analysed."""
+    parts = []
+    for rec in records[:3]:
+        outcome = rec["outcome"]
+        if outcome == "converges to a bias":
+            outcome += f" of norm {rec['bias_norm']:.3g}"
+        parts.append(f"{rec['attack']}: {outcome} ({'proved' if rec['proved'] else 'observed'})")
+    more = f"; {len(records) - 3} more in the evidence" if len(records) > 3 else ""
+    return "Under a constant attack, from zero error: " + "; ".join(parts) + more + "."
+
+
+def _iss_gain(
+    design: ObserverDesign,
+    stability: Any,
+    *,
+    budget: Budget | None = None,
+    tolerances: Tolerances | None = None,
+) -> Check:
+    """``iss_gain_check`` without the constant attacks."""
     tol = Tolerances.check(tolerances)
     clear = tol.certificate_clear
     title = "ISS gain from attack to estimation error"
@@ -415,6 +461,7 @@ def observer_checks(
     budget: Budget | None = None,
     context: AnalysisContext | None = None,
     tolerances: Tolerances | None = None,
+    constant_attacks: Sequence[tuple[str, np.ndarray]] = (),
 ) -> list[Check]:
     """All observer checks of a spec's ``[observer]`` section.
 
@@ -437,6 +484,10 @@ def observer_checks(
     tolerances : Tolerances, optional
         ``certificate_clear`` decides when a certificate's margin beats its
         error bound; every check reports the tolerances it rests on.
+    constant_attacks : sequence of (str, ndarray), optional
+        Named constant attack vectors (length p): ``iss_gain`` reports where
+        the error goes under each (``ssecert.stability.constant_attack``;
+        ``analyze`` passes ``default_attacks`` of the spec).
 
     Returns
     -------
@@ -516,7 +567,11 @@ def observer_checks(
             evidence={**stability.evidence, "certified_region_radius": region.value},
         )
     checks.append(stability)
-    checks.append(iss_gain_check(design, cert, budget=budget, tolerances=tol))
+    checks.append(
+        iss_gain_check(
+            design, cert, budget=budget, tolerances=tol, constant_attacks=constant_attacks
+        )
+    )
     if design.sparse:
         checks.append(thesis_assumptions_check(design, observability, seed=seed, budget=budget))
     if region is not None:

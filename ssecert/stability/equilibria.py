@@ -25,7 +25,7 @@ import numpy as np
 from .._rational import fractions, product, solve
 from ..observers.lure import LureModel
 
-__all__ = ["nonzero_equilibrium", "MAX_PATTERNS"]
+__all__ = ["nonzero_equilibrium", "attacked_equilibria", "MAX_PATTERNS"]
 
 MAX_PATTERNS = 3**10  # patterns tried exhaustively (59,049)
 _BATCH = 4096
@@ -33,38 +33,83 @@ _BATCH = 4096
 
 def nonzero_equilibrium(model: LureModel) -> tuple[dict[str, Any] | None, str]:
     """An exactly confirmed nonzero equilibrium (the witness) or None, with what was searched."""
-    m = model.m
-    if m == 0 or model.q <= 0:
+    if model.m == 0 or model.q <= 0:
         return None, "no nonlinearity: the only equilibrium of a stable linear map is 0"
+    found, note = _search(model, None, first=True)
+    return (found[0] if found else None), note
+
+
+def attacked_equilibria(
+    model: LureModel, attack: np.ndarray
+) -> tuple[list[dict[str, Any]], str, int]:
+    """Every equilibrium of the error dynamics under the constant attack ``attack`` (length
+    r), each confirmed in exact arithmetic, with what was searched and the number of patterns
+    whose equations were too ill-conditioned to decide (0 means the list is complete)."""
+    a = np.asarray(attack, dtype=float)
+    if model.m == 0 or model.q <= 0:
+        K = np.eye(model.N) - model.A
+        try:
+            xi = np.linalg.solve(K, model.E @ a)
+        except np.linalg.LinAlgError:
+            return [], "the linear error map has an eigenvalue 1: no unique equilibrium", 1
+        witness = {"initial_error": xi[: model.n_e], "attack_estimate": xi[model.n_e :],
+                   "exact": False, "active_signs": np.zeros(0, int),
+                   "error_is_zero": not np.any(xi[: model.n_e])}  # fmt: skip
+        return [witness], "the linear error dynamics' unique equilibrium", 0
+    found, note = _search(model, a, first=False)
+    singular = int(note.split("(")[1].split()[0].replace(",", "")) if "singular" in note else 0
+    return found, note, singular
+
+
+def _search(
+    model: LureModel, attack: np.ndarray | None, *, first: bool
+) -> tuple[list[dict[str, Any]], str]:
+    """Equilibria of the soft threshold's active/sign patterns (nonzero ones without attack),
+    confirmed exactly; the first only, or all."""
+    m = model.m
     count = 3**m
     if count > MAX_PATTERNS:
-        return None, f"not searched: 3^{m} = {count:,} active/sign patterns exceed {MAX_PATTERNS:,}"
+        return [], f"not searched: 3^{m} = {count:,} active/sign patterns exceed {MAX_PATTERNS:,}"
     N, lam, q = model.N, model.threshold, model.q
+    shift = np.zeros(m) if attack is None else model.Dw @ attack  # w = Cw xi + Dw a
+    push = np.zeros(N) if attack is None else model.E @ attack
     singular = 0
+    found: list[dict[str, Any]] = []
     for start in range(0, count, _BATCH):
         signs = _patterns(m, start, min(start + _BATCH, count))
         active = np.abs(signs)
         K = np.eye(N) - model.A - q * np.einsum("ij,pj,jk->pik", model.B, active, model.Cw)
-        rhs = -q * lam * signs @ model.B.T
+        rhs = q * (active * shift - lam * signs) @ model.B.T + push
         cond = np.linalg.cond(K)
         ok = np.isfinite(cond) & (cond < 1e12)
         singular += int(np.count_nonzero(~ok))
         if not ok.any():
             continue
         xi = np.linalg.solve(K[ok], rhs[ok][..., None])[..., 0]
-        w = xi @ model.Cw.T
+        w = xi @ model.Cw.T + shift
         s = signs[ok]
         slack = 1e-9 * max(lam, 1.0)
-        inside = np.where(s != 0, s * w > lam + slack, np.abs(w) < lam - slack).all(axis=1)
-        nonzero = np.linalg.norm(xi, axis=1) > 0
-        for i in np.flatnonzero(inside & nonzero):
-            witness = _confirm(model, s[i])
-            if witness is not None:
-                return witness, f"{start + i + 1:,} of {count:,} active/sign patterns tried"
-    note = f"none among the {count:,} active/sign patterns of the soft threshold"
+        inside = np.where(s != 0, s * w > lam - slack, np.abs(w) < lam + slack).all(axis=1)
+        if attack is None:
+            inside &= np.linalg.norm(xi, axis=1) > 0
+        for i in np.flatnonzero(inside):
+            witness = _confirm(model, s[i], attack)
+            if witness is not None and not any(
+                np.array_equal(witness["point"], other["point"]) for other in found
+            ):
+                found.append(witness)
+                if first:
+                    return found, f"{start + i + 1:,} of {count:,} active/sign patterns tried"
+    what = "nonzero equilibrium" if attack is None else "equilibrium"
+    note = (
+        f"{len(found)} {what}{'s' if len(found) != 1 else ''} among the {count:,} active/sign "
+        "patterns of the soft threshold"
+        if found or attack is not None
+        else f"none among the {count:,} active/sign patterns of the soft threshold"
+    )
     if singular:
         note += f" ({singular:,} with a singular or ill-conditioned system, not decided)"
-    return None, note
+    return found, note
 
 
 def _patterns(m: int, start: int, stop: int) -> np.ndarray:
@@ -74,9 +119,11 @@ def _patterns(m: int, start: int, stop: int) -> np.ndarray:
     return (digits - 1).astype(float)
 
 
-def _confirm(model: LureModel, signs: np.ndarray) -> dict[str, Any] | None:
-    """Solve the pattern's fixed-point equations exactly; the witness if the solution is a
-    nonzero equilibrium in its region, else None."""
+def _confirm(
+    model: LureModel, signs: np.ndarray, attack: np.ndarray | None = None
+) -> dict[str, Any] | None:
+    """Solve the pattern's fixed-point equations exactly; the witness if the solution is an
+    equilibrium in its region (nonzero without attack), else None."""
     N = model.N
     lam, q = Fraction(model.threshold), Fraction(model.q)
     A, B, Cw = fractions(model.A), fractions(model.B), fractions(model.Cw)
@@ -84,15 +131,36 @@ def _confirm(model: LureModel, signs: np.ndarray) -> dict[str, Any] | None:
     BDCw = product([[B[i][j] for j in on] for i in range(N)], [Cw[j] for j in on]) if on else None
     K = [[(1 if i == k else 0) - A[i][k] - (q * BDCw[i][k] if BDCw else 0) for k in range(N)]
          for i in range(N)]  # fmt: skip
-    rhs = [-q * lam * sum((B[i][j] * int(signs[j]) for j in on), Fraction(0)) for i in range(N)]
+    if attack is None:
+        shift = [Fraction(0)] * model.m
+        push = [Fraction(0)] * N
+    else:
+        aq = [[Fraction(float(v))] for v in attack]
+        shift = [row[0] for row in product(fractions(model.Dw), aq)]
+        push = [row[0] for row in product(fractions(model.E), aq)]
+    rhs = [
+        push[i] + q * sum((B[i][j] * (shift[j] - lam * int(signs[j])) for j in on), Fraction(0))
+        for i in range(N)
+    ]
     xi = solve(K, rhs)
-    if xi is None or not any(xi):
+    if xi is None or (attack is None and not any(xi)):
         return None
-    w = [row[0] for row in product(Cw, [[v] for v in xi])]
+    w = [row[0] + shift[j] for j, row in enumerate(product(Cw, [[v] for v in xi]))]
     for wi, si in zip(w, signs):
         if (si != 0 and not si * wi > lam) or (si == 0 and not abs(wi) <= lam):
             return None
     point = np.array([float(v) for v in xi])
+    if attack is not None:
+        step = model.simulate(point, 1, np.asarray(attack, float)[None])[-1]
+        return {
+            "point": point,
+            "initial_error": point[: model.n_e],
+            "attack_estimate": point[model.n_e :],
+            "error_is_zero": not any(xi[: model.n_e]),
+            "active_signs": signs.astype(int),
+            "exact": True,
+            "float_residual": float(np.linalg.norm(step - point)),
+        }
     step = model.simulate(point, 1)[-1]
     return {
         "kind": "nonzero equilibrium",

@@ -1,0 +1,148 @@
+"""Where an observer's error goes under a constant attack: to zero, to a bias, or away.
+
+Under a constant attack a the error state of the Lur'e model
+(``ssecert.observers.lure``) moves to an equilibrium xi* of
+xi+ = A xi + B phi(Cw xi + Dw a) + E a, if anywhere.  The equilibria are
+found over the soft threshold's active/sign patterns and confirmed in exact
+arithmetic (``ssecert.stability.equilibria``).
+
+When the observer has a circle-criterion certificate (sector [0, q]), the
+same certificate proves that every trajectory converges to a unique
+equilibrium: the shrinkage is slope-restricted in [0, q], so the increments
+phi(w1) - phi(w2) lie in the same sector as phi itself, and the certificate's
+inequality holds for the difference of any two trajectories under the same
+attack (the attack cancels).  The outcome is then proved: the error converges
+to zero when e* = 0 exactly, otherwise to the bias e*.  Without a certificate
+the outcome is what a simulation from zero error shows (``proved`` false):
+growth without bound is a counterexample to boundedness, convergence to an
+exactly confirmed equilibrium is observed, not proved.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from itertools import combinations
+from typing import Any
+
+import numpy as np
+
+from ..observers.lure import LureModel
+from .equilibria import attacked_equilibria
+
+__all__ = ["constant_attack_outcomes", "default_attacks"]
+
+STEPS = 20_000  # simulated from zero error, stopping once settled
+SETTLED = 1e-12  # relative change per step below which the simulation has settled
+UNBOUNDED = 1e8  # growth over the attack's size that counts as unbounded
+MAX_SUPPORTS = 10
+
+
+def default_attacks(
+    p: int, s: int, scenarios: Sequence[Mapping[str, Any]] = ()
+) -> list[tuple[str, np.ndarray]]:
+    """The constant attacks analysed: each constant scenario with listed sensors (the top of
+    its magnitude range, positive on every attacked sensor), or, without one, a unit attack on
+    each of the first ``MAX_SUPPORTS`` supports of s sensors."""
+    out = []
+    for sc in scenarios:
+        if sc.get("attack") == "constant" and sc.get("sensors") is not None:
+            a = np.zeros(p)
+            a[list(sc["sensors"])] = float(sc["magnitude"][1])
+            out.append((f"scenario {sc['name']}", a))
+    if out or s <= 0:
+        return out
+    for support in list(combinations(range(p), s))[:MAX_SUPPORTS]:
+        a = np.zeros(p)
+        a[list(support)] = 1.0
+        out.append((f"unit attack on sensors {list(support)}", a))
+    return out
+
+
+def constant_attack_outcomes(
+    model: LureModel, attacks: Sequence[tuple[str, np.ndarray]], *, certified: bool
+) -> list[dict[str, Any]]:
+    """One record per attack: ``outcome`` ("converges to zero", "converges to a bias",
+    "unbounded" or "undecided"), ``proved``, the ``bias`` e* and its norm, the equilibria
+    found and the simulation from zero error."""
+    records = []
+    for name, attack in attacks:
+        a = np.asarray(attack, dtype=float)
+        if a.shape != (model.r,):  # a stacked attack (windowed observers): not analysed
+            continue
+        equilibria, note, undecided = attacked_equilibria(model, a)
+        sim = _simulate(model, a)
+        record: dict[str, Any] = {
+            "attack": name,
+            "vector": a,
+            "equilibria": len(equilibria),
+            "equilibrium_search": note,
+            "simulation": sim,
+        }
+        if sim["unbounded"]:
+            record.update(
+                outcome="unbounded",
+                proved=False,
+                how=f"the simulation from zero error grew past {UNBOUNDED:.0e} times the "
+                "attack's size",
+            )
+        elif certified and len(equilibria) == 1 and not undecided:
+            _settle(record, equilibria[0], proved=True)
+            record["how"] = (
+                "the stability certificate proves convergence to the unique equilibrium "
+                "(the shrinkage is slope-restricted, so it holds for increments)"
+            )
+        else:
+            near = [eq for eq in equilibria if _distance(sim["final"], eq) <= 1e-6 * _scale(a)]
+            if near and sim["settled"]:
+                _settle(record, near[0], proved=False)
+                record["how"] = (
+                    "observed: the simulation from zero error settles on this exactly confirmed "
+                    "equilibrium (no certificate proves that it always does)"
+                )
+            else:
+                record.update(
+                    outcome="undecided", proved=False, how="the simulation did not settle"
+                )
+        records.append(record)
+    return records
+
+
+def _settle(record: dict[str, Any], eq: dict[str, Any], *, proved: bool) -> None:
+    bias = np.asarray(eq["initial_error"], dtype=float)
+    record.update(
+        outcome="converges to zero" if eq.get("error_is_zero") else "converges to a bias",
+        proved=proved,
+        bias=bias,
+        bias_norm=float(np.linalg.norm(bias)),
+        attack_estimate=np.asarray(eq["attack_estimate"], dtype=float),
+        exact=bool(eq.get("exact")),
+    )
+
+
+def _scale(a: np.ndarray) -> float:
+    return max(float(np.abs(a).max(initial=0.0)), 1.0)
+
+
+def _distance(final: np.ndarray, eq: dict[str, Any]) -> float:
+    point = np.concatenate([eq["initial_error"], eq["attack_estimate"]])
+    return float(np.linalg.norm(np.asarray(final) - point))
+
+
+def _simulate(model: LureModel, a: np.ndarray) -> dict[str, Any]:
+    """From zero error and zero attack estimate under the constant attack, until settled."""
+    xi = np.zeros(model.N)
+    w_shift = model.Dw @ a if model.m else np.zeros(0)
+    push = model.E @ a
+    limit = UNBOUNDED * _scale(a)
+    for k in range(1, STEPS + 1):
+        nxt = xi @ model.A.T + push
+        if model.m:
+            nxt = nxt + model.phi(xi @ model.Cw.T + w_shift) @ model.B.T
+        if not np.all(np.isfinite(nxt)) or np.linalg.norm(nxt) > limit:
+            return {"steps": k, "unbounded": True, "settled": False, "final": nxt,
+                    "growth": float(np.linalg.norm(nxt) / _scale(a))}  # fmt: skip
+        change = float(np.linalg.norm(nxt - xi))
+        xi = nxt
+        if change <= SETTLED * max(float(np.linalg.norm(xi)), _scale(a)):
+            return {"steps": k, "unbounded": False, "settled": True, "final": xi}
+    return {"steps": STEPS, "unbounded": False, "settled": False, "final": xi}

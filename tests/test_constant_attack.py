@@ -1,0 +1,88 @@
+"""Where the error goes under a constant attack (iss_gain evidence, constant_attacks)."""
+
+from __future__ import annotations
+
+import tomllib
+
+import numpy as np
+import pytest
+
+from ssecert import analyze, spec_from_dict
+from ssecert.examples import example_path
+from ssecert.observers import build_observer
+from ssecert.observers.lure import LureModel
+from ssecert.stability.constant_attack import constant_attack_outcomes, default_attacks
+
+
+def _ugv(observer: dict) -> dict:
+    with open(example_path("ugv"), "rb") as fh:
+        data = tomllib.load(fh)
+    data["observer"] = observer
+    return data
+
+
+def _records(cert) -> list[dict]:
+    return cert["iss_gain"].evidence["constant_attacks"]
+
+
+def test_a_linear_observer_converges_to_its_exact_bias():
+    cert = analyze(spec_from_dict(_ugv({"kind": "luenberger", "gain": "deadbeat"})))
+    (rec,) = _records(cert)
+    assert rec["outcome"] == "converges to a bias" and rec["proved"]
+    L = np.asarray(cert["observer_gain"].fields["L"])
+    A = np.array([[1.0, 0.0099], [0.0, 0.9876]])
+    F = A - L @ np.array([[1, 0], [0, 1], [0, 1]])
+    a = np.array([0.0, 5.0, 0.0])
+    bias = np.linalg.solve(np.eye(2) - F, L @ a)  # e* = F e* + L a
+    np.testing.assert_allclose(np.abs(rec["bias"]), np.abs(bias), rtol=1e-9)
+    assert "constant-velocity-a" in cert["iss_gain"].summary
+
+
+def test_an_attack_the_gain_ignores_leaves_no_bias():
+    data = _ugv({"kind": "luenberger", "gain": [[1.0, 0.0, 0.0], [0.0, 0.5, 0.0]]})
+    data["scenario"] = [
+        {"name": "ignored", "attack": "constant", "sensors": [2], "magnitude": 3.0, "steps": 10}
+    ]
+    (rec,) = _records(analyze(spec_from_dict(data)))
+    assert rec["outcome"] == "converges to zero" and rec["proved"]
+
+
+def test_a_certified_elastic_net_observer_converges_to_the_same_bias_from_anywhere():
+    obs = {"kind": "elastic_net", "gain": "deadbeat", "step": 0.7, "threshold": 0.1, "shrink": 0.5}
+    spec = spec_from_dict(_ugv(obs))
+    cert = analyze(spec)
+    assert cert["observer_stability"].verdict.value == "holds"
+    (rec,) = _records(cert)
+    assert rec["proved"] and rec["outcome"] == "converges to a bias" and rec["exact"]
+    # the certificate's claim, replayed: every initial error goes to the same equilibrium
+    model = LureModel.from_design(build_observer(spec.system, spec.observer))
+    a = np.asarray(rec["vector"])
+    rng = np.random.default_rng(1)
+    starts = rng.standard_normal((30, model.N)) * 10.0 ** rng.uniform(-1, 2, (30, 1))
+    end = model.simulate(starts, 4000, np.tile(a, (4000, 30, 1)))[-1]
+    np.testing.assert_allclose(end[:, : model.n_e], np.tile(rec["bias"], (30, 1)), atol=1e-8)
+
+
+def test_the_thesis_dsso_settles_on_a_bias_that_is_observed_not_proved():
+    with open(example_path("ugv"), "rb") as fh:
+        cert = analyze(spec_from_dict(tomllib.load(fh)))
+    (rec,) = _records(cert)
+    assert rec["outcome"] == "converges to a bias" and not rec["proved"]
+    assert rec["bias_norm"] == pytest.approx(0.1394, abs=1e-4) and rec["exact"]
+
+
+def test_an_unstable_observer_is_unbounded_under_attack():
+    data = _ugv({"kind": "luenberger", "gain": [[2.5, 0.0, 0.0], [0.0, 0.5, 0.5]]})
+    (rec,) = _records(analyze(spec_from_dict(data)))
+    assert rec["outcome"] == "unbounded" and rec["simulation"]["growth"] > 1e7
+
+
+def test_default_attacks_without_a_constant_scenario_are_unit_attacks_on_s_sensors():
+    attacks = default_attacks(4, 2)
+    assert len(attacks) == 6 and all(a.sum() == 2 for _, a in attacks)
+    assert default_attacks(3, 0) == []
+
+
+def test_a_stacked_attack_of_the_wrong_length_is_skipped():
+    model = LureModel.linear(np.array([[0.5]]), np.array([[1.0, 1.0]]))
+    assert constant_attack_outcomes(model, [("x", np.ones(3))], certified=True) == []
