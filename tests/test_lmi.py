@@ -255,3 +255,26 @@ def test_iss_evidence_reverifies_without_the_solver():
         g=ev["gamma"] ** 2,
     )
     assert ok, problem
+
+
+def test_region_map_fails_cells_carry_their_witness_and_undecided_cells_a_radius():
+    spec = load_example("ugv")
+    design = build_observer(spec.system, spec.observer)  # the thesis's D-SSO
+    rm = region_map(design, [0.6, 1.0], [0.7, 1.4])
+    # step 1.4: the large-signal loop has an eigenvalue beyond -1 (a divergent trajectory)
+    assert rm.verdicts[0, 1] == "fails" and rm.witnesses[(0, 1)] == "divergent trajectory"
+    assert rm.verdicts[1, 1] == "fails" and rm.radii[1, 1] == 0.0
+    # shrink 1, step 0.7: undecided, with the dead zone's radius (Q = I)
+    assert rm.verdicts[1, 0] == "inconclusive" and 0.1 < rm.radii[1, 0] <= 0.1 / 0.7
+    assert rm.verdicts[0, 0] == "holds" and rm.radii[0, 0] == np.inf
+    out = rm.to_dict()
+    assert {"shrink": 0.6, "step": 1.4, "kind": "divergent trajectory"} in out["witnesses"]
+    # every witness replays: the model of that cell grows from its witness
+    from ssecert.stability.divergence import divergence_witness
+
+    for i, j in rm.witnesses:
+        model = LureModel.from_design(
+            replace(design, shrink=float(rm.shrinks[i]), step=float(rm.steps[j]))
+        )
+        witness = divergence_witness(model)
+        assert witness is not None and witness["growth"] >= 100

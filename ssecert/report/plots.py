@@ -168,6 +168,14 @@ def region_plot(region: Any, design_point: tuple[float, float] | None = None) ->
     ax.set_yticklabels([f"{q:.3g}" for q in region.shrinks], fontsize=7)
     ax.set_xlabel("step")
     ax.set_ylabel("shrink q")
+    short = {"local instability": "loc", "divergent trajectory": "div", "nonzero equilibrium": "eq"}
+    for (i, j), kind in getattr(region, "witnesses", {}).items():
+        ax.text(j + 0.5, i + 0.5, short.get(kind, "x"), ha="center", va="center", fontsize=7,
+                color="white")  # fmt: skip
+    radii = getattr(region, "radii", None)
+    if radii is not None:
+        for i, j in zip(*np.nonzero(np.isfinite(radii) & (radii > 0))):
+            ax.text(j + 0.5, i + 0.5, f"{radii[i, j]:.2g}", ha="center", va="center", fontsize=6)
     if design_point is not None:
         q, nu = design_point
         i = int(np.argmin(np.abs(region.shrinks - q)))
@@ -185,7 +193,9 @@ def region_plot(region: Any, design_point: tuple[float, float] | None = None) ->
         mark.set_gid("region-design")
         ax.legend(fontsize=8, loc="upper right")
     ax.set_title(
-        "circle criterion: green certified, amber no certificate, red unstable", fontsize=8
+        "green: certified (circle criterion); amber: radius of initial errors certified;\n"
+        "red: fails (loc: dead zone unstable, div: divergent trajectory, eq: equilibrium)",
+        fontsize=7,
     )
     return svg_figure(fig, title="certified region")
 

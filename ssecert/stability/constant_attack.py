@@ -21,7 +21,7 @@ exactly confirmed equilibrium is observed, not proved.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from itertools import combinations
+from itertools import combinations, islice
 from typing import Any
 
 import numpy as np
@@ -51,7 +51,7 @@ def default_attacks(
             out.append((f"scenario {sc['name']}", a))
     if out or s <= 0:
         return out
-    for support in list(combinations(range(p), s))[:MAX_SUPPORTS]:
+    for support in islice(combinations(range(p), min(s, p)), MAX_SUPPORTS):
         a = np.zeros(p)
         a[list(support)] = 1.0
         out.append((f"unit attack on sensors {list(support)}", a))

@@ -2,7 +2,12 @@
 
 Each grid point is a circle-criterion certificate (``lmi.circle_certificate``),
 re-verified in numpy as every certificate is; a certificate found at one point
-is tried first at its neighbours before a new solve.
+is tried first at its neighbours before a new solve.  A point without one is
+decided as observer_stability decides it when it can: it fails with the kind
+of its witness (the dead zone's linear dynamics unstable, a divergent
+trajectory of the large-signal loop, or a nonzero equilibrium confirmed
+exactly); otherwise the radius of initial errors its dead zone certifies
+(``roa.region_of_attraction`` with Q = I) is recorded.
 """
 
 from __future__ import annotations
@@ -28,7 +33,9 @@ class RegionMap:
     """Verdicts of the circle criterion over a (shrink, step) grid.
 
     ``verdicts[i, j]`` is for ``shrinks[i]`` and ``steps[j]``; ``margins``
-    holds the verified margins (NaN where not certified).
+    holds the verified margins (NaN where not certified); ``witnesses`` the
+    kind of witness of each point that fails; ``radii`` the certified radius
+    of initial errors (inf where certified, 0 where it fails or none is).
     """
 
     shrinks: np.ndarray
@@ -39,9 +46,16 @@ class RegionMap:
     reused: int
     seconds: float
     certificates: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+    witnesses: dict[tuple[int, int], str] = field(default_factory=dict)
+    radii: np.ndarray | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {
+            "witnesses": [
+                {"shrink": float(self.shrinks[i]), "step": float(self.steps[j]), "kind": kind}
+                for (i, j), kind in sorted(self.witnesses.items())
+            ],
+            "radii": self.radii,
             "shrinks": self.shrinks,
             "steps": self.steps,
             "verdicts": self.verdicts.tolist(),
@@ -84,6 +98,8 @@ def region_map(
     verdicts: np.ndarray = np.empty((shrink_grid.size, step_grid.size), dtype=object)
     margins = np.full((shrink_grid.size, step_grid.size), np.nan)
     found: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
+    witnesses: dict[tuple[int, int], str] = {}
+    radii = np.zeros((shrink_grid.size, step_grid.size))
     solves = reused = 0
     for i, q in enumerate(shrink_grid):
         for j, nu in enumerate(step_grid):
@@ -106,7 +122,12 @@ def region_map(
             elif cert.details.get("attempts"):
                 solves += 1
             verdicts[i, j] = cert.verdict
+            if cert.verdict == Verdict.INCONCLUSIVE:
+                kind, radii[i, j] = _undecided_point(model)
+                if kind:
+                    verdicts[i, j], witnesses[(i, j)] = Verdict.FAILS, kind
             if cert.verdict == Verdict.HOLDS:
+                radii[i, j] = np.inf
                 margins[i, j] = cert.margin
                 if cert.P is not None and cert.multipliers is not None:  # holds carries both
                     found[(i, j)] = (cert.P, cert.multipliers)
@@ -119,4 +140,22 @@ def region_map(
         reused,
         time.perf_counter() - start,
         dict(found),
+        witnesses,
+        radii,
     )
+
+
+def _undecided_point(model: LureModel) -> tuple[str, float]:
+    """(kind of witness that the point fails with, or '', and its dead zone's radius)."""
+    from .divergence import divergence_witness
+    from .equilibria import nonzero_equilibrium
+    from .roa import region_of_attraction
+
+    dead = region_of_attraction(model, widen=False)
+    if "is not stable" in str(dead.get("reason", "")):
+        return "local instability", 0.0
+    if divergence_witness(model) is not None:
+        return "divergent trajectory", 0.0
+    if nonzero_equilibrium(model)[0] is not None:
+        return "nonzero equilibrium", 0.0
+    return "", float(dead["radius"])

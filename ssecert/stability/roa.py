@@ -40,16 +40,17 @@ EXACT_LIMIT = 20  # largest error state whose region is re-checked in exact arit
 
 
 def region_of_attraction(
-    model: LureModel, *, seed: int = 0, piecewise: bool = False
+    model: LureModel, *, seed: int = 0, piecewise: bool = False, widen: bool = True
 ) -> dict[str, Any]:
     """The certified radius of initial estimation errors (a_hat(0) = 0) from which the observer
     converges without attack, with how it was found; radius 0 with the reason when none is.
 
     With ``piecewise``, a piecewise-quadratic Lyapunov function over the soft threshold's
     regions (``ssecert.stability.piecewise``, up to 3 channels) is also searched, and the
-    larger verified radius is kept (``dead_zone_radius`` then records the other).
+    larger verified radius is kept (``dead_zone_radius`` then records the other).  Without
+    ``widen`` only the Lyapunov matrix with Q = I is tried (no LMI: the design-space map).
     """
-    found = _dead_zone_region(model, seed)
+    found = _dead_zone_region(model, seed, widen)
     if not piecewise or model.m == 0:
         return found
     wider = piecewise_region(model, seed=seed, floor=float(found["radius"]))
@@ -58,7 +59,7 @@ def region_of_attraction(
     return {**found, "piecewise": {k: v for k, v in wider.items() if k != "radius"}}
 
 
-def _dead_zone_region(model: LureModel, seed: int) -> dict[str, Any]:
+def _dead_zone_region(model: LureModel, seed: int, widen: bool = True) -> dict[str, Any]:
     """The radius of the largest invariant sublevel set of the dead zone's Lyapunov function."""
     if model.m == 0 or model.threshold <= 0:
         return {"radius": 0.0, "reason": "the observer has no dead zone (no soft threshold)"}
@@ -71,7 +72,7 @@ def _dead_zone_region(model: LureModel, seed: int) -> dict[str, Any]:
         }
     found = _region(model, 0.5 * (lyap.P + lyap.P.T), lyap.margin, lyap.error_bound, seed)
     found["P_from"] = "discrete Lyapunov equation with Q = I"
-    wider = _lmi_matrix(model) if model.N <= LMI_LIMIT and found["radius"] > 0 else None
+    wider = _lmi_matrix(model) if widen and model.N <= LMI_LIMIT and found["radius"] > 0 else None
     verified = verified_decrease(model.A, wider) if wider is not None else None
     if wider is not None and verified is not None:
         other = _region(model, wider, verified[0], verified[1], seed)
