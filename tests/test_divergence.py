@@ -49,6 +49,10 @@ def test_a_dsso_with_step_1_5_on_the_ugv_diverges_and_the_witness_replays():
         np.concatenate([w["initial_error"], w["initial_attack_estimate"]])
     )
     assert check.witness["growth"] >= 100 and cert.exit_code == 1
+    # replayed through the observer's own simulator too, not only its Lur'e model
+    replay = check.witness["observer_replay"]
+    assert replay["simulator"] == "SparseSoftObserver" and replay["agrees"]
+    assert replay["growth"] >= 100
 
 
 def test_the_thesis_design_is_not_called_divergent():
@@ -185,3 +189,28 @@ def test_the_ugv_search_finds_no_equilibrium_and_says_what_it_searched():
     searches = check.evidence["searches"]
     assert "none among the 27 active/sign patterns" in searches["nonzero_equilibrium"]
     assert "spectral radius 1" in searches["divergent_trajectory"]
+
+
+def test_a_dsso_with_a_nonzero_equilibrium_fails_and_its_simulator_stays_there():
+    # found by a search over small rational designs: rho(A - L C) = 0.54, the large-signal
+    # loop's spectral radius at most 1, and yet a wrong estimate that the observer keeps
+    data = {
+        "name": "wrong-estimate",
+        "system": {"A": [[0.9]], "C": [[-0.2], [1.2]]},
+        "attack": {"max_attacked": 0, "horizon": 1},
+        "observer": {"kind": "dsso", "gain": [[1.8, 0.9]], "step": 1.1, "threshold": 0.1},
+    }
+    cert = analyze(spec_from_dict(data))
+    check = cert["observer_stability"]
+    assert check.verdict.value == "fails" and check.witness["kind"] == "nonzero equilibrium"
+    assert check.witness["exact"] and check.witness["observer_replay"]["agrees"]
+    # by hand: x_hat = e, a_hat = (0, a2): e = 0.9 e + L (y - C e - a_hat) with y = 0, and
+    # a2 = S(a2 + 1.1 (-1.2 e - a2)) with the threshold 0.1
+    e, a2 = (
+        float(check.witness["initial_error"][0]),
+        float(check.witness["initial_attack_estimate"][1]),
+    )
+    r = np.array([0.2 * e, -1.2 * e - a2])
+    assert abs(0.9 * e + np.array([1.8, 0.9]) @ r - e) < 1e-12
+    w = a2 + 1.1 * r[1]
+    assert abs(np.sign(w) * max(abs(w) - 0.1, 0.0) - a2) < 1e-12

@@ -170,6 +170,7 @@ def _witnessed_failure(
     summary, method, margin, error_bound = decided
     evidence = _circle_evidence(model, cert)
     evidence["no_certificate"] = cert.reason
+    witness = {**witness, "observer_replay": _observer_replay(design, witness)}
     return Check(
         id="observer_stability",
         title=title,
@@ -189,6 +190,34 @@ def _witnessed_failure(
         witness=witness,
         tolerances=_decided_by(tol, error_bound=error_bound, lmi_eta=ETA),
     )
+
+
+def _observer_replay(design: ObserverDesign, witness: dict[str, Any]) -> dict[str, Any]:
+    """The witness replayed through the observer's own simulator (not the Lur'e model): true
+    state 0 and no attack, so x_hat is the estimation error."""
+    from ..observers import observer_from_design
+
+    e0 = np.asarray(witness["initial_error"], dtype=float)
+    a0 = np.asarray(witness["initial_attack_estimate"], dtype=float)
+    steps = int(witness.get("steps", 50))
+    try:
+        sim = observer_from_design(design)
+        y = np.zeros((steps, 1, design.system.p))
+        traj = sim.run(y, state={"x_hat": e0[None], "a_hat": a0[None]})
+    except (KeyError, ValueError, NotImplementedError) as exc:  # a windowed observer's state
+        return {"replayed": False, "reason": f"not replayed: {exc}"}
+    if traj.a_hat is None:
+        return {"replayed": False, "reason": "not replayed: the simulator has no attack estimate"}
+    path = np.concatenate([traj.x_hat[:, 0], traj.a_hat[:, 0]], axis=1)
+    start = float(np.linalg.norm(path[0]))
+    out: dict[str, Any] = {"replayed": True, "simulator": type(sim).__name__, "steps": steps}
+    if witness.get("kind") == "nonzero equilibrium":
+        drift = float(np.max(np.linalg.norm(path - path[0], axis=1)))
+        out.update(largest_drift=drift, agrees=drift <= 1e-9 * max(start, 1.0))
+    else:
+        growth = float(np.linalg.norm(path[-1]) / start) if start > 0 else float("nan")
+        out.update(growth=growth, agrees=bool(growth >= 0.5 * float(witness.get("growth", 0))))
+    return out
 
 
 def _linear_stability_check(lyap: LyapunovCertificate, tol: Tolerances, title: str) -> Check:
