@@ -214,3 +214,42 @@ def test_a_dsso_with_a_nonzero_equilibrium_fails_and_its_simulator_stays_there()
     assert abs(0.9 * e + np.array([1.8, 0.9]) @ r - e) < 1e-12
     w = a2 + 1.1 * r[1]
     assert abs(np.sign(w) * max(abs(w) - 0.1, 0.0) - a2) < 1e-12
+
+
+def _lasso_sso(window: int, step: float) -> dict:
+    # the Lasso paper's Sec. 5.2 set-up: n = 10, p = 15, s = 3, 5 tau inner ISTA steps
+    rng = np.random.default_rng(5)
+    A = rng.standard_normal((10, 10))
+    A /= np.abs(np.linalg.eigvals(A)).max()
+    C = rng.standard_normal((15, 10))
+    return {
+        "name": "lasso-sso",
+        "system": {"A": A.tolist(), "C": C.tolist()},
+        "attack": {"max_attacked": 3, "horizon": 1},
+        "observer": {
+            "kind": "sso",
+            "step": step,
+            "threshold": 0.001,
+            "window": window,
+            "inner_steps": 5 * window,
+        },
+    }
+
+
+def test_an_sso_with_inner_steps_gets_the_radius_its_dead_zone_proves():
+    cert = analyze(spec_from_dict(_lasso_sso(1, 0.01)))
+    assert cert["observer_stability"].verdict.value == "inconclusive"
+    region = cert["region_of_attraction"]
+    assert region.verdict.value == "holds" and region.value > 0
+    replay = region.evidence["replay"]
+    assert replay["simulator"] == "WindowSSO" and replay["confirmed"]
+    assert replay["largest_attack_estimate"] == 0.0
+    assert f"{region.value:.3g}" in cert["observer_stability"].summary
+
+
+def test_an_sso_whose_gradient_step_is_too_long_fails_near_the_origin():
+    # step 0.01 against ||O' O|| ~ 1500 for tau = 10: each inner step expands the error
+    cert = analyze(spec_from_dict(_lasso_sso(10, 0.01)))
+    stability = cert["observer_stability"]
+    assert stability.verdict.value == "fails" and "dead zone" in stability.summary
+    assert cert["region_of_attraction"].verdict.value == "fails"

@@ -185,6 +185,13 @@ class ObserverKind:
         """
         return None
 
+    def dead_zone_model(self, design: ObserverDesign) -> LureModel | None:
+        """For a design without a Lur'e form (``lure_gap``): its error dynamics while every soft
+        threshold stays in its dead zone, as a Lur'e model with B = 0 (xi+ = A xi) whose rows
+        Cw are every threshold's input, so that the region-of-attraction search applies; None
+        when the kind has none."""
+        return None
+
     def region_family(self, design: ObserverDesign) -> ObserverDesign | None:
         """The design whose (shrink, step) the certified-region map varies, or None."""
         return None

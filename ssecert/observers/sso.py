@@ -21,6 +21,7 @@ from ..tolerances import Tolerances
 from .base import ObserverDesign, check_finite, parse_unit_shrink
 from .dsso import SoftThresholdObserverKind
 from .dynamic import DynamicObserver
+from .lure import LureModel
 from .registry import register
 from .simulators import WindowSSO
 
@@ -131,6 +132,34 @@ class SparseSoftObserverKind(SoftThresholdObserverKind):
 
     def region_family(self, design: ObserverDesign) -> ObserverDesign | None:
         return None if design.inner_steps > 1 else super().region_family(design)
+
+    def dead_zone_model(self, design: ObserverDesign) -> LureModel | None:
+        """With a_hat = 0 and every inner step's threshold input |w| <= threshold, the attack
+        estimate stays 0 and each inner ISTA step maps the error by I - step S' S: the error
+        follows e+ = A (I - step S' S)^m e, and the threshold inputs of inner step i are
+        -step S (I - step S' S)^(i-1) e."""
+        if design.inner_steps == 1:
+            return None
+        n = design.system.n
+        S = design.sensing
+        nu = design.parameter("step")
+        inner = np.eye(n) - nu * S.T @ S
+        rows, power = [], np.eye(n)
+        for _ in range(design.inner_steps):
+            rows.append(-nu * S @ power)
+            power = inner @ power
+        W = np.vstack(rows)
+        return LureModel(
+            A=self.error_matrix(design),
+            B=np.zeros((n, W.shape[0])),
+            Cw=W,
+            E=np.zeros((n, S.shape[0])),
+            Dw=np.zeros((W.shape[0], S.shape[0])),
+            Ce=np.eye(n),
+            q=float(design.shrink),
+            n_e=n,
+            threshold=float(design.threshold or 0.0),
+        )
 
     def simulation_flops(self, design: ObserverDesign) -> float:
         if not self._windowed(design):

@@ -77,7 +77,7 @@ def observer_stability_check(
         return _linear_stability_check(lyap, tol, title), lyap
     gap = design.observer_kind.lure_gap(design)
     if gap:
-        return _no_certificate(title, gap, "circle criterion"), None
+        return _without_lure_model(design, gap, tol, title), None
     refusal = _lure_model_refusal(design, budget)
     if refusal:
         summary = f"No stability certificate: not attempted: {refusal}."
@@ -247,6 +247,29 @@ def _linear_stability_check(lyap: LyapunovCertificate, tol: Tolerances, title: s
         witness=lyap.witness if verdict is Verdict.FAILS else None,
         tolerances=_decided_by(tol, error_bound=lyap.error_bound),
     )
+
+
+def _without_lure_model(design: ObserverDesign, gap: str, tol: Tolerances, title: str) -> Check:
+    """observer_stability of a design without a Lur'e form: it fails when the linear map its
+    error follows near the origin (every soft threshold in its dead zone) is proved unstable,
+    and is inconclusive otherwise."""
+    dead_zone = design.observer_kind.dead_zone_model(design)
+    if dead_zone is not None:
+        lyap = lyapunov_certificate(dead_zone.A, clear=tol.certificate_clear)
+        if lyap.verdict.value == "fails":
+            return Check(
+                id="observer_stability",
+                title=title,
+                verdict=Verdict.FAILS,
+                summary="The observer is not stable: near the origin every soft threshold is in "
+                "its dead zone, so the error follows the linear map e+ = A (I - step S' S)^m e "
+                f"exactly, and that map is not stable: {lyap.reason}.",
+                method=f"local linear map ({lyap.method})",
+                fields={},
+                evidence={"no_certificate": gap},
+                tolerances=_decided_by(tol),
+            )
+    return _no_certificate(title, gap, "circle criterion")
 
 
 def _no_certificate(title: str, summary: str, method: str) -> Check:
@@ -618,7 +641,10 @@ def region_of_attraction_check(
     try:
         model = design.observer_kind.lure_model(design)
     except NotImplementedError:
-        return None
+        dead_zone = design.observer_kind.dead_zone_model(design)
+        if dead_zone is None:
+            return None
+        return _dead_zone_only_check(design, dead_zone, seed)
     found = region_of_attraction(model, seed=seed, piecewise=piecewise)
     radius = float(found["radius"])
     evidence = {k: v for k, v in found.items() if k != "radius"}
@@ -660,3 +686,70 @@ def region_of_attraction_check(
         fields={"radius": radius},
         evidence=evidence,
     )
+
+
+def _dead_zone_only_check(design: ObserverDesign, model: LureModel, seed: int) -> Check:
+    """region_of_attraction of a design known only in its dead zone (an SSO with several
+    inner steps per sample): the invariant sublevel set of the dead zone's linear map, replayed
+    through the observer's own simulator (the attack estimate must stay 0 and the error
+    converge)."""
+    found = region_of_attraction(model, seed=seed)
+    radius = float(found["radius"])
+    evidence = {k: v for k, v in found.items() if k not in ("radius", "replay")}
+    if radius > 0:
+        replay = _simulator_region_replay(design, radius, seed)
+        evidence["replay"] = replay
+        if not replay["confirmed"]:
+            radius = 0.0
+            evidence["reason"] = "a simulated initial error inside the radius left the dead zone"
+    if radius > 0:
+        verdict = Verdict.HOLDS
+        summary = (
+            f"From every initial estimation error with ||e(0)|| <= {radius:.4g} (a_hat(0) = 0) the "
+            f"error converges to 0 without attack: while every inner step's soft threshold stays "
+            f"in its dead zone the error follows e+ = A (I - step S' S)^m e, and the largest "
+            f"sublevel set of its verified Lyapunov function inside all {model.m} dead-zone slabs "
+            f"is invariant; {evidence['replay']['samples']} initial errors on that sphere, run "
+            f"through the observer's own simulator, keep a_hat = 0 and converge."
+        )
+    else:
+        unstable = "is not stable" in str(evidence.get("reason", ""))
+        verdict = Verdict.FAILS if unstable else Verdict.INCONCLUSIVE
+        summary = f"No region of attraction is certified: {evidence.get('reason', '')}."
+    return Check(
+        id="region_of_attraction",
+        title="Certified region of attraction",
+        verdict=verdict,
+        summary=summary,
+        value=radius,
+        margin=evidence.get("lyapunov_margin"),
+        method="invariant sublevel set of the dead zone of every inner step (Lyapunov)",
+        required=False,
+        fields={"radius": radius},
+        evidence=evidence,
+    )
+
+
+def _simulator_region_replay(design: ObserverDesign, radius: float, seed: int) -> dict[str, Any]:
+    """Initial errors on the sphere of ``radius`` through the observer's simulator, no attack
+    and true state 0: the attack estimate stays 0 and the error shrinks."""
+    from ..observers import observer_from_design
+
+    samples, steps = 32, 200
+    rng = np.random.default_rng(seed)
+    e0 = rng.standard_normal((samples, design.system.n))
+    e0 *= radius / np.linalg.norm(e0, axis=1, keepdims=True)
+    sim = observer_from_design(design)
+    state = sim.initial_state(samples)
+    state["x_hat"] = e0
+    traj = sim.run(np.zeros((steps, samples, design.system.p)), state=state)
+    a_max = float(np.abs(traj.a_hat).max()) if traj.a_hat is not None else 0.0
+    final = float(np.linalg.norm(traj.x_hat[-1], axis=1).max())
+    return {
+        "samples": samples,
+        "steps": steps,
+        "simulator": type(sim).__name__,
+        "largest_attack_estimate": a_max,
+        "final_largest_error": final,
+        "confirmed": a_max == 0.0 and final < radius,
+    }
