@@ -611,6 +611,16 @@ def observer_checks(
         if design.sparse
         else None
     )
+    if region is not None and stability.verdict is Verdict.HOLDS:
+        region = replace(
+            region,
+            value=float("inf"),
+            fields={"radius": float("inf")},
+            summary="From every initial error the error converges to 0 without attack: "
+            "observer_stability's certificate is global. "
+            f"(Its dead zone alone certifies {region.value:.4g}.)",
+            evidence={**region.evidence, "dead_zone_radius": region.value},
+        )
     if region is not None and stability.verdict is Verdict.INCONCLUSIVE and region.value:
         stability = replace(
             stability,
