@@ -144,3 +144,30 @@ def test_the_check_reports_the_piecewise_region_only_when_asked():
     assert plain.value == pytest.approx(0.1429, abs=1e-4)
     assert wide.value >= 5 and wide.verdict.value == "holds"
     assert "piecewise-quadratic" in wide.summary and "ball of radius" in wide.summary
+
+
+def test_the_verification_requires_the_dead_zone_decrease():
+    model = _ugv_model(0.7)
+    regions = pw._Regions(model)
+    empty = pw._empty_pairs(regions, replace(model, threshold=1.0), 20.0)
+    found = pw._attempt(model, regions, 3.0, 6.0, 100.0, empty, set())
+    functions = [P.copy() for P in found["functions"]]
+    N = model.N
+    functions[regions.zero][:N, :N] = np.eye(N)  # V = |xi|^2 does not decrease along A
+    bad = pw._verify(model, regions, functions, found["lmis"], 3.0, 6.0, 100.0)
+    assert bad[2].startswith("the dead zone's decrease")
+
+
+@pytest.mark.parametrize("change", [{"threshold": 1e200}, {"step": 1e300}])
+def test_numbers_out_of_range_end_inconclusive_not_in_an_error(change):
+    spec = load_example("ugv")
+    data = {
+        "name": "huge",
+        "system": {"A": spec.system.A.tolist(), "C": spec.system.C.tolist()},
+        "attack": {"max_attacked": 1, "horizon": 2},
+        "observer": {**spec.observer, **change},
+    }
+    from ssecert import analyze
+
+    cert = analyze(spec_from_dict(data))
+    assert cert["region_of_attraction"].verdict.value == "inconclusive"

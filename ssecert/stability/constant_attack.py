@@ -134,6 +134,18 @@ def _simulate(model: LureModel, a: np.ndarray) -> dict[str, Any]:
     w_shift = model.Dw @ a if model.m else np.zeros(0)
     push = model.E @ a
     limit = UNBOUNDED * _scale(a)
+    with np.errstate(all="ignore"):  # an overflow is the growth this looks for
+        return _run(model, xi, w_shift, push, limit, a)
+
+
+def _run(
+    model: LureModel,
+    xi: np.ndarray,
+    w_shift: np.ndarray,
+    push: np.ndarray,
+    limit: float,
+    a: np.ndarray,
+) -> dict[str, Any]:
     for k in range(1, STEPS + 1):
         nxt = xi @ model.A.T + push
         if model.m:

@@ -91,7 +91,7 @@ def _search(
         slack = 1e-9 * max(lam, 1.0)
         inside = np.where(s != 0, s * w > lam - slack, np.abs(w) < lam + slack).all(axis=1)
         if attack is None:
-            inside &= np.linalg.norm(xi, axis=1) > 0
+            inside &= np.any(xi != 0, axis=1)
         for i in np.flatnonzero(inside):
             witness = _confirm(model, s[i], attack)
             if witness is not None and not any(

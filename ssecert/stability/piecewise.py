@@ -153,10 +153,19 @@ def _search(model: LureModel, seed: int, floor: float, clear: float) -> dict[str
             f"states (the piecewise search handles up to {MAX_CHANNELS} and {MAX_STATES})",
         }
     lam = model.threshold
+    with np.errstate(over="ignore"):
+        if not np.isfinite((np.float64(OUTER * LADDER[-1]) * lam) ** 2 * (model.N + 1)):
+            return {"radius": 0.0, "reason": "the ball searched is out of floating-point range"}
     ladder = [r for r in LADDER if r * lam > floor]
     if not ladder:
         return {"radius": 0.0, "reason": f"every radius tried is within {floor:.4g}"}
     regions = _Regions(model)
+    with np.errstate(all="ignore"):
+        finite = all(np.all(np.isfinite(T)) for T in regions.T) and all(
+            np.all(np.isfinite(G @ T)) for G in regions.G for T in regions.T
+        )
+    if not finite:
+        return {"radius": 0.0, "reason": "the regions' maps are out of floating-point range"}
     unit = replace(model, threshold=1.0)  # the same dynamics, in units of the threshold
     # emptiness in the largest box holds in every smaller one
     empty_pairs = _empty_pairs(regions, unit, OUTER * ladder[-1])
@@ -376,6 +385,8 @@ def _verify(
     top = max(float(np.abs(model.A).max()), 1.0)
     bound = 10 * N * EPS * (top**2 + 1) * float(np.abs(P0).max()) * N
     where = "the dead zone's decrease"
+    if worst <= clear * bound:
+        return worst, bound, f"{where}: margin {worst:.2e} not above {clear:g} x {bound:.2e}"
     for kind, k, j, H, W, s in lmis:
         if kind == "outer":
             M = P[k] - level * E1 - s * (Iq - level * E1) - H.T @ W @ H

@@ -90,7 +90,14 @@ def _region(
     Pinv_Cw = np.linalg.solve(P, model.Cw.T)  # columns P^-1 Cw_i'
     spread = np.einsum("ij,ji->i", model.Cw, Pinv_Cw)  # Cw_i P^-1 Cw_i'
     spread = np.where(spread > 0, spread, np.inf)
-    level = SAFETY * float(np.min(model.threshold**2 / spread))
+    with np.errstate(over="ignore"):
+        level = SAFETY * float(np.min(np.float64(model.threshold) ** 2 / spread))
+    if not math.isfinite(level):
+        return {
+            "radius": 0.0,
+            "reason": "the dead zone's level set is out of floating-point range "
+            f"(threshold {model.threshold:.3g})",
+        }
     n_e = model.n_e
     top = float(np.linalg.eigvalsh(P[:n_e, :n_e])[-1])
     # a hair inside, so that the ball lies strictly in the level set on the printed numbers
