@@ -658,30 +658,40 @@ def region_of_attraction_check(
     found = region_of_attraction(model, seed=seed, piecewise=piecewise)
     radius = float(found["radius"])
     evidence = {k: v for k, v in found.items() if k != "radius"}
-    if radius > 0 and "ball" in evidence:
-        verdict = Verdict.HOLDS
-        summary = (
+    if "ball" in evidence:
+        return _region_check(
+            radius,
+            evidence,
             f"From every initial estimation error with ||e(0)|| <= {radius:.4g} (a_hat(0) = 0) the "
             f"error converges to 0 without attack: a piecewise-quadratic Lyapunov function over "
             f"the soft threshold's regions, verified in numpy, decreases along every step inside "
             f"the ball of radius {evidence['ball']:.4g} and its sublevel set containing those "
             f"errors stays in that ball ({evidence['transitions']} transitions between regions "
             f"checked; the dead zone alone certifies {evidence['dead_zone_radius']:.4g}); "
-            f"{evidence['replay']['samples']} initial errors on that sphere, simulated, converge."
+            f"{evidence['replay']['samples']} initial errors on that sphere, simulated, converge.",
+            "piecewise-quadratic Lyapunov function (S-procedure LMIs)",
         )
-    elif radius > 0:
-        verdict = Verdict.HOLDS
-        summary = (
-            f"From every initial estimation error with ||e(0)|| <= {radius:.4g} (a_hat(0) = 0) the "
-            f"error converges to 0 without attack: the largest sublevel set of a verified "
-            f"Lyapunov function of the dead zone's linear dynamics that fits in the dead zone "
-            f"(|Cw_i xi| <= threshold) is invariant; {evidence['replay']['samples']} initial "
-            f"errors on that sphere, simulated, stay in it."
-        )
+    return _region_check(
+        radius,
+        evidence,
+        f"From every initial estimation error with ||e(0)|| <= {radius:.4g} (a_hat(0) = 0) the "
+        f"error converges to 0 without attack: the largest sublevel set of a verified "
+        f"Lyapunov function of the dead zone's linear dynamics that fits in the dead zone "
+        f"(|Cw_i xi| <= threshold) is invariant; {evidence.get('replay', {}).get('samples')} "
+        f"initial errors on that sphere, simulated, stay in it.",
+        "invariant sublevel set of the dead zone (Lyapunov)",
+    )
+
+
+def _region_check(radius: float, evidence: dict[str, Any], proved: str, method: str) -> Check:
+    """The region_of_attraction Check: holds with the sentence ``proved`` when the radius is
+    positive; fails when the dead zone's own dynamics are unstable; inconclusive otherwise."""
+    if radius > 0:
+        verdict, summary = Verdict.HOLDS, proved
     else:
-        unstable = "is not stable" in str(found.get("reason", ""))
+        unstable = "is not stable" in str(evidence.get("reason", ""))
         verdict = Verdict.FAILS if unstable else Verdict.INCONCLUSIVE
-        summary = f"No region of attraction is certified: {found['reason']}."
+        summary = f"No region of attraction is certified: {evidence.get('reason', '')}."
     return Check(
         id="region_of_attraction",
         title="Certified region of attraction",
@@ -689,9 +699,7 @@ def region_of_attraction_check(
         summary=summary,
         value=radius,
         margin=evidence.get("lyapunov_margin", evidence.get("margin")),
-        method="piecewise-quadratic Lyapunov function (S-procedure LMIs)"
-        if "ball" in evidence
-        else "invariant sublevel set of the dead zone (Lyapunov)",
+        method=method,
         required=False,
         fields={"radius": radius},
         evidence=evidence,
@@ -712,31 +720,16 @@ def _dead_zone_only_check(design: ObserverDesign, model: LureModel, seed: int) -
         if not replay["confirmed"]:
             radius = 0.0
             evidence["reason"] = "a simulated initial error inside the radius left the dead zone"
-    if radius > 0:
-        verdict = Verdict.HOLDS
-        summary = (
-            f"From every initial estimation error with ||e(0)|| <= {radius:.4g} (a_hat(0) = 0) the "
-            f"error converges to 0 without attack: while every inner step's soft threshold stays "
-            f"in its dead zone the error follows e+ = A (I - step S' S)^m e, and the largest "
-            f"sublevel set of its verified Lyapunov function inside all {model.m} dead-zone slabs "
-            f"is invariant; {evidence['replay']['samples']} initial errors on that sphere, run "
-            f"through the observer's own simulator, keep a_hat = 0 and converge."
-        )
-    else:
-        unstable = "is not stable" in str(evidence.get("reason", ""))
-        verdict = Verdict.FAILS if unstable else Verdict.INCONCLUSIVE
-        summary = f"No region of attraction is certified: {evidence.get('reason', '')}."
-    return Check(
-        id="region_of_attraction",
-        title="Certified region of attraction",
-        verdict=verdict,
-        summary=summary,
-        value=radius,
-        margin=evidence.get("lyapunov_margin"),
-        method="invariant sublevel set of the dead zone of every inner step (Lyapunov)",
-        required=False,
-        fields={"radius": radius},
-        evidence=evidence,
+    return _region_check(
+        radius,
+        evidence,
+        f"From every initial estimation error with ||e(0)|| <= {radius:.4g} (a_hat(0) = 0) the "
+        f"error converges to 0 without attack: while every inner step's soft threshold stays "
+        f"in its dead zone the error follows e+ = A (I - step S' S)^m e, and the largest "
+        f"sublevel set of its verified Lyapunov function inside all {model.m} dead-zone slabs "
+        f"is invariant; {evidence.get('replay', {}).get('samples')} initial errors on that "
+        f"sphere, run through the observer's own simulator, keep a_hat = 0 and converge.",
+        "invariant sublevel set of the dead zone of every inner step (Lyapunov)",
     )
 
 
