@@ -253,3 +253,41 @@ def test_an_sso_whose_gradient_step_is_too_long_fails_near_the_origin():
     stability = cert["observer_stability"]
     assert stability.verdict.value == "fails" and "dead zone" in stability.summary
     assert cert["region_of_attraction"].verdict.value == "fails"
+
+
+@pytest.mark.parametrize(
+    ("A", "C", "observer", "period"),
+    [
+        ([[-0.9]], [[-1.7], [1.1]], {"kind": "dsso", "gain": [[-0.9, -1.4]], "step": 0.4}, 2),
+        (
+            [[-1.0]],
+            [[-2.0], [0.5]],
+            {"kind": "elastic_net", "gain": [[0.8, 1.6]], "step": 1.0, "shrink": 0.9},
+            4,
+        ),
+    ],
+)
+def test_a_design_that_cycles_fails_with_its_exact_periodic_orbit(A, C, observer, period):
+    # found by a search over small rational designs: rho(A - L C) < 0.95, no divergent
+    # direction, no nonzero equilibrium, and yet the error never settles
+    data = {
+        "name": "cycles",
+        "system": {"A": A, "C": C},
+        "attack": {"max_attacked": 0, "horizon": 1},
+        "observer": {**observer, "threshold": 0.1},
+    }
+    spec = spec_from_dict(data)
+    check = analyze(spec)["observer_stability"]
+    assert check.verdict.value == "fails" and check.witness["kind"] == "periodic orbit"
+    assert check.witness["period"] == period and check.witness["exact"]
+    assert check.witness["observer_replay"]["agrees"]
+    # independently: the observer's own simulator, started on the orbit, keeps cycling
+    from ssecert.observers import observer_from_design
+
+    sim = observer_from_design(build_observer(spec.system, spec.observer))
+    e0 = np.asarray(check.witness["initial_error"])[None]
+    a0 = np.asarray(check.witness["initial_attack_estimate"])[None]
+    traj = sim.run(np.zeros((100 * period, 1, 2)), state={"x_hat": e0, "a_hat": a0})
+    assert np.allclose(traj.x_hat[-1], e0, atol=1e-9)
+    moved = np.concatenate([traj.x_hat[1, 0], traj.a_hat[1, 0]]) - np.concatenate([e0[0], a0[0]])
+    assert np.linalg.norm(moved) > 1e-6  # an orbit, not an equilibrium

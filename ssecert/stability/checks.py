@@ -41,6 +41,7 @@ from .lmi import (
     lure_model_cost,
 )
 from .lyapunov import LyapunovCertificate, lyapunov_certificate
+from .periodic import periodic_orbit
 from .roa import region_of_attraction
 from .thesis import thesis_assumptions
 
@@ -92,6 +93,10 @@ def observer_stability_check(
         if equilibrium is not None:
             check = _equilibrium_check(design, model, cert, equilibrium, tol, title)
             return check, (model, cert)
+        orbit, cycled = periodic_orbit(model)
+        if orbit is not None:
+            check = _orbit_check(design, model, cert, orbit, tol, title)
+            return check, (model, cert)
         check = _circle_stability_check(design, model, cert, tol, title)
         radius = float(np.max(np.abs(np.linalg.eigvals(model.vertex(model.q)))))
         why = "not clearly above 1" if radius <= 1 + 1e-6 else "but no replay confirmed growth"
@@ -99,6 +104,7 @@ def observer_stability_check(
             "divergent_trajectory": "none: the large-signal loop A + shrink B Cw has spectral "
             f"radius {radius:.6g}, {why}",
             "nonzero_equilibrium": searched,
+            "periodic_orbit": cycled,
         }
         return replace(check, evidence={**check.evidence, "searches": searches}), (model, cert)
     return _circle_stability_check(design, model, cert, tol, title), (model, cert)
@@ -122,6 +128,28 @@ def _equilibrium_check(
         f"(active soft-threshold channels {np.flatnonzero(witness['active_signs']).tolist()})."
     )
     method = "equilibrium search (active/sign patterns, exact)"
+    return _witnessed_failure(
+        design, model, cert, witness, (summary, method, None, 0.0), tol, title
+    )
+
+
+def _orbit_check(
+    design: ObserverDesign,
+    model: LureModel,
+    cert: LMICertificate,
+    witness: dict[str, Any],
+    tol: Tolerances,
+    title: str,
+) -> Check:
+    """observer_stability fails: the error dynamics have an exactly confirmed periodic orbit."""
+    e = np.asarray(witness["initial_error"])
+    summary = (
+        f"The observer is not globally asymptotically stable: without attack its error cycles "
+        f"for ever with period {witness['period']}, confirmed in exact arithmetic: from the "
+        f"estimation error e = {np.array2string(e, precision=4)} and the attack estimate it "
+        f"pairs with, the error returns to the same point every {witness['period']} steps."
+    )
+    method = "periodic orbit search (simulated tails, confirmed exactly)"
     return _witnessed_failure(
         design, model, cert, witness, (summary, method, None, 0.0), tol, title
     )
@@ -214,6 +242,9 @@ def _observer_replay(design: ObserverDesign, witness: dict[str, Any]) -> dict[st
     if witness.get("kind") == "nonzero equilibrium":
         drift = float(np.max(np.linalg.norm(path - path[0], axis=1)))
         out.update(largest_drift=drift, agrees=drift <= 1e-9 * max(start, 1.0))
+    elif witness.get("kind") == "periodic orbit":
+        back = float(np.linalg.norm(path[-1] - path[0]))
+        out.update(return_residual=back, agrees=back <= 1e-9 * max(start, 1.0))
     else:
         growth = float(np.linalg.norm(path[-1]) / start) if start > 0 else float("nan")
         out.update(growth=growth, agrees=bool(growth >= 0.5 * float(witness.get("growth", 0))))
