@@ -42,11 +42,12 @@ LAYERS = {
         "ssecert.system",
         "ssecert.parallel",
         "ssecert.context",
+        "ssecert._spec_write",
     ),
     1: ("ssecert.design", "ssecert.observers"),
     2: ("ssecert.spec", "ssecert.examples"),
     3: ("ssecert.structure", "ssecert.stability", "ssecert.simulation", "ssecert.estimators"),
-    4: ("ssecert.analyze", "ssecert.certify"),
+    4: ("ssecert.analyze", "ssecert.certify", "ssecert.synthesize"),
     5: ("ssecert.report",),
     6: (
         "ssecert.cli",
