@@ -91,11 +91,11 @@ def observer_stability_check(
             return _divergence_check(design, model, cert, witness, tol, title), (model, cert)
         equilibrium, searched = nonzero_equilibrium(model)
         if equilibrium is not None:
-            check = _equilibrium_check(design, model, cert, equilibrium, tol, title)
+            check = _exact_witness_check(design, model, cert, equilibrium, tol, title)
             return check, (model, cert)
         orbit, cycled = periodic_orbit(model)
         if orbit is not None:
-            check = _orbit_check(design, model, cert, orbit, tol, title)
+            check = _exact_witness_check(design, model, cert, orbit, tol, title)
             return check, (model, cert)
         check = _circle_stability_check(design, model, cert, tol, title)
         radius = float(np.max(np.abs(np.linalg.eigvals(model.vertex(model.q)))))
@@ -110,7 +110,7 @@ def observer_stability_check(
     return _circle_stability_check(design, model, cert, tol, title), (model, cert)
 
 
-def _equilibrium_check(
+def _exact_witness_check(
     design: ObserverDesign,
     model: LureModel,
     cert: LMICertificate,
@@ -119,37 +119,25 @@ def _equilibrium_check(
     title: str,
 ) -> Check:
     """observer_stability fails: the error dynamics have an exactly confirmed nonzero
-    equilibrium (the observer settles on a wrong estimate with no attack)."""
-    e = np.asarray(witness["initial_error"])
-    summary = (
-        f"The observer is not globally asymptotically stable: it has a nonzero equilibrium, "
-        f"confirmed in exact arithmetic: from the estimation error e = {np.array2string(e, precision=4)}"
-        f" and the attack estimate it pairs with, the error stays there forever without attack "
-        f"(active soft-threshold channels {np.flatnonzero(witness['active_signs']).tolist()})."
-    )
-    method = "equilibrium search (active/sign patterns, exact)"
-    return _witnessed_failure(
-        design, model, cert, witness, (summary, method, None, 0.0), tol, title
-    )
-
-
-def _orbit_check(
-    design: ObserverDesign,
-    model: LureModel,
-    cert: LMICertificate,
-    witness: dict[str, Any],
-    tol: Tolerances,
-    title: str,
-) -> Check:
-    """observer_stability fails: the error dynamics have an exactly confirmed periodic orbit."""
-    e = np.asarray(witness["initial_error"])
-    summary = (
-        f"The observer is not globally asymptotically stable: without attack its error cycles "
-        f"for ever with period {witness['period']}, confirmed in exact arithmetic: from the "
-        f"estimation error e = {np.array2string(e, precision=4)} and the attack estimate it "
-        f"pairs with, the error returns to the same point every {witness['period']} steps."
-    )
-    method = "periodic orbit search (simulated tails, confirmed exactly)"
+    equilibrium (the observer settles on a wrong estimate with no attack) or periodic orbit
+    (its error cycles for ever)."""
+    e = np.array2string(np.asarray(witness["initial_error"]), precision=4)
+    if witness["kind"] == "periodic orbit":
+        summary = (
+            f"The observer is not globally asymptotically stable: without attack its error "
+            f"cycles for ever with period {witness['period']}, confirmed in exact arithmetic: "
+            f"from the estimation error e = {e} and the attack estimate it pairs with, the "
+            f"error returns to the same point every {witness['period']} steps."
+        )
+        method = "periodic orbit search (simulated tails, confirmed exactly)"
+    else:
+        summary = (
+            f"The observer is not globally asymptotically stable: it has a nonzero equilibrium, "
+            f"confirmed in exact arithmetic: from the estimation error e = {e} and the attack "
+            f"estimate it pairs with, the error stays there forever without attack (active "
+            f"soft-threshold channels {np.flatnonzero(witness['active_signs']).tolist()})."
+        )
+        method = "equilibrium search (active/sign patterns, exact)"
     return _witnessed_failure(
         design, model, cert, witness, (summary, method, None, 0.0), tol, title
     )
