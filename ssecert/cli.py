@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 from ._cli_audit import add_audit_parser, cmd_audit
+from ._cli_design import add_design_parser, cmd_design
 from ._cli_options import (
     _add_analysis_options,
     _add_budget_options,
@@ -171,6 +172,7 @@ def _build_parser() -> argparse.ArgumentParser:
     )
     examples.add_argument("name", nargs="?", help="example to print")
     add_audit_parser(sub)
+    add_design_parser(sub)
     return parser
 
 
@@ -568,6 +570,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _cmd_simulate(args)
         if args.command == "audit":
             return cmd_audit(args, _output_folder, _write, UsageError)
+        if args.command == "design":
+            return cmd_design(args, _load, _output_folder, _output_file, _write)
         raise UsageError(f"unknown command {args.command!r}")  # pragma: no cover
     except (UsageError, SpecError, ResourceLimitError) as exc:
         sys.stderr.write(f"ssecert: error: {one_line(str(exc))}\n")

@@ -53,6 +53,7 @@ LAYERS = {
         "ssecert.cli",
         "ssecert._cli_options",
         "ssecert._cli_audit",
+        "ssecert._cli_design",
         "ssecert.testing",
         "ssecert.__main__",
         "ssecert",
