@@ -167,11 +167,9 @@ def _sparse_limit(spec: Any) -> str:
 def _certified(spec: Any) -> dict[str, Any]:
     """The spec's own design: its stability verdict and certified gain (as analyze gives)."""
     from .observers import build_observer
-    from .stability.checks import iss_gain_check, observer_stability_check
+    from .synthesize import certified_gain
 
-    design = build_observer(spec.system, spec.observer)
-    stability, cert = observer_stability_check(design)
-    iss = iss_gain_check(design, cert)
+    stability, iss = certified_gain(build_observer(spec.system, spec.observer))
     return {
         "kind": spec.observer["kind"],
         "stability": stability.verdict.value,

@@ -23,7 +23,7 @@ import numpy as np
 
 from .system import System
 
-__all__ = ["DesignResult", "design_observer", "SHRINKS", "STEPS"]
+__all__ = ["DesignResult", "certified_gain", "design_observer", "SHRINKS", "STEPS"]
 
 SHRINKS = (0.3, 0.5, 0.7, 0.9)
 STEPS = (0.1, 0.3, 0.5, 0.7, 1.0)
@@ -68,7 +68,6 @@ def design_observer(
     """
     from .design.synthesis import synthesize_gain, with_gain
     from .observers import build_observer
-    from .stability.checks import iss_gain_check, observer_stability_check
 
     if kind not in KINDS:
         raise ValueError(f"kind: expected one of {', '.join(KINDS)}, got {kind!r}")
@@ -102,9 +101,7 @@ def design_observer(
         if proposal.L is None:
             candidates.append(record)
             continue
-        design = with_gain(template, proposal.L)
-        stability, cert = observer_stability_check(design)
-        iss = iss_gain_check(design, cert)
+        stability, iss = certified_gain(with_gain(template, proposal.L))
         decay = stability.fields.get("decay_rate") if stability.fields else None
         record.update(
             stability=stability.verdict.value, gamma=iss.value, decay=decay, iss=iss.verdict.value
@@ -138,3 +135,11 @@ def design_observer(
         seconds,
         complete,
     )
+
+
+def certified_gain(design: Any) -> tuple[Any, Any]:
+    """(observer_stability, iss_gain) of a design, as ``analyze`` checks them."""
+    from .stability.checks import iss_gain_check, observer_stability_check
+
+    stability, cert = observer_stability_check(design)
+    return stability, iss_gain_check(design, cert)

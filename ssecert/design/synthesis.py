@@ -130,16 +130,10 @@ def synthesize_gain(design: ObserverDesign, *, alpha: float = 1e-3) -> GainSynth
 
 def with_gain(design: ObserverDesign, L: np.ndarray) -> ObserverDesign:
     """``design`` with the gain L (an explicit matrix, as a spec file would give it)."""
-    from ..design.gains import Gain
+    from ..observers.base import gain_from_choice
 
-    gain = Gain(
-        L=np.asarray(L, dtype=float),
-        method="matrix",
-        error_matrix=design.system.A - np.asarray(L, dtype=float) @ design.sensing,
-        verified=True,
-        details={"synthesised": True},
-    )
-    return replace(design, gain=gain)
+    gain = gain_from_choice(design.system, {"gain": np.asarray(L, dtype=float)})
+    return replace(design, gain=replace(gain, details={"synthesised": True}))
 
 
 def _since(start: float) -> float:

@@ -86,17 +86,13 @@ def observer_stability_check(
     model = design.observer_kind.lure_model(design)
     cert = circle_certificate(model, budget=budget, clear=tol.certificate_clear)
     if cert.verdict == "inconclusive":
-        witness = divergence_witness(model)
+        witness, searched, cycled = divergence_witness(model), "", ""
+        if witness is None:
+            witness, searched = nonzero_equilibrium(model)
+        if witness is None:
+            witness, cycled = periodic_orbit(model)
         if witness is not None:
-            return _divergence_check(design, model, cert, witness, tol, title), (model, cert)
-        equilibrium, searched = nonzero_equilibrium(model)
-        if equilibrium is not None:
-            check = _exact_witness_check(design, model, cert, equilibrium, tol, title)
-            return check, (model, cert)
-        orbit, cycled = periodic_orbit(model)
-        if orbit is not None:
-            check = _exact_witness_check(design, model, cert, orbit, tol, title)
-            return check, (model, cert)
+            return _witnessed_failure(design, model, cert, witness, tol, title), (model, cert)
         check = _circle_stability_check(design, model, cert, tol, title)
         radius = float(np.max(np.abs(np.linalg.eigvals(model.vertex(model.q)))))
         why = "not clearly above 1" if radius <= 1 + 1e-6 else "but no replay confirmed growth"
@@ -110,51 +106,37 @@ def observer_stability_check(
     return _circle_stability_check(design, model, cert, tol, title), (model, cert)
 
 
-def _exact_witness_check(
-    design: ObserverDesign,
-    model: LureModel,
-    cert: LMICertificate,
-    witness: dict[str, Any],
-    tol: Tolerances,
-    title: str,
-) -> Check:
-    """observer_stability fails: the error dynamics have an exactly confirmed nonzero
-    equilibrium (the observer settles on a wrong estimate with no attack) or periodic orbit
-    (its error cycles for ever)."""
+def _failure_words(
+    model: LureModel, witness: dict[str, Any]
+) -> tuple[str, str, float | None, float]:
+    """(summary, method, margin, error bound) of a failing observer_stability, by the kind of
+    its witness: a divergent trajectory of the large-signal loop, or an exactly confirmed
+    nonzero equilibrium (a wrong estimate kept with no attack) or periodic orbit."""
     e = np.array2string(np.asarray(witness["initial_error"]), precision=4)
+    start = "The observer is not globally asymptotically stable: "
     if witness["kind"] == "periodic orbit":
-        summary = (
-            f"The observer is not globally asymptotically stable: without attack its error "
-            f"cycles for ever with period {witness['period']}, confirmed in exact arithmetic: "
-            f"from the estimation error e = {e} and the attack estimate it pairs with, the "
-            f"error returns to the same point every {witness['period']} steps."
-        )
-        method = "periodic orbit search (simulated tails, confirmed exactly)"
-    else:
-        summary = (
-            f"The observer is not globally asymptotically stable: it has a nonzero equilibrium, "
+        return (
+            f"{start}without attack its error cycles for ever with period {witness['period']}, "
             f"confirmed in exact arithmetic: from the estimation error e = {e} and the attack "
-            f"estimate it pairs with, the error stays there forever without attack (active "
-            f"soft-threshold channels {np.flatnonzero(witness['active_signs']).tolist()})."
+            f"estimate it pairs with, the error returns to the same point every "
+            f"{witness['period']} steps.",
+            "periodic orbit search (simulated tails, confirmed exactly)",
+            None,
+            0.0,
         )
-        method = "equilibrium search (active/sign patterns, exact)"
-    return _witnessed_failure(
-        design, model, cert, witness, (summary, method, None, 0.0), tol, title
-    )
-
-
-def _divergence_check(
-    design: ObserverDesign,
-    model: LureModel,
-    cert: LMICertificate,
-    witness: dict[str, Any],
-    tol: Tolerances,
-    title: str,
-) -> Check:
-    """observer_stability fails: the large-signal loop has a replayed divergent trajectory."""
+    if witness["kind"] == "nonzero equilibrium":
+        return (
+            f"{start}it has a nonzero equilibrium, confirmed in exact arithmetic: from the "
+            f"estimation error e = {e} and the attack estimate it pairs with, the error stays "
+            f"there forever without attack (active soft-threshold channels "
+            f"{np.flatnonzero(witness['active_signs']).tolist()}).",
+            "equilibrium search (active/sign patterns, exact)",
+            None,
+            0.0,
+        )
     mu = witness["large_signal_eigenvalue"]
-    summary = (
-        f"The observer is not globally asymptotically stable: far from the origin the soft "
+    return (
+        f"{start}far from the origin the soft "
         f"threshold is the identity minus a bounded term, and that large-signal loop has the "
         f"eigenvalue {sig(mu.real) if mu.imag == 0 else f'{mu.real:.4g} {mu.imag:+.4g}i'} "
         f"(modulus {abs(mu):.6g} > 1). "
@@ -163,12 +145,11 @@ def _divergence_check(
         f"{witness['escape_level']:.3g}; replayed: from an initial error of norm "
         f"{witness['norms'][0]:.3g} (a_hat(0) = "
         f"{'0' if not np.any(witness['initial_attack_estimate']) else 'as given'}) it reaches "
-        f"{witness['norms'][1]:.3g} in {witness['steps']} steps without attack."
+        f"{witness['norms'][1]:.3g} in {witness['steps']} steps without attack.",
+        "large-signal divergence (eigenvector bound, replayed)",
+        abs(mu) - 1.0,
+        witness["eigenvalue_error_bound"],
     )
-    method = "large-signal divergence (eigenvector bound, replayed)"
-    decided = (summary, method, abs(mu) - 1.0, witness["eigenvalue_error_bound"])
-    check = _witnessed_failure(design, model, cert, witness, decided, tol, title)
-    return replace(check, evidence={**check.evidence, "large_signal_loop": model.vertex(model.q)})
 
 
 def _witnessed_failure(
@@ -176,16 +157,17 @@ def _witnessed_failure(
     model: LureModel,
     cert: LMICertificate,
     witness: dict[str, Any],
-    decided: tuple[str, str, float | None, float],
     tol: Tolerances,
     title: str,
 ) -> Check:
-    """A failing observer_stability with the witness a search found: ``decided`` is (summary,
-    method, margin, error bound); the circle certificate that was not found stays in the
-    evidence."""
-    summary, method, margin, error_bound = decided
+    """A failing observer_stability with the witness a search found (``_failure_words``); the
+    circle certificate that was not found stays in the evidence, and a divergence's
+    large-signal loop."""
+    summary, method, margin, error_bound = _failure_words(model, witness)
     evidence = _circle_evidence(model, cert)
     evidence["no_certificate"] = cert.reason
+    if witness["kind"] == "divergent trajectory":
+        evidence["large_signal_loop"] = model.vertex(model.q)
     witness = {**witness, "observer_replay": _observer_replay(design, witness)}
     return Check(
         id="observer_stability",

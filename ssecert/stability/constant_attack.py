@@ -64,13 +64,15 @@ def constant_attack_outcomes(
     """One record per attack: ``outcome`` ("converges to zero", "converges to a bias",
     "unbounded" or "undecided"), ``proved``, the ``bias`` e* and its norm, the equilibria
     found and the simulation from zero error."""
+    # a stacked attack (windowed observers) is not analysed
+    kept = [(name, np.asarray(a, dtype=float)) for name, a in attacks]
+    kept = [(name, a) for name, a in kept if a.shape == (model.r,)]
+    if not kept:
+        return []
+    runs = _simulate(model, np.array([a for _, a in kept]))
     records = []
-    for name, attack in attacks:
-        a = np.asarray(attack, dtype=float)
-        if a.shape != (model.r,):  # a stacked attack (windowed observers): not analysed
-            continue
+    for (name, a), sim in zip(kept, runs):
         equilibria, note, undecided = attacked_equilibria(model, a)
-        sim = _simulate(model, a)
         record: dict[str, Any] = {
             "attack": name,
             "vector": a,
@@ -128,33 +130,37 @@ def _distance(final: np.ndarray, eq: dict[str, Any]) -> float:
     return float(np.linalg.norm(np.asarray(final) - point))
 
 
-def _simulate(model: LureModel, a: np.ndarray) -> dict[str, Any]:
-    """From zero error and zero attack estimate under the constant attack, until settled."""
-    xi = np.zeros(model.N)
-    w_shift = model.Dw @ a if model.m else np.zeros(0)
-    push = model.E @ a
-    limit = UNBOUNDED * _scale(a)
+def _simulate(model: LureModel, attacks: np.ndarray) -> list[dict[str, Any]]:
+    """From zero error and zero attack estimate under each constant attack (rows of
+    ``attacks``, simulated together), until each settles or grows past its limit."""
+    count = attacks.shape[0]
+    xi = np.zeros((count, model.N))
+    shift = attacks @ model.Dw.T if model.m else np.zeros((count, 0))
+    push = attacks @ model.E.T
+    scale = np.maximum(np.abs(attacks).max(axis=1, initial=0.0), 1.0)
+    out: list[dict[str, Any] | None] = [None] * count
+    live = np.arange(count)
     with np.errstate(all="ignore"):  # an overflow is the growth this looks for
-        return _run(model, xi, w_shift, push, limit, a)
-
-
-def _run(
-    model: LureModel,
-    xi: np.ndarray,
-    w_shift: np.ndarray,
-    push: np.ndarray,
-    limit: float,
-    a: np.ndarray,
-) -> dict[str, Any]:
-    for k in range(1, STEPS + 1):
-        nxt = xi @ model.A.T + push
-        if model.m:
-            nxt = nxt + model.phi(xi @ model.Cw.T + w_shift) @ model.B.T
-        if not np.all(np.isfinite(nxt)) or np.linalg.norm(nxt) > limit:
-            return {"steps": k, "unbounded": True, "settled": False, "final": nxt,
-                    "growth": float(np.linalg.norm(nxt) / _scale(a))}  # fmt: skip
-        change = float(np.linalg.norm(nxt - xi))
-        xi = nxt
-        if change <= SETTLED * max(float(np.linalg.norm(xi)), _scale(a)):
-            return {"steps": k, "unbounded": False, "settled": True, "final": xi}
-    return {"steps": STEPS, "unbounded": False, "settled": False, "final": xi}
+        for k in range(1, STEPS + 1):
+            x = xi[live]
+            nxt = x @ model.A.T + push[live]
+            if model.m:
+                nxt = nxt + model.phi(x @ model.Cw.T + shift[live]) @ model.B.T
+            size = np.linalg.norm(nxt, axis=1)
+            grew = ~np.all(np.isfinite(nxt), axis=1) | (size > UNBOUNDED * scale[live])
+            change = np.linalg.norm(nxt - x, axis=1)
+            settled = ~grew & (change <= SETTLED * np.maximum(size, scale[live]))
+            for j in np.flatnonzero(grew | settled):
+                row = int(live[j])
+                if grew[j]:
+                    out[row] = {"steps": k, "unbounded": True, "settled": False,
+                                "final": nxt[j], "growth": float(size[j] / scale[row])}  # fmt: skip
+                else:
+                    out[row] = {"steps": k, "unbounded": False, "settled": True, "final": nxt[j]}
+            xi[live] = nxt
+            live = live[~(grew | settled)]
+            if live.size == 0:
+                break
+    for rest in live.tolist():
+        out[rest] = {"steps": STEPS, "unbounded": False, "settled": False, "final": xi[rest]}
+    return [r for r in out if r is not None]

@@ -35,7 +35,7 @@ def nonzero_equilibrium(model: LureModel) -> tuple[dict[str, Any] | None, str]:
     """An exactly confirmed nonzero equilibrium (the witness) or None, with what was searched."""
     if model.m == 0 or model.q <= 0:
         return None, "no nonlinearity: the only equilibrium of a stable linear map is 0"
-    found, note = _search(model, None, first=True)
+    found, note, _ = _search(model, None, first=True)
     return (found[0] if found else None), note
 
 
@@ -56,20 +56,23 @@ def attacked_equilibria(
                    "exact": False, "active_signs": np.zeros(0, int),
                    "error_is_zero": not np.any(xi[: model.n_e])}  # fmt: skip
         return [witness], "the linear error dynamics' unique equilibrium", 0
-    found, note = _search(model, a, first=False)
-    singular = int(note.split("(")[1].split()[0].replace(",", "")) if "singular" in note else 0
-    return found, note, singular
+    return _search(model, a, first=False)
 
 
 def _search(
     model: LureModel, attack: np.ndarray | None, *, first: bool
-) -> tuple[list[dict[str, Any]], str]:
+) -> tuple[list[dict[str, Any]], str, int]:
     """Equilibria of the soft threshold's active/sign patterns (nonzero ones without attack),
-    confirmed exactly; the first only, or all."""
+    confirmed exactly (the first only, or all), what was searched, and how many patterns were
+    too ill-conditioned to decide."""
     m = model.m
     count = 3**m
     if count > MAX_PATTERNS:
-        return [], f"not searched: 3^{m} = {count:,} active/sign patterns exceed {MAX_PATTERNS:,}"
+        return (
+            [],
+            f"not searched: 3^{m} = {count:,} active/sign patterns exceed {MAX_PATTERNS:,}",
+            count,
+        )
     N, lam, q = model.N, model.threshold, model.q
     shift = np.zeros(m) if attack is None else model.Dw @ attack  # w = Cw xi + Dw a
     push = np.zeros(N) if attack is None else model.E @ attack
@@ -99,7 +102,8 @@ def _search(
             ):
                 found.append(witness)
                 if first:
-                    return found, f"{start + i + 1:,} of {count:,} active/sign patterns tried"
+                    tried = f"{start + i + 1:,} of {count:,} active/sign patterns tried"
+                    return found, tried, singular
     what = "nonzero equilibrium" if attack is None else "equilibrium"
     note = (
         f"{len(found)} {what}{'s' if len(found) != 1 else ''} among the {count:,} active/sign "
@@ -109,7 +113,7 @@ def _search(
     )
     if singular:
         note += f" ({singular:,} with a singular or ill-conditioned system, not decided)"
-    return found, note
+    return found, note, singular
 
 
 def _patterns(m: int, start: int, stop: int) -> np.ndarray:

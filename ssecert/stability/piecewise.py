@@ -80,7 +80,6 @@ class _Regions:
 
     def __init__(self, model: LureModel) -> None:
         N, m, q = model.N, model.m, model.q
-        self.N, self.m = N, m
         self.signs = np.array(list(itertools.product((-1.0, 0.0, 1.0), repeat=m)))
         self.zero = (3**m - 1) // 2
         self.index = {tuple(s): k for k, s in enumerate(self.signs)}
@@ -517,12 +516,9 @@ def _replay(model: LureModel, radius: float, ball: float, seed: int) -> dict[str
     rng = np.random.default_rng(seed)
     e0 = rng.standard_normal((SAMPLES, model.n_e))
     e0 *= radius / np.linalg.norm(e0, axis=1, keepdims=True)
-    xi = np.concatenate([e0, np.zeros((SAMPLES, model.N - model.n_e))], axis=1)
-    highest = 0.0
-    for _ in range(STEPS):
-        xi = model.simulate(xi, 1)[-1]
-        highest = max(highest, float(np.linalg.norm(xi, axis=1).max()))
-    final = float(np.linalg.norm(xi, axis=1).max())
+    xi0 = np.concatenate([e0, np.zeros((SAMPLES, model.N - model.n_e))], axis=1)
+    norms = np.linalg.norm(model.simulate(xi0, STEPS)[1:], axis=2)  # (steps, samples)
+    highest, final = float(norms.max()), float(norms[-1].max())
     return {
         "samples": SAMPLES,
         "steps": STEPS,
