@@ -13,7 +13,7 @@ KIND_NAMES = {"elastic-net": "elastic_net", "elastic_net": "elastic_net", "dsso"
 
 
 def add_design_parser(sub: Any) -> None:
-    from ._cli_options import _seconds
+    from ._cli_options import _nonnegative_int, _seconds
 
     design = sub.add_parser(
         "design",
@@ -53,6 +53,12 @@ def add_design_parser(sub: Any) -> None:
     design.add_argument(
         "--json", metavar="PATH", dest="json_path", help="write the result as JSON ('-': stdout)"
     )
+    design.add_argument(
+        "--max-attacked",
+        type=_nonnegative_int,
+        metavar="S",
+        help="number of attacked sensors s (required for .npz/.mat)",
+    )
 
 
 def cmd_design(
@@ -67,7 +73,7 @@ def cmd_design(
 
     folder = output_folder("--out", args.out)
     target = output_file("--json", args.json_path)
-    spec = load(args.spec)
+    spec = load(args.spec, max_attacked=args.max_attacked)
     own = spec.observer or {}
     own_kind = str(own.get("kind", ""))
     if args.observer:

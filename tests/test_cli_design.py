@@ -48,3 +48,15 @@ def test_the_time_budget_ends_the_search_and_says_so(tmp_path, capsys):
 def test_an_unknown_kind_is_refused(capsys):
     assert main(["design", "ugv", "--observer", "sso"]) == 2
     assert "--observer" in capsys.readouterr().err
+
+
+def test_a_plant_file_designs_with_the_number_of_attacked_sensors(tmp_path, capsys):
+    import numpy as np
+
+    plant = tmp_path / "plant.npz"
+    np.savez(plant, A=np.array([[0.9, 0.1], [0.0, 0.8]]), C=np.array([[1.0, 0.0], [0.0, 1.0],
+             [1.0, 1.0]]))  # fmt: skip
+    assert main(["design", str(plant), "--out", str(tmp_path)]) == 2
+    assert "--max-attacked" in capsys.readouterr().err
+    status = main(["design", str(plant), "--max-attacked", "1", "--out", str(tmp_path)])
+    assert status == 0 and (tmp_path / "plant-design.toml").exists()
