@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 from typing import Any
 
@@ -13,7 +14,7 @@ KIND_NAMES = {"elastic-net": "elastic_net", "elastic_net": "elastic_net", "dsso"
 
 
 def add_design_parser(sub: Any) -> None:
-    from ._cli_options import _nonnegative_int, _seconds
+    from ._cli_options import _nonnegative_int, _positive_int, _seconds
 
     design = sub.add_parser(
         "design",
@@ -22,10 +23,12 @@ def add_design_parser(sub: Any) -> None:
             "Search the observer of the chosen kind with the best certified guarantee for the "
             "spec's plant: the gain L comes out of the dissipation LMI that certifies it, "
             "(shrink, step) are searched on a grid within the time budget, and every candidate "
-            "is certified exactly as 'ssecert analyze' certifies a spec. Writes DIR/NAME-design"
-            ".toml (the spec with the synthesised [observer]) and prints the synthesised design "
-            "beside the spec's own. Exit status 0 when a design is written, 1 when none of the "
-            "grid is certified."
+            "is certified exactly as 'ssecert analyze' certifies a spec. The best design is "
+            "certified and simulated under the spec's scenarios as 'ssecert certify' does, "
+            "beside the spec's own design with the same seeds. Writes DIR/NAME-design.toml (the "
+            "spec with the synthesised [observer]), DIR/NAME-design.html (the report, with the "
+            "comparison) and DIR/NAME-design.json (the certificate). Exit status 0 when a "
+            "design is written, 1 when none is certified."
         ),
     )
     design.add_argument("spec", metavar="SPEC", help="spec file or packaged example name")
@@ -33,16 +36,27 @@ def add_design_parser(sub: Any) -> None:
         "--observer",
         choices=sorted(KIND_NAMES),
         metavar="KIND",
-        help="elastic-net, dsso or luenberger (default: the spec's kind if one of those, "
-        "else elastic-net)",
+        help="elastic-net (default; dsso with --objective roa), dsso or luenberger",
     )
     design.add_argument(
         "--objective",
-        choices=("gain", "rate"),
+        choices=("gain", "rate", "roa"),
         default="gain",
-        help="smallest certified l2 gain from attack to error (default) or fastest certified decay",
+        help="smallest certified l2 gain from attack to error (default), fastest certified "
+        "decay, or (D-SSO) largest certified region of attraction",
     )
-    design.add_argument("--out", default="reports", metavar="DIR", help="folder of the spec file")
+    design.add_argument(
+        "--out",
+        default="reports",
+        metavar="DIR",
+        help="folder of NAME-design.toml, .html and .json (default reports)",
+    )
+    design.add_argument(
+        "--seed", type=int, help="replaces every scenario's seed (both designs get the same)"
+    )
+    design.add_argument(
+        "--runs", type=_positive_int, metavar="N", help="Monte Carlo runs per scenario"
+    )
     design.add_argument(
         "--time-budget",
         type=_seconds,
@@ -62,25 +76,47 @@ def add_design_parser(sub: Any) -> None:
 
 
 def cmd_design(
-    args: argparse.Namespace, load: Any, output_folder: Any, output_file: Any, write: Any
+    args: argparse.Namespace,
+    load: Any,
+    output_folder: Any,
+    output_file: Any,
+    write: Any,
+    usage_error: type[Exception],
 ) -> int:
-    """Search, write the spec file, print the comparison; 0 when a design is written."""
+    """Search, certify and simulate the best design, write its spec file, report and
+    certificate, print the comparison; 0 when a design is written."""
+    import hashlib
     import sys
+    import tomllib
 
-    from ._spec_write import dumps, spec_document
+    from .report.html import render_report
+    from .report.json import certify_json
     from .results import to_jsonable
-    from .synthesize import design_observer
+    from .spec import spec_from_dict
+    from .synthesize import design_observer, design_report, design_spec_text
 
     folder = output_folder("--out", args.out)
     target = output_file("--json", args.json_path)
     spec = load(args.spec, max_attacked=args.max_attacked)
     own = spec.observer or {}
-    own_kind = str(own.get("kind", ""))
-    if args.observer:
-        kind = KIND_NAMES[args.observer]
-    else:
-        kind = own_kind if own_kind in ("elastic_net", "dsso", "luenberger") else "elastic_net"
+    kind = KIND_NAMES[args.observer] if args.observer else "elastic_net"
+    if args.objective == "roa" and not args.observer:
+        kind = "dsso"
+    if args.objective == "roa" and kind != "dsso":
+        raise usage_error(
+            f"--objective roa is for --observer dsso (shrink 1), got --observer {args.observer}: "
+            "the other kinds are certified globally or not at all"
+        )
     threshold = float(own.get("threshold") or 0.1)
+    human = sys.stderr if args.json_path == "-" else sys.stdout
+    tty = sys.stderr.isatty() and args.json_path != "-"
+
+    def say(message: str) -> None:
+        if tty:
+            sys.stderr.write(f"ssecert: {message}...\n")
+            sys.stderr.flush()
+
+    say(f"searching {kind} designs ({args.objective})")
     result = design_observer(
         spec.system,
         kind,
@@ -88,8 +124,8 @@ def cmd_design(
         threshold=threshold,
         time_budget=args.time_budget,
     )
-    human = sys.stderr if args.json_path == "-" else sys.stdout
-    before = _certified(spec) if spec.observer is not None else None
+    stem = f"{spec.name}-design"
+    paths = {ext: folder / f"{stem}.{ext}" for ext in ("toml", "html", "json")}
     document: dict[str, Any] = {
         "spec": spec.source,
         "kind": kind,
@@ -97,60 +133,112 @@ def cmd_design(
         "design": result.observer,
         "gamma": result.gamma,
         "decay": result.decay,
-        "spec_design": before,
+        "radius": result.radius,
         "candidates": result.candidates,
         "seconds": result.seconds,
         "complete": result.complete,
+        "time_budget": args.time_budget,
     }
-    path = folder / f"{spec.name}-design.toml"
+    limit = _sparse_limit(spec)
+    if limit:
+        document["sparse_observability"] = limit
     files: dict[Any, str] = {}
+    report = None
     if result.observer is not None:
-        text = (
-            f"# Observer synthesised by ssecert design ({kind}, objective {args.objective}):\n"
-            f"# certified l2 gain {result.gamma:.6g}, decay {result.decay:.3g} per step.\n"
-            + dumps(spec_document(spec, result.observer))
+        text = design_spec_text(spec, result, kind)
+        designed = spec_from_dict(
+            tomllib.loads(text),
+            source=str(paths["toml"]),
+            sha256=hashlib.sha256(text.encode()).hexdigest(),
         )
-        files[path] = text
-        document["spec_file"] = str(path)
+        command = f"ssecert certify {paths['toml']} --out {folder}" + (
+            f" --seed {args.seed}" if args.seed is not None else ""
+        )
+        report = design_report(
+            spec, designed, seed=args.seed, runs=args.runs, command=command, progress=say
+        )
+        if limit:
+            report = dataclasses.replace(report, notes=(*report.notes, limit))
+        document["comparison"] = report.comparison
+        document["files"] = {ext: str(path) for ext, path in paths.items()}
+        files = {
+            paths["toml"]: text,
+            paths["html"]: render_report(report),
+            paths["json"]: certify_json(report),
+        }
     else:
         document["reason"] = result.reason
-    rendered = json.dumps(to_jsonable(document), indent=2) + "\n"
+    rendered = json.dumps(to_jsonable(document), indent=2, allow_nan=False) + "\n"
     if target is not None:
         files[target] = rendered
     if files:
         write(files)  # every file or none
-    searched = f"{len(result.candidates)} candidates in {result.seconds:.1f} s"
-    if not result.complete:
-        searched += " (the time budget ended the search)"
-    human.write(f"ssecert design: {spec.name}, {kind}, objective {args.objective}: {searched}\n")
-    if before is not None:
-        human.write(
-            f"  the spec's design ({before['kind']}): observer_stability {before['stability']}, "
-            f"certified l2 gain {_num(before['gamma'])}\n"
-        )
-    limit = _sparse_limit(spec)
-    if limit:
-        document["sparse_observability"] = limit
-        human.write(f"  note: {limit}\n")
-    if result.observer is None:
-        human.write(f"  no design: {result.reason}\n")
-        if kind == "dsso":
-            human.write(
-                "  (a D-SSO has shrink 1: when the plant has an eigenvalue at 1 no quadratic "
-                "certificate can exist; try --observer elastic-net)\n"
-            )
-    else:
-        params = ", ".join(
-            f"{k} {v:g}" for k, v in result.observer.items() if k in ("step", "shrink")
-        )
-        human.write(
-            f"  synthesised ({params or 'gain only'}): observer_stability holds, certified "
-            f"l2 gain {_num(result.gamma)}, decay {_num(result.decay)} per step\n"
-            f"spec file: {path}\n"
-        )
+    _print_design(human, spec, kind, args, result, report, limit, paths)
     if args.json_path == "-":
         sys.stdout.write(rendered)
     return 0 if result.observer is not None else 1
+
+
+def _print_design(
+    out: Any,
+    spec: Any,
+    kind: str,
+    args: argparse.Namespace,
+    result: Any,
+    report: Any,
+    limit: str,
+    paths: dict[str, Any],
+) -> None:
+    """The terminal summary: the search, both designs' certified numbers, each scenario."""
+    searched = f"{len(result.candidates)} candidates in {result.seconds:.1f} s"
+    if not result.complete:
+        searched += f" (the time budget of {args.time_budget:g} s ended the search)"
+    out.write(f"ssecert design: {spec.name}, {kind}, objective {args.objective}: {searched}\n")
+    if limit:
+        out.write(f"  note: {limit}\n")
+    if result.observer is None:
+        out.write(f"  no design: {result.reason}\n")
+        if kind == "dsso" and args.objective != "roa":
+            out.write(
+                "  (a D-SSO has shrink 1: when the plant has an eigenvalue at 1 no quadratic "
+                "certificate can exist; try --observer elastic-net, or --objective roa for "
+                "the largest certified region of attraction)\n"
+            )
+        return
+    comparison = report.comparison
+    for d in comparison["designs"]:
+        label = "the spec's design" if d["design"] == "spec" else "synthesised"
+        params = ", ".join(
+            f"{k} {d[k]:g}" for k in ("step", "threshold", "shrink") if isinstance(d.get(k), float)
+        )
+        words = [f"observer_stability {d.get('observer_stability', '-')}"]
+        words.append(f"certified l2 gain {_num(d.get('iss_gain_value'))}")
+        if "region_of_attraction_value" in d:
+            words.append(f"region of attraction {_num(d['region_of_attraction_value'])}")
+        out.write(f"  {label} ({d['kind']}, {params or 'gain only'}): {', '.join(words)}\n")
+    if result.decay is not None:
+        out.write(f"  synthesised: certified decay {result.decay:.3g} per step (V(k+1) <= "
+                  f"{1 - result.decay:.3g} V(k))\n")  # fmt: skip
+    for row in comparison["scenarios"]:
+        cells = []
+        for label in ("spec", "synthesised"):
+            sim = row.get(label)
+            if sim is None:
+                continue
+            if "skipped" in sim:
+                cells.append(f"{label}: skipped")
+            else:
+                settle = sim["settling_step"]
+                cells.append(
+                    f"{label} {_num(sim['final_mean'])}"
+                    + ("" if settle is None else f" (settles by step {settle})")
+                )
+        verdict = f" -> {row['comparison']}" if "comparison" in row else ""
+        out.write(f"  scenario {row['scenario']}: final mean error {'; '.join(cells)}{verdict}\n")
+    out.write(f"  {comparison['summary']}\n")
+    out.write(
+        f"spec file: {paths['toml']}\nreport: {paths['html']}\ncertificate: {paths['json']}\n"
+    )
 
 
 def _sparse_limit(spec: Any) -> str:
@@ -168,19 +256,6 @@ def _sparse_limit(spec: Any) -> str:
         f"{', '.join(names) or 'the breaking set'} leaves it unobservable); the design bounds "
         "the error under attack by its certified gain"
     )
-
-
-def _certified(spec: Any) -> dict[str, Any]:
-    """The spec's own design: its stability verdict and certified gain (as analyze gives)."""
-    from .observers import build_observer
-    from .synthesize import certified_gain
-
-    stability, iss = certified_gain(build_observer(spec.system, spec.observer))
-    return {
-        "kind": spec.observer["kind"],
-        "stability": stability.verdict.value,
-        "gamma": iss.value if iss.verdict.value == "holds" else None,
-    }
 
 
 def _num(v: Any) -> str:

@@ -53,6 +53,9 @@ class CertifyResult:
     command : str
         The command that reproduces the report.
     notes : tuple of str
+    comparison : dict or None
+        For ``ssecert design``: the synthesised design beside the spec's own
+        (``ssecert.synthesize.compare_designs``).
     """
 
     spec: Spec
@@ -63,6 +66,7 @@ class CertifyResult:
     seed: int = 0
     command: str = ""
     notes: tuple[str, ...] = ()
+    comparison: dict[str, Any] | None = None
 
     @property
     def exit_code(self) -> int:
@@ -81,6 +85,8 @@ class CertifyResult:
         out["seed"] = self.seed
         if self.notes:
             out["notes"] = list(self.notes)
+        if self.comparison is not None:
+            out["design_comparison"] = self.comparison
         return to_jsonable(out)
 
 

@@ -1,4 +1,5 @@
-"""``ssecert design``: a certified observer synthesised and written as a spec file."""
+"""``ssecert design``: a certified observer synthesised, certified, simulated beside the
+spec's own design, and written as a spec file, a report and a certificate."""
 
 from __future__ import annotations
 
@@ -6,43 +7,85 @@ import json
 
 import pytest
 
-from ssecert import analyze, load_spec
+from ssecert import load_spec
 from ssecert.cli import main
 
 
-def test_design_writes_a_spec_that_certifies_with_the_printed_gain(tmp_path, capsys):
+def test_design_writes_a_spec_report_and_certificate_that_certify_reproduces(tmp_path, capsys):
     out = tmp_path / "out"
     out.mkdir()
     status = main(
-        ["design", "ugv", "--observer", "elastic-net", "--out", str(out),
-         "--json", str(out / "r.json")]
-    )  # fmt: skip
+        ["design", "ugv", "--out", str(out), "--runs", "4", "--json", str(out / "r.json")]
+    )
     printed = capsys.readouterr().out
     assert status == 0, printed
+    assert sorted(p.name for p in out.iterdir()) == [
+        "r.json", "ugv-design.html", "ugv-design.json", "ugv-design.toml"
+    ]  # fmt: skip
     result = json.loads((out / "r.json").read_text())
-    assert result["complete"] and len(result["candidates"]) == 20
+    assert result["kind"] == "elastic_net" and result["complete"]
+    assert len(result["candidates"]) == 20
     assert "not 2-sparse observable" in printed and "removing position" in printed
-    assert result["spec_design"]["stability"] == "inconclusive"  # the thesis's D-SSO
-    cert = analyze(load_spec(out / "ugv-design.toml"))
-    assert cert["observer_stability"].verdict.value == "holds"
-    assert cert["iss_gain"].value == pytest.approx(result["gamma"], rel=1e-9)
+    designs = {d["design"]: d for d in result["comparison"]["designs"]}
+    assert designs["spec"]["observer_stability"] == "inconclusive"  # the thesis's D-SSO
+    assert designs["synthesised"]["observer_stability"] == "holds"
+    assert designs["synthesised"]["iss_gain_value"] == pytest.approx(result["gamma"], rel=1e-12)
     assert f"{result['gamma']:.4g}" in printed
+    # the report says, scenario by scenario, where the synthesised design is worse
+    for row in result["comparison"]["scenarios"]:
+        mine, theirs = row["synthesised"]["final_mean"], row["spec"]["final_mean"]
+        assert (row["comparison"] == "worse") == (mine > theirs * 1.05 + 1e-12)
+        assert (row["scenario"] in result["comparison"]["worse_in"]) == (
+            row["comparison"] == "worse"
+        )
+    html = (out / "ugv-design.html").read_text()
+    assert 'id="design-comparison"' in html and "the spec&#39;s design" in html
+    certificate = json.loads((out / "ugv-design.json").read_text())
+    assert certificate["design_comparison"] == result["comparison"]
+    # the written spec, certified again as a user would, gives the same verdicts and gain
+    again = tmp_path / "again"
+    again.mkdir()
+    status = main(["certify", str(out / "ugv-design.toml"), "--out", str(again), "--no-sim"])
+    assert status == 1  # the plant is not 2-sparse observable: the certificate fails
+    capsys.readouterr()
+    redone = json.loads((again / "ugv-design.json").read_text())
+    checks, mine = redone["checks"], certificate["checks"]
+    assert {k: c["verdict"] for k, c in checks.items()} == {
+        k: c["verdict"] for k, c in mine.items()
+    }
+    assert checks["iss_gain"]["value"] == pytest.approx(result["gamma"], rel=1e-9)
+    assert load_spec(out / "ugv-design.toml").name == "ugv-design"
 
 
 def test_a_dsso_on_an_integrator_gets_no_design_and_a_hint(tmp_path, capsys):
-    status = main(["design", "ugv", "--out", str(tmp_path)])
+    status = main(["design", "ugv", "--observer", "dsso", "--out", str(tmp_path)])
     printed = capsys.readouterr().out
     assert status == 1 and "no dsso design" in printed and "--observer elastic-net" in printed
+    assert "--objective roa" in printed
     assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+def test_the_roa_objective_designs_a_dsso(tmp_path, capsys):
+    status = main(["design", "ugv", "--objective", "roa", "--out", str(tmp_path), "--runs", "2",
+                   "--json", "-"])  # fmt: skip
+    captured = capsys.readouterr()
+    assert status == 0, captured.err
+    result = json.loads(captured.out)
+    assert result["kind"] == "dsso" and result["radius"] > 10.0
+    designs = {d["design"]: d for d in result["comparison"]["designs"]}
+    assert designs["synthesised"]["region_of_attraction_value"] == pytest.approx(result["radius"])
+    assert designs["spec"]["region_of_attraction_value"] < result["radius"]
+    assert main(["design", "ugv", "--objective", "roa", "--observer", "elastic-net"]) == 2
+    assert "--objective roa is for --observer dsso" in capsys.readouterr().err
 
 
 def test_the_time_budget_ends_the_search_and_says_so(tmp_path, capsys):
     status = main(
-        ["design", "ugv", "--observer", "elastic-net", "--out", str(tmp_path),
-         "--time-budget", "0"]
+        ["design", "ugv", "--out", str(tmp_path), "--time-budget", "0", "--runs", "2"]
     )  # fmt: skip
     printed = capsys.readouterr().out
-    assert status == 1 and "the time budget ended the search" in printed
+    assert status == 0 and "1 candidates" in printed
+    assert "the time budget of 0 s ended the search" in printed
 
 
 def test_an_unknown_kind_is_refused(capsys):
@@ -59,4 +102,6 @@ def test_a_plant_file_designs_with_the_number_of_attacked_sensors(tmp_path, caps
     assert main(["design", str(plant), "--out", str(tmp_path)]) == 2
     assert "--max-attacked" in capsys.readouterr().err
     status = main(["design", str(plant), "--max-attacked", "1", "--out", str(tmp_path)])
+    printed = capsys.readouterr().out
     assert status == 0 and (tmp_path / "plant-design.toml").exists()
+    assert "has no observer of its own" in printed

@@ -112,6 +112,135 @@ def test_design_refuses_what_it_cannot_design():
     with pytest.raises(ValueError, match="kind"):
         design_observer(spec.system, "sso")
     with pytest.raises(ValueError, match="objective"):
-        design_observer(spec.system, objective="roa")
+        design_observer(spec.system, objective="speed")
+    with pytest.raises(ValueError, match="roa"):
+        design_observer(spec.system, "elastic_net", objective="roa")
     none = design_observer(spec.system, "dsso")  # shrink 1 on an integrator: no certificate
     assert none.observer is None and "no dsso design" in none.reason
+
+
+def test_the_rate_objective_certifies_a_faster_decay_than_the_gain_objective():
+    from ssecert.design.synthesis import synthesize_rate_gain
+    from ssecert.synthesize import verify_synthesis
+
+    spec = load_example("ugv")
+    params = {"kind": "elastic_net", "gain": "deadbeat", "step": 0.3, "threshold": 0.1}
+    template = build_observer(spec.system, {**params, "shrink": 0.5})
+    slow, fast = synthesize_gain(template), synthesize_rate_gain(template)
+    assert slow.L is not None and fast.L is not None
+    own_slow = verify_synthesis(with_gain(template, slow.L), slow)
+    own_fast = verify_synthesis(with_gain(template, fast.L), fast)
+    assert own_slow["verified"] and own_fast["verified"]
+    assert own_fast["alpha"] > 0.5 > own_slow["alpha"]  # 0.88 against the imposed 1e-3
+    # the decay is real: V = xi' P xi falls by (1 - alpha) per step along simulations
+    model = LureModel.from_design(with_gain(template, fast.L))
+    rng = np.random.default_rng(0)
+    xi = model.simulate(rng.standard_normal((50, model.N)) * 5.0, 6)
+    V = np.einsum("kri,ij,krj->kr", xi, fast.P, xi)
+    assert np.all(V[1:] <= (1 - own_fast["alpha"]) * V[:-1] * (1 + 1e-9) + 1e-300)
+
+
+def test_a_certificate_of_another_gain_is_not_verified():
+    from ssecert.synthesize import verify_synthesis
+
+    spec = load_example("ugv")
+    params = {"kind": "elastic_net", "gain": "deadbeat", "step": 0.3, "threshold": 0.1}
+    template = build_observer(spec.system, {**params, "shrink": 0.5})
+    found = synthesize_gain(template)
+    assert not verify_synthesis(with_gain(template, found.L * 3.0), found)["verified"]
+
+
+def test_the_roa_objective_widens_the_thesis_region_of_attraction():
+    from ssecert.synthesize import design_observer
+
+    spec = load_example("ugv")
+    result = design_observer(spec.system, "dsso", objective="roa", time_budget=120)
+    assert result.observer is not None and result.observer["kind"] == "dsso"
+    assert result.radius > 10.0  # the thesis's step 0.7 design: 10
+    radii = [c["radius"] for c in result.candidates if "radius" in c]
+    assert result.radius == max(radii)
+
+
+def test_the_search_starts_in_the_middle_and_stops_at_the_budget():
+    from ssecert.synthesize import design_observer
+
+    spec = load_example("ugv")
+    result = design_observer(spec.system, "elastic_net", time_budget=0)
+    assert len(result.candidates) == 1 and not result.complete
+    first = result.candidates[0]
+    assert (first["shrink"], first["step"]) == (0.5, 0.5)
+    assert result.observer is not None  # the one candidate tried is certified
+
+
+def test_settling_step():
+    from ssecert.simulation.metrics import settling_step
+
+    assert settling_step(np.array([1.0, 0.5, 0.2, 0.04, 0.01, 0.0])) == 3
+    assert settling_step(np.array([2.0, 2.0])) == 0
+    assert settling_step(np.array([1.0, np.inf])) is None
+    assert settling_step(np.array([1.0, 0.0, 0.5, 0.5])) == 2  # overshoot: settles when back
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_on_random_plants_the_report_compares_the_designs_on_the_same_seeds(seed):
+    """The synthesised design is certified; the comparison says exactly where its simulated
+    error is worse than the hand-picked design's (the same scenarios, the same seeds)."""
+    import tomllib
+
+    from ssecert import spec_from_dict
+    from ssecert.synthesize import design_observer, design_report, design_spec_text
+
+    rng = np.random.default_rng(100 + seed)
+    n, p = 3, 5
+    A = rng.standard_normal((n, n))
+    A /= np.abs(np.linalg.eigvals(A)).max()
+    C = rng.standard_normal((p, n))
+    spec = spec_from_dict(
+        {
+            "name": f"random-{seed}",
+            "system": {"A": A.tolist(), "C": C.tolist()},
+            "attack": {"max_attacked": 1},
+            "observer": {
+                "kind": "elastic_net",
+                "gain": "pinv",
+                "step": 0.3,
+                "threshold": 0.1,
+                "shrink": 0.6,
+            },
+            "scenario": [
+                {
+                    "name": "constant",
+                    "attack": "constant",
+                    "count": 1,
+                    "magnitude": [1.0, 2.0],
+                    "steps": 80,
+                    "runs": 6,
+                    "seed": 7,
+                },
+                {
+                    "name": "random",
+                    "attack": "random",
+                    "count": 1,
+                    "magnitude": [0.5, 1.0],
+                    "steps": 80,
+                    "runs": 6,
+                    "seed": 8,
+                },
+            ],
+        }
+    )
+    result = design_observer(spec.system, "elastic_net", time_budget=30)
+    assert result.observer is not None
+    designed = spec_from_dict(tomllib.loads(design_spec_text(spec, result, "elastic_net")))
+    report = design_report(spec, designed)
+    assert report.certificate.get("observer_stability").verdict.value == "holds"
+    assert report.certificate.get("iss_gain").value == pytest.approx(result.gamma, rel=1e-9)
+    comparison = report.comparison
+    assert [r["scenario"] for r in comparison["scenarios"]] == ["constant", "random"]
+    for row in comparison["scenarios"]:
+        mine, theirs = row["synthesised"], row["spec"]
+        assert (mine["seed"], mine["runs"]) == (theirs["seed"], theirs["runs"])
+        worse = mine["final_mean"] > theirs["final_mean"] * 1.05 + 1e-12
+        assert (row["comparison"] == "worse") == worse
+        assert (row["scenario"] in comparison["worse_in"]) == worse
+    assert ("error is worse than" in comparison["summary"]) == bool(comparison["worse_in"])

@@ -32,7 +32,12 @@ import numpy as np
 from ..observers.base import ObserverDesign
 from ..observers.lure import LureModel
 
-__all__ = ["GainSynthesis", "synthesize_gain", "with_gain"]
+__all__ = [
+    "GainSynthesis",
+    "synthesize_gain",
+    "synthesize_rate_gain",
+    "with_gain",
+]
 
 
 @dataclass(frozen=True)
@@ -43,6 +48,10 @@ class GainSynthesis:
     gamma_proposed: float | None
     status: str
     seconds: float
+    alpha: float | None = None
+    P: np.ndarray | None = None
+    multipliers: np.ndarray | None = None
+    g: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -50,6 +59,7 @@ class GainSynthesis:
             "gamma_proposed": self.gamma_proposed,
             "status": self.status,
             "seconds": self.seconds,
+            "alpha": self.alpha,
         }
 
 
@@ -65,18 +75,57 @@ def synthesize_gain(design: ObserverDesign, *, alpha: float = 1e-3) -> GainSynth
     alpha : float, default 1e-3
         Decay imposed with the gain (V(xi+) <= (1 - alpha) V(xi) without attack).
     """
-    import cvxpy as cp
-
     start = time.perf_counter()
     model = LureModel.from_design(design)
-    n, p = design.system.n, design.system.p
-    S = design.sensing
-    if S.shape[0] != p:
+    if design.sensing.shape[0] != design.system.p:
         raise NotImplementedError("gain synthesis needs one attack estimate per sensor")
+    problem, variables = _dissipation_problem(model, design, alpha)
+    return _solved(problem, variables, start)
+
+
+def synthesize_rate_gain(design: ObserverDesign, *, gamma: float | None = None) -> GainSynthesis:
+    """The gain L with the fastest decay the dissipation LMI certifies (bisection over
+    alpha, one feasibility solve each), optionally keeping the l2 gain below ``gamma``;
+    a candidate only, as ``synthesize_gain``."""
+    start = time.perf_counter()
+    model = LureModel.from_design(design)
+    if design.sensing.shape[0] != design.system.p:
+        raise NotImplementedError("gain synthesis needs one attack estimate per sensor")
+    low, high, best = 0.0, 1.0, None
+    for _ in range(RATE_BISECTIONS):
+        alpha = 0.5 * (low + high)
+        problem, variables = _dissipation_problem(model, design, alpha, gamma=gamma)
+        found = _solved(problem, variables, start)
+        if found.L is None:
+            high = alpha
+        else:
+            low, best = alpha, found
+    if best is None:
+        return GainSynthesis(None, None, f"no decay above {high:.3g} is feasible", _since(start))
+    # the last feasible alpha sits at the edge: back off so that the certificate has a margin
+    problem, variables = _dissipation_problem(model, design, RATE_BACKOFF * low, gamma=gamma)
+    inner = _solved(problem, variables, start)
+    return replace(inner if inner.L is not None else best, seconds=_since(start))
+
+
+RATE_BISECTIONS = 7  # alpha to within 2^-7 of the best the LMI allows
+RATE_BACKOFF = 0.97
+
+
+def _dissipation_problem(
+    model: LureModel, design: ObserverDesign, alpha: float, *, gamma: float | None = None
+) -> tuple[Any, dict[str, Any]]:
+    """The dissipation LMI with Y = P1 L, in Schur form on the P1 block only (the a_hat
+    block's V(xi+) = w' D w is linear in D), minimising g = gamma^2 (or, with ``gamma``,
+    only feasible with g <= gamma^2)."""
+    import cvxpy as cp
+
+    n = design.system.n
+    S = design.sensing
     N, m, r = model.N, model.m, model.r
     A_p = design.system.A
     P1 = cp.Variable((n, n), symmetric=True)
-    Y = cp.Variable((n, p))
+    Y = cp.Variable((n, S.shape[0]))
     g = cp.Variable(nonneg=True)
     cons = [P1 >> np.eye(n)]
     Z = np.zeros
@@ -86,46 +135,72 @@ def synthesize_gain(design: ObserverDesign, *, alpha: float = 1e-3) -> GainSynth
         cons += [d >= 1, t >= 1e-6]
         D, T = cp.diag(d), cp.diag(t)
         P = cp.bmat([[P1, Z((n, m))], [Z((m, n)), D]])
-        PH = cp.bmat(
+        PH = cp.hstack([P1 @ A_p - Y @ S, -Y, Z((n, m)), Y])
+        qTC = model.q * T @ model.Cw
+        qTD = model.q * T @ model.Dw
+        top = (1 - alpha) * P - model.Ce.T @ model.Ce
+        left = cp.bmat(
             [
-                [P1 @ A_p - Y @ S, -Y, Z((n, m)), Y],
-                [Z((m, n)), Z((m, m)), D, Z((m, r))],
+                [top, -qTC.T, Z((N, r))],
+                [-qTC, 2 * T - D, -qTD],
+                [Z((r, N)), -qTD.T, g * np.eye(r)],
             ]
         )
     else:
         P = P1
         PH = cp.hstack([P1 @ A_p - Y @ S, Y])
-    size = N + m + r
-    Ce = model.Ce
-    top = (1 - alpha) * P - Ce.T @ Ce
-    if m:
-        qTC = model.q * T @ model.Cw
-        qTD = model.q * T @ model.Dw
-        left = cp.bmat(
-            [
-                [top, -qTC.T, Z((N, r))],
-                [-qTC, 2 * T, -qTD],
-                [Z((r, N)), -qTD.T, g * np.eye(r)],
-            ]
-        )
-    else:
+        top = (1 - alpha) * P - model.Ce.T @ model.Ce
         left = cp.bmat([[top, Z((N, r))], [Z((r, N)), g * np.eye(r)]])
-    big = cp.bmat([[left, PH.T], [PH, P]])
-    cons.append(0.5 * (big + big.T) >> 1e-7 * np.eye(size + N))
-    problem = cp.Problem(cp.Minimize(g), cons)
+    big = cp.bmat([[left, PH.T], [PH, P1]])
+    cons.append(0.5 * (big + big.T) >> 1e-7 * np.eye(big.shape[0]))
+    if gamma is None:
+        problem = cp.Problem(cp.Minimize(g), cons)
+    else:
+        problem = cp.Problem(cp.Minimize(0), [*cons, g <= gamma**2])
+    return problem, {"P1": P1, "Y": Y, "g": g, "alpha": alpha, **({"d": d, "t": t} if m else {})}
+
+
+def _solved(problem: Any, variables: dict[str, Any], start: float) -> GainSynthesis:
+    """One Clarabel solve of a synthesis LMI; the gain L = P1^-1 Y it proposes."""
+    import cvxpy as cp
+
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # a candidate: certified afterwards either way
-            problem.solve(solver=cp.CLARABEL)
+            problem.solve(solver=cp.CLARABEL, **SOLVER_OPTIONS)
     except (cp.error.SolverError, ArithmeticError, ValueError) as exc:
         return GainSynthesis(None, None, f"solver failed ({type(exc).__name__})", _since(start))
-    if Y.value is None or P1.value is None:
+    P1, Y, g = variables["P1"].value, variables["Y"].value, variables["g"].value
+    if Y is None or P1 is None or problem.status not in ("optimal", "optimal_inaccurate"):
         return GainSynthesis(None, None, str(problem.status), _since(start))
-    L = np.linalg.solve(0.5 * (P1.value + P1.value.T), Y.value)
+    L = np.linalg.solve(0.5 * (P1 + P1.T), Y)
     if not np.all(np.isfinite(L)):
         return GainSynthesis(None, None, "the solver's gain is not finite", _since(start))
-    gamma = float(np.sqrt(max(float(np.asarray(g.value)), 0.0)))
-    return GainSynthesis(L, gamma, str(problem.status), _since(start))
+    g = max(float(np.asarray(g)), 0.0) if g is not None else None
+    P = 0.5 * (P1 + P1.T)
+    t = np.zeros(0)
+    if "d" in variables:
+        P = np.block(
+            [
+                [P, np.zeros((len(P), len(variables["d"].value)))],
+                [np.zeros((len(variables["d"].value), len(P))), np.diag(variables["d"].value)],
+            ]
+        )
+        t = np.asarray(variables["t"].value, dtype=float)
+    return GainSynthesis(
+        L,
+        None if g is None else float(np.sqrt(g)),
+        str(problem.status),
+        _since(start),
+        alpha=variables["alpha"],
+        P=P,
+        multipliers=t,
+        g=g,
+    )
+
+
+# A candidate is certified afterwards from scratch, so the solve need not be tight.
+SOLVER_OPTIONS = {"tol_gap_abs": 1e-6, "tol_gap_rel": 1e-6, "tol_feas": 1e-7, "max_iter": 60}
 
 
 def with_gain(design: ObserverDesign, L: np.ndarray) -> ObserverDesign:

@@ -212,7 +212,50 @@ def _context(result: Any, *, fragment: bool) -> dict[str, Any]:
     ctx["simulations"] = _simulation_rows(result.simulations)
     if result.region is not None:
         ctx["region_svg"] = _region_svg(result.region, spec.observer)
+    comparison = getattr(result, "comparison", None)
+    if comparison is not None:
+        ctx["comparison"] = _comparison_context(comparison)
     return ctx
+
+
+def _comparison_context(comparison: Mapping[str, Any]) -> dict[str, Any]:
+    """The design command's side-by-side table: each design's parameters and certified
+    numbers, then per scenario the final mean error and settling step of each."""
+    labels = [d["design"] for d in comparison["designs"]]
+    designs = []
+    for d in comparison["designs"]:
+        params = ", ".join(
+            f"{k} {_fmt(d[k])}" for k in ("gain", "step", "threshold", "shrink") if k in d
+        )
+        designs.append(
+            {
+                "label": "the spec's design" if d["design"] == "spec" else "synthesised",
+                "kind": d.get("kind"),
+                "params": params,
+                "stability": d.get("observer_stability", "-"),
+                "gamma": _fmt(d.get("iss_gain_value")) if "iss_gain_value" in d else "none",
+                "radius": _fmt(d.get("region_of_attraction_value"))
+                if "region_of_attraction_value" in d
+                else "-",
+            }
+        )
+    rows = []
+    for r in comparison["scenarios"]:
+        cells = []
+        for label in labels:
+            sim = r.get(label, {})
+            if "skipped" in sim or not sim:
+                cells += [sim.get("skipped", "-"), "-"]
+            else:
+                settle = sim.get("settling_step")
+                cells += [_fmt(sim["final_mean"]), "-" if settle is None else str(settle)]
+        rows.append({"name": r["scenario"], "cells": cells, "verdict": r.get("comparison", "-")})
+    return {
+        "designs": designs,
+        "labels": ["the spec's design" if x == "spec" else "synthesised" for x in labels],
+        "rows": rows,
+        "summary": comparison["summary"],
+    }
 
 
 def _identity(result: Any, meta: Mapping[str, Any]) -> list[tuple[str, str]]:

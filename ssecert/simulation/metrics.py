@@ -9,6 +9,9 @@ Definitions (docs/architecture.md, "Simulation metrics"):
   empty, 1 when a_hat = 0 and a != 0), our precise form of the thesis's
   MASE, which it does not define; supp uses |a_i| > 1e-9 * scale with scale
   the largest attack magnitude of the run (1 when there is no attack);
+* settling step of a mean error curve: the first step from which the curve
+  stays within 5% of its initial distance to its final value (None when it
+  is not finite);
 * detection delay: steps from the first attacked step until the estimated
   support contains every attacked sensor and keeps doing so to the end of
   the horizon (NaN if it never does).
@@ -21,7 +24,15 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["relative_error", "mse", "support_error", "detection_delay", "summarize", "SUPPORT_RTOL"]
+__all__ = [
+    "relative_error",
+    "mse",
+    "support_error",
+    "detection_delay",
+    "settling_step",
+    "summarize",
+    "SUPPORT_RTOL",
+]
 
 SUPPORT_RTOL = 1e-9
 
@@ -141,3 +152,15 @@ def quantile(values: np.ndarray, q: float, axis: int | None = None) -> Any:
     unbounded = (low >= big) | ((high >= big) & (linear != low))
     result = np.where(unbounded, np.inf, linear)
     return result if np.ndim(result) else float(result)
+
+
+def settling_step(curve: np.ndarray, band: float = 0.05) -> int | None:
+    """The first step k from which ``curve`` stays within ``band`` x |curve[0] - curve[-1]|
+    of its final value (0 when it starts there); None when the curve is not finite."""
+    curve = np.asarray(curve, dtype=float)
+    if curve.size == 0 or not np.all(np.isfinite(curve)):
+        return None
+    final = curve[-1]
+    outside = np.abs(curve - final) > band * abs(curve[0] - final)
+    (where,) = np.nonzero(outside)
+    return int(where[-1] + 1) if where.size else 0
