@@ -147,6 +147,7 @@ def design_observer(
             return False
         record, found = evaluate(rows[cell[0]], cols[cell[1]])
         record["certified"] = found is not None
+        record["seconds_since_start"] = round(time.perf_counter() - start, 3)
         tried[cell] = record
         if found is not None:
             kept[cell] = found
