@@ -91,19 +91,20 @@ def synthesize_rate_gain(design: ObserverDesign, *, gamma: float | None = None) 
     model = LureModel.from_design(design)
     if design.sensing.shape[0] != design.system.p:
         raise NotImplementedError("gain synthesis needs one attack estimate per sensor")
+    # one parametrised problem: cvxpy canonicalises it once, each solve only sets alpha
+    problem, variables = _dissipation_problem(model, design, 0.5, gamma=gamma)
     low, high, best = 0.0, 1.0, None
     for _ in range(RATE_BISECTIONS):
-        alpha = 0.5 * (low + high)
-        problem, variables = _dissipation_problem(model, design, alpha, gamma=gamma)
+        variables["alpha"].value = 0.5 * (low + high)
         found = _solved(problem, variables, start)
         if found.L is None:
-            high = alpha
+            high = float(variables["alpha"].value)
         else:
-            low, best = alpha, found
+            low, best = float(variables["alpha"].value), found
     if best is None:
         return GainSynthesis(None, None, f"no decay above {high:.3g} is feasible", _since(start))
     # the last feasible alpha sits at the edge: back off so that the certificate has a margin
-    problem, variables = _dissipation_problem(model, design, RATE_BACKOFF * low, gamma=gamma)
+    variables["alpha"].value = RATE_BACKOFF * low
     inner = _solved(problem, variables, start)
     return replace(inner if inner.L is not None else best, seconds=_since(start))
 
@@ -127,6 +128,7 @@ def _dissipation_problem(
     P1 = cp.Variable((n, n), symmetric=True)
     Y = cp.Variable((n, S.shape[0]))
     g = cp.Variable(nonneg=True)
+    decay = cp.Parameter(nonneg=True, value=alpha)
     cons = [P1 >> np.eye(n)]
     Z = np.zeros
     if m:
@@ -138,7 +140,7 @@ def _dissipation_problem(
         PH = cp.hstack([P1 @ A_p - Y @ S, -Y, Z((n, m)), Y])
         qTC = model.q * T @ model.Cw
         qTD = model.q * T @ model.Dw
-        top = (1 - alpha) * P - model.Ce.T @ model.Ce
+        top = (1 - decay) * P - model.Ce.T @ model.Ce
         left = cp.bmat(
             [
                 [top, -qTC.T, Z((N, r))],
@@ -149,7 +151,7 @@ def _dissipation_problem(
     else:
         P = P1
         PH = cp.hstack([P1 @ A_p - Y @ S, Y])
-        top = (1 - alpha) * P - model.Ce.T @ model.Ce
+        top = (1 - decay) * P - model.Ce.T @ model.Ce
         left = cp.bmat([[top, Z((N, r))], [Z((r, N)), g * np.eye(r)]])
     big = cp.bmat([[left, PH.T], [PH, P1]])
     cons.append(0.5 * (big + big.T) >> 1e-7 * np.eye(big.shape[0]))
@@ -157,7 +159,7 @@ def _dissipation_problem(
         problem = cp.Problem(cp.Minimize(g), cons)
     else:
         problem = cp.Problem(cp.Minimize(0), [*cons, g <= gamma**2])
-    return problem, {"P1": P1, "Y": Y, "g": g, "alpha": alpha, **({"d": d, "t": t} if m else {})}
+    return problem, {"P1": P1, "Y": Y, "g": g, "alpha": decay, **({"d": d, "t": t} if m else {})}
 
 
 def _solved(problem: Any, variables: dict[str, Any], start: float) -> GainSynthesis:
@@ -192,7 +194,7 @@ def _solved(problem: Any, variables: dict[str, Any], start: float) -> GainSynthe
         None if g is None else float(np.sqrt(g)),
         str(problem.status),
         _since(start),
-        alpha=variables["alpha"],
+        alpha=float(variables["alpha"].value),
         P=P,
         multipliers=t,
         g=g,
