@@ -265,7 +265,8 @@ def _evaluator(
             gamma=iss.value if iss.verdict.value == "holds" else None,
             decay=decay,
         )
-        observer = {**params, "gain": np.asarray(design.L).tolist()}
+        gain = "deadbeat" if proposal is None else np.asarray(design.L).tolist()
+        observer = {**params, "gain": gain}
         if objective == "roa":
             radius = _certified_radius(design, stability)
             record["radius"] = radius
@@ -448,7 +449,7 @@ def _design_row(label: str, result: Any) -> dict[str, Any]:
     row: dict[str, Any] = {
         "design": label,
         "kind": observer.get("kind"),
-        "gain": gain if isinstance(gain, str) else "matrix",
+        "gain": gain if isinstance(gain, str) else ("LMI" if label == "synthesised" else "matrix"),
         **{k: observer.get(k) for k in ("step", "threshold", "shrink") if k in observer},
     }
     for check_id in ("observer_stability", "iss_gain", "region_of_attraction"):

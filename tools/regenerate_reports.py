@@ -1,5 +1,6 @@
-"""Regenerate reports/: NAME.html and NAME.json for every packaged example, and the audit of the
-documents' claims (audit.html and audit.json, as ``ssecert audit`` writes them).
+"""Regenerate reports/: NAME.html and NAME.json for every packaged example, the UGV's designed
+observer (ugv-design.toml, .html and .json, as ``ssecert design ugv --seed 0`` writes them) and
+the audit of the documents' claims (audit.html and audit.json, as ``ssecert audit`` writes them).
 
 python tools/regenerate_reports.py
 """
@@ -23,6 +24,13 @@ def main() -> None:
         # the same layout as `ssecert certify` (run times kept apart in meta.timings)
         atomic_write_text(out / f"{name}.json", certify_json(result))
         print(f"{name}: {result.certificate.verdict.value}")
+    import os
+
+    from ssecert.cli import main as command
+
+    os.chdir(out.parent)  # the report's reproduce command names reports/, not this machine's path
+    status = command(["design", "ugv", "--out", "reports", "--seed", "0"])
+    print(f"ugv design: exit status {status}")
     outcomes = run_audit()
     atomic_write_text(out / "audit.html", render_audit(outcomes))
     atomic_write_text(out / "audit.json", audit_json(outcomes))
