@@ -171,3 +171,17 @@ def test_numbers_out_of_range_end_inconclusive_not_in_an_error(change):
 
     cert = analyze(spec_from_dict(data))
     assert cert["region_of_attraction"].verdict.value == "inconclusive"
+
+
+def test_the_replay_goes_on_while_a_slow_trajectory_stays_inside(monkeypatch):
+    """A certified design that converges slowly is not refused for want of steps: the replay
+    continues chunk by chunk (here chunks of 20 steps) until it converges inside the ball."""
+    spec = load_example("ugv")
+    model = LureModel.from_design(build_observer(spec.system, spec.observer))
+    monkeypatch.setattr(pw, "STEPS", 20)
+    replay = pw._replay(model, 50.0, 1e6, seed=0)
+    assert replay["confirmed"] and 20 < replay["steps"] <= pw.MAX_STEPS
+    assert replay["final_largest_norm"] <= 1e-6
+    monkeypatch.setattr(pw, "MAX_STEPS", 40)  # not converged by then: not confirmed
+    assert not pw._replay(model, 50.0, 1e6, seed=0)["confirmed"]
+    assert not pw._replay(model, 50.0, 20.0, seed=0)["confirmed"]  # it leaves a smaller ball
