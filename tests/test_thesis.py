@@ -101,3 +101,27 @@ def test_epsilon_bound_is_sufficient_not_necessary():
     )
     assert items_of(small)[1]["epsilon_bound"].verdict == "holds"
     assert items_of(large)[1]["epsilon_bound"].verdict == "inconclusive"
+
+
+def test_a_subnormal_plant_leaves_lemma_1_unchecked_instead_of_crashing():
+    """F = 1e-320 is invertible in exact arithmetic, but its inverse overflows: Lemma 1 is
+    inconclusive (it was an internal error)."""
+    from ssecert import analyze, spec_from_dict
+
+    spec = spec_from_dict(
+        {
+            "name": "subnormal",
+            "system": {"A": [[1e-320]], "C": [[1.0], [1.0], [1.0]]},
+            "attack": {"max_attacked": 1},
+            "observer": {
+                "kind": "elastic_net",
+                "gain": [[0.0, 0.0, 0.0]],
+                "step": 0.5,
+                "threshold": 0.1,
+                "shrink": 0.5,
+            },  # fmt: skip
+        }
+    )
+    check = analyze(spec)["thesis_assumptions"]
+    lemma = check.evidence["lemma_1"]
+    assert lemma["verdict"].value == "inconclusive" and "floating-point range" in lemma["reason"]

@@ -226,7 +226,21 @@ def _lemma_1(inst: _Instance, rng: np.random.Generator) -> _Lemma1:
     claimed = float(np.linalg.norm(L1, 2)) / abs(rho_F - q) if abs(rho_F - q) > 0 else np.inf
     if singular:
         return _Lemma1(_singular_F(float(s_F[-1]), claimed), False, None, None)
+    if s_F[-1] < SUBNORMAL_FLOOR:
+        item = AssumptionResult(
+            "lemma_1",
+            Verdict.INCONCLUSIVE,
+            f"F = A + L1 C has smallest singular value {s_F[-1]:.2e}, not small against its own "
+            f"scale but at the bottom of the floating-point range: its inverse (the series of "
+            f"Pi) cannot be formed in floating point, so Lemma 1 is not checked.",
+            {"smallest_singular_value_F": float(s_F[-1]), "claimed_lipschitz": claimed},
+        )
+        return _Lemma1(item, False, None, None)
     return _lemma_1_on_pi(inst, rng, claimed, rho_F)
+
+
+# below this smallest singular value F^-1 is out of (or at the edge of) the float range
+SUBNORMAL_FLOOR = 1e10 * np.finfo(float).tiny
 
 
 def _singular_F(smallest: float, claimed: float) -> AssumptionResult:
