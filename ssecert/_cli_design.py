@@ -55,6 +55,13 @@ def add_design_parser(sub: Any) -> None:
         "--seed", type=int, help="replaces every scenario's seed (both designs get the same)"
     )
     design.add_argument(
+        "--min-decay",
+        type=_decay,
+        default=1e-3,
+        metavar="ALPHA",
+        help="decay per step imposed by the gain objective, 0 < ALPHA < 1 (default 0.001)",
+    )
+    design.add_argument(
         "--runs", type=_positive_int, metavar="N", help="Monte Carlo runs per scenario"
     )
     design.add_argument(
@@ -82,6 +89,7 @@ def cmd_design(
     output_file: Any,
     write: Any,
     usage_error: type[Exception],
+    argv: list[str] | None = None,
 ) -> int:
     """Search, certify and simulate the best design, write its spec file, report and
     certificate, print the comparison; 0 when a design is written."""
@@ -116,6 +124,13 @@ def cmd_design(
             sys.stderr.write(f"ssecert: {message}...\n")
             sys.stderr.flush()
 
+    stem = f"{spec.name}-design"
+    paths = {ext: folder / f"{stem}.{ext}" for ext in ("toml", "html", "json")}
+    if target is not None and any(target.resolve() == p.resolve() for p in paths.values()):
+        raise usage_error(
+            f"--json {args.json_path}: design writes its spec file, report and certificate "
+            f"there ({', '.join(p.name for p in paths.values())}); give another path"
+        )
     say(f"searching {kind} designs ({args.objective})")
     result = design_observer(
         spec.system,
@@ -123,9 +138,8 @@ def cmd_design(
         objective=args.objective,
         threshold=threshold,
         time_budget=args.time_budget,
+        min_decay=args.min_decay,
     )
-    stem = f"{spec.name}-design"
-    paths = {ext: folder / f"{stem}.{ext}" for ext in ("toml", "html", "json")}
     document: dict[str, Any] = {
         "spec": spec.source,
         "kind": kind,
@@ -151,14 +165,21 @@ def cmd_design(
             source=str(paths["toml"]),
             sha256=hashlib.sha256(text.encode()).hexdigest(),
         )
-        command = f"ssecert certify {paths['toml']} --out {folder}" + (
-            f" --seed {args.seed}" if args.seed is not None else ""
-        )
+        words = ["ssecert", "design", *(argv if argv is not None else sys.argv[2:])]
         report = design_report(
-            spec, designed, seed=args.seed, runs=args.runs, command=command, progress=say
+            spec, designed, seed=args.seed, runs=args.runs, command=" ".join(words), progress=say
         )
-        if limit:
-            report = dataclasses.replace(report, notes=(*report.notes, limit))
+        options = "".join(
+            f" --{name} {value}" for name, value in (("seed", args.seed), ("runs", args.runs))
+            if value is not None
+        )  # fmt: skip
+        alone = (
+            f"the certificate of the written spec file alone: ssecert certify {paths['toml']}"
+            f"{options} --out ANOTHER_FOLDER (this one holds the design's report)"
+        )
+        report = dataclasses.replace(
+            report, notes=(*report.notes, alone, *([limit] if limit else []))
+        )
         document["comparison"] = report.comparison
         document["files"] = {ext: str(path) for ext, path in paths.items()}
         files = {
@@ -190,6 +211,8 @@ def _print_design(
     paths: dict[str, Any],
 ) -> None:
     """The terminal summary: the search, both designs' certified numbers, each scenario."""
+    import numpy as np
+
     searched = f"{len(result.candidates)} candidates in {result.seconds:.1f} s"
     if not result.complete:
         searched += f" (the time budget of {args.time_budget:g} s ended the search)"
@@ -199,15 +222,25 @@ def _print_design(
     if result.observer is None:
         out.write(f"  no design: {result.reason}\n")
         if kind == "dsso" and args.objective != "roa":
+            import numpy as np
+
+            at_one = np.any(np.abs(np.linalg.eigvals(spec.system.A) - 1.0) <= 1e-9)
+            why = (
+                "the plant has an eigenvalue at 1, so no quadratic certificate can exist"
+                if at_one
+                else "its sector [0, 1] contains the identity, which quadratic certificates "
+                "rarely survive"
+            )
             out.write(
-                "  (a D-SSO has shrink 1: when the plant has an eigenvalue at 1 no quadratic "
-                "certificate can exist; try --observer elastic-net, or --objective roa for "
-                "the largest certified region of attraction)\n"
+                f"  (a D-SSO has shrink 1 and {why}; try --observer elastic-net, or "
+                "--objective roa for the largest certified region of attraction)\n"
             )
         return
     comparison = report.comparison
     for d in comparison["designs"]:
         label = "the spec's design" if d["design"] == "spec" else "synthesised"
+        if d.get("observer_gain") not in (None, "holds"):
+            out.write(f"  {label}: its observer gain is {d['observer_gain']} (see the report)\n")
         params = ", ".join(
             f"{k} {d[k]:g}" for k in ("step", "threshold", "shrink") if isinstance(d.get(k), float)
         )
@@ -216,9 +249,22 @@ def _print_design(
         if "region_of_attraction_value" in d:
             words.append(f"region of attraction {_num(d['region_of_attraction_value'])}")
         out.write(f"  {label} ({d['kind']}, {params or 'gain only'}): {', '.join(words)}\n")
-    if result.decay is not None:
+    if result.decay is not None and args.objective == "rate":
         out.write(f"  synthesised: certified decay {result.decay:.3g} per step (V(k+1) <= "
                   f"{1 - result.decay:.3g} V(k))\n")  # fmt: skip
+    L = (
+        np.asarray(result.observer["gain"])
+        if not isinstance(result.observer["gain"], str)
+        else None
+    )
+    A, C = spec.system.A, spec.system.C
+    scale = max(float(np.linalg.norm(A, 2)), 1e-300)
+    if L is not None and float(np.linalg.norm(L @ C, 2)) <= 1e-6 * scale:
+        out.write(
+            "  note: the synthesised gain is close to zero: the observer barely uses its "
+            "sensors and the plant's own decay does the estimation (the smallest gain from "
+            "attack to error on a stable plant); --min-decay asks for faster convergence\n"
+        )
     for row in comparison["scenarios"]:
         cells = []
         for label in ("spec", "synthesised"):
@@ -241,6 +287,17 @@ def _print_design(
     )
 
 
+def _decay(text: str) -> float:
+    """--min-decay: a number strictly between 0 and 1."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number in (0, 1), got {text!r}") from None
+    if not 0 < value < 1:
+        raise argparse.ArgumentTypeError(f"expected a number in (0, 1), got {text!r}")
+    return value
+
+
 def _sparse_limit(spec: Any) -> str:
     """What no observer can do on this plant ('' when it is 2s-sparse observable): the
     certified gain bounds the error under attack, it does not make it vanish."""
@@ -250,11 +307,16 @@ def _sparse_limit(spec: Any) -> str:
     if check.verdict.value != "fails":
         return ""
     names = [spec.system.sensors[i] for i in check.fields.get("breaking_set") or []]
+    if not names:
+        return (
+            "the plant is not observable even with every sensor: no observer can recover the "
+            "state exactly, attacked or not"
+        )
     return (
         f"no observer can recover the state exactly with {spec.max_attacked} attacked "
         f"sensor(s): the plant is not {2 * spec.max_attacked}-sparse observable (removing "
-        f"{', '.join(names) or 'the breaking set'} leaves it unobservable); the design bounds "
-        "the error under attack by its certified gain"
+        f"{', '.join(names)} leaves it unobservable); a certified gain bounds the error "
+        "under attack, it does not remove it"
     )
 
 

@@ -571,7 +571,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command == "audit":
             return cmd_audit(args, _output_folder, _write, UsageError)
         if args.command == "design":
-            return cmd_design(args, _load, _output_folder, _output_file, _write, UsageError)
+            return cmd_design(
+                args,
+                _load,
+                _output_folder,
+                _output_file,
+                _write,
+                UsageError,
+                argv[1:] if argv is not None else None,
+            )
         raise UsageError(f"unknown command {args.command!r}")  # pragma: no cover
     except (UsageError, SpecError, ResourceLimitError) as exc:
         sys.stderr.write(f"ssecert: error: {one_line(str(exc))}\n")

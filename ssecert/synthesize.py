@@ -98,6 +98,7 @@ def design_observer(
     objective: str = "gain",
     threshold: float = 0.1,
     time_budget: float = 60.0,
+    min_decay: float = 1e-3,
 ) -> DesignResult:
     """Search the best certified design of ``kind`` for ``system``.
 
@@ -113,7 +114,14 @@ def design_observer(
         depend on it; the region of attraction scales with it).
     time_budget : float, default 60
         Seconds; no candidate is started when fewer seconds remain than the candidates so
-        far took on average (``complete`` false when some of the grid was left).
+        far took on average (``complete`` false when some of the grid was left), and each
+        synthesis solve stops at the time left (at least 1 s: the first candidate always
+        runs).
+    min_decay : float, default 1e-3
+        Decay alpha imposed by the ``gain`` objective's synthesis (V(xi+) <= (1 - alpha)
+        V(xi) without attack): on a stable plant the smallest gain from attack to error is
+        often a gain near zero (the observer ignores its sensors and the plant's own decay
+        does the estimation); a larger alpha asks for faster convergence.
 
     Examples
     --------
@@ -133,7 +141,14 @@ def design_observer(
         )
     start = time.perf_counter()
     rows, cols = _axes(kind, objective)
-    evaluate = _evaluator(system, kind, objective, threshold)
+    evaluate = _evaluator(
+        system,
+        kind,
+        objective,
+        threshold,
+        lambda: time_budget - (time.perf_counter() - start),
+        min_decay,
+    )
     tried: dict[tuple[int, int], dict[str, Any]] = {}
     kept: dict[tuple[int, int], tuple[tuple[float, float], dict[str, Any]]] = {}
 
@@ -157,7 +172,7 @@ def design_observer(
     seconds = round(time.perf_counter() - start, 3)
     candidates = [tried[c] for c in sorted(tried)]
     if not kept:
-        reason = _no_design_reason(kind, candidates)
+        reason = _no_design_reason(kind, candidates, system)
         return DesignResult(None, None, None, objective, candidates, seconds, complete, reason)
     best = min(kept, key=lambda c: kept[c][0])
     record = tried[best]
@@ -218,7 +233,12 @@ Found = tuple[tuple[float, float], dict[str, Any]]
 
 
 def _evaluator(
-    system: System, kind: str, objective: str, threshold: float
+    system: System,
+    kind: str,
+    objective: str,
+    threshold: float,
+    remaining: Callable[[], float],
+    min_decay: float,
 ) -> Callable[[Any, Any], tuple[dict[str, Any], Found | None]]:
     """The function certifying one grid cell: a record with its parameters, verdicts and
     numbers, and, when it is certified, its rank (lower is better: the objective, then a
@@ -248,16 +268,25 @@ def _evaluator(
             proposal = None
         else:
             record["gain"] = "synthesised"
-            proposal = (synthesize_rate_gain if objective == "rate" else synthesize_gain)(template)
+            limit = max(remaining(), 1.0)
+            if objective == "rate":
+                proposal = synthesize_rate_gain(template, time_limit=limit)
+            else:
+                proposal = synthesize_gain(template, alpha=min_decay, time_limit=limit)
+            own = _verified_proposal(template, proposal)
+            if objective == "rate" and proposal.L is not None and not own["verified"]:
+                # at the edge of feasibility: a decay further inside has a margin
+                proposal = synthesize_rate_gain(template, backoff=0.8, time_limit=limit)
+                own = _verified_proposal(template, proposal)
             record["synthesis"] = proposal.status
             if proposal.L is None:
+                record["rejected"] = f"the synthesis LMI gave no gain ({proposal.status})"
                 return record, None
+            record["synthesis_certificate"] = own
             design = with_gain(template, proposal.L)
         stability, iss = certified_gain(design)
         decay = None
         if proposal is not None:
-            own = verify_synthesis(design, proposal)
-            record["synthesis_certificate"] = own
             decay = own.get("alpha") if own["verified"] else None
         record.update(
             stability=stability.verdict.value,
@@ -271,15 +300,35 @@ def _evaluator(
             radius = _certified_radius(design, stability)
             record["radius"] = radius
             if radius <= 0:
+                record["rejected"] = "no region of attraction certified"
                 return record, None
             return record, ((-radius, record["gamma"] or math.inf), observer)
-        if stability.verdict.value != "holds" or iss.verdict.value != "holds":
+        if stability.verdict.value != "holds":
+            record["rejected"] = f"observer_stability {stability.verdict.value}"
+            return record, None
+        if iss.verdict.value != "holds":
+            record["rejected"] = f"iss_gain {iss.verdict.value}"
             return record, None
         if objective == "rate":
-            return record, (None if decay is None else ((-decay, float(iss.value)), observer))
+            if decay is None:
+                record["rejected"] = (
+                    "the synthesis's own decay certificate did not verify in numpy "
+                    f"({record['synthesis_certificate'].get('problem', '')})"
+                )
+                return record, None
+            return record, ((-decay, float(iss.value)), observer)
         return record, ((float(iss.value), -(decay or 0.0)), observer)
 
     return evaluate
+
+
+def _verified_proposal(template: Any, proposal: Any) -> dict[str, Any]:
+    """``verify_synthesis`` on the design with the proposed gain ({} without one)."""
+    from .design.synthesis import with_gain
+
+    if proposal.L is None:
+        return {"verified": False}
+    return verify_synthesis(with_gain(template, proposal.L), proposal)
 
 
 def _certified_radius(design: Any, stability: Any) -> float:
@@ -295,12 +344,32 @@ def _certified_radius(design: Any, stability: Any) -> float:
     return float(check.value or 0.0) if check is not None else 0.0
 
 
-def _no_design_reason(kind: str, candidates: list[dict[str, Any]]) -> str:
-    verdicts = sorted({str(rec.get("stability", rec.get("synthesis"))) for rec in candidates})
-    return (
-        f"no {kind} design of the {len(candidates)} tried was certified stable with a finite "
-        f"gain (observer_stability or synthesis: {', '.join(verdicts)})"
-    )
+def _no_design_reason(kind: str, candidates: list[dict[str, Any]], system: System) -> str:
+    why = sorted({str(rec.get("rejected", "not certified")) for rec in candidates})
+    reason = f"no {kind} design of the {len(candidates)} tried was certified: {'; '.join(why)}"
+    modes = _undetectable_modes(system)
+    if modes:
+        reason += (
+            f"; the plant has an unobservable mode that is not stable (eigenvalue "
+            f"{', '.join(f'{m:.4g}' for m in modes)}): no observer's error can converge"
+        )
+    return reason
+
+
+def _undetectable_modes(system: System) -> list[complex]:
+    """Eigenvalues with |lambda| >= 1 that the sensors do not see (PBH test, numerically:
+    a reason's words, not a verdict)."""
+    A, C = system.A, system.C
+    out = []
+    for lam in np.linalg.eigvals(A):
+        if abs(lam) < 1 - 1e-9:
+            continue
+        M = np.vstack([A - lam * np.eye(system.n), C])
+        s = np.linalg.svd(M, compute_uv=False)
+        scale = max(float(np.linalg.norm(A, 2)), float(np.linalg.norm(C, 2)), 1e-300)
+        if s[-1] <= 1e-9 * scale:
+            out.append(complex(lam) if abs(np.imag(lam)) > 0 else float(np.real(lam)))
+    return out
 
 
 def certified_gain(design: Any) -> tuple[Any, Any]:
@@ -417,21 +486,27 @@ def compare_designs(own: Any | None, designed: Any) -> dict[str, Any]:
             if row["comparison"] == "worse":
                 worse.append(name)
         rows.append(row)
-    compared = [r for r in rows if "comparison" in r]
+    compared = [r for r in rows if r.get("comparison") in ("better", "no worse", "worse")]
+    apart = [r["scenario"] for r in rows if "comparison" in r and r not in compared]
     if own is None:
         summary = "The spec has no observer of its own: the synthesised design alone is shown."
     elif not compared:
-        summary = "No scenario was simulated for both designs."
+        summary = "No scenario was simulated to a finite error for both designs."
     elif worse:
         summary = (
             f"The synthesised design's final mean error is worse than the spec's own design's "
-            f"in {len(worse)} of {len(compared)} scenarios ({', '.join(worse)}); no worse in "
-            "the others."
+            f"in {len(worse)} of {len(compared)} scenarios compared ({', '.join(worse)}); no "
+            "worse in the others."
         )
     else:
         summary = (
             f"The synthesised design's final mean error is no worse than the spec's own "
-            f"design's in every one of the {len(compared)} scenarios (same seeds)."
+            f"design's in every one of the {len(compared)} scenarios compared (same seeds)."
+        )
+    if own is not None and apart:
+        summary += (
+            f" Not compared ({', '.join(apart)}): a scenario skipped, or a simulation that "
+            "overflowed, for at least one of the designs."
         )
     return {
         "designs": designs,
@@ -452,7 +527,7 @@ def _design_row(label: str, result: Any) -> dict[str, Any]:
         "gain": gain if isinstance(gain, str) else ("LMI" if label == "synthesised" else "matrix"),
         **{k: observer.get(k) for k in ("step", "threshold", "shrink") if k in observer},
     }
-    for check_id in ("observer_stability", "iss_gain", "region_of_attraction"):
+    for check_id in ("observer_gain", "observer_stability", "iss_gain", "region_of_attraction"):
         check = cert.get(check_id)
         if check is not None:
             row[check_id] = check.verdict.value
@@ -481,7 +556,7 @@ def _sim_row(res: Any) -> dict[str, Any]:
 
 def _versus(mine: dict[str, Any], theirs: dict[str, Any]) -> str:
     a, b = mine.get("final_mean"), theirs.get("final_mean")
-    if a is None or b is None:
+    if a is None or b is None or math.isnan(a) or math.isnan(b):
         return "not compared"
     if not math.isfinite(a):
         return "worse" if math.isfinite(b) else "not compared"

@@ -105,3 +105,48 @@ def test_a_plant_file_designs_with_the_number_of_attacked_sensors(tmp_path, caps
     printed = capsys.readouterr().out
     assert status == 0 and (tmp_path / "plant-design.toml").exists()
     assert "has no observer of its own" in printed
+
+
+def test_json_may_not_overwrite_what_design_writes(tmp_path, capsys):
+    for name in ("ugv-design.json", "ugv-design.toml"):
+        status = main(["design", "ugv", "--out", str(tmp_path), "--json", str(tmp_path / name)])
+        assert status == 2 and "give another path" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_report_reproduces_the_design_command_and_names_the_certificate_alone(tmp_path, capsys):
+    argv = ["design", "ugv", "--out", str(tmp_path), "--runs", "2", "--seed", "3",
+            "--time-budget", "0"]  # fmt: skip
+    assert main(argv) == 0
+    capsys.readouterr()
+    certificate = json.loads((tmp_path / "ugv-design.json").read_text())
+    assert certificate["reproduce"] == "ssecert " + " ".join(argv)
+    alone = [n for n in certificate["notes"] if "certificate of the written spec" in n]
+    assert alone and "--seed 3 --runs 2 --out ANOTHER_FOLDER" in alone[0]
+
+
+def test_the_rate_objective_designs_a_luenberger_observer_for_a_chain(tmp_path, capsys):
+    spec = tmp_path / "chain.toml"
+    spec.write_text(
+        'name = "chain"\n[system]\nA = [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.3, -0.2, 0.9]]\n'
+        "C = [[1.0, 0.0, 0.0]]\n[attack]\nmax_attacked = 0\nhorizon = 3\n"
+    )
+    status = main(["design", str(spec), "--observer", "luenberger", "--objective", "rate",
+                   "--out", str(tmp_path), "--json", str(tmp_path / "r.json")])  # fmt: skip
+    printed = capsys.readouterr().out
+    assert status == 0, printed
+    result = json.loads((tmp_path / "r.json").read_text())
+    assert result["decay"] > 0.5 and result["candidates"][0]["synthesis_certificate"]["verified"]
+
+
+def test_an_unobservable_unstable_plant_gets_the_reason(tmp_path, capsys):
+    spec = tmp_path / "unobs.toml"
+    spec.write_text(
+        'name = "unobs"\n[system]\nA = [[1.2, 0.0], [0.0, 0.5]]\nC = [[0.0, 1.0], [0.0, 2.0]]\n'
+        "[attack]\nmax_attacked = 0\nhorizon = 2\n"
+    )
+    status = main(["design", str(spec), "--out", str(tmp_path)])
+    printed = capsys.readouterr().out
+    assert status == 1 and list(tmp_path.iterdir()) == [spec]
+    assert "not observable even with every sensor" in printed
+    assert "unobservable mode that is not stable (eigenvalue 1.2)" in printed

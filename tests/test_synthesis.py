@@ -244,3 +244,43 @@ def test_on_random_plants_the_report_compares_the_designs_on_the_same_seeds(seed
         assert (row["comparison"] == "worse") == worse
         assert (row["scenario"] in comparison["worse_in"]) == worse
     assert ("error is worse than" in comparison["summary"]) == bool(comparison["worse_in"])
+
+
+def test_a_synthesis_lmi_over_the_memory_budget_is_refused():
+    from ssecert.budget import Budget
+
+    spec = load_example("ugv")
+    params = {"kind": "elastic_net", "gain": "deadbeat", "step": 0.3, "threshold": 0.1}
+    template = build_observer(spec.system, {**params, "shrink": 0.5})
+    found = synthesize_gain(template, budget=Budget(memory=1000))
+    assert found.L is None and "over the memory budget" in found.status
+
+
+def test_the_comparison_says_which_scenarios_it_could_not_compare():
+    from types import SimpleNamespace
+
+    from ssecert.synthesize import compare_designs
+
+    def result(finals, label):
+        sims = {
+            name: SimpleNamespace(
+                relative_error=np.array([[1.0], [v]]),
+                runs=1,
+                steps=1,
+                seed=0,
+                final=lambda v=v: {"relative_error_mean": v, "relative_error_q90": v},
+            )
+            for name, v in finals.items()
+        }
+        sims["skipped"] = {"skipped": "no stealthy attack"}
+        spec = SimpleNamespace(observer={"kind": label})
+        cert = SimpleNamespace(get=lambda check_id: None)
+        return SimpleNamespace(simulations=sims, spec=spec, certificate=cert)
+
+    out = compare_designs(
+        result({"a": 0.5, "b": np.inf}, "dsso"), result({"a": 0.6, "b": np.inf}, "elastic_net")
+    )
+    labels = {r["scenario"]: r.get("comparison") for r in out["scenarios"]}
+    assert labels == {"a": "worse", "b": "not compared", "skipped": "not compared"}
+    assert "1 of 1 scenarios compared" in out["summary"]
+    assert "Not compared (b, skipped)" in out["summary"]

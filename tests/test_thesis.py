@@ -119,7 +119,7 @@ def test_a_subnormal_plant_leaves_lemma_1_unchecked_instead_of_crashing():
                 "step": 0.5,
                 "threshold": 0.1,
                 "shrink": 0.5,
-            },  # fmt: skip
+            },
         }
     )
     check = analyze(spec)["thesis_assumptions"]

@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from ..budget import Budget
 from ..observers.base import ObserverDesign
 from ..observers.lure import LureModel
 
@@ -63,7 +64,13 @@ class GainSynthesis:
         }
 
 
-def synthesize_gain(design: ObserverDesign, *, alpha: float = 1e-3) -> GainSynthesis:
+def synthesize_gain(
+    design: ObserverDesign,
+    *,
+    alpha: float = 1e-3,
+    time_limit: float | None = None,
+    budget: Budget | None = None,
+) -> GainSynthesis:
     """The gain L minimising the l2 gain from attack to estimation error that the
     dissipation LMI certifies, for the design's step, threshold and shrink (its own gain is
     ignored); a candidate only: certify the design built with it.
@@ -74,29 +81,53 @@ def synthesize_gain(design: ObserverDesign, *, alpha: float = 1e-3) -> GainSynth
         A D-SSO or elastic-net design (window 1, one step per sample) or a Luenberger design.
     alpha : float, default 1e-3
         Decay imposed with the gain (V(xi+) <= (1 - alpha) V(xi) without attack).
+    time_limit : float, optional
+        Seconds for the solve (Clarabel stops there; no gain then).
+    budget : Budget, optional
+        Memory allowed (default ``Budget()``, 2 GiB): a synthesis LMI whose interior-point
+        system would need more is refused, with the estimate in the status.
     """
     start = time.perf_counter()
     model = LureModel.from_design(design)
     if design.sensing.shape[0] != design.system.p:
         raise NotImplementedError("gain synthesis needs one attack estimate per sensor")
+    refusal = _refusal(model, design, budget)
+    if refusal:
+        return GainSynthesis(None, None, refusal, _since(start))
     problem, variables = _dissipation_problem(model, design, alpha)
-    return _solved(problem, variables, start)
+    return _solved(problem, variables, start, time_limit)
 
 
-def synthesize_rate_gain(design: ObserverDesign, *, gamma: float | None = None) -> GainSynthesis:
+def synthesize_rate_gain(
+    design: ObserverDesign,
+    *,
+    gamma: float | None = None,
+    backoff: float = 0.97,
+    time_limit: float | None = None,
+    budget: Budget | None = None,
+) -> GainSynthesis:
     """The gain L with the fastest decay the dissipation LMI certifies (bisection over
     alpha, one feasibility solve each), optionally keeping the l2 gain below ``gamma``;
-    a candidate only, as ``synthesize_gain``."""
+    the last feasible alpha times ``backoff`` is solved again, so that the certificate has a
+    margin; a candidate only, as ``synthesize_gain`` (``time_limit`` for the whole
+    bisection)."""
     start = time.perf_counter()
     model = LureModel.from_design(design)
     if design.sensing.shape[0] != design.system.p:
         raise NotImplementedError("gain synthesis needs one attack estimate per sensor")
+    refusal = _refusal(model, design, budget)
+    if refusal:
+        return GainSynthesis(None, None, refusal, _since(start))
+
+    def left() -> float | None:
+        return None if time_limit is None else max(time_limit - _since(start), 0.1)
+
     # one parametrised problem: cvxpy canonicalises it once, each solve only sets alpha
     problem, variables = _dissipation_problem(model, design, 0.5, gamma=gamma)
     low, high, best = 0.0, 1.0, None
     for _ in range(RATE_BISECTIONS):
         variables["alpha"].value = 0.5 * (low + high)
-        found = _solved(problem, variables, start)
+        found = _solved(problem, variables, start, left())
         if found.L is None:
             high = float(variables["alpha"].value)
         else:
@@ -104,13 +135,26 @@ def synthesize_rate_gain(design: ObserverDesign, *, gamma: float | None = None) 
     if best is None:
         return GainSynthesis(None, None, f"no decay above {high:.3g} is feasible", _since(start))
     # the last feasible alpha sits at the edge: back off so that the certificate has a margin
-    variables["alpha"].value = RATE_BACKOFF * low
-    inner = _solved(problem, variables, start)
+    variables["alpha"].value = backoff * low
+    inner = _solved(problem, variables, start, left())
     return replace(inner if inner.L is not None else best, seconds=_since(start))
 
 
 RATE_BISECTIONS = 7  # alpha to within 2^-7 of the best the LMI allows
-RATE_BACKOFF = 0.97
+
+
+def _refusal(model: LureModel, design: ObserverDesign, budget: Budget | None) -> str:
+    """Why the synthesis LMI is not attempted ('' when it fits): the interior-point method
+    holds a dense matrix of the LMI's svec size squared."""
+    rows = model.N + model.m + model.r + design.system.n
+    memory = 8.0 * (rows * (rows + 1) / 2) ** 2
+    allowed = (budget or Budget()).memory
+    if memory <= allowed:
+        return ""
+    return (
+        f"refused: the synthesis LMI has {rows} rows; its interior-point system needs about "
+        f"{memory / 2**30:.3g} GiB, over the memory budget of {allowed / 2**30:.3g} GiB"
+    )
 
 
 def _dissipation_problem(
@@ -162,14 +206,19 @@ def _dissipation_problem(
     return problem, {"P1": P1, "Y": Y, "g": g, "alpha": decay, **({"d": d, "t": t} if m else {})}
 
 
-def _solved(problem: Any, variables: dict[str, Any], start: float) -> GainSynthesis:
+def _solved(
+    problem: Any, variables: dict[str, Any], start: float, time_limit: float | None = None
+) -> GainSynthesis:
     """One Clarabel solve of a synthesis LMI; the gain L = P1^-1 Y it proposes."""
     import cvxpy as cp
 
+    options = dict(SOLVER_OPTIONS)
+    if time_limit is not None:
+        options["time_limit"] = float(time_limit)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # a candidate: certified afterwards either way
-            problem.solve(solver=cp.CLARABEL, **SOLVER_OPTIONS)
+            problem.solve(solver=cp.CLARABEL, **options)
     except (cp.error.SolverError, ArithmeticError, ValueError) as exc:
         return GainSynthesis(None, None, f"solver failed ({type(exc).__name__})", _since(start))
     P1, Y, g = variables["P1"].value, variables["Y"].value, variables["g"].value
