@@ -88,10 +88,7 @@ def synthesize_gain(
         system would need more is refused, with the estimate in the status.
     """
     start = time.perf_counter()
-    model = LureModel.from_design(design)
-    if design.sensing.shape[0] != design.system.p:
-        raise NotImplementedError("gain synthesis needs one attack estimate per sensor")
-    refusal = _refusal(model, design, budget)
+    model, refusal = _model(design, budget)
     if refusal:
         return GainSynthesis(None, None, refusal, _since(start))
     problem, variables = _dissipation_problem(model, design, alpha)
@@ -112,10 +109,7 @@ def synthesize_rate_gain(
     margin; a candidate only, as ``synthesize_gain`` (``time_limit`` for the whole
     bisection)."""
     start = time.perf_counter()
-    model = LureModel.from_design(design)
-    if design.sensing.shape[0] != design.system.p:
-        raise NotImplementedError("gain synthesis needs one attack estimate per sensor")
-    refusal = _refusal(model, design, budget)
+    model, refusal = _model(design, budget)
     if refusal:
         return GainSynthesis(None, None, refusal, _since(start))
 
@@ -141,6 +135,14 @@ def synthesize_rate_gain(
 
 
 RATE_BISECTIONS = 7  # alpha to within 2^-7 of the best the LMI allows
+
+
+def _model(design: ObserverDesign, budget: Budget | None) -> tuple[LureModel, str]:
+    """The design's Lur'e model and why its synthesis LMI is refused ('' when it is not)."""
+    model = LureModel.from_design(design)
+    if design.sensing.shape[0] != design.system.p:
+        raise NotImplementedError("gain synthesis needs one attack estimate per sensor")
+    return model, _refusal(model, design, budget)
 
 
 def _refusal(model: LureModel, design: ObserverDesign, budget: Budget | None) -> str:
