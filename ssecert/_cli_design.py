@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+from collections.abc import Sequence
 from typing import Any
 
 __all__: list[str] = []
@@ -89,7 +90,7 @@ def cmd_design(
     output_file: Any,
     write: Any,
     usage_error: type[Exception],
-    argv: list[str] | None = None,
+    argv: Sequence[str] | None = None,
 ) -> int:
     """Search, certify and simulate the best design, write its spec file, report and
     certificate, print the comparison; 0 when a design is written."""
@@ -165,7 +166,7 @@ def cmd_design(
             source=str(paths["toml"]),
             sha256=hashlib.sha256(text.encode()).hexdigest(),
         )
-        words = ["ssecert", "design", *(argv if argv is not None else sys.argv[2:])]
+        words = ["ssecert", "design", *(list(argv) if argv is not None else sys.argv[2:])]
         report = design_report(
             spec, designed, seed=args.seed, runs=args.runs, command=" ".join(words), progress=say
         )

@@ -201,7 +201,7 @@ def _prechecks(model: LureModel) -> tuple[Verdict | None, str, dict[str, Any]]:
                 why = (
                     f"with shrink = 1 the sector [0, 1] contains the identity, and the linear "
                     f"loop it then contains has spectral radius {rho_q:.6g}"
-                    f"{' > 1' if rho_q > 1 + 1e-9 else ''} (it has the eigenvalue 1 whenever A "
+                    f"{' > 1' if rho_q > 1 + 1e-9 else ''} (it has an eigenvalue at 1 whenever A "
                     f"does: e = v, a_hat = -C v); no sector certificate can "
                     f"exist, which does not mean the observer is unstable. Shrink < 1 (the "
                     f"elastic-net observer) is what makes a certificate possible"
