@@ -70,7 +70,9 @@ def add_design_parser(sub: Any) -> None:
         type=_seconds,
         default=60.0,
         metavar="SECONDS",
-        help="time for the search (default 60)",
+        help="time for the search (default 60): no candidate starts when less is left than "
+        "one took on average, and each synthesis stops at the time left; the first candidate "
+        "always runs, and the certification and simulations of the chosen design come after",
     )
     design.add_argument(
         "--json", metavar="PATH", dest="json_path", help="write the result as JSON ('-': stdout)"
