@@ -168,7 +168,14 @@ def region_plot(region: Any, design_point: tuple[float, float] | None = None) ->
     ax.set_yticklabels([f"{q:.3g}" for q in region.shrinks], fontsize=7)
     ax.set_xlabel("step")
     ax.set_ylabel("shrink q")
-    short = {"local instability": "loc", "divergent trajectory": "div", "nonzero equilibrium": "eq"}
+    short = {
+        "local instability": "loc",
+        "divergent trajectory": "div",
+        "nonzero equilibrium": "eq",
+        "periodic orbit": "per",
+    }
+    for i, j in getattr(region, "zames_falb", {}):
+        ax.text(j + 0.5, i + 0.5, "zf", ha="center", va="center", fontsize=7)
     for (i, j), kind in getattr(region, "witnesses", {}).items():
         ax.text(j + 0.5, i + 0.5, short.get(kind, "x"), ha="center", va="center", fontsize=7,
                 color="white")  # fmt: skip
@@ -193,8 +200,9 @@ def region_plot(region: Any, design_point: tuple[float, float] | None = None) ->
         mark.set_gid("region-design")
         ax.legend(fontsize=8, loc="upper right")
     ax.set_title(
-        "green: certified (circle criterion); amber: radius of initial errors certified;\n"
-        "red: fails (loc: dead zone unstable, div: divergent trajectory, eq: equilibrium)",
+        "green: certified (circle criterion; zf: Zames-Falb multiplier); amber: radius of\n"
+        "initial errors certified; red: fails (loc: dead zone unstable, div: divergent\n"
+        "trajectory, eq: equilibrium, per: periodic orbit)",
         fontsize=7,
     )
     return svg_figure(fig, title="certified region")

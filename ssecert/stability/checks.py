@@ -44,6 +44,7 @@ from .lyapunov import LyapunovCertificate, lyapunov_certificate
 from .periodic import periodic_orbit
 from .roa import region_of_attraction
 from .thesis import thesis_assumptions
+from .zames_falb import zames_falb_certificate, zames_falb_gain
 
 __all__ = [
     "observer_checks",
@@ -85,6 +86,16 @@ def observer_stability_check(
         return _no_certificate(title, summary, "circle criterion (LMI, Clarabel)"), None
     model = design.observer_kind.lure_model(design)
     cert = circle_certificate(model, budget=budget, clear=tol.certificate_clear)
+    if cert.verdict == "inconclusive" and cert.details.get("attempts"):
+        # the LMIs were solved and failed: a dynamic multiplier may succeed
+        zf = zames_falb_certificate(model, budget=budget, clear=tol.certificate_clear)
+        if zf.verdict == Verdict.HOLDS:
+            return _zames_falb_stability_check(design, model, zf, tol, title), (model, zf)
+        cert = replace(
+            cert,
+            reason=f"{cert.reason}; {zf.reason}",
+            details={**cert.details, "zames_falb": zf.details},
+        )
     if cert.verdict == "inconclusive":
         witness, searched, cycled = divergence_witness(model), "", ""
         if witness is None:
@@ -333,6 +344,48 @@ def _circle_stability_check(
     )
 
 
+def _zames_falb_stability_check(
+    design: ObserverDesign, model: LureModel, cert: LMICertificate, tol: Tolerances, title: str
+) -> Check:
+    """observer_stability of a sparse observer certified by a Zames-Falb multiplier."""
+    order = cert.details["order"]
+    summary = (
+        f"The error state (e, a_hat) converges to 0 from every initial condition without "
+        f"attack: with a Zames-Falb multiplier of order {order} (the soft threshold is odd and "
+        f"slope-restricted in [0, shrink]), V(zeta) = zeta' P zeta over the error state and the "
+        f"last {order} nonlinearity inputs and outputs satisfies V(zeta+) - V(zeta) + sigma <= "
+        f"-eta |xi|^2 with sum_k sigma_k >= 0, so sum_k |xi(k)|^2 <= "
+        f"{cert.details['sum_bound_factor']:.4g} |xi(0)|^2 (verified margin {cert.margin:.3g} "
+        f"against an error bound {cert.error_bound:.1e}). No decay rate is certified: the "
+        f"circle criterion found no quadratic Lyapunov function."
+    )
+    evidence = _circle_evidence(model, cert)
+    evidence["lmi"] = (
+        "G' P G - diag(P, 0) + sum_i m0_i K0_i - sum_ij (a_ij Ka_ij + b_ij Kb_ij) <= -margin ||P|| I "
+        "over z = (xi, u(k-1..k-order), v(k-1..k-order), u(k)), u = phi(w), v = shrink w - u, "
+        "with m0_i >= sum_j |a_ij| + |b_ij| (ssecert.stability.zames_falb)"
+    )
+    evidence["multipliers_m0"] = evidence.pop("multipliers_T")
+    return Check(
+        id="observer_stability",
+        title=title,
+        verdict=Verdict.HOLDS,
+        summary=summary,
+        value=None,
+        margin=cert.margin,
+        method=f"Zames-Falb multiplier of order {order} (LMI, Clarabel)",
+        fields={
+            "decay_rate": None,
+            "structure": "zames-falb",
+            "shrink": design.shrink,
+            "step": design.step,
+            "threshold": design.threshold,
+        },
+        evidence=evidence,
+        tolerances=_decided_by(tol, error_bound=cert.error_bound, lmi_eta=ETA),
+    )
+
+
 def _circle_evidence(model: LureModel, cert: LMICertificate) -> dict[str, Any]:
     """The certificate's evidence with the LMI it solves and the Lur'e model's matrices."""
     evidence = cert.evidence()
@@ -375,7 +428,12 @@ def iss_gain_check(
             stability is not None and (stability.verdict == Verdict.HOLDS),
         )
     elif stability is not None:
-        model, certified = stability[0], stability[1].verdict == Verdict.HOLDS
+        # a Zames-Falb certificate proves the increments converge only with nonnegative
+        # coefficients (the increments' nonlinearity is slope-restricted but not odd)
+        model, certified = (
+            stability[0],
+            stability[1].verdict == Verdict.HOLDS and stability[1].details.get("incremental", True),
+        )
     else:
         return check
     records = constant_attack_outcomes(model, constant_attacks, certified=certified)
@@ -431,6 +489,9 @@ def _iss_gain(
                 fields={"norm": norm},
             )
         model, circle = stability
+        if circle.kind == "zames-falb":
+            cert = zames_falb_gain(model, circle, budget=budget, clear=clear)
+            return _zames_falb_gain_check(cert, tol, title, norm)
         cert = iss_from_circle(model, circle, clear=clear)
         if model.N + model.m + model.r <= ISS_OPTIMIZE_LIMIT:
             direct = iss_certificate(
@@ -462,6 +523,35 @@ def _iss_gain(
         margin=cert.margin,
         method="dissipation inequality (LMI)",
         fields=fields,
+        evidence=evidence,
+        tolerances=_decided_by(tol, error_bound=cert.error_bound),
+    )
+
+
+def _zames_falb_gain_check(cert: LMICertificate, tol: Tolerances, title: str, norm: str) -> Check:
+    """iss_gain from a Zames-Falb dissipation certificate (no decay is certified)."""
+    verdict = Verdict(cert.verdict)
+    if verdict is Verdict.HOLDS:
+        summary = (
+            f"V(zeta+) - V(zeta) + sigma <= -|e|^2 + gamma^2 |a|^2 holds with gamma = "
+            f"{cert.gamma:.4g} and a Zames-Falb multiplier of order {cert.details['order']} "
+            f"(sum_k sigma_k >= 0): the l2 gain from attack to estimation error is at most "
+            f"{cert.gamma:.4g}."
+        )
+    else:
+        summary = f"No ISS gain certified: {cert.reason}."
+    evidence = cert.evidence()
+    evidence["inequality"] = "V(zeta+) - V(zeta) + sigma <= -|e|^2 + gamma^2 |a|^2"
+    return Check(
+        id="iss_gain",
+        title=title,
+        verdict=verdict,
+        summary=summary,
+        required=False,
+        value=cert.gamma,
+        margin=cert.margin,
+        method="dissipation inequality with a Zames-Falb multiplier (LMI)",
+        fields={"gamma": cert.gamma, "alpha": None, "norm": norm},
         evidence=evidence,
         tolerances=_decided_by(tol, error_bound=cert.error_bound),
     )

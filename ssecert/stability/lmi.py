@@ -18,7 +18,10 @@ it lies in the sector [0, q] (q = shrink) and is slope-restricted in [0, q].
   locally unstable (fails); and the sector contains the linear map
   phi = q w, so if that closed loop A + q B Cw is not Schur no sector
   certificate can exist (inconclusive, with the reason; for shrink = 1 and
-  an eigenvalue of A at 1 it has that eigenvalue: e = v, a_hat = -C v);
+  an eigenvalue of A at 1 it has that eigenvalue: e = v, a_hat = -C v); nor
+  when another corner of the channels' sectors, phi_i = k_i w_i with k_i in
+  {0, q}, gives a loop that is not Schur (``channel_vertex_instability``, up
+  to 12 channels): the LMIs are then not solved;
 * ``iss_certificate``: V(xi+) - V(xi) <= -alpha V(xi) - |e|^2 + gamma^2 |a|^2,
   which gives input-to-state stability with decay alpha and the l2 gain
   gamma from attack to estimation error.
@@ -37,6 +40,7 @@ re-verification in ``lmi_verification``; this module decides.
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -60,9 +64,12 @@ __all__ = [
     "verify_certificate",
     "lmi_cost",
     "lure_model_cost",
+    "channel_vertex_instability",
+    "corner_reason",
 ]
 
 FULL_LIMIT = 80  # largest LMI dimension tried with a full P
+VERTEX_LIMIT = 12  # most channels whose 2^m corner loops are checked
 # Lyapunov structures, cheapest first: P = diag(P1, D) with D diagonal; the
 # same with a full cross block P12; a full P.
 STRUCTURES = ("block-diagonal", "cross", "full")
@@ -213,7 +220,51 @@ def _prechecks(model: LureModel) -> tuple[Verdict | None, str, dict[str, Any]]:
                     f"certificate can exist"
                 )
             return Verdict.INCONCLUSIVE, why, details
+        corner = channel_vertex_instability(model)
+        if corner is not None:
+            details["channel_corner"] = corner
+            return Verdict.INCONCLUSIVE, corner_reason(corner), details
     return None, "", details
+
+
+def channel_vertex_instability(model: LureModel) -> dict[str, Any] | None:
+    """A corner k in {0, q}^m whose linear loop A + B diag(k) Cw is not Schur, or None.
+
+    Each channel phi_i = k_i w_i with k_i in [0, q] is a sector (and slope)
+    restricted nonlinearity, so a certificate that treats the channels
+    separately (the circle criterion with a diagonal multiplier, the
+    Zames-Falb multipliers here) would prove that loop stable: when it is not,
+    no such certificate exists.  None also when m > ``VERTEX_LIMIT``.
+    """
+    m = model.m
+    if m == 0 or m > VERTEX_LIMIT:
+        return None
+    corners = np.array(list(itertools.product((0.0, model.q), repeat=m)))
+    loops = model.A[None] + np.einsum("ij,kj,jl->kil", model.B, corners, model.Cw)
+    with np.errstate(all="ignore"):
+        radii = np.abs(np.linalg.eigvals(loops)).max(axis=1)
+    if not np.all(np.isfinite(radii)):
+        return None
+    worst = int(np.argmax(radii))
+    if radii[worst] <= 1 + 1e-9:
+        return None
+    return {
+        "gains": corners[worst],
+        "spectral_radius": float(radii[worst]),
+        "corners": int(corners.shape[0]),
+        "unstable_corners": int((radii > 1 + 1e-9).sum()),
+    }
+
+
+def corner_reason(corner: dict[str, Any]) -> str:
+    gains = ", ".join(f"{k:g}" for k in corner["gains"])
+    return (
+        f"the linear loop with phi_i = k_i w_i, k = ({gains}), is in the sector channel by "
+        f"channel and has spectral radius {corner['spectral_radius']:.6g} > 1 "
+        f"({corner['unstable_corners']} of the {corner['corners']} corners k in {{0, shrink}}^m "
+        f"are unstable), so no certificate that treats the channels as separate sector or "
+        f"slope-restricted nonlinearities (circle criterion, Zames-Falb multipliers) can exist"
+    )
 
 
 def circle_certificate(

@@ -14,7 +14,7 @@ import numpy as np
 from ..observers.lure import LureModel
 from ..tolerances import EPS
 
-__all__ = ["circle_matrix", "iss_matrix", "verify_certificate"]
+__all__ = ["circle_matrix", "iss_matrix", "verify_certificate", "definite_problem"]
 
 
 def circle_matrix(model: LureModel, P: np.ndarray, t: np.ndarray, alpha: float = 0.0) -> np.ndarray:
@@ -70,6 +70,20 @@ def _error_bound(model: LureModel, P: np.ndarray, t: np.ndarray, size: int) -> f
     return 10.0 * size * EPS * raw / normP
 
 
+def definite_problem(P: np.ndarray, clear: float) -> str:
+    """Empty when the symmetric P is clearly positive definite: its smallest eigenvalue beats
+    ``clear`` times a rounding bound and P minus half of it passes a Cholesky test."""
+    normP = max(float(np.linalg.norm(P, 2)), np.finfo(float).tiny)
+    p_eigs = np.linalg.eigvalsh(P)
+    if p_eigs[0] <= clear * 10 * P.shape[0] * EPS * normP:
+        return f"P is not clearly positive definite (lambda_min {p_eigs[0]:.2e})"
+    try:
+        np.linalg.cholesky(P - 0.5 * p_eigs[0] * np.eye(P.shape[0]))
+    except np.linalg.LinAlgError:
+        return "P fails the Cholesky test"
+    return ""
+
+
 def verify_certificate(
     model: LureModel,
     P: np.ndarray,
@@ -103,18 +117,9 @@ def verify_certificate(
     lam = float(np.linalg.eigvalsh(M)[-1])
     margin = -lam / normP
     bound = _error_bound(model, P, t, M.shape[0])
-    p_eigs = np.linalg.eigvalsh(P)
-    if p_eigs[0] <= clear * 10 * P.shape[0] * EPS * normP:
-        return (
-            False,
-            margin,
-            bound,
-            f"P is not clearly positive definite (lambda_min {p_eigs[0]:.2e})",
-        )
-    try:
-        np.linalg.cholesky(P - 0.5 * p_eigs[0] * np.eye(P.shape[0]))
-    except np.linalg.LinAlgError:
-        return False, margin, bound, "P fails the Cholesky test"
+    problem = definite_problem(P, clear)
+    if problem:
+        return False, margin, bound, problem
     if margin <= clear * bound:
         return (
             False,

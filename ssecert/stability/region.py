@@ -6,7 +6,9 @@ is tried first at its neighbours before a new solve.  A point without one is
 decided as observer_stability decides it when it can: it fails with the kind
 of its witness (the dead zone's linear dynamics unstable, a divergent
 trajectory of the large-signal loop, or a nonzero equilibrium confirmed
-exactly); otherwise the radius of initial errors its dead zone certifies
+exactly, or a periodic orbit confirmed exactly); where the circle LMIs were
+solved and failed, a Zames-Falb multiplier (``zames_falb``) may still certify
+the point; otherwise the radius of initial errors its dead zone certifies
 (``roa.region_of_attraction`` with Q = I) is recorded.
 """
 
@@ -24,6 +26,7 @@ from ..observers import ObserverDesign
 from ..observers.lure import LureModel
 from ..results import Verdict
 from .lmi import circle_certificate
+from .zames_falb import zames_falb_certificate
 
 __all__ = ["RegionMap", "region_map"]
 
@@ -35,7 +38,9 @@ class RegionMap:
     ``verdicts[i, j]`` is for ``shrinks[i]`` and ``steps[j]``; ``margins``
     holds the verified margins (NaN where not certified); ``witnesses`` the
     kind of witness of each point that fails; ``radii`` the certified radius
-    of initial errors (inf where certified, 0 where it fails or none is).
+    of initial errors (inf where certified, 0 where it fails or none is);
+    ``zames_falb`` the points certified by a Zames-Falb multiplier (not by
+    the circle criterion), with the multiplier's order.
     """
 
     shrinks: np.ndarray
@@ -48,9 +53,14 @@ class RegionMap:
     certificates: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
     witnesses: dict[tuple[int, int], str] = field(default_factory=dict)
     radii: np.ndarray | None = None
+    zames_falb: dict[tuple[int, int], int] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
         return {
+            "zames_falb": [
+                {"shrink": float(self.shrinks[i]), "step": float(self.steps[j]), "order": order}
+                for (i, j), order in sorted(self.zames_falb.items())
+            ],
             "witnesses": [
                 {"shrink": float(self.shrinks[i]), "step": float(self.steps[j]), "kind": kind}
                 for (i, j), kind in sorted(self.witnesses.items())
@@ -100,6 +110,7 @@ def region_map(
     found: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
     witnesses: dict[tuple[int, int], str] = {}
     radii = np.zeros((shrink_grid.size, step_grid.size))
+    multipliers: dict[tuple[int, int], int] = {}
     solves = reused = 0
     for i, q in enumerate(shrink_grid):
         for j, nu in enumerate(step_grid):
@@ -121,6 +132,11 @@ def region_map(
                 reused += 1
             elif cert.details.get("attempts"):
                 solves += 1
+            if cert.verdict == Verdict.INCONCLUSIVE and cert.details.get("attempts"):
+                zf = zames_falb_certificate(model, solver_options=solver_options, budget=budget)
+                solves += 1
+                if zf.verdict == Verdict.HOLDS:
+                    cert, multipliers[(i, j)] = zf, int(zf.details["order"])
             verdicts[i, j] = cert.verdict
             if cert.verdict == Verdict.INCONCLUSIVE:
                 kind, radii[i, j] = _undecided_point(model)
@@ -129,7 +145,11 @@ def region_map(
             if cert.verdict == Verdict.HOLDS:
                 radii[i, j] = np.inf
                 margins[i, j] = cert.margin
-                if cert.P is not None and cert.multipliers is not None:  # holds carries both
+                if (
+                    (i, j) not in multipliers
+                    and cert.P is not None
+                    and cert.multipliers is not None
+                ):
                     found[(i, j)] = (cert.P, cert.multipliers)
     return RegionMap(
         shrink_grid,
@@ -142,6 +162,7 @@ def region_map(
         dict(found),
         witnesses,
         radii,
+        multipliers,
     )
 
 
@@ -149,6 +170,7 @@ def _undecided_point(model: LureModel) -> tuple[str, float]:
     """(kind of witness that the point fails with, or '', and its dead zone's radius)."""
     from .divergence import divergence_witness
     from .equilibria import nonzero_equilibrium
+    from .periodic import periodic_orbit
     from .roa import region_of_attraction
 
     dead = region_of_attraction(model, widen=False)
@@ -158,4 +180,6 @@ def _undecided_point(model: LureModel) -> tuple[str, float]:
         return "divergent trajectory", 0.0
     if nonzero_equilibrium(model)[0] is not None:
         return "nonzero equilibrium", 0.0
+    if periodic_orbit(model)[0] is not None:
+        return "periodic orbit", 0.0
     return "", float(dead["radius"])
