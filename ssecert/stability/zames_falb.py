@@ -328,8 +328,8 @@ def _certificate(
 ) -> LMICertificate:
     P, m0, a, b = sol
     N = model.N
-    # eta sum |xi|^2 <= xi0' P_xx xi0 with eta = margin ||P||
-    eta = margin * float(np.linalg.norm(P, 2))
+    # eta sum |xi|^2 <= xi0' P_xx xi0 with eta = (margin - its rounding bound) ||P||
+    eta = (margin - bound) * float(np.linalg.norm(P, 2))
     details = {
         "order": int(a.shape[0]),
         "u_delays": a,
