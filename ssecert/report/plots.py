@@ -175,7 +175,7 @@ def region_plot(region: Any, design_point: tuple[float, float] | None = None) ->
         "periodic orbit": "per",
     }
     for i, j in getattr(region, "zames_falb", {}):
-        ax.text(j + 0.5, i + 0.5, "zf", ha="center", va="center", fontsize=7)
+        ax.text(j + 0.5, i + 0.5, "zf", ha="center", va="center", fontsize=7, color="white")
     for (i, j), kind in getattr(region, "witnesses", {}).items():
         ax.text(j + 0.5, i + 0.5, short.get(kind, "x"), ha="center", va="center", fontsize=7,
                 color="white")  # fmt: skip

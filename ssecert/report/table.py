@@ -124,7 +124,9 @@ def _finding(check: Check, sensors: tuple[str, ...], width: int) -> list[str]:
             line += f", nilpotency index {check.fields['nilpotency_index']}"
         lines.append(line)
     if check.id == "iss_gain" and check.fields.get("gamma") is not None:
-        lines.append(f"  gamma = {check.fields['gamma']:.4g}, alpha = {check.fields['alpha']:.3g}")
+        alpha = check.fields.get("alpha")
+        decay = "" if alpha is None else f", alpha = {alpha:.3g}"
+        lines.append(f"  gamma = {check.fields['gamma']:.4g}{decay}")
     if check.id == "thesis_assumptions":
         items = check.fields.get("items", {})
         lines.append("  " + ", ".join(f"{k}: {v}" for k, v in items.items()))

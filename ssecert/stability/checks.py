@@ -551,7 +551,7 @@ def _zames_falb_gain_check(cert: LMICertificate, tol: Tolerances, title: str, no
         value=cert.gamma,
         margin=cert.margin,
         method="dissipation inequality with a Zames-Falb multiplier (LMI)",
-        fields={"gamma": cert.gamma, "alpha": None, "norm": norm},
+        fields={"gamma": cert.gamma, "alpha": 0.0, "norm": norm},
         evidence=evidence,
         tolerances=_decided_by(tol, error_bound=cert.error_bound),
     )
