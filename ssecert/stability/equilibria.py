@@ -9,10 +9,15 @@ fixed points solve the linear equations
     (I - A - q B D Cw) xi = -q threshold B s,   D = diag(|s|),
 
 and a solution is an equilibrium when it lies in its own region.  Every
-pattern is tried (3^m, batched) for small m; an equilibrium other than the
-origin is confirmed in exact rational arithmetic on the model's floats
-before it is reported: the observer then settles on a wrong estimate with no
-attack, and is not globally asymptotically stable.
+pattern is tried (3^m, batched) for small m; for larger m a mixed-integer
+program (``scipy.optimize.milp``, HiGHS) searches the patterns at once, with
+two binaries per channel (active positive, active negative), big-M region
+constraints on |w_i| <= ``MILP_BOX`` thresholds and at least one active
+channel (an equilibrium with every channel in the dead zone is the origin
+when F is Schur).  An equilibrium other than the origin is confirmed in
+exact rational arithmetic on the model's floats before it is reported: the
+observer then settles on a wrong estimate with no attack, and is not
+globally asymptotically stable.
 """
 
 from __future__ import annotations
@@ -29,14 +34,142 @@ __all__ = ["nonzero_equilibrium", "attacked_equilibria", "MAX_PATTERNS"]
 
 MAX_PATTERNS = 3**10  # patterns tried exhaustively (59,049)
 _BATCH = 4096
+MILP_BOX = 1e4  # the mixed-integer search looks at |w_i| <= MILP_BOX * threshold
+MILP_SECONDS = 10.0  # time limit of one mixed-integer solve
+MILP_ROUNDS = 5  # solves, each excluding the patterns that exact arithmetic refused
 
 
-def nonzero_equilibrium(model: LureModel) -> tuple[dict[str, Any] | None, str]:
-    """An exactly confirmed nonzero equilibrium (the witness) or None, with what was searched."""
+def nonzero_equilibrium(
+    model: LureModel, *, milp: bool = True
+) -> tuple[dict[str, Any] | None, str]:
+    """An exactly confirmed nonzero equilibrium (the witness) or None, with what was searched.
+
+    More than ``MAX_PATTERNS`` patterns are searched by mixed-integer programming, unless
+    ``milp`` is False (then they are not searched).
+    """
     if model.m == 0 or model.q <= 0:
         return None, "no nonlinearity: the only equilibrium of a stable linear map is 0"
+    if milp and 3**model.m > MAX_PATTERNS and model.threshold > 0:
+        return _milp_search(model)
     found, note, _ = _search(model, None, first=True)
     return (found[0] if found else None), note
+
+
+def _milp_search(model: LureModel) -> tuple[dict[str, Any] | None, str]:
+    """A nonzero equilibrium by mixed-integer programming (too many patterns to enumerate).
+
+    Variables xi (N), u (m, the nonlinearity's output) and binaries p, n (m each):
+    xi = A xi + B u, w = Cw xi; p_i = 1 means w_i >= threshold and u_i = q (w_i - threshold),
+    n_i = 1 means w_i <= -threshold and u_i = q (w_i + threshold), neither means |w_i| <=
+    threshold and u_i = 0; p_i + n_i <= 1 and sum (p + n) >= 1.  A solution's pattern is
+    confirmed in exact arithmetic; one that is not is cut off and the search repeated.
+    """
+    from scipy.optimize import Bounds, LinearConstraint, milp
+
+    N, m, q, lam = model.N, model.m, float(model.q), float(model.threshold)
+    W = MILP_BOX * lam
+    big = W + lam  # region constraints
+    big_u = 3.0 * q * (W + lam)  # output constraints (|u - q w| stays below it in the box)
+    # variable order: xi (N), u (m), p (m), n (m)
+    nv = N + 3 * m
+    Cw = model.Cw
+    rows: list[np.ndarray] = []
+    lo: list[float] = []
+    hi: list[float] = []
+
+    def add(coef: np.ndarray, low: float, high: float) -> None:
+        rows.append(coef)
+        lo.append(low)
+        hi.append(high)
+
+    fixed = np.zeros((N, nv))  # (I - A) xi - B u = 0
+    fixed[:, :N] = np.eye(N) - model.A
+    fixed[:, N : N + m] = -model.B
+    for r in range(N):
+        add(fixed[r], 0.0, 0.0)
+    for i in range(m):
+        w = np.zeros(nv)
+        w[:N] = Cw[i]
+        U, P, Nn = N + i, N + m + i, N + 2 * m + i
+        c = w.copy()  # w_i - big p_i >= lam - big  (p_i = 1: w_i >= lam)
+        c[P] -= big
+        add(c, lam - big, np.inf)
+        c = w.copy()  # w_i + big n_i <= -lam + big  (n_i = 1: w_i <= -lam)
+        c[Nn] += big
+        add(c, -np.inf, -lam + big)
+        c = w.copy()  # dead: |w_i| <= lam + big (p_i + n_i)
+        c[P] -= big
+        c[Nn] -= big
+        add(c, -np.inf, lam)
+        c = w.copy()
+        c[P] += big
+        c[Nn] += big
+        add(c, -lam, np.inf)
+        for sign, b in ((1.0, P), (-1.0, Nn)):  # b = 1: u_i - q w_i = -q sign lam
+            c = -q * w
+            c[U] += 1.0
+            c[b] += big_u  # u - q w <= -q sign lam + big_u (1 - b)
+            add(c, -np.inf, -q * sign * lam + big_u)
+            c = -q * w
+            c[U] += 1.0
+            c[b] -= big_u  # u - q w >= -q sign lam - big_u (1 - b)
+            add(c, -q * sign * lam - big_u, np.inf)
+        c = np.zeros(nv)  # dead: |u_i| <= big_u (p_i + n_i)
+        c[U] = 1.0
+        c[P] = c[Nn] = -big_u
+        add(c, -np.inf, 0.0)
+        c = np.zeros(nv)
+        c[U] = 1.0
+        c[P] = c[Nn] = big_u
+        add(c, 0.0, np.inf)
+        c = np.zeros(nv)
+        c[P] = c[Nn] = 1.0
+        add(c, 0.0, 1.0)
+    c = np.zeros(nv)
+    c[N + m :] = 1.0
+    add(c, 1.0, np.inf)
+    lower = np.concatenate([np.full(N, -np.inf), np.full(m, -q * (W + lam)), np.zeros(2 * m)])
+    upper = np.concatenate([np.full(N, np.inf), np.full(m, q * (W + lam)), np.ones(2 * m)])
+    integrality = np.concatenate([np.zeros(N + m), np.ones(2 * m)])
+    refused = 0
+    for _ in range(MILP_ROUNDS):
+        result = milp(
+            np.zeros(nv),
+            constraints=LinearConstraint(np.array(rows), lo, hi),
+            integrality=integrality,
+            bounds=Bounds(lower, upper),
+            options={"time_limit": MILP_SECONDS},
+        )
+        if result.x is None:
+            what = {
+                2: "none",
+                1: f"undecided (the solver's time limit of {MILP_SECONDS:g} s was reached)",
+            }.get(result.status, f"undecided (the solver stopped: {result.message.strip()})")
+            return None, (
+                f"{what}: a mixed-integer search over the 3^{m} active/sign patterns "
+                f"(|w_i| <= {MILP_BOX:g} thresholds, HiGHS)"
+                + (
+                    f"; {refused} candidate pattern(s) refused by exact arithmetic"
+                    if refused
+                    else ""
+                )
+            )
+        signs = np.round(result.x[N + m : N + 2 * m]) - np.round(result.x[N + 2 * m :])
+        witness = _confirm(model, signs)
+        if witness is not None:
+            return witness, (
+                f"found by a mixed-integer search over the 3^{m} active/sign patterns (HiGHS), "
+                "confirmed in exact arithmetic"
+            )
+        refused += 1
+        cut = np.zeros(nv)  # exclude this pattern: sum of the binaries that differ >= 1
+        ones = np.concatenate([signs > 0, signs < 0])
+        cut[N + m :] = np.where(ones, -1.0, 1.0)
+        add(cut, 1.0 - float(ones.sum()), np.inf)
+    return None, (
+        f"undecided: a mixed-integer search over the 3^{m} active/sign patterns found "
+        f"{refused} candidate patterns that exact arithmetic refused"
+    )
 
 
 def attacked_equilibria(

@@ -178,7 +178,7 @@ def _undecided_point(model: LureModel) -> tuple[str, float]:
         return "local instability", 0.0
     if divergence_witness(model) is not None:
         return "divergent trajectory", 0.0
-    if nonzero_equilibrium(model)[0] is not None:
+    if nonzero_equilibrium(model, milp=False)[0] is not None:  # a map cell: no MILP
         return "nonzero equilibrium", 0.0
     if periodic_orbit(model)[0] is not None:
         return "periodic orbit", 0.0
