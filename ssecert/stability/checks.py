@@ -501,57 +501,55 @@ def _iss_gain(
                 cert.gamma is None or _known(direct.gamma) < cert.gamma
             ):
                 cert = direct
-    verdict = Verdict(cert.verdict)
-    fields = {"gamma": cert.gamma, "alpha": cert.decay, "norm": norm}
-    if verdict is Verdict.HOLDS:
-        summary = (
-            f"V(xi+) - V(xi) <= -{cert.decay:.3g} V(xi) - |e|^2 + gamma^2 |a|^2 holds with "
-            f"gamma = {cert.gamma:.4g}: the estimation error is input-to-state stable with "
-            f"respect to the attack, with l2 gain at most {cert.gamma:.4g}."
-        )
-    else:
-        summary = f"No ISS gain certified: {cert.reason}."
-    evidence = cert.evidence()
-    evidence["inequality"] = "V(xi+) - V(xi) <= -alpha V(xi) - |e|^2 + gamma^2 |a|^2"
-    return Check(
-        id="iss_gain",
-        title=title,
-        verdict=verdict,
-        summary=summary,
-        required=False,
-        value=cert.gamma,
-        margin=cert.margin,
-        method="dissipation inequality (LMI)",
-        fields=fields,
-        evidence=evidence,
-        tolerances=_decided_by(tol, error_bound=cert.error_bound),
+    holds = (
+        f"V(xi+) - V(xi) <= -{_known(cert.decay):.3g} V(xi) - |e|^2 + gamma^2 |a|^2 holds with "
+        f"gamma = {_known(cert.gamma):.4g}: the estimation error is input-to-state stable with "
+        f"respect to the attack, with l2 gain at most {_known(cert.gamma):.4g}."
+        if cert.verdict == Verdict.HOLDS
+        else ""
     )
+    inequality = "V(xi+) - V(xi) <= -alpha V(xi) - |e|^2 + gamma^2 |a|^2"
+    return _gain_check(cert, tol, title, norm, holds, inequality, "dissipation inequality (LMI)")
 
 
 def _zames_falb_gain_check(cert: LMICertificate, tol: Tolerances, title: str, norm: str) -> Check:
     """iss_gain from a Zames-Falb dissipation certificate (no decay is certified)."""
+    holds = (
+        f"V(zeta+) - V(zeta) + sigma <= -|e|^2 + gamma^2 |a|^2 holds with gamma = "
+        f"{_known(cert.gamma):.4g} and a Zames-Falb multiplier of order "
+        f"{cert.details.get('order')} (sum_k sigma_k >= 0): the l2 gain from attack to "
+        f"estimation error is at most {_known(cert.gamma):.4g}."
+        if cert.verdict == Verdict.HOLDS
+        else ""
+    )
+    inequality = "V(zeta+) - V(zeta) + sigma <= -|e|^2 + gamma^2 |a|^2"
+    method = "dissipation inequality with a Zames-Falb multiplier (LMI)"
+    return _gain_check(cert, tol, title, norm, holds, inequality, method)
+
+
+def _gain_check(
+    cert: LMICertificate,
+    tol: Tolerances,
+    title: str,
+    norm: str,
+    holds: str,
+    inequality: str,
+    method: str,
+) -> Check:
+    """The iss_gain Check of a dissipation certificate: ``holds`` is its summary when verified."""
     verdict = Verdict(cert.verdict)
-    if verdict is Verdict.HOLDS:
-        summary = (
-            f"V(zeta+) - V(zeta) + sigma <= -|e|^2 + gamma^2 |a|^2 holds with gamma = "
-            f"{cert.gamma:.4g} and a Zames-Falb multiplier of order {cert.details['order']} "
-            f"(sum_k sigma_k >= 0): the l2 gain from attack to estimation error is at most "
-            f"{cert.gamma:.4g}."
-        )
-    else:
-        summary = f"No ISS gain certified: {cert.reason}."
     evidence = cert.evidence()
-    evidence["inequality"] = "V(zeta+) - V(zeta) + sigma <= -|e|^2 + gamma^2 |a|^2"
+    evidence["inequality"] = inequality
     return Check(
         id="iss_gain",
         title=title,
         verdict=verdict,
-        summary=summary,
+        summary=holds if verdict is Verdict.HOLDS else f"No ISS gain certified: {cert.reason}.",
         required=False,
         value=cert.gamma,
         margin=cert.margin,
-        method="dissipation inequality with a Zames-Falb multiplier (LMI)",
-        fields={"gamma": cert.gamma, "alpha": 0.0, "norm": norm},
+        method=method,
+        fields={"gamma": cert.gamma, "alpha": cert.decay, "norm": norm},
         evidence=evidence,
         tolerances=_decided_by(tol, error_bound=cert.error_bound),
     )

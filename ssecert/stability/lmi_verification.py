@@ -14,7 +14,7 @@ import numpy as np
 from ..observers.lure import LureModel
 from ..tolerances import EPS
 
-__all__ = ["circle_matrix", "iss_matrix", "verify_certificate", "definite_problem"]
+__all__ = ["circle_matrix", "iss_matrix", "verify_certificate", "definite_problem", "decide"]
 
 
 def circle_matrix(model: LureModel, P: np.ndarray, t: np.ndarray, alpha: float = 0.0) -> np.ndarray:
@@ -117,6 +117,14 @@ def verify_certificate(
     lam = float(np.linalg.eigvalsh(M)[-1])
     margin = -lam / normP
     bound = _error_bound(model, P, t, M.shape[0])
+    return decide(P, margin, bound, clear)
+
+
+def decide(
+    P: np.ndarray, margin: float, bound: float, clear: float
+) -> tuple[bool, float, float, str]:
+    """A recomputed LMI's verdict: P clearly positive definite and the margin (``-lambda_max /
+    ||P||``) above ``clear`` times its rounding bound; (ok, margin, bound, problem)."""
     problem = definite_problem(P, clear)
     if problem:
         return False, margin, bound, problem

@@ -60,7 +60,7 @@ from ..results import Verdict
 from ..tolerances import EPS
 from .lmi import LMICertificate, channel_vertex_instability, corner_reason
 from .lmi_solver import ETA, _run_clarabel
-from .lmi_verification import definite_problem
+from .lmi_verification import decide
 
 __all__ = [
     "ORDERS",
@@ -182,18 +182,7 @@ def verify_zames_falb(
     extra = float(np.linalg.norm(model.Ce, 2)) ** 2 + (abs(g) if g is not None else 0.0)
     raw = (lift_norm**2 + 2.0) * normP + 2.0 * coef * side**2 + extra
     bound = 10.0 * M.shape[0] * EPS * raw / normP
-    problem = definite_problem(P, clear)
-    if problem:
-        return False, margin, bound, problem
-    if margin <= clear * bound:
-        return (
-            False,
-            margin,
-            bound,
-            f"the recomputed LMI has largest eigenvalue {-margin:.2e} ||P||, not below "
-            f"-{clear:g} x the error bound {bound:.2e}",
-        )
-    return True, margin, bound, ""
+    return decide(P, margin, bound, clear)
 
 
 def zf_cost(model: LureModel, nu: int, attack: bool = False) -> tuple[int, float, float]:
