@@ -490,6 +490,8 @@ def compare_designs(own: Any | None, designed: Any) -> dict[str, Any]:
     apart = [r["scenario"] for r in rows if "comparison" in r and r not in compared]
     if own is None:
         summary = "The spec has no observer of its own: the synthesised design alone is shown."
+    elif not rows:
+        summary = "The spec has no scenarios: the designs were not simulated."
     elif not compared:
         summary = "No scenario was simulated to a finite error for both designs."
     elif worse:

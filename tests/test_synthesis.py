@@ -284,3 +284,17 @@ def test_the_comparison_says_which_scenarios_it_could_not_compare():
     assert labels == {"a": "worse", "b": "not compared", "skipped": "not compared"}
     assert "1 of 1 scenarios compared" in out["summary"]
     assert "Not compared (b, skipped)" in out["summary"]
+
+
+def test_a_spec_without_scenarios_says_so():
+    from types import SimpleNamespace
+
+    from ssecert.synthesize import compare_designs
+
+    def result(label):
+        spec = SimpleNamespace(observer={"kind": label})
+        cert = SimpleNamespace(get=lambda check_id: None)
+        return SimpleNamespace(simulations={}, spec=spec, certificate=cert)
+
+    out = compare_designs(result("dsso"), result("elastic_net"))
+    assert out["scenarios"] == [] and out["summary"].startswith("The spec has no scenarios")
