@@ -349,10 +349,16 @@ def _zames_falb_stability_check(
 ) -> Check:
     """observer_stability of a sparse observer certified by a Zames-Falb multiplier."""
     order = cert.details["order"]
+    nature = (
+        "slope-restricted in [0, shrink]; nonnegative coefficients, so the certificate also "
+        "holds for increments"
+        if cert.details.get("incremental")
+        else "odd and slope-restricted in [0, shrink]"
+    )
     summary = (
         f"The error state (e, a_hat) converges to 0 from every initial condition without "
-        f"attack: with a Zames-Falb multiplier of order {order} (the soft threshold is odd and "
-        f"slope-restricted in [0, shrink]), V(zeta) = zeta' P zeta over the error state and the "
+        f"attack: with a Zames-Falb multiplier of order {order} (the soft threshold is "
+        f"{nature}), V(zeta) = zeta' P zeta over the error state and the "
         f"last {order} nonlinearity inputs and outputs satisfies V(zeta+) - V(zeta) + sigma <= "
         f"-eta |xi|^2 with sum_k sigma_k >= 0, so sum_k |xi(k)|^2 <= "
         f"{cert.details['sum_bound_factor']:.4g} |xi(0)|^2 (verified margin {cert.margin:.3g} "

@@ -195,9 +195,13 @@ def zf_cost(model: LureModel, nu: int, attack: bool = False) -> tuple[int, float
 
 
 def _solve(
-    model: LureModel, nu: int, attack: bool, options: dict[str, Any]
+    model: LureModel, nu: int, attack: bool, options: dict[str, Any], signed: bool = True
 ) -> tuple[tuple[np.ndarray, ...] | None, float | None, dict[str, Any]]:
-    """One Zames-Falb LMI with cvxpy and Clarabel: ((P, m0, a, b), g, info), None on failure."""
+    """One Zames-Falb LMI with cvxpy and Clarabel: ((P, m0, a, b), g, info), None on failure.
+
+    ``signed`` False asks for nonnegative delayed coefficients (a certificate that also holds
+    for increments).
+    """
     import cvxpy as cp
 
     start = time.perf_counter()
@@ -205,8 +209,8 @@ def _solve(
     G, D, Z, m = lift["G"], lift["D"], lift["Z"], model.m
     P = cp.Variable((D, D), symmetric=True)
     m0 = cp.Variable(m)
-    a = cp.Variable((nu, m))
-    b = cp.Variable((nu, m))
+    a = cp.Variable((nu, m), nonneg=not signed)
+    b = cp.Variable((nu, m), nonneg=not signed)
     a_abs = cp.Variable((nu, m), nonneg=True)
     b_abs = cp.Variable((nu, m), nonneg=True)
     coef = cp.hstack([m0, cp.vec(a, order="C"), cp.vec(b, order="C")])
@@ -229,7 +233,12 @@ def _solve(
         (1 - GUARD) * m0 >= cp.sum(a_abs, axis=0) + cp.sum(b_abs, axis=0),
     ]
     problem = cp.Problem(cp.Minimize(g) if g is not None else cp.Minimize(0), cons)
-    info: dict[str, Any] = {"solver": "CLARABEL", "order": nu, "lmi_size": Z}
+    info: dict[str, Any] = {
+        "solver": "CLARABEL",
+        "order": nu,
+        "coefficients": "signed" if signed else "nonnegative",
+        "lmi_size": Z,
+    }
     if not _run_clarabel(problem, options, info, start):
         return None, None, info
     values = [P.value, m0.value, a.value, b.value]
@@ -262,8 +271,9 @@ def zames_falb_certificate(
 ) -> LMICertificate:
     """Global convergence without attack by a Zames-Falb multiplier (kind ``"zames-falb"``).
 
-    Tries FIR multipliers of each order in ``orders`` (shortest first) and
-    returns the first verified; ``multipliers`` holds m0, ``details`` the
+    Tries FIR multipliers of each order in ``orders`` (shortest first), with
+    nonnegative delayed coefficients and then with signed ones, and returns
+    the first verified; ``multipliers`` holds m0, ``details`` the
     delayed coefficients (``u_delays`` a, ``v_delays`` b), the order and
     whether the certificate also holds for increments. ``decay`` is None: the
     certificate proves square-summability, not a rate.
@@ -280,12 +290,15 @@ def zames_falb_certificate(
             reason=corner_reason(corner),
             details={"channel_corner": corner},
         )
-    for nu in orders:
+    # nonnegative coefficients first (the certificate then also proves convergence to the
+    # equilibrium of every constant attack), then signed ones (the soft threshold is odd)
+    for signed, nu in [(False, nu) for nu in orders] + [(True, nu) for nu in orders]:
         skip = _refusal(model, nu, False, budget)
         if skip:
-            attempts.append({"order": nu, "status": f"skipped: {skip}"})
+            if not signed:
+                attempts.append({"order": nu, "status": f"skipped: {skip}"})
             continue
-        sol, _, info = _solve(model, nu, False, solver_options or {})
+        sol, _, info = _solve(model, nu, False, solver_options or {}, signed)
         attempts.append(info)
         if sol is None:
             continue
@@ -300,7 +313,11 @@ def zames_falb_certificate(
         "zames-falb",
         reason=(
             "no Zames-Falb certificate was found or verified ("
-            + "; ".join(f"order {a['order']}: {a['status']}" for a in attempts)
+            + "; ".join(
+                f"order {a['order']}{', ' + a['coefficients'] if 'coefficients' in a else ''}: "
+                f"{a['status']}"
+                for a in attempts
+            )
             + ")"
         ),
         details={"attempts": attempts},
