@@ -41,6 +41,16 @@ def _soft(w, threshold, q):
     return q * np.sign(w) * np.maximum(np.abs(w) - threshold, 0.0)
 
 
+
+def _supply(u, v, a, b, m0):
+    """sum_k m0 v_k u_k - sum_j (a_j v_k u_(k-j) + b_j v_(k-j) u_k), the past taken as zero."""
+    T, nu = len(u), len(a)
+    up, vp = np.concatenate([np.zeros(nu), u]), np.concatenate([np.zeros(nu), v])
+    total = m0 * v @ u
+    for j in range(1, nu + 1):
+        total -= a[j - 1] * v @ up[nu - j : nu - j + T] + b[j - 1] * vp[nu - j : nu - j + T] @ u
+    return total
+
 def test_the_hard_integral_quadratic_constraint_holds_on_any_sequence():
     # the inequality the certificate rests on, summed from time 0 with the past taken as 0: for
     # coefficients with m0 >= sum |a_j| + |b_j| and any input sequence (large, small, signs
@@ -53,11 +63,7 @@ def test_the_hard_integral_quadratic_constraint_holds_on_any_sequence():
         v = q * w - u
         a, b = rng.standard_normal(nu), rng.standard_normal(nu)
         m0 = np.abs(a).sum() + np.abs(b).sum()
-        up, vp = np.concatenate([np.zeros(nu), u]), np.concatenate([np.zeros(nu), v])
-        total = m0 * v @ u
-        for j in range(1, nu + 1):
-            total -= a[j - 1] * v @ up[nu - j : nu - j + T] + b[j - 1] * vp[nu - j : nu - j + T] @ u
-        assert total >= -1e-9 * (1 + m0 * np.abs(v) @ np.abs(u))
+        assert _supply(u, v, a, b, m0) >= -1e-9 * (1 + m0 * np.abs(v) @ np.abs(u))
 
 
 def test_with_nonnegative_coefficients_it_holds_for_increments_too():
@@ -72,11 +78,7 @@ def test_with_nonnegative_coefficients_it_holds_for_increments_too():
         v = q * d - u
         a, b = rng.uniform(0, 1, nu), rng.uniform(0, 1, nu)
         m0 = a.sum() + b.sum()
-        up, vp = np.concatenate([np.zeros(nu), u]), np.concatenate([np.zeros(nu), v])
-        total = m0 * v @ u
-        for j in range(1, nu + 1):
-            total -= a[j - 1] * v @ up[nu - j : nu - j + T] + b[j - 1] * vp[nu - j : nu - j + T] @ u
-        assert total >= -1e-9 * (1 + m0 * np.abs(v) @ np.abs(u))
+        assert _supply(u, v, a, b, m0) >= -1e-9 * (1 + m0 * np.abs(v) @ np.abs(u))
 
 
 def test_a_design_without_circle_certificate_is_certified_by_a_zames_falb_multiplier():
