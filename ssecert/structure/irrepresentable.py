@@ -95,6 +95,12 @@ class _Verdicts:
         """What the support counts: sensors (block mode) or entries."""
         return "sensors" if self.mode == "block" else "entries"
 
+    def counted(self, k: int) -> str:
+        """The noun for k of them (singular for one)."""
+        if k != 1:
+            return self.noun
+        return "sensor" if self.mode == "block" else "entry"
+
     def names(self, support: tuple[int, ...]) -> list[Any]:
         """Sensor names of a support (block) or ``name@step`` of its entries (entrywise)."""
         sensors = self.system.sensors
@@ -498,7 +504,7 @@ def _worst_verdict(
             worst,
             support,
             f"The worst irrepresentable constant is {sig(worst)} < 1 (support {label}): "
-            f"Lasso identifies every attack on {out.k} {out.noun}"
+            f"Lasso identifies every attack on {out.k} {out.counted(out.k)}"
             f" for small enough lambda.",
             margin=margin,
         )

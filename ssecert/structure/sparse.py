@@ -479,7 +479,8 @@ class _Decision:
             )
         summary = (
             f"Removing any {mr} of the {p} sensors keeps the plant observable, so up to "
-            f"{mr // 2} attacked sensors can be corrected (s = {s} needed)."
+            f"{mr // 2} attacked sensor{'' if mr // 2 == 1 else 's'} can be corrected "
+            f"(s = {s} needed)."
         )
         return self.make(
             Verdict.HOLDS, summary, mr, self.fields(mr, False, outcome.breaking_set), margin=margin
