@@ -78,3 +78,18 @@ def test_the_mixed_integer_search_agrees_with_the_enumeration():
             )
         compared += 1
     assert found >= 2
+
+
+def test_the_mixed_integer_search_works_in_units_of_the_threshold():
+    # the equilibria scale with the threshold (soft_threshold(c w, c lam) = c soft_threshold(w,
+    # lam), the rest is linear): a threshold of 1e8 must not hide the planted equilibrium
+    # behind big-M constants of 1e12
+    for threshold in (1e-6, 1e8):
+        data = _planted(12)
+        data["observer"]["threshold"] = threshold
+        spec = spec_from_dict(data)
+        model = LureModel.from_design(build_observer(spec.system, spec.observer))
+        witness, note = equilibria._milp_search(model)
+        assert witness is not None, note
+        e = np.asarray(witness["initial_error"])
+        assert abs(abs(e[0]) / threshold - 3.1468531468531) < 1e-9 and not np.any(e[1:])

@@ -66,7 +66,10 @@ def _milp_search(model: LureModel) -> tuple[dict[str, Any] | None, str]:
     """
     from scipy.optimize import Bounds, LinearConstraint, milp
 
-    N, m, q, lam = model.N, model.m, float(model.q), float(model.threshold)
+    # in units of the threshold: the equilibrium equations are homogeneous in (xi, u,
+    # threshold), so a pattern's equilibria scale with the threshold, and big-M constants of
+    # the threshold's size (1e12 for a threshold of 1e8) would make HiGHS misjudge feasibility
+    N, m, q, lam = model.N, model.m, float(model.q), 1.0
     W = MILP_BOX * lam
     big = W + lam  # region constraints
     big_u = 3.0 * q * (W + lam)  # output constraints (|u - q w| stays below it in the box)
@@ -142,7 +145,7 @@ def _milp_search(model: LureModel) -> tuple[dict[str, Any] | None, str]:
         )
         if result.x is None:
             what = {
-                2: "none",
+                2: "none (HiGHS found the patterns infeasible; a solver's claim, not re-checked)",
                 1: f"undecided (the solver's time limit of {MILP_SECONDS:g} s was reached)",
             }.get(result.status, f"undecided (the solver stopped: {result.message.strip()})")
             return None, (
