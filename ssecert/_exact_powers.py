@@ -265,7 +265,7 @@ class _PowerTrail:
         """Take P = F^m into the bounds; returns log2 ||F^m||_inf (-inf when zero)."""
         value = P.inf_norm_log2()
         self.powers.append(m)
-        bound = 0.0 if value == -math.inf else 2.0 ** min(value / m, 1e4)
+        bound = 0.0 if value == -math.inf else _pow2(value / m)
         if bound < self.best:
             self.best, self.best_m = bound, m
         trace = abs(sum(int(P.ints[i, i]) for i in range(self.n)))
@@ -278,6 +278,11 @@ class _PowerTrail:
         return value
 
 
+def _pow2(x: float) -> float:
+    """2^x, inf beyond the float range (2.0 ** 1024 raises OverflowError)."""
+    return math.inf if x >= 1024 else 2.0 ** max(x, -1e4)
+
+
 def _trace_reaches_n(trace: int, exponent: int, n: int) -> bool:
     """|trace F^m| >= n, decided in integers: trace * 2^exponent >= n."""
     e = exponent
@@ -288,7 +293,7 @@ def _trace_radius_lower(trace: int, exponent: int, n: int, m: int) -> float:
     """(|trace F^m| / n)^(1/m), rounded down: a lower bound on the spectral radius."""
     # log2 of an int is within a few ulps
     log_t = math.log2(trace) - 1e-12 * max(1.0, abs(math.log2(trace))) + exponent
-    return 2.0 ** max(min((log_t - math.log2(n)) / m, 1e4), -1e4)
+    return _pow2((log_t - math.log2(n)) / m)
 
 
 def _consecutive_powers(F: Dyadic, k_max: int, trail: _PowerTrail) -> tuple[Dyadic, int | None]:

@@ -325,3 +325,30 @@ def test_a_certain_breaking_set_is_found_past_undecided_smaller_sets():
     assert check.fields["max_removable"] == 3 and check.fields["max_removable_at_least"] == 2
     assert "whatever digits the data lack" in check.summary
     assert check.witness["verified"] and len(check.fields["breaking_set"]) == 4
+
+
+@pytest.mark.parametrize("scale, gain_row", [(1e-308, "holds"), (1e-310, "inconclusive")])
+def test_sensor_rows_near_the_bottom_of_the_float_range_end_in_verdicts(scale, gain_row):
+    """C of order 1e-308 put exact powers of 1e308 past 2.0 ** 1024 in the spectral bound (an
+    OverflowError); at 1e-310 the deadbeat gain itself overflows, which is said as such."""
+    from ssecert import analyze, spec_from_dict
+
+    C = (np.array([[0.9, -0.2], [0.7, 0.5], [0.8, 0.7]]) * scale).tolist()
+    observer = {"kind": "elastic_net", "gain": "deadbeat", "step": 1.0, "threshold": 0.1,
+                "shrink": 0.8}  # fmt: skip
+    spec = spec_from_dict(
+        {"name": "tiny-c", "system": {"A": [[-0.4, -0.9], [1.1, -0.4]], "C": C},
+         "attack": {"max_attacked": 1}, "observer": observer}
+    )  # fmt: skip
+    cert = analyze(spec)
+    assert cert["observer_gain"].verdict.value == gain_row
+    if gain_row == "inconclusive":
+        assert "overflows the float range" in cert["observer_gain"].summary
+    else:
+        assert cert["region_of_attraction"].verdict.value == "inconclusive"
+
+
+def test_a_power_bound_beyond_the_float_range_is_infinite():
+    from ssecert._exact_powers import _pow2
+
+    assert _pow2(1e4) == np.inf and _pow2(1023.5) < np.inf and _pow2(-1e5) == 0.0

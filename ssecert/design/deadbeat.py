@@ -373,7 +373,13 @@ def deadbeat_gain(
     alpha = pow2_scale(float(np.max(np.abs(A)))) if np.any(A) else 1.0
     D = pow2_row_scaling(C)
     L_n, dims = _deadbeat_construction(alpha * A, D[:, None] * C, tol)
-    L = (L_n * D[None, :]) / alpha
+    with np.errstate(over="ignore"):
+        L = (L_n * D[None, :]) / alpha
+    if not np.all(np.isfinite(L)):
+        raise GainError(
+            "the deadbeat gain overflows the float range (its entries scale as 1 / C, and C's "
+            f"smallest nonzero entry is {np.min(np.abs(C[C != 0])):.3g})"
+        )
     F = A - L @ C
     from .._linalg import staircase
 
