@@ -41,7 +41,6 @@ def _soft(w, threshold, q):
     return q * np.sign(w) * np.maximum(np.abs(w) - threshold, 0.0)
 
 
-
 def _supply(u, v, a, b, m0):
     """sum_k m0 v_k u_k - sum_j (a_j v_k u_(k-j) + b_j v_(k-j) u_k), the past taken as zero."""
     T, nu = len(u), len(a)
@@ -50,6 +49,7 @@ def _supply(u, v, a, b, m0):
     for j in range(1, nu + 1):
         total -= a[j - 1] * v @ up[nu - j : nu - j + T] + b[j - 1] * vp[nu - j : nu - j + T] @ u
     return total
+
 
 def test_the_hard_integral_quadratic_constraint_holds_on_any_sequence():
     # the inequality the certificate rests on, summed from time 0 with the past taken as 0: for
