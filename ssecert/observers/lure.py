@@ -68,6 +68,56 @@ class LureModel:
         """
         return design.observer_kind.lure_model(design)
 
+    def scaled(self, s: np.ndarray) -> LureModel:
+        """The same dynamics in the coordinates xi = diag(s) xi_b.
+
+        A_b = S^-1 A S, B_b = S^-1 B, Cw_b = Cw S, E_b = S^-1 E, Ce_b = Ce S;
+        the channels and the attack keep their units.  With powers of two
+        (``balancing``) every entry is scaled exactly.
+        """
+        s = np.asarray(s, dtype=float)
+        return LureModel(
+            self.A * (s[None, :] / s[:, None]),
+            self.B / s[:, None],
+            self.Cw * s[None, :],
+            self.E / s[:, None],
+            self.Dw,
+            self.Ce * s[None, :],
+            self.q,
+            self.n_e,
+            self.threshold,
+        )
+
+    def balancing(self, spread: float = 16.0) -> np.ndarray | None:
+        """Powers of two s that balance the large-signal loop A + q B Cw (LAPACK's gebal
+        through ``scipy.linalg.matrix_balance``), or None when they spread less than
+        ``spread`` or the scaled model would not be exact (an entry under- or overflowing).
+
+        An LMI solver fails on a Lur'e model whose states are in very different units; the
+        model in the coordinates xi = diag(s) xi_b (``scaled``) is the same system, written
+        exactly.
+        """
+        from scipy.linalg import matrix_balance
+
+        if self.N == 0:
+            return None
+        loop = self.vertex(self.q)
+        if not np.all(np.isfinite(loop)):
+            return None
+        _, (s, _) = matrix_balance(loop, permute=False, separate=True)
+        s = np.asarray(s, dtype=float)
+        if not np.all(np.isfinite(s)) or s.max() < spread * s.min():
+            return None
+        exponents = np.log2(s)
+        if not np.array_equal(exponents, np.round(exponents)):
+            return None
+        balanced = self.scaled(s)
+        back = balanced.scaled(1.0 / s)
+        for name in ("A", "B", "Cw", "E", "Ce"):
+            if not np.array_equal(getattr(back, name), getattr(self, name)):
+                return None
+        return s
+
     def phi(self, w: np.ndarray) -> np.ndarray:
         """The nonlinearity q * soft_threshold(w), componentwise."""
         return self.q * np.sign(w) * np.maximum(np.abs(w) - self.threshold, 0.0)

@@ -323,7 +323,7 @@ def _circle_stability_check(
             f"without attack: V = xi' P xi decreases by at least a factor "
             f"{1 - _known(cert.decay):.6g} per step (circle criterion with a diagonal multiplier, "
             f"{cert.structure} P, verified margin {cert.margin:.3g} against an error bound "
-            f"{cert.error_bound:.1e})."
+            f"{cert.error_bound:.1e})." + _balanced_note(cert)
         )
     elif verdict is Verdict.FAILS:
         summary = f"The observer is not globally asymptotically stable: {cert.reason}."
@@ -363,7 +363,7 @@ def _zames_falb_stability_check(
         f"-eta |xi|^2 with sum_k sigma_k >= 0, so sum_k |xi(k)|^2 <= "
         f"{cert.details['sum_bound_factor']:.4g} |xi(0)|^2 (verified margin {cert.margin:.3g} "
         f"against an error bound {cert.error_bound:.1e}). No decay rate is certified: the "
-        f"circle criterion found no quadratic Lyapunov function."
+        f"circle criterion found no quadratic Lyapunov function." + _balanced_note(cert)
     )
     evidence = _circle_evidence(model, cert)
     evidence["lmi"] = (
@@ -389,6 +389,19 @@ def _zames_falb_stability_check(
         },
         evidence=evidence,
         tolerances=_decided_by(tol, error_bound=cert.error_bound, lmi_eta=ETA),
+    )
+
+
+def _balanced_note(cert: LMICertificate) -> str:
+    """A sentence when the certificate was solved and verified in balanced state coordinates."""
+    s = cert.details.get("state_scaling")
+    if s is None:
+        return ""
+    scaling = ", ".join(f"2^{int(e)}" for e in np.log2(np.asarray(s, dtype=float)))
+    return (
+        f" The LMI was solved and verified in balanced coordinates xi = diag({scaling}) xi_b "
+        "(an exact change of variables: the states' units differ widely); P is given for the "
+        "spec's coordinates."
     )
 
 
@@ -550,7 +563,9 @@ def _gain_check(
         id="iss_gain",
         title=title,
         verdict=verdict,
-        summary=holds if verdict is Verdict.HOLDS else f"No ISS gain certified: {cert.reason}.",
+        summary=holds + _balanced_note(cert)
+        if verdict is Verdict.HOLDS
+        else f"No ISS gain certified: {cert.reason}.",
         required=False,
         value=cert.gamma,
         margin=cert.margin,
@@ -707,13 +722,22 @@ def observer_checks(
         else None
     )
     if region is not None and stability.verdict is Verdict.HOLDS:
+        prefix = "No region of attraction is certified: "
+        alone = (
+            f"{region.value:.4g}."
+            if region.verdict is Verdict.HOLDS
+            else f"no radius: {region.summary.removeprefix(prefix)}"
+        )
         region = replace(
             region,
+            verdict=Verdict.HOLDS,
             value=float("inf"),
             fields={"radius": float("inf")},
             summary="From every initial error the error converges to 0 without attack: "
-            "observer_stability's certificate is global. "
-            f"(Its dead zone alone certifies {region.value:.4g}.)",
+            f"observer_stability's certificate is global. (Its dead zone alone certifies {alone})",
+            method=region.method
+            if region.verdict is Verdict.HOLDS
+            else "observer_stability's global certificate",
             evidence={**region.evidence, "dead_zone_radius": region.value},
         )
     if region is not None and stability.verdict is Verdict.INCONCLUSIVE and region.value:

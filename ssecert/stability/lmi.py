@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -66,6 +66,9 @@ __all__ = [
     "lure_model_cost",
     "channel_vertex_instability",
     "corner_reason",
+    "balanced_retry",
+    "to_original_coordinates",
+    "in_balanced_coordinates",
 ]
 
 FULL_LIMIT = 80  # largest LMI dimension tried with a full P
@@ -267,6 +270,64 @@ def corner_reason(corner: dict[str, Any]) -> str:
     )
 
 
+def to_original_coordinates(cert: LMICertificate, s: np.ndarray, N: int) -> LMICertificate | None:
+    """A certificate of ``model.scaled(s)`` written for ``model`` (None if not exactly).
+
+    With xi = diag(s) xi_b the Lyapunov function zeta_b' P_b zeta_b is zeta' P zeta with
+    P = diag(1 / s, I) P_b diag(1 / s, I) (only the first N coordinates are states): exact
+    for powers of two.  The margin and error bound stay those verified in the balanced
+    coordinates, where the LMI is recomputed; ``state_scaling`` records s.
+    """
+    if cert.P is None:
+        return None
+    inv = np.ones(cert.P.shape[0])
+    inv[:N] = 1.0 / np.asarray(s, dtype=float)
+    P = cert.P * inv[:, None] * inv[None, :]
+    if not np.all(np.isfinite(P)) or not np.array_equal(P / inv[:, None] / inv[None, :], cert.P):
+        return None
+    details = {**cert.details, "state_scaling": np.asarray(s, dtype=float)}
+    if "sum_bound_factor" in details:  # sum |xi|^2 <= max(s)^2 sum |xi_b|^2
+        details["sum_bound_factor"] = (
+            float(np.max(s)) ** 2 * float(np.linalg.eigvalsh(P[:N, :N])[-1]) / details["eta"]
+        )
+    return replace(cert, P=P, details=details)
+
+
+def in_balanced_coordinates(
+    model: LureModel, cert: LMICertificate
+) -> tuple[LureModel, LMICertificate]:
+    """The model and certificate in which ``cert`` was verified: its ``state_scaling``'s
+    balanced coordinates when it has one (``to_original_coordinates`` undone, exactly)."""
+    s = cert.details.get("state_scaling")
+    if s is None or cert.P is None:
+        return model, cert
+    s = np.asarray(s, dtype=float)
+    scale = np.ones(cert.P.shape[0])
+    scale[: model.N] = s
+    return model.scaled(s), replace(cert, P=cert.P * scale[:, None] * scale[None, :])
+
+
+def balanced_retry(
+    model: LureModel, certify: Callable[[LureModel], LMICertificate]
+) -> tuple[LMICertificate | None, str]:
+    """``certify`` run again on the model in balanced state coordinates (``LureModel.
+    balancing``), its certificate written back for ``model``; (None, why) when there is no
+    balancing to try or it certifies nothing."""
+    s = model.balancing()
+    if s is None:
+        return None, ""
+    cert = certify(model.scaled(s))
+    if cert.verdict is Verdict.HOLDS:
+        back = to_original_coordinates(cert, s, model.N)
+        if back is not None:
+            return back, ""
+        why = "its P does not scale back exactly"
+    else:
+        why = cert.reason
+    scaling = ", ".join(f"2^{int(e)}" for e in np.log2(s))
+    return None, f"; in balanced state coordinates (xi = diag({scaling}) xi_b): {why}"
+
+
 def circle_certificate(
     model: LureModel,
     *,
@@ -275,6 +336,7 @@ def circle_certificate(
     clear: float = 100.0,
     reuse: Sequence[tuple[np.ndarray, np.ndarray]] = (),
     budget: Budget | None = None,
+    balance: bool = True,
 ) -> LMICertificate:
     """Circle-criterion certificate of global asymptotic stability without attack.
 
@@ -296,6 +358,10 @@ def circle_certificate(
         Memory and work allowed for one solve (default ``Budget()``: 2 GiB,
         1e12 operations); a structure whose estimated cost (``lmi_cost``)
         exceeds it is skipped, with the estimate in the reason.
+    balance : bool, default True
+        When no certificate is found, solve again in balanced state
+        coordinates (``balanced_retry``): the same system in exact
+        power-of-two units, for plants whose states differ widely in scale.
 
     Returns
     -------
@@ -338,13 +404,32 @@ def circle_certificate(
         if ok:
             return _holds(model, P, t, margin, bound, st, {**details, "attempts": attempts})
         info["verification_problem"] = problem
+    retry, note = (
+        balanced_retry(
+            model,
+            lambda scaled: circle_certificate(
+                scaled,
+                structure=structure,
+                solver_options=solver_options,
+                clear=clear,
+                budget=budget,
+                balance=False,
+            ),
+        )
+        if balance
+        else (None, "")
+    )
+    if retry is not None:
+        return replace(retry, details={**retry.details, "unbalanced_attempts": attempts})
     return LMICertificate(
         Verdict.INCONCLUSIVE,
         "circle",
         reason=(
             "no circle-criterion certificate was found or verified (LMI "
             + "; ".join(f"{a['structure']}: {a['status']}" for a in attempts)
-            + "); this does not show the observer is unstable"
+            + ")"
+            + note
+            + "; this does not show the observer is unstable"
         ),
         details={**details, "attempts": attempts},
     )
@@ -384,6 +469,7 @@ def iss_certificate(
     solver_options: dict[str, Any] | None = None,
     clear: float = 100.0,
     budget: Budget | None = None,
+    balance: bool = True,
 ) -> LMICertificate:
     """Dissipation certificate V+ - V <= -alpha V - |e|^2 + gamma^2 |a|^2.
 
@@ -392,7 +478,7 @@ def iss_certificate(
     model : LureModel
     alpha : float, default 0
         Decay to keep (for example half the circle certificate's).
-    structure, solver_options, clear, budget
+    structure, solver_options, clear, budget, balance
         As in ``circle_certificate``.
 
     Returns
@@ -449,6 +535,24 @@ def iss_certificate(
                 details={**details, "attempts": attempts, "gamma_squared": g_cert},
             )
         info["verification_problem"] = problem
+    retry, note = (
+        balanced_retry(
+            model,
+            lambda scaled: iss_certificate(
+                scaled,
+                alpha=alpha,
+                structure=structure,
+                solver_options=solver_options,
+                clear=clear,
+                budget=budget,
+                balance=False,
+            ),
+        )
+        if balance
+        else (None, "")
+    )
+    if retry is not None:
+        return replace(retry, details={**retry.details, "unbalanced_attempts": attempts})
     return LMICertificate(
         Verdict.INCONCLUSIVE,
         "iss",
@@ -456,6 +560,7 @@ def iss_certificate(
             "no dissipation certificate was found or verified (LMI "
             + "; ".join(f"{a['structure']}: {a['status']}" for a in attempts)
             + ")"
+            + note
         ),
         details={**details, "attempts": attempts},
     )
@@ -487,6 +592,18 @@ def iss_from_circle(
         return LMICertificate(
             Verdict.INCONCLUSIVE, "iss", reason="no circle certificate to build on"
         )
+    if "state_scaling" in circle.details:  # verified in balanced coordinates: work there
+        scaled, inside = in_balanced_coordinates(model, circle)
+        details = {k: v for k, v in circle.details.items() if k != "state_scaling"}
+        found = iss_from_circle(scaled, replace(inside, details=details), clear=clear)
+        if found.verdict is not Verdict.HOLDS:
+            return found
+        back = to_original_coordinates(found, circle.details["state_scaling"], model.N)
+        if back is None:
+            return LMICertificate(
+                Verdict.INCONCLUSIVE, "iss", reason="the gain's P does not scale back exactly"
+            )
+        return back
     P, t = circle.P, circle.multipliers if circle.multipliers is not None else np.zeros(0)
     alpha = 0.5 * float(circle.decay or 0.0)
     k = model.N + model.m

@@ -50,6 +50,7 @@ with a rounding guard.
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -58,7 +59,13 @@ from ..budget import Budget
 from ..observers.lure import LureModel
 from ..results import Verdict
 from ..tolerances import EPS
-from .lmi import LMICertificate, channel_vertex_instability, corner_reason
+from .lmi import (
+    LMICertificate,
+    balanced_retry,
+    channel_vertex_instability,
+    corner_reason,
+    to_original_coordinates,
+)
 from .lmi_solver import ETA, _run_clarabel
 from .lmi_verification import decide
 
@@ -268,6 +275,7 @@ def zames_falb_certificate(
     clear: float = 100.0,
     budget: Budget | None = None,
     solver_options: dict[str, Any] | None = None,
+    balance: bool = True,
 ) -> LMICertificate:
     """Global convergence without attack by a Zames-Falb multiplier (kind ``"zames-falb"``).
 
@@ -276,7 +284,9 @@ def zames_falb_certificate(
     the first verified; ``multipliers`` holds m0, ``details`` the
     delayed coefficients (``u_delays`` a, ``v_delays`` b), the order and
     whether the certificate also holds for increments. ``decay`` is None: the
-    certificate proves square-summability, not a rate.
+    certificate proves square-summability, not a rate.  With ``balance``, a model
+    that nothing certifies is tried again in balanced state coordinates
+    (``lmi.balanced_retry``).
     """
     budget = budget or Budget()
     attempts: list[dict[str, Any]] = []
@@ -308,6 +318,23 @@ def zames_falb_certificate(
         if ok:
             return _certificate(model, sol, margin, bound, attempts)
         info["verification_problem"] = problem
+    retry, note = (
+        balanced_retry(
+            model,
+            lambda scaled: zames_falb_certificate(
+                scaled,
+                orders=orders,
+                clear=clear,
+                budget=budget,
+                solver_options=solver_options,
+                balance=False,
+            ),
+        )
+        if balance
+        else (None, "")
+    )
+    if retry is not None:
+        return replace(retry, details={**retry.details, "unbalanced_attempts": attempts})
     return LMICertificate(
         Verdict.INCONCLUSIVE,
         "zames-falb",
@@ -319,6 +346,7 @@ def zames_falb_certificate(
                 for a in attempts
             )
             + ")"
+            + note
         ),
         details={"attempts": attempts},
     )
@@ -368,13 +396,34 @@ def zames_falb_gain(
     clear: float = 100.0,
     budget: Budget | None = None,
     solver_options: dict[str, Any] | None = None,
+    balance: bool = True,
 ) -> LMICertificate:
     """The l2 gain from attack to estimation error with a Zames-Falb multiplier.
 
     Solves the LMI with the attack as input at the order that certified
     ``stability`` (a verified ``zames_falb_certificate``), minimising g; the
-    certificate holds for g slightly above the optimum, re-verified.
+    certificate holds for g slightly above the optimum, re-verified.  A stability
+    certificate verified in balanced state coordinates (``state_scaling``) has its gain
+    solved there too, and written back.
     """
+    scaling = stability.details.get("state_scaling")
+    if scaling is not None:
+        s = np.asarray(scaling, dtype=float)
+        found = zames_falb_gain(
+            model.scaled(s),
+            replace(stability, details={"order": stability.details.get("order", ORDERS[0])}),
+            clear=clear,
+            budget=budget,
+            solver_options=solver_options,
+        )
+        if found.verdict is not Verdict.HOLDS:
+            return found
+        back = to_original_coordinates(found, s, model.N)
+        if back is None:
+            return LMICertificate(
+                Verdict.INCONCLUSIVE, "iss", reason="the gain's P does not scale back exactly"
+            )
+        return back
     budget = budget or Budget()
     nu = int(stability.details.get("order", ORDERS[0]))
     skip = _refusal(model, nu, True, budget)
@@ -382,11 +431,15 @@ def zames_falb_gain(
         return LMICertificate(Verdict.INCONCLUSIVE, "iss", reason=f"not attempted: {skip}")
     sol, g, info = _solve(model, nu, True, solver_options or {})
     if sol is None or g is None:
-        return LMICertificate(
-            Verdict.INCONCLUSIVE,
-            "iss",
-            reason=f"no Zames-Falb dissipation certificate (order {nu}: {info['status']})",
-            details={"attempts": [info]},
+        return _gain_retry(
+            model,
+            stability,
+            f"no Zames-Falb dissipation certificate (order {nu}: {info['status']})",
+            {"attempts": [info]},
+            clear,
+            budget,
+            solver_options,
+            balance,
         )
     problem = ""
     for g_cert in (g * (1 + 1e-6) + 1e-9, g * 1.01 + 1e-6):
@@ -409,9 +462,44 @@ def zames_falb_gain(
                     "attack as input)",
                 },
             )
-    return LMICertificate(
-        Verdict.INCONCLUSIVE,
-        "iss",
-        reason=f"the Zames-Falb gain was not verified: {problem}",
-        details={"attempts": [info]},
+    return _gain_retry(
+        model,
+        stability,
+        f"the Zames-Falb gain was not verified: {problem}",
+        {"attempts": [info]},
+        clear,
+        budget,
+        solver_options,
+        balance,
     )
+
+
+def _gain_retry(
+    model: LureModel,
+    stability: LMICertificate,
+    reason: str,
+    details: dict[str, Any],
+    clear: float,
+    budget: Budget,
+    solver_options: dict[str, Any] | None,
+    balance: bool,
+) -> LMICertificate:
+    """The gain solved again in balanced state coordinates, or inconclusive with ``reason``."""
+    retry, note = (
+        balanced_retry(
+            model,
+            lambda scaled: zames_falb_gain(
+                scaled,
+                stability,
+                clear=clear,
+                budget=budget,
+                solver_options=solver_options,
+                balance=False,
+            ),
+        )
+        if balance
+        else (None, "")
+    )
+    if retry is not None:
+        return retry
+    return LMICertificate(Verdict.INCONCLUSIVE, "iss", reason=reason + note, details=details)

@@ -1,0 +1,123 @@
+"""Certificates do not depend on the units of the plant's states: the same observer written in
+coordinates x' = T x with T = diag(1, 2^k) (exactly: powers of two) is certified again, by an
+LMI solved in balanced coordinates and verified there, and its P written back for the user's
+coordinates re-verifies in exact arithmetic."""
+
+import json
+from fractions import Fraction
+
+import numpy as np
+import pytest
+from test_evidence_reverifies import _positive_definite, _q, _zames_falb_lmi
+
+from ssecert import analyze, spec_from_dict
+from ssecert.observers import build_observer
+from ssecert.observers.lure import LureModel
+from ssecert.stability.lmi import circle_certificate
+from ssecert.stability.zames_falb import zames_falb_certificate
+
+ZF_PLANT = {"A": [[-0.4, -0.9], [1.1, -0.4]], "C": [[0.9, -0.2], [0.7, 0.5], [0.8, 0.7]]}
+ZF_OBSERVER = {"kind": "elastic_net", "gain": "deadbeat", "step": 1.0, "threshold": 0.1,
+               "shrink": 0.8}  # fmt: skip
+UGV_PLANT = {"A": [[1.0, 0.0099], [0.0, 0.9876]], "C": [[1, 0], [0, 1], [0, 1]]}
+UGV_OBSERVER = {"kind": "elastic_net", "gain": "deadbeat", "step": 0.7, "threshold": 0.1,
+                "shrink": 0.5}  # fmt: skip
+
+
+def _spec(plant, observer, name="units"):
+    return spec_from_dict(
+        {"name": name, "system": plant, "attack": {"max_attacked": 1}, "observer": observer}
+    )
+
+
+def _rescaled(plant, observer, k):
+    """The same observer in x' = diag(1, 2^k) x: A' = T A T^-1, C' = C T^-1, L' = T L."""
+    spec = _spec(plant, observer)
+    L = build_observer(spec.system, spec.observer).L
+    t = np.array([1.0, 2.0**k])
+    A = np.asarray(plant["A"], dtype=float) * t[:, None] / t[None, :]
+    C = np.asarray(plant["C"], dtype=float) / t[None, :]
+    return {"A": A.tolist(), "C": C.tolist()}, {**observer, "gain": (t[:, None] * L).tolist()}
+
+
+def _model(plant, observer):
+    spec = _spec(plant, observer)
+    return LureModel.from_design(build_observer(spec.system, spec.observer))
+
+
+def test_balancing_is_exact_and_absent_for_a_well_scaled_model():
+    assert _model(ZF_PLANT, ZF_OBSERVER).balancing() is None
+    model = _model(*_rescaled(ZF_PLANT, ZF_OBSERVER, 14))
+    s = model.balancing()
+    assert s is not None and np.array_equal(np.log2(s), np.round(np.log2(s)))
+    back = model.scaled(s).scaled(1.0 / s)
+    for name in ("A", "B", "Cw", "E", "Ce"):
+        assert np.array_equal(getattr(back, name), getattr(model, name))
+
+
+def _circle_negative_definite(model, P, t):
+    """[A B]' P [A B] - diag(P, 0) + [[0, q Cw' T], [q T Cw, -2 T]] < 0, in fractions."""
+    A, B, Cw = _q(model["A"]), _q(model["B"]), _q(model["Cw"])
+    P, t, q = _q(P), [Fraction(float(x)) for x in t], Fraction(float(model["q"]))
+    N, m = len(A), len(t)
+    G = [A[i] + B[i] for i in range(N)]
+    M = [
+        [sum(G[a][i] * P[a][b] * G[b][j] for a in range(N) for b in range(N)) for j in range(N + m)]
+        for i in range(N + m)
+    ]
+    for i in range(N):
+        for j in range(N):
+            M[i][j] -= P[i][j]
+    for i in range(m):
+        for j in range(N):
+            M[N + i][j] += q * t[i] * Cw[i][j]
+            M[j][N + i] += q * t[i] * Cw[i][j]
+        M[N + i][N + i] -= 2 * t[i]
+    return _positive_definite([[-x for x in row] for row in M])
+
+
+def test_a_circle_certificate_survives_a_change_of_state_units():
+    plant, observer = _rescaled(UGV_PLANT, UGV_OBSERVER, 17)
+    model = _model(plant, observer)
+    assert circle_certificate(model, balance=False).verdict.value == "inconclusive"
+    document = json.loads(json.dumps(analyze(_spec(plant, observer)).to_dict()))
+    check = document["checks"]["observer_stability"]
+    assert check["verdict"] == "holds" and check["method"].startswith("circle")
+    ev = check["evidence"]
+    assert ev["state_scaling"][1] == 2.0**17
+    # the P printed is for the user's coordinates, and it is a certificate there, exactly
+    assert _positive_definite(_q(ev["P"]))
+    assert _circle_negative_definite(ev["model"], ev["P"], ev["multipliers_T"])
+    assert document["checks"]["iss_gain"]["verdict"] == "holds"
+    # every initial error, scaled like the states, converges
+    rng = np.random.default_rng(0)
+    xi0 = rng.standard_normal((200, model.N)) * 10.0 ** rng.uniform(-2, 3, (200, 1))
+    xi0[:, 1] *= 2.0**17
+    tail = model.simulate(xi0, 3000)[-1]
+    assert np.all(np.linalg.norm(tail, axis=1) <= 1e-8 * np.linalg.norm(xi0, axis=1))
+
+
+@pytest.mark.parametrize("k", [7, 14])
+def test_a_zames_falb_certificate_survives_a_change_of_state_units(k):
+    plant, observer = _rescaled(ZF_PLANT, ZF_OBSERVER, k)
+    model = _model(plant, observer)
+    if k == 14:  # Clarabel fails in these units; the balanced coordinates make the difference
+        assert zames_falb_certificate(model, balance=False).verdict.value == "inconclusive"
+    document = json.loads(json.dumps(analyze(_spec(plant, observer)).to_dict()))
+    check = document["checks"]["observer_stability"]
+    assert check["verdict"] == "holds" and check["method"].startswith("Zames-Falb")
+    ev = check["evidence"]
+    m0, a, b = ev["multipliers_m0"], ev["u_delays"], ev["v_delays"]
+    assert _positive_definite(_q(ev["P"]))
+    M = _zames_falb_lmi(ev["model"], ev["P"], m0, a, b)
+    assert _positive_definite([[-x for x in r] for r in M])
+    region = document["checks"]["region_of_attraction"]
+    assert region["verdict"] == "holds" and region["value"] == "Infinity"
+    # the sum bound it prints holds on simulated trajectories in the user's units
+    rng = np.random.default_rng(1)
+    xi0 = rng.standard_normal((100, model.N))
+    xi0[:, 1] *= 2.0**k
+    traj = model.simulate(xi0, 400)
+    total = np.sum(np.linalg.norm(traj, axis=2) ** 2, axis=0)
+    factor = ev["sum_bound_factor"]
+    assert np.all(total <= factor * np.linalg.norm(xi0, axis=1) ** 2)
