@@ -43,6 +43,7 @@ from __future__ import annotations
 import itertools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -308,17 +309,24 @@ def in_balanced_coordinates(
 
 
 def balanced_retry(
-    model: LureModel, certify: Callable[[LureModel], LMICertificate]
+    model: LureModel,
+    certify: Callable[[LureModel], LMICertificate],
+    *,
+    enabled: bool = True,
+    attempts: list[dict[str, Any]] | None = None,
 ) -> tuple[LMICertificate | None, str]:
     """``certify`` run again on the model in balanced state coordinates (``LureModel.
-    balancing``), its certificate written back for ``model``; (None, why) when there is no
-    balancing to try or it certifies nothing."""
-    s = model.balancing()
+    balancing``), its certificate written back for ``model`` (with ``attempts``, those made
+    in the original coordinates, as ``unbalanced_attempts``); (None, why) when not
+    ``enabled``, when there is no balancing to try or when it certifies nothing."""
+    s = model.balancing() if enabled else None
     if s is None:
         return None, ""
     cert = certify(model.scaled(s))
     if cert.verdict is Verdict.HOLDS:
         back = to_original_coordinates(cert, s, model.N)
+        if back is not None and attempts is not None:
+            back = replace(back, details={**back.details, "unbalanced_attempts": attempts})
         if back is not None:
             return back, ""
         why = "its P does not scale back exactly"
@@ -404,23 +412,21 @@ def circle_certificate(
         if ok:
             return _holds(model, P, t, margin, bound, st, {**details, "attempts": attempts})
         info["verification_problem"] = problem
-    retry, note = (
-        balanced_retry(
-            model,
-            lambda scaled: circle_certificate(
-                scaled,
-                structure=structure,
-                solver_options=solver_options,
-                clear=clear,
-                budget=budget,
-                balance=False,
-            ),
-        )
-        if balance
-        else (None, "")
+    retry, note = balanced_retry(
+        model,
+        partial(
+            circle_certificate,
+            structure=structure,
+            solver_options=solver_options,
+            clear=clear,
+            budget=budget,
+            balance=False,
+        ),
+        enabled=balance,
+        attempts=attempts,
     )
     if retry is not None:
-        return replace(retry, details={**retry.details, "unbalanced_attempts": attempts})
+        return retry
     return LMICertificate(
         Verdict.INCONCLUSIVE,
         "circle",
@@ -535,24 +541,22 @@ def iss_certificate(
                 details={**details, "attempts": attempts, "gamma_squared": g_cert},
             )
         info["verification_problem"] = problem
-    retry, note = (
-        balanced_retry(
-            model,
-            lambda scaled: iss_certificate(
-                scaled,
-                alpha=alpha,
-                structure=structure,
-                solver_options=solver_options,
-                clear=clear,
-                budget=budget,
-                balance=False,
-            ),
-        )
-        if balance
-        else (None, "")
+    retry, note = balanced_retry(
+        model,
+        partial(
+            iss_certificate,
+            alpha=alpha,
+            structure=structure,
+            solver_options=solver_options,
+            clear=clear,
+            budget=budget,
+            balance=False,
+        ),
+        enabled=balance,
+        attempts=attempts,
     )
     if retry is not None:
-        return replace(retry, details={**retry.details, "unbalanced_attempts": attempts})
+        return retry
     return LMICertificate(
         Verdict.INCONCLUSIVE,
         "iss",

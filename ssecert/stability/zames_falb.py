@@ -51,6 +51,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import replace
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -318,23 +319,21 @@ def zames_falb_certificate(
         if ok:
             return _certificate(model, sol, margin, bound, attempts)
         info["verification_problem"] = problem
-    retry, note = (
-        balanced_retry(
-            model,
-            lambda scaled: zames_falb_certificate(
-                scaled,
-                orders=orders,
-                clear=clear,
-                budget=budget,
-                solver_options=solver_options,
-                balance=False,
-            ),
-        )
-        if balance
-        else (None, "")
+    retry, note = balanced_retry(
+        model,
+        partial(
+            zames_falb_certificate,
+            orders=orders,
+            clear=clear,
+            budget=budget,
+            solver_options=solver_options,
+            balance=False,
+        ),
+        enabled=balance,
+        attempts=attempts,
     )
     if retry is not None:
-        return replace(retry, details={**retry.details, "unbalanced_attempts": attempts})
+        return retry
     return LMICertificate(
         Verdict.INCONCLUSIVE,
         "zames-falb",
@@ -485,20 +484,17 @@ def _gain_retry(
     balance: bool,
 ) -> LMICertificate:
     """The gain solved again in balanced state coordinates, or inconclusive with ``reason``."""
-    retry, note = (
-        balanced_retry(
-            model,
-            lambda scaled: zames_falb_gain(
-                scaled,
-                stability,
-                clear=clear,
-                budget=budget,
-                solver_options=solver_options,
-                balance=False,
-            ),
-        )
-        if balance
-        else (None, "")
+    retry, note = balanced_retry(
+        model,
+        partial(
+            zames_falb_gain,
+            stability=stability,
+            clear=clear,
+            budget=budget,
+            solver_options=solver_options,
+            balance=False,
+        ),
+        enabled=balance,
     )
     if retry is not None:
         return retry
