@@ -121,3 +121,43 @@ def test_a_zames_falb_certificate_survives_a_change_of_state_units(k):
     total = np.sum(np.linalg.norm(traj, axis=2) ** 2, axis=0)
     factor = ev["sum_bound_factor"]
     assert np.all(total <= factor * np.linalg.norm(xi0, axis=1) ** 2)
+
+
+def test_large_state_units_keep_the_certificate_its_gain_and_the_constant_attack_proof():
+    # at 2^40 the balanced output matrix has norm 2^40: the stability LMI's rounding bound must
+    # not count it (it is not in that LMI), the gain LMI is solved for e / 2^40 and scaled
+    # back, and a constant attack moving the state by 2^40 in one step is not growth
+    plant, observer = _rescaled(UGV_PLANT, UGV_OBSERVER, 40)
+    spec = spec_from_dict(
+        {"name": "units", "system": plant, "attack": {"max_attacked": 1}, "observer": observer,
+         "scenario": [{"name": "const", "attack": "constant", "sensors": [1],
+                       "magnitude": [4.0, 5.0], "steps": 50, "runs": 1, "seed": 0}]}
+    )  # fmt: skip
+    cert = analyze(spec)
+    assert cert["observer_stability"].verdict.value == "holds"
+    gain = cert["iss_gain"]
+    assert gain.verdict.value == "holds"
+    # at most 2^40 times the gain in the original units (1.881), and it bounds an attack
+    model = _model(plant, observer)
+    assert gain.value <= 1.881 * 2.0**40
+    a = np.random.default_rng(3).standard_normal((400, model.r))
+    e = model.simulate(np.zeros(model.N), 400, attack=a)[:, : model.n_e]
+    assert np.sum(e**2) <= gain.value**2 * np.sum(a**2)
+    (record,) = gain.evidence["constant_attacks"]
+    assert record["outcome"] == "converges to a bias" and record["proved"]
+    # the bias the simulation reaches
+    xi = model.simulate(np.zeros(model.N), 3000, attack=np.tile([0.0, 5.0, 0.0], (3000, 1)))[-1]
+    assert np.allclose(record["bias"], xi[: model.n_e], rtol=1e-9)
+
+
+def test_a_zames_falb_gain_survives_a_change_of_state_units():
+    plant, observer = _rescaled(ZF_PLANT, ZF_OBSERVER, 14)
+    gain = analyze(_spec(plant, observer))["iss_gain"]
+    assert gain.verdict.value == "holds" and gain.evidence["state_scaling"][1] == 2.0**14
+    # at most 2^14 times the gain in the original units (13.94), and a simulated attack stays
+    # within it: sum |e|^2 <= gamma^2 sum |a|^2 from zero error
+    assert gain.value <= 13.94 * 2.0**14
+    model = _model(plant, observer)
+    a = np.random.default_rng(2).standard_normal((400, model.r))
+    e = model.simulate(np.zeros(model.N), 400, attack=a)[:, : model.n_e]
+    assert np.sum(e**2) <= gain.value**2 * np.sum(a**2)

@@ -80,7 +80,7 @@ def constant_attack_outcomes(
             "equilibrium_search": note,
             "simulation": sim,
         }
-        if sim["unbounded"]:
+        if sim["unbounded"] and not certified:
             record.update(
                 outcome="unbounded",
                 proved=False,
@@ -93,8 +93,16 @@ def constant_attack_outcomes(
                 "the stability certificate proves convergence to the unique equilibrium "
                 "(the shrinkage is slope-restricted, so it holds for increments)"
             )
+        elif sim["unbounded"]:  # a certified design cannot grow without bound
+            record.update(
+                outcome="undecided",
+                proved=False,
+                how="the simulation from zero error grew large although the stability "
+                "certificate bounds it (rounding in the simulation); the equilibrium search "
+                f"gave {len(equilibria)} equilibria",
+            )
         else:
-            near = [eq for eq in equilibria if _distance(sim["final"], eq) <= 1e-6 * _scale(a)]
+            near = [eq for eq in equilibria if _distance(sim["final"], eq) <= 1e-6 * sim["scale"]]
             if near and sim["settled"]:
                 _settle(record, near[0], proved=False)
                 record["how"] = (
@@ -121,10 +129,6 @@ def _settle(record: dict[str, Any], eq: dict[str, Any], *, proved: bool) -> None
     )
 
 
-def _scale(a: np.ndarray) -> float:
-    return max(float(np.abs(a).max(initial=0.0)), 1.0)
-
-
 def _distance(final: np.ndarray, eq: dict[str, Any]) -> float:
     point = np.concatenate([eq["initial_error"], eq["attack_estimate"]])
     return float(np.linalg.norm(np.asarray(final) - point))
@@ -137,7 +141,12 @@ def _simulate(model: LureModel, attacks: np.ndarray) -> list[dict[str, Any]]:
     xi = np.zeros((count, model.N))
     shift = attacks @ model.Dw.T if model.m else np.zeros((count, 0))
     push = attacks @ model.E.T
-    scale = np.maximum(np.abs(attacks).max(axis=1, initial=0.0), 1.0)
+    # the attack's size in the states' units: its first step from zero error (a state in units
+    # 2^40 times smaller moves 2^40 times more, which is not growth)
+    first = push + (model.phi(shift) @ model.B.T if model.m else 0.0)
+    with np.errstate(all="ignore"):
+        scale = np.maximum(np.abs(attacks).max(axis=1, initial=0.0), 1.0)
+        scale = np.maximum(scale, np.nan_to_num(np.linalg.norm(first, axis=1), posinf=0.0))
     out: list[dict[str, Any] | None] = [None] * count
     live = np.arange(count)
     with np.errstate(all="ignore"):  # an overflow is the growth this looks for
@@ -154,13 +163,16 @@ def _simulate(model: LureModel, attacks: np.ndarray) -> list[dict[str, Any]]:
                 row = int(live[j])
                 if grew[j]:
                     out[row] = {"steps": k, "unbounded": True, "settled": False,
-                                "final": nxt[j], "growth": float(size[j] / scale[row])}  # fmt: skip
+                                "final": nxt[j], "growth": float(size[j] / scale[row]),
+                                "scale": float(scale[row])}  # fmt: skip
                 else:
-                    out[row] = {"steps": k, "unbounded": False, "settled": True, "final": nxt[j]}
+                    out[row] = {"steps": k, "unbounded": False, "settled": True, "final": nxt[j],
+                                "scale": float(scale[row])}  # fmt: skip
             xi[live] = nxt
             live = live[~(grew | settled)]
             if live.size == 0:
                 break
     for rest in live.tolist():
-        out[rest] = {"steps": STEPS, "unbounded": False, "settled": False, "final": xi[rest]}
+        out[rest] = {"steps": STEPS, "unbounded": False, "settled": False, "final": xi[rest],
+                     "scale": float(scale[rest])}  # fmt: skip
     return [r for r in out if r is not None]

@@ -192,7 +192,18 @@ def attacked_equilibria(
                    "exact": False, "active_signs": np.zeros(0, int),
                    "error_is_zero": not np.any(xi[: model.n_e])}  # fmt: skip
         return [witness], "the linear error dynamics' unique equilibrium", 0
-    return _search(model, a, first=False)
+    scaling = model.balancing()
+    if scaling is None:
+        return _search(model, a, first=False)
+    # the patterns' equations in balanced state coordinates (their conditioning does not
+    # depend on the states' units there), each equilibrium scaled back exactly
+    found, note, undecided = _search(model.scaled(scaling), a, first=False)
+    n_e = model.n_e
+    for eq in found:
+        eq["point"] = eq["point"] * scaling
+        eq["initial_error"] = eq["initial_error"] * scaling[:n_e]
+        eq["attack_estimate"] = eq["attack_estimate"] * scaling[n_e:]
+    return found, note + " (in balanced state coordinates)", undecided
 
 
 def _search(

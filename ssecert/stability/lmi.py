@@ -68,6 +68,7 @@ __all__ = [
     "channel_vertex_instability",
     "corner_reason",
     "balanced_retry",
+    "output_scale",
     "to_original_coordinates",
     "in_balanced_coordinates",
 ]
@@ -269,6 +270,17 @@ def corner_reason(corner: dict[str, Any]) -> str:
         f"are unstable), so no certificate that treats the channels as separate sector or "
         f"slope-restricted nonlinearities (circle criterion, Zames-Falb multipliers) can exist"
     )
+
+
+def output_scale(model: LureModel, spread: float = 16.0) -> float:
+    """A power of two c near ||Ce||: the dissipation LMIs are solved for the output e / c (the
+    gain in units the solver can handle) and their certificate (P, T, g) scaled back by c^2,
+    exactly; 1 when ||Ce|| is within ``spread`` of 1."""
+    norm = float(np.linalg.norm(model.Ce, 2)) if model.Ce.size else 0.0
+    if not np.isfinite(norm) or norm <= 0.0 or 1.0 / spread < norm < spread:
+        return 1.0
+    c = 2.0 ** round(float(np.log2(norm)))
+    return c if np.isfinite(c**2) and c**2 > 0.0 else 1.0
 
 
 def to_original_coordinates(cert: LMICertificate, s: np.ndarray, N: int) -> LMICertificate | None:
@@ -517,12 +529,17 @@ def iss_certificate(
         if skip:
             attempts.append({"structure": st, "status": f"skipped: {skip}"})
             continue
-        P, t, g, info = _solve(model, "iss", st, alpha, solver_options or {})
+        c = output_scale(model)  # solved with e in units c, the certificate scaled back
+        solved = replace(model, Ce=model.Ce / c) if c != 1.0 else model
+        P, t, g, info = _solve(solved, "iss", st, alpha, solver_options or {})
+        if c != 1.0 and P is not None and t is not None and g is not None:
+            P, t, g = P * c**2, t * c**2, g * c**2
+            info["output_scaling"] = c
         attempts.append(info)
         if P is None or t is None or g is None:  # None only when the solve failed
             continue
         # certify a slightly larger gain than the optimum so that the margin survives
-        g_cert = g * (1 + 1e-6) + 1e-9
+        g_cert = g * (1 + 1e-6) + 1e-9 * c**2
         ok, margin, bound, problem = verify_certificate(
             model, P, t, kind="iss", alpha=alpha, g=g_cert, clear=clear
         )
@@ -678,7 +695,8 @@ def _scale_grid(model: LureModel, base: np.ndarray, k: int) -> np.ndarray:
     # kappa must make Z negative definite: Z = kappa Zc + diag(Ce'Ce, 0)
     zc = float(np.linalg.eigvalsh(base[:k, :k])[-1])
     ce = float(np.linalg.norm(model.Ce, 2)) ** 2
-    lo = np.log(1.01 * ce / max(-zc, np.finfo(float).tiny))
+    with np.errstate(over="ignore", divide="ignore"):
+        lo = np.log(1.01 * ce / max(-zc, np.finfo(float).tiny))
     return lo + np.linspace(0.0, np.log(1e8), 60)
 
 

@@ -65,6 +65,7 @@ from .lmi import (
     balanced_retry,
     channel_vertex_instability,
     corner_reason,
+    output_scale,
     to_original_coordinates,
 )
 from .lmi_solver import ETA, _run_clarabel
@@ -187,7 +188,8 @@ def verify_zames_falb(
     lift_norm = float(np.linalg.norm(_lifted(model, nu, g is not None)["G"], 2))
     coef = float(np.abs(_coefficients(m0, a, b)).sum())
     side = float(np.linalg.norm(np.hstack([model.Cw, model.Dw]), 2)) * model.q + 1.0
-    extra = float(np.linalg.norm(model.Ce, 2)) ** 2 + (abs(g) if g is not None else 0.0)
+    # the |e|^2 - g |a|^2 terms are in the LMI only in its gain form
+    extra = float(np.linalg.norm(model.Ce, 2)) ** 2 + abs(g) if g is not None else 0.0
     raw = (lift_norm**2 + 2.0) * normP + 2.0 * coef * side**2 + extra
     bound = 10.0 * M.shape[0] * EPS * raw / normP
     return decide(P, margin, bound, clear)
@@ -428,7 +430,12 @@ def zames_falb_gain(
     skip = _refusal(model, nu, True, budget)
     if skip:
         return LMICertificate(Verdict.INCONCLUSIVE, "iss", reason=f"not attempted: {skip}")
-    sol, g, info = _solve(model, nu, True, solver_options or {})
+    c = output_scale(model)  # solved with e in units c, the certificate scaled back
+    solved = replace(model, Ce=model.Ce / c) if c != 1.0 else model
+    sol, g, info = _solve(solved, nu, True, solver_options or {})
+    if c != 1.0 and sol is not None and g is not None:
+        sol, g = tuple(x * c**2 for x in sol), g * c**2
+        info["output_scaling"] = c
     if sol is None or g is None:
         return _gain_retry(
             model,
@@ -441,7 +448,7 @@ def zames_falb_gain(
             balance,
         )
     problem = ""
-    for g_cert in (g * (1 + 1e-6) + 1e-9, g * 1.01 + 1e-6):
+    for g_cert in (g * (1 + 1e-6) + 1e-9 * c**2, g * 1.01 + 1e-6 * c**2):
         ok, margin, bound, problem = verify_zames_falb(model, *sol, g=g_cert, clear=clear)
         if ok:
             cert = _certificate(model, sol, margin, bound, [info], gamma_squared=g_cert)
