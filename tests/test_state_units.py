@@ -161,3 +161,23 @@ def test_a_zames_falb_gain_survives_a_change_of_state_units():
     a = np.random.default_rng(2).standard_normal((400, model.r))
     e = model.simulate(np.zeros(model.N), 400, attack=a)[:, : model.n_e]
     assert np.sum(e**2) <= gain.value**2 * np.sum(a**2)
+
+
+def test_the_thesis_design_keeps_its_region_of_attraction_in_other_units():
+    # the UGV's D-SSO (shrink 1): undecided, with a certified region of radius 10 in its own
+    # units; with the velocity in units 2^17 times smaller the region is proved in balanced
+    # coordinates and converted (a ball of radius r_b there holds for r_b min(s_e) here)
+    dsso = {"kind": "dsso", "gain": "deadbeat", "step": 0.7, "threshold": 0.1}
+    plant, observer = _rescaled(UGV_PLANT, dsso, 17)
+    region = analyze(_spec(plant, observer))["region_of_attraction"]
+    assert region.verdict.value == "holds" and region.value >= 10.0 * (1 - 1e-9)
+    s = np.asarray(region.evidence["state_scaling"])
+    assert region.value == region.evidence["balanced_radius"] * s[:2].min()
+    assert "balanced coordinates" in region.summary
+    model = _model(plant, observer)
+    rng = np.random.default_rng(4)
+    e0 = rng.standard_normal((200, 2))
+    e0 *= region.value / np.linalg.norm(e0, axis=1, keepdims=True)
+    xi0 = np.hstack([e0, np.zeros((200, model.N - 2))])
+    tail = model.simulate(xi0, 5000)[-1]
+    assert np.all(np.linalg.norm(tail, axis=1) <= 1e-9 * region.value)

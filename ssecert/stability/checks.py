@@ -777,6 +777,14 @@ def region_of_attraction_check(
     found = region_of_attraction(model, seed=seed, piecewise=piecewise)
     radius = float(found["radius"])
     evidence = {k: v for k, v in found.items() if k != "radius"}
+    balanced = ""
+    if "state_scaling" in evidence:
+        scaling = ", ".join(f"2^{int(e)}" for e in np.log2(evidence["state_scaling"]))
+        balanced = (
+            f" Proved in balanced coordinates xi = diag({scaling}) xi_b (the states' units "
+            f"differ widely) for ||e_b(0)|| <= {evidence['balanced_radius']:.4g}, which holds "
+            f"whenever ||e(0)|| <= {radius:.4g}; the other numbers are in those coordinates."
+        )
     if "ball" in evidence:
         return _region_check(
             radius,
@@ -787,7 +795,8 @@ def region_of_attraction_check(
             f"the ball of radius {evidence['ball']:.4g} and its sublevel set containing those "
             f"errors stays in that ball ({evidence['transitions']} transitions between regions "
             f"checked; the dead zone alone certifies {evidence['dead_zone_radius']:.4g}); "
-            f"{evidence['replay']['samples']} initial errors on that sphere, simulated, converge.",
+            f"{evidence['replay']['samples']} initial errors on that sphere, simulated, converge."
+            + balanced,
             "piecewise-quadratic Lyapunov function (S-procedure LMIs)",
         )
     return _region_check(
@@ -797,7 +806,7 @@ def region_of_attraction_check(
         f"error converges to 0 without attack: the largest sublevel set of a verified "
         f"Lyapunov function of the dead zone's linear dynamics that fits in the dead zone "
         f"(|Cw_i xi| <= threshold) is invariant; {evidence.get('replay', {}).get('samples')} "
-        f"initial errors on that sphere, simulated, stay in it.",
+        f"initial errors on that sphere, simulated, stay in it." + balanced,
         "invariant sublevel set of the dead zone (Lyapunov)",
     )
 

@@ -49,7 +49,31 @@ def region_of_attraction(
     regions (``ssecert.stability.piecewise``, up to 3 channels) is also searched, and the
     larger verified radius is kept (``dead_zone_radius`` then records the other).  Without
     ``widen`` only the Lyapunov matrix with Q = I is tried (no LMI: the design-space map).
+
+    When nothing is certified and the states' units differ widely, the region is searched
+    again in balanced coordinates xi = diag(s) xi_b (``LureModel.balancing``, exact): a radius
+    r_b there holds for ||e(0)|| <= r_b min(s_e) in the model's own units (``state_scaling``,
+    ``balanced_radius``; the other numbers then are in the balanced coordinates).
     """
+    found = _region_in_units(model, seed, piecewise, widen)
+    if found["radius"] > 0:
+        return found
+    s = model.balancing()
+    if s is None:
+        return found
+    inner = _region_in_units(model.scaled(s), seed, piecewise, widen)
+    if not inner["radius"] > 0:
+        return found
+    low = float(np.min(s[: model.n_e]))
+    out = {**inner, "radius": float(inner["radius"]) * low, "state_scaling": s}
+    out["balanced_radius"] = inner["radius"]
+    if "dead_zone_radius" in out:
+        out["dead_zone_radius"] = float(out["dead_zone_radius"]) * low
+    return out
+
+
+def _region_in_units(model: LureModel, seed: int, piecewise: bool, widen: bool) -> dict[str, Any]:
+    """``region_of_attraction`` in the model's own coordinates."""
     found = _dead_zone_region(model, seed, widen)
     if not piecewise or model.m == 0:
         return found
