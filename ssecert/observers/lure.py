@@ -101,18 +101,19 @@ class LureModel:
 
         if self.N == 0:
             return None
-        loop = self.vertex(self.q)
-        if not np.all(np.isfinite(loop)):
-            return None
-        _, (s, _) = matrix_balance(loop, permute=False, separate=True)
-        s = np.asarray(s, dtype=float)
-        if not np.all(np.isfinite(s)) or s.max() < spread * s.min():
-            return None
-        exponents = np.log2(s)
-        if not np.array_equal(exponents, np.round(exponents)):
-            return None
-        balanced = self.scaled(s)
-        back = balanced.scaled(1.0 / s)
+        with np.errstate(all="ignore"):  # a model at the ends of the float range: no scaling
+            loop = self.vertex(self.q)
+            if not np.all(np.isfinite(loop)):
+                return None
+            _, (s, _) = matrix_balance(loop, permute=False, separate=True)
+            s = np.asarray(s, dtype=float)
+            if not np.all(np.isfinite(s) & (s > 0)) or s.max() < spread * s.min():
+                return None
+            exponents = np.log2(s)
+            if not np.array_equal(exponents, np.round(exponents)):
+                return None
+            balanced = self.scaled(s)
+            back = balanced.scaled(1.0 / s)
         for name in ("A", "B", "Cw", "E", "Ce"):
             if not np.array_equal(getattr(back, name), getattr(self, name)):
                 return None
