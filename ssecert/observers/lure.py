@@ -21,7 +21,12 @@ import numpy as np
 if TYPE_CHECKING:
     from .base import ObserverDesign
 
-__all__ = ["LureModel"]
+__all__ = ["LureModel", "scaling_text"]
+
+
+def scaling_text(s: np.ndarray) -> str:
+    """``diag(2^a, 2^b, ...)`` for the powers of two of a balancing (``LureModel.balancing``)."""
+    return "diag(" + ", ".join(f"2^{int(e)}" for e in np.log2(np.asarray(s, dtype=float))) + ")"
 
 
 @dataclass(frozen=True)

@@ -17,7 +17,7 @@ from ..budget import Budget, ResourceLimitError
 from ..context import OBSERVER, AnalysisContext, shared
 from ..design.gains import GainError
 from ..observers import ObserverDesign, build_observer
-from ..observers.lure import LureModel
+from ..observers.lure import LureModel, scaling_text
 from ..results import Check, Verdict
 from ..system import System
 from ..tolerances import Tolerances
@@ -397,9 +397,8 @@ def _balanced_note(cert: LMICertificate) -> str:
     s = cert.details.get("state_scaling")
     if s is None:
         return ""
-    scaling = ", ".join(f"2^{int(e)}" for e in np.log2(np.asarray(s, dtype=float)))
     return (
-        f" The LMI was solved and verified in balanced coordinates xi = diag({scaling}) xi_b "
+        f" The LMI was solved and verified in balanced coordinates xi = {scaling_text(s)} xi_b "
         "(an exact change of variables: the states' units differ widely); P is given for the "
         "spec's coordinates."
     )
@@ -779,9 +778,9 @@ def region_of_attraction_check(
     evidence = {k: v for k, v in found.items() if k != "radius"}
     balanced = ""
     if "state_scaling" in evidence:
-        scaling = ", ".join(f"2^{int(e)}" for e in np.log2(evidence["state_scaling"]))
+        scaling = scaling_text(evidence["state_scaling"])
         balanced = (
-            f" Proved in balanced coordinates xi = diag({scaling}) xi_b (the states' units "
+            f" Proved in balanced coordinates xi = {scaling} xi_b (the states' units "
             f"differ widely) for ||e_b(0)|| <= {evidence['balanced_radius']:.4g}, which holds "
             f"whenever ||e(0)|| <= {radius:.4g}; the other numbers are in those coordinates."
         )

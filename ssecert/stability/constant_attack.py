@@ -143,13 +143,12 @@ def _simulate(model: LureModel, attacks: np.ndarray) -> list[dict[str, Any]]:
     push = attacks @ model.E.T
     # the attack's size in the states' units: its first step from zero error (a state in units
     # 2^40 times smaller moves 2^40 times more, which is not growth)
-    first = push + (model.phi(shift) @ model.B.T if model.m else 0.0)
-    with np.errstate(all="ignore"):
-        scale = np.maximum(np.abs(attacks).max(axis=1, initial=0.0), 1.0)
-        scale = np.maximum(scale, np.nan_to_num(np.linalg.norm(first, axis=1), posinf=0.0))
     out: list[dict[str, Any] | None] = [None] * count
     live = np.arange(count)
     with np.errstate(all="ignore"):  # an overflow is the growth this looks for
+        first = push + (model.phi(shift) @ model.B.T if model.m else 0.0)
+        scale = np.maximum(np.abs(attacks).max(axis=1, initial=0.0), 1.0)
+        scale = np.maximum(scale, np.nan_to_num(np.linalg.norm(first, axis=1), posinf=0.0))
         for k in range(1, STEPS + 1):
             x = xi[live]
             nxt = x @ model.A.T + push[live]

@@ -49,7 +49,7 @@ from typing import Any
 import numpy as np
 
 from ..budget import Budget
-from ..observers.lure import LureModel
+from ..observers.lure import LureModel, scaling_text
 from ..results import Verdict
 from .lmi_solver import ETA, _solve, lmi_cost  # noqa: F401  (ETA stays importable here)
 from .lmi_verification import circle_matrix, iss_matrix, verify_certificate
@@ -68,9 +68,9 @@ __all__ = [
     "channel_vertex_instability",
     "corner_reason",
     "balanced_retry",
-    "output_scale",
+    "output_scaled",
     "to_original_coordinates",
-    "in_balanced_coordinates",
+    "where_verified",
 ]
 
 FULL_LIMIT = 80  # largest LMI dimension tried with a full P
@@ -272,17 +272,6 @@ def corner_reason(corner: dict[str, Any]) -> str:
     )
 
 
-def output_scale(model: LureModel, spread: float = 16.0) -> float:
-    """A power of two c near ||Ce||: the dissipation LMIs are solved for the output e / c (the
-    gain in units the solver can handle) and their certificate (P, T, g) scaled back by c^2,
-    exactly; 1 when ||Ce|| is within ``spread`` of 1."""
-    norm = float(np.linalg.norm(model.Ce, 2)) if model.Ce.size else 0.0
-    if not np.isfinite(norm) or norm <= 0.0 or 1.0 / spread < norm < spread:
-        return 1.0
-    c = 2.0 ** round(float(np.log2(norm)))
-    return c if np.isfinite(c**2) and c**2 > 0.0 else 1.0
-
-
 def to_original_coordinates(cert: LMICertificate, s: np.ndarray, N: int) -> LMICertificate | None:
     """A certificate of ``model.scaled(s)`` written for ``model`` (None if not exactly).
 
@@ -306,18 +295,48 @@ def to_original_coordinates(cert: LMICertificate, s: np.ndarray, N: int) -> LMIC
     return replace(cert, P=P, details=details)
 
 
-def in_balanced_coordinates(
-    model: LureModel, cert: LMICertificate
-) -> tuple[LureModel, LMICertificate]:
-    """The model and certificate in which ``cert`` was verified: its ``state_scaling``'s
-    balanced coordinates when it has one (``to_original_coordinates`` undone, exactly)."""
+def where_verified(
+    model: LureModel,
+    cert: LMICertificate,
+    compute: Callable[[LureModel, LMICertificate], LMICertificate],
+) -> LMICertificate | None:
+    """``compute`` run where ``cert`` was verified and its result written back for ``model``:
+    in the balanced coordinates of its ``state_scaling`` (with ``cert`` there, exactly:
+    ``to_original_coordinates`` undone); None when ``cert`` was verified in ``model``'s own."""
     s = cert.details.get("state_scaling")
     if s is None or cert.P is None:
-        return model, cert
+        return None
     s = np.asarray(s, dtype=float)
     scale = np.ones(cert.P.shape[0])
     scale[: model.N] = s
-    return model.scaled(s), replace(cert, P=cert.P * scale[:, None] * scale[None, :])
+    inside = replace(
+        cert,
+        P=cert.P * scale[:, None] * scale[None, :],
+        details={k: v for k, v in cert.details.items() if k != "state_scaling"},
+    )
+    found = compute(model.scaled(s), inside)
+    if found.verdict is not Verdict.HOLDS:
+        return found
+    back = to_original_coordinates(found, s, model.N)
+    if back is None:
+        return LMICertificate(
+            Verdict.INCONCLUSIVE, found.kind, reason="the certificate does not scale back exactly"
+        )
+    return back
+
+
+def output_scaled(model: LureModel, spread: float = 16.0) -> tuple[float, LureModel]:
+    """(c, model with Ce / c): c a power of two near ||Ce||, so that the dissipation LMIs are
+    solved for the output e / c (the gain in units the solver can handle) and their
+    certificate (P, T, g) scaled back by c^2, exactly; c = 1 when ||Ce|| is within ``spread``
+    of 1."""
+    norm = float(np.linalg.norm(model.Ce, 2)) if model.Ce.size else 0.0
+    if not np.isfinite(norm) or norm <= 0.0 or 1.0 / spread < norm < spread:
+        return 1.0, model
+    c = 2.0 ** round(float(np.log2(norm)))
+    if not (np.isfinite(c**2) and c**2 > 0.0):
+        return 1.0, model
+    return c, replace(model, Ce=model.Ce / c)
 
 
 def balanced_retry(
@@ -344,8 +363,7 @@ def balanced_retry(
         why = "its P does not scale back exactly"
     else:
         why = cert.reason
-    scaling = ", ".join(f"2^{int(e)}" for e in np.log2(s))
-    return None, f"; in balanced state coordinates (xi = diag({scaling}) xi_b): {why}"
+    return None, f"; in balanced state coordinates (xi = {scaling_text(s)} xi_b): {why}"
 
 
 def circle_certificate(
@@ -518,6 +536,7 @@ def iss_certificate(
     if verdict is not None:
         return LMICertificate(verdict, "iss", reason=reason, details=details)
     attempts = []
+    c, solved = output_scaled(model)  # solved with e in units c, the certificate scaled back
     structures = STRUCTURES if structure == "auto" else [structure]
     for st in structures:
         if st == "full" and structure == "auto" and model.N + model.m + model.r > FULL_LIMIT:
@@ -529,8 +548,6 @@ def iss_certificate(
         if skip:
             attempts.append({"structure": st, "status": f"skipped: {skip}"})
             continue
-        c = output_scale(model)  # solved with e in units c, the certificate scaled back
-        solved = replace(model, Ce=model.Ce / c) if c != 1.0 else model
         P, t, g, info = _solve(solved, "iss", st, alpha, solver_options or {})
         if c != 1.0 and P is not None and t is not None and g is not None:
             P, t, g = P * c**2, t * c**2, g * c**2
@@ -613,18 +630,9 @@ def iss_from_circle(
         return LMICertificate(
             Verdict.INCONCLUSIVE, "iss", reason="no circle certificate to build on"
         )
-    if "state_scaling" in circle.details:  # verified in balanced coordinates: work there
-        scaled, inside = in_balanced_coordinates(model, circle)
-        details = {k: v for k, v in circle.details.items() if k != "state_scaling"}
-        found = iss_from_circle(scaled, replace(inside, details=details), clear=clear)
-        if found.verdict is not Verdict.HOLDS:
-            return found
-        back = to_original_coordinates(found, circle.details["state_scaling"], model.N)
-        if back is None:
-            return LMICertificate(
-                Verdict.INCONCLUSIVE, "iss", reason="the gain's P does not scale back exactly"
-            )
-        return back
+    elsewhere = where_verified(model, circle, partial(iss_from_circle, clear=clear))
+    if elsewhere is not None:
+        return elsewhere
     P, t = circle.P, circle.multipliers if circle.multipliers is not None else np.zeros(0)
     alpha = 0.5 * float(circle.decay or 0.0)
     k = model.N + model.m

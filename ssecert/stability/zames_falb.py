@@ -50,7 +50,6 @@ with a rounding guard.
 from __future__ import annotations
 
 import time
-from dataclasses import replace
 from functools import partial
 from typing import Any
 
@@ -65,8 +64,8 @@ from .lmi import (
     balanced_retry,
     channel_vertex_instability,
     corner_reason,
-    output_scale,
-    to_original_coordinates,
+    output_scaled,
+    where_verified,
 )
 from .lmi_solver import ETA, _run_clarabel
 from .lmi_verification import decide
@@ -407,31 +406,19 @@ def zames_falb_gain(
     certificate verified in balanced state coordinates (``state_scaling``) has its gain
     solved there too, and written back.
     """
-    scaling = stability.details.get("state_scaling")
-    if scaling is not None:
-        s = np.asarray(scaling, dtype=float)
-        found = zames_falb_gain(
-            model.scaled(s),
-            replace(stability, details={"order": stability.details.get("order", ORDERS[0])}),
-            clear=clear,
-            budget=budget,
-            solver_options=solver_options,
-        )
-        if found.verdict is not Verdict.HOLDS:
-            return found
-        back = to_original_coordinates(found, s, model.N)
-        if back is None:
-            return LMICertificate(
-                Verdict.INCONCLUSIVE, "iss", reason="the gain's P does not scale back exactly"
-            )
-        return back
+    elsewhere = where_verified(
+        model,
+        stability,
+        partial(zames_falb_gain, clear=clear, budget=budget, solver_options=solver_options),
+    )
+    if elsewhere is not None:
+        return elsewhere
     budget = budget or Budget()
     nu = int(stability.details.get("order", ORDERS[0]))
     skip = _refusal(model, nu, True, budget)
     if skip:
         return LMICertificate(Verdict.INCONCLUSIVE, "iss", reason=f"not attempted: {skip}")
-    c = output_scale(model)  # solved with e in units c, the certificate scaled back
-    solved = replace(model, Ce=model.Ce / c) if c != 1.0 else model
+    c, solved = output_scaled(model)  # solved with e in units c, the certificate scaled back
     sol, g, info = _solve(solved, nu, True, solver_options or {})
     if c != 1.0 and sol is not None and g is not None:
         sol, g = tuple(x * c**2 for x in sol), g * c**2
