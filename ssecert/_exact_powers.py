@@ -12,7 +12,10 @@ nearly nilpotent F.  ``ssecert._exact`` re-exports these names.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from fractions import Fraction
+from functools import cached_property
 
 import numpy as np
 
@@ -20,6 +23,9 @@ __all__ = [
     "Dyadic",
     "dyadic",
     "exact_error_matrix",
+    "exact_observability_matrix",
+    "ExactMatrix",
+    "as_dyadic",
     "shift_by",
     "PowerBound",
     "spectral_radius_bound",
@@ -42,7 +48,86 @@ class Dyadic:
         return max((abs(int(x)).bit_length() for x in self.ints.flat), default=0)
 
     def __matmul__(self, other: Dyadic) -> Dyadic:
+        if self.ints.size == 0 or other.ints.size == 0:
+            return Dyadic.zeros((self.shape[0], other.shape[1]))
         return Dyadic(self.ints.dot(other.ints), self.exponent + other.exponent)
+
+    def __add__(self, other: Dyadic) -> Dyadic:
+        ia, ib, e = _align(self, other)
+        return Dyadic(ia + ib, e)
+
+    def __sub__(self, other: Dyadic) -> Dyadic:
+        ia, ib, e = _align(self, other)
+        return Dyadic(ia - ib, e)
+
+    def __neg__(self) -> Dyadic:
+        return Dyadic(-self.ints, self.exponent)
+
+    @property
+    def T(self) -> Dyadic:
+        return Dyadic(self.ints.T, self.exponent)
+
+    def __getitem__(self, index: tuple[slice, slice]) -> Dyadic:
+        return Dyadic(self.ints[index], self.exponent)
+
+    def times(self, x: float) -> Dyadic:
+        """The exact product with the float ``x``."""
+        d = dyadic(np.array([[float(x)]]))
+        return Dyadic(self.ints * d.ints[0, 0], self.exponent + d.exponent)
+
+    def scaled(self, left: np.ndarray, right: np.ndarray) -> Dyadic:
+        """diag(2^left) self diag(2^right), exactly, for integer exponents."""
+        left = np.asarray(left, dtype=np.int64)
+        right = np.asarray(right, dtype=np.int64)
+        shifts = left[:, None] + right[None, :]
+        low = int(shifts.min(initial=0))
+        out = np.empty(self.shape, dtype=object)
+        for index in np.ndindex(*self.shape):
+            out[index] = int(self.ints[index]) << int(shifts[index] - low)
+        return Dyadic(out, self.exponent + low)
+
+    def to_fractions(self) -> list[list[Fraction]]:
+        """The entries as Fractions (rows of a 2-D matrix)."""
+        unit = Fraction(2) ** self.exponent
+        return [[int(v) * unit for v in row] for row in self.ints]
+
+    def distance_bound(self, M: np.ndarray) -> float:
+        """An upper bound on ||self - M||_2 for the float matrix ``M`` (the Frobenius norm of
+        the exact difference, rounded up)."""
+        diff = self - dyadic(M)
+        top = max((abs(int(v)) for v in diff.ints.flat), default=0)
+        if top == 0:
+            return 0.0
+        shift = max(top.bit_length() - 60, 0)  # entries to about 60 bits, rounded up
+        squares = sum(((abs(int(v)) >> shift) + 1) ** 2 for v in diff.ints.flat if v)
+        try:
+            value = math.ldexp(math.sqrt(squares) * (1 + 1e-12), diff.exponent + shift)
+        except OverflowError:
+            return math.inf
+        return max(value, 5e-324)  # never 0 for a nonzero difference
+
+    @staticmethod
+    def zeros(shape: tuple[int, ...]) -> Dyadic:
+        out = np.empty(shape, dtype=object)
+        out.fill(0)
+        return Dyadic(out, 0)
+
+    @staticmethod
+    def eye(n: int) -> Dyadic:
+        out = Dyadic.zeros((n, n))
+        for i in range(n):
+            out.ints[i, i] = 1
+        return out
+
+    @staticmethod
+    def block(rows: Sequence[Sequence[Dyadic]]) -> Dyadic:
+        """The block matrix of ``rows`` (each a sequence of Dyadic blocks of matching sizes)."""
+        low = min(b.exponent for row in rows for b in row)
+        lifted = [
+            [b.ints * (1 << (b.exponent - low)) if b.exponent > low else b.ints for b in row]
+            for row in rows
+        ]
+        return Dyadic(np.vstack([np.hstack(row) for row in lifted]).astype(object), low)
 
     def inf_norm_log2(self) -> float:
         """log2 of the exact infinity norm (max absolute row sum); -inf for zero.
@@ -129,11 +214,79 @@ def _align(a: Dyadic, b: Dyadic) -> tuple[np.ndarray, np.ndarray, int]:
     return ia, ib, e
 
 
-def exact_error_matrix(A: np.ndarray, L: np.ndarray, C: np.ndarray) -> Dyadic:
-    """F = A - L C computed exactly from the floats of A, L and C."""
-    LC = dyadic(L) @ dyadic(C)
-    ia, ib, e = _align(dyadic(A), LC)
-    return Dyadic(ia - ib, e)
+def as_dyadic(M: np.ndarray | Dyadic) -> Dyadic:
+    """``M`` itself when it is a Dyadic, else the exact value of its floats."""
+    return M if isinstance(M, Dyadic) else dyadic(M)
+
+
+def exact_error_matrix(
+    A: np.ndarray | Dyadic, L: np.ndarray | Dyadic, C: np.ndarray | Dyadic
+) -> Dyadic:
+    """F = A - L C computed exactly from the floats (or exact values) of A, L and C."""
+    return as_dyadic(A) - as_dyadic(L) @ as_dyadic(C)
+
+
+def exact_observability_matrix(
+    A: np.ndarray, C: np.ndarray, tau: int, *, max_bits: int = 1_000_000
+) -> Dyadic | None:
+    """O_tau = [C; C A; ...; C A^(tau-1)] formed exactly from the floats of A and C, or None
+    when an entry would exceed ``max_bits`` bits."""
+    Ad, row = dyadic(A), dyadic(C)
+    blocks = [row]
+    for _ in range(1, tau):
+        if row.bits() + Ad.bits() > max_bits:
+            return None
+        row = row @ Ad
+        blocks.append(row)
+    return Dyadic.block([[b] for b in blocks])
+
+
+@dataclass(frozen=True)
+class ExactMatrix:
+    """The exact value of a matrix that was computed in floating point, formed on demand.
+
+    Attributes
+    ----------
+    build : callable
+        Returns the exact value (a ``Dyadic``), or None when it is beyond its budget.
+    bound : float or None
+        An a-priori upper bound on the 2-norm of the computed floats minus the exact value;
+        None to measure it on the exact value when it is needed.
+    source : str
+        How the exact value is formed, for messages.
+    """
+
+    build: Callable[[], Dyadic | None]
+    bound: float | None
+    source: str
+
+    @cached_property
+    def value(self) -> Dyadic | None:
+        """The exact matrix (formed once), or None beyond its budget."""
+        return self.build()
+
+    def rounding(self, computed: np.ndarray) -> float:
+        """An upper bound on ||computed - exact||_2 (inf when neither is known)."""
+        if self.bound is not None:
+            return self.bound
+        exact = self.value
+        return math.inf if exact is None else exact.distance_bound(computed)
+
+    @classmethod
+    def error_matrix(
+        cls, A: np.ndarray, L: np.ndarray, C: np.ndarray | Dyadic, *, bound: float | None = None
+    ) -> ExactMatrix:
+        """F = A - L C from the floats of A and L and the floats (or exact value) of C; the
+        a-priori bound on fl(A - L C) is Higham's when C is given as floats."""
+        if bound is None and not isinstance(C, Dyadic):
+            from .tolerances import product_rounding
+
+            bound = product_rounding(L, C, A)
+        return cls(
+            lambda: exact_error_matrix(A, L, C),
+            bound,
+            "F = A - L C formed exactly from the floats of A, L and C",
+        )
 
 
 def shift_by(F: Dyadic, value: float) -> Dyadic:
@@ -171,6 +324,12 @@ class PowerBound:
         The power that gave the lower bound (0 if none).
     trace_reaches_n : int
         A power m with |trace F^m| >= n exactly (then rho >= 1), or 0.
+    radius_gap : float
+        Certified lower bound on 1 - rho(F), from an exact power m with ||F^m||_inf < 1
+        decided in integers: 1 - ||F^m||^(1/m) >= (1 - ||F^m||) / m.  Positive exactly
+        when such a power was found, even when ``radius_bound`` rounds to 1 (F = 1 - 1e-17).
+    gap_power : int
+        The power that gave the gap (0 if none).
     """
 
     log2_norms: tuple[float, ...]
@@ -183,6 +342,8 @@ class PowerBound:
     radius_lower: float = 0.0
     lower_power: int = 0
     trace_reaches_n: int = 0
+    radius_gap: float = 0.0
+    gap_power: int = 0
 
 
 def spectral_radius_bound(
@@ -233,6 +394,8 @@ def spectral_radius_bound(
         trail.lower,
         trail.lower_m,
         trail.reaches,
+        trail.gap,
+        trail.gap_m,
     )
 
 
@@ -250,6 +413,7 @@ class _PowerTrail:
         self.best, self.best_m = math.inf, 0
         self.lower, self.lower_m = 0.0, 0
         self.reaches = 0
+        self.gap, self.gap_m = 0.0, 0
 
     def affordable(self, a: Dyadic, b: Dyadic) -> bool:
         """Whether a @ b fits in the work budget (then it is charged); else incomplete."""
@@ -268,6 +432,9 @@ class _PowerTrail:
         bound = 0.0 if value == -math.inf else _pow2(value / m)
         if bound < self.best:
             self.best, self.best_m = bound, m
+        gap = _exact_gap(P, m)
+        if gap > self.gap:
+            self.gap, self.gap_m = gap, m
         trace = abs(sum(int(P.ints[i, i]) for i in range(self.n)))
         if trace and not self.reaches and _trace_reaches_n(trace, P.exponent, self.n):
             self.reaches = m
@@ -276,6 +443,19 @@ class _PowerTrail:
             if low > self.lower:
                 self.lower, self.lower_m = low, m
         return value
+
+
+def _exact_gap(P: Dyadic, m: int) -> float:
+    """(1 - ||P||_inf) / m rounded down when ||P||_inf < 1 exactly (integers), else 0: with
+    P = F^m a lower bound on 1 - rho(F), since 1 - x^(1/m) >= (1 - x) / m for 0 <= x <= 1."""
+    top = max((sum(abs(int(x)) for x in row) for row in P.ints), default=0)
+    e = P.exponent
+    if e >= 0:
+        return 1.0 if top == 0 else 0.0
+    one = 1 << -e
+    if top >= one:
+        return 0.0
+    return float(Fraction(one - top, one * m)) * (1 - 1e-15)
 
 
 def _pow2(x: float) -> float:
@@ -316,7 +496,9 @@ def _square_powers(P: Dyadic, squarings: int, target: float | None, trail: _Powe
     """Square the last power P into ``trail`` until the bounds decide ``target`` or stop."""
     m = trail.powers[-1] if trail.powers else 1
     for _ in range(squarings):
-        if target is not None and (trail.best < target or trail.lower > target):
+        if target is not None and (
+            trail.best < target or trail.lower > target or (target == 1.0 and trail.gap > 0)
+        ):
             break
         if not trail.affordable(P, P):
             break

@@ -15,6 +15,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -41,7 +42,80 @@ __all__ = [
     "stacked_rank",
     "matrix_norm",
     "unit_normalized",
+    "balanced_units",
+    "Units",
 ]
+
+
+class Units(NamedTuple):
+    """A plant in exact power-of-two units (``balanced_units``): ``system`` holds
+    alpha S^-1 A S and D C S with S = diag(states), D = diag(sensors), powers of two; a state
+    direction z of ``system`` is ``states * z`` in the user's coordinates."""
+
+    system: System
+    alpha: float
+    states: np.ndarray
+    sensors: np.ndarray
+
+    def to_user(self, z: np.ndarray) -> np.ndarray:
+        """A state direction of the balanced plant in the user's coordinates (unit norm)."""
+        out = np.asarray(z, dtype=float) * self.states
+        norm = float(np.linalg.norm(out))
+        return out / norm if norm > 0 and np.isfinite(norm) else out
+
+    @property
+    def balanced(self) -> bool:
+        return bool(np.any(self.states != 1.0))
+
+
+def balanced_units(system: System, *, spread: float = 16.0) -> Units:
+    """The plant in exact power-of-two units, its states balanced too.
+
+    ``unit_normalized`` scales A by a power of two and each sensor's row by its own; here the
+    states are also rescaled, x = S x_b with S = diag(s) powers of two from LAPACK's balancing
+    (gebal, ``scipy.linalg.matrix_balance``) of [[A, 0], [C, 0]], when their spread exceeds
+    ``spread``.  Observability, sparse observability and every breaking set are unchanged by a
+    change of state coordinates, and powers of two change no rounding, so a plant written
+    with one state in units 2^30 times smaller gets the decisions of the plant in its own
+    units.  The rows of C are renormalised after the state scaling.
+    """
+    from scipy.linalg import matrix_balance
+
+    from ._exact import pow2_row_scaling
+
+    work, alpha = unit_normalized(system)
+    n, p = system.n, system.p
+    plain = Units(work, alpha, np.ones(n), pow2_row_scaling(system.C))
+    if n < 2:
+        return plain
+    A, C = system.A, plain.sensors[:, None] * system.C
+    K = np.zeros((n + p, n + p))
+    K[:n, :n], K[n:, :n] = A, C
+    with np.errstate(all="ignore"):
+        if not np.all(np.isfinite(K)):
+            return plain
+        _, (scale, _) = matrix_balance(K, permute=False, separate=True)
+        states = np.asarray(scale[:n], dtype=float)
+        exponents = np.log2(states)
+        if (
+            not np.all(np.isfinite(exponents))
+            or not np.array_equal(exponents, np.round(exponents))
+            or states.max() < spread * states.min()
+        ):
+            return plain
+        A_b = A * (states[None, :] / states[:, None])
+        C_b = C * states[None, :]
+        back = A_b * (states[:, None] / states[None, :])
+        if not (np.array_equal(back, A) and np.array_equal(C_b / states[None, :], C)):
+            return plain  # an entry under- or overflowed: not exact
+        balanced, alpha_b = unit_normalized(System(A_b, C_b))
+        rows = pow2_row_scaling(C_b)
+    return Units(
+        System(balanced.A, balanced.C, sensors=system.sensors, name=system.name),
+        alpha_b,
+        states,
+        plain.sensors * rows,
+    )
 
 
 def unit_normalized(system: System) -> tuple[System, float]:

@@ -11,7 +11,7 @@ from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
 
-from ._linalg import eigen_clusters, unit_normalized
+from ._linalg import balanced_units, eigen_clusters
 from .budget import Budget
 from .context import AnalysisContext, sparse_key
 from .observers import get_kind, observer_kinds
@@ -199,8 +199,8 @@ def analyze(
     system = spec.system
     clock = _Clock()
     # shared by the structural checks, which decide in power-of-two units
-    work, alpha = unit_normalized(system)
-    eig = eigen_clusters(work.A, tolerances=tol, unit=alpha)
+    units = balanced_units(system)
+    eig = eigen_clusters(units.system.A, tolerances=tol, unit=units.alpha)
     clock.lap("eigenvalues", None)
     sparse_timing: dict[str, float] = {}
     checks: list[Check] = [

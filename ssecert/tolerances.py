@@ -27,6 +27,7 @@ __all__ = [
     "ZERO",
     "BORDERLINE",
     "NONZERO",
+    "product_rounding",
 ]
 
 EPS = float(np.finfo(np.float64).eps)
@@ -142,3 +143,32 @@ class Tolerances:
     def to_dict(self) -> dict[str, float | None]:
         """Plain dictionary, for evidence and JSON."""
         return asdict(self)
+
+
+def product_rounding(
+    X: np.ndarray, Y: np.ndarray, addend: np.ndarray | None = None, scale: float = 1.0
+) -> float:
+    """An upper bound on the 2-norm of fl(addend - scale X Y) minus its exact value, for float
+    X, Y, addend and scalar ``scale``.
+
+    Entrywise the rounding of a dot product of k terms is at most gamma_k |X| |Y| (Higham,
+    Accuracy and Stability of Numerical Algorithms, 3.5) with gamma_k = k u / (1 - k u); a
+    scalar multiple and the subtraction add at most two more roundings.  The Frobenius norm of
+    that bound, computed with a safety factor, bounds the 2-norm.
+    """
+    X = np.asarray(X, dtype=float)
+    Y = np.asarray(Y, dtype=float)
+    if X.size == 0 or Y.size == 0:
+        return 0.0
+    u = EPS / 2
+    k = X.shape[-1] + 3
+    gamma = k * u / (1 - k * u)
+    with np.errstate(over="ignore", invalid="ignore"):
+        bound = abs(float(scale)) * (np.abs(X) @ np.abs(Y))
+        if addend is not None:
+            bound = bound + np.abs(np.asarray(addend, dtype=float))
+        top = float(np.max(bound))
+        frobenius = top * float(np.sqrt(np.sum(np.square(bound / top)))) if top > 0 else 0.0
+        # underflow adds at most one subnormal unit per operation
+        value = frobenius * gamma * (1 + 4 * k * u) + k * 5e-324 * np.sqrt(bound.size)
+    return float(value) if np.isfinite(value) else float("inf")

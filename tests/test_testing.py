@@ -280,17 +280,41 @@ def test_assert_sparse_observable_inconclusive_gives_the_budget():
 def test_assert_deadbeat():
     plant = UGV.system
     L = deadbeat_gain(plant).L
-    assert assert_deadbeat(plant.A, L, plant.C) == 1
+    assert assert_deadbeat(plant.A, L, plant.C, rtol=1e-8) == 1
     with pytest.raises(AssertionError) as info:
-        assert_deadbeat(plant.A, np.zeros((2, 3)), plant.C)
+        assert_deadbeat(plant.A, np.zeros((2, 3)), plant.C, rtol=1e-8)
     message = str(info.value)
     assert "A - L C is not nilpotent: ||F^2|| / ||A||^2 >= 0.7" in message
     assert "at the power k = n = 2" in message
     assert "needs <= 1e-08" in message
     with pytest.raises(AssertionError, match="L has the opposite sign convention"):
-        assert_deadbeat(plant.A, -L, plant.C)
+        assert_deadbeat(plant.A, -L, plant.C, rtol=1e-8)
     with pytest.raises(ValueError, match="L has the wrong number of rows: expected 2"):
         assert_deadbeat(plant.A, np.zeros((3, 3)), plant.C)
+    with pytest.raises(ValueError, match="rtol must be a number in"):
+        assert_deadbeat(plant.A, L, plant.C, rtol=0.0)
+
+
+def test_assert_deadbeat_is_exact_by_default():
+    # F^2 = 1e-9 I exactly: small, never zero; only an explicit tolerance accepts it
+    F = np.array([[0.0, 1.0], [1e-9, 0.0]])
+    with pytest.raises(AssertionError) as info:
+        assert_deadbeat(F, np.zeros((2, 1)), [[0.0, 0.0]])
+    message = str(info.value)
+    assert "no power F^k, k = 1..2, is exactly zero" in message
+    assert "pass rtol=1e-08 to accept that" in message
+    assert assert_deadbeat(F, np.zeros((2, 1)), [[0.0, 0.0]], rtol=1e-8) == 2
+    # the printed float deadbeat gain of the UGV is deadbeat to rounding only
+    with pytest.raises(AssertionError, match="nilpotent to the tolerance 1e-08"):
+        assert_deadbeat(UGV.system.A, deadbeat_gain(UGV.system).L, UGV.system.C)
+    # an exactly nilpotent error matrix passes with its exact index
+    shift = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, 0.0]])
+    assert assert_deadbeat(shift, np.zeros((3, 1)), np.zeros((1, 3))) == 3
+    A = np.array([[1.0, 1.0], [0.0, 1.0]])
+    assert assert_deadbeat(A, [[2.0], [1.0]], [[1.0, 0.0]]) == 2
+    # not nilpotent at all, exactly or to a tolerance
+    with pytest.raises(AssertionError, match="nor zero to 1e-08"):
+        assert_deadbeat(np.eye(2), np.zeros((2, 1)), np.zeros((1, 2)))
 
 
 def test_assert_deadbeat_inconclusive_names_both_powers():
@@ -299,7 +323,7 @@ def test_assert_deadbeat_inconclusive_names_both_powers():
     F = np.array([[0.0, 1e-7], [0.0, 0.0]])
     C = np.eye(2)
     with pytest.raises(AssertionError) as info:
-        assert_deadbeat(A, A - F, C)
+        assert_deadbeat(A, A - F, C, rtol=1e-8)
     message = str(info.value)
     assert "cannot conclude: ||F^2|| / ||A||^2 <= 0 <= 1e-08" in message
     assert "but ||F^1|| / ||A||^1 >= 7.07e-08 only, not clearly above it" in message

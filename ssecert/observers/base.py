@@ -19,18 +19,20 @@ use only these methods and never a kind's name.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
+from .._exact_powers import Dyadic, ExactMatrix, as_dyadic, dyadic, exact_error_matrix
 from .._spec_table import SpecTable
 from ..budget import Budget
 from ..design.gains import Gain, GainError, deadbeat_gain, ogd_gain, pinv_gain, place_gain
 from ..system import System
-from ..tolerances import Tolerances
-from .lure import LureModel
+from ..tolerances import Tolerances, product_rounding
+from .lure import EXACT_ENTRIES, ExactLure, LureModel
 
 if TYPE_CHECKING:
     from .dynamic import DynamicObserver
@@ -156,11 +158,19 @@ class ObserverKind:
         """The linear error dynamics while the attack estimate is zero: F = A - L S."""
         return design.system.A - design.gain.L @ design.sensing
 
-    def exact_parts(
-        self, design: ObserverDesign
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-        """(A, L, S) whose exact combination A - L S is ``error_matrix``, or None."""
-        return design.system.A, design.gain.L, design.sensing
+    def exact_sensing(self, design: ObserverDesign) -> np.ndarray | Dyadic:
+        """The sensing matrix S as the design defines it: the floats of C (a float matrix is
+        its own exact value), or an exact ``Dyadic`` when S is a product (O_tau)."""
+        return design.sensing
+
+    def exact_error(self, design: ObserverDesign) -> ExactMatrix:
+        """The exact F = A - L S of the spec's data (the floats of A, the printed gain L and
+        S), of which ``error_matrix`` is the rounding; formed on demand."""
+        S = self.exact_sensing(design)
+        bound = (
+            None if isinstance(S, Dyadic) else product_rounding(design.gain.L, S, design.system.A)
+        )
+        return ExactMatrix.error_matrix(design.system.A, design.gain.L, S, bound=bound)
 
     def lure_model(self, design: ObserverDesign) -> LureModel:
         """The error dynamics in Lur'e form, for the LMI certificates.
@@ -175,7 +185,14 @@ class ObserverKind:
 
     def lure_form(self, design: ObserverDesign) -> LureModel:
         """The Lur'e model itself (``lure_model`` has checked ``lure_gap``); linear by default."""
-        return LureModel.linear(self.error_matrix(design), design.gain.L)
+        F = self.error_matrix(design)
+        exact = self.exact_error(design)
+        return LureModel.linear(
+            F,
+            design.gain.L,
+            exact_F=lambda: exact.value,
+            formation_error=exact.bound if exact.bound is not None else math.inf,
+        )
 
     def lure_gap(self, design: ObserverDesign) -> str | None:
         """Why ``design`` has no Lur'e form (so no LMI certificate), or None.
@@ -306,4 +323,68 @@ def soft_lure_model(design: ObserverDesign) -> LureModel:
     E = np.vstack([L, np.zeros((m, m))])
     Dw = nu * L2
     Ce = np.hstack([np.eye(n), np.zeros((n, m))])
-    return LureModel(A, B, Cw, E, Dw, Ce, float(design.shrink), n, float(design.threshold or 0.0))
+    exact_S = design.observer_kind.exact_sensing(design)
+    formation = _soft_formation_error(design, nu, L2)
+    N = n + m
+    fits = N * (N + 2 * m) + m * (N + m) <= EXACT_ENTRIES
+
+    def build() -> ExactLure | None:
+        return _exact_soft_lure(A_p, L, exact_S, nu, L2) if fits else None
+
+    return LureModel(
+        A,
+        B,
+        Cw,
+        E,
+        Dw,
+        Ce,
+        float(design.shrink),
+        n,
+        float(design.threshold or 0.0),
+        build,
+        formation,
+    )
+
+
+def _soft_formation_error(design: ObserverDesign, nu: float, L2: np.ndarray) -> float:
+    """A-priori bound on the rounding of the soft Lur'e model's float matrices (F, nu L2 S,
+    I - nu L2 and nu L2), from Higham's bound on each product; inf for a sensing matrix that
+    is itself a product (its rounding is measured on the exact model instead)."""
+    if design.observer_kind.exact_sensing(design) is not design.sensing:
+        return math.inf
+    S, L, A_p = design.sensing, design.gain.L, design.system.A
+    m = S.shape[0]
+    parts = [
+        product_rounding(L, S, A_p),
+        product_rounding(L2, S, scale=nu),
+        product_rounding(L2, np.eye(m), np.eye(m), scale=nu),
+        product_rounding(L2, np.eye(m), scale=nu),
+    ]
+    return math.sqrt(sum(v * v for v in parts)) * (1 + 1e-12)
+
+
+def _exact_soft_lure(
+    A_p: np.ndarray, L: np.ndarray, S: np.ndarray | Dyadic, nu: float, L2: np.ndarray
+) -> ExactLure:
+    """The exact matrices of ``soft_lure_model`` from the floats of A, L, S (or its exact
+    value), nu and L2."""
+    n = A_p.shape[0]
+    Sd = as_dyadic(S)
+    m = Sd.shape[0]
+    Ld = dyadic(L)
+    nuL2 = dyadic(L2).times(nu)
+    if np.array_equal(L2, np.diag(np.diag(L2))):  # diagonal L2: scale rows, no product
+        diag = dyadic(np.diag(L2)[:, None]).times(nu)
+        nuL2S = Dyadic(Sd.ints * diag.ints, Sd.exponent + diag.exponent)
+    else:
+        nuL2S = nuL2 @ Sd
+    I_m = Dyadic.eye(m)
+    return ExactLure(
+        A=Dyadic.block(
+            [[exact_error_matrix(A_p, L, Sd), -Ld], [Dyadic.zeros((m, n)), Dyadic.zeros((m, m))]]
+        ),
+        B=Dyadic.block([[Dyadic.zeros((n, m))], [I_m]]),
+        Cw=Dyadic.block([[-nuL2S, I_m - nuL2]]),
+        E=Dyadic.block([[Ld], [Dyadic.zeros((m, m))]]),
+        Dw=nuL2,
+    )

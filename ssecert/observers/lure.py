@@ -13,15 +13,62 @@ observers have no nonlinearity (B and Cw empty).  The LMI certificates of
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from fractions import Fraction
+from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .._exact_powers import Dyadic, ExactMatrix, dyadic
+
 if TYPE_CHECKING:
     from .base import ObserverDesign
 
-__all__ = ["LureModel", "scaling_text"]
+__all__ = ["LureModel", "ExactLure", "scaling_text"]
+
+# Largest model (entries of [A B E; Cw Dw]) whose exact matrices are formed on demand; beyond
+# it nothing is decided in exact arithmetic and only the a-priori rounding bound is used.
+EXACT_ENTRIES = 250_000
+
+
+@dataclass(frozen=True)
+class ExactLure:
+    """The exact matrices of a Lur'e model, formed from the spec's data (the floats of A, L,
+    C, the step and L2 as given), not from their floating-point products."""
+
+    A: Dyadic
+    B: Dyadic
+    Cw: Dyadic
+    E: Dyadic
+    Dw: Dyadic
+
+    def fractions(self, name: str) -> list[list[Fraction]]:
+        """One matrix (``"A"``, ``"B"``, ``"Cw"``, ``"E"``, ``"Dw"``) as rows of Fractions."""
+        return getattr(self, name).to_fractions()
+
+    def scaled(self, s: np.ndarray) -> ExactLure:
+        """The same dynamics in the coordinates xi = diag(s) xi_b, s powers of two."""
+        k = np.round(np.log2(np.asarray(s, dtype=float))).astype(np.int64)
+        m, r = self.B.shape[1], self.E.shape[1]
+        zm, zr = np.zeros(m, np.int64), np.zeros(r, np.int64)
+        return ExactLure(
+            self.A.scaled(-k, k),
+            self.B.scaled(-k, zm),
+            self.Cw.scaled(zm, k),
+            self.E.scaled(-k, zr),
+            self.Dw,
+        )
+
+    def distance_bound(self, model: LureModel) -> float:
+        """An upper bound on the 2-norm of [A B E; Cw Dw] of ``model`` minus these."""
+        parts = [
+            getattr(self, name).distance_bound(getattr(model, name))
+            for name in ("A", "B", "Cw", "E", "Dw")
+        ]
+        return math.sqrt(sum(v * v for v in parts)) * (1 + 1e-12)
 
 
 def scaling_text(s: np.ndarray) -> str:
@@ -47,6 +94,56 @@ class LureModel:
     q: float
     n_e: int
     threshold: float = 0.0
+    # the exact matrices from the spec's data (None: beyond their budget); without it the
+    # model's own floats are its data
+    exact_build: Callable[[], ExactLure | None] | None = field(
+        default=None, compare=False, repr=False
+    )
+    # a-priori bound on the 2-norm of the floats of [A B E; Cw Dw] minus the exact matrices
+    formation_error: float = 0.0
+
+    def exact(self) -> ExactLure | None:
+        """The exact matrices of the model (formed once), or None beyond their budget."""
+        return self._exact
+
+    @cached_property
+    def _exact(self) -> ExactLure | None:
+        if self.exact_build is None:
+            return ExactLure(*(dyadic(getattr(self, k)) for k in ("A", "B", "Cw", "E", "Dw")))
+        return self.exact_build()
+
+    def exact_A(self, *, error_block: bool = False) -> ExactMatrix | None:
+        """The exact A (or its estimation-error block F with ``error_block``), formed on
+        demand, when the model's floats are a rounding of the spec's data; None when the
+        floats are themselves the data (a model built from given matrices)."""
+        if self.exact_build is None:
+            return None
+        k = self.n_e if error_block else self.N
+        model = self
+
+        def build() -> Dyadic | None:
+            exact = model.exact()
+            return None if exact is None else exact.A[:k, :k]
+
+        finite = math.isfinite(self.formation_error)
+        return ExactMatrix(
+            build,
+            self.formation_error if finite else None,
+            "F = A - L C formed exactly from the spec's data"
+            if error_block
+            else "the model's A formed exactly from the spec's data",
+        )
+
+    @cached_property
+    def rounding(self) -> float:
+        """An upper bound on the 2-norm of the model's floats [A B E; Cw Dw] minus its exact
+        matrices: the perturbation every certificate verified on the floats must absorb."""
+        if self.exact_build is None:
+            return 0.0
+        exact = self.exact()
+        if exact is None:
+            return self.formation_error
+        return exact.distance_bound(self)
 
     @property
     def N(self) -> int:
@@ -81,6 +178,15 @@ class LureModel:
         (``balancing``) every entry is scaled exactly.
         """
         s = np.asarray(s, dtype=float)
+        build = None
+        if self.exact_build is not None:
+            parent = self
+
+            def build() -> ExactLure | None:
+                exact = parent.exact()
+                return None if exact is None else exact.scaled(s)
+
+        spread = float(s.max() / s.min()) if s.size else 1.0
         return LureModel(
             self.A * (s[None, :] / s[:, None]),
             self.B / s[:, None],
@@ -91,6 +197,8 @@ class LureModel:
             self.q,
             self.n_e,
             self.threshold,
+            build,
+            self.formation_error * spread,
         )
 
     def balancing(self, spread: float = 16.0) -> np.ndarray | None:
@@ -147,7 +255,43 @@ class LureModel:
         return out
 
     @classmethod
-    def linear(cls, F: np.ndarray, L: np.ndarray) -> LureModel:
-        """e+ = F e + L a with no nonlinearity (a Luenberger-type observer)."""
+    def linear(
+        cls,
+        F: np.ndarray,
+        L: np.ndarray,
+        *,
+        exact_F: Callable[[], Dyadic | None] | None = None,
+        formation_error: float = 0.0,
+    ) -> LureModel:
+        """e+ = F e + L a with no nonlinearity (a Luenberger-type observer); ``exact_F`` forms
+        the exact F when F is a rounded product (``formation_error`` bounds the rounding)."""
         n, r = L.shape
-        return cls(F, np.zeros((n, 0)), np.zeros((0, n)), L, np.zeros((0, r)), np.eye(n), 0.0, n)
+        build = None
+        if exact_F is not None:
+            make_F = exact_F
+
+            def build() -> ExactLure | None:
+                exact = make_F()
+                if exact is None:
+                    return None
+                return ExactLure(
+                    exact,
+                    Dyadic.zeros((n, 0)),
+                    Dyadic.zeros((0, n)),
+                    dyadic(L),
+                    Dyadic.zeros((0, r)),
+                )
+
+        return cls(
+            F,
+            np.zeros((n, 0)),
+            np.zeros((0, n)),
+            L,
+            np.zeros((0, r)),
+            np.eye(n),
+            0.0,
+            n,
+            0.0,
+            build,
+            formation_error,
+        )

@@ -8,20 +8,22 @@ observability matrix of the window.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
+from .._exact_powers import Dyadic, ExactMatrix, as_dyadic, dyadic, exact_observability_matrix
 from .._spec_table import SpecTable
 from ..budget import Budget
 from ..design.gains import Gain, GainError, ogd_gain
 from ..system import System
-from ..tolerances import Tolerances
+from ..tolerances import Tolerances, product_rounding
 from .base import ObserverDesign, check_finite, parse_unit_shrink
 from .dsso import SoftThresholdObserverKind
 from .dynamic import DynamicObserver
-from .lure import LureModel
+from .lure import ExactLure, LureModel
 from .registry import register
 from .simulators import WindowSSO
 
@@ -117,10 +119,32 @@ class SparseSoftObserverKind(SoftThresholdObserverKind):
         inner = np.eye(design.system.n) - step * design.sensing.T @ design.sensing
         return design.system.A @ np.linalg.matrix_power(inner, design.inner_steps)
 
-    def exact_parts(
-        self, design: ObserverDesign
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-        return None if design.inner_steps > 1 else super().exact_parts(design)
+    def exact_sensing(self, design: ObserverDesign) -> np.ndarray | Dyadic:
+        """C, or for a window tau > 1 the exact O_tau = [C; C A; ...; C A^(tau-1)] (the
+        design's float O_tau is its rounding); the floats when the exact one is too large."""
+        if design.window == 1:
+            return design.sensing
+        exact = exact_observability_matrix(design.system.A, design.system.C, design.window)
+        return design.sensing if exact is None else exact
+
+    def exact_error(self, design: ObserverDesign) -> ExactMatrix:
+        """A - L S, or with m inner steps A (I - step S' S)^m, formed exactly from the spec's
+        data (None beyond the budget of its bits: the power's entries grow with m)."""
+        if design.inner_steps == 1:
+            return super().exact_error(design)
+        A, nu, steps = design.system.A, design.parameter("step"), design.inner_steps
+        n = A.shape[0]
+        S = self.exact_sensing(design)
+
+        def build() -> Dyadic | None:
+            powers = _exact_inner_powers(n, S, nu, steps, A)
+            return None if powers is None else powers[0]
+
+        return ExactMatrix(
+            build,
+            _inner_rounding(A, design.sensing, S, nu, steps)[0],
+            f"F = A (I - step S' S)^{steps} formed exactly from the floats of A, C and the step",
+        )
 
     def lure_gap(self, design: ObserverDesign) -> str | None:
         if design.inner_steps > 1:
@@ -143,12 +167,29 @@ class SparseSoftObserverKind(SoftThresholdObserverKind):
         n = design.system.n
         S = design.sensing
         nu = design.parameter("step")
+        steps = design.inner_steps
         inner = np.eye(n) - nu * S.T @ S
         rows, power = [], np.eye(n)
-        for _ in range(design.inner_steps):
+        for _ in range(steps):
             rows.append(-nu * S @ power)
             power = inner @ power
         W = np.vstack(rows)
+        exact_S = self.exact_sensing(design)
+        A = design.system.A
+
+        def build() -> ExactLure | None:
+            powers = _exact_inner_powers(n, exact_S, nu, steps, A)
+            if powers is None:
+                return None
+            F, rows = powers
+            return ExactLure(
+                A=F,
+                B=Dyadic.zeros((n, W.shape[0])),
+                Cw=Dyadic.block([[r] for r in rows]),
+                E=Dyadic.zeros((n, S.shape[0])),
+                Dw=Dyadic.zeros((W.shape[0], S.shape[0])),
+            )
+
         return LureModel(
             A=self.error_matrix(design),
             B=np.zeros((n, W.shape[0])),
@@ -159,6 +200,8 @@ class SparseSoftObserverKind(SoftThresholdObserverKind):
             q=float(design.shrink),
             n_e=n,
             threshold=float(design.threshold or 0.0),
+            exact_build=build,
+            formation_error=_inner_rounding(A, S, exact_S, nu, steps)[1],
         )
 
     def simulation_flops(self, design: ObserverDesign) -> float:
@@ -166,3 +209,65 @@ class SparseSoftObserverKind(SoftThresholdObserverKind):
             return super().simulation_flops(design)
         n, m = design.system.n, design.sensing.shape[0]
         return design.inner_steps * 2.0 * (n + m) ** 2 + 2.0 * (n + m) * m
+
+
+EXACT_INNER_WORK = 2e7  # word operations for the exact powers of an SSO's inner map
+
+
+def _exact_inner_powers(
+    n: int, S: np.ndarray | Dyadic, nu: float, steps: int, A: np.ndarray
+) -> tuple[Dyadic, list[Dyadic]] | None:
+    """A (I - nu S' S)^steps and the threshold inputs -nu S (I - nu S' S)^i, i < steps, in
+    exact arithmetic; None when their bits would exceed ``EXACT_INNER_WORK``."""
+    Sd = as_dyadic(S)
+    inner = Dyadic.eye(n) - (Sd.T @ Sd).times(nu)
+    # each factor adds the bits of ``inner``: the last power has about steps times them
+    words = steps * (inner.bits() + 64) / 64.0
+    if steps * n**3 * words**1.6 > EXACT_INNER_WORK:
+        return None
+    nuS = Sd.times(-nu)
+    rows, power = [], Dyadic.eye(n)
+    for _ in range(steps):
+        rows.append(nuS @ power)
+        power = inner @ power
+    return dyadic(A) @ power, rows
+
+
+def _inner_rounding(
+    A: np.ndarray, S: np.ndarray, exact_S: np.ndarray | Dyadic, nu: float, steps: int
+) -> tuple[float, float]:
+    """A-priori bounds on the rounding of A (I - nu S'S)^steps and of the dead-zone model
+    (that matrix and every threshold input -nu S (I - nu S'S)^i) computed in floating point,
+    as 2-norms of their distance from the exact values: (bound on F, bound on the model).
+
+    One product of n x n matrices X Y is within n gamma_n ||X|| ||Y|| of the exact product of
+    its floats (Higham 3.5, with || |X| ||_2 <= sqrt(n) ||X||_2); the recurrence
+    e_k <= (dM + n gamma a) p_(k-1) + a e_(k-1), p_k = a^k + e_k, bounds the k-th power's
+    error, a >= ||M|| + dM.  The power of F is computed by repeated squaring, which takes
+    fewer roundings; the bound is doubled for it.
+    """
+    n = A.shape[0]
+    u = float(np.finfo(float).eps) / 2
+    k = max(n, S.shape[0]) + 3
+    gamma = k * u / (1 - k * u)
+    with np.errstate(all="ignore"):
+        dS = 0.0 if not isinstance(exact_S, Dyadic) else exact_S.distance_bound(S)
+        normS = float(np.linalg.norm(S, 2)) * (1 + 1e-12) + dS
+        M = np.eye(n) - nu * S.T @ S
+        dM = product_rounding(S.T, S, np.eye(n), scale=nu) + abs(nu) * (2 * normS + dS) * dS
+        a = (float(np.linalg.norm(M, 2)) * (1 + 1e-12) + dM) * (1 + 1e-12)
+        normA = float(np.linalg.norm(A, 2)) * (1 + 1e-12)
+        e, p, rows = 0.0, 1.0, 0.0
+        for _ in range(steps):
+            # the threshold input of this inner step: -nu S P, within nu (||S|| e + dS p) + rounding
+            row = abs(nu) * (normS * e + dS * p + 2 * k * gamma * normS * p)
+            rows += row * row
+            e = (dM + k * gamma * a) * p + a * e
+            p = a * p + e
+            if not (math.isfinite(e) and math.isfinite(p)):
+                return math.inf, math.inf
+        dF = 2.0 * (normA * e + k * gamma * normA * p) * (1 + 1e-12)
+        model = math.sqrt(dF * dF + rows) * (1 + 1e-12)
+    if not (math.isfinite(dF) and math.isfinite(model)):
+        return math.inf, math.inf
+    return dF, model

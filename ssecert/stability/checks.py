@@ -27,9 +27,9 @@ from .equilibria import nonzero_equilibrium
 from .gain_check import (
     EXACT_LIMIT,  # noqa: F401  (stays importable here)
     _decided_by,
+    _exact,
     _known,
     _lyapunov_evidence,
-    _parts,
     observer_gain_check,
 )
 from .lmi import (
@@ -74,7 +74,7 @@ def observer_stability_check(
     title = f"Observer stability ({design.kind})"
     if not design.sparse:
         lyap = lyapunov_certificate(
-            design.error_matrix, parts=_parts(design), clear=tol.certificate_clear
+            design.error_matrix, exact=_exact(design), clear=tol.certificate_clear
         )
         return _linear_stability_check(lyap, tol, title), lyap
     gap = design.observer_kind.lure_gap(design)
@@ -267,7 +267,9 @@ def _without_lure_model(design: ObserverDesign, gap: str, tol: Tolerances, title
     and is inconclusive otherwise."""
     dead_zone = design.observer_kind.dead_zone_model(design)
     if dead_zone is not None:
-        lyap = lyapunov_certificate(dead_zone.A, clear=tol.certificate_clear)
+        lyap = lyapunov_certificate(
+            dead_zone.A, exact=dead_zone.exact_A(), clear=tol.certificate_clear
+        )
         if lyap.verdict.value == "fails":
             return Check(
                 id="observer_stability",

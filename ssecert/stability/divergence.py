@@ -42,7 +42,9 @@ def divergence_witness(model: LureModel) -> dict[str, Any] | None:
     if model.m == 0 or model.q <= 0:
         return None
     M = model.vertex(model.q)
-    mu, w, error = _dominant_left_pair(M)
+    # M's floats are within (1 + q ||B||) d of the loop of the spec's exact data
+    spread = (1.0 + model.q * float(np.linalg.norm(model.B, 2))) * model.rounding
+    mu, w, error = _dominant_left_pair(M, spread)
     if mu is None or w is None or abs(mu) - 1.0 <= max(1e-9, 100.0 * error):
         return None
     beta = model.q * model.threshold * float(np.abs(model.B.T @ w).sum())
@@ -76,9 +78,12 @@ def divergence_witness(model: LureModel) -> dict[str, Any] | None:
     }
 
 
-def _dominant_left_pair(M: np.ndarray) -> tuple[complex | None, np.ndarray | None, float]:
+def _dominant_left_pair(
+    M: np.ndarray, rounding: float = 0.0
+) -> tuple[complex | None, np.ndarray | None, float]:
     """The eigenvalue of largest modulus, a unit left eigenvector and a first-order error bound
-    of the eigenvalue (eps ||M|| times its condition number)."""
+    of the eigenvalue ((n eps ||M|| + rounding) times its condition number; ``rounding``
+    bounds the distance of M from the matrix it stands for)."""
     values, left = np.linalg.eig(M.T)  # M' w = mu w, i.e. w' M = mu w'
     if not np.all(np.isfinite(values)):
         return None, None, math.inf
@@ -90,7 +95,7 @@ def _dominant_left_pair(M: np.ndarray) -> tuple[complex | None, np.ndarray | Non
     overlap = float(abs(np.vdot(np.conj(w), v)))  # |w' v| with unit w and v
     condition = 1.0 / max(overlap, float(np.finfo(float).tiny))
     scale = max(float(np.linalg.norm(M, 2)), 1.0)
-    error = float(np.finfo(float).eps) * scale * condition * M.shape[0]
+    error = (float(np.finfo(float).eps) * scale * M.shape[0] + rounding) * condition
     if abs(mu.imag) <= error:
         mu, w = complex(mu.real), w.real / np.linalg.norm(w.real)
     return complex(mu), w, float(error)

@@ -15,7 +15,8 @@ two binaries per channel (active positive, active negative), big-M region
 constraints on |w_i| <= ``MILP_BOX`` thresholds and at least one active
 channel (an equilibrium with every channel in the dead zone is the origin
 when F is Schur).  An equilibrium other than the origin is confirmed in
-exact rational arithmetic on the model's floats before it is reported: the
+exact rational arithmetic on the model's exact matrices (formed from the spec's
+data, not from their floating-point products) before it is reported: the
 observer then settles on a wrong estimate with no attack, and is not
 globally asymptotically stable.
 """
@@ -27,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from .._rational import fractions, product, solve
+from .._rational import product, solve
 from ..observers.lure import LureModel
 
 __all__ = ["nonzero_equilibrium", "attacked_equilibria", "MAX_PATTERNS"]
@@ -276,8 +277,11 @@ def _confirm(
     """Solve the pattern's fixed-point equations exactly; the witness if the solution is an
     equilibrium in its region (nonzero without attack), else None."""
     N = model.N
+    exact = model.exact()
+    if exact is None:  # the spec's exact data is beyond its budget: nothing is confirmed
+        return None
     lam, q = Fraction(model.threshold), Fraction(model.q)
-    A, B, Cw = fractions(model.A), fractions(model.B), fractions(model.Cw)
+    A, B, Cw = exact.fractions("A"), exact.fractions("B"), exact.fractions("Cw")
     on = [j for j in range(model.m) if signs[j] != 0]
     BDCw = product([[B[i][j] for j in on] for i in range(N)], [Cw[j] for j in on]) if on else None
     K = [[(1 if i == k else 0) - A[i][k] - (q * BDCw[i][k] if BDCw else 0) for k in range(N)]
@@ -287,8 +291,8 @@ def _confirm(
         push = [Fraction(0)] * N
     else:
         aq = [[Fraction(float(v))] for v in attack]
-        shift = [row[0] for row in product(fractions(model.Dw), aq)]
-        push = [row[0] for row in product(fractions(model.E), aq)]
+        shift = [row[0] for row in product(exact.fractions("Dw"), aq)]
+        push = [row[0] for row in product(exact.fractions("E"), aq)]
     rhs = [
         push[i] + q * sum((B[i][j] * (shift[j] - lam * int(signs[j])) for j in on), Fraction(0))
         for i in range(N)

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from .._exact_powers import ExactMatrix
 from .._format import sig
 from ..design.gains import GainError
 from ..observers import ObserverDesign
@@ -84,7 +85,6 @@ def observer_gain_check(design: ObserverDesign, *, tolerances: Tolerances | None
     tol = Tolerances.check(tolerances)
     gain = design.gain
     F = design.error_matrix
-    parts = _parts(design)
     computed_radius = float(np.abs(np.linalg.eigvals(F)).max())
     fields: dict[str, Any] = {"L": gain.L, "gain_method": gain.method, "kind": design.kind}
     title = f"Observer gain ({gain.method})"
@@ -94,7 +94,7 @@ def observer_gain_check(design: ObserverDesign, *, tolerances: Tolerances | None
     }
     if gain.method == "deadbeat":
         return _deadbeat_check(design, fields, evidence, title)
-    cert = lyapunov_certificate(F, parts=parts, clear=tol.certificate_clear)
+    cert = lyapunov_certificate(F, exact=_exact(design), clear=tol.certificate_clear)
     fields["spectral_radius"] = cert.spectral_radius
     evidence.update(_lyapunov_evidence(cert))
     verdict = Verdict(cert.verdict)
@@ -138,9 +138,10 @@ def _known(value: float | None) -> float:
     return value
 
 
-def _parts(design: ObserverDesign) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-    """(A, L, S) whose exact combination A - L S is the error matrix, when it is one."""
-    return design.observer_kind.exact_parts(design)
+def _exact(design: ObserverDesign) -> ExactMatrix:
+    """The exact error matrix of the spec's data, of which ``design.error_matrix`` is the
+    rounding (formed on demand)."""
+    return design.observer_kind.exact_error(design)
 
 
 def _deadbeat_check(
@@ -267,7 +268,7 @@ def _deadbeat_instability(design: ObserverDesign) -> dict[str, Any] | None:
         return None
     from .lyapunov import instability_witness
 
-    witness = instability_witness(design.error_matrix, parts=_parts(design))
+    witness = instability_witness(design.error_matrix, exact=_exact(design))
     if witness is not None and witness["verified"]:
         return witness
     return None

@@ -177,7 +177,7 @@ def _prechecks(model: LureModel) -> tuple[Verdict | None, str, dict[str, Any]]:
     if rho_F >= 1 - 1e-12:
         from .spectral import schur_decision
 
-        decision = schur_decision(F)
+        decision = schur_decision(F, exact=model.exact_A(error_block=True))
         details["exact_decision"] = decision.to_dict()
         if decision.state != "stable":
             witness = instability_witness(F, decision=decision)
@@ -209,6 +209,21 @@ def _prechecks(model: LureModel) -> tuple[Verdict | None, str, dict[str, Any]]:
         rho_q = float(np.abs(np.linalg.eigvals(model.vertex(model.q))).max())
         details["spectral_radius_at_sector_vertex"] = rho_q
         if rho_q >= 1 - 1e-9:
+            from .spectral import schur_decision
+
+            vertex = schur_decision(model.vertex(model.q), exact=_exact_vertex(model))
+            details["sector_vertex_decision"] = vertex.to_dict()
+            if vertex.state != "unstable":
+                return (
+                    Verdict.INCONCLUSIVE,
+                    (
+                        f"the linear loop phi = {model.q:g} w that the sector [0, {model.q:g}] "
+                        f"contains has spectral radius within rounding of 1 (computed "
+                        f"{rho_q:.12g}; {vertex.reason}): a sector certificate would have a "
+                        f"margin below what floating point can verify"
+                    ),
+                    details,
+                )
             if model.q >= 1 - 1e-12:
                 why = (
                     f"with shrink = 1 the sector [0, 1] contains the identity, and the linear "
@@ -230,6 +245,23 @@ def _prechecks(model: LureModel) -> tuple[Verdict | None, str, dict[str, Any]]:
             details["channel_corner"] = corner
             return Verdict.INCONCLUSIVE, corner_reason(corner), details
     return None, "", details
+
+
+def _exact_vertex(model: LureModel) -> Any:
+    """The exact large-signal loop A + q B Cw of the spec's data (an ``ExactMatrix``), or None
+    when the model's floats are its data."""
+    from .._exact_powers import ExactMatrix
+
+    if model.exact_build is None:
+        return None
+
+    def build() -> Any:
+        exact = model.exact()
+        if exact is None:
+            return None
+        return exact.A + (exact.B @ exact.Cw).times(model.q)
+
+    return ExactMatrix(build, None, "the loop A + q B Cw formed exactly from the spec's data")
 
 
 def channel_vertex_instability(model: LureModel) -> dict[str, Any] | None:

@@ -70,7 +70,11 @@ def _error_bound(
     normC = float(np.linalg.norm(np.hstack([model.Cw, model.Dw]), 2)) if model.m else 0.0
     normCe = float(np.linalg.norm(model.Ce, 2)) if output else 0.0
     raw = (normG**2 + 2.0) * normP + (2 * model.q * normC + 2) * tmax + normCe**2
-    return 10.0 * size * EPS * raw / normP
+    # the model's floats are within d of the exact matrices of the spec's data: G'PG moves by
+    # at most (2 ||G|| + d) d ||P||, the sector terms by 2 q max(T) d
+    d = model.rounding
+    data = (2.0 * normG + d) * d * normP + 2.0 * model.q * tmax * d
+    return 10.0 * size * EPS * raw / normP + data * (1 + 1e-12) / normP
 
 
 def definite_problem(P: np.ndarray, clear: float) -> str:

@@ -16,6 +16,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from .._exact_powers import ExactMatrix
 from .._validation import as_real_matrix
 from ..results import Verdict
 from ..tolerances import EPS
@@ -91,6 +92,7 @@ def instability_witness(
     steps: int = 2000,
     parts: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
     decision: Any = None,
+    exact: ExactMatrix | None = None,
 ) -> dict[str, Any] | None:
     """A real initial error that does not decay under F, when F is not shown stable.
 
@@ -112,11 +114,13 @@ def instability_witness(
         Decide on F = A - L C formed exactly from these floats.
     decision : SchurDecision, optional
         A decision already made for this F.
+    exact : ExactMatrix, optional
+        Decide on the exact value F stands for (instead of ``parts``).
     """
     from .spectral import schur_decision
 
     if decision is None:
-        decision = schur_decision(F, parts=parts)
+        decision = schur_decision(F, parts=parts, exact=exact)
     if decision.state == "stable":
         return None
     n = F.shape[0]
@@ -156,6 +160,7 @@ def lyapunov_certificate(
     *,
     clear: float = 100.0,
     parts: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+    exact: ExactMatrix | None = None,
 ) -> LyapunovCertificate:
     """Certify that e(k+1) = F e(k) is asymptotically stable, or show it is not.
 
@@ -175,6 +180,10 @@ def lyapunov_certificate(
     parts : (A, L, C), optional
         The floats F was formed from (F = A - L C); exact decisions are then
         made on the matrix of the printed gain.
+    exact : ExactMatrix, optional
+        The exact matrix F stands for when it is a rounded product (instead of ``parts``):
+        exact decisions are made on it, and a verified P must also absorb the distance
+        between F and it.
 
     Returns
     -------
@@ -194,10 +203,12 @@ def lyapunov_certificate(
     Q = np.eye(n) if Q is None else np.asarray(as_real_matrix(Q, "Q", shape=(n, n)))
     Q = 0.5 * (Q + Q.T)
     rho = float(np.abs(np.linalg.eigvals(F)).max()) if n else 0.0
+    if exact is None and parts is not None:
+        exact = ExactMatrix.error_matrix(*parts)
     P, why = _lyapunov_solution(F, Q)
     if P is None:
-        return _exact_fallback(F, parts, rho, why)
-    c = _check_solution(F, Q, P)
+        return _exact_fallback(F, exact, rho, why)
+    c = _check_solution(F, Q, P, 0.0 if exact is None else exact.rounding(F))
     contraction = _verified_contraction(c, clear)
     if contraction is not None:
         return LyapunovCertificate(
@@ -217,7 +228,7 @@ def lyapunov_certificate(
     )
     margin = min(c.dec_min, c.p_min)  # negative when P or the decrease is indefinite
     unverified = _Unverified(c.P, c.decrease, margin, c.bound, c.condition, c.residual)
-    return _exact_fallback(F, parts, rho, why, unverified)
+    return _exact_fallback(F, exact, rho, why, unverified)
 
 
 def _lyapunov_solution(F: np.ndarray, Q: np.ndarray) -> tuple[np.ndarray | None, str]:
@@ -249,9 +260,13 @@ class _Checked(NamedTuple):
     residual: float
 
 
-def _check_solution(F: np.ndarray, Q: np.ndarray | None, P: np.ndarray) -> _Checked:
+def _check_solution(
+    F: np.ndarray, Q: np.ndarray | None, P: np.ndarray, rounding: float = 0.0
+) -> _Checked:
     """P symmetrised, its decrease, their smallest eigenvalues and the error bound (and the
-    residual of the Lyapunov equation P solves for Q, NaN without Q)."""
+    residual of the Lyapunov equation P solves for Q, NaN without Q).  ``rounding`` bounds
+    ||F - F_exact||_2 for the exact matrix F stands for: ||F'PF - F_e'PF_e|| is at most
+    (2 ||F|| + rounding) rounding ||P||, which the bound takes in."""
     n = F.shape[0]
     normF = float(np.linalg.norm(F, 2))
     P = 0.5 * (P + P.T)
@@ -264,7 +279,7 @@ def _check_solution(F: np.ndarray, Q: np.ndarray | None, P: np.ndarray) -> _Chec
     decrease = P - F.T @ P @ F
     decrease = 0.5 * (decrease + decrease.T)
     # rounding in forming F^T P F and in eigvalsh, relative to ||P||
-    bound = 10 * n * EPS * (normF**2 + 1.0)
+    bound = 10 * n * EPS * (normF**2 + 1.0) + (2.0 * normF + rounding) * rounding * (1 + 1e-12)
     dec_min = float(np.linalg.eigvalsh(decrease)[0]) / normP if n else 1.0
     p_eigs = np.linalg.eigvalsh(P)
     p_min = float(p_eigs[0]) / normP
@@ -291,12 +306,13 @@ def _verified_contraction(c: _Checked, clear: float) -> float | None:
 
 
 def verified_decrease(
-    F: np.ndarray, P: np.ndarray, *, clear: float = 100.0
+    F: np.ndarray, P: np.ndarray, *, clear: float = 100.0, rounding: float = 0.0
 ) -> tuple[float, float] | None:
     """(margin, error bound) when V = e' P e is verified to decrease along e+ = F e, as
     ``lyapunov_certificate`` verifies its own P (both P and P - F' P F positive definite by
-    more than ``clear`` times a rounding-error bound, relative to ||P||); None otherwise."""
-    c = _check_solution(np.asarray(F, float), None, np.asarray(P, float))
+    more than ``clear`` times a rounding-error bound, relative to ||P||); None otherwise.
+    ``rounding`` bounds the distance of F from the exact matrix it stands for."""
+    c = _check_solution(np.asarray(F, float), None, np.asarray(P, float), rounding)
     if _verified_contraction(c, clear) is None:
         return None
     return c.dec_min, c.bound
@@ -315,7 +331,7 @@ class _Unverified(NamedTuple):
 
 def _exact_fallback(
     F: np.ndarray,
-    parts: tuple[np.ndarray, np.ndarray, np.ndarray] | None,
+    exact: ExactMatrix | None,
     rho: float,
     why: str,
     unverified: _Unverified | None = None,
@@ -323,7 +339,7 @@ def _exact_fallback(
     """The certificate the exact F decides (``schur_decision``) when no P verifies."""
     from .spectral import schur_decision
 
-    decision = schur_decision(F, parts=parts)
+    decision = schur_decision(F, exact=exact)
     proof = decision.to_dict()
     if decision.state == "stable":
         if decision.radius_upper is None:  # pragma: no cover - set whenever stable
@@ -333,7 +349,7 @@ def _exact_fallback(
             Verdict.HOLDS,
             None,
             None,
-            1.0 - upper,
+            float(decision.details.get("spectral_radius_gap", 1.0 - upper)),
             0.0,
             upper,
             None,
@@ -344,7 +360,7 @@ def _exact_fallback(
             "exact powers",
             proof,
         )
-    witness = instability_witness(F, parts=parts, decision=decision)
+    witness = instability_witness(F, exact=exact, decision=decision)
     if decision.state == "unstable":
         verdict, reason = Verdict.FAILS, decision.reason
     else:

@@ -6,7 +6,8 @@ Lur'e model (``ssecert.observers.lure``); a tail that neither converges nor
 grows and repeats itself after k >= 2 steps is taken as a candidate.  Along
 the candidate the soft threshold follows one active/sign pattern per step, on
 which the map is affine, so the k-step map is affine too: its fixed point is
-solved in exact rational arithmetic on the model's floats, and then iterated
+solved in exact rational arithmetic on the model's exact matrices (formed from the
+spec's data), and then iterated
 exactly through the true nonlinearity.  An orbit is reported only when that
 exact iteration returns to its start after k steps without having been at
 rest: the observer then cycles without attack and is not globally
@@ -20,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from .._rational import fractions, product, solve
+from .._rational import product, solve
 from ..observers.lure import LureModel
 
 __all__ = ["periodic_orbit"]
@@ -75,8 +76,11 @@ def _confirm(model: LureModel, states: np.ndarray) -> dict[str, Any] | None:
     visit, exactly; the witness when iterating the true dynamics from it, exactly, returns
     to it after k steps and not before one step."""
     N, k = model.N, states.shape[0]
+    exact = model.exact()
+    if exact is None:  # the spec's exact data is beyond its budget: nothing is confirmed
+        return None
     lam, q = Fraction(model.threshold), Fraction(model.q)
-    A, B, Cw = fractions(model.A), fractions(model.B), fractions(model.Cw)
+    A, B, Cw = exact.fractions("A"), exact.fractions("B"), exact.fractions("Cw")
     M = [[Fraction(int(i == j)) for j in range(N)] for i in range(N)]
     c = [Fraction(0)] * N
     for x in states:

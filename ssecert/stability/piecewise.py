@@ -101,6 +101,42 @@ class _Regions:
             T[N, N] = 1.0
             self.T.append(T)
 
+    def exact_rows(self, model: LureModel, k: int, j: int) -> list[list[Fraction]] | None:
+        """The rows of [G_k; G_j T_k] (thresholds 1) formed exactly from the model's exact
+        matrices (the spec's data), or None when those are beyond their budget."""
+        exact = model.exact()
+        if exact is None:
+            return None
+        from .._rational import product
+
+        A, B, Cw = exact.fractions("A"), exact.fractions("B"), exact.fractions("Cw")
+        q, N = Fraction(model.q), model.N
+
+        def G(signs: np.ndarray) -> list[list[Fraction]]:
+            rows = []
+            for i, si in enumerate(signs):
+                if si == 0:
+                    rows += [[-v for v in Cw[i]] + [Fraction(1)], [*Cw[i], Fraction(1)]]
+                else:
+                    rows.append([int(si) * v for v in Cw[i]] + [Fraction(-1)])
+            return rows
+
+        s = self.signs[k]
+        on = [i for i in range(model.m) if s[i] != 0]
+        T = [[A[a][b] + q * sum((B[a][i] * Cw[i][b] for i in on), Fraction(0))
+              for b in range(N)] + [-q * sum((B[a][i] * int(s[i]) for i in on), Fraction(0))]
+             for a in range(N)]  # fmt: skip
+        T.append([Fraction(0)] * N + [Fraction(1)])
+        return G(s) + product(G(self.signs[j]), T)
+
+    def exact_inner_rows(self, model: LureModel, k: int) -> list[list[Fraction]] | None:
+        """The rows of G_k Z (the initial states (e, a_hat = 0)) formed exactly, or None."""
+        rows = self.exact_rows(model, k, k)
+        if rows is None:
+            return None
+        n, N = model.n_e, model.N
+        return [row[:n] + [row[N]] for row in rows[: len(self.G[k])]]
+
     def mirror(self, k: int) -> int:
         return self.index[tuple(-self.signs[k])]
 
@@ -172,7 +208,12 @@ def _search(model: LureModel, seed: int, floor: float, clear: float) -> dict[str
     empty_inner = {
         k
         for k in regions.representatives()
-        if _empty_in_box(regions.G[k] @ _inner_map(model), ladder[-1]) is not None
+        if _empty_in_box(
+            regions.G[k] @ _inner_map(model),
+            ladder[-1],
+            partial(regions.exact_inner_rows, unit, k),
+        )
+        is not None
     }
     attempts: list[dict[str, Any]] = []
     best: dict[str, Any] | None = None
@@ -383,7 +424,10 @@ def _verify(
     dead = model.A.T @ P0 @ model.A - P0 + ALPHA * np.eye(N)
     worst = -float(np.linalg.eigvalsh(_sym(dead))[-1])
     top = max(float(np.abs(model.A).max()), 1.0)
-    bound = 10 * N * EPS * (top**2 + 1) * float(np.abs(P0).max()) * N
+    d = model.rounding  # the model's floats against the spec's exact data
+    bound = 10 * N * EPS * (top**2 + 1) * float(np.abs(P0).max()) * N + _perturbation(
+        model.A, P0, d
+    )
     where = "the dead zone's decrease"
     if worst <= clear * bound:
         return worst, bound, f"{where}: margin {worst:.2e} not above {clear:g} x {bound:.2e}"
@@ -409,6 +453,11 @@ def _verify(
         terms.append(np.abs(H).T @ W @ np.abs(H))
         size = M.shape[0] + H.shape[0]
         err = 10 * size * EPS * sum(float(np.abs(t).sum()) for t in terms)
+        # G and T are formed from Cw and A + q B D Cw: each is within (1 + q ||B||) d of exact
+        dT = (1.0 + model.q * float(np.linalg.norm(model.B, 2))) * d
+        err += _perturbation(H, W, dT)
+        if kind == "decrease":
+            err += _perturbation(regions.T[k], P[j], dT)
         eig = np.linalg.eigvalsh(_sym(M))
         margin = float(-eig[-1]) if sign > 0 else float(eig[0])
         if margin < worst:
@@ -423,13 +472,20 @@ def _verify(
     return worst, bound, ""
 
 
+def _perturbation(X: np.ndarray, P: np.ndarray, d: float) -> float:
+    """A bound on ||X'PX - Y'PY||_2 over every Y with ||Y - X||_2 <= d."""
+    if d == 0:
+        return 0.0
+    return (2 * float(np.linalg.norm(X, 2)) + d) * d * float(np.linalg.norm(P, 2)) * (1 + 1e-12)
+
+
 def _empty_in_box(
-    H: np.ndarray, box: float, exact: Callable[[], list[list[Fraction]]] | None = None
+    H: np.ndarray, box: float, exact: Callable[[], list[list[Fraction]] | None] | None = None
 ) -> list[Fraction] | None:
     """A Farkas certificate that {x : H (x, 1) >= 0, |x_i| <= box} is empty, checked exactly:
     y >= 0 with y' h + box ||H_x' y||_1 < 0.  ``exact`` gives the rows of H in exact
-    arithmetic when the floats of H were rounded (products of matrices).  None when the set
-    is not proved empty."""
+    arithmetic (from the spec's data) when the floats of H were rounded (products of
+    matrices); None from it proves nothing.  None when the set is not proved empty."""
     from scipy.optimize import linprog
 
     rows, cols = H.shape
@@ -450,16 +506,11 @@ def _empty_in_box(
         return None
     y = [Fraction(max(float(v), 0.0)) for v in res.x[:rows]]
     Hq = exact() if exact is not None else [[Fraction(float(v)) for v in row] for row in H]
+    if Hq is None:
+        return None
     combo = [sum((y[i] * Hq[i][c] for i in range(rows)), Fraction(0)) for c in range(cols)]
     spread = sum((abs(v) for v in combo[:-1]), Fraction(0))
     return y if combo[-1] + Fraction(box) * spread < 0 else None
-
-
-def _exact_rows(G_now: np.ndarray, G_next: np.ndarray, T: np.ndarray) -> list[list[Fraction]]:
-    """The rows of [G_now; G_next T] in exact arithmetic (G_next T is rounded in floats)."""
-    from .._rational import fractions, product
-
-    return fractions(G_now) + product(fractions(G_next), fractions(T))
 
 
 def _empty_pairs(regions: _Regions, model: LureModel, box: float) -> set[tuple[int, int]]:
@@ -474,7 +525,7 @@ def _empty_pairs(regions: _Regions, model: LureModel, box: float) -> set[tuple[i
             if (k == regions.zero and j == regions.zero) or (k, j) in seen:
                 continue
             H = np.vstack([regions.G[k], regions.G[j] @ T])
-            exact = partial(_exact_rows, regions.G[k], regions.G[j], T)
+            exact = partial(regions.exact_rows, model, k, j)
             if _empty_in_box(H, box, exact) is not None:
                 out.add((k, j))
     return out

@@ -87,7 +87,7 @@ def _dead_zone_region(model: LureModel, seed: int, widen: bool = True) -> dict[s
     """The radius of the largest invariant sublevel set of the dead zone's Lyapunov function."""
     if model.m == 0 or model.threshold <= 0:
         return {"radius": 0.0, "reason": "the observer has no dead zone (no soft threshold)"}
-    lyap = lyapunov_certificate(model.A)
+    lyap = lyapunov_certificate(model.A, exact=model.exact_A())
     if lyap.verdict.value != "holds" or lyap.P is None or lyap.method != "lyapunov":
         why = "is not stable" if lyap.verdict.value == "fails" else "has no verified P"
         return {
@@ -97,7 +97,9 @@ def _dead_zone_region(model: LureModel, seed: int, widen: bool = True) -> dict[s
     found = _region(model, 0.5 * (lyap.P + lyap.P.T), lyap.margin, lyap.error_bound, seed)
     found["P_from"] = "discrete Lyapunov equation with Q = I"
     wider = _lmi_matrix(model) if widen and model.N <= LMI_LIMIT and found["radius"] > 0 else None
-    verified = verified_decrease(model.A, wider) if wider is not None else None
+    verified = (
+        verified_decrease(model.A, wider, rounding=model.rounding) if wider is not None else None
+    )
     if wider is not None and verified is not None:
         other = _region(model, wider, verified[0], verified[1], seed)
         if other["radius"] > found["radius"]:
@@ -200,10 +202,16 @@ def _lmi_matrix(model: LureModel) -> np.ndarray | None:
 
 def _exact_recheck(model: LureModel, P: np.ndarray, level: float, radius: float) -> dict[str, bool]:
     """The three facts the region rests on, decided exactly on the printed floats P, level and
-    radius: V decreases (P - A' P A > 0, and P > 0), the level set lies in the dead zone
-    (level Cw_i P^-1 Cw_i' <= threshold^2 for every i), and the ball of initial errors lies in
-    the level set (level I - radius^2 P_ee > 0, a_hat(0) = 0)."""
-    Pq, Aq, Cw = fractions(P), fractions(model.A), fractions(model.Cw)
+    radius and the model's exact matrices (from the spec's data): V decreases (P - A' P A > 0,
+    and P > 0), the level set lies in the dead zone (level Cw_i P^-1 Cw_i' <= threshold^2 for
+    every i), and the ball of initial errors lies in the level set (level I - radius^2 P_ee > 0,
+    a_hat(0) = 0).  Every fact is False when the exact matrices are beyond their budget."""
+    exact = model.exact()
+    if exact is None:
+        return dict.fromkeys(
+            ("lyapunov_decrease", "level_set_in_dead_zone", "ball_in_level_set"), False
+        )
+    Pq, Aq, Cw = fractions(P), exact.fractions("A"), exact.fractions("Cw")
     n_e = model.n_e
     decrease = [[p - v for p, v in zip(rp, rv)] for rp, rv in zip(Pq, product(
         [list(col) for col in zip(*Aq)], product(Pq, Aq)))]  # fmt: skip

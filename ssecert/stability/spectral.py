@@ -28,11 +28,11 @@ from .._exact import (
     Dyadic,
     PowerBound,
     dyadic,
-    exact_error_matrix,
     exact_kernel_vector,
     shift_by,
     spectral_radius_bound,
 )
+from .._exact_powers import ExactMatrix
 from .._format import sig
 from ..tolerances import EPS
 
@@ -42,6 +42,13 @@ __all__ = ["SchurDecision", "schur_decision", "EXACT_SCHUR_LIMIT"]
 def _fmt(x: float) -> str:
     """A radius with enough digits to show on which side of 1 it lies."""
     return sig(x, 6)
+
+
+def below_one(upper: float, gap: float) -> str:
+    """``upper < 1`` in words that show it: ``1 - 1.65e-07`` when six digits would print 1."""
+    if 0 < gap < 1e-4 or upper >= 1.0:
+        return f"1 - {gap:.3g} < 1"
+    return f"{_fmt(upper)} < 1"
 
 
 EXACT_SCHUR_LIMIT = 80  # largest n whose powers are computed exactly
@@ -89,8 +96,9 @@ class SchurDecision:
         }
 
 
-def _first_order(F: np.ndarray) -> tuple[complex, float]:
-    """Dominant computed eigenvalue and its first-order error bound."""
+def _first_order(F: np.ndarray, rounding: float = 0.0) -> tuple[complex, float]:
+    """Dominant computed eigenvalue and its first-order error bound (``rounding`` bounds how
+    far F's floats are from the matrix it stands for)."""
     import scipy.linalg
 
     n = F.shape[0]
@@ -100,13 +108,16 @@ def _first_order(F: np.ndarray) -> tuple[complex, float]:
     x = vr[:, j] / np.linalg.norm(vr[:, j])
     dot = abs(np.vdot(y, x))
     kappa = 1.0 / dot if dot > 0 else np.inf
-    return complex(lam[j]), float(n * EPS * np.linalg.norm(F, 2) * kappa)
+    with np.errstate(over="ignore", invalid="ignore"):
+        bound = (n * EPS * np.linalg.norm(F, 2) + rounding) * kappa
+    return complex(lam[j]), float(bound) if np.isfinite(bound) else np.inf
 
 
 def schur_decision(
     F: np.ndarray,
     *,
     parts: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+    exact: ExactMatrix | None = None,
     max_work: float = 3e8,
 ) -> SchurDecision:
     """Decide whether every eigenvalue of the exact F lies inside the unit circle.
@@ -114,10 +125,13 @@ def schur_decision(
     Parameters
     ----------
     F : ndarray, shape (n, n)
-        The matrix, or its floating-point rounding when ``parts`` is given.
+        The matrix, or its floating-point rounding when ``parts`` or ``exact`` is given.
     parts : (A, L, C), optional
         Decide F = A - L C formed exactly from these floats instead: the
         matrix of the gain as printed, not its rounded product.
+    exact : ExactMatrix, optional
+        The exact value F stands for, formed on demand (instead of ``parts``).  When it is
+        beyond its budget nothing is decided in exact arithmetic.
     max_work : float, default 3e8
         Budget of the exact powers (word operations).
 
@@ -142,15 +156,25 @@ def schur_decision(
         return SchurDecision(
             "unknown", None, None, "none", complex(np.nan), False, "F has non-finite entries"
         )
+    if exact is None and parts is not None:
+        exact = ExactMatrix.error_matrix(*parts)
+    rounding = 0.0 if exact is None else exact.rounding(F)
     try:
-        lam, bound = _first_order(F)
+        lam, bound = _first_order(F, rounding)
     except (np.linalg.LinAlgError, ValueError):
         lam, bound = complex(np.nan), np.inf
     upper = lower = None
     details: dict[str, Any] = {"first_order_error_bound": bound}
+    if exact is not None:
+        details["exact_data"] = exact.source
+        details["rounding_of_F"] = rounding
+    value: Dyadic | None = None
     if n <= EXACT_SCHUR_LIMIT:
-        exact: Dyadic = exact_error_matrix(*parts) if parts is not None else dyadic(F)
-        powers = spectral_radius_bound(exact, squarings=8, target=1.0, max_work=max_work)
+        value = dyadic(F) if exact is None else exact.value
+        if value is None:
+            details["exact_data"] = f"{exact.source if exact else 'F'}: beyond its budget"
+    if value is not None:
+        powers = spectral_radius_bound(value, squarings=8, target=1.0, max_work=max_work)
         upper, lower = powers.radius_bound, powers.radius_lower
         details.update(
             upper_bound_power=powers.radius_power,
@@ -158,10 +182,10 @@ def schur_decision(
             exactly_nilpotent_index=powers.nilpotent_index,
             exact_powers_complete=powers.complete,
         )
-        source = "of the printed gain (F = A - L C from its floats)" if parts else "of F"
+        source = f"of {exact.source}" if exact is not None else "of F"
         decided = _decided_by_powers(powers, source, n, lam, details)
         if decided is None:
-            decided = _exact_eigenvalue_on_circle(exact, n, powers, lam, details)
+            decided = _exact_eigenvalue_on_circle(value, n, powers, lam, details)
         if decided is not None:
             return decided
     return _decided_to_first_order(lam, bound, upper, lower, details)
@@ -172,15 +196,20 @@ def _decided_by_powers(
 ) -> SchurDecision | None:
     """Stable by the norm of an exact power, unstable by exact traces, or None."""
     upper, lower = powers.radius_bound, powers.radius_lower
-    if upper < 1.0:
+    if upper < 1.0 or powers.radius_gap > 0:
+        m = powers.radius_power
+        if not upper < 1.0 or 1.0 - upper < powers.radius_gap:
+            m, upper = powers.gap_power, min(upper, 1.0 - powers.radius_gap)
+        gap = max(1.0 - upper, powers.radius_gap)
+        details["spectral_radius_gap"] = gap
         return SchurDecision(
             "stable",
             upper,
             lower,
-            f"exact powers: rho <= ||F^{powers.radius_power}||^(1/{powers.radius_power})",
+            f"exact powers: rho <= ||F^{m}||^(1/{m})",
             lam,
             True,
-            f"the exact powers {source} bound its spectral radius by {_fmt(upper)} < 1",
+            f"the exact powers {source} bound its spectral radius by {below_one(upper, gap)}",
             details,
         )
     if powers.trace_reaches_n and not lower > 1.0:

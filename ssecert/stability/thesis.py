@@ -33,6 +33,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from .._exact import dyadic, exact_kernel_vector
+from .._exact_powers import ExactMatrix
 from .._format import sig
 from ..budget import Budget
 from ..observers import ObserverDesign
@@ -136,6 +138,8 @@ class _Instance:
     q: float
     lam: float
     eps: float
+    exact_F: ExactMatrix | None = None  # the exact F of the spec's data
+    deadbeat: bool = False  # the gain is a deadbeat design (F nilpotent in exact arithmetic)
 
     @property
     def p(self) -> int:
@@ -157,7 +161,19 @@ def _instance(design: ObserverDesign) -> _Instance:
         )
     eps = float(design.step)
     L2 = design.L2 if design.L2 is not None else np.eye(S.shape[0])
-    return _Instance(A=A, S=S, L1=L1, F=F, L2=L2, q=q, lam=lam, eps=eps)
+    exact_F = design.observer_kind.exact_error(design)
+    return _Instance(
+        A=A,
+        S=S,
+        L1=L1,
+        F=F,
+        L2=L2,
+        q=q,
+        lam=lam,
+        eps=eps,
+        exact_F=exact_F,
+        deadbeat=design.gain.method == "deadbeat",
+    )
 
 
 def _assumption_1(observability_holds: bool | None) -> AssumptionResult:
@@ -225,7 +241,7 @@ def _lemma_1(inst: _Instance, rng: np.random.Generator) -> _Lemma1:
     q = inst.q
     claimed = float(np.linalg.norm(L1, 2)) / abs(rho_F - q) if abs(rho_F - q) > 0 else np.inf
     if singular:
-        return _Lemma1(_singular_F(float(s_F[-1]), claimed), False, None, None)
+        return _Lemma1(_singular_F(inst, float(s_F[-1]), claimed), False, None, None)
     if s_F[-1] < SUBNORMAL_FLOOR:
         item = AssumptionResult(
             "lemma_1",
@@ -243,16 +259,39 @@ def _lemma_1(inst: _Instance, rng: np.random.Generator) -> _Lemma1:
 SUBNORMAL_FLOOR = 1e10 * np.finfo(float).tiny
 
 
-def _singular_F(smallest: float, claimed: float) -> AssumptionResult:
-    """Lemma 1 fails: F is singular, so Pi does not exist."""
+def _singular_F(inst: _Instance, smallest: float, claimed: float) -> AssumptionResult:
+    """Lemma 1 fails when F is singular in exact arithmetic (an exact kernel vector of the exact
+    F of the spec's data), so Pi does not exist; singular only to rounding, it is undecided."""
+    details = {"smallest_singular_value_F": smallest, "claimed_lipschitz": claimed}
+    exact = inst.exact_F.value if inst.exact_F is not None else dyadic(inst.F)
+    if inst.deadbeat and (exact is None or exact_kernel_vector(exact) is None):
+        return AssumptionResult(
+            "lemma_1",
+            Verdict.FAILS,
+            f"a deadbeat gain makes F = A + L1 C nilpotent, hence singular, so Pi(a) = -sum "
+            f"F^(-l-1) L1 Psi_q^l(a) does not exist and the change of variable "
+            f"eta = e - Pi(a_hat) of the proof is unavailable (the printed gain is the rounding "
+            f"of a deadbeat gain: its F is singular to rounding, smallest singular value "
+            f"{smallest:.2e}).",
+            details,
+        )
+    if exact is None or exact_kernel_vector(exact) is None:
+        return AssumptionResult(
+            "lemma_1",
+            Verdict.INCONCLUSIVE,
+            f"F = A + L1 C is singular to rounding (smallest singular value {smallest:.2e}) "
+            f"but not shown singular in exact arithmetic, so whether Pi exists (and its "
+            f"Lipschitz constant) cannot be decided in floating point.",
+            details,
+        )
     return AssumptionResult(
         "lemma_1",
         Verdict.FAILS,
-        f"F = A + L1 C is singular (smallest singular value {smallest:.2e}; every "
-        f"nilpotent F, as a deadbeat gain makes it, is singular), so "
-        f"Pi(a) = -sum F^(-l-1) L1 Psi_q^l(a) does not exist and the "
-        f"change of variable eta = e - Pi(a_hat) of the proof is unavailable.",
-        {"smallest_singular_value_F": smallest, "claimed_lipschitz": claimed},
+        f"F = A + L1 C is singular (an exact kernel vector of F formed from the spec's data; "
+        f"smallest computed singular value {smallest:.2e}; every nilpotent F, as a deadbeat "
+        f"gain makes it, is singular), so Pi(a) = -sum F^(-l-1) L1 Psi_q^l(a) does not exist "
+        f"and the change of variable eta = e - Pi(a_hat) of the proof is unavailable.",
+        details,
     )
 
 
@@ -349,7 +388,9 @@ def _assumption_3(
         return AssumptionResult(
             "assumption_3",
             Verdict.INCONCLUSIVE,
-            "it is stated in terms of Pi from Lemma 1, which does not exist for this gain",
+            "it is stated in terms of Pi from Lemma 1, which does not exist for this gain"
+            if lemma.item.verdict is Verdict.FAILS
+            else "it is stated in terms of Pi from Lemma 1, which could not be formed here",
         ), None
     search = _Search(_Meter(SEARCH_FLOPS / 2, SEARCH_EVALUATIONS / 2))
     ratio_of = _attack_ratio(inst, lemma.series, search.meter)
@@ -483,7 +524,7 @@ def _epsilon_bound(inst: _Instance, lemma: _Lemma1, rho_a: float | None) -> Assu
             Verdict.INCONCLUSIVE,
             "the bound (5.20) needs Lemma 1 and Assumption 3, which are not established here",
         )
-    lyap = lyapunov_certificate(inst.F)
+    lyap = lyapunov_certificate(inst.F, exact=inst.exact_F)
     if lyap.verdict != Verdict.HOLDS or lyap.P is None:
         return AssumptionResult(
             "epsilon_bound",

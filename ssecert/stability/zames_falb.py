@@ -190,7 +190,12 @@ def verify_zames_falb(
     # the |e|^2 - g |a|^2 terms are in the LMI only in its gain form
     extra = float(np.linalg.norm(model.Ce, 2)) ** 2 + abs(g) if g is not None else 0.0
     raw = (lift_norm**2 + 2.0) * normP + 2.0 * coef * side**2 + extra
-    bound = 10.0 * M.shape[0] * EPS * raw / normP
+    # the model's floats are within d of the spec's exact data: the lifted G within (1 + q) d,
+    # each multiplier term sym(Hv_i, .) within q d
+    d = model.rounding
+    dG = (1.0 + model.q) * d
+    data = (2.0 * lift_norm + dG) * dG * normP + 2.0 * coef * model.q * d
+    bound = 10.0 * M.shape[0] * EPS * raw / normP + data * (1 + 1e-12) / normP
     return decide(P, margin, bound, clear)
 
 

@@ -10,7 +10,10 @@ reports.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
+
+import numpy as np
 
 from .._exact import ExactObservability, ExactPlant
 from ..results import Verdict
@@ -32,17 +35,24 @@ def _failure(
     tol: Tolerances,
     evidence: dict[str, Any],
     exact: ExactPlant,
+    to_user: Callable[[np.ndarray], np.ndarray],
 ) -> tuple[Verdict, str, dict[str, Any] | None]:
     """Verdict, summary and stealthy-attack witness of a failing check.
 
-    ``work`` is the plant in power-of-two units used for float decisions;
-    the witness is built on the user's ``system``.
+    ``work`` is the plant in power-of-two units used for float decisions (its state
+    directions map to the user's by ``to_user``); the witness is built on the user's
+    ``system``, from the exact kernel vector of the kept sensors when there is one.
     """
     mr = outcome.max_removable
     B = outcome.breaking_set
-    z = outcome.z
-    assert mr is not None and B is not None and z is not None
+    assert mr is not None and B is not None and outcome.z is not None
     kept, sc_rank, decision = _confirm_breaking_set(system, work, B, tol, evidence, exact)
+    if decision.state == "unobservable" and decision.z is not None:
+        z = np.asarray(decision.z, dtype=float)  # the exact data's direction, user's units
+    elif outcome.method == "exact arithmetic":
+        z = np.asarray(outcome.z, dtype=float)
+    else:
+        z = to_user(outcome.z)
     if decision.state == "observable":
         return (
             Verdict.INCONCLUSIVE,

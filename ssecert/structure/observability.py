@@ -15,13 +15,14 @@ backward-stable methods are used instead and must agree:
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
 from .._format import distance as format_distance
-from .._linalg import EigenAnalysis, Staircase, eigen_clusters, matrix_norm, staircase
+from .._linalg import EigenAnalysis, Staircase, Units, eigen_clusters, matrix_norm, staircase
 from ..results import Check, Verdict
 from ..system import System
 from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances, classify
@@ -110,7 +111,7 @@ def observability(
     tolerances : Tolerances, optional
     eigen : EigenAnalysis, optional
         Precomputed eigenvalue groups of the plant in power-of-two units
-        (``unit_normalized(system)[0].A``).
+        (``balanced_units(system).system.A``).
 
     Returns
     -------
@@ -130,12 +131,15 @@ def observability(
     ('holds', 20)
     """
     from .._exact import ExactPlant
-    from .._linalg import unit_normalized
+    from .._linalg import balanced_units
 
     if not isinstance(system, System):
         raise TypeError(f"system must be a System, got {type(system).__name__}")
     tol = Tolerances.check(tolerances)
-    work, alpha = unit_normalized(system)
+    # decisions in exact power-of-two units of the states, the sensors and time: a change of
+    # units changes no verdict; witnesses are given in the user's coordinates
+    units = balanced_units(system)
+    work, alpha = units.system, units.alpha
     A, C = work.A, work.C
     n = system.n
     eig = eigen if eigen is not None else eigen_clusters(A, tolerances=tol, unit=alpha)
@@ -153,7 +157,7 @@ def observability(
         pbh_state, grouping = "observable", "; ".join(eig.problems)
     out = _Verdicts(
         margin=pbh.margin,
-        evidence=_evidence(eig, alpha, pbh, pbh_state, sc, stair_state, exact.to_dict()),
+        evidence=_evidence(eig, alpha, pbh, pbh_state, sc, stair_state, exact.to_dict(), units),
         tolerances={
             "rank_rtol": tol.rtol(n + system.p, n),
             "borderline_factor": tol.borderline_factor,
@@ -164,14 +168,16 @@ def observability(
 
     unobservable_in_floats = "unobservable" in (pbh_state, stair_state)
     if exact.state == "unobservable" and not unobservable_in_floats:
-        return _exactly_unobservable(out, A, C, exact)
+        return _exactly_unobservable(out, system.A, system.C, exact)
     if exact.state == "observable" and unobservable_in_floats:
         return _exactly_observable(out, n)
     if pbh_state == "observable" and stair_state == "observable":
         return _observable(out, sc.index, exact.state, grouping)
     candidates, conservative = _candidate_directions(A, C, eig, alpha, pbh, pbh_state, tol)
     unobs = n - sc.rank if stair_state == "unobservable" else n - conservative.rank
-    verified = _verified_direction(out, A, C, candidates, unobs, stair_state, exact, tol)
+    verified = _verified_direction(
+        out, A, C, candidates, unobs, stair_state, exact, tol, units.to_user
+    )
     if verified is not None:
         return verified
     notes = [r for r in (pbh.note, stair_note) if r]
@@ -265,9 +271,13 @@ def _evidence(
     sc: Staircase,
     stair_state: str,
     exact: dict[str, Any],
+    units: Units,
 ) -> dict[str, Any]:
-    """Evidence of every verdict: eigenvalues, PBH per group, the staircase, the exact decision."""
+    """Evidence of every verdict: eigenvalues, PBH per group, the staircase, the exact decision
+    (the margins are those of the plant in balanced power-of-two units)."""
+    scaling = {"state_scaling": units.states} if units.balanced else {}
     return {
+        **scaling,
         "eigenvalues": eig.eigenvalues / alpha,
         "pbh": [
             {
@@ -402,14 +412,16 @@ def _verified_direction(
     stair_state: str,
     exact: ExactObservability,
     tol: Tolerances,
+    to_user: Callable[[np.ndarray], np.ndarray],
 ) -> Check | None:
-    """Fails on the first candidate that simulation confirms; None when none survives."""
+    """Fails on the first candidate that simulation confirms (on the balanced plant (A, C));
+    None when none survives.  The witness z is in the user's coordinates (``to_user``)."""
     for z, source, eigenvalues in candidates:
         residual = unobservable_residual(A, C, z)
         if residual <= tol.witness_rtol:
             out.evidence["unobservable_direction_source"] = source
             witness = {
-                "z": z,
+                "z": to_user(z),
                 "unobservable_dimension": unobs,
                 "unobservable_eigenvalues": eigenvalues,
                 "residual": residual,

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._exact import ExactPlant
-from .._linalg import eigen_clusters, sensor_subspaces, unit_normalized
+from .._linalg import balanced_units, eigen_clusters, sensor_subspaces
 from .._validation import as_int_option
 from ..system import System
 from ..tolerances import Tolerances
@@ -85,7 +85,7 @@ def scan_removals(
     tol = Tolerances.check(tolerances)
     size = as_int_option(size, "size", min_value=0, max_value=system.p)
     original = system
-    system, _ = unit_normalized(system)
+    system = balanced_units(system).system
     sub = sensor_subspaces(system.A, system.C, tolerances=tol)
     n = system.n
     if prune:

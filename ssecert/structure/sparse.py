@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -44,7 +45,7 @@ from .._linalg import (
     SensorSubspaces,
     eigen_clusters,
     sensor_subspaces,
-    unit_normalized,
+    balanced_units,
 )
 from .._validation import as_choice, as_float_option, as_int_option
 from ..results import Check, Verdict
@@ -241,7 +242,7 @@ def sparse_observability(
         ``progress(done, total)`` called during enumeration.
     eigen : EigenAnalysis, optional
         Precomputed eigenvalue groups of the plant in power-of-two units
-        (``unit_normalized(system)[0].A``).
+        (``balanced_units(system).system.A``).
     time_budget : float or None, default 5
         Seconds the enumeration may spend refining max_removable once the
         verdict is decided (every set of up to 2s sensors checked): a level
@@ -290,7 +291,8 @@ def sparse_observability(
     H = system.n if horizon is None else as_int_option(horizon, "horizon", min_value=1)
     # decisions in power-of-two units (no sensor's units can tip a rank threshold), confirmed
     # on the user's exact data; the witness is built in the user's units
-    work, alpha = unit_normalized(system)
+    units = balanced_units(system)
+    work, alpha = units.system, units.alpha
     eig = eigen if eigen is not None else eigen_clusters(work.A, tolerances=tol, unit=alpha)
     exact = ExactPlant(system.A, system.C)
     if time_budget is not None:
@@ -301,9 +303,11 @@ def sparse_observability(
     for o in tried:
         for item in o.details.get("eigenvalues", []):
             item["eigenvalue"] = item["eigenvalue"] / alpha
+    evidence = _evidence(s, outcome, tried, estimates, max_sets)
+    if units.balanced:
+        evidence["state_scaling"] = units.states
     decision = _Decision(
-        system, work, s, outcome, tried, H, seed, tol, eig, exact,
-        _evidence(s, outcome, tried, estimates, max_sets),
+        system, work, s, outcome, tried, H, seed, tol, eig, exact, evidence, units.to_user,
     )  # fmt: skip
     if outcome.status == "exact":
         check = decision.exact_answer()
@@ -377,6 +381,7 @@ class _Decision:
     eig: EigenAnalysis
     exact: ExactPlant
     evidence: dict[str, Any]
+    to_user: Callable[[np.ndarray], np.ndarray]  # a direction of ``work`` in the user's units
 
     def fields(self, mr: int | None, lower: bool, bset: tuple[int, ...] | None) -> dict[str, Any]:
         """The check's fields for max_removable ``mr`` and breaking set ``bset``."""
@@ -421,7 +426,7 @@ class _Decision:
         """Verdict, summary and stealthy attack of a breaking set (``_failure``)."""
         return _failure(
             self.system, self.work, self.s, found, self.horizon, self.seed, self.tol,
-            self.evidence, self.exact,
+            self.evidence, self.exact, self.to_user,
         )  # fmt: skip
 
     def recheck(self) -> tuple[float | None, str]:

@@ -324,46 +324,57 @@ def assert_sparse_observable(
     )
 
 
-def assert_deadbeat(A: Any, L: Any, C: Any) -> int:
+def assert_deadbeat(A: Any, L: Any, C: Any, *, rtol: float | None = None) -> int:
     """Assert that the observer error matrix A - L C is nilpotent (a deadbeat observer).
 
     Observers are written x_hat+ = A x_hat + L (y - C x_hat), so the error
     obeys e+ = (A - L C) e and vanishes in k steps iff (A - L C)^k = 0.  The
     test is on the gain as given: F = A - L C is formed exactly from the
     floats of A, L and C and its powers computed in integers
-    (``ssecert.design.gains.verify_deadbeat``): ||F^k|| <= 1e-8 ||A||^k with
-    ||F^(k-1)|| clearly above, and a certified spectral radius below 1 (a
-    gain that rounding made unstable fails, however small its powers look).
+    (``ssecert.design.gains.verify_deadbeat``).  By default the property is
+    decided exactly: some power F^k, k <= n, is exactly zero.  A gain computed
+    in floating point is usually nilpotent only to rounding; ``rtol`` accepts
+    it when ||F^k|| <= rtol ||A||^k with ||F^(k-1)|| clearly above and a
+    certified spectral radius below 1 (a gain that rounding made unstable
+    fails, however small its powers look).
 
     Parameters
     ----------
     A : array_like, shape (n, n)
     L : array_like, shape (n, p)
     C : array_like, shape (p, n)
+    rtol : float, optional
+        Opt-in tolerance: a power with ||F^k|| / ||A||^k <= rtol counts as zero
+        (``ssecert.design.gains.DEADBEAT_RTOL`` = 1e-8 is what ssecert's own
+        deadbeat check uses).  Default: exact nilpotency only.
 
     Returns
     -------
     int
-        The nilpotency index k: the error vanishes (to rounding) after k steps.
+        The nilpotency index k: the error vanishes exactly after k steps (to the
+        tolerance ``rtol`` when given).
 
     Raises
     ------
     AssertionError
         If A - L C is not nilpotent (the message gives the power k = n and
-        the residual ||F^k|| / ||A||^k), the test cannot conclude (it gives
-        both powers), or the gain as given is not certified stable (it gives
-        the certified bounds on the spectral radius); also says when A + L C
-        is nilpotent, i.e. when L has the opposite sign convention (the
-        thesis's L1 = -L).
+        the residual ||F^k|| / ||A||^k, and whether it is nilpotent to a
+        tolerance), the tolerance test cannot conclude (it gives both powers),
+        or the gain as given is not certified stable (it gives the certified
+        bounds on the spectral radius); also says when A + L C is nilpotent,
+        i.e. when L has the opposite sign convention (the thesis's L1 = -L).
     ValueError
-        If the matrices have inconsistent shapes or non-finite entries.
+        If the matrices have inconsistent shapes or non-finite entries, or
+        ``rtol`` is not a positive number.
 
     Examples
     --------
     >>> from ssecert import System
     >>> from ssecert.design.gains import deadbeat_gain
     >>> plant = System([[1.0, 0.0099], [0.0, 0.9876]], [[1, 0]])
-    >>> assert_deadbeat(plant.A, deadbeat_gain(plant).L, plant.C)
+    >>> assert_deadbeat(plant.A, deadbeat_gain(plant).L, plant.C, rtol=1e-8)
+    2
+    >>> assert_deadbeat([[0.0, 1.0], [0.0, 0.0]], [[0.0], [0.0]], [[0.0, 0.0]])
     2
     """
     __tracebackhide__ = True  # pytest shows the caller's line, not ours
@@ -373,15 +384,45 @@ def assert_deadbeat(A: Any, L: Any, C: Any) -> int:
         raise ValueError(f"A must be square, got shape {A.shape}")
     C = as_real_matrix(C, "C", shape=(None, n), shape_hint="the number of states, from A")
     L = as_real_matrix(L, "L", shape=(n, C.shape[0]), shape_hint="n x p: states by sensors")
-    from ..design.gains import verify_deadbeat
+    if rtol is not None and not (isinstance(rtol, (int, float)) and 0 < rtol < 1):
+        raise ValueError(f"rtol must be a number in (0, 1) or None (exact), got {rtol!r}")
+    from ..design.gains import DEADBEAT_RTOL, verify_deadbeat
 
-    test = verify_deadbeat(A, L, C)
+    test = verify_deadbeat(A, L, C, rtol=DEADBEAT_RTOL if rtol is None else float(rtol))
+    if rtol is None:
+        if test.exact_index is not None and test.exact_index <= n:
+            return int(test.exact_index)
+        raise AssertionError(_not_exactly_nilpotent(test, A, L, C))
     if test.verified:
         if test.index is None:  # pragma: no cover - verified means a nilpotency index was found
             raise RuntimeError("verify_deadbeat verified a gain without a nilpotency index")
         return int(test.index)
-    norms, lower = test.relative_norms, test.relative_lower
+    raise AssertionError(_deadbeat_problem(test, A, L, C))
 
+
+def _not_exactly_nilpotent(test: Any, A: np.ndarray, L: np.ndarray, C: np.ndarray) -> str:
+    """The message of an exact ``assert_deadbeat`` on a gain whose powers never vanish."""
+    norms, lower = test.relative_norms, test.relative_lower
+    k = len(norms)
+    if not test.verified:
+        return f"no power of A - L C is exactly zero, nor zero to {test.rtol:.0e}: " + (
+            _deadbeat_problem(test, A, L, C)
+        )
+    return (
+        f"A - L C is not nilpotent: no power F^k, k = 1..{k}, is exactly zero (F = A - L C "
+        f"formed exactly from the given floats; ||F^{k}|| / ||A||^{k} is between "
+        f"{sig(lower[-1])} and {sig(norms[-1])}). It is nilpotent to the tolerance "
+        f"{test.rtol:.0e}: ||F^{test.index}|| / ||A||^{test.index} <= "
+        f"{sig(norms[test.index - 1])}, as a gain computed in floating point usually is; pass "
+        f"rtol={test.rtol:.0e} to accept that"
+    )
+
+
+def _deadbeat_problem(test: Any, A: np.ndarray, L: np.ndarray, C: np.ndarray) -> str:
+    """Why the tolerance test of ``assert_deadbeat`` did not pass, with the radius bounds."""
+    from ..design.gains import verify_deadbeat
+
+    norms, lower = test.relative_norms, test.relative_lower
     if test.index is None:
         k = len(norms)
         problem = (
@@ -404,14 +445,14 @@ def assert_deadbeat(A: Any, L: Any, C: Any) -> int:
             f"||F^{k}|| / ||A||^{k} <= {norms[k - 1]:.3g} looks deadbeat, but the gain as "
             f"given is not certified stable: {test.reason}"
         )
-    flipped = verify_deadbeat(A, -np.asarray(L), C)
+    flipped = verify_deadbeat(A, -np.asarray(L), C, rtol=test.rtol)
     if flipped.verified:
         problem += (
             f". A + L C is nilpotent (index {flipped.index}): L has the opposite sign "
             f"convention; ssecert writes x_hat+ = A x_hat + L (y - C x_hat), the thesis's "
             f"L1 is -L"
         )
-    raise AssertionError(
+    return (
         f"{problem}. Spectral radius of A - L C: certified between {sig(test.radius_lower)} and "
         f"{sig(test.radius_upper)}. Relative norms ||F^k|| / ||A||^k, k = 1..{len(norms)}: "
         f"{_vector(norms)}."
