@@ -43,9 +43,9 @@ from .._exact import ExactPlant
 from .._linalg import (
     EigenAnalysis,
     SensorSubspaces,
+    balanced_units,
     eigen_clusters,
     sensor_subspaces,
-    balanced_units,
 )
 from .._validation import as_choice, as_float_option, as_int_option
 from ..results import Check, Verdict
