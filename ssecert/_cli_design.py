@@ -28,8 +28,11 @@ def add_design_parser(sub: Any) -> None:
             "certified and simulated under the spec's scenarios as 'ssecert certify' does, "
             "beside the spec's own design with the same seeds. Writes DIR/NAME-design.toml (the "
             "spec with the synthesised [observer]), DIR/NAME-design.html (the report, with the "
-            "comparison) and DIR/NAME-design.json (the certificate). Exit status 0 when a "
-            "design is written, 1 when none is certified."
+            "comparison) and DIR/NAME-design.json (the certificate). Exit status, as for "
+            "certify, from the written design's certificate: 0 every required check holds, 1 "
+            "one fails (a plant that is not sparse observable, say) or no design was "
+            "certified (nothing is written), 3 none fails but one is inconclusive; 2 bad "
+            "input, 4 internal error."
         ),
     )
     design.add_argument("spec", metavar="SPEC", help="spec file or packaged example name")
@@ -95,7 +98,8 @@ def cmd_design(
     argv: Sequence[str] | None = None,
 ) -> int:
     """Search, certify and simulate the best design, write its spec file, report and
-    certificate, print the comparison; 0 when a design is written."""
+    certificate, print the comparison; the exit status of the written design's certificate
+    (1 when none was certified)."""
     import hashlib
     import sys
     import tomllib
@@ -198,9 +202,17 @@ def cmd_design(
     if files:
         write(files)  # every file or none
     _print_design(human, spec, kind, args, result, report, limit, paths)
+    if report is not None:
+        verdict = report.certificate.verdict.value
+        human.write(
+            f"verdict of the written design's certificate: "
+            f"{verdict.upper() if verdict == 'fails' else verdict} (exit status "
+            f"{report.exit_code})\n"
+        )
     if args.json_path == "-":
         sys.stdout.write(rendered)
-    return 0 if result.observer is not None else 1
+    # the written design's certificate decides, as for certify; nothing written: 1
+    return report.exit_code if report is not None else 1
 
 
 def _print_design(
@@ -215,6 +227,8 @@ def _print_design(
 ) -> None:
     """The terminal summary: the search, both designs' certified numbers, each scenario."""
     import numpy as np
+
+    from ._format import one_minus
 
     searched = f"{len(result.candidates)} candidates in {result.seconds:.1f} s"
     if not result.complete:
@@ -254,7 +268,7 @@ def _print_design(
         out.write(f"  {label} ({d['kind']}, {params or 'gain only'}): {', '.join(words)}\n")
     if result.decay is not None and args.objective == "rate":
         out.write(f"  synthesised: certified decay {result.decay:.3g} per step (V(k+1) <= "
-                  f"{1 - result.decay:.3g} V(k))\n")  # fmt: skip
+                  f"{one_minus(result.decay)} V(k))\n")  # fmt: skip
     L = (
         np.asarray(result.observer["gain"])
         if not isinstance(result.observer["gain"], str)

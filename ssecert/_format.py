@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["sig", "distance"]
+__all__ = ["sig", "distance", "one_minus"]
 
 
 def sig(x: float, digits: int = 4, versus: float = 1.0) -> str:
@@ -54,3 +54,20 @@ def distance(x: float | None) -> str:
     if not x >= eps:  # also NaN
         return f"below the rounding level {eps:.1e}"
     return f"{x:.1e}"
+
+
+def one_minus(gap: float) -> str:
+    """The number 1 - gap in words that show how far below 1 it is.
+
+    A factor 1 - 1.65e-7 printed with six digits reads "1"; below a gap of 1e-3 the gap is
+    written out.
+
+    Examples
+    --------
+    >>> one_minus(1.65e-7), one_minus(0.25)
+    ('1 - 1.65e-07', '0.75')
+    """
+    gap = float(gap)
+    if math.isfinite(gap) and 0 < gap < 1e-3:
+        return f"1 - {gap:.3g}"
+    return sig(1.0 - gap, 6)

@@ -341,9 +341,10 @@ def test_assert_schur():
     message = str(info.value)
     assert "eigenvalue 0+1j has modulus 1 >= 1 (confirmed: in exact arithmetic" in message
     assert "|trace F^2| >= n = 2" in message
-    with pytest.raises(AssertionError) as info:  # rho < 1 by less than rounding: undecided
-        assert_schur([[0.0, 2.0**60], [np.nextafter(2.0**-60, 0.0), 0.0]])
-    assert "could not be certified Schur stable (inconclusive)" in str(info.value)
+    # rho = 1 - 2^-54 in exact arithmetic: ||M^2||_inf < 1 is decided in integers
+    close = assert_schur([[0.0, 2.0**60], [np.nextafter(2.0**-60, 0.0), 0.0]])
+    assert close.method == "exact powers" and 0 < close.margin < 1e-15
+    assert "1 - 5.55e-17 < 1" in close.reason
     with pytest.raises(AssertionError, match=r"eigenvalue 1\.000000001 has modulus 1\.000000001"):
         assert_schur([[1.0 + 1e-9]])  # enough digits to see the eigenvalue is not 1
 

@@ -202,11 +202,17 @@ class ObserverKind:
         """
         return None
 
+    def dead_zone_refusal(self, design: ObserverDesign) -> str:
+        """Why ``dead_zone_model`` would be too large to build and certify ('' when it is not):
+        the size in the spec that makes it so, asked before anything is allocated."""
+        return ""
+
     def dead_zone_model(self, design: ObserverDesign) -> LureModel | None:
         """For a design without a Lur'e form (``lure_gap``): its error dynamics while every soft
         threshold stays in its dead zone, as a Lur'e model with B = 0 (xi+ = A xi) whose rows
         Cw are every threshold's input, so that the region-of-attraction search applies; None
-        when the kind has none."""
+        when the kind has none.  Raises ``ResourceLimitError`` when ``dead_zone_refusal``
+        gives a reason."""
         return None
 
     def region_family(self, design: ObserverDesign) -> ObserverDesign | None:

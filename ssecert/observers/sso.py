@@ -16,7 +16,7 @@ import numpy as np
 
 from .._exact_powers import Dyadic, ExactMatrix, as_dyadic, dyadic, exact_observability_matrix
 from .._spec_table import SpecTable
-from ..budget import Budget
+from ..budget import Budget, ResourceLimitError
 from ..design.gains import Gain, GainError, ogd_gain
 from ..system import System
 from ..tolerances import Tolerances, product_rounding
@@ -27,7 +27,12 @@ from .lure import ExactLure, LureModel
 from .registry import register
 from .simulators import WindowSSO
 
-__all__ = ["SparseSoftObserverKind"]
+__all__ = ["SparseSoftObserverKind", "MAX_DEAD_ZONE_ROWS"]
+
+EXACT_INNER_WORK = 2e7  # word operations for the exact powers of an SSO's inner map
+# most threshold inputs (inner steps times attack-estimate entries) of a dead-zone model: each is
+# a row of its certificates and a constraint of the LMI that widens its region
+MAX_DEAD_ZONE_ROWS = 20_000
 
 
 @register
@@ -157,6 +162,17 @@ class SparseSoftObserverKind(SoftThresholdObserverKind):
     def region_family(self, design: ObserverDesign) -> ObserverDesign | None:
         return None if design.inner_steps > 1 else super().region_family(design)
 
+    def dead_zone_refusal(self, design: ObserverDesign) -> str:
+        rows = design.inner_steps * design.sensing.shape[0]
+        if design.inner_steps > 1 and rows > MAX_DEAD_ZONE_ROWS:
+            return (
+                f"observer.inner_steps = {design.inner_steps:,}: the dead zone of an SSO with "
+                f"that many inner steps has {rows:,} threshold inputs (inner steps times "
+                f"{design.sensing.shape[0]:,} entries of the attack estimate), more than the "
+                f"{MAX_DEAD_ZONE_ROWS:,} its certificates handle; not attempted"
+            )
+        return ""
+
     def dead_zone_model(self, design: ObserverDesign) -> LureModel | None:
         """With a_hat = 0 and every inner step's threshold input |w| <= threshold, the attack
         estimate stays 0 and each inner ISTA step maps the error by I - step S' S: the error
@@ -164,6 +180,9 @@ class SparseSoftObserverKind(SoftThresholdObserverKind):
         -step S (I - step S' S)^(i-1) e."""
         if design.inner_steps == 1:
             return None
+        refusal = self.dead_zone_refusal(design)
+        if refusal:
+            raise ResourceLimitError(refusal)
         n = design.system.n
         S = design.sensing
         nu = design.parameter("step")
@@ -211,9 +230,6 @@ class SparseSoftObserverKind(SoftThresholdObserverKind):
         return design.inner_steps * 2.0 * (n + m) ** 2 + 2.0 * (n + m) * m
 
 
-EXACT_INNER_WORK = 2e7  # word operations for the exact powers of an SSO's inner map
-
-
 def _exact_inner_powers(
     n: int, S: np.ndarray | Dyadic, nu: float, steps: int, A: np.ndarray
 ) -> tuple[Dyadic, list[Dyadic]] | None:
@@ -242,9 +258,10 @@ def _inner_rounding(
 
     One product of n x n matrices X Y is within n gamma_n ||X|| ||Y|| of the exact product of
     its floats (Higham 3.5, with || |X| ||_2 <= sqrt(n) ||X||_2); the recurrence
-    e_k <= (dM + n gamma a) p_(k-1) + a e_(k-1), p_k = a^k + e_k, bounds the k-th power's
-    error, a >= ||M|| + dM.  The power of F is computed by repeated squaring, which takes
-    fewer roundings; the bound is doubled for it.
+    e_k <= (dM + n gamma a) p_(k-1) + a e_(k-1), p_k = a p_(k-1) + e_k >= ||P_k||, bounds the
+    k-th power's error, a >= ||M|| + dM; it is linear, so its k-th step is a power of a 2 x 2
+    matrix.  The power of F is computed by repeated squaring, which takes fewer roundings;
+    the bound is doubled for it.
     """
     n = A.shape[0]
     u = float(np.finfo(float).eps) / 2
@@ -257,17 +274,19 @@ def _inner_rounding(
         dM = product_rounding(S.T, S, np.eye(n), scale=nu) + abs(nu) * (2 * normS + dS) * dS
         a = (float(np.linalg.norm(M, 2)) * (1 + 1e-12) + dM) * (1 + 1e-12)
         normA = float(np.linalg.norm(A, 2)) * (1 + 1e-12)
-        e, p, rows = 0.0, 1.0, 0.0
-        for _ in range(steps):
-            # the threshold input of this inner step: -nu S P, within nu (||S|| e + dS p) + rounding
-            row = abs(nu) * (normS * e + dS * p + 2 * k * gamma * normS * p)
-            rows += row * row
-            e = (dM + k * gamma * a) * p + a * e
-            p = a * p + e
-            if not (math.isfinite(e) and math.isfinite(p)):
-                return math.inf, math.inf
+        # (e_k, p_k) = T (e_(k-1), p_(k-1)), from (0, 1): powers of T by squaring
+        c = dM + k * gamma * a
+        T = np.array([[a, c], [a, a + c]])
+        e, p = np.linalg.matrix_power(T, steps) @ np.array([0.0, 1.0]) * (1 + 1e-10 * steps)
         dF = 2.0 * (normA * e + k * gamma * normA * p) * (1 + 1e-12)
-        model = math.sqrt(dF * dF + rows) * (1 + 1e-12)
-    if not (math.isfinite(dF) and math.isfinite(model)):
-        return math.inf, math.inf
-    return dF, model
+        # the threshold input of inner step i, -nu S P_i, one by one (a model that large is
+        # refused before it is built)
+        rows, v = 0.0, np.array([0.0, 1.0])
+        for _ in range(steps if steps <= MAX_DEAD_ZONE_ROWS else 0):
+            row = abs(nu) * (normS * v[0] + dS * v[1] + 2 * k * gamma * normS * v[1])
+            rows += row * row
+            v = T @ v
+        if steps > MAX_DEAD_ZONE_ROWS:
+            rows = math.inf
+        model = math.sqrt(dF * dF + rows) * (1 + 1e-10 * min(steps, MAX_DEAD_ZONE_ROWS))
+    return (dF if math.isfinite(dF) else math.inf), (model if math.isfinite(model) else math.inf)

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from .._format import sig
+from .._format import one_minus, sig
 from ..budget import Budget, ResourceLimitError
 from ..context import OBSERVER, AnalysisContext, shared
 from ..design.gains import GainError
@@ -130,7 +130,7 @@ def _failure_words(
             f"{start}without attack its error cycles for ever with period {witness['period']}, "
             f"confirmed in exact arithmetic: from the estimation error e = {e} and the attack "
             f"estimate it pairs with, the error returns to the same point every "
-            f"{witness['period']} steps.",
+            f"{witness['period']} steps." + _replay_disagrees(witness, "return_residual"),
             "periodic orbit search (simulated tails, confirmed exactly)",
             None,
             0.0,
@@ -140,7 +140,8 @@ def _failure_words(
             f"{start}it has a nonzero equilibrium, confirmed in exact arithmetic: from the "
             f"estimation error e = {e} and the attack estimate it pairs with, the error stays "
             f"there forever without attack (active soft-threshold channels "
-            f"{np.flatnonzero(witness['active_signs']).tolist()}).",
+            f"{np.flatnonzero(witness['active_signs']).tolist()})."
+            + _equilibrium_replay_words(witness),
             "equilibrium search (active/sign patterns, exact)",
             None,
             0.0,
@@ -156,10 +157,48 @@ def _failure_words(
         f"{witness['escape_level']:.3g}; replayed: from an initial error of norm "
         f"{witness['norms'][0]:.3g} (a_hat(0) = "
         f"{'0' if not np.any(witness['initial_attack_estimate']) else 'as given'}) it reaches "
-        f"{witness['norms'][1]:.3g} in {witness['steps']} steps without attack.",
+        f"{witness['norms'][1]:.3g} in {witness['steps']} steps without attack."
+        + _replay_disagrees(witness, "growth"),
         "large-signal divergence (eigenvector bound, replayed)",
         abs(mu) - 1.0,
         witness["eigenvalue_error_bound"],
+    )
+
+
+def _replay_disagrees(witness: dict[str, Any], measure: str) -> str:
+    """A sentence when the observer's own simulator did not reproduce the witness ('' else)."""
+    replay = witness.get("observer_replay") or {}
+    if not replay.get("replayed") or replay.get("agrees", True):
+        return ""
+    name = measure.replace("_", " ")
+    return (
+        f" The observer's own simulator did not reproduce it in floating point ({name} "
+        f"{replay.get(measure, float('nan')):.3g} over {replay.get('steps')} steps); the "
+        f"proof above does not rest on that replay."
+    )
+
+
+def _equilibrium_replay_words(witness: dict[str, Any]) -> str:
+    """What the replay of an equilibrium showed, when it did not stay there, and why."""
+    replay = witness.get("observer_replay") or {}
+    moduli = np.asarray(witness.get("local_loop_moduli", []), dtype=float)
+    shown = ", ".join(f"{v:.3g}" for v in moduli[moduli > 1 + 1e-9][:3])
+    repelling = (
+        f" It is repelling: the linear part of the error's map near it has eigenvalues of "
+        f"modulus {shown} > 1, so any error off it by rounding moves away"
+        if witness.get("repelling")
+        else ""
+    )
+    if not replay.get("replayed") or replay.get("agrees", True):
+        return f"{repelling}." if repelling else ""
+    drift = f"{replay.get('largest_drift', float('nan')):.2g}"
+    steps = replay.get("steps")
+    return (
+        f"{repelling}; the observer's own simulator, started there in floating point (the "
+        f"point rounded), drifted off it by {drift} in {steps} steps."
+        if repelling
+        else f" The observer's own simulator, started there in floating point, drifted off it "
+        f"by {drift} in {steps} steps: the equilibrium is shown in exact arithmetic only."
     )
 
 
@@ -174,12 +213,12 @@ def _witnessed_failure(
     """A failing observer_stability with the witness a search found (``_failure_words``); the
     circle certificate that was not found stays in the evidence, and a divergence's
     large-signal loop."""
+    witness = {**witness, "observer_replay": _observer_replay(design, witness)}
     summary, method, margin, error_bound = _failure_words(model, witness)
     evidence = _circle_evidence(model, cert)
     evidence["no_certificate"] = cert.reason
     if witness["kind"] == "divergent trajectory":
         evidence["large_signal_loop"] = model.vertex(model.q)
-    witness = {**witness, "observer_replay": _observer_replay(design, witness)}
     return Check(
         id="observer_stability",
         title=title,
@@ -265,10 +304,11 @@ def _without_lure_model(design: ObserverDesign, gap: str, tol: Tolerances, title
     """observer_stability of a design without a Lur'e form: it fails when the linear map its
     error follows near the origin (every soft threshold in its dead zone) is proved unstable,
     and is inconclusive otherwise."""
-    dead_zone = design.observer_kind.dead_zone_model(design)
-    if dead_zone is not None:
+    kind = design.observer_kind
+    if kind.dead_zone_refusal(design) or kind.dead_zone_model(design) is not None:
+        # the dead zone's linear map is the error matrix (F = A (I - step S' S)^m for an SSO)
         lyap = lyapunov_certificate(
-            dead_zone.A, exact=dead_zone.exact_A(), clear=tol.certificate_clear
+            design.error_matrix, exact=kind.exact_error(design), clear=tol.certificate_clear
         )
         if lyap.verdict.value == "fails":
             return Check(
@@ -323,7 +363,7 @@ def _circle_stability_check(
         summary = (
             f"The error state (e, a_hat) converges to 0 from every initial condition "
             f"without attack: V = xi' P xi decreases by at least a factor "
-            f"{1 - _known(cert.decay):.6g} per step (circle criterion with a diagonal multiplier, "
+            f"{one_minus(_known(cert.decay))} per step (circle criterion with a diagonal multiplier, "
             f"{cert.structure} P, verified margin {cert.margin:.3g} against an error bound "
             f"{cert.error_bound:.1e})." + _balanced_note(cert)
         )
@@ -771,6 +811,9 @@ def region_of_attraction_check(
     try:
         model = design.observer_kind.lure_model(design)
     except NotImplementedError:
+        refusal = design.observer_kind.dead_zone_refusal(design)
+        if refusal:
+            return _region_check(0.0, {"reason": refusal}, "", "dead zone (not attempted)")
         dead_zone = design.observer_kind.dead_zone_model(design)
         if dead_zone is None:
             return None

@@ -317,8 +317,15 @@ def _confirm(
             "float_residual": float(np.linalg.norm(step - point)),
         }
     step = model.simulate(point, 1)[-1]
+    local = model.A + model.q * model.B @ np.diag(np.abs(signs)) @ model.Cw
+    with np.errstate(all="ignore"):
+        moduli = np.sort(np.abs(np.linalg.eigvals(local)))[::-1]
     return {
         "kind": "nonzero equilibrium",
+        # near the equilibrium the error follows its pattern's affine map: eigenvalues of its
+        # linear part beyond 1 make it repelling (still an equilibrium, kept only exactly)
+        "local_loop_moduli": moduli[: min(4, moduli.size)],
+        "repelling": bool(moduli.size and moduli[0] > 1 + 1e-9),
         "initial_error": point[: model.n_e],
         "initial_attack_estimate": point[model.n_e :],
         "active_signs": signs.astype(int),

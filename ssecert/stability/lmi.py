@@ -248,12 +248,9 @@ def _prechecks(model: LureModel) -> tuple[Verdict | None, str, dict[str, Any]]:
 
 
 def _exact_vertex(model: LureModel) -> Any:
-    """The exact large-signal loop A + q B Cw of the spec's data (an ``ExactMatrix``), or None
-    when the model's floats are its data."""
+    """The exact large-signal loop A + q B Cw of the spec's data (an ``ExactMatrix``; of the
+    model's own floats when they are its data)."""
     from .._exact_powers import ExactMatrix
-
-    if model.exact_build is None:
-        return None
 
     def build() -> Any:
         exact = model.exact()
@@ -262,6 +259,25 @@ def _exact_vertex(model: LureModel) -> Any:
         return exact.A + (exact.B @ exact.Cw).times(model.q)
 
     return ExactMatrix(build, None, "the loop A + q B Cw formed exactly from the spec's data")
+
+
+def _exact_corner(model: LureModel, gains: np.ndarray) -> Any:
+    """The exact loop A + B diag(k) Cw of the spec's data for the corner ``gains`` (each 0 or
+    the float q; of the model's own floats when they are its data)."""
+    from .._exact_powers import Dyadic, ExactMatrix
+
+    def build() -> Any:
+        exact = model.exact()
+        if exact is None:
+            return None
+        on = np.flatnonzero(gains)
+        if on.size == 0:
+            return exact.A
+        B = Dyadic(exact.B.ints[:, on], exact.B.exponent)
+        Cw = Dyadic(exact.Cw.ints[on, :], exact.Cw.exponent)
+        return exact.A + (B @ Cw).times(model.q)
+
+    return ExactMatrix(build, None, "the corner's loop formed exactly from the spec's data")
 
 
 def channel_vertex_instability(model: LureModel) -> dict[str, Any] | None:
@@ -284,6 +300,12 @@ def channel_vertex_instability(model: LureModel) -> dict[str, Any] | None:
         return None
     worst = int(np.argmax(radii))
     if radii[worst] <= 1 + 1e-9:
+        return None
+    # the corner's loop formed exactly from the spec's data must be unstable too
+    from .spectral import schur_decision
+
+    decision = schur_decision(loops[worst], exact=_exact_corner(model, corners[worst]))
+    if decision.state != "unstable":
         return None
     return {
         "gains": corners[worst],

@@ -302,7 +302,8 @@ def _verified_contraction(c: _Checked, clear: float) -> float | None:
         np.linalg.cholesky(c.decrease - 0.5 * c.dec_min * c.normP * np.eye(n))
     except np.linalg.LinAlgError:
         return None
-    return float(np.sqrt(max(0.0, 1.0 - c.dec_min * c.normP / c.p_eigs[-1])))
+    # the decrease the exact F is sure of: the computed one less its error bound
+    return float(np.sqrt(max(0.0, 1.0 - (c.dec_min - c.bound) * c.normP / c.p_eigs[-1])))
 
 
 def verified_decrease(

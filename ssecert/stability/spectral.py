@@ -33,7 +33,7 @@ from .._exact import (
     spectral_radius_bound,
 )
 from .._exact_powers import ExactMatrix
-from .._format import sig
+from .._format import one_minus, sig
 from ..tolerances import EPS
 
 __all__ = ["SchurDecision", "schur_decision", "EXACT_SCHUR_LIMIT"]
@@ -46,8 +46,8 @@ def _fmt(x: float) -> str:
 
 def below_one(upper: float, gap: float) -> str:
     """``upper < 1`` in words that show it: ``1 - 1.65e-07`` when six digits would print 1."""
-    if 0 < gap < 1e-4 or upper >= 1.0:
-        return f"1 - {gap:.3g} < 1"
+    if 0 < gap < 1e-3 or upper >= 1.0:
+        return f"{one_minus(gap)} < 1"
     return f"{_fmt(upper)} < 1"
 
 

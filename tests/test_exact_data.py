@@ -1,0 +1,244 @@
+"""Every exact claim is made on the spec's exact data, and every size a spec names is budgeted.
+
+A float product such as A - L C rounds: with L C below half an ulp of A's entries the product is
+A itself, and an "exact" decision on it would be a decision about another observer.  These tests
+build designs whose answer is known in exact arithmetic and check that no verdict contradicts it.
+"""
+
+from fractions import Fraction
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from ssecert.analyze import analyze
+from ssecert.cli import main
+from ssecert.observers import build_observer
+from ssecert.spec import spec_from_dict
+from ssecert.stability.checks import observer_gain_check, observer_stability_check
+
+
+def _spec(A, C, observer, s=0, **extra):
+    data = {
+        "name": "exact",
+        "system": {"A": A, "C": C},
+        "attack": {"max_attacked": s},
+        "observer": observer,
+        **extra,
+    }
+    return spec_from_dict(data)
+
+
+def _verdicts(cert):
+    return {c.id: c.verdict.value for c in cert.checks}
+
+
+# ---------------------------------------------------------------------------
+# L C below half an ulp of A
+
+
+def test_an_elastic_net_gain_below_rounding_gets_no_fails():
+    # F = 1 - 1e-17 exactly: the float product A - L C rounds to 1.0
+    cert = analyze(
+        _spec(
+            [[1.0]],
+            [[1.0], [1.0]],
+            {
+                "kind": "elastic_net",
+                "gain": [[1e-17, 0.0]],
+                "step": 0.5,
+                "threshold": 0.1,
+                "shrink": 0.5,
+            },
+        )
+    )
+    verdicts = _verdicts(cert)
+    assert "fails" not in verdicts.values(), verdicts
+    gain = cert["observer_gain"]
+    assert gain.verdict.value == "holds" and "1 - 1e-17 < 1" in gain.summary
+    stability = cert["observer_stability"]
+    assert stability.verdict.value == "inconclusive"
+    assert "within rounding of 1" in stability.summary
+
+
+def test_a_luenberger_gain_below_rounding_is_certified_by_its_exact_powers():
+    cert = analyze(_spec([[1.0]], [[1.0], [1.0]], {"kind": "luenberger", "gain": [[1e-17, 0.0]]}))
+    verdicts = _verdicts(cert)
+    assert "fails" not in verdicts.values(), verdicts
+    stability = cert["observer_stability"]
+    assert stability.verdict.value == "holds" and stability.method == "exact powers of A - L C"
+    assert 0 < stability.margin < 1e-16
+
+
+def test_a_product_that_rounds_to_a_above_one_entry_is_decided_exactly():
+    # A = 1 + 2^-52 and L C = 2^-52 + 2^-60: F = 1 - 2^-60 exactly, fl(A - L C) = 1
+    A = 1.0 + 2.0**-52
+    lc = 2.0**-52 + 2.0**-60
+    cert = analyze(_spec([[A]], [[1.0], [1.0]], {"kind": "luenberger", "gain": [[lc, 0.0]]}))
+    assert cert["observer_gain"].verdict.value == "holds"
+    assert cert["observer_stability"].verdict.value == "holds"
+    assert "fails" not in _verdicts(cert).values()
+
+
+def _exactly_schur(F: list[list[Fraction]]) -> bool:
+    """Every eigenvalue of the exact 1 x 1 or 2 x 2 matrix strictly inside the unit circle
+    (Jury's test on the characteristic polynomial z^2 - t z + d)."""
+    if len(F) == 1:
+        return abs(F[0][0]) < 1
+    t = F[0][0] + F[1][1]
+    d = F[0][0] * F[1][1] - F[0][1] * F[1][0]
+    return abs(d) < 1 and abs(t) < 1 + d
+
+
+def _exact_F(A, L, C) -> list[list[Fraction]]:
+    n, p = len(A), len(C)
+    return [
+        [
+            Fraction(A[i][j]) - sum((Fraction(L[i][k]) * Fraction(C[k][j]) for k in range(p)), 0)
+            for j in range(n)
+        ]
+        for i in range(n)
+    ]
+
+
+@st.composite
+def _rounding_level_designs(draw):
+    """A plant whose A has entries near 1 and a gain whose L C is at or below its rounding."""
+    n = draw(st.integers(1, 2))
+    p = draw(st.integers(1, 2))
+    ulp = 2.0**-52
+    diag = draw(st.sampled_from([1.0, 1.0 + ulp, 1.0 - ulp / 2, -1.0, 0.5]))
+    A = [[diag if i == j else 0.0 for j in range(n)] for i in range(n)]
+    if n == 2:
+        A[0][1] = draw(st.sampled_from([0.0, 0.25, 1.0]))
+    C = [[draw(st.sampled_from([1.0, -1.0, 0.5, 0.0])) for _ in range(n)] for _ in range(p)]
+    for i in range(min(n, p)):
+        C[i][i] = 1.0
+    exponent = st.integers(50, 64)
+    L = [
+        [
+            draw(st.sampled_from([-1.0, 1.0])) * 2.0 ** -draw(exponent)
+            + draw(st.sampled_from([0.0, 2.0**-70]))
+            for _ in range(p)
+        ]
+        for _ in range(n)
+    ]
+    return A, C, L
+
+
+@settings(max_examples=40, deadline=None)
+@given(_rounding_level_designs())
+def test_gain_verdicts_at_the_rounding_level_agree_with_exact_arithmetic(design):
+    A, C, L = design
+    spec = _spec(A, C, {"kind": "luenberger", "gain": L})
+    observer = build_observer(spec.system, spec.observer)
+    stable = _exactly_schur(_exact_F(A, L, C))
+    gain = observer_gain_check(observer)
+    stability, _ = observer_stability_check(observer)
+    for check in (gain, stability):
+        if check.verdict.value == "holds":
+            assert stable, (check.id, check.summary)
+        if check.verdict.value == "fails":
+            assert not stable, (check.id, check.summary)
+
+
+@settings(max_examples=25, deadline=None)
+@given(_rounding_level_designs(), st.sampled_from([0.5, 0.9]))
+def test_sparse_observer_verdicts_at_the_rounding_level_agree_with_exact_arithmetic(design, shrink):
+    A, C, L = design
+    observer = {"kind": "elastic_net", "gain": L, "step": 0.5, "threshold": 0.1}
+    observer["shrink"] = shrink
+    spec = _spec(A, C, observer)
+    design_ = build_observer(spec.system, spec.observer)
+    stable = _exactly_schur(_exact_F(A, L, C))
+    check, _ = observer_stability_check(design_)
+    if check.verdict.value == "holds":
+        assert stable, check.summary  # a stable F is necessary: near 0 the error follows F
+    if check.verdict.value == "fails" and "linear error matrix" in check.summary:
+        assert not stable, check.summary
+
+
+# ---------------------------------------------------------------------------
+# witnesses whose replay disagrees
+
+
+def test_a_repelling_equilibrium_says_so_and_why_its_replay_drifts():
+    # found by a search over small rational designs: the equilibrium exists exactly, but the
+    # linear part of the error's map near it has an eigenvalue 1.76, so rounding moves off it
+    spec = _spec(
+        [[0.4]],
+        [[-1.1], [-0.6], [1.3]],
+        {"kind": "dsso", "gain": [[1.5, 0.7, 1.2]], "step": 0.9, "threshold": 0.1},
+    )
+    check, _ = observer_stability_check(build_observer(spec.system, spec.observer))
+    witness = check.witness
+    assert check.verdict.value == "fails" and witness["kind"] == "nonzero equilibrium"
+    assert witness["repelling"] and witness["local_loop_moduli"][0] > 1.7
+    replay = witness["observer_replay"]
+    assert replay["replayed"] and not replay["agrees"]
+    assert "It is repelling" in check.summary
+    assert f"drifted off it by {replay['largest_drift']:.2g} in 50 steps" in check.summary
+
+
+# ---------------------------------------------------------------------------
+# every size a spec names, at 10^9
+
+
+UGV = {"A": [[1.0, 0.0099], [0.0, 0.9876]], "C": [[1, 0], [0, 1], [0, 1]]}
+BIG = 10**9
+
+
+def _write(tmp_path, observer, attack=None, scenario=None):
+    import json
+
+    data = {
+        "name": "big",
+        "system": UGV,
+        "attack": attack or {"max_attacked": 1},
+        "observer": observer,
+    }
+    if scenario is not None:
+        data["scenario"] = [scenario]
+    path = tmp_path / "big.json"
+    path.write_text(json.dumps(data))
+    return str(path)
+
+
+SSO = {"kind": "sso", "step": 0.3, "threshold": 0.1}
+SCENARIO = {"name": "c", "attack": "constant", "sensors": [1], "magnitude": [4.0, 5.0]}
+
+
+def test_a_horizon_of_a_billion_is_refused_naming_it(tmp_path, capsys):
+    path = _write(tmp_path, SSO, attack={"max_attacked": 1, "horizon": BIG})
+    assert main(["analyze", path]) == 2
+    assert "attack.horizon" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("key", ["window", "inner_steps"])
+def test_an_sso_size_of_a_billion_is_answered_naming_it(tmp_path, capsys, key):
+    path = _write(tmp_path, {**SSO, key: BIG})
+    assert main(["analyze", path, "--json", "-"]) in (1, 3)
+    out = capsys.readouterr().out
+    assert f"{key} = 1,000,000,000" in out or f"{key} = {BIG:,}" in out
+
+
+@pytest.mark.parametrize("key", ["steps", "runs"])
+def test_a_scenario_size_of_a_billion_is_refused_naming_it(tmp_path, capsys, key):
+    path = _write(tmp_path, SSO, scenario={**SCENARIO, "steps": 20, "runs": 2, key: BIG})
+    assert main(["simulate", path]) == 2
+    err = capsys.readouterr().err
+    assert "1,000,000,000" in err and key in err and "--memory-budget" in err
+
+
+def test_a_switching_period_of_a_billion_simulates(tmp_path, capsys):
+    scenario = {"name": "c", "attack": "switching", "count": 1, "magnitude": [1.0, 2.0]}
+    path = _write(tmp_path, SSO, scenario={**scenario, "steps": 20, "runs": 2, "period": BIG})
+    assert main(["simulate", path]) == 0
+
+
+@pytest.mark.parametrize("option", ["--runs", "--steps"])
+def test_a_simulation_option_of_a_billion_is_refused(tmp_path, capsys, option):
+    path = _write(tmp_path, SSO, scenario={**SCENARIO, "steps": 20, "runs": 2})
+    assert main(["simulate", path, option, str(BIG)]) == 2
+    assert "1,000,000,000" in capsys.readouterr().err
