@@ -7,7 +7,6 @@ build designs whose answer is known in exact arithmetic and check that no verdic
 
 from fractions import Fraction
 
-import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
