@@ -18,7 +18,9 @@ def test_design_writes_a_spec_report_and_certificate_that_certify_reproduces(tmp
         ["design", "ugv", "--out", str(out), "--runs", "4", "--json", str(out / "r.json")]
     )
     printed = capsys.readouterr().out
-    assert status == 0, printed
+    # a design is written, and its certificate fails: the plant is not 2-sparse observable
+    assert status == 1, printed
+    assert "verdict of the written design's certificate: FAILS (exit status 1)" in printed
     assert sorted(p.name for p in out.iterdir()) == [
         "r.json", "ugv-design.html", "ugv-design.json", "ugv-design.toml"
     ]  # fmt: skip
@@ -69,7 +71,7 @@ def test_the_roa_objective_designs_a_dsso(tmp_path, capsys):
     status = main(["design", "ugv", "--objective", "roa", "--out", str(tmp_path), "--runs", "2",
                    "--json", "-"])  # fmt: skip
     captured = capsys.readouterr()
-    assert status == 0, captured.err
+    assert status == 1, captured.err  # written; the UGV is not 2-sparse observable
     result = json.loads(captured.out)
     assert result["kind"] == "dsso" and result["radius"] > 10.0
     designs = {d["design"]: d for d in result["comparison"]["designs"]}
@@ -84,7 +86,7 @@ def test_the_time_budget_ends_the_search_and_says_so(tmp_path, capsys):
         ["design", "ugv", "--out", str(tmp_path), "--time-budget", "0", "--runs", "2"]
     )  # fmt: skip
     printed = capsys.readouterr().out
-    assert status == 0 and "1 candidates" in printed
+    assert status == 1 and "1 candidates" in printed  # written; the certificate fails
     assert "the time budget of 0 s ended the search" in printed
 
 
@@ -103,7 +105,10 @@ def test_a_plant_file_designs_with_the_number_of_attacked_sensors(tmp_path, caps
     assert "--max-attacked" in capsys.readouterr().err
     status = main(["design", str(plant), "--max-attacked", "1", "--out", str(tmp_path)])
     printed = capsys.readouterr().out
-    assert status == 0 and (tmp_path / "plant-design.toml").exists()
+    # written: the observer is certified, but removing sensor 0 and 2 leaves (A, [0 1])
+    # unobservable, so 1 attacked sensor cannot be corrected and the certificate fails
+    assert status == 1 and (tmp_path / "plant-design.toml").exists()
+    assert "verdict of the written design's certificate: FAILS (exit status 1)" in printed
     assert "has no observer of its own" in printed
 
 
@@ -117,7 +122,7 @@ def test_json_may_not_overwrite_what_design_writes(tmp_path, capsys):
 def test_the_report_reproduces_the_design_command_and_names_the_certificate_alone(tmp_path, capsys):
     argv = ["design", "ugv", "--out", str(tmp_path), "--runs", "2", "--seed", "3",
             "--time-budget", "0"]  # fmt: skip
-    assert main(argv) == 0
+    assert main(argv) == 1  # the design is written; its certificate fails
     capsys.readouterr()
     certificate = json.loads((tmp_path / "ugv-design.json").read_text())
     assert certificate["reproduce"] == "ssecert " + " ".join(argv)
