@@ -45,15 +45,18 @@ def distance(x: float | None) -> str:
 
     Examples
     --------
+    A distance above it is also given in units of eps, so that "within floating-point
+    precision" can be read against it.
+
     >>> distance(0.0), distance(3.1e-12)
-    ('below the rounding level 2.2e-16', '3.1e-12')
+    ('below the rounding level 2.2e-16', '3.1e-12, 1.4e+04 eps')
     """
     eps = 2.0**-52
     if x is None:
         return "unknown"
     if not x >= eps:  # also NaN
         return f"below the rounding level {eps:.1e}"
-    return f"{x:.1e}"
+    return f"{x:.1e}, {x / eps:.2g} eps"
 
 
 def one_minus(gap: float) -> str:

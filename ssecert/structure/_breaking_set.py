@@ -59,8 +59,8 @@ def _failure(
             (
                 f"The {outcome.method} method finds breaking set {list(B)}, but without those sensors "
                 f"the exact data are observable (Krylov rank {system.n} modulo a prime): the plant is "
-                f"within floating-point precision of one they break, and the answer depends on digits "
-                f"the data do not have."
+                f"within the precision of the floating-point rank decision of one they break, and "
+                f"the answer depends on digits the data do not have."
             ),
             None,
         )

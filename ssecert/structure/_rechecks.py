@@ -69,7 +69,11 @@ def _cross_check(
     }
     mr = outcome.max_removable
     if enum.max_removable is not None and enum.max_removable < mr:
-        found = "a breaking set" if enum.status == "exact" else "a set within precision of breaking"
+        found = (
+            "a breaking set"
+            if enum.status == "exact"
+            else "a set within the rank decision's precision of breaking"
+        )
         outcome.problems.append(
             f"the enumeration finds {found} of "
             f"{enum.max_removable + 1} sensors, smaller than the eigenspace method's {size} (its "

@@ -167,8 +167,9 @@ def _exactly_breaking(
         far = format_distance(distance)
         out.problems.append(
             f"its smallest support, sensors {list(support)}, does not break the exact data "
-            f"(relative distance {far} to a plant it breaks: the data are within "
-            f"precision of one, or its eigenvectors are too ill-conditioned to trust)"
+            f"(relative distance {far} to a plant it breaks: within the precision of the "
+            f"floating-point rank decision, or its eigenvectors are too ill-conditioned to "
+            f"trust)"
         )
         return None
     out.details["breaking_set_exact"] = decision.state == "unobservable"

@@ -372,8 +372,9 @@ class _Levels:
         )
         out.problems.append(
             f"removing sensors {list(within[0])}{others} leaves a plant that is observable in "
-            f"exact arithmetic but within floating-point precision of an unobservable one"
-            f"{how_far}: the answer depends on digits the data do not have"
+            f"exact arithmetic but, within the precision of the floating-point rank decision (the "
+            f"error bound of its computed eigenvalues and singular values), of an unobservable "
+            f"one{how_far}, so the answer depends on digits the data do not have"
         )
 
 

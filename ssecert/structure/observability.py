@@ -347,8 +347,8 @@ def _exactly_observable(out: _Verdicts, n: int) -> Check:
         Verdict.INCONCLUSIVE,
         f"In floating point (A, C) looks unobservable, but the exact data are observable "
         f"(Krylov rank {n} modulo a prime): the plant is within a relative distance "
-        f"{distance} of an unobservable one, below the precision of its data, so the answer "
-        f"depends on digits the data do not have.",
+        f"{distance} of an unobservable one, within the precision of the floating-point "
+        f"rank decision, so the answer depends on digits the data do not have.",
         None,
         None,
     )
