@@ -274,19 +274,21 @@ class ExactMatrix:
 
     @classmethod
     def error_matrix(
-        cls, A: np.ndarray, L: np.ndarray, C: np.ndarray | Dyadic, *, bound: float | None = None
+        cls,
+        A: np.ndarray,
+        L: np.ndarray | Dyadic,
+        C: np.ndarray | Dyadic,
+        *,
+        bound: float | None = None,
+        source: str = "F = A - L C formed exactly from the floats of A, L and C",
     ) -> ExactMatrix:
-        """F = A - L C from the floats of A and L and the floats (or exact value) of C; the
-        a-priori bound on fl(A - L C) is Higham's when C is given as floats."""
-        if bound is None and not isinstance(C, Dyadic):
+        """F = A - L C from the floats of A and the floats (or exact values) of L and C; the
+        a-priori bound on fl(A - L C) is Higham's when L and C are given as floats."""
+        if bound is None and not isinstance(C, Dyadic) and not isinstance(L, Dyadic):
             from .tolerances import product_rounding
 
             bound = product_rounding(L, C, A)
-        return cls(
-            lambda: exact_error_matrix(A, L, C),
-            bound,
-            "F = A - L C formed exactly from the floats of A, L and C",
-        )
+        return cls(lambda: exact_error_matrix(A, L, C), bound, source)
 
 
 def shift_by(F: Dyadic, value: float) -> Dyadic:

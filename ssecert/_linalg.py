@@ -43,6 +43,7 @@ __all__ = [
     "matrix_norm",
     "unit_normalized",
     "balanced_units",
+    "state_balancing",
     "Units",
 ]
 
@@ -68,6 +69,39 @@ class Units(NamedTuple):
         return bool(np.any(self.states != 1.0))
 
 
+def state_balancing(A: np.ndarray, C: np.ndarray, *, spread: float = 16.0) -> np.ndarray | None:
+    """Powers of two s that balance the states of (A, C) (LAPACK's gebal on [[A, 0], [C, 0]],
+    ``scipy.linalg.matrix_balance``), or None when they spread less than ``spread`` or
+    S^-1 A S and C S would not be exact (an entry under- or overflowing)."""
+    from scipy.linalg import matrix_balance
+
+    A = np.asarray(A, dtype=float)
+    C = np.asarray(C, dtype=float).reshape(-1, A.shape[0])
+    n, p = A.shape[0], C.shape[0]
+    if n < 2:
+        return None
+    K = np.zeros((n + p, n + p))
+    K[:n, :n], K[n:, :n] = A, C
+    with np.errstate(all="ignore"):
+        if not np.all(np.isfinite(K)):
+            return None
+        _, (scale, _) = matrix_balance(K, permute=False, separate=True)
+        states = np.asarray(scale[:n], dtype=float)
+        exponents = np.log2(states)
+        if (
+            not np.all(np.isfinite(exponents))
+            or not np.array_equal(exponents, np.round(exponents))
+            or states.max() < spread * states.min()
+        ):
+            return None
+        A_b = A * (states[None, :] / states[:, None])
+        C_b = C * states[None, :]
+        back = A_b * (states[:, None] / states[None, :])
+        if not (np.array_equal(back, A) and np.array_equal(C_b / states[None, :], C)):
+            return None
+    return states
+
+
 def balanced_units(system: System, *, spread: float = 16.0) -> Units:
     """The plant in exact power-of-two units, its states balanced too.
 
@@ -79,35 +113,18 @@ def balanced_units(system: System, *, spread: float = 16.0) -> Units:
     with one state in units 2^30 times smaller gets the decisions of the plant in its own
     units.  The rows of C are renormalised after the state scaling.
     """
-    from scipy.linalg import matrix_balance
-
     from ._exact import pow2_row_scaling
 
     work, alpha = unit_normalized(system)
-    n, p = system.n, system.p
+    n = system.n
     plain = Units(work, alpha, np.ones(n), pow2_row_scaling(system.C))
-    if n < 2:
-        return plain
     A, C = system.A, plain.sensors[:, None] * system.C
-    K = np.zeros((n + p, n + p))
-    K[:n, :n], K[n:, :n] = A, C
+    states = state_balancing(A, C, spread=spread)
+    if states is None:
+        return plain
     with np.errstate(all="ignore"):
-        if not np.all(np.isfinite(K)):
-            return plain
-        _, (scale, _) = matrix_balance(K, permute=False, separate=True)
-        states = np.asarray(scale[:n], dtype=float)
-        exponents = np.log2(states)
-        if (
-            not np.all(np.isfinite(exponents))
-            or not np.array_equal(exponents, np.round(exponents))
-            or states.max() < spread * states.min()
-        ):
-            return plain
         A_b = A * (states[None, :] / states[:, None])
         C_b = C * states[None, :]
-        back = A_b * (states[:, None] / states[None, :])
-        if not (np.array_equal(back, A) and np.array_equal(C_b / states[None, :], C)):
-            return plain  # an entry under- or overflowed: not exact
         balanced, alpha_b = unit_normalized(System(A_b, C_b))
         rows = pow2_row_scaling(C_b)
     return Units(

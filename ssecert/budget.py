@@ -72,6 +72,9 @@ def format_count(value: float) -> str:
     """
     if isinstance(value, int) and value < 10**9:
         return f"{value:,}"
+    if isinstance(value, int) and value.bit_length() > 1000:  # beyond the float range
+        digits = len(str(value))
+        return f"about {str(value)[0]}.{str(value)[1]}e+{digits - 1}"
     value = float(value)
     if value < 1e9:
         return f"{int(value):,}"

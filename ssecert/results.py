@@ -43,7 +43,7 @@ def to_jsonable(value: Any) -> Any:
     if isinstance(value, Mapping):
         return {str(k): to_jsonable(v) for k, v in value.items()}
     if isinstance(value, np.ndarray):
-        return to_jsonable(value.tolist())
+        return _array_jsonable(value)
     if isinstance(value, (list, tuple, set, frozenset)):
         return [to_jsonable(v) for v in value]
     if isinstance(value, (bool, np.bool_)):
@@ -62,6 +62,33 @@ def to_jsonable(value: Any) -> Any:
     if value is None or isinstance(value, str):
         return value
     raise TypeError(f"cannot convert {type(value).__name__} to JSON")
+
+
+# Largest array written to JSON entry by entry: a model of thousands of states (an SSO window
+# of hundreds of steps) has matrices of millions of entries, which would take gigabytes as
+# Python lists; beyond it the array is described (shape, norm and a hash of its bytes).
+MAX_JSON_ENTRIES = 1_000_000
+
+
+def _array_jsonable(value: np.ndarray) -> Any:
+    """An array as nested lists (real finite floats without a Python loop), or its summary."""
+    if value.size > MAX_JSON_ENTRIES:
+        import hashlib
+
+        data = np.ascontiguousarray(value)
+        with np.errstate(all="ignore"):
+            norm = float(np.sqrt(np.sum(np.abs(data.astype(complex)) ** 2)))
+        return {
+            "omitted": f"an array of {value.size:,} entries, more than the {MAX_JSON_ENTRIES:,} "
+            f"written to JSON",
+            "shape": list(value.shape),
+            "dtype": str(value.dtype),
+            "frobenius_norm": to_jsonable(norm),
+            "sha256_of_bytes": hashlib.sha256(data.tobytes()).hexdigest(),
+        }
+    if value.dtype.kind in "fiu" and (value.dtype.kind != "f" or np.all(np.isfinite(value))):
+        return value.tolist()
+    return to_jsonable(value.tolist())
 
 
 @dataclass(frozen=True)

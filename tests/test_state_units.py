@@ -181,3 +181,36 @@ def test_the_thesis_design_keeps_its_region_of_attraction_in_other_units():
     xi0 = np.hstack([e0, np.zeros((200, model.N - 2))])
     tail = model.simulate(xi0, 5000)[-1]
     assert np.all(np.linalg.norm(tail, axis=1) <= 1e-9 * region.value)
+
+
+@pytest.mark.parametrize("k", [30, -40])
+def test_structural_checks_keep_their_verdicts_and_margins_in_other_state_units(k):
+    # the zf-plant with its second state in units 2^30 times smaller lost sparse observability
+    # ("within floating-point precision, relative distance 3.8e-10"); it holds with the margin
+    # of its own units, and an unobservable direction comes back in the user's coordinates
+    plain = analyze(_spec(ZF_PLANT, ZF_OBSERVER))
+    plant, observer = _rescaled(ZF_PLANT, ZF_OBSERVER, k)
+    scaled = analyze(_spec(plant, observer))
+    for check in ("observability", "sparse_observability"):
+        assert scaled[check].verdict.value == plain[check].verdict.value == "holds"
+        assert scaled[check].margin == pytest.approx(plain[check].margin, rel=1e-9)
+    assert scaled["sparse_observability"].fields["max_removable"] == 2
+    assert len(scaled["sparse_observability"].evidence["state_scaling"]) == 2
+
+
+def test_a_breaking_sets_stealthy_attack_is_given_in_the_users_units():
+    # state 2 is seen by sensor 0 only: removing it breaks the plant, in any units
+    t = np.array([1.0, 2.0**-35])
+    A = np.array([[0.5, 0.0], [1.0, 0.7]]) * t[:, None] / t[None, :]
+    C = np.array([[0.0, 1.0], [1.0, 0.0], [1.0, 0.0]]) / t[None, :]
+    spec = spec_from_dict(
+        {"name": "b", "system": {"A": A.tolist(), "C": C.tolist()}, "attack": {"max_attacked": 1}}
+    )
+    check = analyze(spec)["sparse_observability"]
+    assert check.verdict.value == "fails" and check.fields["breaking_set"] == [0]
+    witness = check.witness
+    z = np.asarray(witness["z"], dtype=float)
+    # kept sensors see nothing of z: C_kept A^k z = 0 in the user's coordinates
+    for power in range(2):
+        assert np.allclose(C[1:] @ np.linalg.matrix_power(A, power) @ z, 0.0, atol=1e-12)
+    assert np.linalg.norm(C[0] @ z) > 0

@@ -192,7 +192,8 @@ class DeadbeatCheck:
             "verified": self.verified,
             "reason": self.reason,
             "test": (
-                "F = A - L C formed exactly from the printed floats; ||F^k||_2 <= rtol "
+                "F = A - L C formed exactly from the printed floats, in balanced power-of-two "
+                "state coordinates (S^-1 F S, S^-1 A S); ||F^k||_2 <= rtol "
                 "||A||_2^k with ||F^(k-1)||_2 clearly above (exact bounds "
                 "||X||_inf / sqrt(n) <= ||X||_2 <= sqrt(||X||_1 ||X||_inf)), and "
                 "rho(F) <= ||F^m||_inf^(1/m) < 1 for an exact power m"
@@ -244,6 +245,15 @@ def verify_deadbeat(
         dtype=float,
     )
     F = exact_error_matrix(A, L, C)
+    # the norms are measured in balanced state coordinates (F_b = S^-1 F S, exactly), so that
+    # a state written in other units does not make a large F look small against ||A||
+    from .._linalg import state_balancing
+
+    s = state_balancing(A, C)
+    if s is not None:
+        k = np.round(np.log2(s)).astype(np.int64)
+        F = F.scaled(-k, k)
+        A = A * (s[None, :] / s[:, None])
     powers = spectral_radius_bound(F, consecutive=n, squarings=8, target=1.0)
     scale = float(np.linalg.norm(A, 2))
     if not np.isfinite(scale) or scale <= 0:
@@ -367,14 +377,20 @@ def deadbeat_gain(
     A = np.asarray(as_real_matrix(A, "A"), dtype=float)
     C = np.asarray(as_real_matrix(C, "C", shape=(None, A.shape[0])), dtype=float)
     tol = tolerances or Tolerances()
-    # Units: the construction runs on alpha A and D C with powers of two alpha
-    # and D (exact), so that no sensor's units or the plant's scale decide a
-    # rank; L = L_n D / alpha maps the gain back exactly.
-    alpha = pow2_scale(float(np.max(np.abs(A)))) if np.any(A) else 1.0
+    # Units: the construction runs on alpha S^-1 A S and D C S with powers of two alpha, D
+    # and S (the states balanced, exact), so that no sensor's or state's units or the plant's
+    # scale decide a rank; L = S L_n D / alpha maps the gain back exactly.
+    from .._linalg import state_balancing
+
     D = pow2_row_scaling(C)
-    L_n, dims = _deadbeat_construction(alpha * A, D[:, None] * C, tol)
+    s = state_balancing(A, D[:, None] * C)
+    s = np.ones(A.shape[0]) if s is None else s
+    A_s, C_s = A * (s[None, :] / s[:, None]), (D[:, None] * C) * s[None, :]
+    alpha = pow2_scale(float(np.max(np.abs(A_s)))) if np.any(A_s) else 1.0
+    D_s = pow2_row_scaling(C_s)
+    L_n, dims = _deadbeat_construction(alpha * A_s, D_s[:, None] * C_s, tol)
     with np.errstate(over="ignore"):
-        L = (L_n * D[None, :]) / alpha
+        L = (s[:, None] * L_n * (D * D_s)[None, :]) / alpha
     if not np.all(np.isfinite(L)):
         raise GainError(
             "the deadbeat gain overflows the float range (its entries scale as 1 / C, and C's "
@@ -383,7 +399,7 @@ def deadbeat_gain(
     F = A - L @ C
     from .._linalg import staircase
 
-    index = staircase(alpha * A, D[:, None] * C, tolerances=tol).index
+    index = staircase(alpha * A_s, D_s[:, None] * C_s, tolerances=tol).index
     test = verify_deadbeat(A, L, C, rtol=tol.deadbeat_rtol, clear=tol.certificate_clear)
     if not np.any(C) and not test.verified:
         # A - L C = A exactly for every L, and its exact powers do not vanish

@@ -40,6 +40,8 @@ if TYPE_CHECKING:
 __all__ = ["ObserverDesign", "ObserverKind", "LINEAR_GAINS", "GAIN_CHOICES"]
 
 LINEAR_GAINS = ("deadbeat", "place", "pinv")
+# gains the spec defines by a step (L = step A S^T): exact from the step, not from the floats
+DERIVED_GAINS = ("ogd", "sso")
 GAIN_CHOICES = ("deadbeat", "place", "ogd", "pinv")
 
 
@@ -163,14 +165,47 @@ class ObserverKind:
         its own exact value), or an exact ``Dyadic`` when S is a product (O_tau)."""
         return design.sensing
 
+    def exact_gain(self, design: ObserverDesign) -> np.ndarray | Dyadic:
+        """The gain L as the spec defines it: the printed floats of a matrix, deadbeat, place
+        or pinv gain (the design's output), or for a gain derived from the step (``ogd``, the
+        SSO's L = step A S^T) its exact value, of which the printed floats are the rounding."""
+        step = design.gain.details.get("step")
+        if design.gain.method in DERIVED_GAINS and step is not None:
+            S = as_dyadic(self.exact_sensing(design))
+            return (dyadic(design.system.A) @ S.T).times(float(step))
+        return design.gain.L
+
+    def gain_rounding(self, design: ObserverDesign) -> float:
+        """An a-priori bound on ||L_printed - L_exact||_2 (0 for a gain that is its floats)."""
+        step = design.gain.details.get("step")
+        if design.gain.method in DERIVED_GAINS and step is not None:
+            S = self.exact_sensing(design)
+            if isinstance(S, Dyadic):
+                return math.inf  # a product itself: measured on the exact value instead
+            return product_rounding(design.system.A, S.T, scale=float(step))
+        return 0.0
+
     def exact_error(self, design: ObserverDesign) -> ExactMatrix:
-        """The exact F = A - L S of the spec's data (the floats of A, the printed gain L and
-        S), of which ``error_matrix`` is the rounding; formed on demand."""
+        """The exact F = A - L S of the spec's data (the floats of A and S, the gain as
+        ``exact_gain`` defines it), of which ``error_matrix`` is the rounding; formed on
+        demand."""
         S = self.exact_sensing(design)
-        bound = (
-            None if isinstance(S, Dyadic) else product_rounding(design.gain.L, S, design.system.A)
-        )
-        return ExactMatrix.error_matrix(design.system.A, design.gain.L, S, bound=bound)
+        L = self.exact_gain(design)
+        bound = None
+        dL = self.gain_rounding(design)
+        if not isinstance(S, Dyadic) and math.isfinite(dL):
+            normS = float(np.linalg.norm(S, 2)) * (1 + 1e-12)
+            bound = product_rounding(design.gain.L, S, design.system.A) + dL * normS
+        if isinstance(L, Dyadic):
+            return ExactMatrix.error_matrix(
+                design.system.A,
+                L,
+                S,
+                bound=bound,
+                source="F = A - L C with L = step A C^T, formed exactly from the floats of A, C "
+                "and the step",
+            )
+        return ExactMatrix.error_matrix(design.system.A, L, S, bound=bound)
 
     def lure_model(self, design: ObserverDesign) -> LureModel:
         """The error dynamics in Lur'e form, for the LMI certificates.
@@ -335,7 +370,9 @@ def soft_lure_model(design: ObserverDesign) -> LureModel:
     fits = N * (N + 2 * m) + m * (N + m) <= EXACT_ENTRIES
 
     def build() -> ExactLure | None:
-        return _exact_soft_lure(A_p, L, exact_S, nu, L2) if fits else None
+        if not fits:
+            return None
+        return _exact_soft_lure(A_p, design.observer_kind.exact_gain(design), exact_S, nu, L2)
 
     return LureModel(
         A,
@@ -360,8 +397,11 @@ def _soft_formation_error(design: ObserverDesign, nu: float, L2: np.ndarray) -> 
         return math.inf
     S, L, A_p = design.sensing, design.gain.L, design.system.A
     m = S.shape[0]
+    dL = design.observer_kind.gain_rounding(design)  # in F (times ||S||), in -L and in E
     parts = [
-        product_rounding(L, S, A_p),
+        product_rounding(L, S, A_p) + dL * float(np.linalg.norm(S, 2)) * (1 + 1e-12),
+        dL,
+        dL,
         product_rounding(L2, S, scale=nu),
         product_rounding(L2, np.eye(m), np.eye(m), scale=nu),
         product_rounding(L2, np.eye(m), scale=nu),
@@ -370,14 +410,18 @@ def _soft_formation_error(design: ObserverDesign, nu: float, L2: np.ndarray) -> 
 
 
 def _exact_soft_lure(
-    A_p: np.ndarray, L: np.ndarray, S: np.ndarray | Dyadic, nu: float, L2: np.ndarray
+    A_p: np.ndarray,
+    L: np.ndarray | Dyadic,
+    S: np.ndarray | Dyadic,
+    nu: float,
+    L2: np.ndarray,
 ) -> ExactLure:
-    """The exact matrices of ``soft_lure_model`` from the floats of A, L, S (or its exact
-    value), nu and L2."""
+    """The exact matrices of ``soft_lure_model`` from the floats of A, nu and L2 and the
+    floats or exact values of L and S."""
     n = A_p.shape[0]
     Sd = as_dyadic(S)
     m = Sd.shape[0]
-    Ld = dyadic(L)
+    Ld = as_dyadic(L)
     nuL2 = dyadic(L2).times(nu)
     if np.array_equal(L2, np.diag(np.diag(L2))):  # diagonal L2: scale rows, no product
         diag = dyadic(np.diag(L2)[:, None]).times(nu)

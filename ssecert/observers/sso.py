@@ -122,7 +122,8 @@ class SparseSoftObserverKind(SoftThresholdObserverKind):
             return super().error_matrix(design)
         step = design.parameter("step")
         inner = np.eye(design.system.n) - step * design.sensing.T @ design.sensing
-        return design.system.A @ np.linalg.matrix_power(inner, design.inner_steps)
+        with np.errstate(over="ignore", invalid="ignore"):  # the callers judge an overflow
+            return design.system.A @ np.linalg.matrix_power(inner, design.inner_steps)
 
     def exact_sensing(self, design: ObserverDesign) -> np.ndarray | Dyadic:
         """C, or for a window tau > 1 the exact O_tau = [C; C A; ...; C A^(tau-1)] (the
@@ -164,6 +165,11 @@ class SparseSoftObserverKind(SoftThresholdObserverKind):
 
     def dead_zone_refusal(self, design: ObserverDesign) -> str:
         rows = design.inner_steps * design.sensing.shape[0]
+        if design.inner_steps > 1 and not np.all(np.isfinite(self.error_matrix(design))):
+            return (
+                f"observer.inner_steps = {design.inner_steps:,}: A (I - step S' S)^m "
+                f"overflows in floating point, so its dead zone cannot be certified"
+            )
         if design.inner_steps > 1 and rows > MAX_DEAD_ZONE_ROWS:
             return (
                 f"observer.inner_steps = {design.inner_steps:,}: the dead zone of an SSO with "

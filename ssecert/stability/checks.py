@@ -30,7 +30,9 @@ from .gain_check import (
     _exact,
     _known,
     _lyapunov_evidence,
+    balanced_lyapunov_note,
     observer_gain_check,
+    overflow_reason,
 )
 from .lmi import (
     ETA,
@@ -99,9 +101,9 @@ def observer_stability_check(
     if cert.verdict == "inconclusive":
         witness, searched, cycled = divergence_witness(model), "", ""
         if witness is None:
-            witness, searched = nonzero_equilibrium(model)
+            witness, searched = nonzero_equilibrium(model, budget=budget)
         if witness is None:
-            witness, cycled = periodic_orbit(model)
+            witness, cycled = periodic_orbit(model, budget=budget)
         if witness is not None:
             return _witnessed_failure(design, model, cert, witness, tol, title), (model, cert)
         check = _circle_stability_check(design, model, cert, tol, title)
@@ -280,6 +282,7 @@ def _linear_stability_check(lyap: LyapunovCertificate, tol: Tolerances, title: s
         summary = (
             f"The error dynamics are linear and certified stable by a Lyapunov matrix "
             f"(contraction {sig(_known(lyap.contraction))} per step)."
+            + balanced_lyapunov_note(lyap)
         )
     elif verdict is Verdict.FAILS:
         summary = f"The error dynamics are unstable: {lyap.reason}."
@@ -305,6 +308,8 @@ def _without_lure_model(design: ObserverDesign, gap: str, tol: Tolerances, title
     error follows near the origin (every soft threshold in its dead zone) is proved unstable,
     and is inconclusive otherwise."""
     kind = design.observer_kind
+    if not np.all(np.isfinite(design.error_matrix)):
+        return _no_certificate(title, f"{gap} {overflow_reason(design)}.", "circle criterion")
     if kind.dead_zone_refusal(design) or kind.dead_zone_model(design) is not None:
         # the dead zone's linear map is the error matrix (F = A (I - step S' S)^m for an SSO)
         lyap = lyapunov_certificate(
@@ -496,7 +501,7 @@ def iss_gain_check(
         )
     else:
         return check
-    records = constant_attack_outcomes(model, constant_attacks, certified=certified)
+    records = constant_attack_outcomes(model, constant_attacks, certified=certified, budget=budget)
     if not records:
         return check
     return replace(
@@ -561,8 +566,10 @@ def _iss_gain(
                 cert.gamma is None or _known(direct.gamma) < cert.gamma
             ):
                 cert = direct
+    decay = float(cert.decay or 0.0)
+    decrease = f"-{decay:.3g} V(xi) " if decay > 0 else ""
     holds = (
-        f"V(xi+) - V(xi) <= -{_known(cert.decay):.3g} V(xi) - |e|^2 + gamma^2 |a|^2 holds with "
+        f"V(xi+) - V(xi) <= {decrease}- |e|^2 + gamma^2 |a|^2 holds with "
         f"gamma = {_known(cert.gamma):.4g}: the estimation error is input-to-state stable with "
         f"respect to the attack, with l2 gain at most {_known(cert.gamma):.4g}."
         if cert.verdict == Verdict.HOLDS
@@ -758,7 +765,7 @@ def observer_checks(
     stability, cert = observer_stability_check(design, budget=budget, tolerances=tol)
     undecided = stability.verdict is Verdict.INCONCLUSIVE
     region = (
-        region_of_attraction_check(design, seed=seed, piecewise=undecided)
+        region_of_attraction_check(design, seed=seed, piecewise=undecided, budget=budget)
         if design.sparse
         else None
     )
@@ -802,12 +809,22 @@ def observer_checks(
 
 
 def region_of_attraction_check(
-    design: ObserverDesign, *, seed: int = 0, piecewise: bool = False
+    design: ObserverDesign,
+    *,
+    seed: int = 0,
+    piecewise: bool = False,
+    budget: Budget | None = None,
 ) -> Check | None:
     """Advisory: the radius of initial estimation errors from which a sparse observer provably
     converges without attack (the invariant part of its dead zone, and with ``piecewise`` a
     piecewise-quadratic Lyapunov function when it certifies more); None for a design without
     a Lur'e model."""
+    if design.observer_kind.lure_gap(design) is None:
+        refusal = _lure_model_refusal(design, budget)
+        if refusal:
+            return _region_check(
+                0.0, {"reason": f"not attempted: {refusal}"}, "", "dead zone (not attempted)"
+            )
     try:
         model = design.observer_kind.lure_model(design)
     except NotImplementedError:
@@ -818,7 +835,7 @@ def region_of_attraction_check(
         if dead_zone is None:
             return None
         return _dead_zone_only_check(design, dead_zone, seed)
-    found = region_of_attraction(model, seed=seed, piecewise=piecewise)
+    found = region_of_attraction(model, seed=seed, piecewise=piecewise, budget=budget)
     radius = float(found["radius"])
     evidence = {k: v for k, v in found.items() if k != "radius"}
     balanced = ""

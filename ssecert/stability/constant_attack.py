@@ -26,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from ..budget import Budget
 from ..observers.lure import LureModel
 from .equilibria import attacked_equilibria
 
@@ -59,15 +60,24 @@ def default_attacks(
 
 
 def constant_attack_outcomes(
-    model: LureModel, attacks: Sequence[tuple[str, np.ndarray]], *, certified: bool
+    model: LureModel,
+    attacks: Sequence[tuple[str, np.ndarray]],
+    *,
+    certified: bool,
+    budget: Budget | None = None,
 ) -> list[dict[str, Any]]:
     """One record per attack: ``outcome`` ("converges to zero", "converges to a bias",
     "unbounded" or "undecided"), ``proved``, the ``bias`` e* and its norm, the equilibria
-    found and the simulation from zero error."""
+    found and the simulation from zero error.  Nothing when the simulations (``STEPS`` steps
+    of every attack) do not fit ``budget`` (default ``Budget()``)."""
     # a stacked attack (windowed observers) is not analysed
     kept = [(name, np.asarray(a, dtype=float)) for name, a in attacks]
     kept = [(name, a) for name, a in kept if a.shape == (model.r,)]
     if not kept:
+        return []
+    N, m = model.N, model.m
+    flops = 2.0 * STEPS * len(kept) * (N * N + 2 * N * m + N * model.r)
+    if (budget or Budget()).refusal("constant attacks", flops=flops):
         return []
     runs = _simulate(model, np.array([a for _, a in kept]))
     records = []

@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from .._rational import product, solve
+from ..budget import Budget, format_count
 from ..observers.lure import LureModel
 
 __all__ = ["nonzero_equilibrium", "attacked_equilibria", "MAX_PATTERNS"]
@@ -40,17 +41,34 @@ MILP_SECONDS = 10.0  # time limit of one mixed-integer solve
 MILP_ROUNDS = 5  # solves, each excluding the patterns that exact arithmetic refused
 
 
+def milp_cost(model: LureModel) -> tuple[float, float]:
+    """Bytes of the mixed-integer program's dense constraint matrix (with the solver's copies)
+    and the operations of the exact confirmation of a candidate (a solve of N equations)."""
+    N, m = model.N, model.m
+    rows, cols = N + 6 * m, N + 3 * m
+    return 8.0 * 3 * rows * cols, 10.0 * MILP_ROUNDS * N**3
+
+
 def nonzero_equilibrium(
-    model: LureModel, *, milp: bool = True
+    model: LureModel, *, milp: bool = True, budget: Budget | None = None
 ) -> tuple[dict[str, Any] | None, str]:
     """An exactly confirmed nonzero equilibrium (the witness) or None, with what was searched.
 
     More than ``MAX_PATTERNS`` patterns are searched by mixed-integer programming, unless
-    ``milp`` is False (then they are not searched).
+    ``milp`` is False or the program does not fit ``budget`` (default ``Budget()``; then they
+    are not searched).
     """
     if model.m == 0 or model.q <= 0:
         return None, "no nonlinearity: the only equilibrium of a stable linear map is 0"
     if milp and 3**model.m > MAX_PATTERNS and model.threshold > 0:
+        nbytes, flops = milp_cost(model)
+        refusal = (budget or Budget()).refusal(
+            f"the mixed-integer program over the {model.m:,} soft-threshold channels",
+            nbytes=nbytes,
+            flops=flops,
+        )
+        if refusal:
+            return None, f"not searched: {refusal}"
         return _milp_search(model)
     found, note, _ = _search(model, None, first=True)
     return (found[0] if found else None), note
@@ -218,7 +236,8 @@ def _search(
     if count > MAX_PATTERNS:
         return (
             [],
-            f"not searched: 3^{m} = {count:,} active/sign patterns exceed {MAX_PATTERNS:,}",
+            f"not searched: 3^{m} = {format_count(count)} active/sign patterns exceed "
+            f"{MAX_PATTERNS:,}",
             count,
         )
     N, lam, q = model.N, model.threshold, model.q

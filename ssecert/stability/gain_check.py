@@ -85,6 +85,8 @@ def observer_gain_check(design: ObserverDesign, *, tolerances: Tolerances | None
     tol = Tolerances.check(tolerances)
     gain = design.gain
     F = design.error_matrix
+    if not np.all(np.isfinite(F)):
+        return _overflowed_check(design, tol)
     computed_radius = float(np.abs(np.linalg.eigvals(F)).max())
     fields: dict[str, Any] = {"L": gain.L, "gain_method": gain.method, "kind": design.kind}
     title = f"Observer gain ({gain.method})"
@@ -106,6 +108,7 @@ def observer_gain_check(design: ObserverDesign, *, tolerances: Tolerances | None
             f"The linear error dynamics e+ = (A - L C) e are stable (spectral radius "
             f"{sig(_known(cert.spectral_radius))}), certified by a Lyapunov matrix P: the error "
             f"contracts at least by {sig(_known(cert.contraction))} per step in the P-norm."
+            + balanced_lyapunov_note(cert)
         )
     elif verdict is Verdict.FAILS:
         summary = (
@@ -128,6 +131,46 @@ def observer_gain_check(design: ObserverDesign, *, tolerances: Tolerances | None
         evidence=evidence,
         witness=cert.witness if verdict is Verdict.FAILS else None,
         tolerances=_decided_by(tol, error_bound=cert.error_bound),
+    )
+
+
+def balanced_lyapunov_note(cert: Any) -> str:
+    """A sentence when the Lyapunov matrix was verified in balanced state coordinates."""
+    proof = cert.proof or {}
+    if "state_scaling" not in proof:
+        return ""
+    from ..observers.lure import scaling_text
+
+    return (
+        f" P was found and verified in balanced state coordinates e = "
+        f"{scaling_text(proof['state_scaling'])} e_b (the states' units differ widely) and "
+        f"written back exactly."
+    )
+
+
+def _overflowed_check(design: ObserverDesign, tol: Tolerances) -> Check:
+    """observer_gain of a design whose error matrix overflows in floating point (an SSO with
+    many inner steps of a long step): inconclusive, saying so."""
+    return Check(
+        id="observer_gain",
+        title=f"Observer gain ({design.gain.method})",
+        verdict=Verdict.INCONCLUSIVE,
+        summary=f"The stability of the error matrix could not be decided: {overflow_reason(design)}.",
+        value=None,
+        margin=None,
+        method="none (the error matrix overflows)",
+        fields={"L": design.gain.L, "gain_method": design.gain.method, "kind": design.kind},
+        evidence={"details": design.gain.details},
+        tolerances=_decided_by(tol),
+    )
+
+
+def overflow_reason(design: ObserverDesign) -> str:
+    """Why the design's error matrix is not finite, in words."""
+    what = f"A (I - step S' S)^{design.inner_steps}" if design.inner_steps > 1 else "A - L C"
+    return (
+        f"{what} overflows in floating point (entries beyond 1e308), and its exact value is "
+        f"beyond the budget of exact arithmetic"
     )
 
 
@@ -245,7 +288,8 @@ def _nilpotent_summary(details: Mapping[str, Any], fields: dict[str, Any]) -> st
         return exact + f" (to rounding already in {index}: {rounded})."
     return (
         f"With the printed L, ||(A - L C)^{index}|| <= {rel:.1e} ||A||^{index} (powers "
-        f"computed exactly from the floats): the error vanishes to rounding in {index} "
+        f"computed exactly from the floats, norms in balanced power-of-two state units): the "
+        f"error vanishes to rounding in {index} "
         f"step{'s' if index != 1 else ''} without attack{_fastest_note(details)}, and the "
         f"spectral radius is certified <= {upper:.3g}."
     )

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -202,9 +202,60 @@ def lyapunov_certificate(
     n = F.shape[0]
     Q = np.eye(n) if Q is None else np.asarray(as_real_matrix(Q, "Q", shape=(n, n)))
     Q = 0.5 * (Q + Q.T)
-    rho = float(np.abs(np.linalg.eigvals(F)).max()) if n else 0.0
     if exact is None and parts is not None:
         exact = ExactMatrix.error_matrix(*parts)
+    cert = _certificate_in_units(F, Q, clear, exact)
+    if cert.verdict is not Verdict.INCONCLUSIVE:
+        return cert
+    balanced = _in_balanced_units(F, clear, exact)
+    return cert if balanced is None else balanced
+
+
+def _in_balanced_units(
+    F: np.ndarray, clear: float, exact: ExactMatrix | None
+) -> LyapunovCertificate | None:
+    """A Lyapunov certificate found in balanced state coordinates F_b = S^-1 F S (S powers of
+    two from LAPACK's balancing, exact), written back as P = S^-1 P_b S^-1; None when there
+    is no balancing or it certifies nothing.  A matrix whose states are in very different
+    units has a P that floating point cannot verify in those units."""
+    from .._exact_powers import dyadic
+    from .._linalg import state_balancing
+
+    s = state_balancing(F, np.zeros((0, F.shape[0])))
+    if s is None:
+        return None
+    k = np.round(np.log2(s)).astype(np.int64)
+    F_b = F * (s[None, :] / s[:, None])
+    source = exact.source if exact is not None else "F"
+
+    def build() -> Any:
+        value = dyadic(F) if exact is None else exact.value
+        return None if value is None else value.scaled(-k, k)
+
+    exact_b = ExactMatrix(build, None, f"{source}, in balanced state coordinates")
+    cert = _certificate_in_units(F_b, np.eye(F.shape[0]), clear, exact_b)
+    if cert.verdict is not Verdict.HOLDS or cert.P is None:
+        return None
+    with np.errstate(all="ignore"):
+        P = cert.P / s[:, None] / s[None, :]
+    if not (np.all(np.isfinite(P)) and np.array_equal(P * s[:, None] * s[None, :], cert.P)):
+        return None  # not exactly representable in the user's coordinates
+    proof = {
+        "state_scaling": s,
+        "balanced_P": cert.P,
+        "note": "P was verified in the coordinates e = diag(state_scaling) e_b (with F_b = "
+        "S^-1 F S, Q = I there) and written back exactly as P = S^-1 P_b S^-1; margin, error "
+        "bound and decrease are those of the balanced coordinates",
+    }
+    return replace(cert, P=P, proof=proof)
+
+
+def _certificate_in_units(
+    F: np.ndarray, Q: np.ndarray, clear: float, exact: ExactMatrix | None
+) -> LyapunovCertificate:
+    """``lyapunov_certificate`` in the coordinates F is written in."""
+    n = F.shape[0]
+    rho = float(np.abs(np.linalg.eigvals(F)).max()) if n else 0.0
     P, why = _lyapunov_solution(F, Q)
     if P is None:
         return _exact_fallback(F, exact, rho, why)

@@ -22,9 +22,10 @@ from typing import Any
 import numpy as np
 
 from .._rational import product, solve
+from ..budget import Budget
 from ..observers.lure import LureModel
 
-__all__ = ["periodic_orbit"]
+__all__ = ["periodic_orbit", "periodic_orbit_cost"]
 
 SAMPLES = 64  # initial errors simulated
 STEPS = 3000
@@ -32,10 +33,28 @@ MAX_PERIOD = 64
 EXACT_WORK = 96  # largest period x error states confirmed in exact arithmetic
 
 
-def periodic_orbit(model: LureModel, *, seed: int = 0) -> tuple[dict[str, Any] | None, str]:
-    """An exactly confirmed periodic orbit (the witness) or None, with what was searched."""
+def periodic_orbit_cost(model: LureModel) -> tuple[float, float]:
+    """Bytes and operations of the search: the simulated paths and their steps."""
+    N, m = model.N, model.m
+    return 8.0 * (STEPS + 1) * SAMPLES * N, 2.0 * STEPS * SAMPLES * (N * N + 2 * N * m)
+
+
+def periodic_orbit(
+    model: LureModel, *, seed: int = 0, budget: Budget | None = None
+) -> tuple[dict[str, Any] | None, str]:
+    """An exactly confirmed periodic orbit (the witness) or None, with what was searched;
+    not searched when its simulations do not fit ``budget`` (default ``Budget()``)."""
     if model.m == 0 or model.q <= 0 or model.threshold <= 0:
         return None, "no soft threshold: nothing to cycle"
+    nbytes, flops = periodic_orbit_cost(model)
+    refusal = (budget or Budget()).refusal(
+        f"simulating {SAMPLES} initial errors for {STEPS:,} steps of the {model.N:,}-state "
+        f"error dynamics",
+        nbytes=nbytes,
+        flops=flops,
+    )
+    if refusal:
+        return None, f"not searched: {refusal}"
     rng = np.random.default_rng(seed)
     start = rng.standard_normal((SAMPLES, model.N))
     start /= np.linalg.norm(start, axis=1, keepdims=True)

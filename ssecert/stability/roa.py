@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from .._rational import fractions, is_positive_definite, product, solve
+from ..budget import Budget
 from ..observers.lure import LureModel
 from .lyapunov import lyapunov_certificate, verified_decrease
 from .piecewise import piecewise_region
@@ -39,8 +40,22 @@ LMI_LIMIT = 40  # largest error state whose P is also chosen by an LMI (a second
 EXACT_LIMIT = 20  # largest error state whose region is re-checked in exact arithmetic
 
 
+def region_cost(model: LureModel) -> tuple[float, float]:
+    """Bytes and operations of the dead zone's region: a dense Lyapunov solve of the N-state
+    model (Bartels-Stewart: a dozen N x N work arrays, about 30 N^3 operations) and the replay
+    of ``SAMPLES`` initial errors for ``STEPS`` steps."""
+    N, m = model.N, model.m
+    nbytes = 8.0 * (12 * N * N + (STEPS + 1) * SAMPLES * N)
+    return nbytes, 30.0 * N**3 + 2.0 * STEPS * SAMPLES * (N * N + 2 * N * m)
+
+
 def region_of_attraction(
-    model: LureModel, *, seed: int = 0, piecewise: bool = False, widen: bool = True
+    model: LureModel,
+    *,
+    seed: int = 0,
+    piecewise: bool = False,
+    widen: bool = True,
+    budget: Budget | None = None,
 ) -> dict[str, Any]:
     """The certified radius of initial estimation errors (a_hat(0) = 0) from which the observer
     converges without attack, with how it was found; radius 0 with the reason when none is.
@@ -54,7 +69,18 @@ def region_of_attraction(
     again in balanced coordinates xi = diag(s) xi_b (``LureModel.balancing``, exact): a radius
     r_b there holds for ||e(0)|| <= r_b min(s_e) in the model's own units (``state_scaling``,
     ``balanced_radius``; the other numbers then are in the balanced coordinates).
+
+    Radius 0, not attempted, when the dead zone's Lyapunov solve and replay (``region_cost``)
+    do not fit ``budget`` (default ``Budget()``).
     """
+    nbytes, flops = region_cost(model)
+    refusal = (budget or Budget()).refusal(
+        f"the dead zone's Lyapunov function of the {model.N:,}-state error dynamics",
+        nbytes=nbytes,
+        flops=flops,
+    )
+    if refusal:
+        return {"radius": 0.0, "reason": f"not attempted: {refusal}"}
     found = _region_in_units(model, seed, piecewise, widen)
     if found["radius"] > 0:
         return found
@@ -87,6 +113,17 @@ def _dead_zone_region(model: LureModel, seed: int, widen: bool = True) -> dict[s
     """The radius of the largest invariant sublevel set of the dead zone's Lyapunov function."""
     if model.m == 0 or model.threshold <= 0:
         return {"radius": 0.0, "reason": "the observer has no dead zone (no soft threshold)"}
+    n_e = model.n_e
+    if n_e < model.N and not np.any(model.A[n_e:]):
+        # xi+ = A xi with A = [[F, -L], [0, 0]]: its eigenvalues are F's and 0, so F decides
+        # (the exact powers of F alone reach a decision the whole A's may not)
+        local = lyapunov_certificate(model.A[:n_e, :n_e], exact=model.exact_A(error_block=True))
+        if local.verdict.value == "fails":
+            return {
+                "radius": 0.0,
+                "reason": f"the linear dynamics of the dead zone (xi+ = A xi, whose eigenvalues "
+                f"are those of F = A - L C and 0) is not stable: {local.reason}",
+            }
     lyap = lyapunov_certificate(model.A, exact=model.exact_A())
     if lyap.verdict.value != "holds" or lyap.P is None or lyap.method != "lyapunov":
         why = "is not stable" if lyap.verdict.value == "fails" else "has no verified P"

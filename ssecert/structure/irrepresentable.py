@@ -220,6 +220,7 @@ def irrepresentable(
     budget = budget or Budget()
     if not isinstance(system, System):
         raise TypeError(f"system must be a System, got {type(system).__name__}")
+    system = _states_balanced(system)
     mode = as_choice(mode, "mode", MODES)
     tau = system.n if horizon is None else as_int_option(horizon, "horizon", min_value=1)
     max_sets = as_int_option(max_sets, "max_sets", min_value=1)
@@ -269,6 +270,21 @@ def irrepresentable(
             f"{hi - 1:,} ({exc.cause!r}).",
         )
     return _scan_verdict(out, scan, O, rows_of, tol, total, time_budget)
+
+
+def _states_balanced(system: System) -> System:
+    """The plant in balanced power-of-two state units (x = S x_b, exact): rho(S) depends on
+    O_tau only through its range, which a change of state coordinates keeps, so the value is
+    the same, but no state's units tip a rank decision.  Sensor rows are not rescaled: that
+    would weigh the Lasso's l1 penalty differently and change rho."""
+    from .._exact import pow2_row_scaling
+    from .._linalg import state_balancing
+
+    s = state_balancing(system.A, pow2_row_scaling(system.C)[:, None] * system.C)
+    if s is None:
+        return system
+    A = system.A * (s[None, :] / s[:, None])
+    return System(A, system.C * s[None, :], sensors=system.sensors, name=system.name)
 
 
 def _scan_verdict(
