@@ -7,6 +7,7 @@ build designs whose answer is known in exact arithmetic and check that no verdic
 
 from fractions import Fraction
 
+import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -241,3 +242,89 @@ def test_a_simulation_option_of_a_billion_is_refused(tmp_path, capsys, option):
     path = _write(tmp_path, SSO, scenario={**SCENARIO, "steps": 20, "runs": 2})
     assert main(["simulate", path, option, str(BIG)]) == 2
     assert "1,000,000,000" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------------------
+# found by an adversarial pass (CLI and documents only)
+
+
+def test_an_sso_gain_derived_from_its_step_is_exact_from_the_step():
+    # L = step A C^T rounds to a gain whose A - L C is stable; the spec's own observer,
+    # A (1 - 5 step) = 1 + 1.09e-47, is not
+    spec = _spec(
+        [[1.0000000000000002]],
+        [[1.0]] * 5,
+        {"kind": "sso", "step": 4.440892098500625e-17, "threshold": 0.1},
+    )
+    cert = analyze(spec)
+    assert cert["observer_gain"].verdict.value == "fails"
+    assert "L = step A C^T" in cert["observer_gain"].summary
+    assert cert["observer_stability"].verdict.value == "fails"
+
+
+def test_an_sso_error_matrix_that_overflows_is_inconclusive_not_an_error(tmp_path, capsys):
+    plant = {"A": [[1.0, 0.0099], [0.0, 0.9876]], "C": [[1, 0], [0, 1], [0, 1], [1, 1]]}
+    data = {"name": "o", "system": plant, "attack": {"max_attacked": 1}}
+    data["observer"] = {"kind": "sso", "step": 0.9, "threshold": 0.1, "inner_steps": 1000}
+    path = tmp_path / "o.json"
+    import json
+
+    path.write_text(json.dumps(data))
+    assert main(["analyze", str(path)]) == 1  # sparse observability fails; nothing crashes
+    out = capsys.readouterr().out
+    assert "A (I - step S' S)^1000 overflows in floating point" in out
+
+
+def test_a_deadbeat_gain_of_a_badly_scaled_plant_is_deadbeat():
+    # the plant's states in units 2^40 apart: the gain was index 2 "to rounding" with
+    # rho(A - L C) = 0.54; built and tested in balanced state units it has index 3
+    A = [
+        [0.3, 1099511627776.0, 0.0],
+        [0.0, 0.5, 9.094947017729282e-13],
+        [9.313225746154785e-10, 0.0, 0.7],
+    ]
+    cert = analyze(_spec(A, [[1.0, 1.0, 1.0]], {"kind": "luenberger", "gain": "deadbeat"}))
+    gain = cert["observer_gain"]
+    assert gain.verdict.value == "holds"
+    assert gain.fields["nilpotency_index"] == cert["observability"].value == 3
+    assert gain.evidence["details"]["spectral_radius_upper_bound"] < 1e-3
+
+
+def test_assert_deadbeat_with_a_tolerance_does_not_depend_on_units():
+    from ssecert.testing import assert_deadbeat
+
+    for F in ([[0.0, 2.0**33], [2.0**-36, 0.0]], [[0.0, 0.5], [0.25, 0.0]]):  # rho 0.354
+        with pytest.raises(AssertionError, match="not nilpotent"):
+            assert_deadbeat(F, np.zeros((2, 1)), np.zeros((1, 2)), rtol=1e-8)
+
+
+@pytest.mark.parametrize("k", [(47, -23), (200, -200)])
+def test_a_lyapunov_certificate_survives_state_units(k):
+    # (1 - 1e-9) times a rotation, its states in units 2^47 and 2^-23: P verified in balanced
+    # coordinates and written back exactly
+    c, s = np.cos(1.0), np.sin(1.0)
+    F = (1 - 1e-9) * np.array([[c, -s], [s, c]])
+    t = np.array([2.0 ** k[0], 2.0 ** k[1]])
+    Ft = F * t[:, None] / t[None, :]
+    cert = analyze(
+        _spec(
+            Ft.tolist(),
+            np.diag(1.0 / t).tolist(),
+            {"kind": "luenberger", "gain": [[0.0, 0.0], [0.0, 0.0]]},
+        )
+    )
+    for check in ("observer_gain", "observer_stability"):
+        assert cert[check].verdict.value == "holds", cert[check].summary
+    assert "balanced state coordinates" in cert["observer_gain"].summary
+
+
+def test_the_dead_zone_region_fails_with_its_error_matrix():
+    # F = 1 + 1e-17 exactly: observer_stability fails, and the region check agrees
+    spec = _spec(
+        [[1.0]],
+        [[1.0], [1.0]],
+        {"kind": "dsso", "gain": [[-1e-17, 0.0]], "step": 0.5, "threshold": 0.1},
+    )
+    cert = analyze(spec)
+    assert cert["observer_stability"].verdict.value == "fails"
+    assert cert["region_of_attraction"].verdict.value == "fails"
