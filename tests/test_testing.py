@@ -296,14 +296,22 @@ def test_assert_deadbeat():
 
 
 def test_assert_deadbeat_is_exact_by_default():
-    # F^2 = 1e-9 I exactly: small, never zero; only an explicit tolerance accepts it
+    # F^2 = 1e-9 I exactly: never zero; nor small against F's own scale (in balanced units F
+    # is 3.2e-5 times a rotation), so no tolerance accepts it either
     F = np.array([[0.0, 1.0], [1e-9, 0.0]])
     with pytest.raises(AssertionError) as info:
         assert_deadbeat(F, np.zeros((2, 1)), [[0.0, 0.0]])
+    assert "no power of A - L C is exactly zero, nor zero to 1e-08" in str(info.value)
+    with pytest.raises(AssertionError, match="A - L C is not nilpotent"):
+        assert_deadbeat(F, np.zeros((2, 1)), [[0.0, 0.0]], rtol=1e-8)
+    # F^2 = 2^-60 I against ||A|| = 1: nilpotent to the tolerance, and the message says so
+    G = np.array([[0.0, 1.0], [2.0**-60, 0.0]])
+    with pytest.raises(AssertionError) as info:
+        assert_deadbeat(np.eye(2), np.eye(2) - G, np.eye(2))
     message = str(info.value)
     assert "no power F^k, k = 1..2, is exactly zero" in message
     assert "pass rtol=1e-08 to accept that" in message
-    assert assert_deadbeat(F, np.zeros((2, 1)), [[0.0, 0.0]], rtol=1e-8) == 2
+    assert assert_deadbeat(np.eye(2), np.eye(2) - G, np.eye(2), rtol=1e-8) == 2
     # the printed float deadbeat gain of the UGV is deadbeat to rounding only
     with pytest.raises(AssertionError, match="nilpotent to the tolerance 1e-08"):
         assert_deadbeat(UGV.system.A, deadbeat_gain(UGV.system).L, UGV.system.C)

@@ -390,7 +390,7 @@ def deadbeat_gain(
     D_s = pow2_row_scaling(C_s)
     L_n, dims = _deadbeat_construction(alpha * A_s, D_s[:, None] * C_s, tol)
     with np.errstate(over="ignore"):
-        L = (s[:, None] * L_n * (D * D_s)[None, :]) / alpha
+        L = ((s[:, None] * L_n * D_s[None, :]) / alpha) * D[None, :]  # D last: it may be 2^1023
     if not np.all(np.isfinite(L)):
         raise GainError(
             "the deadbeat gain overflows the float range (its entries scale as 1 / C, and C's "

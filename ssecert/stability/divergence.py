@@ -37,10 +37,45 @@ def divergence_witness(model: LureModel) -> dict[str, Any] | None:
     None when the model has no nonlinearity, when the large-signal loop M
     has no eigenvalue clearly outside the unit circle (beyond its
     floating-point error bound), or when the replay does not confirm the
-    growth.
+    growth.  When nothing is found in the model's own coordinates and its states' units
+    differ widely, the search runs again in balanced coordinates xi = diag(s) xi_b (exact),
+    and the witness found there is mapped back and replayed in the model's own.
     """
     if model.m == 0 or model.q <= 0:
         return None
+    found = _in_units(model)
+    if found is not None:
+        return found
+    s = model.balancing()
+    if s is None:
+        return None
+    inner = _in_units(model.scaled(s))
+    if inner is None:
+        return None
+    xi0 = np.concatenate([inner["initial_error"], inner["initial_attack_estimate"]]) * s
+    w = inner["left_eigenvector"] / s  # w' xi = w_b' xi_b
+    with np.errstate(over="ignore", invalid="ignore"):
+        path = model.simulate(xi0, inner["steps"])
+    along = np.abs(path @ w)
+    if not (np.all(np.isfinite(along)) and along[-1] >= GROWTH * along[0] * 0.5):
+        return None
+    norms = np.linalg.norm(path, axis=1)
+    return {
+        **inner,
+        "left_eigenvector": w,
+        "initial_error": xi0[: model.n_e],
+        "initial_attack_estimate": xi0[model.n_e :],
+        "along_eigenvector": [float(along[0]), float(along[-1])],
+        "norms": [float(norms[0]), float(norms[-1])],
+        "growth": float(norms[-1] / norms[0]),
+        "state_scaling": s,
+        "balanced": "found in balanced coordinates xi = diag(state_scaling) xi_b (beta and "
+        "escape_level are in them) and replayed in the model's own",
+    }
+
+
+def _in_units(model: LureModel) -> dict[str, Any] | None:
+    """``divergence_witness`` in the model's own coordinates."""
     M = model.vertex(model.q)
     # M's floats are within (1 + q ||B||) d of the loop of the spec's exact data
     spread = (1.0 + model.q * float(np.linalg.norm(model.B, 2))) * model.rounding
