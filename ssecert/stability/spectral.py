@@ -173,6 +173,12 @@ def schur_decision(
         value = dyadic(F) if exact is None else exact.value
         if value is None:
             details["exact_data"] = f"{exact.source if exact else 'F'}: beyond its budget"
+    if value is not None and np.isfinite(abs(lam)) and abs(abs(lam) - 1.0) <= 1e-9:
+        # an eigenvalue that looks like +-1: an exact kernel vector decides at once, where the
+        # powers of a matrix with rho = 1 never do
+        decided = _exact_eigenvalue_on_circle(value, n, None, 0.0, lam, details)
+        if decided is not None:
+            return decided
     if value is not None:
         powers = spectral_radius_bound(value, squarings=8, target=1.0, max_work=max_work)
         upper, lower = powers.radius_bound, powers.radius_lower
@@ -185,7 +191,9 @@ def schur_decision(
         source = f"of {exact.source}" if exact is not None else "of F"
         decided = _decided_by_powers(powers, source, n, lam, details)
         if decided is None:
-            decided = _exact_eigenvalue_on_circle(value, n, powers, lam, details)
+            decided = _exact_eigenvalue_on_circle(
+                value, n, powers.radius_bound, powers.radius_lower, lam, details
+            )
         if decided is not None:
             return decided
     return _decided_to_first_order(lam, bound, upper, lower, details)
@@ -241,7 +249,12 @@ def _decided_by_powers(
 
 
 def _exact_eigenvalue_on_circle(
-    exact: Dyadic, n: int, powers: PowerBound, lam: complex, details: dict[str, Any]
+    exact: Dyadic,
+    n: int,
+    upper: float | None,
+    lower: float,
+    lam: complex,
+    details: dict[str, Any],
 ) -> SchurDecision | None:
     """Unstable by an exact eigenvalue of modulus >= 1 that is a float, or None.
 
@@ -257,8 +270,8 @@ def _exact_eigenvalue_on_circle(
             shown = sig(value, 6, versus=np.sign(value))  # 1 + 2^-40 is not "1"
             return SchurDecision(
                 "unstable",
-                powers.radius_bound,
-                max(powers.radius_lower, abs(value)),
+                upper,
+                max(lower, abs(value)),
                 f"exact eigenvalue {shown}",
                 lam,
                 True,
