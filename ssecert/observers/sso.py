@@ -266,8 +266,10 @@ def _inner_rounding(
     its floats (Higham 3.5, with || |X| ||_2 <= sqrt(n) ||X||_2); the recurrence
     e_k <= (dM + n gamma a) p_(k-1) + a e_(k-1), p_k = a p_(k-1) + e_k >= ||P_k||, bounds the
     k-th power's error, a >= ||M|| + dM; it is linear, so its k-th step is a power of a 2 x 2
-    matrix.  The power of F is computed by repeated squaring, which takes fewer roundings;
-    the bound is doubled for it.
+    matrix.  The power of F is computed by repeated squaring: a product of two computed powers
+    with relative errors r and r' has 1 + r'' <= (1 + r)(1 + r')(1 + n gamma), so its bound is
+    that of the same factors with at most 2 log2 m <= m - 1 roundings, below the sequential
+    one; the bound is doubled besides.
     """
     n = A.shape[0]
     u = float(np.finfo(float).eps) / 2
