@@ -330,3 +330,19 @@ def test_the_dead_zone_region_fails_with_its_error_matrix():
     design = build_observer(spec.system, spec.observer)
     assert observer_stability_check(design)[0].verdict.value == "fails"
     assert region_of_attraction_check(design).verdict.value == "fails"
+
+
+def test_a_large_sso_window_decides_its_error_block_alone():
+    # window 100: the Lur'e model (302 states) is beyond its exact budget, but F (2 x 2) is not,
+    # so observer_stability agrees with observer_gain instead of being undecided
+    spec = _spec(
+        [[0.9, 0.2], [0.0, 0.8]],
+        [[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]],
+        {"kind": "sso", "step": 0.1, "threshold": 0.1, "window": 100},
+        s=1,
+    )
+    design = build_observer(spec.system, spec.observer)
+    gain = observer_gain_check(design)
+    assert gain.verdict.value == "fails" and "O_tau" in gain.summary
+    assert gain.method == "exact powers of A - L C"
+    assert observer_stability_check(design)[0].verdict.value == "fails"

@@ -202,8 +202,13 @@ class ObserverKind:
                 L,
                 S,
                 bound=bound,
-                source="F = A - L C with L = step A C^T, formed exactly from the floats of A, C "
-                "and the step",
+                source=(
+                    "F = A - L C with L = step A C^T, formed exactly from the floats of A, C "
+                    "and the step"
+                    if design.window == 1
+                    else f"F = A - L O_tau with L = step A O_tau^T (window tau = {design.window}), "
+                    "formed exactly from the floats of A, C and the step"
+                ),
             )
         return ExactMatrix.error_matrix(design.system.A, L, S, bound=bound)
 
@@ -386,6 +391,7 @@ def soft_lure_model(design: ObserverDesign) -> LureModel:
         float(design.threshold or 0.0),
         build,
         formation,
+        design.observer_kind.exact_error(design),
     )
 
 

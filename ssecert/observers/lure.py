@@ -101,6 +101,8 @@ class LureModel:
     )
     # a-priori bound on the 2-norm of the floats of [A B E; Cw Dw] minus the exact matrices
     formation_error: float = 0.0
+    # the exact error block F alone (n_e x n_e), when it can be formed without the whole model
+    exact_error: ExactMatrix | None = field(default=None, compare=False, repr=False)
 
     def exact(self) -> ExactLure | None:
         """The exact matrices of the model (formed once), or None beyond their budget."""
@@ -122,6 +124,8 @@ class LureModel:
         model = self
 
         def build() -> Dyadic | None:
+            if error_block and model.exact_error is not None and model.exact() is None:
+                return model.exact_error.value  # F alone, where the whole model is too large
             exact = model.exact()
             return None if exact is None else exact.A[:k, :k]
 
@@ -187,6 +191,15 @@ class LureModel:
                 return None if exact is None else exact.scaled(s)
 
         spread = float(s.max() / s.min()) if s.size else 1.0
+        error = None
+        if self.exact_error is not None:
+            base, k = self.exact_error, np.round(np.log2(s[: self.n_e])).astype(np.int64)
+
+            def error_build() -> Dyadic | None:
+                value = base.value
+                return None if value is None else value.scaled(-k, k)
+
+            error = ExactMatrix(error_build, None, base.source)
         return LureModel(
             self.A * (s[None, :] / s[:, None]),
             self.B / s[:, None],
@@ -199,6 +212,7 @@ class LureModel:
             self.threshold,
             build,
             self.formation_error * spread,
+            error,
         )
 
     def balancing(self, spread: float = 16.0) -> np.ndarray | None:

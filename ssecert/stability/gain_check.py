@@ -38,7 +38,7 @@ def _lyapunov_evidence(cert) -> dict[str, Any]:
         "residual": cert.residual,
         "margin_definition": (
             "lambda_min(P - F'PF) / ||P||, recomputed from P"
-            if cert.method == "lyapunov"
+            if cert.method == "lyapunov" or cert.verdict is not Verdict.HOLDS
             else "1 - (certified upper bound on the spectral radius of the exact F)"
         ),
         "certificate": cert.method,

@@ -341,7 +341,14 @@ def to_original_coordinates(cert: LMICertificate, s: np.ndarray, N: int) -> LMIC
     P = cert.P * inv[:, None] * inv[None, :]
     if not np.all(np.isfinite(P)) or not np.array_equal(P / inv[:, None] / inv[None, :], cert.P):
         return None
-    details = {**cert.details, "state_scaling": np.asarray(s, dtype=float)}
+    details = {
+        **cert.details,
+        "state_scaling": np.asarray(s, dtype=float),
+        "margin_coordinates": "margin and error_bound are those of the LMI recomputed in the "
+        "balanced coordinates xi = diag(state_scaling) xi_b, where it was verified; P is written "
+        "for the spec's coordinates, where the same inequality holds by congruence, with its "
+        "margin relative to ||P|| changed by the scaling",
+    }
     if "sum_bound_factor" in details:  # sum |xi|^2 <= max(s)^2 sum |xi_b|^2
         details["sum_bound_factor"] = (
             float(np.max(s)) ** 2 * float(np.linalg.eigvalsh(P[:N, :N])[-1]) / details["eta"]

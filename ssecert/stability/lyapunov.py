@@ -413,8 +413,11 @@ def _exact_fallback(
             proof,
         )
     witness = instability_witness(F, exact=exact, decision=decision)
+    method = "lyapunov"
     if decision.state == "unstable":
         verdict, reason = Verdict.FAILS, decision.reason
+        if decision.rigorous:
+            method = "exact powers"  # instability proved on the exact F, not by P
     else:
         verdict, reason = Verdict.INCONCLUSIVE, f"{why}; {decision.reason}"
     u = _Unverified() if unverified is None else unverified
@@ -430,6 +433,6 @@ def _exact_fallback(
         rho,
         reason,
         witness,
-        "lyapunov",
+        method,
         proof,
     )

@@ -346,7 +346,10 @@ def assert_deadbeat(A: Any, L: Any, C: Any, *, rtol: float | None = None) -> int
     rtol : float, optional
         Opt-in tolerance: a power with ||F^k|| / ||A||^k <= rtol counts as zero
         (``ssecert.design.gains.DEADBEAT_RTOL`` = 1e-8 is what ssecert's own
-        deadbeat check uses).  Default: exact nilpotency only.
+        deadbeat check uses), both norms in balanced power-of-two state units.
+        Being relative to ||A||, it accepts any F that is small against A: with
+        A = 2^30 I + F and L C = 2^30 I it accepts F = 0.875 I, whose error
+        shrinks by 0.875 a step.  Default: exact nilpotency only.
 
     Returns
     -------
