@@ -260,7 +260,7 @@ def test_the_deadbeat_gain_is_built_with_the_run_tolerances():
     [
         (np.diag([1.0 + 2.0**-40, 0.5]), "exact eigenvalue"),  # below the first-order bound
         (np.diag([-(1.0 + 2.0**-40), 0.5]), "exact eigenvalue"),
-        (np.array([[0.0, 2.0**60], [2.0**-60, 0.0]]), "exact traces"),  # eigenvalues +-1
+        (np.array([[0.0, 2.0**60], [2.0**-60, 0.0]]), "exact eigenvalue 1"),  # eigenvalues +-1
         (np.array([[0.0, 1.0], [-1.0, 0.0]]), "exact traces"),  # a rotation: rho = 1
     ],
 )

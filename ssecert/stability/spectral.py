@@ -176,7 +176,9 @@ def schur_decision(
     if value is not None and np.isfinite(abs(lam)) and abs(abs(lam) - 1.0) <= 1e-9:
         # an eigenvalue that looks like +-1: an exact kernel vector decides at once, where the
         # powers of a matrix with rho = 1 never do
-        decided = _exact_eigenvalue_on_circle(value, n, None, 0.0, lam, details)
+        norm = value.inf_norm_log2()  # rho <= ||F||_inf: the upper bound this decision has
+        upper_now = 0.0 if norm == -np.inf else (np.inf if norm >= 1024 else 2.0**norm)
+        decided = _exact_eigenvalue_on_circle(value, n, upper_now, 0.0, lam, details)
         if decided is not None:
             return decided
     if value is not None:
