@@ -132,12 +132,36 @@ def test_sparse_attacks_are_sparse_finite_and_bounded(kind):
     check()
 
 
+def _attacked(a):
+    """The sensors attacked at some step of the window."""
+    return set(np.flatnonzero(np.abs(a).sum(axis=0)).tolist())
+
+
+@given(st.data())
+def test_sparse_attacks_default_to_one_attacked_set_over_the_window(data):
+    # the certificates' threat model: one set of at most s sensors for the whole window
+    p = data.draw(st.integers(1, 6), label="p")
+    s = data.draw(st.integers(0, p), label="s")
+    a = data.draw(sparse_attacks(p, s, st.integers(1, 40)), label="attack")
+    assert len(_attacked(a)) <= s
+    assert (len(_attacked(a)) >= 1) == (s >= 1)
+
+
+def test_the_default_kinds_are_the_fixed_support_shapes():
+    default = inspect.signature(sparse_attacks).parameters["kinds"].default
+    assert default == strategies.FIXED_SUPPORT_SHAPES == ("constant", "sinusoidal")
+    assert set(strategies.FIXED_SUPPORT_SHAPES) == set(strategies.ATTACK_SHAPES) - {"switching"}
+
+
 def test_switching_attacks_change_their_support():
     def supports(a):
         return {tuple(np.flatnonzero(row)) for row in a}
 
     a = find(sparse_attacks(5, 2, 20, kinds=["switching"]), lambda a: len(supports(a)) >= 3)
     assert all(len(support) <= 2 for support in supports(a))
+    # at most s = 2 per step, but more than s over the window: outside the certificates
+    a = find(sparse_attacks(5, 2, 20, kinds=["switching"]), lambda a: len(_attacked(a)) > 2)
+    assert len(_attacked(a)) > 2 and (np.count_nonzero(a, axis=1) <= 2).all()
 
 
 def test_sparse_attacks_refuse_bad_arguments():
