@@ -61,9 +61,10 @@ def add_design_parser(sub: Any) -> None:
     design.add_argument(
         "--min-decay",
         type=_decay,
-        default=1e-3,
         metavar="ALPHA",
-        help="decay per step imposed by the gain objective, 0 < ALPHA < 1 (default 0.001)",
+        help="decay per step imposed by the gain objective, V(k+1) <= (1 - ALPHA) V(k), 0 < "
+        "ALPHA < 1 (default: read off the trade-off front, clearly faster than the plant's "
+        "own decay; a given ALPHA is imposed even when the design is no faster than the plant)",
     )
     design.add_argument(
         "--runs", type=_positive_int, metavar="N", help="Monte Carlo runs per scenario"
@@ -155,6 +156,10 @@ def cmd_design(
         "gamma": result.gamma,
         "decay": result.decay,
         "radius": result.radius,
+        "plant_radius": result.plant_radius,
+        "linear_radius": result.linear_radius,
+        "choice": result.choice,
+        "front": result.front,
         "candidates": result.candidates,
         "seconds": result.seconds,
         "complete": result.complete,
@@ -174,7 +179,13 @@ def cmd_design(
         )
         words = ["ssecert", "design", *(list(argv) if argv is not None else sys.argv[2:])]
         report = design_report(
-            spec, designed, seed=args.seed, runs=args.runs, command=" ".join(words), progress=say
+            spec,
+            designed,
+            seed=args.seed,
+            runs=args.runs,
+            command=" ".join(words),
+            progress=say,
+            search=result,
         )
         options = "".join(
             f" --{name} {value}" for name, value in (("seed", args.seed), ("runs", args.runs))
@@ -266,21 +277,25 @@ def _print_design(
         if "region_of_attraction_value" in d:
             words.append(f"region of attraction {_num(d['region_of_attraction_value'])}")
         out.write(f"  {label} ({d['kind']}, {params or 'gain only'}): {', '.join(words)}\n")
-    if result.decay is not None and args.objective == "rate":
+    if result.decay is not None and args.objective in ("gain", "rate"):
         out.write(f"  synthesised: certified decay {result.decay:.3g} per step (V(k+1) <= "
                   f"{one_minus(result.decay)} V(k))\n")  # fmt: skip
-    L = (
-        np.asarray(result.observer["gain"])
-        if not isinstance(result.observer["gain"], str)
-        else None
-    )
-    A, C = spec.system.A, spec.system.C
-    scale = max(float(np.linalg.norm(A, 2)), 1e-300)
-    if L is not None and float(np.linalg.norm(L @ C, 2)) <= 1e-6 * scale:
+    if result.linear_radius is not None and result.plant_radius is not None:
+        faster = (
+            "faster than"
+            if result.linear_radius < result.plant_radius
+            else "NO faster than (it barely uses its sensors)"
+        )
         out.write(
-            "  note: the synthesised gain is close to zero: the observer barely uses its "
-            "sensors and the plant's own decay does the estimation (the smallest gain from "
-            "attack to error on a stable plant); --min-decay asks for faster convergence\n"
+            f"  its linear loop: rho(A - L S) = {result.linear_radius:.4g}, {faster} the "
+            f"plant's own rho(A) = {result.plant_radius:.4g}\n"
+        )
+    if result.choice:
+        out.write(f"  chosen: {result.choice}\n")
+    if result.front:
+        out.write(
+            f"  trade-off front: {len(result.front)} certified (decay, gain) points, plotted "
+            "in the report\n"
         )
     for row in comparison["scenarios"]:
         cells = []
@@ -297,7 +312,10 @@ def _print_design(
                     + ("" if settle is None else f" (settles by step {settle})")
                 )
         verdict = f" -> {row['comparison']}" if "comparison" in row else ""
-        out.write(f"  scenario {row['scenario']}: final mean error {'; '.join(cells)}{verdict}\n")
+        out.write(
+            f"  scenario {row['scenario']}: final mean error ||x_hat - x|| {'; '.join(cells)}"
+            f"{verdict}\n"
+        )
     out.write(f"  {comparison['summary']}\n")
     out.write(
         f"spec file: {paths['toml']}\nreport: {paths['html']}\ncertificate: {paths['json']}\n"

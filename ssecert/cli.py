@@ -491,8 +491,10 @@ def _simulation_table(spec: Any, scenarios: dict[str, Any]) -> str:
             "attack",
             "runs",
             "steps",
-            "rel. error mean",
+            "error mean",
             "q90",
+            "of initial",
+            "rel. error",
             "support error",
             "delay (median)",
         )
@@ -500,7 +502,7 @@ def _simulation_table(spec: Any, scenarios: dict[str, Any]) -> str:
     notes = []
     for name, res in scenarios.items():
         if isinstance(res, dict):
-            rows.append((name, "-", "-", "-", "skipped", "", "", ""))
+            rows.append((name, "-", "-", "-", "skipped", "", "", "", "", ""))
             notes.append(f"{name}: {res['skipped']}")
             continue
         notes.extend(f"{name}: {note}" for note in getattr(res, "notes", ()))
@@ -512,8 +514,10 @@ def _simulation_table(spec: Any, scenarios: dict[str, Any]) -> str:
                 res.attack,
                 str(res.runs),
                 str(res.steps),
+                fmt(f.get("absolute_error_mean")),
+                fmt(f.get("absolute_error_q90")),
+                fmt(f.get("initial_relative_error_mean")),
                 fmt(f["relative_error_mean"]),
-                fmt(f["relative_error_q90"]),
                 fmt(f["support_error_mean"]),
                 fmt(f.get("detection_delay_median")),
             )
@@ -524,6 +528,12 @@ def _simulation_table(spec: Any, scenarios: dict[str, Any]) -> str:
         lines.append("  ".join(c.ljust(w) for c, w in zip(row, widths)).rstrip())
         if j == 0:
             lines.append("  ".join("-" * w for w in widths))
+    lines.append("")
+    lines.append(
+        "error: ||x_hat - x|| (mean and 90th percentile over runs); of initial: the mean of "
+        "||x_hat - x|| / ||x_hat(0) - x(0)||; rel. error: the mean of ||x_hat - x|| / ||x||, "
+        "which grows without bound when the state decays and the error does not."
+    )
     lines.extend(["", *notes] if notes else [])
     return "\n".join(lines) + "\n"
 

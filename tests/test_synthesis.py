@@ -265,10 +265,15 @@ def test_the_comparison_says_which_scenarios_it_could_not_compare():
         sims = {
             name: SimpleNamespace(
                 relative_error=np.array([[1.0], [v]]),
+                absolute_error=np.array([[1.0], [v]]),
                 runs=1,
                 steps=1,
                 seed=0,
-                final=lambda v=v: {"relative_error_mean": v, "relative_error_q90": v},
+                final=lambda v=v: {
+                    "relative_error_mean": v,
+                    "absolute_error_mean": v,
+                    "absolute_error_q90": v,
+                },
             )
             for name, v in finals.items()
         }

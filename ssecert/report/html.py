@@ -233,6 +233,7 @@ def _comparison_context(comparison: Mapping[str, Any]) -> dict[str, Any]:
                 "kind": d.get("kind"),
                 "params": params,
                 "stability": d.get("observer_stability", "-"),
+                "linear": _fmt(d.get("linear_radius")),
                 "gamma": _fmt(d.get("iss_gain_value")) if "iss_gain_value" in d else "none",
                 "radius": _fmt(d.get("region_of_attraction_value"))
                 if "region_of_attraction_value" in d
@@ -250,12 +251,19 @@ def _comparison_context(comparison: Mapping[str, Any]) -> dict[str, Any]:
                 settle = sim.get("settling_step")
                 cells += [_fmt(sim["final_mean"]), "-" if settle is None else str(settle)]
         rows.append({"name": r["scenario"], "cells": cells, "verdict": r.get("comparison", "-")})
-    return {
+    out: dict[str, Any] = {
         "designs": designs,
         "labels": ["the spec's design" if x == "spec" else "synthesised" for x in labels],
         "rows": rows,
         "summary": comparison["summary"],
     }
+    tradeoff = comparison.get("tradeoff")
+    if tradeoff:
+        from .plots import tradeoff_plot
+
+        out["tradeoff_svg"] = Markup(tradeoff_plot(tradeoff))
+        out["choice"] = tradeoff.get("choice", "")
+    return out
 
 
 def _identity(result: Any, meta: Mapping[str, Any]) -> list[tuple[str, str]]:
@@ -344,6 +352,8 @@ def _skipped_row(name: str, res: Mapping[str, Any], slug: str) -> dict[str, Any]
         "attack": "-",
         "runs": "-",
         "steps": "-",
+        "abs": "-",
+        "initial": "-",
         "rel": "-",
         "q90": "-",
         "support": "-",
@@ -364,8 +374,10 @@ def _simulation_row(name: str, res: Any, slug: str) -> dict[str, Any]:
         "attack": res.attack,
         "runs": res.runs,
         "steps": res.steps,
+        "abs": _fmt(final.get("absolute_error_mean")),
+        "q90": _fmt(final.get("absolute_error_q90")),
+        "initial": _fmt(final.get("initial_relative_error_mean")),
         "rel": _fmt(final["relative_error_mean"]),
-        "q90": _fmt(final["relative_error_q90"]),
         "support": _fmt(final["support_error_mean"]),
         "delay": _fmt(final.get("detection_delay_median")),
         "svg": Markup(simulation_plot(name, res, gid=f"sim-{slug}")),

@@ -15,7 +15,14 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["svg_figure", "simulation_plot", "stealthy_plot", "region_plot", "sensor_plot"]
+__all__ = [
+    "svg_figure",
+    "simulation_plot",
+    "stealthy_plot",
+    "region_plot",
+    "sensor_plot",
+    "tradeoff_plot",
+]
 
 PALETTE = {
     "holds": "#1b7f3b",
@@ -75,14 +82,19 @@ def _figure(width: float, height: float, rows: int = 1, cols: int = 1) -> tuple[
 
 
 def simulation_plot(name: str, result: Any, *, gid: str) -> str:
-    """Relative error and support error over time: Monte Carlo mean and 10-90% band."""
+    """The estimation error over time, relative to its initial value (what is left of it,
+    meaningful whether the state decays or grows) and relative to the present state, and
+    the support error: Monte Carlo mean and 10-90% band."""
     has_support = result.support_error is not None
-    fig, axes = _figure(7.5, 2.8, 1, 2 if has_support else 1)
-    k = np.arange(result.relative_error.shape[0])
-    panels = [("relative state error", result.relative_error, True)]
+    panels = []
+    if getattr(result, "initial_relative_error", None) is not None:
+        panels.append(("error / initial error", "initial", result.initial_relative_error, True))
+    panels.append(("error / state, ||x_hat - x|| / ||x||", "error", result.relative_error, True))
     if has_support:
-        panels.append(("support error (Jaccard)", result.support_error, False))
-    for ax, (label, data, log) in zip(axes[0], panels):
+        panels.append(("support error (Jaccard)", "support", result.support_error, False))
+    fig, axes = _figure(2.6 * len(panels) + 0.4, 2.8, 1, len(panels))
+    k = np.arange(result.relative_error.shape[0])
+    for ax, (label, key, data, log) in zip(axes[0], panels):
         with warnings.catch_warnings():  # steps where every run diverged: NaN, drawn as a gap
             warnings.filterwarnings("ignore", "Mean of empty slice", RuntimeWarning)
             warnings.filterwarnings("ignore", "All-NaN slice encountered", RuntimeWarning)
@@ -95,15 +107,62 @@ def simulation_plot(name: str, result: Any, *, gid: str) -> str:
         band = ax.fill_between(
             k, lo, hi, color=PALETTE["band"], alpha=0.6, linewidth=0, label="10-90% of runs"
         )
-        band.set_gid(f"{gid}-{'error' if log else 'support'}-band")
+        band.set_gid(f"{gid}-{key}-band")
         (line,) = ax.plot(k, mean, color=PALETTE["a"], linewidth=1.5, label="mean")
-        line.set_gid(f"{gid}-{'error' if log else 'support'}-mean")
+        line.set_gid(f"{gid}-{key}-mean")
         ax.set_xlabel("step k")
         ax.set_title(label, fontsize=10)
         ax.grid(True, alpha=0.3)
     axes[0][0].legend(fontsize=8, loc="best")
     fig.suptitle(f"{plain(name)}: {result.runs} runs, {result.attack} attack", fontsize=10)
     return svg_figure(fig, title=f"simulation {name}")
+
+
+def tradeoff_plot(tradeoff: dict[str, Any], *, gid: str = "tradeoff") -> str:
+    """The certified trade-off of ``ssecert design``: certified l2 gain from attack to error
+    against the certified error contraction per step, the plant's own rho(A) (and rho(A)^2,
+    "clearly faster"), the chosen design and the spec's design (at its linear loop's
+    spectral radius: it has no decay certificate)."""
+    fig, axes = _figure(6.0, 3.2)
+    ax = axes[0][0]
+    points = [
+        p for p in tradeoff.get("front", []) if p.get("verified") and p.get("gamma") is not None
+    ]
+    if points:
+        x = [p["contraction"] for p in points]
+        y = [p["gamma"] for p in points]
+        (line,) = ax.plot(
+            x, y, "o-", color=PALETTE["a"], linewidth=1.2, markersize=4,
+            label="certified trade-off (synthesis)",
+        )  # fmt: skip
+        line.set_gid(f"{gid}-front")
+    rho = tradeoff.get("plant_radius")
+    if rho is not None and rho < 1.5:
+        ax.axvline(rho, color=PALETTE["output"], linestyle="--", linewidth=1,
+                   label=f"plant's own, rho(A) = {rho:.3g}").set_gid(f"{gid}-plant")  # fmt: skip
+        if rho < 1:
+            ax.axvline(rho**2, color=PALETTE["output"], linestyle=":", linewidth=1,
+                       label=f"twice as fast, rho(A)^2 = {rho**2:.3g}")  # fmt: skip
+    chosen = tradeoff.get("chosen") or {}
+    if chosen.get("contraction") is not None and chosen.get("gamma") is not None:
+        (mark,) = ax.plot(
+            [chosen["contraction"]], [chosen["gamma"]], "*", color=PALETTE["holds"],
+            markersize=12, label="chosen design",
+        )  # fmt: skip
+        mark.set_gid(f"{gid}-chosen")
+    spec = tradeoff.get("spec") or {}
+    if spec.get("linear_radius") is not None and spec.get("gamma") is not None:
+        (mark,) = ax.plot(
+            [spec["linear_radius"]], [spec["gamma"]], "D", color=PALETTE["b"],
+            markerfacecolor="none", label="the spec's design (x: rho(A - L S))",
+        )  # fmt: skip
+        mark.set_gid(f"{gid}-spec")
+    ax.set_yscale("log")
+    ax.set_xlabel("error contraction per step, sqrt(1 - alpha) (smaller is faster)")
+    ax.set_ylabel("certified l2 gain, attack to error")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7, loc="best")
+    return svg_figure(fig, title="certified trade-off between decay and gain")
 
 
 def stealthy_plot(system: Any, demo: dict[str, Any], *, gid: str = "stealthy") -> str:

@@ -9,7 +9,15 @@ from .engine import (
     simulate_spec,
     stealthy_replay,
 )
-from .metrics import detection_delay, mse, relative_error, summarize, support_error
+from .metrics import (
+    absolute_error,
+    detection_delay,
+    initial_relative_error,
+    mse,
+    relative_error,
+    summarize,
+    support_error,
+)
 from .scenarios import ScenarioData, StealthyReplay, generate, run_rng
 
 __all__ = [
@@ -20,7 +28,9 @@ __all__ = [
     "simulate_scenario",
     "simulate_spec",
     "stealthy_replay",
+    "absolute_error",
     "detection_delay",
+    "initial_relative_error",
     "mse",
     "relative_error",
     "summarize",

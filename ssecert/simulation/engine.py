@@ -27,7 +27,16 @@ from ..context import OBSERVER, AnalysisContext, shared, sparse_key
 from ..observers import ObserverDesign, build_observer, observer_from_design
 from ..parallel import map_ordered
 from ..system import System
-from .metrics import detection_delay, mse, quantile, relative_error, summarize, support_error
+from .metrics import (
+    absolute_error,
+    detection_delay,
+    initial_relative_error,
+    mse,
+    quantile,
+    relative_error,
+    summarize,
+    support_error,
+)
 from .scenarios import StealthyReplay, generate
 
 __all__ = [
@@ -122,10 +131,19 @@ class ScenarioResult:
     name, attack, observer : str
     runs, steps, seed : int
     relative_error, mse : ndarray, shape (steps + 1, runs)
+        ||x_hat - x|| / max(||x||, 1e-9 ||x0||) and the mean squared error.
     support_error : ndarray or None, shape (steps + 1, runs)
         For observers that estimate the attack.
     detection_delay : ndarray or None, shape (runs,)
     seconds : float
+    absolute_error : ndarray, shape (steps + 1, runs)
+        ||x_hat - x||.
+    initial_relative_error : ndarray, shape (steps + 1, runs)
+        ||x_hat(k) - x(k)|| / ||x_hat(0) - x(0)||: the part of the initial error left.
+
+    ``ssecert.simulation.metrics`` defines each; the relative error grows without bound
+    when the state decays and the error does not, so designs are compared on the
+    absolute error (same seeds, same plant trajectories).
     """
 
     name: str
@@ -140,12 +158,20 @@ class ScenarioResult:
     detection_delay: np.ndarray | None
     seconds: float = 0.0
     notes: tuple[str, ...] = field(default=())
+    absolute_error: np.ndarray | None = None
+    initial_relative_error: np.ndarray | None = None
 
     def final(self) -> dict[str, float | None]:
         """Aggregates at the last step."""
         rel = self.relative_error[-1]
         with np.errstate(over="ignore", invalid="ignore"):  # diverged runs: inf or NaN
-            out: dict[str, float | None] = {
+            out: dict[str, float | None] = {}
+            for key in ("absolute_error", "initial_relative_error"):
+                series = getattr(self, key)
+                if series is not None:
+                    out[f"{key}_mean"] = float(np.mean(series[-1]))
+                    out[f"{key}_q90"] = float(quantile(series[-1], 0.9))
+            out |= {
                 "relative_error_mean": float(np.mean(rel)),
                 "relative_error_q90": float(quantile(rel, 0.9)),
                 "mse_mean": float(np.mean(self.mse[-1])),
@@ -162,9 +188,11 @@ class ScenarioResult:
     def to_dict(self) -> dict[str, Any]:
         """The JSON object of ``ssecert simulate`` for this scenario."""
         series: dict[str, Any] = {
-            "relative_error": summarize(self.relative_error),
-            "mse": summarize(self.mse),
+            key: summarize(getattr(self, key))
+            for key in ("absolute_error", "initial_relative_error")
+            if getattr(self, key) is not None
         }
+        series |= {"relative_error": summarize(self.relative_error), "mse": summarize(self.mse)}
         if self.support_error is not None:
             series["support_error"] = summarize(self.support_error)
         return {
@@ -230,7 +258,10 @@ def _simulate_chunk(
     d = traj.delay
     # estimate at time k refers to x(k - d); compare where defined
     x_ref = xs if d == 0 else np.concatenate([np.repeat(xs[:1], d, axis=0), xs[:-d]], axis=0)
+    error = absolute_error(traj.x_hat, x_ref)
     out = {
+        "absolute_error": error,
+        "initial_relative_error": initial_relative_error(error, data.x0),
         "relative_error": relative_error(traj.x_hat, x_ref, data.x0[None]),
         "mse": mse(traj.x_hat, x_ref),
     }
@@ -322,7 +353,7 @@ def simulate_scenario(
         first = int(np.argmax(bad.any(axis=1)))
         # a run that overflowed has an unbounded error from then on, not an undefined one
         gone = np.maximum.accumulate(bad, axis=0)
-        for key in ("relative_error", "mse"):
+        for key in ("absolute_error", "initial_relative_error", "relative_error", "mse"):
             merged[key] = np.where(gone, np.inf, merged[key])
         notes.append(
             f"the plant state or its estimate overflows in floating point in {overflowed} of "
@@ -342,6 +373,8 @@ def simulate_scenario(
         detection_delay=merged.get("detection_delay"),
         seconds=time.perf_counter() - start,
         notes=tuple(notes),
+        absolute_error=merged["absolute_error"],
+        initial_relative_error=merged["initial_relative_error"],
     )
 
 

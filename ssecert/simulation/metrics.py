@@ -2,7 +2,13 @@
 
 Definitions (docs/architecture.md, "Simulation metrics"):
 
-* relative error: ||x_hat - x|| / max(||x||, 1e-9 ||x0||);
+* error: ||x_hat - x||, the absolute estimation error;
+* error relative to the initial error: ||x_hat(k) - x(k)|| / ||x_hat(0) - x(0)||
+  (the denominator floored at 1e-9 ||x0||): how much of the initial error is left,
+  meaningful whether the state decays, grows or stays;
+* relative error: ||x_hat - x|| / max(||x||, 1e-9 ||x0||), the error relative to the
+  present state (grows without bound when the state decays to 0 and the error
+  does not: never compare designs on it alone);
 * MSE: mean over states of (x_hat - x)^2;
 * support error at step k: the Jaccard distance
   |supp(a_hat) xor supp(a)| / |supp(a_hat) or supp(a)| (0 when both are
@@ -25,6 +31,8 @@ from typing import Any
 import numpy as np
 
 __all__ = [
+    "absolute_error",
+    "initial_relative_error",
     "relative_error",
     "mse",
     "support_error",
@@ -49,6 +57,32 @@ def relative_error(x_hat: np.ndarray, x: np.ndarray, x0: np.ndarray) -> np.ndarr
     num = np.linalg.norm(x_hat - x, axis=-1)
     den = np.maximum(np.linalg.norm(x, axis=-1), 1e-9 * np.linalg.norm(x0, axis=-1))
     return num / np.maximum(den, np.finfo(float).tiny)
+
+
+def absolute_error(x_hat: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """||x_hat - x|| over the last axis.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> float(absolute_error(np.array([1.0, 1.0]), np.array([1.0, 3.0])))
+    2.0
+    """
+    return np.linalg.norm(x_hat - x, axis=-1)
+
+
+def initial_relative_error(error: np.ndarray, x0: np.ndarray) -> np.ndarray:
+    """||x_hat(k) - x(k)|| / max(||x_hat(0) - x(0)||, 1e-9 ||x0||) from the absolute error
+    of shape (steps + 1, runs) and the initial states x0 of shape (runs, n).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> initial_relative_error(np.array([[2.0], [1.0], [0.5]]), np.array([[3.0, 4.0]])).ravel()
+    array([1.  , 0.5 , 0.25])
+    """
+    den = np.maximum(error[:1], 1e-9 * np.linalg.norm(x0, axis=-1))
+    return error / np.maximum(den, np.finfo(float).tiny)
 
 
 def mse(x_hat: np.ndarray, x: np.ndarray) -> np.ndarray:

@@ -1,0 +1,168 @@
+"""``ssecert design`` against two objectives: the certified trade-off between decay and l2
+gain, a default design clearly faster than the plant, and comparisons on the absolute error."""
+
+from __future__ import annotations
+
+import itertools
+import json
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from ssecert.simulation.metrics import absolute_error, initial_relative_error
+from ssecert.synthesize import choose_decay, compare_designs, design_observer
+from ssecert.system import System
+
+
+def _damped_plant() -> System:
+    """Stable, 4 states, 6 sensors, two lightly damped modes: rho(A) = 0.985."""
+    rng = np.random.default_rng(3)
+
+    def rot(r: float, th: float) -> np.ndarray:
+        return r * np.array([[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]])
+
+    A = np.zeros((4, 4))
+    A[:2, :2], A[2:, 2:] = rot(0.985, 0.3), rot(0.97, 0.8)
+    T = rng.standard_normal((4, 4))
+    return System(T @ A @ np.linalg.inv(T), rng.standard_normal((6, 4)))
+
+
+@pytest.fixture(scope="module")
+def plant() -> System:
+    return _damped_plant()
+
+
+@pytest.mark.parametrize("kind", ["luenberger", "elastic_net"])
+def test_the_default_design_is_clearly_faster_than_a_stable_plant(plant, kind):
+    result = design_observer(plant, kind, time_budget=20)
+    assert result.observer is not None and result.gamma is not None
+    rho = result.plant_radius
+    assert rho == pytest.approx(0.985, abs=1e-9)
+    # the imposed decay is at least twice the plant's (contraction <= rho^2), and the linear
+    # loop is no slower than the certified contraction
+    assert result.decay is not None and math.sqrt(1 - result.decay) <= rho**2 + 1e-12
+    L = np.asarray(result.observer["gain"])
+    radius = float(np.abs(np.linalg.eigvals(plant.A - L @ plant.C)).max())
+    assert radius == pytest.approx(result.linear_radius, rel=1e-9)
+    assert radius <= rho**2
+    assert "clearly faster" in result.choice
+    verified = [p for p in result.front if p["verified"]]
+    assert len(verified) >= 3
+    # a Pareto front: a slower certified decay never costs a larger certified gain
+    by_speed = sorted(verified, key=lambda p: p["contraction"])
+    gains = [p["gamma"] for p in by_speed]
+    assert all(b <= a * (1 + 1e-3) for a, b in itertools.pairwise(gains))
+
+
+def test_an_explicit_min_decay_may_give_a_design_no_faster_than_the_plant_and_names_it(plant):
+    result = design_observer(plant, "luenberger", min_decay=1e-3, time_budget=20)
+    assert result.observer is not None
+    assert "min_decay" in result.choice
+    if result.linear_radius >= result.plant_radius:
+        assert "no faster than the plant" in result.choice
+    else:
+        assert "no faster" not in result.choice
+
+
+def _point(alpha: float, gamma: float) -> dict:
+    return {"alpha": alpha, "contraction": math.sqrt(1 - alpha), "gamma": gamma, "verified": True}
+
+
+def test_choose_decay_takes_the_smallest_gain_twice_as_fast_as_the_plant():
+    front = [_point(0.75, 9.0), _point(0.36, 2.0), _point(0.19, 1.0), _point(0.01, 0.1)]
+    alpha, why = choose_decay(front, 0.94)  # rho^2 = 0.8836: 0.5, 0.8 qualify, 0.9 does not
+    assert alpha == 0.36 and "clearly faster" in why and "0.8836" in why
+    # a slower plant lets the slower point qualify
+    alpha, _ = choose_decay(front, 0.95)  # rho^2 = 0.9025 >= 0.9
+    assert alpha == 0.19
+
+
+def test_choose_decay_takes_the_knee_when_nothing_is_twice_as_fast_or_the_plant_is_unstable():
+    contractions, gains = (0.981, 0.983, 0.986, 0.989), (50.0, 3.0, 2.0, 1.5)
+    front = [_point(1 - c**2, g) for c, g in zip(contractions, gains)]
+    corner = 1 - 0.983**2  # the gain falls 17x to it, then little
+    alpha, why = choose_decay(front, 0.99)  # rho^2 = 0.9801: no point is that fast
+    assert "knee" in why and "0.9801" in why
+    assert alpha == corner
+    alpha, why = choose_decay(front, 1.0)
+    assert alpha == corner and "not stable" in why
+    # nothing faster than the plant: the fastest point, and it says so
+    alpha, why = choose_decay(front, 0.98)
+    assert alpha == 1 - 0.981**2 and "none is faster" in why
+    alpha, why = choose_decay([{**_point(0.5, 1.0), "verified": False}], 0.9)
+    assert alpha == 1e-3 and "no point of the trade-off front verified" in why
+
+
+def test_the_error_metrics_do_not_grow_when_the_state_decays():
+    steps = np.arange(50)
+    x = np.stack([0.5**steps, np.zeros(50)], axis=-1)[:, None, :]  # (steps, runs, n)
+    x_hat = x + np.array([0.1, 0.0])  # a bias the error keeps
+    x0 = x[0]
+    err = absolute_error(x_hat, x)
+    assert np.allclose(err, 0.1)
+    np.testing.assert_allclose(initial_relative_error(err, x0), 1.0)
+    from ssecert.simulation.metrics import relative_error
+
+    assert relative_error(x_hat, x, x0[None])[-1, 0] > 1e7  # what misled (floored at 1e-9 ||x0||)
+
+
+def test_the_comparison_reads_the_absolute_error_not_the_relative_one():
+    def result(absolute: float, relative: float, label: str):
+        sims = {
+            "a": SimpleNamespace(
+                relative_error=np.array([[1.0], [relative]]),
+                absolute_error=np.array([[1.0], [absolute]]),
+                runs=1,
+                steps=1,
+                seed=0,
+                final=lambda: {
+                    "relative_error_mean": relative,
+                    "absolute_error_mean": absolute,
+                    "absolute_error_q90": absolute,
+                    "initial_relative_error_mean": absolute,
+                },
+            )
+        }
+        spec = SimpleNamespace(observer={"kind": label})
+        cert = SimpleNamespace(get=lambda check_id: None)
+        return SimpleNamespace(simulations=sims, spec=spec, certificate=cert)
+
+    # the synthesised design has the larger relative error but the smaller absolute one
+    out = compare_designs(result(2.0, 0.5, "dsso"), result(0.2, 30.0, "elastic_net"))
+    assert out["scenarios"][0]["comparison"] == "better"
+    assert "||x_hat - x||" in out["summary"] and "absolute" in out["metric"]
+    out = compare_designs(result(0.2, 30.0, "dsso"), result(2.0, 0.5, "elastic_net"))
+    assert out["scenarios"][0]["comparison"] == "worse"
+
+
+def test_design_on_a_stable_plant_plots_the_tradeoff_and_names_its_metric(plant, tmp_path, capsys):
+    from ssecert._spec_write import dumps
+
+    spec = {
+        "name": "damped",
+        "system": {"A": plant.A.tolist(), "C": plant.C.tolist()},
+        "attack": {"max_attacked": 1},
+        "observer": {"kind": "luenberger", "gain": "place", "poles": [0.5, 0.5, 0.6, 0.6]},
+        "scenario": [
+            {"name": "constant", "attack": "constant", "sensors": [0], "magnitude": [1.0, 2.0],
+             "steps": 60, "runs": 4, "seed": 0}
+        ],
+    }  # fmt: skip
+    path = tmp_path / "damped.toml"
+    path.write_text(dumps(spec))
+    from ssecert.cli import main
+
+    status = main(["design", str(path), "--observer", "luenberger", "--out", str(tmp_path),
+                   "--json", str(tmp_path / "r.json"), "--time-budget", "20"])  # fmt: skip
+    printed = capsys.readouterr().out
+    assert status == 0, printed
+    assert "faster than the plant's own rho(A) = 0.985" in printed
+    assert "final mean error ||x_hat - x||" in printed
+    result = json.loads((tmp_path / "r.json").read_text())
+    assert result["linear_radius"] < result["plant_radius"] ** 2
+    html = (tmp_path / "damped-design.html").read_text()
+    assert 'id="tradeoff"' in html and "tradeoff-front" in html and "tradeoff-chosen" in html
+    assert "tradeoff-spec" in html  # the spec's Luenberger design has a certified gain
+    assert "of the initial error" in html
