@@ -517,6 +517,21 @@ def test_count(x):
         out.write(f"{x}\\n")
 """
 
+# the same test marked as using ssecert; it also writes the settings it runs under
+MARKED_COUNTING = """
+import pytest
+from hypothesis import given, settings, strategies as st
+
+@pytest.mark.ssecert
+@given(st.integers(0, 10**9))
+def test_count(x):
+    current = settings.default
+    with open("drawn.txt", "a") as out:
+        out.write(f"{x}\\n")
+    with open("settings.txt", "w") as out:
+        out.write(f"{current.verbosity.name} {current.deadline} {current.derandomize}")
+"""
+
 
 def _run(pytester, *args):
     """Run the counting file in-process as from a fresh process: its draws, result, and the
@@ -537,15 +552,21 @@ def _run(pytester, *args):
     return values, result, after
 
 
-def test_profiles_quick_by_default_and_thorough_on_demand(pytester):
-    pytester.makepyfile(test_counting=COUNTING)
+def test_profiles_quick_for_ssecert_tests_and_thorough_on_demand(pytester):
+    pytester.makepyfile(test_counting=MARKED_COUNTING)
     quick, result, after = _run(pytester)
     result.assert_outcomes(passed=1)
-    result.stdout.fnmatch_lines(["ssecert: hypothesis profile 'ssecert-quick' (default)"])
+    result.stdout.fnmatch_lines(
+        [
+            "ssecert: hypothesis profile 'ssecert-quick' (for tests that use ssecert; "
+            "hypothesis's own for the others)"
+        ]
+    )
     assert len(quick) == QUICK_EXAMPLES
     assert after == "default"  # restored: nothing leaks out of an in-process run
     again, _, _ = _run(pytester)
     assert again == quick  # derandomized: the same examples every run
+    pytester.makepyfile(test_counting=COUNTING)  # not marked: --ssecert-profile reaches it too
     thorough, result, after = _run(pytester, "--ssecert-profile", "thorough")
     result.assert_outcomes(passed=1)
     result.stdout.fnmatch_lines(
@@ -556,7 +577,7 @@ def test_profiles_quick_by_default_and_thorough_on_demand(pytester):
 
 
 def test_an_explicit_hypothesis_profile_is_respected(pytester):
-    pytester.makepyfile(test_counting=COUNTING)
+    pytester.makepyfile(test_counting=MARKED_COUNTING)
     drawn, result, _ = _run(pytester, "--hypothesis-profile", "ci")
     result.assert_outcomes(passed=1)
     assert len(drawn) == 100  # hypothesis's own ci profile: 100 derandomized examples
@@ -572,23 +593,22 @@ def test_an_explicit_hypothesis_profile_is_respected(pytester):
 
 
 def test_hypothesis_verbosity_keeps_the_ssecert_profile(pytester):
-    pytester.makepyfile(test_counting=COUNTING)
+    pytester.makepyfile(test_counting=MARKED_COUNTING)
     drawn, result, after = _run(pytester, "--hypothesis-verbosity", "verbose")
     result.assert_outcomes(passed=1)
     assert len(drawn) == QUICK_EXAMPLES
     result.stdout.fnmatch_lines(
-        ["ssecert: hypothesis profile 'ssecert-quick-with-verbose-verbosity' (default)"]
+        ["ssecert: hypothesis profile 'ssecert-quick-with-verbose-verbosity' (for tests*"]
     )
     # the verbosity was kept, and so were the quick profile's settings
-    header = next(line for line in result.outlines if line.startswith("hypothesis profile "))
-    for setting in (
-        "deadline=None",
-        f"max_examples={QUICK_EXAMPLES}",
-        "derandomize=True",
-        "verbosity=Verbosity.verbose",
-    ):
-        assert setting in header, header
+    assert (pytester.path / "settings.txt").read_text() == "verbose None True"
     assert after == "default-with-verbose-verbosity"  # what hypothesis's plugin had loaded
+    drawn, result, after = _run(
+        pytester, "--hypothesis-verbosity", "verbose", "--ssecert-profile", "quick"
+    )
+    assert len(drawn) == QUICK_EXAMPLES
+    assert (pytester.path / "settings.txt").read_text() == "verbose None True"
+    assert after == "default-with-verbose-verbosity"
 
 
 def test_ini_option_and_project_profiles(pytester):

@@ -8,8 +8,11 @@
 * ``ssecert.testing.strategies`` (needs hypothesis): plants, sparse attacks
   and observer designs built to have the property they promise.
 * ``ssecert.testing.plugin``: a pytest plugin, loaded automatically once
-  ssecert is installed, with the ``ssecert_example`` fixture and the
-  ``--ssecert-profile quick|thorough`` option.
+  ssecert is installed, with the ``ssecert_example`` fixture, the
+  ``ssecert`` marker and the ``--ssecert-profile quick|thorough`` option.
+  Its hypothesis profile applies to the tests that use ssecert (or to every
+  test, when asked); pytest's start-up imports neither ssecert nor
+  hypothesis for it.
 
 Install the test dependencies with ``pip install "ssecert[testing]"``.
 
