@@ -13,6 +13,11 @@ compact table between ``<!-- benchmarks:start -->`` and
 
 ``--only`` reruns the named benchmarks and keeps the others' rows from
 results.json; ``--no-run`` only rewrites the files from results.json.
+
+The experiment scripts (``exp_*.py``) are not run here: each one run with
+``--record`` keeps its numbers in benchmarks/experiments.json, and
+benchmarks/README.md gets a section written from them by the scripts' own
+``report`` and ``conclusion`` functions.
 """
 
 from __future__ import annotations
@@ -119,6 +124,21 @@ ORDER = (
     "design synthesis LMI",
     "design search",
 )
+
+# experiments of the documents (``exp_*.py``): name: what it reruns
+EXPERIMENTS_FILE = "experiments.json"
+EXPERIMENTS = HERE / EXPERIMENTS_FILE
+EXPERIMENT_SCRIPTS: dict[str, str] = {
+    "exp_lasso_sec51": "Lasso paper Sec. 5.1: Lasso (FISTA) vs l1 vs l0 decoders, n = 20, p varied, "
+    "with and without noise",
+    "exp_sso_sec52": "Lasso paper Sec. 5.2: the sparse soft observer with tau = 1 and tau = n",
+    "exp_thesis_observers": "thesis Sec. 6.1-6.2: the D-SSO (grid-searched, as the thesis did) "
+    "vs the elastic-net observer in four attack scenarios",
+    "exp_pruning": "weighted l1 paper Sec. IV: success rate against attack percentage, m = 20, "
+    "n = 10",
+    "exp_sise": "SISE paper: relative errors against the oracle, p = 40, m = 20, n = 50 and 70",
+    "exp_localization": "thesis Sec. 6.3: RSS localization of a target under sensor attacks",
+}
 
 CHILD = """
 import json, sys
@@ -295,12 +315,76 @@ def compact_block(results: dict[str, Any]) -> str:
     return intro + "\n\n" + compact_table(_all_rows(results))
 
 
-def benchmarks_readme(results: dict[str, Any]) -> str:
+def load_experiments() -> dict[str, Any]:
+    """The recorded experiment runs (benchmarks/experiments.json), {} when there are none."""
+    if not EXPERIMENTS.is_file():
+        return {}
+    return dict(json.loads(EXPERIMENTS.read_text(encoding="utf-8")))
+
+
+def experiment_module(name: str) -> Any:
+    """Import ``benchmarks/NAME.py`` (an experiment script) without running it."""
+    import importlib.util
+
+    if str(HERE) not in sys.path:
+        sys.path.insert(0, str(HERE))  # the scripts import _common beside them
+    spec = importlib.util.spec_from_file_location(name, HERE / f"{name}.py")
+    if spec is None or spec.loader is None:
+        raise ImportError(f"cannot import benchmarks/{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def experiments_section(experiments: dict[str, Any]) -> str:
+    """The README's section on the experiments, its words written from the recorded numbers.
+
+    Each script's ``report`` (its table) and ``conclusion`` (its comparison
+    with the document) are called on the numbers kept by ``--record``; no
+    sentence is stored, so none can disagree with the numbers beside it.
+    """
+    parts = [
+        "## Experiments of the documents\n",
+        "Each `exp_*.py` script reruns one experiment of the reference documents, prints its "
+        "table and ends with a comparison with the document. Every comparing word (faster or "
+        "slower and by how much, the same order of magnitude or not, which is better, as in "
+        "the document or unlike it) is computed from the numbers by the script's "
+        "`conclusion` function, with its rule stated; `tests/test_benchmarks_conclusions.py` "
+        "feeds those functions other numbers and checks that the words change. The text "
+        "below is written from the numbers of the last run recorded with `--record` (kept "
+        f"in `benchmarks/{EXPERIMENTS_FILE}`); `--quick` runs are smaller (fewer runs, a "
+        "coarser grid) than the documents' experiments.\n",
+        "```\n"
+        "python benchmarks/exp_sso_sec52.py --quick --record   # run, print, keep for this file\n"
+        "python benchmarks/exp_sso_sec52.py                    # the full experiment, printed\n"
+        "```\n",
+    ]
+    for name, what in EXPERIMENT_SCRIPTS.items():
+        entry = experiments.get(name)
+        parts.append(f"### `{name}.py`\n")
+        if entry is None:
+            parts.append(f"{what}. Not recorded yet (`python benchmarks/{name}.py --record`).\n")
+            continue
+        module = experiment_module(name)
+        m = entry["machine"]
+        mode = "quick run (--quick)" if entry["quick"] else "full run"
+        parts += [
+            f"{what}. {mode} on {entry['date'][:10]}, {format_seconds(entry['seconds'])} "
+            f"({m['cpus']} CPUs: {m['cpu_model']}; Python {m['python']}, numpy {m['numpy']}): "
+            f"`{entry['command']}`\n",
+            "```\n" + module.report(entry["numbers"]).rstrip("\n") + "\n```\n",
+            module.conclusion(entry["numbers"]) + "\n",
+        ]
+    return "\n".join(part.rstrip("\n") + "\n" for part in parts)
+
+
+def benchmarks_readme(results: dict[str, Any], experiments: dict[str, Any] | None = None) -> str:
     m = results["machine"]
     parts = [
         "# Benchmarks\n",
-        "This file is written by `python benchmarks/table.py`; do not edit it by hand. Every "
-        "figure is a ratio against a reference measured in the same run, on the same "
+        "This file is written by `python benchmarks/table.py` (and its last section by the "
+        "`exp_*.py` scripts run with `--record`); do not edit it by hand. Every "
+        "figure in the table is a ratio against a reference measured in the same run, on the same "
         "machine: ratio = reference / ssecert, so above 1x ssecert is faster. For the cost "
         "model rows the ssecert column is the cost model's estimate and the reference the "
         "measured enumeration, so the ratio is measured / estimate (within a factor of 2 is "
@@ -344,7 +428,15 @@ def benchmarks_readme(results: dict[str, Any]) -> str:
         "## Table\n",
         full_table(_all_rows(results)),
     ]
+    if experiments is not None:
+        parts.append(experiments_section(experiments))
     return "\n".join(part.rstrip("\n") + "\n" for part in parts)
+
+
+def write_benchmarks_readme() -> None:
+    """Rewrite benchmarks/README.md from results.json and experiments.json (nothing else)."""
+    results = json.loads(RESULTS.read_text(encoding="utf-8"))
+    atomic_write_text(HERE / "README.md", benchmarks_readme(results, load_experiments()))
 
 
 def run_benchmark(name: str, *, quick: bool) -> dict[str, Any]:
@@ -398,7 +490,7 @@ def main(argv: list[str] | None = None) -> int:
     if not results["benchmarks"]:
         return 1
     atomic_write_text(RESULTS, json.dumps(results, indent=1) + "\n")
-    atomic_write_text(HERE / "README.md", benchmarks_readme(results))
+    atomic_write_text(HERE / "README.md", benchmarks_readme(results, load_experiments()))
     readme = ROOT / "README.md"
     text = readme.read_text(encoding="utf-8")
     atomic_write_text(readme, replace_block(text, compact_block(results)))
