@@ -166,3 +166,29 @@ def test_design_on_a_stable_plant_plots_the_tradeoff_and_names_its_metric(plant,
     assert 'id="tradeoff"' in html and "tradeoff-front" in html and "tradeoff-chosen" in html
     assert "tradeoff-spec" in html  # the spec's Luenberger design has a certified gain
     assert "of the initial error" in html
+
+
+def test_assert_recovers_takes_an_absolute_tolerance_for_a_decaying_state(plant):
+    from ssecert import spec_from_dict
+    from ssecert.testing import assert_recovers
+
+    design = spec_from_dict(
+        {
+            "name": "damped",
+            "system": {"A": plant.A.tolist(), "C": plant.C.tolist()},
+            "attack": {"max_attacked": 1},
+            "observer": {"kind": "luenberger", "gain": "place", "poles": [0.5, 0.5, 0.6, 0.6]},
+        }
+    )
+    # a constant attack leaves a bias: the error converges, the state decays to 0
+    scenario = {"attack": "constant", "sensors": [0], "magnitude": [1.0, 1.0], "steps": 400,
+                "runs": 4}  # fmt: skip
+    result = assert_recovers(design, scenario, 0, atol=100.0)
+    bias = float(result.absolute_error[-1].max())
+    assert result.relative_error[-1].min() > 100  # what a relative tolerance would read
+    with pytest.raises(AssertionError, match=r"an error \|\|x_hat - x\|\| above atol"):
+        assert_recovers(design, scenario, 0, atol=0.5 * bias)
+    with pytest.raises(AssertionError, match="relative state error above tol = 10"):
+        assert_recovers(design, scenario, 10.0)
+    # both tolerances: ||e|| <= atol + tol ||x||, as numpy.isclose combines them
+    assert_recovers(design, scenario, 1e-3, atol=1.01 * bias)

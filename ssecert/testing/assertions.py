@@ -625,11 +625,20 @@ def _scenario(design: Spec, scenario: str | Mapping[str, Any]) -> dict[str, Any]
     return dict(checked.scenarios[0])
 
 
+def _tolerance_words(tol: float, atol: float) -> str:
+    if atol == 0:
+        return f"a relative state error above tol = {tol:g}"
+    if tol == 0:
+        return f"an error ||x_hat - x|| above atol = {atol:g}"
+    return f"an error ||x_hat - x|| above atol + tol ||x|| (atol = {atol:g}, tol = {tol:g})"
+
+
 def assert_recovers(
     design: Spec,
     scenario: str | Mapping[str, Any],
     tol: float,
     *,
+    atol: float = 0.0,
     runs: int | None = None,
     steps: int | None = None,
     seed: int | None = None,
@@ -638,9 +647,15 @@ def assert_recovers(
 
     The observer is simulated with ``ssecert.simulation.engine.simulate_scenario``
     (vectorised over runs; run r draws x0, the attack and the noise from
-    ``numpy.random.default_rng([seed, r])``).  Every run must end with a
-    relative state error ||x_hat - x|| / max(||x||, 1e-9 ||x0||) <= tol
-    (ssecert's metric; see ``ssecert.simulation.metrics``).
+    ``numpy.random.default_rng([seed, r])``).  Every run must end with
+
+        ||x_hat - x|| <= atol + tol * max(||x||, 1e-9 ||x0||),
+
+    as ``numpy.isclose`` combines its tolerances: ``tol`` alone bounds the
+    relative state error (ssecert's metric; see ``ssecert.simulation.metrics``),
+    ``atol`` alone the absolute error.  On a plant whose state decays the
+    relative error grows without bound while the error converges to a bias:
+    give ``atol`` there (``assert_recovers(design, scenario, 0, atol=0.5)``).
 
     Parameters
     ----------
@@ -653,7 +668,11 @@ def assert_recovers(
         ``steps``, ``runs``, ``seed``; ``name`` defaults to ``"custom"``),
         validated as the spec loader validates it.
     tol : float
-        Largest acceptable final relative error (>= 0).
+        Largest acceptable final relative error (>= 0; 0 with ``atol`` for an absolute
+        tolerance alone).
+    atol : float, default 0
+        Largest acceptable final absolute error ||x_hat - x|| (>= 0); with both 0 the
+        error must vanish.
     runs, steps, seed : int, optional
         Override the scenario's values.
 
@@ -694,6 +713,7 @@ def assert_recovers(
 
     design = _require_spec(design)
     tol = as_float_option(tol, "tol", min_value=0.0)
+    atol = as_float_option(atol, "atol", min_value=0.0)
     if design.observer is None:
         raise ValueError(f"design {design.name!r} has no [observer] section to simulate")
     table = _scenario(design, scenario)
@@ -707,11 +727,17 @@ def assert_recovers(
     result = simulate_scenario(
         observer, table, runs=runs, steps=steps, seed=seed, max_attacked=design.max_attacked
     )
-    final = np.asarray(result.relative_error[-1], dtype=float)
-    bad = ~(final <= tol)  # NaN (a diverged run) counts as failing
+    rel = np.asarray(result.relative_error[-1], dtype=float)
+    error = np.asarray(result.absolute_error[-1], dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        state = np.where(error > 0, error / rel, 0.0)  # max(||x||, 1e-9 ||x0||)
+        allowed = atol + tol * state
+        bad = ~(error <= allowed)  # NaN (a diverged run) counts as failing
     if not bad.any():
         return result
-    ranked = np.where(np.isnan(final), np.inf, final)
+    final = rel if atol == 0 else error
+    excess = rel if atol == 0 else error - allowed
+    ranked = np.where(np.isnan(error), np.inf, excess)
     worst = int(np.argmax(ranked))
     where = ", ".join(
         f"{key} = {table[key]}"
@@ -720,10 +746,13 @@ def assert_recovers(
     )
     raise AssertionError(
         f"the {observer.kind} observer of design {design.name!r} does not recover under scenario "
-        f"{table['name']!r}: {int(bad.sum())} of {result.runs} runs end with a relative state "
-        f"error above tol = {tol:g} after {result.steps} steps.\n"
-        f"worst run: index {worst}, final relative error {_num(final[worst])}; mean "
-        f"{_num(np.mean(final))}.\n"
+        f"{table['name']!r}: {int(bad.sum())} of {result.runs} runs end with "
+        + _tolerance_words(tol, atol)
+        + f" after {result.steps} steps.\n"
+        f"worst run: index {worst}, final {'relative ' if atol == 0 else ''}error "
+        f"{_num(final[worst])}"
+        + ("" if atol == 0 or tol == 0 else f" (allowed {_num(allowed[worst])})")
+        + f"; mean {_num(np.mean(final))}.\n"
         f"scenario: attack {table['attack']!r}"
         + (f" ({where})" if where else "")
         + f", seed {result.seed}, runs {result.runs}, steps {result.steps}; run r draws from "
