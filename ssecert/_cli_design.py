@@ -281,11 +281,10 @@ def _print_design(
         out.write(f"  synthesised: certified decay {result.decay:.3g} per step (V(k+1) <= "
                   f"{one_minus(result.decay)} V(k))\n")  # fmt: skip
     if result.linear_radius is not None and result.plant_radius is not None:
-        faster = (
-            "faster than"
-            if result.linear_radius < result.plant_radius
-            else "NO faster than (it barely uses its sensors)"
-        )
+        from .synthesize import no_faster
+
+        slow = no_faster(result.linear_radius, result.plant_radius)
+        faster = "NO faster than (it barely uses its sensors)" if slow else "faster than"
         out.write(
             f"  its linear loop: rho(A - L S) = {result.linear_radius:.4g}, {faster} the "
             f"plant's own rho(A) = {result.plant_radius:.4g}\n"

@@ -38,8 +38,8 @@ decay ``choose_decay`` reads off that front: the smallest gain whose certified
 contraction per step is at most rho(A)^2 (the error shrinks at least twice as
 fast, in logarithm, as the plant's own state: "clearly faster"), else the
 knee of the front among the decays faster than the plant's.  A design whose
-linear loop A - L S is no faster than the plant (rho(A - L S) >= rho(A)) is
-then never chosen; with an explicit ``min_decay`` it may be, and it is named
+linear loop A - L S is no faster than the plant (``no_faster``: rho(A - L S)
+above rho(A)^1.1 for a stable plant) is then never chosen; with an explicit ``min_decay`` it may be, and it is named
 as such.
 """
 
@@ -59,6 +59,7 @@ __all__ = [
     "DesignResult",
     "certified_gain",
     "choose_decay",
+    "no_faster",
     "tradeoff_front",
     "design_observer",
     "verify_synthesis",
@@ -223,10 +224,10 @@ def design_observer(
     best = min(kept, key=lambda c: kept[c][0])
     record = tried[best]
     linear = record.get("linear_radius")
-    if linear is not None and linear >= plant_radius and system.n:
+    if linear is not None and no_faster(linear, plant_radius) and system.n:
         choice += (
-            f"; its linear loop is no faster than the plant (rho(A - L S) = {linear:.4g} >= "
-            f"rho(A) = {plant_radius:.4g}): the observer barely uses its sensors"
+            f"; its linear loop is no faster than the plant (rho(A - L S) = {linear:.6g} "
+            f"against rho(A) = {plant_radius:.6g}): the observer barely uses its sensors"
         )
     return DesignResult(
         kept[best][1],
@@ -245,6 +246,24 @@ def design_observer(
 
 
 DEFAULT_DECAY = 1e-3  # imposed when the front gives nothing to choose from
+FASTER = 1.1  # a loop is faster than a stable plant when its error falls 10% faster (in log)
+
+
+def no_faster(linear_radius: float, plant_radius: float) -> bool:
+    """True when a linear loop with spectral radius ``linear_radius`` is no faster than the
+    plant: for a stable plant, rho(A - L S) > rho(A)^1.1 (its error falls less than 10%
+    faster, in logarithm, than the plant's own state); else rho(A - L S) >= rho(A).
+
+    Examples
+    --------
+    >>> no_faster(0.9946, 0.9946), no_faster(0.7636, 0.9946), no_faster(0.5, 1.0)
+    (True, False, False)
+    """
+    if 0 < plant_radius < 1:
+        return bool(linear_radius > plant_radius**FASTER)
+    return bool(linear_radius >= plant_radius)
+
+
 FRONT_SHARE = 0.3  # of the time budget, at most, for the trade-off front
 FRONT_POINTS = 8
 
@@ -487,10 +506,10 @@ def _evaluator(
             record["synthesis_certificate"] = own
             design = with_gain(template, proposal.L)
         record["linear_radius"] = float(np.abs(np.linalg.eigvals(design.error_matrix)).max())
-        if faster_than is not None and record["linear_radius"] >= faster_than:
+        if faster_than is not None and no_faster(record["linear_radius"], faster_than):
             record["rejected"] = (
                 f"its linear loop is no faster than the plant (rho(A - L S) = "
-                f"{record['linear_radius']:.4g} >= rho(A) = {faster_than:.4g})"
+                f"{record['linear_radius']:.6g} against rho(A) = {faster_than:.6g})"
             )
             return record, None
         stability, iss = certified_gain(design)
