@@ -284,9 +284,12 @@ def tradeoff_front(
     template: Any, *, points: int = FRONT_POINTS, time_limit: float | None = None
 ) -> list[dict[str, Any]]:
     """The trade-off between certified decay and certified l2 gain of ``template``'s kind,
-    step and shrink: the fastest decay the synthesis LMI certifies, then the smallest gain
-    at ``points - 1`` decays between it and almost none (contraction per step sqrt(1 -
-    alpha) evenly spaced up to sqrt(1 - 1e-3)).
+    step and shrink: the smallest gain at almost no decay (alpha = 1e-3), the fastest decay
+    the synthesis LMI certifies (bisection on alpha), then the smallest gain at decays
+    between (contraction per step sqrt(1 - alpha) evenly spaced), ``points`` in all.
+
+    With a ``time_limit`` the solves' time sets how many fit: fewer bisections, fewer
+    points, none started past the limit.
 
     Each point: ``alpha`` (V(k+1) <= (1 - alpha) V(k)), ``contraction`` (sqrt(1 - alpha):
     the error's certified factor per step, in the certificate's norm), ``gamma`` (the l2
@@ -302,25 +305,36 @@ def tradeoff_front(
     def left() -> float | None:
         return None if time_limit is None else max(time_limit - (time.perf_counter() - start), 0.5)
 
-    fastest = synthesize_rate_gain(template, time_limit=left())
+    slowest = synthesize_gain(template, alpha=DEFAULT_DECAY, time_limit=left())
+    out = [_front_point(template, slowest)] if slowest.L is not None else []
+    solve = time.perf_counter() - start
+    room = points + RATE_BISECTIONS_FRONT
+    if time_limit is not None:
+        room = min(room, int((time_limit - solve) / max(solve, 1e-3)))
+    bisections = max(2, min(RATE_BISECTIONS_FRONT, room - 3))
+    fastest = synthesize_rate_gain(template, time_limit=left(), bisections=bisections)
     if fastest.L is not None and not _verified_proposal(template, fastest)["verified"]:
         # at the edge of feasibility: a decay further inside has a margin
-        inside = synthesize_rate_gain(template, backoff=0.8, time_limit=left())
+        inside = synthesize_rate_gain(
+            template, backoff=0.8, time_limit=left(), bisections=bisections
+        )
         fastest = inside if inside.L is not None else fastest
     if fastest.L is None or fastest.alpha is None:
-        return []
-    top = float(fastest.alpha)
-    slow = math.sqrt(1 - DEFAULT_DECAY)
-    fast = math.sqrt(1 - top)
-    out = [_front_point(template, fastest)]
+        return out
+    out.append(_front_point(template, fastest))
+    solve = (time.perf_counter() - start) / (bisections + 2)  # the solves so far, about
+    fast, slow = math.sqrt(1 - float(fastest.alpha)), math.sqrt(1 - DEFAULT_DECAY)
     if fast < slow:
-        for c in np.linspace(fast, slow, points)[1:]:
-            if time_limit is not None and time.perf_counter() - start > time_limit:
+        for c in np.linspace(fast, slow, points)[1:-1]:
+            if time_limit is not None and time.perf_counter() - start + solve > time_limit:
                 break
             found = synthesize_gain(template, alpha=1 - float(c) ** 2, time_limit=left())
             if found.L is not None:
                 out.append(_front_point(template, found))
     return sorted(out, key=lambda p: p["contraction"])
+
+
+RATE_BISECTIONS_FRONT = 6  # alpha of the fastest point to within 2^-6
 
 
 def _front_point(template: Any, proposal: Any) -> dict[str, Any]:
@@ -345,7 +359,8 @@ def choose_decay(front: list[dict[str, Any]], plant_radius: float) -> tuple[floa
     error falls at least twice as fast, in logarithm, as the plant's own state); else,
     among the verified points faster than the plant (every point when rho(A) >= 1), the
     knee of the front (the point farthest below the chord from the fastest to the
-    slowest, in contraction and log gain); else the fastest verified point.
+    slowest, in contraction and log gain); else the fastest verified point.  With fewer
+    than two verified points: rho(A)^2 itself for a stable plant, else alpha = 1e-3.
 
     Examples
     --------
@@ -356,9 +371,18 @@ def choose_decay(front: list[dict[str, Any]], plant_radius: float) -> tuple[floa
     0.2
     """
     good = [p for p in front if p.get("verified") and p.get("gamma") is not None]
-    if not good:
+    if len(good) < 2:
+        if 0 < plant_radius < 1:
+            alpha = 1 - plant_radius**4
+            return alpha, (
+                f"decay {alpha:.3g} per step imposed, error contraction rho(A)^2 = "
+                f"{plant_radius**2:.4g}: clearly faster than the plant's own rho(A) = "
+                f"{plant_radius:.4g} (the trade-off front has fewer than two verified "
+                "points: a larger time budget traces it)"
+            )
         return DEFAULT_DECAY, (
-            f"no point of the trade-off front verified: decay {DEFAULT_DECAY:g} per step imposed"
+            f"decay {DEFAULT_DECAY:g} per step imposed (the trade-off front has fewer than two "
+            "verified points: a larger time budget traces it)"
         )
     if plant_radius < 1:
         twice = [p for p in good if p["contraction"] <= plant_radius**2]

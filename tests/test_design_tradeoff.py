@@ -94,8 +94,11 @@ def test_choose_decay_takes_the_knee_when_nothing_is_twice_as_fast_or_the_plant_
     # nothing faster than the plant: the fastest point, and it says so
     alpha, why = choose_decay(front, 0.98)
     assert alpha == 1 - 0.981**2 and "none is faster" in why
+    # no front to read (the time budget): rho(A)^2 itself on a stable plant, else 1e-3
     alpha, why = choose_decay([{**_point(0.5, 1.0), "verified": False}], 0.9)
-    assert alpha == 1e-3 and "no point of the trade-off front verified" in why
+    assert alpha == pytest.approx(1 - 0.9**4) and "fewer than two verified points" in why
+    alpha, why = choose_decay([_point(0.5, 1.0)], 1.2)
+    assert alpha == 1e-3 and "a larger time budget traces it" in why
 
 
 def test_the_error_metrics_do_not_grow_when_the_state_decays():

@@ -102,12 +102,14 @@ def synthesize_rate_gain(
     backoff: float = 0.97,
     time_limit: float | None = None,
     budget: Budget | None = None,
+    bisections: int | None = None,
 ) -> GainSynthesis:
     """The gain L with the fastest decay the dissipation LMI certifies (bisection over
     alpha, one feasibility solve each), optionally keeping the l2 gain below ``gamma``;
     the last feasible alpha times ``backoff`` is solved again, so that the certificate has a
     margin; a candidate only, as ``synthesize_gain`` (``time_limit`` for the whole
-    bisection)."""
+    bisection: no solve starts past it; ``bisections``, default ``RATE_BISECTIONS``, the
+    number of halvings of the interval of alpha)."""
     start = time.perf_counter()
     model, refusal = _model(design, budget)
     if refusal:
@@ -119,7 +121,9 @@ def synthesize_rate_gain(
     # one parametrised problem: cvxpy canonicalises it once, each solve only sets alpha
     problem, variables = _dissipation_problem(model, design, 0.5, gamma=gamma)
     low, high, best = 0.0, 1.0, None
-    for _ in range(RATE_BISECTIONS):
+    for _ in range(RATE_BISECTIONS if bisections is None else max(int(bisections), 1)):
+        if time_limit is not None and _since(start) >= time_limit:
+            break
         variables["alpha"].value = 0.5 * (low + high)
         found = _solved(problem, variables, start, left())
         if found.L is None:
@@ -127,6 +131,8 @@ def synthesize_rate_gain(
         else:
             low, best = float(variables["alpha"].value), found
     if best is None:
+        if high == 1.0:
+            return GainSynthesis(None, None, "the time limit ended the bisection", _since(start))
         return GainSynthesis(None, None, f"no decay above {high:.3g} is feasible", _since(start))
     # the last feasible alpha sits at the edge: back off so that the certificate has a margin
     variables["alpha"].value = backoff * low
