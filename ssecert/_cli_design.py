@@ -284,17 +284,22 @@ def _print_design(
         from .synthesize import no_faster
 
         slow = no_faster(result.linear_radius, result.plant_radius)
-        faster = "NO faster than (it barely uses its sensors)" if slow else "faster than"
         out.write(
-            f"  its linear loop: rho(A - L S) = {result.linear_radius:.4g}, {faster} the "
-            f"plant's own rho(A) = {result.plant_radius:.4g}\n"
+            f"  its linear loop: rho(A - L S) = {result.linear_radius:.4g}, "
+            f"{'NO faster' if slow else 'faster'} than the plant's own rho(A) = "
+            f"{result.plant_radius:.4g}{': it barely uses its sensors' if slow else ''}\n"
         )
     if result.choice:
         out.write(f"  chosen: {result.choice}\n")
-    if result.front:
+    verified = sum(1 for p in result.front if p.get("verified"))
+    if verified >= 2:
         out.write(
-            f"  trade-off front: {len(result.front)} certified (decay, gain) points, plotted "
-            "in the report\n"
+            f"  trade-off front: {verified} verified (decay, gain) points, plotted in the report\n"
+        )
+    elif args.objective in ("gain", "rate"):
+        out.write(
+            f"  trade-off front: {verified} verified point{'' if verified == 1 else 's'} within "
+            "its share of the time budget (30%); a larger --time-budget traces it\n"
         )
     for row in comparison["scenarios"]:
         cells = []

@@ -259,9 +259,16 @@ def no_faster(linear_radius: float, plant_radius: float) -> bool:
     >>> no_faster(0.9946, 0.9946), no_faster(0.7636, 0.9946), no_faster(0.5, 1.0)
     (True, False, False)
     """
-    if 0 < plant_radius < 1:
+    if _stable(plant_radius):
         return bool(linear_radius > plant_radius**FASTER)
     return bool(linear_radius >= plant_radius)
+
+
+def _stable(plant_radius: float) -> bool:
+    """rho(A) clearly below 1 (a plant whose spectral radius is 1 to 1e-6, as the thesis's
+    normalised random plants, is not stable in any useful sense: its own decay takes
+    millions of steps)."""
+    return bool(0 < plant_radius < 1 - 1e-6)
 
 
 FRONT_SHARE = 0.3  # of the time budget, at most, for the trade-off front
@@ -372,8 +379,8 @@ def choose_decay(front: list[dict[str, Any]], plant_radius: float) -> tuple[floa
     """
     good = [p for p in front if p.get("verified") and p.get("gamma") is not None]
     if len(good) < 2:
-        if 0 < plant_radius < 1:
-            alpha = 1 - plant_radius**4
+        if _stable(plant_radius):
+            alpha = max(1 - plant_radius**4, DEFAULT_DECAY)
             return alpha, (
                 f"decay {alpha:.3g} per step imposed, error contraction rho(A)^2 = "
                 f"{plant_radius**2:.4g}: clearly faster than the plant's own rho(A) = "
@@ -384,7 +391,7 @@ def choose_decay(front: list[dict[str, Any]], plant_radius: float) -> tuple[floa
             f"decay {DEFAULT_DECAY:g} per step imposed (the trade-off front has fewer than two "
             "verified points: a larger time budget traces it)"
         )
-    if plant_radius < 1:
+    if _stable(plant_radius):
         twice = [p for p in good if p["contraction"] <= plant_radius**2]
         if twice:
             pick = min(twice, key=lambda p: p["gamma"])
@@ -398,9 +405,9 @@ def choose_decay(front: list[dict[str, Any]], plant_radius: float) -> tuple[floa
     if faster:
         pick = _knee(faster)
         why = (
-            f"the plant is not stable (rho(A) = {plant_radius:.4g}): every certified decay is "
+            f"the plant is not stable (rho(A) = {plant_radius:.6g}): every certified decay is "
             "faster than its own"
-            if plant_radius >= 1
+            if not _stable(plant_radius)
             else f"no certified contraction reaches rho(A)^2 = {plant_radius**2:.4g} (the "
             f"fastest: {min(p['contraction'] for p in good):.4g})"
         )

@@ -99,6 +99,11 @@ def test_choose_decay_takes_the_knee_when_nothing_is_twice_as_fast_or_the_plant_
     assert alpha == pytest.approx(1 - 0.9**4) and "fewer than two verified points" in why
     alpha, why = choose_decay([_point(0.5, 1.0)], 1.2)
     assert alpha == 1e-3 and "a larger time budget traces it" in why
+    # a spectral radius of 1 to rounding (the thesis's normalised plants) is not stable
+    alpha, why = choose_decay([_point(0.5, 1.0)], 1 - 1e-15)
+    assert alpha == 1e-3
+    alpha, why = choose_decay(front, 1 - 1e-15)
+    assert alpha == corner and "not stable" in why
 
 
 def test_the_error_metrics_do_not_grow_when_the_state_decays():
