@@ -310,16 +310,20 @@ def conclusion(numbers: dict[str, Any]) -> str:
     )
     rates = [pct(s, "C", "conv") for s in attacked]
     lo, hi = min(rates), max(rates)
+    failed, unconverged = 100 - pct(five, "C", "both"), 100 - pct(five, "C", "conv")
     text.append(
-        f"C converges in {f'{lo:.0f}' if lo == hi else f'{lo:.0f}-{hi:.0f}'}% of the runs"
+        f"C converges in {f'{lo:.0f}' if lo == hi else f'{lo:.0f}-{hi:.0f}'}% of the runs; "
+        f"with {five} attacked it fails in {failed:.0f}% and does not converge in "
+        f"{unconverged:.0f}%, so "
         + (
-            ", so its failures are failures of the l1 relaxation itself "
-            "(tests/test_localization.py checks the fixed point against cvxpy): neighbouring "
-            "cells have almost collinear fingerprints, so a mixture of cells plus small attacks "
-            "on many sensors can cost less than the true one-hot cell plus the real attack. "
-            if lo >= 100
-            else ", so some of its failures may be the solver's rather than the relaxation's. "
+            "its failures are all "
+            if unconverged <= 0
+            else f"at least {max(failed - unconverged, 0):.0f}% of the runs are "
         )
+        + "failures of the l1 relaxation itself, with the solver converged "
+        "(tests/test_localization.py checks the fixed point against cvxpy): neighbouring "
+        "cells have almost collinear fingerprints, so a mixture of cells plus small attacks "
+        "on many sensors can cost less than the true one-hot cell plus the real attack. "
     )
     sign = {int(s): v for s, v in numbers["sign"].items()}
     if sign:

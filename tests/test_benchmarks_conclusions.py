@@ -488,6 +488,12 @@ def test_localization_comparisons_follow_the_rates(load):
     assert "C has the higher rate of both right with 5 attacked (60% against D's 10%" in text
     assert "C has the higher rate of cells found with 5 attacked (60% against k-NN's 45%" in text
     assert "lowering is the harder attack only with 5 attacked" in text
+    assert "fails in 40% and does not converge in 0%, so its failures are all failures" in text
+    unconverged = _localization_numbers()
+    unconverged["table"]["5"]["C"]["conv"] = 90.0
+    assert "so at least 30% of the runs are failures of the l1 relaxation" in _one_line(
+        loc.conclusion(unconverged)
+    )
     flipped = _one_line(
         loc.conclusion(
             _localization_numbers(a_both=70.0, c_both=20.0, d_both=40.0, knn=90.0, sign5=(10, 80))
