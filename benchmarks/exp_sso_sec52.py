@@ -180,7 +180,7 @@ def conclusion(numbers: dict[str, Any]) -> str:
             one["support_jaccard"],
             "tau = n",
             full["support_jaccard"],
-            quantity="final support error (Jaccard)",
+            quantity="final Jaccard support error",
             atol=1e-3,
         )
         + " (the paper's text makes no comparison between the two windows to agree with). ",

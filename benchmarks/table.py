@@ -353,7 +353,7 @@ def experiments_section(experiments: dict[str, Any]) -> str:
         "feeds those functions other numbers and checks that the words change. The text "
         "below is written from the numbers of the last run recorded with `--record` (kept "
         f"in `benchmarks/{EXPERIMENTS_FILE}`); `--quick` runs are smaller (fewer runs, a "
-        "coarser grid) than the documents' experiments.\n",
+        "coarser grid) than the default ones, whose sizes each script's docstring gives.\n",
         "```\n"
         "python benchmarks/exp_sso_sec52.py --quick --record   # run, print, keep for this file\n"
         "python benchmarks/exp_sso_sec52.py                    # the full experiment, printed\n"
@@ -361,13 +361,14 @@ def experiments_section(experiments: dict[str, Any]) -> str:
     ]
     for name, what in EXPERIMENT_SCRIPTS.items():
         entry = experiments.get(name)
+        what = what[:1].upper() + what[1:]
         parts.append(f"### `{name}.py`\n")
         if entry is None:
             parts.append(f"{what}. Not recorded yet (`python benchmarks/{name}.py --record`).\n")
             continue
         module = experiment_module(name)
         m = entry["machine"]
-        mode = "quick run (--quick)" if entry["quick"] else "full run"
+        mode = "Quick run (--quick)" if entry["quick"] else "Full run"
         parts += [
             f"{what}. {mode} on {entry['date'][:10]}, {format_seconds(entry['seconds'])} "
             f"({m['cpus']} CPUs: {m['cpu_model']}; Python {m['python']}, numpy {m['numpy']}): "
