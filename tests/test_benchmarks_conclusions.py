@@ -531,7 +531,8 @@ def test_the_readme_says_what_the_recorded_numbers_make_the_scripts_say(load, mo
     if not experiments:
         pytest.skip("no experiment recorded in benchmarks/experiments.json")
     readme = (BENCHMARKS / "README.md").read_text(encoding="utf-8")
-    assert table.experiments_section(experiments) in readme
+    stale = "benchmarks/README.md is stale: rewrite it with `python benchmarks/table.py --no-run`"
+    assert table.experiments_section(experiments) in readme, stale
     for name, entry in experiments.items():
         module = load(name)
         # a JSON round trip: the conclusion reads only what the record keeps
