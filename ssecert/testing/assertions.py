@@ -727,8 +727,9 @@ def assert_recovers(
     result = simulate_scenario(
         observer, table, runs=runs, steps=steps, seed=seed, max_attacked=design.max_attacked
     )
-    rel = np.asarray(result.relative_error[-1], dtype=float)
-    error = np.asarray(result.absolute_error[-1], dtype=float)
+    assert result.absolute_error is not None  # simulate_scenario always fills it
+    rel: np.ndarray = np.asarray(result.relative_error[-1], dtype=np.float64)
+    error: np.ndarray = np.asarray(result.absolute_error[-1], dtype=np.float64)
     with np.errstate(divide="ignore", invalid="ignore"):
         state = np.where(error > 0, error / rel, 0.0)  # max(||x||, 1e-9 ||x0||)
         allowed = atol + tol * state
