@@ -3,8 +3,13 @@
 from __future__ import annotations
 
 import math
+import re
 
-__all__ = ["sig", "distance", "one_minus"]
+__all__ = ["sig", "distance", "one_minus", "readable", "factor_above"]
+
+# below this magnitude a number is shown with two significant digits: its digits are rounding
+# noise, or it is read as "tiny" only
+TINY = 1e-4
 
 
 def sig(x: float, digits: int = 4, versus: float = 1.0) -> str:
@@ -74,3 +79,75 @@ def one_minus(gap: float) -> str:
     if math.isfinite(gap) and 0 < gap < 1e-3:
         return f"1 - {gap:.3g}"
     return sig(1.0 - gap, 6)
+
+
+def _exponent(text: str) -> str:
+    """Python's exponent written as people write it: 1e+156 -> 1e156, 2.8e-05 -> 2.8e-5."""
+    return re.sub(r"e([+-])0*(\d)", lambda m: "e" + ("-" if m[1] == "-" else "") + m[2], text)
+
+
+def readable(x: float, digits: int = 4, *, versus: float | None = None) -> str:
+    """``x`` as a report shows it: ``digits`` significant digits, never "-0", tiny numbers short.
+
+    The exact value stays in the JSON; this is what a reader sees beside it.
+
+    - 0 and -0 read "0"; a magnitude below 1e-4 gets two significant digits
+      (2.77556e-17 reads "2.8e-17": next to quantities of order 1 its digits are noise);
+    - exponents are written without "+" and leading zeros (1e156, 3.3e-16);
+    - with ``versus`` (the number ``x`` is compared with), a number that would round onto or
+      across it is written as its distance from it: a spectral radius 0.9999999999999997 with
+      ``versus=1`` reads "1 - 3.3e-16", and never "1".
+
+    Parameters
+    ----------
+    x : float
+    digits : int, default 4
+        Significant digits of numbers of magnitude 1e-4 and above.
+    versus : float, optional
+        The threshold whose side ``x`` lies on is the finding.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> readable(0.786123), readable(-0.0), readable(2.77556e-17), readable(4.895e120)
+    ('0.7861', '0', '2.8e-17', '4.895e120')
+    >>> readable(0.9999999999999997), readable(0.9999999999999997, versus=1.0)
+    ('1', '1 - 3.3e-16')
+    >>> readable(1.00000002, versus=1.0), readable(2.0000001, versus=2.0)
+    ('1 + 2e-8', '2 + 1e-7')
+    """
+    x = float(x)
+    if math.isnan(x):
+        return "nan"
+    if math.isinf(x):
+        return "inf" if x > 0 else "-inf"
+    if x == 0:
+        return "0"
+    if abs(x) < TINY:
+        text = f"{x:.2g}"
+    else:
+        text = f"{x:.{digits}g}"
+    if versus is not None and x != versus:
+        shown = float(text)
+        if shown == versus or (shown > versus) != (x > versus):
+            gap = abs(x - versus)
+            sign = "+" if x > versus else "-"
+            return f"{readable(versus, digits)} {sign} {_exponent(f'{gap:.2g}')}"
+    return _exponent(text)
+
+
+def factor_above(ratio: float) -> str:
+    """How many times a bound is exceeded, in words: a large factor by its power of ten.
+
+    Examples
+    --------
+    >>> factor_above(2.268 / 0.7313), factor_above(6.645e305)
+    ('3.101', 'above 1e305')
+    """
+    ratio = float(ratio)
+    if math.isfinite(ratio) and ratio >= 1e4:
+        return f"above 1e{math.floor(math.log10(ratio))}"
+    return readable(ratio)
