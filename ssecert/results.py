@@ -14,7 +14,28 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["Verdict", "Check", "Certificate", "to_jsonable", "combine_verdicts"]
+__all__ = [
+    "Verdict",
+    "Check",
+    "Certificate",
+    "to_jsonable",
+    "combine_verdicts",
+    "QUANTITY_NAMES",
+]
+
+#: What each check's ``value`` and ``margin`` are, by check id, when the check does not say
+#: otherwise (a deadbeat gain's value is its nilpotency index, not a spectral radius: the code
+#: that computes such a value names it).  The margin is always compared with 0.
+QUANTITY_NAMES: Mapping[str, tuple[str, str]] = {
+    "observability": ("observability index", "min PBH singular value"),
+    "sparse_observability": ("max_removable", "min PBH singular value"),
+    "irrepresentable": ("irrepresentable constant", "1 - constant"),
+    "observer_gain": ("spectral radius of A - L C", "Lyapunov margin"),
+    "observer_stability": ("decay rate alpha", "LMI margin"),
+    "iss_gain": ("l2 gain gamma", "LMI margin"),
+    "thesis_assumptions": ("assumptions not met", ""),
+    "region_of_attraction": ("radius ||e(0)||", "certificate margin"),
+}
 
 
 class Verdict(str, enum.Enum):
@@ -122,6 +143,15 @@ class Check:
         Counterexample when the check fails.
     tolerances : mapping
         Tolerances used.
+    value_name, margin_name : str
+        What ``value`` and ``margin`` are ("spectral radius of A - L C",
+        "LMI margin"); by default those of ``QUANTITY_NAMES`` for the id.
+    applies : bool, default True
+        False for an advisory check whose failure means only that a
+        sufficient condition it tests is not met: the result it would support
+        does not apply to this design, and no verdict of the certificate
+        relies on it.  Reports show "does not apply" instead of fails;
+        ``verdict`` keeps the answer to the check's own question.
     """
 
     id: str
@@ -136,9 +166,20 @@ class Check:
     evidence: Mapping[str, Any] = field(default_factory=dict)
     witness: Mapping[str, Any] | None = None
     tolerances: Mapping[str, Any] = field(default_factory=dict)
+    value_name: str = ""
+    margin_name: str = ""
+    applies: bool = True
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "verdict", Verdict(self.verdict))
+        value_name, margin_name = QUANTITY_NAMES.get(self.id, ("", ""))
+        object.__setattr__(self, "value_name", self.value_name or value_name)
+        object.__setattr__(self, "margin_name", self.margin_name or margin_name)
+        if not self.applies and (self.required or self.verdict is not Verdict.FAILS):
+            raise ValueError(
+                f"check {self.id!r}: applies=False is for an advisory check that fails, got "
+                f"required={self.required}, verdict {self.verdict.value}"
+            )
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary with the check-specific fields at top level."""
@@ -147,8 +188,11 @@ class Check:
             "title": self.title,
             "summary": self.summary,
             "required": self.required,
+            "applies": self.applies,
             "value": self.value,
+            "value_name": self.value_name,
             "margin": self.margin,
+            "margin_name": self.margin_name,
             "method": self.method,
         }
         out.update(self.fields)

@@ -229,6 +229,7 @@ def _witnessed_failure(
         value=None,
         margin=margin,
         method=method,
+        margin_name="|mu| - 1 of the large-signal eigenvalue" if margin is not None else "",
         fields={
             "decay_rate": None,
             "structure": cert.structure,
@@ -296,6 +297,10 @@ def _linear_stability_check(lyap: LyapunovCertificate, tol: Tolerances, title: s
         value=lyap.contraction,
         margin=lyap.margin,
         method="discrete Lyapunov" if lyap.method == "lyapunov" else "exact powers of A - L C",
+        value_name="contraction per step (P-norm)"
+        if lyap.method == "lyapunov"
+        else "spectral radius bound of A - L C",
+        margin_name="Lyapunov margin" if lyap.method == "lyapunov" else "1 - spectral radius bound",
         fields={"decay_rate": None if lyap.contraction is None else 1 - lyap.contraction},
         evidence=_lyapunov_evidence(lyap),
         witness=lyap.witness if verdict is Verdict.FAILS else None,

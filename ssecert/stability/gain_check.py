@@ -127,6 +127,9 @@ def observer_gain_check(design: ObserverDesign, *, tolerances: Tolerances | None
         method="discrete Lyapunov (dlyap)"
         if cert.method == "lyapunov"
         else "exact powers of A - L C",
+        # exact powers bound the spectral radius; their margin is that bound's distance from 1
+        value_name="" if cert.method == "lyapunov" else "spectral radius bound of A - L C",
+        margin_name="" if cert.method == "lyapunov" else "1 - spectral radius bound",
         fields=fields,
         evidence=evidence,
         witness=cert.witness if verdict is Verdict.FAILS else None,
@@ -202,6 +205,8 @@ def _deadbeat_check(
         id="observer_gain",
         title=title,
         method="deadbeat (exact powers of the printed A - L C)",
+        value_name="nilpotency index",
+        margin_name="1 - spectral radius bound",
         fields=fields,
         evidence=evidence,
         tolerances=_deadbeat_tolerances(details),
