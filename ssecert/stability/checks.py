@@ -636,23 +636,39 @@ def thesis_assumptions_check(
     seed: int = 0,
     budget: Budget | None = None,
 ) -> Check:
-    """The thesis's Assumptions 1-3, Lemma 1 and epsilon bound (5.20), advisory."""
+    """The thesis's Assumptions 1-3, Lemma 1 and epsilon bound (5.20), advisory.
+
+    They are sufficient conditions of the thesis's stability theorem: when one
+    fails, the check fails (the answer to its question) and does not apply
+    (``applies=False``): the theorem says nothing about this design, and no
+    verdict of the certificate relies on it.
+    """
     holds = None if observability is None else observability.verdict is Verdict.HOLDS
     verdict, items = thesis_assumptions(design, observability_holds=holds, seed=seed, budget=budget)
-    failing = [i.name for i in items if i.verdict == Verdict.FAILS]
+    by_name = {i.name: i for i in items}
+    failing = [i for i in items if i.verdict is Verdict.FAILS]
     if verdict == Verdict.HOLDS:
         summary = "Every assumption of the thesis's stability proof holds on this design."
     elif verdict == Verdict.FAILS:
-        summary = (
-            "The thesis's stability proof does not apply to this design: "
-            + "; ".join(f"{i.name}: {i.reason}" for i in items if i.verdict == Verdict.FAILS)[:600]
+        findings = "; ".join(i.finding or f"{i.name}: {i.reason}" for i in failing)
+        corrected = [i.name for i in failing] == ["lemma_1"] and all(
+            by_name[name].verdict is Verdict.HOLDS for name in ("assumption_3", "epsilon_bound")
         )
+        if corrected:
+            summary = (
+                f"{findings}. With that bound Assumption 3 and the epsilon bound (5.20) hold: "
+                f"the thesis's stability theorem does not apply as printed, but its argument "
+                f"with the corrected constant does."
+            )
+        else:
+            summary = (
+                f"{findings}. The thesis's stability theorem therefore does not apply to this "
+                f"design."
+            )
+        summary += " Advisory: no verdict of this certificate relies on it."
     else:
-        summary = (
-            "Not all assumptions could be decided: "
-            + "; ".join(
-                f"{i.name}: {i.reason}" for i in items if i.verdict == Verdict.INCONCLUSIVE
-            )[:600]
+        summary = "Not all assumptions could be decided: " + "; ".join(
+            f"{i.name}: {i.reason}" for i in items if i.verdict == Verdict.INCONCLUSIVE
         )
     return Check(
         id="thesis_assumptions",
@@ -660,6 +676,7 @@ def thesis_assumptions_check(
         verdict=Verdict(verdict),
         summary=summary,
         required=False,
+        applies=verdict != Verdict.FAILS,
         value=len(failing),
         method="proof or counterexample search",
         fields={"items": {i.name: i.verdict for i in items}},

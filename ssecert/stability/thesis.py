@@ -35,7 +35,7 @@ import numpy as np
 
 from .._exact import dyadic, exact_kernel_vector
 from .._exact_powers import ExactMatrix
-from .._format import sig
+from .._format import factor_above, readable, sig
 from ..budget import Budget
 from ..observers import ObserverDesign
 from ..results import Verdict, combine_verdicts
@@ -66,18 +66,27 @@ __all__ = ["AssumptionResult", "thesis_assumptions", "pi_map"]
 
 @dataclass(frozen=True)
 class AssumptionResult:
-    """One item of the thesis's chain of assumptions."""
+    """One item of the thesis's chain of assumptions.
+
+    ``finding`` says in one clause what a failing item means for the thesis's
+    theorem (which of its sufficient conditions the design does not meet, or
+    which printed statement is wrong); ``reason`` gives the numbers.
+    """
 
     name: str
     verdict: Verdict  # or its name
     reason: str
     details: dict[str, Any] = field(default_factory=dict)
+    finding: str = ""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "verdict", Verdict(self.verdict))  # a name is accepted too
 
     def to_dict(self) -> dict[str, Any]:
-        return {"verdict": self.verdict, "reason": self.reason, **self.details}
+        out: dict[str, Any] = {"verdict": self.verdict, "reason": self.reason}
+        if self.finding:
+            out["finding"] = self.finding
+        return {**out, **self.details}
 
 
 def _psi(s: np.ndarray, q: float, lam: float) -> np.ndarray:
@@ -186,6 +195,7 @@ def _assumption_1(observability_holds: bool | None) -> AssumptionResult:
         "(A, C) is observable (see the observability check)"
         if observability_holds
         else "(A, C) is not observable (see the observability check)",
+        finding="" if observability_holds else "Assumption 1, observability of (A, C), is not met",
     )
 
 
@@ -246,7 +256,7 @@ def _lemma_1(inst: _Instance, rng: np.random.Generator) -> _Lemma1:
         item = AssumptionResult(
             "lemma_1",
             Verdict.INCONCLUSIVE,
-            f"F = A + L1 C has smallest singular value {s_F[-1]:.2e}, not small against its own "
+            f"F = A + L1 C has smallest singular value {readable(s_F[-1])}, not small against its own "
             f"scale but at the bottom of the floating-point range: its inverse (the series of "
             f"Pi) cannot be formed in floating point, so Lemma 1 is not checked.",
             {"smallest_singular_value_F": float(s_F[-1]), "claimed_lipschitz": claimed},
@@ -272,14 +282,15 @@ def _singular_F(inst: _Instance, smallest: float, claimed: float) -> AssumptionR
             f"F^(-l-1) L1 Psi_q^l(a) does not exist and the change of variable "
             f"eta = e - Pi(a_hat) of the proof is unavailable (the printed gain is the rounding "
             f"of a deadbeat gain: its F is singular to rounding, smallest singular value "
-            f"{smallest:.2e}).",
+            f"{readable(smallest)}).",
             details,
+            finding=_singular_f(" (a deadbeat gain makes it nilpotent)"),
         )
     if exact is None or exact_kernel_vector(exact) is None:
         return AssumptionResult(
             "lemma_1",
             Verdict.INCONCLUSIVE,
-            f"F = A + L1 C is singular to rounding (smallest singular value {smallest:.2e}) "
+            f"F = A + L1 C is singular to rounding (smallest singular value {readable(smallest)}) "
             f"but not shown singular in exact arithmetic, so whether Pi exists (and its "
             f"Lipschitz constant) cannot be decided in floating point.",
             details,
@@ -288,10 +299,19 @@ def _singular_F(inst: _Instance, smallest: float, claimed: float) -> AssumptionR
         "lemma_1",
         Verdict.FAILS,
         f"F = A + L1 C is singular (an exact kernel vector of F formed from the spec's data; "
-        f"smallest computed singular value {smallest:.2e}; every nilpotent F, as a deadbeat "
+        f"smallest computed singular value {readable(smallest)}; every nilpotent F, as a deadbeat "
         f"gain makes it, is singular), so Pi(a) = -sum F^(-l-1) L1 Psi_q^l(a) does not exist "
         f"and the change of variable eta = e - Pi(a_hat) of the proof is unavailable.",
         details,
+        finding=_singular_f(),
+    )
+
+
+def _singular_f(why: str = "") -> str:
+    """What a singular F means for the thesis's proof, in one clause."""
+    return (
+        f"Lemma 1 needs F = A + L1 C (= A - L C) invertible, and this gain makes it "
+        f"singular{why}, so the map Pi its proof rests on does not exist"
     )
 
 
@@ -324,13 +344,22 @@ def _lemma_1_on_pi(
     }
     if ratio is not None and ratio > claimed * (1 + 1e-9):
         # the claimed constant is wrong, but Pi exists and the corrected bound is valid
+        factor = factor_above(ratio / claimed) if claimed > 0 else "without bound"
+        corrected = (
+            f"; the bound its proof supports, ||L1|| ||F^-1|| / (1 - q ||F^-1||), is "
+            f"{readable(correct)}"
+            if np.isfinite(correct)
+            else "; the bound its proof supports is infinite here (q ||F^-1|| >= 1)"
+        )
         item = AssumptionResult(
             "lemma_1",
             Verdict.FAILS,
-            f"the claimed Lipschitz constant ||L1|| / |lambda_max(F) - q| = {claimed:.4g} is "
-            f"exceeded: |Pi(a1) - Pi(a2)| / |a1 - a2| = {ratio:.4g} for the pair in the "
-            f"counterexample",
+            f"the claimed Lipschitz constant ||L1|| / |lambda_max(F) - q| = {readable(claimed)} "
+            f"is exceeded by a factor {factor}: |Pi(a1) - Pi(a2)| / |a1 - a2| = "
+            f"{readable(ratio)} for the pair in the counterexample",
             {**details, "counterexample": {"a1": a1, "a2": a2}},
+            finding=f"Lemma 1's printed Lipschitz constant of Pi, {readable(claimed)}, is "
+            f"exceeded by a factor {factor} on this design{corrected}",
         )
         finite = bool(np.isfinite(correct))
         return _Lemma1(item, finite, correct if finite else None, series)
@@ -338,21 +367,21 @@ def _lemma_1_on_pi(
         item = AssumptionResult(
             "lemma_1",
             Verdict.HOLDS,
-            f"Pi exists (the series is finite) and is Lipschitz with constant <= {correct:.4g} "
-            f"(= ||L1|| ||F^-1|| / (1 - q ||F^-1||)) <= the claimed {claimed:.4g}",
+            f"Pi exists (the series is finite) and is Lipschitz with constant <= {readable(correct)} "
+            f"(= ||L1|| ||F^-1|| / (1 - q ||F^-1||)) <= the claimed {readable(claimed)}",
             details,
         )
         return _Lemma1(item, True, correct, series)
     found = (
-        f"sampling found ratios up to {ratio:.4g}"
+        f"sampling found ratios up to {readable(ratio)}"
         if ratio is not None
         else f"no ratio could be sampled: {search['reason']}"
     )
     item = AssumptionResult(
         "lemma_1",
         Verdict.INCONCLUSIVE,
-        f"Pi exists, but the claimed constant {claimed:.4g} is not proven: the series "
-        f"gives {correct:.4g}; {found}",
+        f"Pi exists, but the claimed constant {readable(claimed)} is not proven: the series "
+        f"gives {readable(correct)}; {found}",
         details,
     )
     return _Lemma1(item, True, correct if np.isfinite(correct) else None, series)
@@ -414,19 +443,25 @@ def _assumption_3(
         bound = _attack_contraction_bound(inst, lemma.lipschitz)
         details["proven_bound_sqrt_rho"] = bound
     if worst_value is not None and worst_value >= 1.0:
+        times = (
+            f"exceeds a_hat' Q a_hat by a factor {factor_above(worst_value)}"
+            if worst_value >= 1e4
+            else f"is {readable(worst_value, versus=1.0)} times a_hat' Q a_hat"
+        )
         return AssumptionResult(
             "assumption_3",
             Verdict.FAILS,
-            f"for the a_hat in the counterexample the left side is {worst_value:.4g} times "
-            f"a_hat' Q a_hat, so no rho'' < 1 works",
+            f"for the a_hat in the counterexample the left side {times}, so no rho'' < 1 works",
             {**details, "counterexample": worst_point},
+            finding="Assumption 3 (the attack estimate's map contracts, with a rho'' < 1) is "
+            f"not met: for the a_hat in the evidence its left side {times}",
         ), None
     if bound is not None and bound < 1.0:
         rho_a = bound**2
         return AssumptionResult(
             "assumption_3",
             Verdict.HOLDS,
-            f"proven with rho'' = {rho_a:.4g} < 1 from |Psi_q(v)| <= q |v| and the Lipschitz "
+            f"proven with rho'' = {readable(rho_a, versus=1.0)} < 1 from |Psi_q(v)| <= q |v| and the Lipschitz "
             f"bound of Pi",
             details,
         ), rho_a
@@ -441,7 +476,7 @@ def _assumption_3(
     return AssumptionResult(
         "assumption_3",
         Verdict.INCONCLUSIVE,
-        f"no counterexample found (largest ratio found {worst_value:.4g}) but no proof either",
+        f"no counterexample found (largest ratio found {readable(worst_value)}) but no proof either",
         details,
     ), None
 
