@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import math
 import textwrap
 from typing import Any
 
 import numpy as np
 
-from .._format import sig
 from ..results import Certificate, Check, Verdict
+from .cells import margin_text, named, number, value_text, verdict_label
 
 __all__ = ["render_table"]
 
@@ -17,15 +16,12 @@ _MARK = {Verdict.HOLDS: "holds", Verdict.FAILS: "FAILS", Verdict.INCONCLUSIVE: "
 
 
 def _fmt(value: Any) -> str:
-    if value is None:
-        return "-"
-    if isinstance(value, float):
-        if math.isnan(value):
-            return "-"
-        if math.isinf(value):
-            return "inf" if value > 0 else "-inf"
-        return sig(value)
-    return str(value)
+    return number(value)
+
+
+def _mark(check: Check) -> str:
+    """The verdict column: FAILS in capitals, "does not apply" for a check that does not."""
+    return _MARK[check.verdict] if check.applies else verdict_label(check)
 
 
 def _sensor_list(check: Check, names: tuple[str, ...], key: str) -> str:
@@ -91,12 +87,21 @@ def _header(certificate: Certificate) -> list[str]:
 
 
 def _check_rows(certificate: Certificate) -> list[str]:
-    """The aligned table of checks (advisory ones starred), its legend and a blank line."""
+    """The aligned table of checks (advisory ones starred), its legend and a blank line.
+
+    The value and margin cells name their quantity ("max_removable = 2").
+    """
     rows = [("check", "verdict", "value", "margin", "method")]
     for check in certificate.checks:
         name = check.id + ("" if check.required else " *")
         rows.append(
-            (name, _MARK[check.verdict], _fmt(check.value), _fmt(check.margin), check.method)
+            (
+                name,
+                _mark(check),
+                named(check.value_name, value_text(check)),
+                named(check.margin_name, margin_text(check)),
+                check.method,
+            )
         )
     widths = [max(len(r[i]) for r in rows) for i in range(5)]
     lines = []
@@ -111,7 +116,7 @@ def _check_rows(certificate: Certificate) -> list[str]:
 
 def _finding(check: Check, sensors: tuple[str, ...], width: int) -> list[str]:
     """A check's verdict, its wrapped summary and the details its kind adds."""
-    lines = [f"{check.id}: {_MARK[check.verdict]}"]
+    lines = [f"{check.id}: {_mark(check)}"]
     lines.append(
         textwrap.fill(check.summary, width=width - 2, initial_indent="  ", subsequent_indent="  ")
     )
@@ -125,8 +130,8 @@ def _finding(check: Check, sensors: tuple[str, ...], width: int) -> list[str]:
         lines.append(line)
     if check.id == "iss_gain" and check.fields.get("gamma") is not None:
         alpha = check.fields.get("alpha")
-        decay = "" if alpha is None else f", alpha = {alpha:.3g}"
-        lines.append(f"  gamma = {check.fields['gamma']:.4g}{decay}")
+        decay = "" if alpha is None else f", alpha = {number(alpha)}"
+        lines.append(f"  gamma = {number(check.fields['gamma'])}{decay}")
     if check.id == "thesis_assumptions":
         items = check.fields.get("items", {})
         lines.append("  " + ", ".join(f"{k}: {v}" for k, v in items.items()))
