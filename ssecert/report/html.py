@@ -12,9 +12,9 @@ from typing import Any
 import numpy as np
 from markupsafe import Markup, escape
 
-from .._format import sig
 from .._io import atomic_write_text
 from ..results import Certificate, Check, Verdict, to_jsonable
+from .cells import margin_text, number, value_text, verdict_class, verdict_label
 
 __all__ = [
     "render_report",
@@ -37,6 +37,14 @@ CSS = """
  font-size:.8rem;font-weight:600;color:#fff;vertical-align:middle}
 .ssecert-report .badge.holds{background:#1b7f3b}.ssecert-report .badge.fails{background:#b3261e}
 .ssecert-report .badge.inconclusive{background:#a36b00}
+.ssecert-report .badge.not-applicable{background:#6e6e76}
+.ssecert-report .badge{white-space:nowrap}
+.ssecert-report .qname{display:block;color:#555;font-size:.75rem}
+.ssecert-report .qnum{white-space:nowrap;font-variant-numeric:tabular-nums}
+.ssecert-report td.quantity{min-width:6rem;max-width:11rem}
+.ssecert-report table.matrix th{font-family:ui-monospace,monospace;font-size:.75rem;
+ font-weight:normal;color:#555}
+.ssecert-report .params th{font-family:ui-monospace,monospace;font-weight:normal}
 .ssecert-report table{border-collapse:collapse;margin:.5rem 0;font-size:.9rem}
 .ssecert-report th,.ssecert-report td{border:1px solid #e1e1e4;padding:.25rem .5rem;
  text-align:left;vertical-align:top}
@@ -54,6 +62,9 @@ CSS = """
 
 MAX_ROWS = 14
 MAX_COLS = 14
+# the plant's and the observer's matrices: larger ones are shown truncated, with their shape
+DESIGN_ROWS = 12
+DESIGN_COLS = 12
 
 
 def _template(name: str) -> Any:
@@ -68,33 +79,36 @@ def _template(name: str) -> Any:
     return env.from_string(text)
 
 
-def _fmt(value: Any) -> str:
-    if value is None:
-        return "-"
-    if isinstance(value, str):
-        return value
-    if isinstance(value, bool):
-        return str(value)
-    if isinstance(value, (int, np.integer)):
-        return str(int(value))
-    if isinstance(value, (float, np.floating)):
-        v = float(value)
-        if math.isnan(v):
-            return "-"
-        if math.isinf(v):
-            return "inf" if v > 0 else "-inf"
-        return sig(v, 6)
-    if isinstance(value, (complex, np.complexfloating)):
-        return f"{value.real:.6g}{value.imag:+.6g}j"
-    if isinstance(value, Mapping) and set(value) == {"re", "im"}:
-        return _fmt(complex(value["re"], value["im"]))
-    return str(value)
+def _fmt(value: Any, digits: int = 6) -> str:
+    """A scalar of the evidence: six significant digits (the JSON has every digit)."""
+    return number(value, digits)
+
+
+def _exact_title(value: Any, shown: str) -> str:
+    """A title attribute with the float's every digit, when the text shown rounds it."""
+    if isinstance(value, (float, np.floating)) and math.isfinite(float(value)):
+        try:
+            if float(shown) == float(value):
+                return ""
+        except ValueError:  # "1 - 3.3e-16"
+            pass
+        return f' title="{escape(repr(float(value)))}"'
+    return ""
+
+
+def _scalar(value: Any, digits: int = 6) -> str:
+    """HTML of a scalar: rounded, with the exact value on hover."""
+    shown = _fmt(value, digits)
+    title = _exact_title(value, shown)
+    return f"<span{title}>{escape(shown)}</span>" if title else str(escape(shown))
 
 
 def _render(value: Any, depth: int = 0) -> str:
     """HTML for an evidence value: scalars inline, arrays as tables, mappings nested."""
     if isinstance(value, Mapping) and set(value) == {"re", "im"}:
         return escape(_fmt(value))
+    if isinstance(value, (float, np.floating)):
+        return _scalar(value)
     if isinstance(value, Mapping):
         if not value:
             return "-"
@@ -135,14 +149,20 @@ def _render(value: Any, depth: int = 0) -> str:
     return escape(_fmt(value))
 
 
+def _cell(value: Any, digits: int = 6) -> str:
+    """A matrix entry: rounded, with the exact value on hover."""
+    if isinstance(value, np.generic):
+        value = value.item()
+    shown = _fmt(value, digits)
+    return f"<td{_exact_title(value, shown)}>{escape(shown)}</td>"
+
+
 def _matrix(arr: np.ndarray) -> str:
     if arr.ndim == 1:
         arr = arr[None, :]
     r, c = arr.shape
     shown = arr[:MAX_ROWS, :MAX_COLS]
-    rows = "".join(
-        "<tr>" + "".join(f"<td>{escape(_fmt(v))}</td>" for v in row) + "</tr>" for row in shown
-    )
+    rows = "".join("<tr>" + "".join(_cell(v) for v in row) + "</tr>" for row in shown)
     note = ""
     if r > MAX_ROWS or c > MAX_COLS:
         note = f"<p>{r} x {c}; the first {min(r, MAX_ROWS)} x {min(c, MAX_COLS)} shown, all in the JSON</p>"
@@ -166,13 +186,20 @@ def _check_context(check: Check) -> dict[str, Any]:
         "tolerances",
         "witness",
     }
+    skip |= {"applies", "value_name", "margin_name"}
     fields = [(k, Markup(_render(v))) for k, v in data.items() if k not in skip]
     return {
         "id": check.id,
         "title": check.title,
         "verdict": check.verdict.value,
-        "value": _fmt(check.value),
-        "margin": _fmt(check.margin),
+        "label": verdict_label(check),
+        "css": verdict_class(check),
+        "value": value_text(check),
+        "value_name": check.value_name,
+        "margin": margin_text(check),
+        "margin_name": check.margin_name,
+        "value_exact": _exact_title(check.value, value_text(check)),
+        "margin_exact": _exact_title(check.margin, margin_text(check)),
         "required": check.required,
         "method": check.method,
         "summary": check.summary,
@@ -200,6 +227,7 @@ def _context(result: Any, *, fragment: bool) -> dict[str, Any]:
         "exit_code": cert.exit_code,
         "headline": _headline(cert),
         "identity": _identity(result, meta),
+        "design": _design_context(spec, cert),
         "checks": [_check_context(c) for c in cert.checks],
         "notes": list(result.notes) + list(meta.get("notes", [])),
         "command": result.command,
@@ -216,6 +244,106 @@ def _context(result: Any, *, fragment: bool) -> dict[str, Any]:
     if comparison is not None:
         ctx["comparison"] = _comparison_context(comparison)
     return ctx
+
+
+def _labelled_matrix(
+    arr: np.ndarray, rows: list[str], cols: list[str], name: str, where: str
+) -> Markup:
+    """A matrix with its rows and columns named; beyond DESIGN_ROWS x DESIGN_COLS the corner
+    is shown, with the shape and where the whole matrix is."""
+    arr = np.atleast_2d(np.asarray(arr))
+    r, c = arr.shape
+    shown = arr[:DESIGN_ROWS, :DESIGN_COLS]
+    head = "<tr><th></th>" + "".join(f"<th>{escape(x)}</th>" for x in cols[:DESIGN_COLS])
+    head += "<th>...</th></tr>" if c > DESIGN_COLS else "</tr>"
+    body = "".join(
+        f"<tr><th>{escape(rows[i])}</th>"
+        + "".join(_cell(v, 4) for v in row)
+        + ("<td>...</td>" if c > DESIGN_COLS else "")
+        + "</tr>"
+        for i, row in enumerate(shown)
+    )
+    if r > DESIGN_ROWS:
+        body += "<tr><th>...</th></tr>"
+    digits = "to 4 significant digits (hover an entry for all of its digits)"
+    if r > DESIGN_ROWS or c > DESIGN_COLS:
+        note = (
+            f"{name} is {r} x {c}: its first {min(r, DESIGN_ROWS)} x {min(c, DESIGN_COLS)} "
+            f"entries are shown {digits}; every entry is in the JSON certificate, {where}."
+        )
+    else:
+        note = f"{name} is {r} x {c}, shown {digits}; the JSON certificate has it as {where}."
+    return Markup(
+        f"<table class='matrix labelled' id='matrix-{escape(name)}'>{head}{body}</table>"
+        f"<p class='shape'>{escape(note)}</p>"
+    )
+
+
+def _gain_columns(system: Any, columns: int) -> list[str]:
+    """Column names of a gain: the sensors, or for a stacked window (SSO) each sensor at each
+    block C A^j of O_tau."""
+    p = system.p
+    if columns == p:
+        return list(system.sensors)
+    if columns % p == 0:
+        return [f"{name} [C A^{j}]" for j in range(columns // p) for name in system.sensors]
+    return [str(j + 1) for j in range(columns)]
+
+
+def _design_context(spec: Any, cert: Certificate) -> dict[str, Any]:
+    """The plant (A, C with the sensors' names), the attack budget and the observer (its kind,
+    parameters and the gain L it was built with)."""
+    system = spec.system
+    states = [f"x{i + 1}" for i in range(system.n)]
+    out: dict[str, Any] = {
+        "A": _labelled_matrix(system.A, states, states, "A", "spec.system.A"),
+        "C": _labelled_matrix(system.C, list(system.sensors), states, "C", "spec.system.C"),
+        "n": system.n,
+        "p": system.p,
+        "s": spec.max_attacked,
+        "horizon": spec.horizon,
+        "observer": None,
+    }
+    observer = spec.observer
+    if not observer:
+        return out
+    params: list[tuple[str, Markup]] = []
+    for key, value in observer.items():
+        if key == "kind":
+            continue
+        if key == "gain" and not isinstance(value, str):
+            params.append((key, Markup("a matrix given in the spec (below)")))
+        elif isinstance(value, np.ndarray) and value.ndim == 2:
+            rows = [str(i + 1) for i in range(value.shape[0])]
+            cols = [str(j + 1) for j in range(value.shape[1])]
+            params.append((key, _labelled_matrix(value, rows, cols, key, f"spec.observer.{key}")))
+        elif isinstance(value, (list, tuple, np.ndarray)):
+            params.append((key, Markup(escape(", ".join(number(v) for v in value)))))
+        else:
+            params.append(
+                (
+                    key,
+                    Markup(
+                        _scalar(value, 6) if isinstance(value, float) else escape(number(value))
+                    ),
+                )
+            )
+    gain_check = cert.get("observer_gain")
+    L = None if gain_check is None else gain_check.fields.get("L")
+    gain: Markup | str
+    if L is not None:
+        L = np.atleast_2d(np.asarray(L, dtype=float))
+        cols = _gain_columns(system, L.shape[1])
+        gain = _labelled_matrix(L, states, cols, "L", "checks.observer_gain.L")
+    else:
+        gain = "not computed: " + gain_check.summary if gain_check is not None else "not computed"
+    out["observer"] = {
+        "kind": observer.get("kind"),
+        "gain_method": observer.get("gain") if isinstance(observer.get("gain"), str) else None,
+        "params": params,
+        "L": gain,
+    }
+    return out
 
 
 def _comparison_context(comparison: Mapping[str, Any]) -> dict[str, Any]:
@@ -460,22 +588,32 @@ def write_report(result: Any, path: str | Path) -> Path:
 def check_fragment(check: Check) -> str:
     """A small HTML card for one check (Jupyter)."""
     c = _check_context(check)
+    value = _named_html(c["value_name"], c["value"])
+    margin = _named_html(c["margin_name"], c["margin"])
     return (
         f"<div class='ssecert-report'><style>{CSS}</style><h3>{escape(c['title'])} "
-        f"<span class='badge {c['verdict']}'>{c['verdict']}</span></h3>"
+        f"<span class='badge {c['css']}'>{escape(c['label'])}</span></h3>"
         f"<p>{escape(c['summary'])}</p><table class='kv'><tr><th>value</th>"
-        f"<td>{escape(c['value'])}</td></tr><tr><th>margin</th><td>{escape(c['margin'])}"
-        f"</td></tr><tr><th>method</th><td>{escape(c['method'])}</td></tr></table>"
+        f"<td>{value}</td></tr><tr><th>margin</th><td>{margin}</td></tr>"
+        f"<tr><th>method</th><td>{escape(c['method'])}</td></tr></table>"
         f"<details><summary>evidence</summary>{c['evidence']}</details></div>"
     )
+
+
+def _named_html(name: str, text: str) -> str:
+    """``name = number`` with the name in small print ("-" when there is no number)."""
+    if not name or text == "-":
+        return str(escape(text))
+    return f"<span class='qname'>{escape(name)}</span> <span class='qnum'>{escape(text)}</span>"
 
 
 def certificate_fragment(cert: Certificate) -> str:
     """The summary table of a Certificate as an HTML fragment (Jupyter)."""
     rows = "".join(
-        f"<tr><td>{escape(c.id)}</td><td><span class='badge {c.verdict.value}'>"
-        f"{c.verdict.value}</span></td><td>{escape(_fmt(c.value))}</td>"
-        f"<td>{escape(_fmt(c.margin))}</td><td>{escape(c.summary)}</td></tr>"
+        f"<tr><td>{escape(c.id)}</td><td><span class='badge {verdict_class(c)}'>"
+        f"{escape(verdict_label(c))}</span></td>"
+        f"<td>{_named_html(c.value_name, value_text(c))}</td>"
+        f"<td>{_named_html(c.margin_name, margin_text(c))}</td><td>{escape(c.summary)}</td></tr>"
         for c in cert.checks
     )
     verdict = cert.verdict.value

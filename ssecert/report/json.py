@@ -7,7 +7,8 @@ from pathlib import Path
 from typing import Any
 
 from .._io import atomic_write_text
-from ..results import Certificate
+from .._spec_write import spec_document
+from ..results import Certificate, to_jsonable
 
 __all__ = ["certificate_json", "write_json", "certify_json"]
 
@@ -28,12 +29,16 @@ def write_json(certificate: Certificate, path: str | Path) -> Path:
 def certify_json(result: Any, *, indent: int | None = 2) -> str:
     """The JSON certificate of ``ssecert certify`` (a ``CertifyResult``).
 
+    It holds the validated spec under ``spec`` (``name``, ``system`` with ``A``, ``C`` and
+    ``sensors``, ``attack``, ``observer``, ``scenario``): the matrices the report shows.
     Measured durations (``seconds`` of solver runs and simulations) are moved
     from where they were measured to ``meta.timings``, keyed by that place:
     with ``meta.date`` they are the only fields that change when a report is
     regenerated from the same spec, seed and version.
     """
     document = result.to_dict()
+    # the spec as validated, so that A, C and the observer shown in the report are here in full
+    document["spec"] = to_jsonable(spec_document(result.spec))
     # the analysis's own step times (``analyze``), then those measured in the checks
     timings: dict[str, Any] = dict(document.get("meta", {}).pop("timings", {}))
     _move_timings(document, "", timings)
