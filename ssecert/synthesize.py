@@ -411,9 +411,15 @@ def choose_decay(front: list[dict[str, Any]], plant_radius: float) -> tuple[floa
             else f"no certified contraction reaches rho(A)^2 = {plant_radius**2:.4g} (the "
             f"fastest: {min(p['contraction'] for p in good):.4g})"
         )
+        where = (
+            "the knee of the trade-off front"
+            if len(faster) >= 3
+            else f"the smallest certified gain of the front's {len(faster)} verified points "
+            "(too few for a knee)"
+        )
         return float(pick["alpha"]), (
-            f"decay {pick['alpha']:.3g} per step imposed, the knee of the trade-off front "
-            f"(error contraction {pick['contraction']:.4g} per step; {why})"
+            f"decay {pick['alpha']:.3g} per step imposed, {where} (error contraction "
+            f"{pick['contraction']:.4g} per step; {why})"
         )
     pick = min(good, key=lambda p: p["contraction"])
     return float(pick["alpha"]), (
