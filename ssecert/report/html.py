@@ -320,14 +320,7 @@ def _design_context(spec: Any, cert: Certificate) -> dict[str, Any]:
         elif isinstance(value, (list, tuple, np.ndarray)):
             params.append((key, Markup(escape(", ".join(number(v) for v in value)))))
         else:
-            params.append(
-                (
-                    key,
-                    Markup(
-                        _scalar(value, 6) if isinstance(value, float) else escape(number(value))
-                    ),
-                )
-            )
+            params.append((key, Markup(_scalar(value))))
     gain_check = cert.get("observer_gain")
     L = None if gain_check is None else gain_check.fields.get("L")
     gain: Markup | str
@@ -337,9 +330,13 @@ def _design_context(spec: Any, cert: Certificate) -> dict[str, Any]:
         gain = _labelled_matrix(L, states, cols, "L", "checks.observer_gain.L")
     else:
         gain = "not computed: " + gain_check.summary if gain_check is not None else "not computed"
+    method = observer.get("gain")
+    if method is None and gain_check is not None:  # a kind whose gain follows from its step
+        method = gain_check.fields.get("gain_method")
     out["observer"] = {
         "kind": observer.get("kind"),
-        "gain_method": observer.get("gain") if isinstance(observer.get("gain"), str) else None,
+        "gain_method": method if isinstance(method, str) else None,
+        "gain_spec": observer.get("gain") if isinstance(observer.get("gain"), str) else None,
         "params": params,
         "L": gain,
     }
