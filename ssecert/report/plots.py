@@ -123,7 +123,7 @@ def tradeoff_plot(tradeoff: dict[str, Any], *, gid: str = "tradeoff") -> str:
     against the certified error contraction per step, the plant's own rho(A) (and rho(A)^2,
     "clearly faster"), the chosen design and the spec's design (at its linear loop's
     spectral radius: it has no decay certificate)."""
-    fig, axes = _figure(6.0, 3.2)
+    fig, axes = _figure(8.0, 3.2)
     ax = axes[0][0]
     points = [
         p for p in tradeoff.get("front", []) if p.get("verified") and p.get("gamma") is not None
@@ -161,7 +161,7 @@ def tradeoff_plot(tradeoff: dict[str, Any], *, gid: str = "tradeoff") -> str:
     ax.set_xlabel("error contraction per step, sqrt(1 - alpha) (smaller is faster)")
     ax.set_ylabel("certified l2 gain, attack to error")
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=7, loc="best")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0)
     return svg_figure(fig, title="certified trade-off between decay and gain")
 
 
