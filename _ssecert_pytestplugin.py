@@ -241,7 +241,8 @@ def _uses_ssecert(item: pytest.Item) -> bool:
     It does when it is marked ``@pytest.mark.ssecert`` (itself, its class or
     its module), requests the ``ssecert_example`` fixture (directly or
     through another fixture), or sits in a module that imported
-    ``ssecert.testing.strategies`` or one of its strategies: such a module's
+    ``ssecert.testing.strategies`` (``from`` it, or ``import
+    ssecert.testing.strategies``) or one of its strategies: such a module's
     tests may draw them through ``st.data()`` or a composite strategy.
     """
     if item.get_closest_marker(MARKER) is not None:
@@ -252,7 +253,36 @@ def _uses_ssecert(item: pytest.Item) -> bool:
     module = getattr(item, "module", None)
     if strategies is None or not isinstance(module, ModuleType):
         return False
-    return any(_from_strategies(value, strategies) for value in list(vars(module).values()))
+    values = list(vars(module).values())
+    if any(_from_strategies(value, strategies) for value in values):
+        return True
+    # ``import ssecert.testing.strategies`` binds only the package ``ssecert``: read the
+    # module's own imports (once per module)
+    package = sys.modules.get("ssecert")
+    return any(value is package for value in values) and _imports_strategies(module)
+
+
+_IMPORTS: dict[str, bool] = {}
+
+
+def _imports_strategies(module: ModuleType) -> bool:
+    """Whether the module's source has ``import ssecert.testing.strategies`` (any alias)."""
+    import ast
+
+    path = getattr(module, "__file__", None)
+    if path is None:
+        return False
+    if path not in _IMPORTS:
+        try:
+            with open(path, encoding="utf-8") as handle:
+                tree = ast.parse(handle.read())
+        except (OSError, SyntaxError, ValueError):
+            tree = None
+        _IMPORTS[path] = tree is not None and any(
+            isinstance(node, ast.Import) and any(a.name == STRATEGIES for a in node.names)
+            for node in ast.walk(tree)
+        )
+    return _IMPORTS[path]
 
 
 def _rebased(given: Any, base: Any, profile: Any) -> Any:

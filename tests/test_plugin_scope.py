@@ -89,6 +89,16 @@ def test_drawn(data):
     record("drawn")
 """
 
+DOTTED = """
+import ssecert.testing.strategies
+from hypothesis import given
+from seen import record
+
+@given(ssecert.testing.strategies.sparse_attacks(3, 1, 5))
+def test_dotted(a):
+    record("dotted")
+"""
+
 SLOW = """
 import time
 from hypothesis import given, strategies as st
@@ -165,10 +175,12 @@ def test_an_unrelated_deadline_still_fails(files):
 
 
 def test_tests_that_use_ssecert_get_its_profile(files):
-    files.makepyfile(test_uses=USES_SSECERT, test_strategies=STRATEGIES, test_z=UNRELATED)
+    files.makepyfile(
+        test_uses=USES_SSECERT, test_strategies=STRATEGIES, test_dotted=DOTTED, test_z=UNRELATED
+    )
     seen, result, after = _run(files)
-    result.assert_outcomes(passed=8)
-    for name in ("marked", "fixture", "method", "strategy", "drawn"):
+    result.assert_outcomes(passed=9)
+    for name in ("marked", "fixture", "method", "strategy", "drawn", "dotted"):
         assert _settings(seen[name]) == QUICK, name
     for name in ("marked", "fixture", "method"):
         assert seen[name]["calls"] == QUICK["max_examples"], name
