@@ -281,14 +281,20 @@ def _print_design(
         out.write(f"  synthesised: certified decay {result.decay:.3g} per step (V(k+1) <= "
                   f"{one_minus(result.decay)} V(k))\n")  # fmt: skip
     if result.linear_radius is not None and result.plant_radius is not None:
-        from .synthesize import no_faster
+        from .synthesize import FAST_PLANT, no_faster
 
         slow = no_faster(result.linear_radius, result.plant_radius)
-        out.write(
-            f"  its linear loop: rho(A - L S) = {result.linear_radius:.4g}, "
-            f"{'NO faster' if slow else 'faster'} than the plant's own rho(A) = "
-            f"{result.plant_radius:.4g}{': it barely uses its sensors' if slow else ''}\n"
-        )
+        if result.plant_radius <= FAST_PLANT:
+            loop = (
+                f"the plant's own rho(A) = {result.plant_radius:.4g} is already fast (its error "
+                f"falls by {FAST_PLANT:g} per step or faster): nothing was asked of the loop"
+            )
+        else:
+            loop = (
+                f"{'NO faster' if slow else 'faster'} than the plant's own rho(A) = "
+                f"{result.plant_radius:.4g}{': it barely uses its sensors' if slow else ''}"
+            )
+        out.write(f"  its linear loop: rho(A - L S) = {result.linear_radius:.4g}, {loop}\n")
     if result.choice:
         out.write(f"  chosen: {result.choice}\n")
     verified = sum(1 for p in result.front if p.get("verified"))

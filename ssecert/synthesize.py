@@ -59,6 +59,7 @@ __all__ = [
     "DesignResult",
     "certified_gain",
     "choose_decay",
+    "linear_target",
     "no_faster",
     "tradeoff_front",
     "design_observer",
@@ -178,12 +179,20 @@ def design_observer(
     front: list[dict[str, Any]] = []
     alpha = DEFAULT_DECAY if min_decay is None else float(min_decay)
     choice = "" if min_decay is None else f"decay {alpha:.3g} per step imposed (min_decay)"
+    # the linear loop is asked to be clearly faster than a stable plant, unless the user
+    # imposes a decay of their own
+    linear = linear_target(plant_radius) if min_decay is None else None
     if objective in ("gain", "rate"):
         middle = _template(system, kind, rows[(len(rows) - 1) // 2],
                            cols[(len(cols) - 1) // 2], threshold)  # fmt: skip
-        front = tradeoff_front(middle, time_limit=FRONT_SHARE * time_budget)
+        front = tradeoff_front(middle, time_limit=FRONT_SHARE * time_budget, linear=linear)
         if objective == "gain" and min_decay is None:
             alpha, choice = choose_decay(front, plant_radius)
+    if linear is not None:
+        choice += (
+            f"; the linear loop is required to contract by {linear:.4g} per step, rho(A)^2 "
+            f"(F' P1 F <= {linear:.4g}^2 P1 in the synthesis)"
+        )
     evaluate = _evaluator(
         system,
         kind,
@@ -191,13 +200,14 @@ def design_observer(
         threshold,
         lambda: time_budget - (time.perf_counter() - start),
         alpha,
-        faster_than=plant_radius if objective == "gain" and min_decay is None else None,
+        faster_than=plant_radius if min_decay is None else None,
+        linear=linear,
     )
     tried: dict[tuple[int, int], dict[str, Any]] = {}
-    kept: dict[tuple[int, int], tuple[tuple[float, float], dict[str, Any]]] = {}
+    kept: dict[tuple[int, int], Found] = {}
 
-    def score(cell: tuple[int, int]) -> float:
-        return kept[cell][0][0] if cell in kept else math.inf
+    def score(cell: tuple[int, int]) -> tuple[float, ...]:
+        return kept[cell][0] if cell in kept else (math.inf,)
 
     def run(cell: tuple[int, int]) -> bool:
         """Certify one cell unless the budget is spent; False when it is."""
@@ -223,6 +233,12 @@ def design_observer(
         )  # fmt: skip
     best = min(kept, key=lambda c: kept[c][0])
     record = tried[best]
+    if objective == "gain" and record.get("decay") is None:
+        choice += (
+            "; the synthesis's own certificate of that decay did not verify in numpy for "
+            "this design (no candidate's did): its stability and l2 gain are certified by the "
+            "analysis, its decay is not"
+        )
     linear = record.get("linear_radius")
     if linear is not None and no_faster(linear, plant_radius) and system.n:
         choice += (
@@ -252,16 +268,40 @@ FASTER = 1.1  # a loop is faster than a stable plant when its error falls 10% fa
 def no_faster(linear_radius: float, plant_radius: float) -> bool:
     """True when a linear loop with spectral radius ``linear_radius`` is no faster than the
     plant: for a stable plant, rho(A - L S) > rho(A)^1.1 (its error falls less than 10%
-    faster, in logarithm, than the plant's own state); else rho(A - L S) >= rho(A).
+    faster, in logarithm, than the plant's own state), except that nothing is slower than a
+    plant already faster than 0.05 per step; else rho(A - L S) >= rho(A).
 
     Examples
     --------
     >>> no_faster(0.9946, 0.9946), no_faster(0.7636, 0.9946), no_faster(0.5, 1.0)
     (True, False, False)
+    >>> no_faster(1e-4, 0.0)  # a nilpotent plant: nothing is slower
+    False
     """
+    if plant_radius <= FAST_PLANT:
+        return False
     if _stable(plant_radius):
         return bool(linear_radius > plant_radius**FASTER)
     return bool(linear_radius >= plant_radius)
+
+
+FAST_PLANT = 0.05  # a plant whose own error falls 20x per step is not asked to be beaten
+
+
+def linear_target(plant_radius: float) -> float | None:
+    """The contraction per step asked of the linear loop A - L S by default: rho(A)^2 for a
+    stable plant (its error falls twice as fast, in logarithm, as the plant's own state);
+    None (nothing asked) for a plant that is not stable, or already faster than 0.05 per
+    step.
+
+    Examples
+    --------
+    >>> linear_target(0.9), linear_target(1.0), linear_target(0.01)
+    (0.81, None, None)
+    """
+    if _stable(plant_radius) and plant_radius > FAST_PLANT:
+        return float(plant_radius**2)
+    return None
 
 
 def _stable(plant_radius: float) -> bool:
@@ -288,12 +328,18 @@ def _template(system: System, kind: str, row: Any, step: Any, threshold: float) 
 
 
 def tradeoff_front(
-    template: Any, *, points: int = FRONT_POINTS, time_limit: float | None = None
+    template: Any,
+    *,
+    points: int = FRONT_POINTS,
+    time_limit: float | None = None,
+    linear: float | None = None,
 ) -> list[dict[str, Any]]:
     """The trade-off between certified decay and certified l2 gain of ``template``'s kind,
     step and shrink: the smallest gain at almost no decay (alpha = 1e-3), the fastest decay
     the synthesis LMI certifies (bisection on alpha), then the smallest gain at decays
-    between (contraction per step sqrt(1 - alpha) evenly spaced), ``points`` in all.
+    between (contraction per step sqrt(1 - alpha) evenly spaced), ``points`` in all; with
+    ``linear``, every point's linear loop is also required to contract by that much
+    (``synthesize_gain``).
 
     With a ``time_limit`` the solves' time sets how many fit: fewer bisections, fewer
     points, none started past the limit.
@@ -312,18 +358,20 @@ def tradeoff_front(
     def left() -> float | None:
         return None if time_limit is None else max(time_limit - (time.perf_counter() - start), 0.5)
 
-    slowest = synthesize_gain(template, alpha=DEFAULT_DECAY, time_limit=left())
+    slowest = synthesize_gain(template, alpha=DEFAULT_DECAY, time_limit=left(), linear=linear)
     out = [_front_point(template, slowest)] if slowest.L is not None else []
     solve = time.perf_counter() - start
     room = points + RATE_BISECTIONS_FRONT
     if time_limit is not None:
         room = min(room, int((time_limit - solve) / max(solve, 1e-3)))
     bisections = max(2, min(RATE_BISECTIONS_FRONT, room - 3))
-    fastest = synthesize_rate_gain(template, time_limit=left(), bisections=bisections)
+    fastest = synthesize_rate_gain(
+        template, time_limit=left(), bisections=bisections, linear=linear
+    )
     if fastest.L is not None and not _verified_proposal(template, fastest)["verified"]:
         # at the edge of feasibility: a decay further inside has a margin
         inside = synthesize_rate_gain(
-            template, backoff=0.8, time_limit=left(), bisections=bisections
+            template, backoff=0.8, time_limit=left(), bisections=bisections, linear=linear
         )
         fastest = inside if inside.L is not None else fastest
     if fastest.L is None or fastest.alpha is None:
@@ -335,7 +383,9 @@ def tradeoff_front(
         for c in np.linspace(fast, slow, points)[1:-1]:
             if time_limit is not None and time.perf_counter() - start + solve > time_limit:
                 break
-            found = synthesize_gain(template, alpha=1 - float(c) ** 2, time_limit=left())
+            found = synthesize_gain(
+                template, alpha=1 - float(c) ** 2, time_limit=left(), linear=linear
+            )
             if found.L is not None:
                 out.append(_front_point(template, found))
     return sorted(out, key=lambda p: p["contraction"])
@@ -367,7 +417,7 @@ def choose_decay(front: list[dict[str, Any]], plant_radius: float) -> tuple[floa
     among the verified points faster than the plant (every point when rho(A) >= 1), the
     knee of the front (the point farthest below the chord from the fastest to the
     slowest, in contraction and log gain); else the fastest verified point.  With fewer
-    than two verified points: rho(A)^2 itself for a stable plant, else alpha = 1e-3.
+    than two verified points, alpha = 1e-3.
 
     Examples
     --------
@@ -379,17 +429,10 @@ def choose_decay(front: list[dict[str, Any]], plant_radius: float) -> tuple[floa
     """
     good = [p for p in front if p.get("verified") and p.get("gamma") is not None]
     if len(good) < 2:
-        if _stable(plant_radius):
-            alpha = max(1 - plant_radius**4, DEFAULT_DECAY)
-            return alpha, (
-                f"decay {alpha:.3g} per step imposed, error contraction rho(A)^2 = "
-                f"{plant_radius**2:.4g}: clearly faster than the plant's own rho(A) = "
-                f"{plant_radius:.4g} (the trade-off front has fewer than two verified "
-                "points: a larger time budget traces it)"
-            )
         return DEFAULT_DECAY, (
-            f"decay {DEFAULT_DECAY:g} per step imposed (the trade-off front has fewer than two "
-            "verified points: a larger time budget traces it)"
+            f"decay {DEFAULT_DECAY:g} per step imposed: the trade-off front has fewer than two "
+            "verified points (its solves failed, did not verify, or ran past its share of the "
+            "time budget)"
         )
     if _stable(plant_radius):
         twice = [p for p in good if p["contraction"] <= plant_radius**2]
@@ -414,8 +457,9 @@ def choose_decay(front: list[dict[str, Any]], plant_radius: float) -> tuple[floa
         where = (
             "the knee of the trade-off front"
             if len(faster) >= 3
-            else f"the smallest certified gain of the front's {len(faster)} verified points "
-            "(too few for a knee)"
+            else f"the smallest certified gain of the {len(faster)} verified point"
+            f"{'' if len(faster) == 1 else 's'} of the front faster than the plant (too few for "
+            "a knee)"
         )
         return float(pick["alpha"]), (
             f"decay {pick['alpha']:.3g} per step imposed, {where} (error contraction "
@@ -475,7 +519,7 @@ def _search(
             if cell not in tried and not run(cell):
                 return False
         best = min(tried, key=score)
-        if best == current or score(best) == math.inf:
+        if best == current or score(best)[0] == math.inf:
             break
         current = best
     rest = sorted(
@@ -485,7 +529,7 @@ def _search(
     return all(run(cell) for cell in rest)
 
 
-Found = tuple[tuple[float, float], dict[str, Any]]
+Found = tuple[tuple[float, ...], dict[str, Any]]
 
 
 def _evaluator(
@@ -496,6 +540,7 @@ def _evaluator(
     remaining: Callable[[], float],
     min_decay: float,
     faster_than: float | None = None,
+    linear: float | None = None,
 ) -> Callable[[Any, Any], tuple[dict[str, Any], Found | None]]:
     """The function certifying one grid cell: a record with its parameters, verdicts and
     numbers, and, when it is certified, its rank (lower is better: the objective, then a
@@ -528,13 +573,17 @@ def _evaluator(
             record["gain"] = "synthesised"
             limit = max(remaining(), 1.0)
             if objective == "rate":
-                proposal = synthesize_rate_gain(template, time_limit=limit)
+                proposal = synthesize_rate_gain(template, time_limit=limit, linear=linear)
             else:
-                proposal = synthesize_gain(template, alpha=min_decay, time_limit=limit)
+                proposal = synthesize_gain(
+                    template, alpha=min_decay, time_limit=limit, linear=linear
+                )
             own = _verified_proposal(template, proposal)
             if objective == "rate" and proposal.L is not None and not own["verified"]:
                 # at the edge of feasibility: a decay further inside has a margin
-                proposal = synthesize_rate_gain(template, backoff=0.8, time_limit=limit)
+                proposal = synthesize_rate_gain(
+                    template, backoff=0.8, time_limit=limit, linear=linear
+                )
                 own = _verified_proposal(template, proposal)
             record["synthesis"] = proposal.status
             if proposal.L is None:
@@ -582,7 +631,8 @@ def _evaluator(
                 )
                 return record, None
             return record, ((-decay, float(iss.value)), observer)
-        return record, ((float(iss.value), -(decay or 0.0)), observer)
+        # a design whose synthesis certificate verified (its decay is certified) first
+        return record, ((float(decay is None), float(iss.value), -(decay or 0.0)), observer)
 
     return evaluate
 

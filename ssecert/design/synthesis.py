@@ -70,6 +70,7 @@ def synthesize_gain(
     alpha: float = 1e-3,
     time_limit: float | None = None,
     budget: Budget | None = None,
+    linear: float | None = None,
 ) -> GainSynthesis:
     """The gain L minimising the l2 gain from attack to estimation error that the
     dissipation LMI certifies, for the design's step, threshold and shrink (its own gain is
@@ -86,12 +87,18 @@ def synthesize_gain(
     budget : Budget, optional
         Memory allowed (default ``Budget()``, 2 GiB): a synthesis LMI whose interior-point
         system would need more is refused, with the estimate in the status.
+    linear : float, optional
+        Also require the linear loop F = A - L S to contract by ``linear`` per step in the
+        P1-norm, F' P1 F <= linear^2 P1 (so rho(F) <= linear): with the same P1 and Y = P1 L
+        the constraint [[linear^2 P1, (P1 F)'], [P1 F, P1]] >= 0 stays linear.  The lever
+        that makes the gain use its sensors where the certified decay of the whole error
+        state is limited by the attack estimate's loop.
     """
     start = time.perf_counter()
     model, refusal = _model(design, budget)
     if refusal:
         return GainSynthesis(None, None, refusal, _since(start))
-    problem, variables = _dissipation_problem(model, design, alpha)
+    problem, variables = _dissipation_problem(model, design, alpha, linear=linear)
     return _solved(problem, variables, start, time_limit)
 
 
@@ -103,13 +110,14 @@ def synthesize_rate_gain(
     time_limit: float | None = None,
     budget: Budget | None = None,
     bisections: int | None = None,
+    linear: float | None = None,
 ) -> GainSynthesis:
     """The gain L with the fastest decay the dissipation LMI certifies (bisection over
     alpha, one feasibility solve each), optionally keeping the l2 gain below ``gamma``;
     the last feasible alpha times ``backoff`` is solved again, so that the certificate has a
     margin; a candidate only, as ``synthesize_gain`` (``time_limit`` for the whole
     bisection: no solve starts past it; ``bisections``, default ``RATE_BISECTIONS``, the
-    number of halvings of the interval of alpha)."""
+    number of halvings of the interval of alpha; ``linear`` as in ``synthesize_gain``)."""
     start = time.perf_counter()
     model, refusal = _model(design, budget)
     if refusal:
@@ -119,7 +127,7 @@ def synthesize_rate_gain(
         return None if time_limit is None else max(time_limit - _since(start), 0.1)
 
     # one parametrised problem: cvxpy canonicalises it once, each solve only sets alpha
-    problem, variables = _dissipation_problem(model, design, 0.5, gamma=gamma)
+    problem, variables = _dissipation_problem(model, design, 0.5, gamma=gamma, linear=linear)
     low, high, best = 0.0, 1.0, None
     for _ in range(RATE_BISECTIONS if bisections is None else max(int(bisections), 1)):
         if time_limit is not None and _since(start) >= time_limit:
@@ -166,7 +174,12 @@ def _refusal(model: LureModel, design: ObserverDesign, budget: Budget | None) ->
 
 
 def _dissipation_problem(
-    model: LureModel, design: ObserverDesign, alpha: float, *, gamma: float | None = None
+    model: LureModel,
+    design: ObserverDesign,
+    alpha: float,
+    *,
+    gamma: float | None = None,
+    linear: float | None = None,
 ) -> tuple[Any, dict[str, Any]]:
     """The dissipation LMI with Y = P1 L, in Schur form on the P1 block only (the a_hat
     block's V(xi+) = w' D w is linear in D), minimising g = gamma^2 (or, with ``gamma``,
@@ -207,6 +220,10 @@ def _dissipation_problem(
         left = cp.bmat([[top, Z((N, r))], [Z((r, N)), g * np.eye(r)]])
     big = cp.bmat([[left, PH.T], [PH, P1]])
     cons.append(0.5 * (big + big.T) >> 1e-7 * np.eye(big.shape[0]))
+    if linear is not None:
+        PF = P1 @ A_p - Y @ S
+        loop = cp.bmat([[float(linear) ** 2 * P1, PF.T], [PF, P1]])
+        cons.append(0.5 * (loop + loop.T) >> 1e-7 * np.eye(2 * n))
     if gamma is None:
         problem = cp.Problem(cp.Minimize(g), cons)
     else:
