@@ -318,12 +318,13 @@ def _print_design(
             else:
                 settle = sim["settling_step"]
                 cells.append(
-                    f"{label} {_num(sim['final_mean'])}"
+                    f"{label} {_num(sim['mean_error'])}, final {_num(sim['final_mean'])}"
                     + ("" if settle is None else f" (settles by step {settle})")
                 )
         verdict = f" -> {row['comparison']}" if "comparison" in row else ""
         out.write(
-            f"  scenario {row['scenario']}: final mean error ||x_hat - x|| {'; '.join(cells)}"
+            f"  scenario {row['scenario']}: mean error ||x_hat - x|| over the horizon "
+            f"{'; '.join(cells)}"
             f"{verdict}\n"
         )
     out.write(f"  {comparison['summary']}\n")

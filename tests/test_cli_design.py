@@ -35,7 +35,7 @@ def test_design_writes_a_spec_report_and_certificate_that_certify_reproduces(tmp
     assert f"{result['gamma']:.4g}" in printed
     # the report says, scenario by scenario, where the synthesised design is worse
     for row in result["comparison"]["scenarios"]:
-        mine, theirs = row["synthesised"]["final_mean"], row["spec"]["final_mean"]
+        mine, theirs = row["synthesised"]["mean_error"], row["spec"]["mean_error"]
         assert (row["comparison"] == "worse") == (mine > theirs * 1.05 + 1e-12)
         assert (row["scenario"] in result["comparison"]["worse_in"]) == (
             row["comparison"] == "worse"

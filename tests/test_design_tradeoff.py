@@ -143,6 +143,7 @@ def test_the_comparison_reads_the_absolute_error_not_the_relative_one():
     # the synthesised design has the larger relative error but the smaller absolute one
     out = compare_designs(result(2.0, 0.5, "dsso"), result(0.2, 30.0, "elastic_net"))
     assert out["scenarios"][0]["comparison"] == "better"
+    assert out["scenarios"][0]["synthesised"]["mean_error"] == pytest.approx(0.6)  # (1 + 0.2) / 2
     assert "||x_hat - x||" in out["summary"] and "absolute" in out["metric"]
     out = compare_designs(result(0.2, 30.0, "dsso"), result(2.0, 0.5, "elastic_net"))
     assert out["scenarios"][0]["comparison"] == "worse"
@@ -170,7 +171,7 @@ def test_design_on_a_stable_plant_plots_the_tradeoff_and_names_its_metric(plant,
     printed = capsys.readouterr().out
     assert status == 0, printed
     assert "faster than the plant's own rho(A) = 0.985" in printed
-    assert "final mean error ||x_hat - x||" in printed
+    assert "mean error ||x_hat - x|| over the horizon" in printed
     result = json.loads((tmp_path / "r.json").read_text())
     assert result["linear_radius"] < result["plant_radius"] ** 2
     html = (tmp_path / "damped-design.html").read_text()
@@ -203,3 +204,20 @@ def test_assert_recovers_takes_an_absolute_tolerance_for_a_decaying_state(plant)
         assert_recovers(design, scenario, 10.0)
     # both tolerances: ||e|| <= atol + tol ||x||, as numpy.isclose combines them
     assert_recovers(design, scenario, 1e-3, atol=1.01 * bias)
+
+
+def test_a_fast_plant_and_a_dsso_get_designs_that_use_their_sensors():
+    C = [[1.0, 0.0], [0.0, 1.0], [1.0, 1.0], [1.0, -1.0]]
+    fast = System(np.diag([0.3, 0.2]), np.array(C))
+    result = design_observer(fast, "luenberger", time_budget=20)
+    assert result.observer is not None and result.linear_radius <= 0.3**2 + 1e-6
+    assert "the linear loop is required to contract by 0.09" in result.choice
+    # the D-SSO's certified decay cannot beat its plant (its large-signal loop holds A):
+    # the linear loop's own requirement makes it use its sensors all the same
+    result = design_observer(_damped_plant(), "dsso", time_budget=20)
+    assert result.observer is not None
+    assert not no_faster(result.linear_radius, result.plant_radius)
+    # a nilpotent plant: nothing is slower than it, a design is found
+    nilpotent = System(np.array([[0.0, 1.0], [0.0, 0.0]]), np.array(C))
+    result = design_observer(nilpotent, "luenberger", time_budget=20)
+    assert result.observer is not None and not no_faster(result.linear_radius, 0.0)

@@ -371,10 +371,14 @@ def _comparison_context(comparison: Mapping[str, Any]) -> dict[str, Any]:
         for label in labels:
             sim = r.get(label, {})
             if "skipped" in sim or not sim:
-                cells += [sim.get("skipped", "-"), "-"]
+                cells += [sim.get("skipped", "-"), "-", "-"]
             else:
                 settle = sim.get("settling_step")
-                cells += [_fmt(sim["final_mean"]), "-" if settle is None else str(settle)]
+                cells += [
+                    _fmt(sim.get("mean_error")),
+                    _fmt(sim["final_mean"]),
+                    "-" if settle is None else str(settle),
+                ]
         rows.append({"name": r["scenario"], "cells": cells, "verdict": r.get("comparison", "-")})
     out: dict[str, Any] = {
         "designs": designs,
