@@ -304,8 +304,9 @@ def _print_design(
         )
     elif args.objective in ("gain", "rate"):
         out.write(
-            f"  trade-off front: {verified} verified point{'' if verified == 1 else 's'} within "
-            "its share of the time budget (30%); a larger --time-budget traces it\n"
+            f"  trade-off front: {verified} verified point{'' if verified == 1 else 's'} (its "
+            "synthesis solves failed, did not verify, or ran past their 30% of the time "
+            "budget)\n"
         )
     for row in comparison["scenarios"]:
         cells = []
