@@ -76,3 +76,24 @@ def test_ugv_cli_reports_observer_checks(capsys):
     assert "shrink = 1" in checks["observer_stability"]["summary"]
     assert checks["thesis_assumptions"]["items"]["lemma_1"] == "fails"
     assert checks["iss_gain"]["required"] is False
+
+
+def test_the_region_check_reads_a_flag_not_a_sentence(monkeypatch):
+    """An unstable dead zone fails the region check because ``region_of_attraction`` says
+    ``unstable``; the same words without the flag leave it inconclusive."""
+    from ssecert.observers import build_observer
+    from ssecert.stability import checks
+    from ssecert.stability.checks import region_of_attraction_check
+    from ssecert.system import System
+
+    system = System(np.array([[1.5]]), np.array([[1.0], [1.0], [1.0]]))
+    design = build_observer(
+        system,
+        {"kind": "elastic_net", "gain": [[0.0, 0.0, 0.0]], "step": 0.5, "threshold": 0.1,
+         "shrink": 0.5},
+    )  # fmt: skip
+    check = region_of_attraction_check(design)
+    assert check.verdict.value == "fails" and check.evidence["unstable"] is True
+    reworded = {"radius": 0.0, "reason": "the dead zone's dynamics is not stable (reworded)"}
+    monkeypatch.setattr(checks, "region_of_attraction", lambda *a, **k: dict(reworded))
+    assert region_of_attraction_check(design).verdict.value == "inconclusive"

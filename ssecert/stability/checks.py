@@ -900,8 +900,7 @@ def _region_check(radius: float, evidence: dict[str, Any], proved: str, method: 
     if radius > 0:
         verdict, summary = Verdict.HOLDS, proved
     else:
-        unstable = "is not stable" in str(evidence.get("reason", ""))
-        verdict = Verdict.FAILS if unstable else Verdict.INCONCLUSIVE
+        verdict = Verdict.FAILS if evidence.get("unstable") is True else Verdict.INCONCLUSIVE
         summary = f"No region of attraction is certified: {evidence.get('reason', '')}."
     return Check(
         id="region_of_attraction",

@@ -174,7 +174,7 @@ def _undecided_point(model: LureModel) -> tuple[str, float]:
     from .roa import region_of_attraction
 
     dead = region_of_attraction(model, widen=False)
-    if "is not stable" in str(dead.get("reason", "")):
+    if dead.get("unstable") is True:
         return "local instability", 0.0
     if divergence_witness(model) is not None:
         return "divergent trajectory", 0.0

@@ -58,7 +58,9 @@ def region_of_attraction(
     budget: Budget | None = None,
 ) -> dict[str, Any]:
     """The certified radius of initial estimation errors (a_hat(0) = 0) from which the observer
-    converges without attack, with how it was found; radius 0 with the reason when none is.
+    converges without attack, with how it was found; radius 0 with the reason when none is,
+    and ``unstable`` true when the dead zone's linear dynamics are proved unstable (no region
+    exists: the region_of_attraction check then fails).
 
     With ``piecewise``, a piecewise-quadratic Lyapunov function over the soft threshold's
     regions (``ssecert.stability.piecewise``, up to 3 channels) is also searched, and the
@@ -121,14 +123,17 @@ def _dead_zone_region(model: LureModel, seed: int, widen: bool = True) -> dict[s
         if local.verdict.value == "fails":
             return {
                 "radius": 0.0,
+                "unstable": True,
                 "reason": f"the linear dynamics of the dead zone (xi+ = A xi, whose eigenvalues "
                 f"are those of F = A - L C and 0) is not stable: {local.reason}",
             }
     lyap = lyapunov_certificate(model.A, exact=model.exact_A())
     if lyap.verdict.value != "holds" or lyap.P is None or lyap.method != "lyapunov":
-        why = "is not stable" if lyap.verdict.value == "fails" else "has no verified P"
+        unstable = lyap.verdict.value == "fails"
+        why = "is not stable" if unstable else "has no verified P"
         return {
             "radius": 0.0,
+            "unstable": unstable,
             "reason": f"the linear dynamics of the dead zone (xi+ = A xi) {why}: {lyap.reason}",
         }
     found = _region(model, 0.5 * (lyap.P + lyap.P.T), lyap.margin, lyap.error_bound, seed)
