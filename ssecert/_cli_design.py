@@ -348,10 +348,11 @@ def _decay(text: str) -> float:
 def _sparse_limit(spec: Any) -> str:
     """What no observer can do on this plant ('' when it is 2s-sparse observable): the
     certified gain bounds the error under attack, it does not make it vanish."""
+    from .results import Verdict
     from .structure.sparse import sparse_observability
 
     check = sparse_observability(spec.system, spec.max_attacked, time_budget=0)
-    if check.verdict.value != "fails":
+    if check.verdict is not Verdict.FAILS:
         return ""
     names = [spec.system.sensors[i] for i in check.fields.get("breaking_set") or []]
     if not names:

@@ -53,6 +53,7 @@ from typing import Any
 
 import numpy as np
 
+from .results import Verdict
 from .system import System
 
 __all__ = [
@@ -605,7 +606,7 @@ def _evaluator(
         record.update(
             stability=stability.verdict.value,
             iss=iss.verdict.value,
-            gamma=iss.value if iss.verdict.value == "holds" else None,
+            gamma=iss.value if iss.verdict is Verdict.HOLDS else None,
             decay=decay,
         )
         gain = "deadbeat" if proposal is None else np.asarray(design.L).tolist()
@@ -617,10 +618,10 @@ def _evaluator(
                 record["rejected"] = "no region of attraction certified"
                 return record, None
             return record, ((-radius, record["gamma"] or math.inf), observer)
-        if stability.verdict.value != "holds":
+        if stability.verdict is not Verdict.HOLDS:
             record["rejected"] = f"observer_stability {stability.verdict.value}"
             return record, None
-        if iss.verdict.value != "holds":
+        if iss.verdict is not Verdict.HOLDS:
             record["rejected"] = f"iss_gain {iss.verdict.value}"
             return record, None
         if objective == "rate":
@@ -651,9 +652,9 @@ def _certified_radius(design: Any, stability: Any) -> float:
     radius the region_of_attraction check proves (piecewise-quadratic included)."""
     from .stability.checks import region_of_attraction_check
 
-    if stability.verdict.value == "holds":
+    if stability.verdict is Verdict.HOLDS:
         return math.inf
-    if stability.verdict.value == "fails":
+    if stability.verdict is Verdict.FAILS:
         return 0.0
     check = region_of_attraction_check(design, piecewise=True)
     return float(check.value or 0.0) if check is not None else 0.0
@@ -880,7 +881,7 @@ def _design_row(label: str, result: Any) -> dict[str, Any]:
         check = cert.get(check_id)
         if check is not None:
             row[check_id] = check.verdict.value
-            if check.value is not None and check.verdict.value == "holds":
+            if check.value is not None and check.verdict is Verdict.HOLDS:
                 row[f"{check_id}_value"] = check.value
     return row
 

@@ -26,6 +26,7 @@ from ..budget import Budget, ResourceLimitError
 from ..context import OBSERVER, AnalysisContext, shared, sparse_key
 from ..observers import ObserverDesign, build_observer, observer_from_design
 from ..parallel import map_ordered
+from ..results import Verdict
 from ..system import System
 from .metrics import (
     absolute_error,
@@ -221,7 +222,7 @@ def stealthy_replay(
     check = shared(
         context, sparse_key(max_attacked), lambda: sparse_observability(system, max_attacked)
     )
-    if check.verdict.value != "fails" or check.witness is None:
+    if check.verdict is not Verdict.FAILS or check.witness is None:
         return None
     w = check.witness
     return StealthyReplay(np.asarray(w["z"], dtype=float), tuple(w["sensors_a"]))

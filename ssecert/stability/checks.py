@@ -320,7 +320,7 @@ def _without_lure_model(design: ObserverDesign, gap: str, tol: Tolerances, title
         lyap = lyapunov_certificate(
             design.error_matrix, exact=kind.exact_error(design), clear=tol.certificate_clear
         )
-        if lyap.verdict.value == "fails":
+        if lyap.verdict is Verdict.FAILS:
             return Check(
                 id="observer_stability",
                 title=title,

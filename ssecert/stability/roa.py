@@ -28,6 +28,7 @@ import numpy as np
 from .._rational import fractions, is_positive_definite, product, solve
 from ..budget import Budget
 from ..observers.lure import LureModel
+from ..results import Verdict
 from .lyapunov import lyapunov_certificate, verified_decrease
 from .piecewise import piecewise_region
 
@@ -120,7 +121,7 @@ def _dead_zone_region(model: LureModel, seed: int, widen: bool = True) -> dict[s
         # xi+ = A xi with A = [[F, -L], [0, 0]]: its eigenvalues are F's and 0, so F decides
         # (the exact powers of F alone reach a decision the whole A's may not)
         local = lyapunov_certificate(model.A[:n_e, :n_e], exact=model.exact_A(error_block=True))
-        if local.verdict.value == "fails":
+        if local.verdict is Verdict.FAILS:
             return {
                 "radius": 0.0,
                 "unstable": True,
@@ -128,8 +129,8 @@ def _dead_zone_region(model: LureModel, seed: int, widen: bool = True) -> dict[s
                 f"are those of F = A - L C and 0) is not stable: {local.reason}",
             }
     lyap = lyapunov_certificate(model.A, exact=model.exact_A())
-    if lyap.verdict.value != "holds" or lyap.P is None or lyap.method != "lyapunov":
-        unstable = lyap.verdict.value == "fails"
+    if lyap.verdict is not Verdict.HOLDS or lyap.P is None or lyap.method != "lyapunov":
+        unstable = lyap.verdict is Verdict.FAILS
         why = "is not stable" if unstable else "has no verified P"
         return {
             "radius": 0.0,
