@@ -221,3 +221,20 @@ def test_a_fast_plant_and_a_dsso_get_designs_that_use_their_sensors():
     nilpotent = System(np.array([[0.0, 1.0], [0.0, 0.0]]), np.array(C))
     result = design_observer(nilpotent, "luenberger", time_budget=20)
     assert result.observer is not None and not no_faster(result.linear_radius, 0.0)
+
+
+def test_assert_recovers_names_only_what_its_scenario_uses(plant):
+    from ssecert import spec_from_dict
+    from ssecert.testing import assert_recovers
+
+    design = spec_from_dict(
+        {
+            "name": "blind",
+            "system": {"A": plant.A.tolist(), "C": plant.C.tolist()},
+            "attack": {"max_attacked": 1},
+            "observer": {"kind": "luenberger", "gain": np.zeros((4, 6)).tolist()},
+        }
+    )
+    with pytest.raises(AssertionError) as info:
+        assert_recovers(design, {"attack": "none", "steps": 3, "runs": 2}, 1e-6)
+    assert "attack 'none'" in str(info.value) and "magnitude" not in str(info.value)

@@ -740,11 +740,9 @@ def assert_recovers(
     excess = rel if atol == 0 else error - allowed
     ranked = np.where(np.isnan(error), np.inf, excess)
     worst = int(np.argmax(ranked))
-    where = ", ".join(
-        f"{key} = {table[key]}"
-        for key in ("sensors", "count", "magnitude", "period", "noise")
-        if key in table
-    )
+    shape = ("noise",) if table["attack"] == "none" else ("sensors", "count", "magnitude",
+                                                          "period", "noise")  # fmt: skip
+    where = ", ".join(f"{key} = {table[key]}" for key in shape if key in table)
     raise AssertionError(
         f"the {observer.kind} observer of design {design.name!r} does not recover under scenario "
         f"{table['name']!r}: {int(bad.sum())} of {result.runs} runs end with "
@@ -752,7 +750,11 @@ def assert_recovers(
         + f" after {result.steps} steps.\n"
         f"worst run: index {worst}, final {'relative ' if atol == 0 else ''}error "
         f"{_num(final[worst])}"
-        + ("" if atol == 0 or tol == 0 else f" (allowed {_num(allowed[worst])})")
+        + (
+            ""
+            if atol == 0 or tol == 0 or not np.isfinite(allowed[worst])
+            else f" (allowed {_num(allowed[worst])})"
+        )
         + f"; mean {_num(np.mean(final))}.\n"
         f"scenario: attack {table['attack']!r}"
         + (f" ({where})" if where else "")
