@@ -176,7 +176,7 @@ def design_observer(
         )
     start = time.perf_counter()
     rows, cols = _axes(kind, objective)
-    plant_radius = float(np.abs(np.linalg.eigvals(system.A)).max()) if system.n else 0.0
+    plant_radius = _radius(system.A)
     front: list[dict[str, Any]] = []
     alpha = DEFAULT_DECAY if min_decay is None else float(min_decay)
     choice = "" if min_decay is None else f"decay {alpha:.3g} per step imposed (min_decay)"
@@ -316,16 +316,42 @@ FRONT_SHARE = 0.3  # of the time budget, at most, for the trade-off front
 FRONT_POINTS = 8
 
 
-def _template(system: System, kind: str, row: Any, step: Any, threshold: float) -> Any:
-    """The design of one grid cell with a zero gain (the synthesis replaces it)."""
-    from .observers import build_observer
+def _radius(M: np.ndarray) -> float:
+    """The spectral radius of M in floating point (0 for an empty matrix): words and choices
+    of the design search, never a verdict."""
+    return float(np.abs(np.linalg.eigvals(M)).max()) if M.size else 0.0
 
+
+def _rate_gain(template: Any, **options: Any) -> tuple[Any, dict[str, Any]]:
+    """``synthesize_rate_gain`` and its verification; at the edge of feasibility, where the
+    certificate does not verify, the decay further inside (backoff 0.8), which has a margin."""
+    from .design.synthesis import synthesize_rate_gain
+
+    proposal = synthesize_rate_gain(template, **options)
+    own = _verified_proposal(template, proposal)
+    if proposal.L is not None and not own["verified"]:
+        inside = synthesize_rate_gain(template, **{**options, "backoff": 0.8})
+        if inside.L is not None:
+            proposal, own = inside, _verified_proposal(template, inside)
+    return proposal, own
+
+
+def _params(system: System, kind: str, row: Any, step: Any, threshold: float) -> dict[str, Any]:
+    """The ``[observer]`` section of one grid cell, with a zero gain (the synthesis replaces
+    it)."""
     params: dict[str, Any] = {"kind": kind, "gain": np.zeros((system.n, system.p)).tolist()}
     if kind != "luenberger":
         params.update(step=step, threshold=threshold)
     if kind == "elastic_net":
         params["shrink"] = row
-    return build_observer(system, params)
+    return params
+
+
+def _template(system: System, kind: str, row: Any, step: Any, threshold: float) -> Any:
+    """The design of one grid cell with a zero gain."""
+    from .observers import build_observer
+
+    return build_observer(system, _params(system, kind, row, step, threshold))
 
 
 def tradeoff_front(
@@ -352,7 +378,7 @@ def tradeoff_front(
     ``verify_synthesis``; alpha and gamma are None when it is not).  Sorted fastest first;
     empty when the synthesis gives no gain.
     """
-    from .design.synthesis import synthesize_gain, synthesize_rate_gain
+    from .design.synthesis import synthesize_gain
 
     start = time.perf_counter()
 
@@ -366,15 +392,7 @@ def tradeoff_front(
     if time_limit is not None:
         room = min(room, int((time_limit - solve) / max(solve, 1e-3)))
     bisections = max(2, min(RATE_BISECTIONS_FRONT, room - 3))
-    fastest = synthesize_rate_gain(
-        template, time_limit=left(), bisections=bisections, linear=linear
-    )
-    if fastest.L is not None and not _verified_proposal(template, fastest)["verified"]:
-        # at the edge of feasibility: a decay further inside has a margin
-        inside = synthesize_rate_gain(
-            template, backoff=0.8, time_limit=left(), bisections=bisections, linear=linear
-        )
-        fastest = inside if inside.L is not None else fastest
+    fastest, _ = _rate_gain(template, time_limit=left(), bisections=bisections, linear=linear)
     if fastest.L is None or fastest.alpha is None:
         return out
     out.append(_front_point(template, fastest))
@@ -405,7 +423,7 @@ def _front_point(template: Any, proposal: Any) -> dict[str, Any]:
         "alpha": own.get("alpha") if own["verified"] else None,
         "contraction": math.sqrt(max(1 - alpha, 0.0)),
         "gamma": own.get("gamma") if own["verified"] else None,
-        "linear_radius": float(np.abs(np.linalg.eigvals(design.error_matrix)).max()),
+        "linear_radius": _radius(design.error_matrix),
         "verified": bool(own["verified"]),
     }
 
@@ -547,17 +565,11 @@ def _evaluator(
     numbers, and, when it is certified, its rank (lower is better: the objective, then a
     tie-break) and its ``[observer]`` section.  With ``faster_than`` (rho(A)), a design
     whose linear loop is no faster than that is rejected."""
-    from .design.synthesis import synthesize_gain, synthesize_rate_gain, with_gain
+    from .design.synthesis import synthesize_gain, with_gain
     from .observers import build_observer
 
-    zero = np.zeros((system.n, system.p)).tolist()
-
     def evaluate(row: Any, step: Any) -> tuple[dict[str, Any], Found | None]:
-        params: dict[str, Any] = {"kind": kind, "gain": zero}
-        if kind != "luenberger":
-            params.update(step=step, threshold=threshold)
-        if kind == "elastic_net":
-            params["shrink"] = row
+        params = _params(system, kind, row, step, threshold)
         record: dict[str, Any] = {
             k: v for k, v in params.items() if k in ("step", "shrink", "threshold")
         }
@@ -574,16 +586,10 @@ def _evaluator(
             record["gain"] = "synthesised"
             limit = max(remaining(), 1.0)
             if objective == "rate":
-                proposal = synthesize_rate_gain(template, time_limit=limit, linear=linear)
+                proposal, own = _rate_gain(template, time_limit=limit, linear=linear)
             else:
                 proposal = synthesize_gain(
                     template, alpha=min_decay, time_limit=limit, linear=linear
-                )
-            own = _verified_proposal(template, proposal)
-            if objective == "rate" and proposal.L is not None and not own["verified"]:
-                # at the edge of feasibility: a decay further inside has a margin
-                proposal = synthesize_rate_gain(
-                    template, backoff=0.8, time_limit=limit, linear=linear
                 )
                 own = _verified_proposal(template, proposal)
             record["synthesis"] = proposal.status
@@ -592,7 +598,7 @@ def _evaluator(
                 return record, None
             record["synthesis_certificate"] = own
             design = with_gain(template, proposal.L)
-        record["linear_radius"] = float(np.abs(np.linalg.eigvals(design.error_matrix)).max())
+        record["linear_radius"] = _radius(design.error_matrix)
         if faster_than is not None and no_faster(record["linear_radius"], faster_than):
             record["rejected"] = (
                 f"its linear loop is no faster than the plant (rho(A - L S) = "
@@ -895,7 +901,7 @@ def _linear_radius(result: Any) -> float | None:
         return None
     try:
         design = build_observer(spec.system, spec.observer)
-        return float(np.abs(np.linalg.eigvals(design.error_matrix)).max())
+        return _radius(design.error_matrix)
     except (ValueError, ArithmeticError, np.linalg.LinAlgError):
         return None
 
