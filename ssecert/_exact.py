@@ -84,10 +84,9 @@ def pow2_row_scaling(M: np.ndarray) -> np.ndarray:
     M = np.asarray(M, dtype=float)
     with np.errstate(over="ignore"):
         norms = np.max(np.abs(M), axis=1) if M.size else np.zeros(M.shape[0])
-    out = np.ones(M.shape[0])
-    for i, v in enumerate(norms):
-        out[i] = pow2_scale(float(v))
-    return out
+    usable = np.isfinite(norms) & (norms > 0)
+    _, exponents = np.frexp(np.where(usable, norms, 1.0))
+    return np.where(usable, np.ldexp(1.0, np.minimum(1 - exponents, 1023)), 1.0)
 
 
 @dataclass(frozen=True)

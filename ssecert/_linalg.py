@@ -70,29 +70,52 @@ class Units(NamedTuple):
 
 
 def state_balancing(A: np.ndarray, C: np.ndarray, *, spread: float = 16.0) -> np.ndarray | None:
-    """Powers of two s that balance the states of (A, C) (LAPACK's gebal on [[A, 0], [C, 0]],
-    ``scipy.linalg.matrix_balance``), or None when they spread less than ``spread`` or
-    S^-1 A S and C S would not be exact (an entry under- or overflowing)."""
+    """Powers of two s that balance the states of (A, C), or None when they spread less than
+    ``spread`` or S^-1 A S and C S would not be exact (an entry under- or overflowing).
+
+    LAPACK's gebal (``scipy.linalg.matrix_balance``) on [[A, 0], [C, 0]].  gebal's norms
+    include the diagonal (LAPACK >= 3.5), which a diagonal similarity does not change, and
+    the rows of C stay fixed: a state whose column of A holds only its diagonal entry, or
+    which one sensor sees, is taken for balanced whatever its units (one state of a plant in
+    units 2^50 was, and gebal met another's units halfway).  So the columns of the
+    observability matrix of gebal's result are then equilibrated (``_observability_balancing``),
+    a further scaling used only beyond a spread of ``EXTREME_SPREAD`` (2^16): moderate units
+    change no decision, and plants gebal balances (or leaves alone) keep its coordinates.
+    """
     from scipy.linalg import matrix_balance
+
+    from ._exact import pow2_scale
 
     A = np.asarray(A, dtype=float)
     C = np.asarray(C, dtype=float).reshape(-1, A.shape[0])
     n, p = A.shape[0], C.shape[0]
     if n < 2:
         return None
-    K = np.zeros((n + p, n + p))
-    K[:n, :n], K[n:, :n] = A, C
     with np.errstate(all="ignore"):
-        if not np.all(np.isfinite(K)):
+        if not (np.all(np.isfinite(A)) and np.all(np.isfinite(C))):
             return None
+        K = np.zeros((n + p, n + p))
+        K[:n, :n], K[n:, :n] = A, C
         _, (scale, _) = matrix_balance(K, permute=False, separate=True)
         states = np.asarray(scale[:n], dtype=float)
-        exponents = np.log2(states)
-        if (
-            not np.all(np.isfinite(exponents))
-            or not np.array_equal(exponents, np.round(exponents))
-            or states.max() < spread * states.min()
-        ):
+        if not _spread_beyond(states, spread):
+            states = np.ones(n)
+        more = np.ones(n)
+        A_g = A * (states[None, :] / states[:, None])
+        top = float(np.max(np.abs(A_g))) if A_g.size else 0.0
+        alpha = pow2_scale(top) if top > 0 else 1.0
+        alpha *= pow2_scale(float(np.linalg.norm(alpha * A_g)))
+        for _ in range(_BALANCING_ROUNDS):  # the sensors' units move with the states'
+            step = _observability_balancing(
+                alpha * A * (states * more)[None, :] / (states * more)[:, None],
+                C * (states * more),
+            )
+            if not _spread_beyond(step, 2.0):
+                break
+            more = more * step
+        if _spread_beyond(more, EXTREME_SPREAD):
+            states = states * more
+        if not _spread_beyond(states, spread):
             return None
         A_b = A * (states[None, :] / states[:, None])
         C_b = C * states[None, :]
@@ -100,6 +123,48 @@ def state_balancing(A: np.ndarray, C: np.ndarray, *, spread: float = 16.0) -> np
         if not (np.array_equal(back, A) and np.array_equal(C_b / states[None, :], C)):
             return None
     return states
+
+
+#: the observability matrix's column scaling is used beyond this spread only
+EXTREME_SPREAD = 2.0**16
+_BALANCING_ROUNDS = 8
+# flops spent on the observability blocks of the balancing
+_BALANCING_WORK = 2e7
+
+
+def _spread_beyond(states: np.ndarray, spread: float) -> bool:
+    """Whether powers of two ``states`` (all finite) spread at least ``spread``."""
+    with np.errstate(all="ignore"):
+        exponents = np.log2(states)
+    return bool(
+        np.all(np.isfinite(exponents))
+        and np.array_equal(exponents, np.round(exponents))
+        and states.max() >= spread * states.min()
+    )
+
+
+def _observability_balancing(A: np.ndarray, C: np.ndarray) -> np.ndarray:
+    """Powers of two that equilibrate the columns of the observability matrix [C; C A; ...]
+    (the matrix the structural decisions rest on), with each sensor's row in its own
+    power-of-two units (a sensor's rows in every block share its units).  The caller gives A
+    in fixed power-of-two units (Frobenius norm in [1, 2) before any state scaling): the
+    blocks' weights then do not move with the states, and O S is the observability matrix
+    of the scaled plant.  A state in units 2^50 has a column 2^50 times its neighbours'
+    throughout; a coupling inside A that is large or small against the diagonal does not
+    move the columns apart."""
+    from ._exact import pow2_row_scaling, pow2_scale
+
+    n, p = A.shape[0], C.shape[0]
+    if p == 0 or not np.all(np.isfinite(A)):
+        return np.ones(n)
+    block = pow2_row_scaling(C)[:, None] * C
+    squares = np.sum(block * block, axis=0)
+    for _ in range(1, min(n, max(1, int(_BALANCING_WORK // max(p * n * n, 1))))):
+        block = block @ A
+        squares = squares + np.sum(block * block, axis=0)
+    if not np.all(np.isfinite(squares)):
+        return np.ones(n)
+    return np.array([pow2_scale(float(v)) for v in np.sqrt(squares)])
 
 
 def balanced_units(system: System, *, spread: float = 16.0) -> Units:

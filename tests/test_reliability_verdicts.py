@@ -247,12 +247,24 @@ def test_sub_precision_perturbations_are_not_degeneracies(where, exponent):
 
 
 def test_unobservable_within_rounding_is_inconclusive_with_the_distance():
-    A = np.diag([1.0, 2.0])
-    C = np.array([[1.0, 2.0**-50]])  # sees the second mode, by 2^-50
+    # eigenvalues one ulp apart, one sensor: a double eigenvalue within rounding, in any units
+    A = np.diag([1.0, 1.0 + 2.0**-52])
+    C = np.array([[1.0, 1.0]])
     check = observability(System(A, C))
     assert check.verdict.value == "inconclusive"
     assert check.evidence["exact"]["state"] == "observable"
     assert "precision" in check.summary
+
+
+def test_a_mode_seen_by_two_to_the_minus_fifty_is_a_change_of_units_away_from_clear():
+    # the sensor sees the second mode by 2^-50 (exactly): in units 2^50 times smaller for
+    # that state the plant is diag(1, 2) with C = [1, 1]; a change of units changes no verdict
+    A = np.diag([1.0, 2.0])
+    C = np.array([[1.0, 2.0**-50]])
+    check = observability(System(A, C))
+    plain = observability(System(A, np.array([[1.0, 1.0]])))
+    assert check.verdict.value == plain.verdict.value == "holds"
+    assert check.margin == pytest.approx(plain.margin, rel=1e-12)
 
 
 # ---------------------------------------------------------------------------

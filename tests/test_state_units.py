@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from test_evidence_reverifies import _positive_definite, _q, _zames_falb_lmi
 
-from ssecert import analyze, spec_from_dict
+from ssecert import System, Verdict, analyze, observability, sparse_observability, spec_from_dict
 from ssecert.observers import build_observer
 from ssecert.observers.lure import LureModel
 from ssecert.stability.lmi import circle_certificate
@@ -214,3 +214,37 @@ def test_a_breaking_sets_stealthy_attack_is_given_in_the_users_units():
     for power in range(2):
         assert np.allclose(C[1:] @ np.linalg.matrix_power(A, power) @ z, 0.0, atol=1e-12)
     assert np.linalg.norm(C[0] @ z) > 0
+
+
+def test_a_state_seen_only_through_its_diagonal_and_one_sensor_keeps_observability():
+    # state 0's column of A holds only its diagonal entry, and one sensor sees it: LAPACK's
+    # balancing (its norms include the diagonal, C's rows fixed) took the plant in units 2^50
+    # for balanced, and observability holds became inconclusive ("1.1 eps of an unobservable
+    # one"); the observability matrix's columns show the units
+    A = np.array([[2.0, 0.0, 3.0], [0.0, -1.0, -3.0], [0.0, 1.0, 2.0]])
+    C = np.array([[2.0, -1.0, 0.0]])
+    t = np.array([2.0**50, 1.0, 1.0])
+    plain = observability(System(A, C))
+    scaled = observability(System(A * t[:, None] / t[None, :], C / t[None, :]))
+    assert plain.verdict == scaled.verdict == Verdict.HOLDS
+    assert sparse_observability(System(A / t[:, None] * t[None, :], C * t[None, :]), 0).verdict == (
+        Verdict.HOLDS
+    )
+
+
+def test_power_of_two_state_units_keep_observability_on_random_integer_plants():
+    """One or more states of random small integer plants in units 2^+-50 and 2^+-200."""
+    rng = np.random.default_rng(5)
+    changed = []
+    for _ in range(40):
+        n, p = int(rng.integers(2, 5)), int(rng.integers(1, 4))
+        A = rng.integers(-3, 4, (n, n)).astype(float)
+        C = rng.integers(-2, 3, (p, n)).astype(float)
+        plain = observability(System(A, C)).verdict
+        for k in (50, -50, 200, -200):
+            t = np.ones(n)
+            t[int(rng.integers(n))] = 2.0**k
+            scaled = observability(System(A * t[:, None] / t[None, :], C / t[None, :])).verdict
+            if scaled != plain:
+                changed.append((A.tolist(), C.tolist(), k, plain.value, scaled.value))
+    assert not changed
