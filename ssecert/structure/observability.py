@@ -33,6 +33,10 @@ if TYPE_CHECKING:
 __all__ = ["observability", "pbh_margins", "observability_index", "unobservable_residual"]
 
 
+# above this many sensors per state, PBH matrices are compressed by a QR factor of C
+_COMPRESS_ROWS = 4
+
+
 def pbh_margins(
     A: np.ndarray,
     C: np.ndarray,
@@ -58,14 +62,23 @@ def pbh_margins(
         Rank decision (ZERO: rank deficient, BORDERLINE, NONZERO).
     """
     tol = tolerances or Tolerances()
-    n = A.shape[0]
+    n, p = A.shape[0], C.shape[0]
+    if p > _COMPRESS_ROWS * n and np.all(np.isfinite(C)):
+        # [A - lambda I; C] = diag(I, Q) [A - lambda I; R] with C = Q R: the same singular
+        # values (to rounding, as the SVD's own) from an (2n x n) matrix instead of (n + p) x n
+        C = np.asarray(np.linalg.qr(C, mode="r"))
     stacked_norm = max(matrix_norm(np.vstack([A, C])), np.finfo(float).tiny)
-    margins = np.empty(len(centers))
-    for i, lam in enumerate(np.asarray(centers, dtype=complex)):
-        shift = lam.real if lam.imag == 0 else lam
-        M = np.vstack([A - shift * np.eye(n), C])
-        margins[i] = np.linalg.svd(M, compute_uv=False)[-1] / stacked_norm
-    codes = classify(margins, tol.rtol(n + C.shape[0], n), factor=tol.borderline_factor)
+    lam = np.asarray(centers, dtype=complex).reshape(-1)
+    margins = np.empty(lam.size)
+    real = lam.imag == 0
+    # one batched SVD per dtype: a real shift keeps a real matrix (same values as one by one)
+    for mask, shifts in ((real, lam.real[real]), (~real, lam[~real])):
+        if shifts.size:
+            stacked = np.vstack([A, C]).astype(shifts.dtype)
+            M = np.broadcast_to(stacked, (shifts.size, *stacked.shape)).copy()
+            M[:, np.arange(n), np.arange(n)] -= shifts[:, None]
+            margins[mask] = np.linalg.svd(M, compute_uv=False)[:, -1] / stacked_norm
+    codes = classify(margins, tol.rtol(n + p, n), factor=tol.borderline_factor)
     return margins, codes
 
 
