@@ -5,22 +5,54 @@ which an adversary controls.  ssecert decides, with evidence anyone can
 re-check, whether secure estimation is possible at all (observability,
 s-sparse observability, the breaking sensor set and a stealthy attack) and
 whether Lasso will find the attack (the irrepresentable constant).
+
+The names below are imported when first used (PEP 562), so ``import ssecert``
+and ``ssecert --version`` do not pay for SciPy and the analyses.
 """
 
-from collections.abc import Callable
-from typing import Any
+from __future__ import annotations
 
+import importlib
+import sys
+import types
+from typing import TYPE_CHECKING, Any
+
+from . import _display
 from ._version import __version__
-from .analyze import analyze
-from .certify import CertifyResult
-from .results import Certificate, Check, Verdict
-from .spec import Spec, SpecError, load_spec, spec_from_dict
-from .structure.attacks import StealthyAttack, stealthy_attack
-from .structure.irrepresentable import irrepresentable, irrepresentable_constant
-from .structure.observability import observability, observability_index
-from .structure.sparse import RemovalScan, scan_removals, sparse_observability
-from .system import System
-from .tolerances import Tolerances
+
+if TYPE_CHECKING:  # the lazily imported names, for type checkers and editors
+    from .analyze import analyze
+    from .results import Certificate, Check, Verdict
+    from .spec import Spec, SpecError, load_spec, spec_from_dict
+    from .structure.attacks import StealthyAttack, stealthy_attack
+    from .structure.irrepresentable import irrepresentable, irrepresentable_constant
+    from .structure.observability import observability, observability_index
+    from .structure.sparse import RemovalScan, scan_removals, sparse_observability
+    from .system import System
+    from .tolerances import Tolerances
+
+# name: the module that defines it
+_LAZY = {
+    "System": ".system",
+    "Spec": ".spec",
+    "SpecError": ".spec",
+    "load_spec": ".spec",
+    "spec_from_dict": ".spec",
+    "Check": ".results",
+    "Certificate": ".results",
+    "Verdict": ".results",
+    "Tolerances": ".tolerances",
+    "analyze": ".analyze",
+    "observability": ".structure.observability",
+    "observability_index": ".structure.observability",
+    "sparse_observability": ".structure.sparse",
+    "scan_removals": ".structure.sparse",
+    "RemovalScan": ".structure.sparse",
+    "stealthy_attack": ".structure.attacks",
+    "StealthyAttack": ".structure.attacks",
+    "irrepresentable": ".structure.irrepresentable",
+    "irrepresentable_constant": ".structure.irrepresentable",
+}
 
 __all__ = [
     "__version__",
@@ -46,23 +78,41 @@ __all__ = [
 ]
 
 
-def _html_display(fragment: str) -> Callable[[Any], str]:
-    """A ``_repr_html_`` that renders with ``ssecert.report.html`` (imported when first shown)."""
-
-    def _repr_html_(self: Any) -> str:
-        from .report import html
-
-        return str(getattr(html, fragment)(self))
-
-    return _repr_html_
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'ssecert' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module, __name__), name)
+    globals()[name] = value
+    return value
 
 
-# Notebooks show checks and certificates as the report does; the renderer sits above the
-# results it renders, so the package wires it here rather than results importing it.
-for _cls, _fragment in (
-    (Check, "check_fragment"),
-    (Certificate, "certificate_fragment"),
-    (CertifyResult, "render_fragment"),
-):
-    setattr(_cls, "_repr_html_", _html_display(_fragment))  # noqa: B010  (not a declared attribute)
-del _cls, _fragment
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_LAZY})
+
+
+class _Package(types.ModuleType):
+    """The package's module type: a function named like its submodule stays the attribute.
+
+    Importing ``ssecert.analyze`` (the module) binds it as the package's attribute
+    ``analyze``, which is the function ``ssecert.analyze(spec)``; that binding is refused,
+    so the function is found (lazily) whoever imported the module first.
+    """
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if isinstance(value, types.ModuleType) and _LAZY.get(name) == f".{name}":
+            return
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package
+
+
+def _render_html(fragment: str, result: Any) -> str:
+    """Notebook display of results (``_display.html_display``), rendered by the report."""
+    from .report import html
+
+    return str(getattr(html, fragment)(result))
+
+
+_display.html_renderer = _render_html

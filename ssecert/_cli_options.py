@@ -169,7 +169,7 @@ def _dask(args: argparse.Namespace) -> Any:
 
 def _add_analysis_options(parser: argparse.ArgumentParser) -> None:
     """Options shared by ``certify`` and ``analyze``."""
-    from .structure.sparse import DEFAULT_TIME_BUDGET
+    from .budget import DEFAULT_TIME_BUDGET
 
     parser.add_argument(
         "--max-attacked",

@@ -24,6 +24,7 @@ __all__ = [
     "ResourceLimitError",
     "DEFAULT_MEMORY",
     "DEFAULT_WORK",
+    "DEFAULT_TIME_BUDGET",
     "format_bytes",
     "format_count",
     "parse_bytes",
@@ -34,6 +35,8 @@ __all__ = [
 
 DEFAULT_MEMORY = 2 * 2**30  # bytes
 DEFAULT_WORK = 1e12  # floating-point operations
+# seconds spent refining max_removable once the verdict is settled (None: exact, however long)
+DEFAULT_TIME_BUDGET = 5.0
 
 
 class ResourceLimitError(ValueError):

@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from ._display import html_display
 from .analyze import analyze
 from .budget import Budget, ResourceLimitError
 from .context import OBSERVER, AnalysisContext
@@ -382,3 +383,7 @@ def _command(spec: Spec, seed: int | None, simulate: bool) -> str:
     if not simulate:
         parts.append("--no-sim")
     return " ".join(shlex.quote(p) for p in parts)
+
+
+# notebooks show a certify result as its report
+CertifyResult._repr_html_ = html_display("render_fragment")  # type: ignore[attr-defined]

@@ -14,6 +14,8 @@ from typing import Any
 
 import numpy as np
 
+from ._display import html_display
+
 __all__ = [
     "Verdict",
     "Check",
@@ -276,3 +278,8 @@ class Certificate:
         if self.meta:
             out["meta"] = to_jsonable(dict(self.meta))
         return out
+
+
+# notebooks show checks and certificates as the report does
+Check._repr_html_ = html_display("check_fragment")  # type: ignore[attr-defined]
+Certificate._repr_html_ = html_display("certificate_fragment")  # type: ignore[attr-defined]

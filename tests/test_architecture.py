@@ -24,6 +24,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "ssecert"
 LAYERS = {
     0: (
         "ssecert._version",
+        "ssecert._display",
         "ssecert._format",
         "ssecert._validation",
         "ssecert._io",

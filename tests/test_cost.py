@@ -51,14 +51,23 @@ def test_a_refusal_over_the_set_budget_quotes_the_time_it_would_take():
     assert "would take about" in problems and "--max-sets raises the budget" in problems
 
 
+@pytest.mark.parametrize("allowance", [(0.0, 0.0), None])
 @pytest.mark.parametrize("time_budget", [0.0, None])
-def test_an_eigenspace_search_past_the_time_budget_gives_way_to_the_enumeration(time_budget):
-    # A = I: one eigenspace of dimension 3, whose hyperplane search auto tries first
+def test_an_eigenspace_search_past_its_allowance_gives_way_to_the_enumeration(
+    time_budget, allowance, monkeypatch
+):
+    # A = I: one eigenspace of dimension 3, whose hyperplane search auto tries first; its
+    # deadline is a multiple of its predicted time (never the refinement's time budget,
+    # which is 0 for "the verdict only"), here set to zero to see it give way
+    from ssecert.structure import sparse
+
+    if allowance is not None:
+        monkeypatch.setattr(sparse, "SEARCH_ALLOWANCE", allowance)
     system = _generic(3, 12, seed=4)
     check = sparse_observability(system, 2, time_budget=time_budget)
     tried = check.evidence["methods_tried"]
     assert tried[0]["method"] == "eigenspace"
-    if time_budget == 0.0:
+    if time_budget == 0.0 and allowance is not None:
         assert "the time budget ended after 0 of 66 hyperplanes" in " ".join(tried[0]["problems"])
         assert tried[1]["method"] == "enumeration"
     else:

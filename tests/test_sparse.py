@@ -347,3 +347,18 @@ def test_the_closest_sets_kept_block_by_block_are_the_smallest_overall(seed):
             kept = tuple(int(i) for i in rest if i not in set(subsets[j].tolist()))
             everything.append((float(proxy[j]), total - 1 - offset - j, kept))
     assert candidates == sorted(everything)[:_CRITICAL]
+
+
+def test_a_zero_time_budget_leaves_the_eigenspace_method_its_verdict():
+    """--time-budget 0 means no refinement past the verdict; the eigenspace method gives the
+    verdict and the exact value at once, so it is not cut off (it was, at once, and the
+    enumeration answered 'at least 6' for an exact 24)."""
+    rng = np.random.default_rng(3)
+    n, p = 12, 30
+    A = np.diag(np.r_[[0.5] * 4, np.linspace(0.1, 0.9, n - 4)])
+    C = rng.standard_normal((p, n)) * (rng.random((p, n)) < 0.85)
+    plain = sparse_observability(System(A, C), 3)
+    zero = sparse_observability(System(A, C), 3, time_budget=0.0)
+    assert plain.fields["method"] == zero.fields["method"] == "eigenspace"
+    assert plain.fields["max_removable"] == zero.fields["max_removable"] == 24
+    assert not zero.fields["max_removable_is_lower_bound"]

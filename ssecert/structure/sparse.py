@@ -48,6 +48,7 @@ from .._linalg import (
     sensor_subspaces,
 )
 from .._validation import as_choice, as_float_option, as_int_option
+from ..budget import DEFAULT_TIME_BUDGET
 from ..results import Check, Verdict
 from ..system import System
 from ..tolerances import Tolerances
@@ -70,8 +71,6 @@ __all__ = [
 ]
 
 DEFAULT_MAX_SETS = 50_000_000
-# seconds spent refining max_removable once the verdict is settled (None: exact, however long)
-DEFAULT_TIME_BUDGET = 5.0
 
 METHODS = ("auto", "enumeration", "eigenspace")
 
@@ -177,10 +176,12 @@ def _run(
                 tried.append(outcome)
                 return outcome, tried, estimates
         else:
-            # in auto, a hyperplane search past the time budget gives way to the enumeration,
-            # which decides the verdict first; a forced eigenspace method runs to the end
+            # in auto, a hyperplane search far past its predicted time gives way to the
+            # enumeration, which decides the verdict first; a forced eigenspace method runs to
+            # the end.  The refinement's time budget is no deadline here: this search gives
+            # the verdict itself (a budget of 0 means no refinement, not a weaker verdict)
             deadline = (
-                time.monotonic() + time_budget
+                time.monotonic() + _search_allowance(system.p, eig, time_budget)
                 if time_budget is not None and order == ["eigenspace", "enumeration"] and not tried
                 else None
             )
@@ -201,6 +202,18 @@ def _run(
             if outcome.max_removable >= 2 * s:
                 return outcome, tried, estimates
     return tried[0], tried, estimates
+
+
+# the hyperplane search may take this many times its predicted seconds, plus a second,
+# before the enumeration takes over
+SEARCH_ALLOWANCE = (4.0, 1.0)
+
+
+def _search_allowance(p: int, eig: EigenAnalysis, time_budget: float) -> float:
+    """Seconds the eigenspace method's search gets before the enumeration takes over: the
+    refinement budget, or a multiple of its own predicted time when that is longer."""
+    factor, fixed = SEARCH_ALLOWANCE
+    return max(time_budget, fixed + factor * search_seconds(p, eig))
 
 
 def sparse_observability(
