@@ -1,10 +1,12 @@
 """Observer gains: deadbeat (float and exact), placement with re-check, OGD, pinv."""
 
+import types
 import warnings
 
 import control
 import numpy as np
 import pytest
+import scipy.signal
 import sympy as sp
 from planted import planted
 
@@ -106,11 +108,11 @@ def test_place_gain_is_rechecked():
 def test_place_miss_is_an_error(monkeypatch):
     system = System([[1.0, 0.1], [0.0, 1.0]], [[1.0, 0.0]])
 
-    def bad_place(A, B, poles):
+    def bad_place(A, B, poles, method):
         warnings.warn("convergence not reached", stacklevel=2)
-        return np.array([[0.0, 0.0]])
+        return types.SimpleNamespace(gain_matrix=np.array([[0.0, 0.0]]))
 
-    monkeypatch.setattr(control, "place", bad_place)
+    monkeypatch.setattr(scipy.signal, "place_poles", bad_place)
     with pytest.raises(GainError, match="miss"):
         place_gain(system, [0.2, 0.3])
 
@@ -138,3 +140,33 @@ def test_place_with_dependent_sensor_rows():
     np.testing.assert_allclose(
         sorted(np.linalg.eigvals(gain.error_matrix).real), [0.1, 0.2], atol=1e-10
     )
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_place_gain_is_control_place_on_the_dual_pair(seed):
+    """place_gain calls SciPy's Tits-Yang placement directly (python-control is not imported
+    for it): on the independent sensors it uses, it returns control.place's gain, bit for bit."""
+    rng = np.random.default_rng(seed)
+    n, p = int(rng.integers(2, 6)), int(rng.integers(1, 4))
+    system = System(rng.standard_normal((n, n)), rng.standard_normal((p, n)))
+    poles = np.linspace(-0.5, 0.5, n).astype(complex)
+    gain = place_gain(system, poles)
+    rows = gain.details["sensors_used"]
+    expected = np.zeros((n, p))
+    expected[:, rows] = np.asarray(control.place(system.A.T, system.C[rows].T, poles)).T
+    assert np.array_equal(gain.L, expected)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_lyapunov_solution_is_control_dlyap(seed):
+    """The Lyapunov certificate's P is what control.dlyap returns without Slycot."""
+    from ssecert.stability.lyapunov import _lyapunov_solution
+
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(1, 7))
+    F = rng.standard_normal((n, n))
+    F *= 0.9 / max(np.abs(np.linalg.eigvals(F)).max(), 1e-12)
+    P, why = _lyapunov_solution(F, np.eye(n))
+    assert not why
+    assert np.allclose(P, control.dlyap(F.T, np.eye(n)), rtol=1e-12, atol=1e-12)
+    assert np.allclose(F.T @ P @ F - P + np.eye(n), 0, atol=1e-9 * np.abs(P).max())

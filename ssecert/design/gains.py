@@ -3,7 +3,8 @@
 Observers are written x_hat(k+1) = A x_hat(k) + L (y(k) - y_hat(k)), so the
 linear error matrix is F = A - L C (the thesis's L1 is -L).
 
-* ``place_gain``: ``control.place`` on the dual pair, with the closed-loop
+* ``place_gain``: ``scipy.signal.place_poles`` (Tits-Yang, what ``control.place``
+  calls) on the dual pair, with the closed-loop
   eigenvalues re-checked against the requested ones (``place`` can return
   gains whose poles are far off, sometimes with only a warning);
 * ``deadbeat_gain``: A - L C nilpotent with the smallest possible index
@@ -68,7 +69,8 @@ def _match_poles(got: np.ndarray, want: np.ndarray, scale: float) -> tuple[float
 
 
 def place_gain(system: System, poles: Sequence[complex]) -> Gain:
-    """Pole placement with ``control.place``, re-checked.
+    """Pole placement with ``scipy.signal.place_poles`` (Tits-Yang, as ``control.place``),
+    re-checked.
 
     Parameters
     ----------
@@ -84,7 +86,7 @@ def place_gain(system: System, poles: Sequence[complex]) -> Gain:
     Raises
     ------
     GainError
-        If ``control.place`` refuses, or if the eigenvalues of A - L C miss
+        If the placement refuses, or if the eigenvalues of A - L C miss
         the requested ones by more than about sqrt(eps) relative (more for
         repeated poles).  A miss is an error, not a result.
 
@@ -95,7 +97,7 @@ def place_gain(system: System, poles: Sequence[complex]) -> Gain:
     >>> g.verified
     True
     """
-    import control
+    from scipy.signal import place_poles
 
     wanted = np.asarray(poles, dtype=complex)
     if wanted.shape != (system.n,):
@@ -106,9 +108,9 @@ def place_gain(system: System, poles: Sequence[complex]) -> Gain:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
-            K = control.place(system.A.T, system.C[rows].T, wanted)
-        except Exception as exc:  # control raises ValueError/ControlDimension/...
-            raise GainError(f"control.place refused: {exc}") from None
+            K = place_poles(system.A.T, system.C[rows].T, wanted, method="YT").gain_matrix
+        except Exception as exc:  # ValueError, LinAlgError, ...
+            raise GainError(f"pole placement refused: {exc}") from None
     L = np.zeros((system.n, system.p))
     L[:, rows] = np.asarray(K, dtype=float).T
     F = system.A - L @ system.C
@@ -118,7 +120,7 @@ def place_gain(system: System, poles: Sequence[complex]) -> Gain:
     notes = [str(w.message) for w in caught]
     if ratio > 1.0:
         raise GainError(
-            f"control.place returned a gain whose poles miss the requested ones by up to "
+            f"pole placement returned a gain whose poles miss the requested ones by up to "
             f"{dist.max():.2e} (tolerance exceeded {ratio:.1f} times)"
             + (f"; warnings: {'; '.join(notes)}" if notes else "")
         )

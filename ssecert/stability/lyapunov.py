@@ -1,10 +1,10 @@
 """Discrete Lyapunov certificates for linear error dynamics e(k+1) = F e(k).
 
-``control.dlyap(A, Q)`` solves A X A^T - X + Q = 0, so F^T is passed to get
-F^T P F - P + Q = 0.  It returns an indefinite X for an unstable F without
-complaint, so nothing is taken on trust: the certificate holds only when
-the recomputed P - F^T P F and P itself are positive definite by Cholesky
-with a margin above a floating-point error bound.
+``scipy.linalg.solve_discrete_lyapunov(A, Q)`` (what ``control.dlyap`` calls without
+Slycot) solves A X A^T - X + Q = 0, so F^T is passed to get F^T P F - P + Q = 0.  It
+returns an indefinite X for an unstable F without complaint, so nothing is taken on trust:
+the certificate holds only when the recomputed P - F^T P F and P itself are positive
+definite by Cholesky with a margin above a floating-point error bound.
 """
 
 from __future__ import annotations
@@ -164,7 +164,7 @@ def lyapunov_certificate(
 ) -> LyapunovCertificate:
     """Certify that e(k+1) = F e(k) is asymptotically stable, or show it is not.
 
-    A Lyapunov matrix P (``control.dlyap``) is the certificate when it
+    A Lyapunov matrix P (``solve_discrete_lyapunov``) is the certificate when it
     verifies in floating point with a margin.  Otherwise the exact F decides
     (``schur_decision``): stable by exact powers, unstable by exact traces or
     an exact eigenvalue on the unit circle (with the dominant direction as a
@@ -283,13 +283,14 @@ def _certificate_in_units(
 
 
 def _lyapunov_solution(F: np.ndarray, Q: np.ndarray) -> tuple[np.ndarray | None, str]:
-    """P solving F^T P F - P + Q = 0 (``control.dlyap``), or None and why there is none."""
-    import control
+    """P solving F^T P F - P + Q = 0 (``scipy.linalg.solve_discrete_lyapunov``, which
+    ``control.dlyap`` calls without Slycot), or None and why there is none."""
+    from scipy.linalg import solve_discrete_lyapunov
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # an ill-conditioned solve is judged below, not trusted
         try:
-            P = np.asarray(control.dlyap(F.T, Q), dtype=float)
+            P = np.asarray(solve_discrete_lyapunov(F.T, Q), dtype=float)
         except Exception as exc:  # singular Lyapunov operator (lambda_i lambda_j = 1)
             return None, f"the Lyapunov equation has no unique solution ({exc})"
     if not np.all(np.isfinite(P)):
