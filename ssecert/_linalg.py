@@ -15,7 +15,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -70,6 +70,25 @@ class Units(NamedTuple):
 
 
 def state_balancing(A: np.ndarray, C: np.ndarray, *, spread: float = 16.0) -> np.ndarray | None:
+    """Powers of two s that balance the states of (A, C) (``_state_balancing``), remembered
+    for the last plant asked: the checks of one analysis ask for the same plant's several
+    times, and a 1,000-sensor plant's balancing costs a few hundredths of a second."""
+    global _LAST_BALANCING
+    A = np.asarray(A, dtype=float)
+    C = np.asarray(C, dtype=float).reshape(-1, A.shape[0])
+    key = (A.shape, C.shape, A.tobytes(), C.tobytes(), float(spread))
+    last = _LAST_BALANCING  # one read: another thread may replace it meanwhile
+    if last is None or last[0] != key:
+        last = (key, _state_balancing(A, C, spread=spread))
+        _LAST_BALANCING = last
+    states = last[1]
+    return None if states is None else states.copy()
+
+
+_LAST_BALANCING: tuple[tuple[Any, ...], np.ndarray | None] | None = None
+
+
+def _state_balancing(A: np.ndarray, C: np.ndarray, *, spread: float) -> np.ndarray | None:
     """Powers of two s that balance the states of (A, C), or None when they spread less than
     ``spread`` or S^-1 A S and C S would not be exact (an entry under- or overflowing).
 

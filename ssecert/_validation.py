@@ -211,7 +211,10 @@ def as_real_matrix(
         flat: list[Any] = [value]
         for _ in range(ndim):
             flat = [sub for item in flat for sub in item]
-        for item in flat:
+        kinds = set(map(type, flat))
+        # plain floats and ints (what JSON and TOML give) need no per-entry type checks
+        checked = flat if not kinds <= {float, int} else [x for x in flat if type(x) is int]
+        for item in checked:
             if (
                 isinstance(item, (bool, np.bool_))
                 or _is_time(item)
