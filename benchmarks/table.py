@@ -86,6 +86,13 @@ BENCHMARKS: dict[str, tuple[str, str]] = {
         "every check included (best of a few runs), against the loop as a script (plus the "
         "start-up of Python with numpy). Both must give the same verdict.",
     ),
+    "large": (
+        "bench_large.py",
+        "The whole `ssecert analyze` command on generic plants with many sensors (n = 50, "
+        "p = 1,000 and n = 100, p = 200, s = 2) against the naive rank loop (sampled and "
+        "extrapolated, plus Python's start-up) and against the same command run from a git "
+        "worktree of an earlier revision in the same run (same verdict required).",
+    ),
     "distributed": (
         "bench_distributed.py",
         "The enumeration on local Dask clusters of 1 and 2 single-thread worker processes "
@@ -117,6 +124,7 @@ ORDER = (
     "FISTA vs cvxpy",
     "verdict vs naive loop",
     "analyze vs naive loop",
+    "large plants",
     "Dask workers vs in-process",
     "cost model",
     "cost model projection",
