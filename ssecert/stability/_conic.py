@@ -11,6 +11,7 @@ solver's candidate comes out of here: callers verify it.
 
 from __future__ import annotations
 
+import functools
 import time
 from typing import Any
 
@@ -19,9 +20,14 @@ import numpy as np
 __all__ = ["LMIProblem"]
 
 
+@functools.lru_cache(maxsize=64)
 def _triu(d: int) -> tuple[np.ndarray, np.ndarray]:
-    """Row and column indices of the upper triangle, column by column (Clarabel's order)."""
+    """Row and column indices of the upper triangle, column by column (Clarabel's order);
+    read-only and remembered (the piecewise search asks for the same few sizes thousands
+    of times)."""
     cols, rows = np.tril_indices(d)  # the lower triangle row by row, transposed
+    rows.flags.writeable = False
+    cols.flags.writeable = False
     return rows, cols
 
 
