@@ -92,15 +92,17 @@ def interpreter_start(runs: int) -> float:
     return seconds
 
 
-def run_analyze(spec: str | Path, out: Path, options: tuple[str, ...] = ()) -> dict[str, Any]:
-    """One run of the command; its JSON certificate."""
+def run_analyze(
+    spec: str | Path, out: Path, options: tuple[str, ...] = (), *, cwd: Path = ROOT
+) -> dict[str, Any]:
+    """One run of the command from ``cwd`` (the source tree, so that this ssecert is the one
+    run, or a worktree of another revision); its JSON certificate."""
     command = [sys.executable, "-m", "ssecert", "analyze", str(spec), "--json", str(out)]
-    # from the source tree, so that this ssecert is the one run
     done = subprocess.run(
-        [*command, *options], cwd=ROOT, capture_output=True, text=True, check=False
+        [*command, *options], cwd=cwd, capture_output=True, text=True, check=False
     )
     if done.returncode not in (0, 1, 3):  # holds, fails, inconclusive
-        raise RuntimeError(f"{' '.join(command)} exited {done.returncode}: {done.stderr}")
+        raise RuntimeError(f"{' '.join(command)} in {cwd} exited {done.returncode}: {done.stderr}")
     return json.loads(out.read_text(encoding="utf-8"))
 
 

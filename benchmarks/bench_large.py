@@ -23,9 +23,7 @@ is timed in a subprocess, start-up included (best of a few runs).  Two reference
 from __future__ import annotations
 
 import argparse
-import json
 import subprocess
-import sys
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -33,7 +31,7 @@ from typing import Any
 
 import numpy as np
 from _common import best_of, row, yes_no
-from bench_analyze import interpreter_start, naive, write_spec
+from bench_analyze import interpreter_start, naive, run_analyze, write_spec
 
 from ssecert import System
 
@@ -47,15 +45,6 @@ def generic_plant(n: int, p: int, seed: int = 0) -> System:
     rng = np.random.default_rng(seed)
     A = rng.standard_normal((n, n)) / np.sqrt(n)
     return System(A, rng.standard_normal((p, n)), name=f"generic-n{n}-p{p}")
-
-
-def run_analyze(spec: Path, out: Path, cwd: Path) -> dict[str, Any]:
-    """One run of the command from ``cwd`` (the source tree or a worktree); its JSON."""
-    command = [sys.executable, "-m", "ssecert", "analyze", str(spec), "--json", str(out)]
-    done = subprocess.run(command, cwd=cwd, capture_output=True, text=True, check=False)
-    if done.returncode not in (0, 1, 3):
-        raise RuntimeError(f"{' '.join(command)} in {cwd} exited {done.returncode}: {done.stderr}")
-    return json.loads(out.read_text(encoding="utf-8"))
 
 
 @dataclass(frozen=True)
@@ -79,7 +68,7 @@ class Large:
 def _timed(spec: Path, out: Path, cwd: Path, runs: int) -> tuple[float, str]:
     """Best-of-``runs`` seconds of the command from ``cwd`` and its sparse-observability verdict."""
     certs: list[dict[str, Any]] = []
-    seconds, _ = best_of(lambda: certs.append(run_analyze(spec, out, cwd)), runs)
+    seconds, _ = best_of(lambda: certs.append(run_analyze(spec, out, cwd=cwd)), runs)
     return seconds, str(certs[-1]["checks"]["sparse_observability"]["verdict"])
 
 
