@@ -105,13 +105,13 @@ def test_the_verification_rejects_a_tampered_function():
     unit = replace(model, threshold=1.0)
     empty = pw._empty_pairs(regions, unit, 20.0)
     found = pw._attempt(model, regions, 3.0, 6.0, 100.0, empty, set())
-    assert found["ok"]
-    functions = [P.copy() for P in found["functions"]]
-    ok = pw._verify(model, regions, functions, found["lmis"], 3.0, 6.0, 100.0)
+    assert found.ok
+    functions = [P.copy() for P in found.functions]
+    ok = pw._verify(model, regions, functions, found.lmis, 3.0, 6.0, 100.0)
     assert ok[2] == ""
     active = next(k for k in range(len(functions)) if k != regions.zero)
     functions[active][-1, -1] += 50.0  # a region's function raised: some decrease breaks
-    bad = pw._verify(model, regions, functions, found["lmis"], 3.0, 6.0, 100.0)
+    bad = pw._verify(model, regions, functions, found.lmis, 3.0, 6.0, 100.0)
     assert bad[2] and bad[0] < 0
 
 
@@ -151,10 +151,10 @@ def test_the_verification_requires_the_dead_zone_decrease():
     regions = pw._Regions(model)
     empty = pw._empty_pairs(regions, replace(model, threshold=1.0), 20.0)
     found = pw._attempt(model, regions, 3.0, 6.0, 100.0, empty, set())
-    functions = [P.copy() for P in found["functions"]]
+    functions = [P.copy() for P in found.functions]
     N = model.N
     functions[regions.zero][:N, :N] = np.eye(N)  # V = |xi|^2 does not decrease along A
-    bad = pw._verify(model, regions, functions, found["lmis"], 3.0, 6.0, 100.0)
+    bad = pw._verify(model, regions, functions, found.lmis, 3.0, 6.0, 100.0)
     assert bad[2].startswith("the dead zone's decrease")
 
 

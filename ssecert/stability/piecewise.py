@@ -52,10 +52,10 @@ import itertools
 import math
 import time
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import dataclass, field, replace
 from fractions import Fraction
 from functools import partial
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -216,15 +216,15 @@ def _search(model: LureModel, seed: int, floor: float, clear: float) -> dict[str
         is not None
     }
     attempts: list[dict[str, Any]] = []
-    best: dict[str, Any] | None = None
+    best: _Attempt | None = None
     lo, hi = -1, len(ladder)  # ladder[lo] verified, ladder[hi] did not
     while hi - lo > 1:
         mid = (lo + hi) // 2
-        r = ladder[mid]
-        found = _attempt(model, regions, r, OUTER * r, clear, empty_pairs, empty_inner)
-        attempts.append({"radius": r * lam, **found["record"]})
-        if found["ok"]:
-            best, lo = {**found, "r": r}, mid
+        found = _attempt(model, regions, ladder[mid], OUTER * ladder[mid], clear, empty_pairs,
+                         empty_inner)  # fmt: skip
+        attempts.append({"radius": ladder[mid] * lam, **found.record})
+        if found.ok:
+            best, lo = found, mid
         else:
             hi = mid
     if best is None:
@@ -233,7 +233,7 @@ def _search(model: LureModel, seed: int, floor: float, clear: float) -> dict[str
             "reason": "no piecewise-quadratic Lyapunov function verified",
             "attempts": attempts,
         }
-    r = best["r"]
+    r = ladder[lo]
     replay = _replay(model, r * lam, OUTER * r * lam, seed)
     if not replay["confirmed"]:
         return {
@@ -248,13 +248,40 @@ def _search(model: LureModel, seed: int, floor: float, clear: float) -> dict[str
         "ball": OUTER * r * lam,
         "method": "piecewise-quadratic Lyapunov function over the soft threshold's "
         f"{3**model.m} regions (S-procedure LMIs, cvxpy and Clarabel), verified in numpy",
-        "transitions": best["transitions"],
-        "transitions_empty": best["empty"],
-        "margin": best["margin"],
-        "error_bound": best["bound"],
+        "transitions": best.transitions,
+        "transitions_empty": best.empty,
+        "margin": best.margin,
+        "error_bound": best.bound,
         "attempts": attempts,
         "replay": replay,
     }
+
+
+class _RegionLMI(NamedTuple):
+    """One S-procedure LMI of a piecewise certificate, as solved (or as posed: then the
+    multiplier and scalar are the solver's variable handles)."""
+
+    kind: str  # "outer" (the level set in the ball), "inner" (the initial ball), "decrease"
+    region: int  # k: the region the state is in
+    to: int  # j: the region it moves to ("decrease"; k otherwise)
+    H: np.ndarray  # the rows of the region constraints the multiplier weighs
+    multiplier: Any  # W >= 0 entrywise (a block handle while posed)
+    scalar: Any  # the ball's S-procedure scalar (a handle while posed)
+
+
+@dataclass(frozen=True)
+class _Attempt:
+    """What one radius's LMIs gave: ``ok`` when they were solved and verified; ``record`` is
+    the attempt's evidence row (status, margin, error bound, seconds, the problem)."""
+
+    ok: bool
+    record: dict[str, Any]
+    transitions: int = 0
+    empty: int = 0  # transitions and initial regions proved empty, without an LMI
+    margin: float = math.nan
+    bound: float = math.nan
+    functions: list[np.ndarray] = field(default_factory=list)  # the verified P_s
+    lmis: list[_RegionLMI] = field(default_factory=list)
 
 
 def _attempt(
@@ -265,7 +292,7 @@ def _attempt(
     clear: float,
     empty_pairs: set[tuple[int, int]],
     empty_inner: set[int],
-) -> dict[str, Any]:
+) -> _Attempt:
     """Pose, solve and verify the LMIs for initial errors of radius r inside the ball R
     (both in thresholds)."""
     from ._conic import LMIProblem
@@ -297,7 +324,7 @@ def _attempt(
         return handle[regions.mirror(k)], J @ F, sign
 
     lp.lmi(-ALPHA * np.eye(N), [(P0, np.eye(N), 1.0), (P0, model.A, -1.0)], delta=DELTA)
-    lmis: list[tuple[str, int, int, np.ndarray, int, int]] = []
+    lmis: list[_RegionLMI] = []
     empty = 0
     for k in reps:
         G = np.vstack([regions.G[k], one])
@@ -308,7 +335,7 @@ def _attempt(
             [(kap, Iq - level * E1, -1.0)],
             delta=DELTA,
         )
-        lmis.append(("outer", k, k, G, U, kap))
+        lmis.append(_RegionLMI("outer", k, k, G, U, kap))
         GZ = G @ Z
         if k not in empty_inner:
             U2, kap2 = lp.block(len(G), nonneg=True, mask=_multiplier_mask(len(G))), lp.scalar()
@@ -318,7 +345,7 @@ def _attempt(
                 [(kap2, r**2 * e1 - In, -1.0)],
                 delta=DELTA,
             )
-            lmis.append(("inner", k, k, GZ, U2, kap2))
+            lmis.append(_RegionLMI("inner", k, k, GZ, U2, kap2))
         else:
             empty += 1
         T = regions.T[k]
@@ -336,15 +363,15 @@ def _attempt(
                 [(nu, level * E1 - Iq, -1.0)],
                 delta=DELTA,
             )
-            lmis.append(("decrease", k, j, H, W, nu))
+            lmis.append(_RegionLMI("decrease", k, j, H, W, nu))
     x, info = lp.solve(max_iter=MAX_ITER)
     record: dict[str, Any] = {
-        "transitions": sum(1 for item in lmis if item[0] == "decrease"),
+        "transitions": sum(1 for item in lmis if item.kind == "decrease"),
         "status": info["status"],
     }
     if x is None:
         record["seconds"] = round(time.perf_counter() - start, 3)
-        return {"ok": False, "record": record}
+        return _Attempt(False, record)
     values: list[np.ndarray] = []
     for k in range(K):
         if k == regions.zero:
@@ -354,8 +381,11 @@ def _attempt(
         else:
             values.append(J @ lp.matrix(x, handle[regions.mirror(k)]) @ J)
     solved = [
-        (kind, k, j, H, np.maximum(lp.matrix(x, w), 0.0), max(lp.value(x, sc), 0.0))
-        for kind, k, j, H, w, sc in lmis
+        item._replace(
+            multiplier=np.maximum(lp.matrix(x, item.multiplier), 0.0),
+            scalar=max(lp.value(x, item.scalar), 0.0),
+        )
+        for item in lmis
     ]
     margin, bound, problem_text = _verify(model, regions, values, solved, r, R, clear)
     record.update(
@@ -366,17 +396,8 @@ def _attempt(
     )
     if problem_text:
         record["problem"] = problem_text
-        return {"ok": False, "record": record}
-    return {
-        "ok": True,
-        "record": record,
-        "transitions": record["transitions"],
-        "empty": empty,
-        "margin": margin,
-        "bound": bound,
-        "functions": values,  # the verified P_s, for the tests and the curious
-        "lmis": solved,
-    }
+        return _Attempt(False, record)
+    return _Attempt(True, record, record["transitions"], empty, margin, bound, values, solved)
 
 
 def _multiplier_mask(size: int) -> np.ndarray:
@@ -405,7 +426,7 @@ def _verify(
     model: LureModel,
     regions: _Regions,
     P: list[np.ndarray],
-    lmis: list[tuple[str, int, int, np.ndarray, np.ndarray, float]],
+    lmis: list[_RegionLMI],
     r: float,
     R: float,
     clear: float,
