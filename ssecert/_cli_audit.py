@@ -33,11 +33,13 @@ def add_audit_parser(sub: Any) -> None:
     )
 
 
-def cmd_audit(args: argparse.Namespace, output_folder: Any, write: Any, usage_error: type) -> int:
+def cmd_audit(args: argparse.Namespace) -> int:
     """Run the audit; 0 once audit.html and audit.json are written."""
     import json
 
     from proofs_checks import all_claims, audit_json, render_audit, run_audit
+
+    from ._cli_files import UsageError, output_folder, write_outputs
 
     folder = output_folder("--out", args.out)
     claims = all_claims()
@@ -45,7 +47,7 @@ def cmd_audit(args: argparse.Namespace, output_folder: Any, write: Any, usage_er
     if wanted:
         unknown = [c for c in wanted if c not in claims]
         if unknown:
-            raise usage_error(
+            raise UsageError(
                 f"--claim {unknown[0]}: no such claim (the claims: {', '.join(claims)})"
             )
     tty = sys.stderr.isatty()
@@ -59,7 +61,7 @@ def cmd_audit(args: argparse.Namespace, output_folder: Any, write: Any, usage_er
     if tty:
         sys.stderr.write("\r" + " " * 70 + "\r")
     html, js = folder / "audit.html", folder / "audit.json"
-    write({html: render_audit(outcomes), js: audit_json(outcomes)})  # both or neither
+    write_outputs({html: render_audit(outcomes), js: audit_json(outcomes)})  # both or neither
     width = max(len(o.claim.id) for o in outcomes)
     for o in outcomes:
         print(f"{o.claim.id:<{width}}  {o.finding.verdict:<11}  {o.claim.where}")

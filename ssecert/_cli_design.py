@@ -89,15 +89,7 @@ def add_design_parser(sub: Any) -> None:
     )
 
 
-def cmd_design(
-    args: argparse.Namespace,
-    load: Any,
-    output_folder: Any,
-    output_file: Any,
-    write: Any,
-    usage_error: type[Exception],
-    argv: Sequence[str] | None = None,
-) -> int:
+def cmd_design(args: argparse.Namespace, argv: Sequence[str] | None = None) -> int:
     """Search, certify and simulate the best design, write its spec file, report and
     certificate, print the comparison; the exit status of the written design's certificate
     (1 when none was certified)."""
@@ -105,6 +97,7 @@ def cmd_design(
     import sys
     import tomllib
 
+    from ._cli_files import UsageError, load_argument, output_file, output_folder, write_outputs
     from .report.html import render_report
     from .report.json import certify_json
     from .results import to_jsonable
@@ -113,13 +106,13 @@ def cmd_design(
 
     folder = output_folder("--out", args.out)
     target = output_file("--json", args.json_path)
-    spec = load(args.spec, max_attacked=args.max_attacked)
+    spec = load_argument(args.spec, max_attacked=args.max_attacked)
     own = spec.observer or {}
     kind = KIND_NAMES[args.observer] if args.observer else "elastic_net"
     if args.objective == "roa" and not args.observer:
         kind = "dsso"
     if args.objective == "roa" and kind != "dsso":
-        raise usage_error(
+        raise UsageError(
             f"--objective roa is for --observer dsso (shrink 1), got --observer {args.observer}: "
             "the other kinds are certified globally or not at all"
         )
@@ -135,7 +128,7 @@ def cmd_design(
     stem = f"{spec.name}-design"
     paths = {ext: folder / f"{stem}.{ext}" for ext in ("toml", "html", "json")}
     if target is not None and any(target.resolve() == p.resolve() for p in paths.values()):
-        raise usage_error(
+        raise UsageError(
             f"--json {args.json_path}: design writes its spec file, report and certificate "
             f"there ({', '.join(p.name for p in paths.values())}); give another path"
         )
@@ -211,7 +204,7 @@ def cmd_design(
     if target is not None:
         files[target] = rendered
     if files:
-        write(files)  # every file or none
+        write_outputs(files)  # every file or none
     _print_design(human, spec, kind, args, result, report, limit, paths)
     if report is not None:
         verdict = report.certificate.verdict.value

@@ -22,13 +22,13 @@ import os
 import sys
 import traceback
 import warnings
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
-from pathlib import Path
 from typing import Any, NoReturn
 
 from ._cli_audit import add_audit_parser, cmd_audit
 from ._cli_design import add_design_parser, cmd_design
+from ._cli_files import UsageError, load_argument, output_file, output_folder, write_outputs
 from ._cli_options import (
     _add_analysis_options,
     _add_budget_options,
@@ -46,10 +46,6 @@ __all__ = ["main"]
 EXIT_BAD_INPUT = 2
 EXIT_INTERNAL = 4
 EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE, what a shell reports for a closed pipe
-
-
-class UsageError(Exception):
-    """Bad command-line usage (exit status 2)."""
 
 
 class _Parser(argparse.ArgumentParser):
@@ -176,92 +172,6 @@ def _build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _load(text: str, **overrides: Any) -> Any:
-    """The spec named on the command line: a file as typed, or a packaged example.
-
-    Reports name the file exactly as typed (``../specs/x.toml`` stays
-    relative) and a packaged example by its name, never by the absolute path
-    of the machine that ran the command.
-    """
-    from .examples import example_path, list_examples
-    from .spec import load_spec
-
-    if not text:
-        raise UsageError("SPEC is empty; give a spec file or a packaged example name")
-    path = Path(text)
-    if not (os.path.lexists(text) or path.suffix) and "\x00" not in text:
-        if text in list_examples():
-            return load_spec(example_path(text), source=text, **overrides)
-        raise UsageError(
-            f"{text}: no such file, and no packaged example of that name "
-            f"(available: {', '.join(list_examples())})"
-        )
-    return load_spec(text, **overrides)
-
-
-def _output_folder(option: str, text: str) -> Path:
-    """A folder to write into: it exists or can be created, before any work is done."""
-    if not text:
-        raise UsageError(f"{option}: empty path; give a folder")
-    path = Path(text)
-    if path.exists() and not path.is_dir():
-        raise UsageError(f"{option} {text}: exists and is not a folder")
-    ancestor = path
-    while not ancestor.exists() and ancestor != ancestor.parent:
-        ancestor = ancestor.parent
-    if not ancestor.is_dir():
-        raise UsageError(f"{option} {text}: cannot create a folder there: {ancestor} is a file")
-    if not os.access(ancestor, os.W_OK | os.X_OK):
-        raise UsageError(f"{option} {text}: cannot write in {ancestor}: permission denied")
-    return path
-
-
-def _output_file(option: str, text: str | None) -> Path | None:
-    """A file to write (None for no file or '-'), checked before any work is done."""
-    if text is None or text == "-":
-        return None
-    if not text:
-        raise UsageError(f"{option}: empty path; give a file path or '-' for stdout")
-    path = Path(text)
-    if path.is_dir():
-        raise UsageError(f"{option} {text}: is a folder, expected a file path")
-    parent = path.parent
-    if not parent.exists():
-        raise UsageError(f"{option} {text}: folder {parent} does not exist")
-    if not parent.is_dir():
-        raise UsageError(f"{option} {text}: {parent} is not a folder")
-    if not path.exists() and not os.access(parent, os.W_OK | os.X_OK):
-        raise UsageError(f"{option} {text}: cannot write in {parent}: permission denied")
-    return path
-
-
-def _write(files: Mapping[Path, str]) -> None:
-    """Write the files all or nothing, creating their folders; UsageError naming the path."""
-    from ._io import write_files
-
-    created: list[Path] = []
-    try:
-        for parent in dict.fromkeys(path.parent for path in files):  # in order
-            missing = []
-            while not parent.exists() and parent != parent.parent:
-                missing.append(parent)
-                parent = parent.parent
-            for folder in reversed(missing):
-                folder.mkdir()
-                created.append(folder)
-        write_files(files)
-    except BaseException as exc:
-        for folder in reversed(created):  # leave no empty folder behind
-            try:
-                folder.rmdir()
-            except OSError:
-                pass
-        if isinstance(exc, OSError):
-            where = exc.filename if exc.filename is not None else ", ".join(map(str, files))
-            raise UsageError(f"cannot write {where}: {exc.strerror or exc}") from None
-        raise
-
-
 class _WarningLog:
     """Python warnings raised during a command, as one-line notes (see the module doc)."""
 
@@ -329,8 +239,8 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     from .report.json import certificate_json
     from .report.table import render_table
 
-    target = _output_file("--json", args.json_path)
-    spec = _load(args.spec, max_attacked=args.max_attacked, horizon=args.horizon)
+    target = output_file("--json", args.json_path)
+    spec = load_argument(args.spec, max_attacked=args.max_attacked, horizon=args.horizon)
     to_stdout_json = args.json_path == "-"
     human = sys.stderr if to_stdout_json else sys.stdout
     progress = _Progress(sys.stderr, quiet=to_stdout_json)
@@ -356,7 +266,7 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
         document = certificate_json(cert)
         table = render_table(cert)
     if target is not None:
-        _write({target: document})
+        write_outputs({target: document})
     human.write(table)
     for note in render_log.notes(besides=log):
         human.write(f"note: {note}\n")
@@ -373,9 +283,9 @@ def _cmd_certify(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
     from .report.json import certify_json
     from .report.table import render_table
 
-    out_dir = _output_folder("--out", args.out)
-    target = _output_file("--json", args.json_path)
-    spec = _load(args.spec, max_attacked=args.max_attacked, horizon=args.horizon)
+    out_dir = output_folder("--out", args.out)
+    target = output_file("--json", args.json_path)
+    spec = load_argument(args.spec, max_attacked=args.max_attacked, horizon=args.horizon)
     html_path, json_path = out_dir / f"{spec.name}.html", out_dir / f"{spec.name}.json"
     for path in (html_path, json_path):
         if path.is_dir():
@@ -418,7 +328,7 @@ def _cmd_certify(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
     files = {html_path: html, json_path: document}
     if target is not None:
         files[target] = document
-    _write(files)
+    write_outputs(files)
     human.write(render_table(result.certificate, compact=True))
     for note in [*notes, *render_log.notes(besides=log)]:
         human.write(f"note: {note}\n")
@@ -435,8 +345,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from .results import to_jsonable
     from .simulation.engine import simulate_spec
 
-    target = _output_file("--json", args.json_path)
-    spec = _load(args.spec, max_attacked=args.max_attacked)
+    target = output_file("--json", args.json_path)
+    spec = load_argument(args.spec, max_attacked=args.max_attacked)
     if spec.observer is None or not spec.scenarios:
         raise UsageError(
             f"{spec.source}: simulate needs an [observer] section and at least one [[scenario]]"
@@ -473,7 +383,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         document["notes"] = log.notes()
     text = json.dumps(to_jsonable(document), indent=2, allow_nan=False) + "\n"
     if target is not None:
-        _write({target: text})
+        write_outputs({target: text})
     human.write(table)
     for note in log.notes():
         human.write(f"note: {note}\n")
@@ -579,17 +489,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command == "simulate":
             return _cmd_simulate(args)
         if args.command == "audit":
-            return cmd_audit(args, _output_folder, _write, UsageError)
+            return cmd_audit(args)
         if args.command == "design":
-            return cmd_design(
-                args,
-                _load,
-                _output_folder,
-                _output_file,
-                _write,
-                UsageError,
-                argv[1:] if argv is not None else None,
-            )
+            return cmd_design(args, argv[1:] if argv is not None else None)
         raise UsageError(f"unknown command {args.command!r}")  # pragma: no cover
     except (UsageError, SpecError, ResourceLimitError) as exc:
         sys.stderr.write(f"ssecert: error: {one_line(str(exc))}\n")

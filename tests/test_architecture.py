@@ -55,6 +55,7 @@ LAYERS = {
         "ssecert._cli_options",
         "ssecert._cli_audit",
         "ssecert._cli_design",
+        "ssecert._cli_files",
         "ssecert.testing",
         "ssecert.__main__",
         "ssecert",
