@@ -93,6 +93,19 @@ def _positive_int(text: str) -> int:
     return _integer(text, 1, scientific=True)
 
 
+def _local_workers(text: str) -> int:
+    from .parallel import max_local_workers
+
+    value = _integer(text, 1, scientific=True)
+    limit = max_local_workers()
+    if value > limit:
+        raise argparse.ArgumentTypeError(
+            f"expected at most {limit} local worker processes (four per core of this "
+            f"machine), got {_shown(text)}; a larger cluster is one --scheduler ADDRESS away"
+        )
+    return value
+
+
 def _seconds(text: str) -> float:
     """A finite, non-negative number of seconds."""
     try:
@@ -152,7 +165,7 @@ def _add_dask_options(parser: argparse.ArgumentParser, work: str) -> None:
     )
     parser.add_argument(
         "--workers",
-        type=_positive_int,
+        type=_local_workers,
         metavar="N",
         help=f"run {work} on a local Dask cluster of N worker processes",
     )

@@ -15,6 +15,7 @@ __all__ = [
     "ChunkError",
     "DaskUnavailable",
     "dask_client",
+    "max_local_workers",
     "map_chunks",
     "map_ordered",
     "map_ranges",
@@ -28,6 +29,15 @@ class DaskUnavailable(RuntimeError):
 
 
 CONNECT_SECONDS = 30  # to reach a scheduler, and again for it to have a worker
+
+
+def max_local_workers() -> int:
+    """The most worker processes a local Dask cluster may start: four per core (at least
+    eight).  Each is a Python process with numpy (about 100 MB); beyond the cores they only
+    wait for one another."""
+    import os
+
+    return max(8, 4 * (os.cpu_count() or 1))
 
 
 @contextlib.contextmanager
@@ -65,6 +75,11 @@ def dask_client(address: str | None = None, *, workers: int | None = None) -> It
         finally:
             client.close()
         return
+    if workers is not None and not 1 <= workers <= max_local_workers():
+        raise ValueError(
+            f"workers must be between 1 and {max_local_workers()} (four per core of this "
+            f"machine) for a local cluster, got {workers}; use an address for a larger one"
+        )
     cluster = LocalCluster(
         n_workers=workers or 2, threads_per_worker=1, processes=True, dashboard_address=":0"
     )

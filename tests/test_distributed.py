@@ -255,3 +255,18 @@ def test_map_chunks_stops_at_the_first_chunk_in_order_that_ends_the_search(clien
 
 def _square(payload, x):
     return x * x
+
+
+def test_a_local_cluster_of_a_billion_workers_is_refused_at_once(tmp_path, capsys):
+    # it started processes until memory ran out (13 GB in 35 s)
+    from ssecert.cli import main
+    from ssecert.parallel import dask_client, max_local_workers
+
+    code = main(["analyze", "ugv", "--workers", "1e9", "--json", str(tmp_path / "x.json")])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert "--workers" in err and f"at most {max_local_workers()}" in err
+    assert not (tmp_path / "x.json").exists()
+    with pytest.raises(ValueError, match="workers must be between 1 and"):
+        with dask_client(workers=10**9):
+            pass
