@@ -267,6 +267,8 @@ def test_a_local_cluster_of_a_billion_workers_is_refused_at_once(tmp_path, capsy
     err = capsys.readouterr().err
     assert "--workers" in err and f"at most {max_local_workers()}" in err
     assert not (tmp_path / "x.json").exists()
-    with pytest.raises(ValueError, match="workers must be between 1 and"):
-        with dask_client(workers=10**9):
-            pass
+    with (
+        pytest.raises(ValueError, match="workers must be between 1 and"),
+        dask_client(workers=10**9),
+    ):
+        pass

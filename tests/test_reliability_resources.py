@@ -614,3 +614,26 @@ def test_long_horizon_on_an_unstable_plant_does_not_change_the_sparse_verdict():
     assert witness["verified"] and witness["steps"] < 700
     assert "overflow in floating point" in witness["truncated"]
     assert np.all(np.isfinite(np.asarray(witness["attack_a"], dtype=float)))
+
+
+def test_an_sso_with_a_billion_inner_steps_is_refused_by_simulate_naming_the_field(tmp_path):
+    # its Python loop of inner steps was not in the work estimate: 1 run x 1 step ran for hours
+    import json
+    import subprocess
+    import sys
+
+    spec = {
+        "name": "inner",
+        "system": {"A": [[0.5, 0.1], [0.0, 0.6]], "C": [[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]},
+        "attack": {"max_attacked": 1},
+        "observer": {"kind": "sso", "step": 0.1, "threshold": 0.1, "inner_steps": 10**9},
+        "scenario": [{"name": "x", "attack": "constant", "sensors": [1], "steps": 1, "runs": 1}],
+    }
+    path = tmp_path / "inner.json"
+    path.write_text(json.dumps(spec))
+    done = subprocess.run(
+        [sys.executable, "-m", "ssecert", "simulate", str(path)],
+        capture_output=True, text=True, timeout=60, check=False,
+    )  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    assert "observer.inner_steps" in done.stderr and "work budget" in done.stderr

@@ -88,10 +88,12 @@ def scenario_cost(
     result_bytes = 2 * 3 * 8.0 * rs
     per_run = 8.0 * (steps + 1) * (8 * p + 6 * n + 3 * (n + m))
     fixed = 8.0 * (4 * (n + m) ** 2 + 2 * m * n)
-    step_flops = design.observer_kind.simulation_flops(design)
+    # an SSO runs its inner ISTA steps in a Python loop inside each step (1 for other kinds)
+    inner = float(max(int(design.inner_steps), 1))
+    step_flops = design.observer_kind.simulation_flops(design) * inner
     flops = rs * (step_flops + 2.0 * n * (n + p) + 20.0 * (n + p + m))
     chunks = -(-int(runs) // max(int(chunk_runs), 1))
-    flops += float(steps) * chunks * _LOOP_COST + float(runs) * _LOOP_COST
+    flops += float(steps) * chunks * inner * _LOOP_COST + float(runs) * _LOOP_COST
     kind = scenario.get("attack")
     if kind == "random":
         flops += rs * _LOOP_COST
@@ -109,9 +111,14 @@ def _plan(
     budget: Budget,
 ) -> int:
     """Runs per chunk within the memory budget; raises ResourceLimitError with the estimate."""
+    inner = (
+        f" x {design.inner_steps:,} inner steps (observer.inner_steps)"
+        if design.inner_steps > 1
+        else ""
+    )
     what = (
-        f"scenario {scenario.get('name', 'scenario')!r} ({runs:,} runs x {steps:,} steps "
-        f"of the {design.kind} observer)"
+        f"scenario {scenario.get('name', 'scenario')!r} ({runs:,} runs x {steps:,} steps"
+        f"{inner} of the {design.kind} observer)"
     )
     result_bytes, per_run, flops = scenario_cost(design, scenario, runs, steps, chunk_runs)
     chunk = max(1, min(int(chunk_runs), runs))
@@ -520,10 +527,13 @@ def simulate_spec(
         try:
             _plan(design, scenario, count, length, CHUNK_RUNS, budget)
         except ResourceLimitError as exc:
-            keys = " and ".join(
+            names = [
                 f"--{key}" if override is not None else f"scenario[{index}].{key}"
                 for key, override in (("runs", runs), ("steps", steps))
-            )
+            ]
+            if design.inner_steps > 1:
+                names.insert(0, "observer.inner_steps")
+            keys = ", ".join(names[:-1]) + f" and {names[-1]}"
             raise ResourceLimitError(f"{spec.source}: {exc}; lower {keys}") from None
     out: dict[str, Any] = {}
     for scenario in spec.scenarios:
