@@ -8,7 +8,11 @@
   rows of C), the reliable way to get the observable subspace and the
   observability index (the rank of the stacked observability matrix is not);
 * ``sensor_subspaces``: the same for every sensor alone, vectorised;
-* ``screen_positive_definite``: batched Cholesky test that never raises;
+* ``screen_positive_definite``: batched Cholesky test that never raises,
+  screened in single precision with the matrices stored batch-last
+  (``cholesky_batch_last``, ``single_precision_margin``) and decided by
+  ``numpy.linalg.cholesky`` (``cholesky_or_nan``) where the screening is not
+  conclusive;
 * ``stacked_rank``: exact rank decisions of many small stacks by SVD.
 """
 
@@ -22,13 +26,6 @@ import numpy as np
 from ._eigen import EigenAnalysis, EigenCluster, eigen_clusters
 from .system import System
 from .tolerances import BORDERLINE, NONZERO, ZERO, Tolerances, classify
-
-try:  # the gufunc behind numpy.linalg.cholesky: NaN instead of an exception
-    from numpy.linalg import _umath_linalg as _ul
-
-    _CHOLESKY: np.ufunc | None = _ul.cholesky_lo
-except (ImportError, AttributeError):  # pragma: no cover - depends on numpy build
-    _CHOLESKY = None
 
 __all__ = [
     "EigenCluster",
@@ -516,11 +513,125 @@ def sensor_subspaces(
 # batched decisions
 
 
+_U32 = 2.0**-24  # unit roundoff of single precision
+_U64 = 2.0**-53
+
+
+def cholesky_or_nan(mats: np.ndarray) -> np.ndarray:
+    """``numpy.linalg.cholesky`` of each matrix, NaN for the matrices that have none.
+
+    The factors are those of ``numpy.linalg.cholesky`` (LAPACK's, one
+    matrix at a time), bit for bit; a batch that holds a matrix without a
+    factorization is split in halves until that matrix is alone, so a few
+    failures cost a few more calls.
+
+    Parameters
+    ----------
+    mats : ndarray, shape (N, n, n)
+        Symmetric float64 matrices (only the lower triangle is read).
+
+    Returns
+    -------
+    ndarray, shape (N, n, n)
+        Lower Cholesky factors; all NaN where the factorization fails.
+    """
+    out = np.full(mats.shape, np.nan)
+    pending = [(0, mats.shape[0])] if mats.shape[0] else []
+    while pending:
+        lo, hi = pending.pop()
+        try:
+            out[lo:hi] = np.linalg.cholesky(mats[lo:hi])
+        except np.linalg.LinAlgError:
+            if hi - lo > 1:
+                mid = (lo + hi) // 2
+                pending += [(mid, hi), (lo, mid)]
+    return out
+
+
+def cholesky_batch_last(work: np.ndarray, diagonal: np.ndarray) -> None:
+    """Cholesky factorization of a batch of matrices stored with the batch last, in place.
+
+    Column by column (left-looking), every operation runs over the whole
+    batch, so that numpy vectorizes over the contiguous last axis instead
+    of calling LAPACK once per small matrix.  A matrix that is not positive
+    definite gets a NaN or non-positive entry in ``diagonal`` (and NaN in
+    the later columns); the others are unaffected.
+
+    Parameters
+    ----------
+    work : ndarray, shape (n, n, N)
+        The matrices ``work[:, :, b]``; their lower triangles are read and
+        overwritten with the strictly lower part of the factors (the upper
+        triangles are left as they are).
+    diagonal : ndarray, shape (n, N)
+        Receives the diagonal of each factor.
+    """
+    n = work.shape[0]
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore", under="ignore"):
+        for j in range(n):
+            column = work[j:, j]
+            if j:
+                column -= np.einsum("ikb,kb->ib", work[j:, :j], work[j, :j])
+            root = np.sqrt(column[0], out=diagonal[j])
+            if j + 1 < n:
+                column[1:] *= np.divide(1.0, root)
+
+
+def single_precision_margin(
+    n: int, trace: float | np.ndarray, frobenius: float | np.ndarray, terms: int = 0
+) -> float | np.ndarray:
+    """Shift that makes a single-precision Cholesky screening conclusive for LAPACK's.
+
+    Let A be an n x n float64 matrix with ``sum(max(A_jj, 0)) <= trace``
+    and Frobenius norm at most ``frobenius``, and tau the margin returned.
+    When ``cholesky_batch_last`` factors A - tau I rounded to single
+    precision (tau subtracted in either precision, and the matrix summed in
+    single precision from at most ``terms + 1`` terms whose absolute values
+    add up to at most ``frobenius`` in Frobenius norm) with positive finite
+    pivots, the computed factor L32 is the exact factor of A + D with
+    -3 tau / 2 I <= D <= -tau / 2 I: the rounding of the matrix and the
+    backward error of the factorization (``gamma(n + 3) trace``, Higham,
+    Accuracy and Stability of Numerical Algorithms, Thm 10.3) are at most
+    tau / 2 in norm.  LAPACK's factor of A is the exact factor of A + E with
+    ``||E|| <= gamma(4 n + 4) trace``, far below tau / 2, so A + E >= A + D
+    in the Loewner order; Cholesky pivots grow with the matrix in that
+    order.  Hence (whatever the conditioning of A) LAPACK's factorization
+    of A succeeds and each of its diagonal entries is at least the
+    corresponding entry of L32.
+
+    Parameters
+    ----------
+    n : int
+    trace : float or ndarray
+        Upper bound of the sum of the positive diagonal entries.
+    frobenius : float or ndarray
+        Upper bound of the Frobenius norm (of the sum of the absolute values
+        of the terms, when the single-precision matrix is a sum).
+    terms : int, default 0
+        Single-precision additions behind each entry.
+
+    Returns
+    -------
+    float or ndarray
+        The margin tau (positive).
+    """
+    g32 = (n + 3) * _U32 / (1 - (n + 3) * _U32)
+    g64 = (4 * n + 4) * _U64 / (1 - (4 * n + 4) * _U64)
+    # both factorizations' backward errors (LAPACK's bound taken 100 times over), and every
+    # rounding of the single-precision matrix, (3 + terms) u32 ||A||_F, with room for tau's own
+    error = (1.01 * trace + (4 + terms) * _U32 * frobenius) * (1.5 * g32 + 100 * g64)
+    error = error + (3.1 + 1.01 * terms) * _U32 * frobenius
+    return 2.0 * error / (1 - 8 * n * _U32) + 1e-30
+
+
 def screen_positive_definite(mats: np.ndarray, shift: float | np.ndarray) -> np.ndarray:
     """True where ``mats - shift I`` has a Cholesky factorization.
 
     Batched and exception-free: a matrix that is not positive definite
-    gives False for that matrix only.
+    gives False for that matrix only.  The answer is LAPACK's (that of
+    ``numpy.linalg.cholesky``): every matrix is first factored in single
+    precision with the margin of ``single_precision_margin``, which proves
+    LAPACK's success where it succeeds; the others are factored by LAPACK.
 
     Parameters
     ----------
@@ -534,11 +645,63 @@ def screen_positive_definite(mats: np.ndarray, shift: float | np.ndarray) -> np.
     """
     n = mats.shape[-1]
     shifted = mats - np.asarray(shift)[..., None, None] * np.eye(n)
-    if _CHOLESKY is not None:
-        with np.errstate(all="ignore"):
-            L = _CHOLESKY(shifted)
-        return np.isfinite(L[:, -1, -1]) & np.isfinite(L[:, 0, 0])
-    return np.linalg.eigvalsh(shifted)[:, 0] > 0  # pragma: no cover
+    if shifted.shape[0] == 0 or n == 0:
+        return np.ones(shifted.shape[0], dtype=bool)
+    ok = single_screen(shifted)[0]
+    unsure = np.flatnonzero(~ok)
+    if unsure.size:
+        L = cholesky_or_nan(shifted[unsure])
+        ok[unsure] = np.isfinite(L[:, -1, -1]) & np.isfinite(L[:, 0, 0])
+    return ok
+
+
+def single_screen(shifted: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The single-precision screening of ``screen_positive_definite`` (margins per matrix).
+
+    Parameters
+    ----------
+    shifted : ndarray, shape (N, n, n)
+        Symmetric float64 matrices (only the lower triangle is read).
+
+    Returns
+    -------
+    passed : ndarray of bool, shape (N,)
+        Where LAPACK's factorization is proved to succeed.
+    smallest : ndarray of float32, shape (N,)
+        Smallest diagonal entry of the single-precision factor (a lower
+        bound of LAPACK's smallest one where ``passed``).
+    """
+    N, n, _ = shifted.shape
+    with np.errstate(over="ignore", invalid="ignore"):
+        trace = np.maximum(np.diagonal(shifted, axis1=1, axis2=2), 0.0).sum(axis=1)
+        margin = np.asarray(single_precision_margin(n, trace, np.linalg.norm(shifted, axis=(1, 2))))
+        work = np.ascontiguousarray(shifted.transpose(1, 2, 0), dtype=np.float32)
+        # rounded up, so that at least the margin is taken off
+        work[np.arange(n), np.arange(n)] -= np.nextafter(
+            margin.astype(np.float32), np.float32(np.inf)
+        )
+    diagonal = np.empty((n, N), dtype=np.float32)
+    cholesky_batch_last(work, diagonal)
+    return single_passed(diagonal)
+
+
+def single_passed(diagonal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Whether each single-precision factorization succeeded, and its smallest diagonal entry.
+
+    Parameters
+    ----------
+    diagonal : ndarray, shape (n, N)
+        Diagonals written by ``cholesky_batch_last``.
+
+    Returns
+    -------
+    passed : ndarray of bool, shape (N,)
+        Every diagonal entry positive and finite.
+    smallest : ndarray, shape (N,)
+    """
+    smallest = diagonal.min(axis=0)
+    with np.errstate(over="ignore", invalid="ignore"):
+        return (smallest > 0) & np.isfinite(diagonal.sum(axis=0)), smallest
 
 
 def stacked_rank(

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._linalg import _CHOLESKY
+from .._linalg import cholesky_or_nan, single_screen
 
 __all__ = [
     "SubsetBlock",
@@ -209,23 +209,31 @@ def colex_blocks(
             return
 
 
+def _proxies(L: np.ndarray, shift: float) -> tuple[np.ndarray, np.ndarray]:
+    """Success of LAPACK's factorizations ``L`` and their proxies (see ``cholesky_screen``)."""
+    ok = np.isfinite(L[:, -1, -1]) & np.isfinite(L[:, 0, 0])
+    smallest = np.min(np.diagonal(L, axis1=1, axis2=2), axis=1) if L.shape[0] else np.zeros(0)
+    return ok, np.where(ok, smallest**2 + shift, -np.inf)
+
+
 def cholesky_screen(
-    shifted: np.ndarray, shift: float, want_proxy: bool, out: np.ndarray
+    shifted: np.ndarray, shift: float, want_proxy: bool, out: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """Cholesky screening of Gramians already shifted by ``-shift I``.
 
     Returns whether each factorization exists and, when asked, a proxy for
     the smallest eigenvalue of the unshifted Gramian (squared smallest
     Cholesky pivot plus the shift, an upper bound) that ranks the sets that
-    come closest to breaking.
+    come closest to breaking.  Both are those of LAPACK's factorization
+    (``numpy.linalg.cholesky``): single precision proves the success of
+    most (``screen_positive_definite``), LAPACK factors the rest and, for
+    the proxies, every matrix.  ``out`` is not used (kept for callers that
+    pass a buffer).
     """
-    if _CHOLESKY is None:  # pragma: no cover - depends on the numpy build
-        w = np.linalg.eigvalsh(shifted)[:, 0]
-        return w > 0, w + shift
-    with np.errstate(all="ignore"):
-        L = _CHOLESKY(shifted, out=out)
-    ok = np.isfinite(L[:, -1, -1]) & np.isfinite(L[:, 0, 0])
-    if not want_proxy:
-        return ok, np.empty(0)
-    proxy = np.where(ok, np.min(np.diagonal(L, axis1=1, axis2=2), axis=1) ** 2 + shift, -np.inf)
-    return ok, proxy
+    if want_proxy:
+        return _proxies(cholesky_or_nan(shifted), shift)
+    ok = single_screen(shifted)[0] if shifted.shape[0] else np.zeros(0, dtype=bool)
+    unsure = np.flatnonzero(~ok)
+    if unsure.size:
+        ok[unsure] = _proxies(cholesky_or_nan(shifted[unsure]), shift)[0]
+    return ok, np.empty(0)
