@@ -314,18 +314,30 @@ def test_time_budget_is_validated():
         sparse_observability(System(np.eye(2), np.eye(2)), 0, time_budget=-1.0)
 
 
-class _Block:
-    """A block of a level for ``_keep_closest``: ranks from ``offset``, subsets by row."""
+class _Screen:
+    """A screened batch of a level for ``_keep_closest``: ranks from ``offset``, subsets by
+    row, lower bounds of the proxies (exact where ``exact``) and the proxies on demand."""
 
-    def __init__(self, offset: int, subsets: np.ndarray) -> None:
-        self.offset, self._subsets = offset, subsets
+    def __init__(self, offset: int, subsets: np.ndarray, proxy: np.ndarray, rng) -> None:
+        self.offset, self._subsets, self._proxy = offset, subsets, proxy
+        self.exact = rng.random(proxy.size) < 0.3
+        self.low = np.where(self.exact, proxy, proxy - rng.integers(0, 3, proxy.size))
+        self.asked = np.zeros(proxy.size, dtype=bool)
 
     def subsets(self, rows: np.ndarray) -> np.ndarray:
         return self._subsets[rows]
 
+    def proxies(self, rows: np.ndarray, shift: float) -> np.ndarray:
+        self.asked[rows[~self.exact[rows]]] = True
+        self.low[rows] = self._proxy[rows]
+        self.exact[rows] = True
+        return self.low[rows]
+
 
 @pytest.mark.parametrize("seed", range(20))
 def test_the_closest_sets_kept_block_by_block_are_the_smallest_overall(seed):
+    """The proxies are asked only where the lower bound allows a set in, and the sets kept are
+    the smallest (proxy, position) whatever the bounds."""
     from ssecert.structure._level_scan import _CRITICAL, _keep_closest
 
     rng = np.random.default_rng(seed)
@@ -342,7 +354,11 @@ def test_the_closest_sets_kept_block_by_block_are_the_smallest_overall(seed):
         # few distinct values, so that ties between and within blocks are common
         proxy = rng.integers(0, 4, size).astype(float)
         subsets = np.array([np.sort(rng.choice(q, k, replace=False)) for _ in range(size)])
-        _keep_closest(candidates, _Block(offset, subsets), proxy, rest, total)
+        threshold = candidates[-1][0] if len(candidates) >= _CRITICAL else np.inf
+        screen = _Screen(offset, subsets, proxy, rng)
+        low = screen.low.copy()
+        _keep_closest(candidates, screen, 0.0, rest, total)
+        assert not np.any(screen.asked & (low > threshold))
         for j in range(size):
             kept = tuple(int(i) for i in rest if i not in set(subsets[j].tolist()))
             everything.append((float(proxy[j]), total - 1 - offset - j, kept))

@@ -8,19 +8,35 @@ elements are a fixed "top" tuple are exactly the first C(t, m) m-subsets
 (in colex order) of the smaller indices, so one precomputed level of
 partial sums serves every top with a single broadcast addition and no
 per-subset gathering.
+
+Screening the sums for positive definiteness (``ColexScreen``) factors
+them in single precision with the batch as the last, contiguous axis,
+shifted by a margin that proves LAPACK's float64 factorization succeeds
+wherever the single-precision one does; only the other sets are factored
+by LAPACK (``numpy.linalg.cholesky``), so every decision and every
+smallest pivot used is LAPACK's, bit for bit.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-from .._linalg import cholesky_or_nan, single_screen
+from .._linalg import (
+    cholesky_batch_last,
+    cholesky_or_nan,
+    single_passed,
+    single_screen,
+)
 
 __all__ = [
+    "ColexScreen",
+    "ScreenedBatch",
     "SubsetBlock",
     "cholesky_screen",
     "colex_blocks",
@@ -68,21 +84,34 @@ class SubsetBlock:
     ----------
     offset : int
         Colex rank of the first subset.
-    matrices : ndarray, shape (N, n, n)
-        ``base + sign * sum(items[S])`` for each subset S of the block.
     bottoms : ndarray of int, shape (N, m)
         Lower part of each subset.
     top : tuple of int
         Upper part, shared by the whole block.
+    partial : ndarray, shape (N, n, n)
+        The precomputed sums of the bottoms (a view of the level).
+    shift : ndarray, shape (n, n), or None
+        ``sign * sum(items[top])``, added to every partial sum (None: no top).
     """
 
     offset: int
-    matrices: np.ndarray
     bottoms: np.ndarray
     top: tuple[int, ...]
+    partial: np.ndarray
+    shift: np.ndarray | None = None
 
     def __len__(self) -> int:
-        return self.matrices.shape[0]
+        return self.bottoms.shape[0]
+
+    @property
+    def matrices(self) -> np.ndarray:
+        """``base + sign * sum(items[S])`` for each subset S of the block, shape (N, n, n)."""
+        return self.partial if self.shift is None else self.partial + self.shift
+
+    def matrices_of(self, rows: np.ndarray) -> np.ndarray:
+        """The matrices of the selected rows, bit for bit those of ``matrices``."""
+        part = self.partial[rows]
+        return part if self.shift is None else part + self.shift
 
     def subsets(self, rows: np.ndarray | slice | None = None) -> np.ndarray:
         """Sorted subsets of the block (or of the selected rows), shape (N, k)."""
@@ -137,6 +166,35 @@ def _next_top(top: list[int], low: int, q: int) -> bool:
     return False
 
 
+def _tops(q: int, k: int, m: int, start: int, stop: int) -> Iterator[tuple[int, int, list[int]]]:
+    """(colex rank of its first subset, number of subsets, top) of each top, the k - m
+    largest items, whose subsets meet the ranks [start, stop); the list is reused."""
+    if m == k:
+        yield 0, math.comb(q, k), []
+        return
+    # tops: (k - m)-subsets t_1 < ... of {m, ..., q-1}, in colex order, from the one that
+    # holds rank ``start`` (its m smallest items are the bottom, the rest the top)
+    top = list(colex_unrank(start, k)[m:])
+    while True:
+        offset = sum(math.comb(t, m + j + 1) for j, t in enumerate(top))
+        if offset >= stop:
+            return
+        yield offset, math.comb(top[0], m), top
+        if not _next_top(top, m, q):
+            return
+
+
+Span = tuple[int, int, int, tuple[int, ...]]
+
+
+def _spans(q: int, k: int, m: int, chunk: int, start: int, stop: int) -> Iterator[Span]:
+    """(colex rank, first and last row of the level, top) of each block of ``colex_blocks``."""
+    for offset, count, top in _tops(q, k, m, start, stop):
+        here = tuple(top)
+        for first in range(max(start - offset, 0), min(count, stop - offset), chunk):
+            yield offset + first, first, min(first + chunk, count, stop - offset), here
+
+
 def colex_blocks(
     items: np.ndarray,
     base: np.ndarray,
@@ -186,27 +244,13 @@ def colex_blocks(
     m = level_split(q, k, per, memory)
     sums, subsets = _level(items, base, sign, m)
     chunk = max(64, chunk_bytes // max(per, 1))
-    if m == k:
-        for first in range(start, stop, chunk):
-            last = min(first + chunk, stop)
-            yield SubsetBlock(first, sums[first:last], subsets[first:last], ())
-        return
-    # tops: (k - m)-subsets t_1 < ... of {m, ..., q-1}, in colex order, from the one that
-    # holds rank ``start`` (its m smallest items are the bottom, the rest the top)
-    top = list(colex_unrank(start, k)[m:])
-    while True:
-        count = math.comb(top[0], m)
-        offset = sum(math.comb(t, m + j + 1) for j, t in enumerate(top))
-        if offset >= stop:
-            return
-        shift = sign * items[top].sum(axis=0)
-        for first in range(max(start - offset, 0), min(count, stop - offset), chunk):
-            last = min(first + chunk, count, stop - offset)
-            yield SubsetBlock(
-                offset + first, sums[first:last] + shift, subsets[first:last], tuple(top)
-            )
-        if not _next_top(top, m, q):
-            return
+    shift: tuple[tuple[int, ...], np.ndarray | None] = ((), None)
+    for rank, first, last, top in _spans(q, k, m, chunk, start, stop):
+        if top and top != shift[0]:
+            shift = (top, sign * items[list(top)].sum(axis=0))
+        yield SubsetBlock(
+            rank, subsets[first:last], top, sums[first:last], shift[1] if top else None
+        )
 
 
 def _proxies(L: np.ndarray, shift: float) -> tuple[np.ndarray, np.ndarray]:
@@ -237,3 +281,412 @@ def cholesky_screen(
     if unsure.size:
         ok[unsure] = _proxies(cholesky_or_nan(shifted[unsure]), shift)[0]
     return ok, np.empty(0)
+
+
+# bytes allowed for the single-precision level of partial sums of ``ColexScreen``: deeper than
+# the float64 level, so that most screened batches are a few broadcast additions
+DEFAULT_SINGLE_MEMORY = 16 * 2**20
+
+
+def _single_level(signed: np.ndarray, base: np.ndarray, m: int) -> np.ndarray:
+    """All m-subsets' sums of ``_level`` with the batch last, shape (n, n, C(q, m)), from the
+    items already multiplied by the sign."""
+    sums = base[:, :, None]
+    for j in range(1, m + 1):
+        sums = np.concatenate(
+            [
+                sums[:, :, : math.comb(last, j - 1)] + signed[last][:, :, None]
+                for last in range(j - 1, signed.shape[0])
+            ],
+            axis=2,
+        )
+    return np.ascontiguousarray(sums)
+
+
+class ColexScreen:
+    """Every k-subset of a range of colex ranks, screened for positive definiteness in batches.
+
+    The subsets and their float64 matrices are those of ``colex_blocks``
+    (``matrices``, ``subsets``; ``spans`` tells the block of each subset),
+    and ``screen`` decides a batch of consecutive ranks as
+    ``cholesky_screen`` decides those matrices, bit for bit, in up to three
+    tiers, each only for the subsets the one before leaves open:
+
+    1. With the factors of the items (``items[i] = factors[i].T @
+       factors[i]``, sign -1): the subsets whose largest item is t share
+       ``H = base - items[t]``, and with ``c_b = ||H^(-1/2) factors[b].T||^2``
+       (from one eigendecomposition of H) the smallest eigenvalue of the
+       sum is at least ``lambda_min(H) (1 - sum of c_b over the other
+       items)``.  A positive bound (less every rounding of the sums and
+       LAPACK's backward error) proves LAPACK's factorization succeeds and
+       bounds its smallest pivot, at the cost of a few additions per subset.
+    2. The matrices minus ``margin`` I factored in single precision with the
+       batch last (``cholesky_batch_last``): where that succeeds LAPACK's
+       float64 factorization provably succeeds too, and its smallest pivot
+       is at least the single-precision one
+       (``ssecert._linalg.single_precision_margin``).  Their own level of
+       partial sums, deeper than the float64 one (their rounding is part of
+       the margin), makes a batch a few broadcast additions.
+    3. LAPACK (``numpy.linalg.cholesky``) on the float64 matrices.
+
+    The float64 level and the single-precision one are computed when
+    first needed.
+
+    Parameters
+    ----------
+    items : ndarray, shape (q, n, n)
+    base : ndarray, shape (n, n)
+    k : int
+    margin : float
+        ``single_precision_margin`` of every sum, its rounding counting k
+        single-precision additions.
+    sign, memory, chunk_bytes, start, stop
+        As for ``colex_blocks``.
+    factors : ndarray, shape (q, r, n), optional
+        With ``sign = -1``: ``items[i]`` is ``factors[i].T @ factors[i]``
+        rounded (tier 1).
+    single_memory : int
+        Bytes allowed for the single-precision level of partial sums.
+    """
+
+    def __init__(
+        self,
+        items: np.ndarray,
+        base: np.ndarray,
+        k: int,
+        margin: float,
+        *,
+        sign: float = -1.0,
+        memory: int = DEFAULT_MEMORY,
+        chunk_bytes: int = DEFAULT_CHUNK_BYTES,
+        start: int = 0,
+        stop: int | None = None,
+        factors: np.ndarray | None = None,
+        single_memory: int = DEFAULT_SINGLE_MEMORY,
+    ) -> None:
+        q, n = items.shape[0], base.shape[-1]
+        if not 0 <= k <= q:
+            raise ValueError(f"subsets of {k} of {q} items")
+        total = math.comb(q, k)
+        if total >= 2**62:
+            raise ValueError(f"C({q}, {k}) subsets: too many to number in 64 bits")
+        self.items, self.base, self.k, self.sign, self.margin = items, base, k, sign, margin
+        self.start, self.stop = start, total if stop is None else min(stop, total)
+        per = items[0].nbytes if q else base.nbytes
+        self.m = level_split(q, k, per, memory)
+        self.chunk = max(64, chunk_bytes // max(per, 1))
+        self._sums: tuple[np.ndarray, np.ndarray] | None = None
+        # C(c, i) for c = 0..q, i = 0..k, for the unranking of many ranks at once (capped:
+        # ranks are below C(q, k) < 2^62, so a capped entry is above every rank, as it was)
+        self._comb = [
+            np.array([min(math.comb(c, i), 2**62) for c in range(q + 1)], dtype=np.int64)
+            for i in range(k + 1)
+        ]
+        # single precision: no more partial sums than the sets of the range (a small range
+        # does not pay for a level it would not use)
+        sets = max(self.stop - self.start, 1)
+        m32 = level_split(q, k, 4 * n * n, single_memory)
+        while m32 > 0 and math.comb(q, m32) > sets:
+            m32 -= 1
+        if factors is not None and sign == -1.0 and k > 0:
+            m32 = min(m32, k - 1)  # tier 1 needs a top, the largest item at least
+        self.m32 = m32
+        self._sums32: np.ndarray | None = None
+        self._signed32 = sign * items.astype(np.float32)
+        # the walk through the tops of the single-precision level: (where the last range
+        # asked stopped, the tops after the current one, the current one); the sum of the
+        # current top's largest items
+        self._cursor: list[Any] | None = None
+        self._upper: tuple[tuple[int, ...], np.ndarray | None] = ((), None)
+        self.factors = factors if sign == -1.0 and (m32 > 0 or k == 1) and m32 < k else None
+        self._bounds: tuple[int, tuple[float, np.ndarray, np.ndarray] | None] = (-1, None)
+        # tier 1 is skipped for this many batches after one where it left most subsets open
+        self._skip = 0
+        self._slack = 0.0 if self.factors is None else _bound_slack(items, base, self.factors, k)
+
+    def batches(self, size: int) -> Iterator[tuple[int, int]]:
+        """Consecutive ranges of ``size`` ranks covering the range."""
+        for first in range(self.start, self.stop, size):
+            yield first, min(first + size, self.stop)
+
+    def subsets(self, ranks: np.ndarray) -> np.ndarray:
+        """Sorted subsets of the given colex ranks, shape (len(ranks), k) (``colex_unrank``)."""
+        rest = np.array(ranks, dtype=np.int64)
+        out = np.empty((rest.size, self.k), dtype=np.int64)
+        for i in range(self.k, 0, -1):
+            c = np.searchsorted(self._comb[i], rest, side="right") - 1
+            out[:, i - 1] = c
+            rest = rest - self._comb[i][c]
+        return out
+
+    def _tops(self, subsets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Colex rank of the first subset of each subset's top, and the top's subsets."""
+        if self.m == self.k:
+            return np.zeros(subsets.shape[0], dtype=np.int64), np.full(
+                subsets.shape[0], math.comb(self.items.shape[0], self.k)
+            )
+        first = sum(
+            self._comb[self.m + j + 1][subsets[:, self.m + j]] for j in range(self.k - self.m)
+        )
+        return first, self._comb[self.m][subsets[:, self.m]]
+
+    def spans(self, ranks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """First and last (excluded) rank of the block of ``colex_blocks`` over the range that
+        holds each rank."""
+        ranks = np.asarray(ranks, dtype=np.int64)
+        offset, count = self._tops(self.subsets(ranks))
+        first = np.maximum(self.start - offset, 0)
+        lo = first + (ranks - offset - first) // self.chunk * self.chunk
+        hi = np.minimum(np.minimum(lo + self.chunk, count), self.stop - offset)
+        return offset + lo, offset + hi
+
+    def matrices(self, ranks: np.ndarray) -> np.ndarray:
+        """The float64 matrices of the given ranks (ascending), bit for bit those of the
+        blocks of ``colex_blocks``."""
+        if self._sums is None:
+            self._sums = _level(self.items, self.base, self.sign, self.m)
+        sums = self._sums[0]
+        ranks = np.asarray(ranks, dtype=np.int64)
+        subsets = self.subsets(ranks)
+        offset, _ = self._tops(subsets)
+        part = sums[ranks - offset]
+        if self.m == self.k:
+            return part
+        tops = subsets[:, self.m :]
+        edges = np.flatnonzero(np.any(tops[1:] != tops[:-1], axis=1)) + 1
+        for a, b in itertools.pairwise([0, *edges.tolist(), ranks.size]):
+            part[a:b] += self.sign * self.items[tops[a].tolist()].sum(axis=0)
+        return part
+
+    def _pieces(self, start: int, stop: int) -> list[tuple[int, int, int, tuple[int, ...]]]:
+        """(first row in the range, first and last row of the single-precision level, top) of
+        the runs of the ranks [start, stop) that share a top of that level (ranges asked in
+        ascending order continue the walk through the tops where the last one stopped)."""
+        cursor = self._cursor
+        if cursor is None or cursor[0] > start:
+            tops = _tops(self.items.shape[0], self.k, self.m32, start, self.stop)
+            cursor = self._cursor = [start, tops, next(tops, None)]
+        cursor[0] = stop
+        pieces = []
+        while cursor[2] is not None:
+            offset, count, top = cursor[2]
+            first, last = max(start - offset, 0), min(count, stop - offset)
+            if first < last:
+                pieces.append((offset + first - start, first, last, tuple(top)))
+            if offset + count > stop:
+                break
+            cursor[2] = next(cursor[1], None)
+        return pieces
+
+    def fill(self, pieces: list[tuple[int, int, int, tuple[int, ...]]], out: np.ndarray) -> None:
+        """The single-precision matrices minus the margin of the pieces (``_pieces``), batch
+        last, into ``out``."""
+        if self._sums32 is None:
+            n = self.base.shape[-1]
+            shifted = np.asarray(self.base - self.margin * np.eye(n), dtype=np.float32)
+            self._sums32 = _single_level(self._signed32, shifted, self.m32)
+        sums = self._sums32
+        for row, first, last, top in pieces:
+            where = out[:, :, row : row + last - first]
+            if not top:
+                np.copyto(where, sums[:, :, first:last])
+                continue
+            rest = top[1:]
+            if rest != self._upper[0]:
+                self._upper = (rest, self._signed32[list(rest)].sum(axis=0) if rest else None)
+            upper = self._upper[1]
+            total = self._signed32[top[0]] if upper is None else self._signed32[top[0]] + upper
+            np.add(sums[:, :, first:last], total[:, :, None], out=where)
+
+    def _bound(self, t: int) -> tuple[float, np.ndarray, np.ndarray] | None:
+        """(lambda, c, sums) of tier 1 for the subsets whose largest item is t: a lower bound
+        of the smallest eigenvalue of ``H = base - items[t]``, upper bounds c[b] of
+        ``||H^(-1/2) factors[b].T||^2`` for b < t, and the sums of c over the rows of the
+        single-precision level below t (None when H is too ill-conditioned).  The last
+        item's is kept: the ranks ascend, so does their largest item."""
+        if self._bounds[0] != t:
+            assert self.factors is not None
+            shared = _shared_bound(self.base - self.items[t], self.factors, t)
+            bound = None if shared is None else (*shared, _level_sums(shared[1], self.m32))
+            self._bounds = (t, bound)
+        return self._bounds[1]
+
+    def lower_bounds(
+        self, pieces: list[tuple[int, int, int, tuple[int, ...]]], size: int
+    ) -> np.ndarray:
+        """Tier 1: a lower bound of the smallest eigenvalue of each matrix minus LAPACK's
+        backward error (-inf where there is none)."""
+        low = np.full(size, -np.inf)
+        if self.factors is None:
+            return low
+        for row, first, last, top in pieces:
+            bound = self._bound(top[-1])
+            if bound is None:
+                continue
+            lam, c, sums = bound
+            s = sums[first:last] + c[list(top[:-1])].sum()
+            low[row : row + last - first] = lam * (1.0 - s) - self._slack
+        return low
+
+    def screen(
+        self,
+        start: int,
+        stop: int,
+        shift: float,
+        threshold: float | None,
+        work: np.ndarray,
+        diagonal: np.ndarray,
+    ) -> ScreenedBatch:
+        """Screen the subsets of the ranks [start, stop) (a range of ``batches``).
+
+        Parameters
+        ----------
+        start, stop : int
+        shift : float
+            The screening shift already in the matrices (for the proxies).
+        threshold : float or None
+            With the proxies asked: the largest proxy that can still matter
+            (the subsets whose lower bound is above it need no more).
+        work : ndarray of float32, shape (n, n, M), M >= stop - start
+        diagonal : ndarray of float32, shape (n, M)
+            Buffers.
+
+        Returns
+        -------
+        ScreenedBatch
+        """
+        N = stop - start
+        pieces = self._pieces(start, stop)
+        tried = self._skip == 0
+        self._skip = max(self._skip - 1, 0)
+        bound = self.lower_bounds(pieces, N) if tried else np.full(N, -np.inf)
+        ok = bound > 0
+        screen = ScreenedBatch(self, start, ok)
+        if threshold is not None:
+            screen.low = np.where(ok, _proxy_floor(bound, shift), -np.inf)
+            screen.exact = np.zeros(N, dtype=bool)
+            rows = np.flatnonzero(~ok | (screen.low <= threshold))
+        else:
+            rows = np.flatnonzero(~ok)
+        if rows.size > max(64, N // 50):
+            if tried and self.factors is not None and rows.size > N // 2:
+                self._skip = 8
+            # many subsets left open: tier 2 for the whole batch (a few calls), then LAPACK for
+            # those it leaves open
+            mats, diag = work[:, :, :N], diagonal[:, :N]
+            self.fill(pieces, mats)
+            cholesky_batch_last(mats, diag)
+            passed, smallest = single_passed(diag)
+            ok |= passed
+            if screen.low is not None:
+                low = smallest.astype(np.float64)
+                screen.low = np.where(passed, np.maximum(screen.low, low**2 + shift), screen.low)
+            # LAPACK decides the rest; the proxies under the threshold are asked for later
+            rows = np.flatnonzero(~ok)
+        if rows.size:
+            decided, proxies = _proxies(cholesky_or_nan(self.matrices(start + rows)), shift)
+            ok[rows] = decided
+            if screen.low is not None and screen.exact is not None:
+                screen.low[rows] = proxies
+                screen.exact[rows] = True
+        return screen
+
+
+def _level_sums(values: np.ndarray, m: int) -> np.ndarray:
+    """Sums of ``values`` over every m-subset of its indices, in colex order."""
+    sums = np.zeros(1)
+    for j in range(1, m + 1):
+        parts = [
+            sums[: math.comb(last, j - 1)] + values[last] for last in range(j - 1, values.size)
+        ]
+        sums = np.concatenate(parts) if parts else np.zeros(0)
+    return sums
+
+
+_U64 = 2.0**-53
+
+
+def _gamma(m: int) -> float:
+    return m * _U64 / (1 - m * _U64)
+
+
+def _bound_slack(items: np.ndarray, base: np.ndarray, factors: np.ndarray, k: int) -> float:
+    """What tier 1's bound takes off, whatever the subset: the roundings of the float64 sums
+    (``gamma(k + 3)`` times the absolute values of the terms), of the items against their
+    factors (``gamma(r) ||factors[i]||_F^2``), and LAPACK's backward error on the sum
+    (``gamma(4 n + 4)`` times its trace, taken 100 times over), each doubled."""
+    n = base.shape[-1]
+    frobenius = np.linalg.norm(base) + np.linalg.norm(items, axis=(1, 2)).sum()
+    trace = np.abs(np.diagonal(base)).sum() + np.abs(np.trace(items, axis1=1, axis2=2)).sum()
+    rounding = _gamma(k + 3) * frobenius + _gamma(factors.shape[1]) * np.sum(factors**2)
+    return float(2.0 * (rounding + 100 * _gamma(4 * n + 4) * trace)) + 1e-300
+
+
+def _shared_bound(H: np.ndarray, factors: np.ndarray, t: int) -> tuple[float, np.ndarray] | None:
+    """(lambda, c) of ``ColexScreen._bound`` for ``H = base - items[t]``.
+
+    The eigendecomposition of H is backward stable: its eigenvalues are
+    within ``64 n u ||H||`` of H's (a generous multiple of LAPACK's bound).
+    When H's condition number is below 1e6, the computed c are within a
+    relative 1e-8 of the exact ones; they are taken 1e-5 relatively (and
+    1e-12 absolutely) above.
+    """
+    n = H.shape[-1]
+    lam, V = np.linalg.eigh(H)
+    lowest = lam[0] - 64 * n * _U64 * max(abs(lam[0]), abs(lam[-1]))
+    if not np.all(np.isfinite(lam)) or lowest <= 0 or lam[-1] > 1e6 * lowest:
+        return None
+    Z = np.einsum("brn,nj->brj", factors[:t], V / np.sqrt(lam))
+    c = np.linalg.eigvalsh(Z @ Z.transpose(0, 2, 1))[:, -1] if t else np.zeros(0)
+    return float(lowest), np.maximum(c, 0.0) * (1 + 1e-5) + 1e-12
+
+
+def _proxy_floor(bound: np.ndarray, shift: float) -> np.ndarray:
+    """A lower bound of the proxy ``fl(fl(l^2) + shift)`` of a factorization whose smallest
+    diagonal entry l has ``l^2 >= bound`` (each rounding of the proxy and of this bound
+    taken off)."""
+    low = 1.0 - 2.0**-50
+    return (np.maximum(bound, 0.0) * low + shift) * low
+
+
+@dataclass
+class ScreenedBatch:
+    """Consecutive subsets screened together (``ColexScreen.screen``); row r is the subset
+    of colex rank ``offset + r``.
+
+    Attributes
+    ----------
+    source : ColexScreen
+    offset : int
+        Colex rank of the first row.
+    ok : ndarray of bool, shape (N,)
+        Whether LAPACK's Cholesky factorization of each matrix succeeds.
+    low : ndarray, shape (N,), or None
+        With the proxies asked: a lower bound of each proxy of
+        ``cholesky_screen`` (squared smallest pivot plus the shift, -inf
+        where the factorization fails), the proxy itself where ``exact``.
+    exact : ndarray of bool, shape (N,), or None
+        Where ``low`` is the proxy.
+    """
+
+    source: ColexScreen
+    offset: int
+    ok: np.ndarray
+    low: np.ndarray | None = None
+    exact: np.ndarray | None = None
+
+    def subsets(self, rows: np.ndarray) -> np.ndarray:
+        """Sorted subsets of the selected rows, shape (len(rows), k)."""
+        return self.source.subsets(self.offset + rows)
+
+    def proxies(self, rows: np.ndarray, shift: float) -> np.ndarray:
+        """The proxies of the selected rows (ascending), bit for bit those of
+        ``cholesky_screen`` (LAPACK factors the rows whose proxy is not known yet, and they
+        are kept)."""
+        assert self.low is not None and self.exact is not None
+        todo = rows[~self.exact[rows]]
+        if todo.size:
+            mats = self.source.matrices(self.offset + todo)
+            self.low[todo] = _proxies(cholesky_or_nan(mats), shift)[1]
+            self.exact[todo] = True
+        return self.low[rows]

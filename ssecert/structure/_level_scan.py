@@ -2,7 +2,10 @@
 
 A range of level k (removals of k of the q screened sensors, colex ranks
 ``[lo, hi)``) is scanned block by block: each block's Gramians (precomputed
-partial sums plus the block's top) are screened by Cholesky; the sets that
+partial sums plus the block's top) are screened for positive definiteness
+(``ColexScreen``: a bound shared by the sets with the same largest sensor,
+a single-precision Cholesky factorization with a proven margin, LAPACK's
+where neither is conclusive; the decisions are LAPACK's); the sets that
 fail are decided by an exact rank test of their kept sensors (``_refine``);
 on the level that decides the verdict, the sets closest to breaking are kept
 for the re-checks.  The findings do not depend on how the level is split
@@ -12,15 +15,16 @@ synthetic level) in the cost model's calibration give the same answers.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._linalg import stacked_rank
+from .._linalg import single_precision_margin, stacked_rank
 from ..tolerances import BORDERLINE, ZERO, Tolerances
-from ._combinatorics import SubsetBlock, cholesky_screen, colex_blocks
+from ._combinatorics import ColexScreen, ScreenedBatch
 
 __all__: list[str] = []
 
@@ -68,66 +72,127 @@ class _LevelTask:
     errors: np.ndarray
 
 
+def _screen_margin(task: _LevelTask) -> float:
+    """The single-precision screening margin of every Gramian of the level
+    (``single_precision_margin``, with k single-precision additions behind each sum): each
+    is the shifted sum of all projectors minus some, so its positive diagonal and its
+    entries are bounded by those of the sum and of the projectors."""
+    n = task.proj.shape[-1]
+    diagonal = np.abs(np.diagonal(task.shifted)).sum() + n * task.shift
+    frobenius = np.linalg.norm(task.shifted) + np.linalg.norm(task.proj, axis=(1, 2)).sum()
+    return float(single_precision_margin(n, 1.01 * diagonal, 1.01 * frobenius, terms=task.k))
+
+
+# sets screened together (measured best at n = 10 to 20: fewer numpy calls per set, still
+# within the caches)
+_BATCH_SETS = 4096
+
+
 def _scan_range(
     task: _LevelTask, ranks: tuple[int, int], progress: Progress | None = None
 ) -> _Level:
     """Check the removals whose colex ranks lie in ``ranks`` (one chunk of a level; the
     sensors in ``task`` in reverse order, so a set of colex rank r is at position
-    ``C(q, k) - 1 - r`` in the lexicographic order of the removed sets)."""
-    P, proj, rest, full, tol = task.P, task.proj, task.rest, task.full, task.tol
-    n = proj.shape[-1]
-    q = rest.size
+    ``C(q, k) - 1 - r`` in the lexicographic order of the removed sets).
+
+    The sets are screened in batches of consecutive ranks; the failures are refined
+    block by block, the blocks of ``colex_blocks`` (the rank tolerance of ``_refine``
+    depends on the sets decided together), a block that runs into the next batch once
+    that batch is screened."""
+    n = task.proj.shape[-1]
     level = _Level()
     candidates: list[tuple[float, int, tuple[int, ...]]] = []
-    buffer = np.empty((0, n, n))
     lo, hi = ranks
-    total = math.comb(q, task.k)
-    for block in colex_blocks(proj, task.shifted, task.k, start=lo, stop=hi):
-        if buffer.shape[0] < len(block):
-            buffer = np.empty((len(block), n, n))
-        ok, proxy = cholesky_screen(block.matrices, task.shift, task.critical, buffer[: len(block)])
+    if lo >= hi:
+        return level
+    source = ColexScreen(
+        task.proj, task.shifted, task.k, _screen_margin(task), start=lo, stop=hi, factors=task.P
+    )
+    size = min(_BATCH_SETS, hi - lo)
+    work = np.empty((n, n, size), dtype=np.float32)
+    diagonal = np.empty((n, size), dtype=np.float32)
+    pending = np.zeros(0, dtype=np.int64)  # failures of a block that runs past the batch
+    for first, last in source.batches(size):
+        threshold = None
         if task.critical:
-            _keep_closest(candidates, block, proxy, rest, total)
-        bad = np.flatnonzero(~ok)
-        if bad.size:
-            subsets = block.subsets(bad)
-            codes, _, nulls = _refine(P, task.ranks, subsets, q, tol, task.errors)
-            for j, row, code, zvec in zip(bad, subsets, codes, nulls):
-                removed = tuple(sorted(full.tolist() + rest[row].tolist()))
-                if code == ZERO:
-                    level.failures[removed] = zvec
-                elif code == BORDERLINE:
-                    level.borderline_at.append(total - 1 - block.offset - int(j))
-        level.checked += len(block)
+            threshold = candidates[-1][0] if len(candidates) >= _CRITICAL else np.inf
+        screen = source.screen(first, last, task.shift, threshold, work, diagonal)
+        if task.critical:
+            _keep_closest(
+                candidates, screen, task.shift, task.rest, math.comb(task.rest.size, task.k)
+            )
+        failed = np.concatenate([pending, first + np.flatnonzero(~screen.ok)])
+        pending = _refine_blocks(task, source, failed, last, level)
+        level.checked += last - first
         if progress is not None:
             progress(level.checked, hi - lo)
     level.critical = candidates
     return level
 
 
+def _refine_blocks(
+    task: _LevelTask, source: ColexScreen, failed: np.ndarray, screened: int, level: _Level
+) -> np.ndarray:
+    """Refine the failures (ascending colex ranks) block by block, as each block of
+    ``colex_blocks`` alone would be, where the whole block is screened (its ranks below
+    ``screened``); returns the failures of the block that is not."""
+    if failed.size == 0:
+        return failed
+    rest, full, q = task.rest, task.full, task.rest.size
+    total = math.comb(q, task.k)
+    begins, ends = source.spans(failed)
+    cut = int(np.searchsorted(ends, screened, side="right"))
+    if cut == 0:
+        return failed
+    edges = np.flatnonzero(begins[1:cut] != begins[: cut - 1]) + 1
+    for a, b in itertools.pairwise([0, *edges.tolist(), cut]):
+        if b <= a:
+            continue
+        subsets = source.subsets(failed[a:b])
+        codes, _, nulls = _refine(task.P, task.ranks, subsets, q, task.tol, task.errors)
+        for rank, row, code, zvec in zip(failed[a:b].tolist(), subsets, codes, nulls):
+            removed = tuple(sorted(full.tolist() + rest[row].tolist()))
+            if code == ZERO:
+                level.failures[removed] = zvec
+            elif code == BORDERLINE:
+                level.borderline_at.append(total - 1 - rank)
+    return failed[cut:]
+
+
 def _keep_closest(
     candidates: list[tuple[float, int, tuple[int, ...]]],
-    block: SubsetBlock,
-    proxy: np.ndarray,
+    screen: ScreenedBatch,
+    shift: float,
     rest: np.ndarray,
     total: int,
 ) -> None:
-    """Merge the block's sets into ``candidates``, the ``_CRITICAL`` smallest (proxy,
+    """Merge the screened sets into ``candidates``, the ``_CRITICAL`` smallest (proxy,
     lexicographic position, kept sensors) so far; a set of colex rank r (sensors in reverse
-    order) is at position ``total - 1 - r``.  Once the list is full only a proxy up to its
-    largest can enter it: most blocks add nothing."""
-    if len(candidates) >= _CRITICAL:
-        rows = np.flatnonzero(proxy <= candidates[-1][0])
-    else:
-        rows = np.arange(proxy.size)
+    order) is at position ``total - 1 - r``.
+
+    Only a set whose proxy is at most a threshold can enter: the largest proxy of a full
+    list, and the largest of the ``_CRITICAL`` sets with the smallest lower bounds of the
+    screening (the closest sets are at most that).  The proxies are computed (by LAPACK)
+    only where the lower bound is at most the threshold: most batches add nothing and
+    compute none."""
+    low = screen.low
+    assert low is not None
+    threshold = candidates[-1][0] if len(candidates) >= _CRITICAL else np.inf
+    rows = np.flatnonzero(low <= threshold)
     if rows.size == 0:
         return
-    position = total - 1 - (block.offset + rows)
-    rows = rows[np.lexsort((position, proxy[rows]))[:_CRITICAL]]
-    for j, removed in zip(rows, block.subsets(rows)):
+    if rows.size > _CRITICAL:
+        first = np.sort(rows[np.argpartition(low[rows], _CRITICAL - 1)[:_CRITICAL]])
+        threshold = min(threshold, float(screen.proxies(first, shift).max()))
+        rows = rows[low[rows] <= threshold]
+    proxy = screen.proxies(rows, shift)
+    rows, proxy = rows[proxy <= threshold], proxy[proxy <= threshold]
+    position = total - 1 - (screen.offset + rows)
+    order = np.sort(np.lexsort((position, proxy))[:_CRITICAL])
+    for j, value, removed in zip(rows[order], proxy[order], screen.subsets(rows[order])):
         dropped = set(rest[removed].tolist())
         kept = tuple(sorted(int(i) for i in rest if i not in dropped))
-        candidates.append((float(proxy[j]), total - 1 - block.offset - int(j), kept))
+        candidates.append((float(value), total - 1 - screen.offset - int(j), kept))
     candidates.sort()
     del candidates[_CRITICAL:]
 
