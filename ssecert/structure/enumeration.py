@@ -4,11 +4,13 @@ Sensor sets are checked by increasing size, so the first breaking set found
 is a smallest one, lexicographically first among equals.  Each sensor's
 observable row space comes from an orthogonal Krylov staircase; a set of
 kept sensors is observable iff the sum of their orthogonal projectors is
-positive definite, screened for many sets per numpy call by a batched
-Cholesky factorization of colex-ordered partial sums and decided exactly by
-SVD where screening fails.  Sensors that alone observe the whole state must
-all be removed to break the plant, which prunes the search.  Float failures
-are confirmed on the exact data (``_resolve_failures``).
+positive definite, screened for many sets per numpy call (colex-ordered
+partial sums; a bound shared by the sets with the same largest sensor, a
+single-precision Cholesky factorization with the batch last, LAPACK's where
+neither proves the answer: ``_level_scan``) and decided exactly by SVD where
+screening fails.  Sensors that alone observe the whole state must all be
+removed to break the plant, which prunes the search.  Float failures are
+confirmed on the exact data (``_resolve_failures``).
 
 ``ssecert.structure.sparse`` combines this method with the eigenspace
 method; ``ssecert.structure.removals`` scans one level of removals alone
