@@ -522,8 +522,8 @@ def cholesky_or_nan(mats: np.ndarray) -> np.ndarray:
 
     The factors are those of ``numpy.linalg.cholesky`` (LAPACK's, one
     matrix at a time), bit for bit; a batch that holds a matrix without a
-    factorization is split in halves until that matrix is alone, so a few
-    failures cost a few more calls.
+    factorization is split in halves down to ``_ONE_BY_ONE`` matrices, then factored one by
+    one, so a few failures cost a few more calls and a batch of failures one call each.
 
     Parameters
     ----------
@@ -542,10 +542,21 @@ def cholesky_or_nan(mats: np.ndarray) -> np.ndarray:
         try:
             out[lo:hi] = np.linalg.cholesky(mats[lo:hi])
         except np.linalg.LinAlgError:
-            if hi - lo > 1:
+            if hi - lo <= _ONE_BY_ONE:
+                # a small batch with a failure: one call per matrix (where most fail, as on a
+                # breaking level, halving down to single matrices costs N log N factorizations)
+                for i in range(lo, hi):
+                    try:
+                        out[i] = np.linalg.cholesky(mats[i])
+                    except np.linalg.LinAlgError:
+                        pass
+            else:
                 mid = (lo + hi) // 2
                 pending += [(mid, hi), (lo, mid)]
     return out
+
+
+_ONE_BY_ONE = 32  # batches with a failure at most this large are factored matrix by matrix
 
 
 def cholesky_batch_last(work: np.ndarray, diagonal: np.ndarray) -> None:
