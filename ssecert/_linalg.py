@@ -168,7 +168,7 @@ def _observability_balancing(A: np.ndarray, C: np.ndarray) -> np.ndarray:
     of the scaled plant.  A state in units 2^50 has a column 2^50 times its neighbours'
     throughout; a coupling inside A that is large or small against the diagonal does not
     move the columns apart."""
-    from ._exact import pow2_row_scaling, pow2_scale
+    from ._exact import pow2_row_scaling
 
     n, p = A.shape[0], C.shape[0]
     if p == 0 or not np.all(np.isfinite(A)):
@@ -180,7 +180,7 @@ def _observability_balancing(A: np.ndarray, C: np.ndarray) -> np.ndarray:
         squares = squares + np.sum(block * block, axis=0)
     if not np.all(np.isfinite(squares)):
         return np.ones(n)
-    return np.array([pow2_scale(float(v)) for v in np.sqrt(squares)])
+    return pow2_row_scaling(np.sqrt(squares)[:, None])  # each column's power of two
 
 
 def balanced_units(system: System, *, spread: float = 16.0) -> Units:
