@@ -66,17 +66,24 @@ class Units(NamedTuple):
         return bool(np.any(self.states != 1.0))
 
 
-def state_balancing(A: np.ndarray, C: np.ndarray, *, spread: float = 16.0) -> np.ndarray | None:
+def state_balancing(
+    A: np.ndarray, C: np.ndarray, *, spread: float = 16.0, canonical: bool = False
+) -> np.ndarray | None:
     """Powers of two s that balance the states of (A, C) (``_state_balancing``), remembered
     for the last plant asked: the checks of one analysis ask for the same plant's several
-    times, and a 1,000-sensor plant's balancing costs a few hundredths of a second."""
+    times, and a 1,000-sensor plant's balancing costs a few hundredths of a second.
+
+    ``canonical=True`` (the structural decisions) first asks the least-squares scaling of
+    the entries' logarithms (``_log_balancing``), which every power-of-two change of units
+    maps to the same balanced plant, and uses it when it spreads the states by 2^16 or more;
+    otherwise, and without it, LAPACK's balancing as below."""
     global _LAST_BALANCING
     A = np.asarray(A, dtype=float)
     C = np.asarray(C, dtype=float).reshape(-1, A.shape[0])
-    key = (A.shape, C.shape, A.tobytes(), C.tobytes(), float(spread))
+    key = (A.shape, C.shape, A.tobytes(), C.tobytes(), float(spread), canonical)
     last = _LAST_BALANCING  # one read: another thread may replace it meanwhile
     if last is None or last[0] != key:
-        last = (key, _state_balancing(A, C, spread=spread))
+        last = (key, _state_balancing(A, C, spread=spread, canonical=canonical))
         _LAST_BALANCING = last
     states = last[1]
     return None if states is None else states.copy()
@@ -85,7 +92,9 @@ def state_balancing(A: np.ndarray, C: np.ndarray, *, spread: float = 16.0) -> np
 _LAST_BALANCING: tuple[tuple[Any, ...], np.ndarray | None] | None = None
 
 
-def _state_balancing(A: np.ndarray, C: np.ndarray, *, spread: float) -> np.ndarray | None:
+def _state_balancing(
+    A: np.ndarray, C: np.ndarray, *, spread: float, canonical: bool
+) -> np.ndarray | None:
     """Powers of two s that balance the states of (A, C), or None when they spread less than
     ``spread`` or S^-1 A S and C S would not be exact (an entry under- or overflowing).
 
@@ -110,6 +119,10 @@ def _state_balancing(A: np.ndarray, C: np.ndarray, *, spread: float) -> np.ndarr
     with np.errstate(all="ignore"):
         if not (np.all(np.isfinite(A)) and np.all(np.isfinite(C))):
             return None
+        if canonical:
+            exponents = _log_balancing(A, C)
+            if exponents.max() - exponents.min() >= _EXTREME_EXPONENTS:
+                return _exact_or_none(A, C, np.ldexp(1.0, exponents))
         K = np.zeros((n + p, n + p))
         K[:n, :n], K[n:, :n] = A, C
         _, (scale, _) = matrix_balance(K, permute=False, separate=True)
@@ -133,6 +146,12 @@ def _state_balancing(A: np.ndarray, C: np.ndarray, *, spread: float) -> np.ndarr
             states = states * more
         if not _spread_beyond(states, spread):
             return None
+        return _exact_or_none(A, C, states)
+
+
+def _exact_or_none(A: np.ndarray, C: np.ndarray, states: np.ndarray) -> np.ndarray | None:
+    """``states`` when S^-1 A S and C S are exact (no entry under- or overflows), else None."""
+    with np.errstate(all="ignore"):
         A_b = A * (states[None, :] / states[:, None])
         C_b = C * states[None, :]
         back = A_b * (states[:, None] / states[None, :])
@@ -141,8 +160,71 @@ def _state_balancing(A: np.ndarray, C: np.ndarray, *, spread: float) -> np.ndarr
     return states
 
 
+def _log_balancing(A: np.ndarray, C: np.ndarray) -> np.ndarray:
+    """Integer exponents e, the states' units 2^e that make the entries of S^-1 A S and
+    D C S closest to their matrix's own scale in the least-squares sense of their logarithms
+    (Curtis and Reid's scaling): every nonzero entry of A, its diagonal included, against
+    one scale alpha of A, and each sensor's row of C in its own units D.
+
+    The normal equations are solved with the sensors' unknowns eliminated exactly (a sensor
+    is linked to states only); in each connected part of the plant the first state's
+    exponent is taken as 0 before rounding.  The answer moves with the data: a plant written
+    with its states in units 2^k gets e + k (up to the rounding of the solve), so every
+    power-of-two change of state units, sensor units or of A's scale gives back the same
+    balanced plant, which LAPACK's gebal (an iteration from the data's own units) does not.
+    """
+    from scipy.sparse.csgraph import connected_components
+
+    n = A.shape[0]
+    nonzero = A != 0
+    off = nonzero & ~np.eye(n, dtype=bool)
+    seen = C != 0
+    W_A = np.where(nonzero, _log2_abs(A), 0.0)
+    W_off = np.where(off, W_A, 0.0)
+    W_C = np.where(seen, _log2_abs(C), 0.0)
+    M_off, M_C = off.astype(float), seen.astype(float)
+    degree = M_C.sum(axis=1)
+    used = degree > 0
+    M_C, W_C, degree = M_C[used], W_C[used], degree[used]
+    # normal equations of min sum over A of (w + alpha + x_col - x_row)^2 and over C of
+    # (w + x_col - g_row)^2, unknowns [x, alpha]: the sensors' g eliminated
+    links = M_off + M_off.T
+    N = np.zeros((n + 1, n + 1))
+    N[:n, :n] = np.diag(links.sum(axis=1) + M_C.sum(axis=0)) - links
+    N[:n, :n] -= (M_C.T / degree[None, :]) @ M_C
+    N[:n, n] = N[n, :n] = M_off.sum(axis=0) - M_off.sum(axis=1)
+    N[n, n] = float(np.count_nonzero(nonzero))
+    rhs = np.empty(n + 1)
+    rhs[:n] = W_off.sum(axis=1) - W_off.sum(axis=0) - W_C.sum(axis=0)
+    rhs[:n] += M_C.T @ (W_C.sum(axis=1) / degree)
+    rhs[n] = -W_A.sum()
+    parts, labels = connected_components((links + M_C.T @ M_C) != 0, directed=False)
+    free = np.ones(n + 1, dtype=bool)
+    free[np.unique(labels, return_index=True)[1]] = False  # each part's first state
+    free[n] = N[n, n] > 0
+    x = np.zeros(n + 1)
+    if np.any(free):
+        block, target = N[np.ix_(free, free)], rhs[free]
+        try:
+            x[free] = np.linalg.solve(block, target)
+        except np.linalg.LinAlgError:
+            x[free] = np.linalg.lstsq(block, target, rcond=None)[0]
+    exponents = np.floor(x[:n] + 0.5)
+    if not np.all(np.isfinite(exponents)):
+        return np.zeros(n, dtype=int)
+    return exponents.astype(int)
+
+
+def _log2_abs(M: np.ndarray) -> np.ndarray:
+    """log2 |M| entrywise (0 where M is 0), the exponent kept exact (frexp)."""
+    mantissa, exponent = np.frexp(np.abs(M))
+    with np.errstate(divide="ignore"):
+        return np.where(M != 0, exponent + np.log2(np.where(M != 0, mantissa, 1.0)), 0.0)
+
+
 #: the observability matrix's column scaling is used beyond this spread only
 EXTREME_SPREAD = 2.0**16
+_EXTREME_EXPONENTS = 16
 _BALANCING_ROUNDS = 8
 # flops spent on the observability blocks of the balancing
 _BALANCING_WORK = 2e7
@@ -187,12 +269,15 @@ def balanced_units(system: System, *, spread: float = 16.0) -> Units:
     """The plant in exact power-of-two units, its states balanced too.
 
     ``unit_normalized`` scales A by a power of two and each sensor's row by its own; here the
-    states are also rescaled, x = S x_b with S = diag(s) powers of two from LAPACK's balancing
-    (gebal, ``scipy.linalg.matrix_balance``) of [[A, 0], [C, 0]], when their spread exceeds
-    ``spread``.  Observability, sparse observability and every breaking set are unchanged by a
-    change of state coordinates, and powers of two change no rounding, so a plant written
-    with one state in units 2^30 times smaller gets the decisions of the plant in its own
-    units.  The rows of C are renormalised after the state scaling.
+    states are also rescaled, x = S x_b with S = diag(s) powers of two, when their spread
+    exceeds ``spread``: the least-squares scaling of the entries' logarithms where it spreads
+    the states by 2^16 or more (units far apart: every power-of-two change of units gives the
+    same balanced plant), else LAPACK's balancing (gebal, ``scipy.linalg.matrix_balance``) of
+    [[A, 0], [C, 0]] (``state_balancing``).  Observability, sparse observability and every
+    breaking set are unchanged by a change of state coordinates, and powers of two change no
+    rounding, so a plant written with one state in units 2^30 times smaller gets the
+    decisions of the plant in its own units.  The rows of C are renormalised after the state
+    scaling.
     """
     from ._exact import pow2_row_scaling
 
@@ -200,7 +285,7 @@ def balanced_units(system: System, *, spread: float = 16.0) -> Units:
     n = system.n
     plain = Units(work, alpha, np.ones(n), pow2_row_scaling(system.C))
     A, C = system.A, plain.sensors[:, None] * system.C
-    states = state_balancing(A, C, spread=spread)
+    states = state_balancing(A, C, spread=spread, canonical=True)
     if states is None:
         return plain
     with np.errstate(all="ignore"):
