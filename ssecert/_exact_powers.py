@@ -332,6 +332,14 @@ class PowerBound:
         when such a power was found, even when ``radius_bound`` rounds to 1 (F = 1 - 1e-17).
     gap_power : int
         The power that gave the gap (0 if none).
+    radius_excess : float
+        Certified lower bound on rho(F) - 1, from an exact power m with |trace F^m| = T > n
+        decided in integers: rho >= (T / n)^(1/m) >= 1 + (T - n) / (m T).  Positive exactly
+        when such a power was found, even when ``radius_lower`` rounds to 1 (F = 1 + 1e-17).
+    trace_excess : float
+        T - n at that power, from the exact trace (rounded down; 0 if none).
+    excess_power : int
+        The power that gave the excess (0 if none).
     """
 
     log2_norms: tuple[float, ...]
@@ -346,6 +354,9 @@ class PowerBound:
     trace_reaches_n: int = 0
     radius_gap: float = 0.0
     gap_power: int = 0
+    radius_excess: float = 0.0
+    trace_excess: float = 0.0
+    excess_power: int = 0
 
 
 def spectral_radius_bound(
@@ -398,6 +409,9 @@ def spectral_radius_bound(
         trail.reaches,
         trail.gap,
         trail.gap_m,
+        trail.excess,
+        trail.trace_excess,
+        trail.excess_m,
     )
 
 
@@ -416,6 +430,7 @@ class _PowerTrail:
         self.lower, self.lower_m = 0.0, 0
         self.reaches = 0
         self.gap, self.gap_m = 0.0, 0
+        self.excess, self.trace_excess, self.excess_m = 0.0, 0.0, 0
 
     def affordable(self, a: Dyadic, b: Dyadic) -> bool:
         """Whether a @ b fits in the work budget (then it is charged); else incomplete."""
@@ -444,6 +459,9 @@ class _PowerTrail:
             low = _trace_radius_lower(trace, P.exponent, self.n, m)
             if low > self.lower:
                 self.lower, self.lower_m = low, m
+            excess = _trace_excess(trace, P.exponent, self.n, m)
+            if excess is not None and excess[0] > self.excess:
+                self.excess, self.trace_excess, self.excess_m = *excess, m
         return value
 
 
@@ -469,6 +487,22 @@ def _trace_reaches_n(trace: int, exponent: int, n: int) -> bool:
     """|trace F^m| >= n, decided in integers: trace * 2^exponent >= n."""
     e = exponent
     return (trace << e if e >= 0 else trace) >= (n if e >= 0 else n << -e)
+
+
+def _trace_excess(trace: int, exponent: int, n: int, m: int) -> tuple[float, float] | None:
+    """With T = |trace F^m| = trace 2^exponent > n (decided in integers): the lower bound
+    (T - n) / (m T) on rho(F) - 1 and T - n, both rounded down; None when T <= n.
+
+    rho^m >= T / n = x^m with x >= 1, and x^m - 1 <= m x^(m-1) (x - 1) <= m (T / n) (x - 1)."""
+    total = Fraction(trace) * Fraction(2) ** exponent
+    if total <= n:
+        return None
+    down = 1 - 1e-15
+    try:
+        beyond = float(total - n) * down
+    except OverflowError:
+        beyond = math.inf
+    return float((total - n) / (m * total)) * down, beyond
 
 
 def _trace_radius_lower(trace: int, exponent: int, n: int, m: int) -> float:
@@ -499,7 +533,9 @@ def _square_powers(P: Dyadic, squarings: int, target: float | None, trail: _Powe
     m = trail.powers[-1] if trail.powers else 1
     for _ in range(squarings):
         if target is not None and (
-            trail.best < target or trail.lower > target or (target == 1.0 and trail.gap > 0)
+            trail.best < target
+            or trail.lower > target
+            or (target == 1.0 and (trail.gap > 0 or trail.excess > 0))
         ):
             break
         if not trail.affordable(P, P):

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 import re
 
-__all__ = ["sig", "distance", "one_minus", "readable", "factor_above"]
+__all__ = ["sig", "distance", "one_minus", "one_plus", "readable", "factor_above"]
 
 # below this magnitude a number is shown with two significant digits: its digits are rounding
 # noise, or it is read as "tiny" only
@@ -79,6 +79,23 @@ def one_minus(gap: float) -> str:
     if math.isfinite(gap) and 0 < gap < 1e-3:
         return f"1 - {gap:.3g}"
     return sig(1.0 - gap, 6)
+
+
+def one_plus(gap: float, base: int = 1) -> str:
+    """The number base + gap in words that show how far above ``base`` it is.
+
+    An exact trace 1 + 2^-60 is the float 1; below a relative gap of 1e-3 the gap is written
+    out, as ``one_minus`` writes it below 1.
+
+    Examples
+    --------
+    >>> one_plus(2.0**-60), one_plus(0.25), one_plus(1.7e-18, base=2)
+    ('1 + 8.67e-19', '1.25', '2 + 1.7e-18')
+    """
+    gap = float(gap)
+    if math.isfinite(gap) and 0 < gap < 1e-3 * base:
+        return f"{base} + {gap:.3g}"
+    return sig(base + gap, 6, versus=float(base))
 
 
 def _exponent(text: str) -> str:

@@ -154,6 +154,11 @@ class Check:
         does not apply to this design, and no verdict of the certificate
         relies on it.  Reports show "does not apply" instead of fails;
         ``verdict`` keeps the answer to the check's own question.
+    value_text : str, default ""
+        ``value`` in words where its float cannot say what the verdict rests on: an exact
+        spectral radius bound 1 - 2^-60 is the float 1.0, and reads "1 - 8.67e-19".  Reports
+        show it instead of the rounded float; the JSON keeps ``value`` (and ``margin``, the
+        exact distance).  Empty: the float, rounded.
     """
 
     id: str
@@ -171,6 +176,7 @@ class Check:
     value_name: str = ""
     margin_name: str = ""
     applies: bool = True
+    value_text: str = ""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "verdict", Verdict(self.verdict))

@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from .._format import one_plus, sig
 from .._validation import as_real_matrix
 from ..system import System
 from ..tolerances import Tolerances
@@ -280,15 +281,16 @@ def verify_deadbeat(
             f"not clearly above {rtol:.0e}"
         )
     if powers.radius_bound >= 1:
-        if powers.radius_lower > 1:
+        if powers.radius_lower > 1 or powers.radius_excess > 0:
+            excess = max(powers.radius_lower - 1.0, powers.radius_excess)
             reasons.append(
                 f"the printed gain is unstable: exact traces of powers of "
-                f"A - L C prove spectral radius >= {powers.radius_lower:.6g}"
+                f"A - L C prove spectral radius >= {one_plus(excess)}"
             )
         else:
             reasons.append(
                 f"the spectral radius of the printed A - L C is not certified below 1 "
-                f"(exact bound {powers.radius_bound:.6g})"
+                f"(exact bound {sig(powers.radius_bound, 6)})"
             )
     return DeadbeatCheck(
         index=index,

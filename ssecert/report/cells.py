@@ -71,8 +71,9 @@ def number(value: Any, digits: int = 4, *, versus: float | None = None) -> str:
 
 
 def value_text(check: Check) -> str:
-    """The check's headline value, rounded ("-" when it has none)."""
-    return number(check.value, versus=VALUE_VERSUS.get(check.id))
+    """The check's headline value, rounded ("-" when it has none), or its words
+    (``Check.value_text``) where the float cannot show the side of the threshold it is on."""
+    return check.value_text or number(check.value, versus=VALUE_VERSUS.get(check.id))
 
 
 def margin_text(check: Check) -> str:

@@ -198,7 +198,8 @@ def _check_context(check: Check) -> dict[str, Any]:
         "value_name": check.value_name,
         "margin": margin_text(check),
         "margin_name": check.margin_name,
-        "value_exact": _exact_title(check.value, value_text(check)),
+        # a value in words (1 - 8.67e-19) is not the float's rounding: no float on hover
+        "value_exact": "" if check.value_text else _exact_title(check.value, value_text(check)),
         "margin_exact": _exact_title(check.margin, margin_text(check)),
         "required": check.required,
         "method": check.method,

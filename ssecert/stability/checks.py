@@ -31,6 +31,7 @@ from .gain_check import (
     _known,
     _lyapunov_evidence,
     balanced_lyapunov_note,
+    exact_radius,
     observer_gain_check,
     overflow_reason,
 )
@@ -111,7 +112,7 @@ def observer_stability_check(
         why = "not clearly above 1" if radius <= 1 + 1e-6 else "but no replay confirmed growth"
         searches = {
             "divergent_trajectory": "none: the large-signal loop A + shrink B Cw has spectral "
-            f"radius {radius:.6g}, {why}",
+            f"radius {sig(radius, 6)}, {why}",
             "nonzero_equilibrium": searched,
             "periodic_orbit": cycled,
         }
@@ -153,7 +154,7 @@ def _failure_words(
         f"{start}far from the origin the soft "
         f"threshold is the identity minus a bounded term, and that large-signal loop has the "
         f"eigenvalue {sig(mu.real) if mu.imag == 0 else f'{mu.real:.4g} {mu.imag:+.4g}i'} "
-        f"(modulus {abs(mu):.6g} > 1). "
+        f"(modulus {sig(abs(mu), 6)} > 1). "
         f"Along its left eigenvector w the error obeys |w' xi+| >= {abs(mu):.6g} |w' xi| - "
         f"{witness['beta']:.3g}, so it grows without bound once |w' xi| > "
         f"{witness['escape_level']:.3g}; replayed: from an initial error of norm "
@@ -184,7 +185,7 @@ def _equilibrium_replay_words(witness: dict[str, Any]) -> str:
     """What the replay of an equilibrium showed, when it did not stay there, and why."""
     replay = witness.get("observer_replay") or {}
     moduli = np.asarray(witness.get("local_loop_moduli", []), dtype=float)
-    shown = ", ".join(f"{v:.3g}" for v in moduli[moduli > 1 + 1e-9][:3])
+    shown = ", ".join(sig(v, 3) for v in moduli[moduli > 1 + 1e-9][:3])
     repelling = (
         f" It is repelling: the linear part of the error's map near it has eigenvalues of "
         f"modulus {shown} > 1, so any error off it by rounding moves away"
@@ -277,6 +278,7 @@ def _observer_replay(design: ObserverDesign, witness: dict[str, Any]) -> dict[st
 def _linear_stability_check(lyap: LyapunovCertificate, tol: Tolerances, title: str) -> Check:
     """observer_stability of a linear observer, from its Lyapunov certificate."""
     verdict = Verdict(lyap.verdict)
+    shown = exact_radius(lyap)
     if verdict is Verdict.HOLDS and lyap.method == "exact powers":
         summary = f"The error dynamics are linear and stable: {lyap.reason}."
     elif verdict is Verdict.HOLDS:
@@ -301,6 +303,7 @@ def _linear_stability_check(lyap: LyapunovCertificate, tol: Tolerances, title: s
         if lyap.method == "lyapunov"
         else "spectral radius bound of A - L C",
         margin_name="Lyapunov margin" if lyap.method == "lyapunov" else "1 - spectral radius bound",
+        value_text=shown.text if verdict is Verdict.HOLDS and shown is not None else "",
         fields={"decay_rate": None if lyap.contraction is None else 1 - lyap.contraction},
         evidence=_lyapunov_evidence(lyap),
         witness=lyap.witness if verdict is Verdict.FAILS else None,

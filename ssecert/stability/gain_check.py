@@ -11,12 +11,12 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from functools import partial
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from .._exact_powers import ExactMatrix
-from .._format import sig
+from .._format import one_minus, one_plus, sig
 from ..design.gains import GainError
 from ..observers import ObserverDesign
 from ..results import Check, Verdict
@@ -100,6 +100,7 @@ def observer_gain_check(design: ObserverDesign, *, tolerances: Tolerances | None
     fields["spectral_radius"] = cert.spectral_radius
     evidence.update(_lyapunov_evidence(cert))
     verdict = Verdict(cert.verdict)
+    shown = exact_radius(cert)
     if verdict is Verdict.HOLDS and cert.method == "exact powers":
         fields["spectral_radius"] = cert.contraction
         summary = f"The linear error dynamics e+ = (A - L C) e are stable: {cert.reason}."
@@ -122,19 +123,46 @@ def observer_gain_check(design: ObserverDesign, *, tolerances: Tolerances | None
         title=title,
         verdict=verdict,
         summary=summary,
-        value=fields["spectral_radius"],
+        value=fields["spectral_radius"] if shown is None else shown.value,
         margin=cert.margin,
         method="discrete Lyapunov (dlyap)"
         if cert.method == "lyapunov"
         else "exact powers of A - L C",
         # exact powers bound the spectral radius; their margin is that bound's distance from 1
-        value_name="" if cert.method == "lyapunov" else "spectral radius bound of A - L C",
+        value_name="" if shown is None else shown.name,
         margin_name="" if cert.method == "lyapunov" else "1 - spectral radius bound",
+        value_text="" if shown is None else shown.text,
         fields=fields,
         evidence=evidence,
         witness=cert.witness if verdict is Verdict.FAILS else None,
         tolerances=_decided_by(tol, error_bound=cert.error_bound),
     )
+
+
+class ExactRadius(NamedTuple):
+    """What an observer check shows as its value when the exact powers of F decided it."""
+
+    value: float | None
+    name: str
+    text: str  # the value in words where its float rounds onto 1 ("" otherwise)
+
+
+def exact_radius(cert: Any) -> ExactRadius | None:
+    """The certified spectral radius bound an exact decision rests on, None without one.
+
+    Stable: the upper bound, "1 - 8.67e-19" where its float is 1 (F = 1 - 2^-60); unstable:
+    the lower bound, "1 + 8.67e-19" where the exact traces exceed n by less than a float
+    resolves (F = 1 + 2^-60)."""
+    proof = cert.proof or {}
+    if cert.method != "exact powers" or proof.get("state") not in ("stable", "unstable"):
+        return None
+    if proof["state"] == "stable":
+        upper, gap = proof["spectral_radius_upper_bound"], proof.get("spectral_radius_gap", 0.0)
+        text = one_minus(gap) if upper >= 1.0 and gap > 0 else ""
+        return ExactRadius(upper, "spectral radius bound of A - L C", text)
+    lower, excess = proof["spectral_radius_lower_bound"], proof.get("spectral_radius_excess", 0.0)
+    text = one_plus(excess) if lower <= 1.0 and excess > 0 else ""
+    return ExactRadius(lower, "spectral radius lower bound of A - L C", text)
 
 
 def balanced_lyapunov_note(cert: Any) -> str:
@@ -296,7 +324,7 @@ def _nilpotent_summary(details: Mapping[str, Any], fields: dict[str, Any]) -> st
         f"computed exactly from the floats, norms in balanced power-of-two state units): the "
         f"error vanishes to rounding in {index} "
         f"step{'s' if index != 1 else ''} without attack{_fastest_note(details)}, and the "
-        f"spectral radius is certified <= {upper:.3g}."
+        f"spectral radius is certified <= {sig(upper, 3)}."
     )
 
 

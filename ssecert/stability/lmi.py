@@ -48,6 +48,7 @@ from typing import Any
 
 import numpy as np
 
+from .._format import sig
 from ..budget import Budget
 from ..observers.lure import LureModel, scaling_text
 from ..results import Verdict
@@ -227,7 +228,7 @@ def _prechecks(model: LureModel) -> tuple[Verdict | None, str, dict[str, Any]]:
             if model.q >= 1 - 1e-12:
                 why = (
                     f"with shrink = 1 the sector [0, 1] contains the identity, and the linear "
-                    f"loop it then contains has spectral radius {rho_q:.6g}"
+                    f"loop it then contains has spectral radius {sig(rho_q, 6)}"
                     f"{' > 1' if rho_q > 1 + 1e-9 else ''} (it has an eigenvalue at 1 whenever A "
                     f"does: e = v, a_hat = -C v); no sector certificate can "
                     f"exist, which does not mean the observer is unstable. Shrink < 1 (the "
@@ -236,7 +237,7 @@ def _prechecks(model: LureModel) -> tuple[Verdict | None, str, dict[str, Any]]:
             else:
                 why = (
                     f"the sector [0, {model.q:g}] contains the linear map phi = {model.q:g} w, "
-                    f"whose closed loop has spectral radius {rho_q:.6g} >= 1; no sector "
+                    f"whose closed loop is not asymptotically stable ({vertex.reason}); no sector "
                     f"certificate can exist"
                 )
             return Verdict.INCONCLUSIVE, why, details
@@ -319,7 +320,7 @@ def corner_reason(corner: dict[str, Any]) -> str:
     gains = ", ".join(f"{k:g}" for k in corner["gains"])
     return (
         f"the linear loop with phi_i = k_i w_i, k = ({gains}), is in the sector channel by "
-        f"channel and has spectral radius {corner['spectral_radius']:.6g} > 1 "
+        f"channel and has spectral radius {sig(corner['spectral_radius'], 6)} > 1 "
         f"({corner['unstable_corners']} of the {corner['corners']} corners k in {{0, shrink}}^m "
         f"are unstable), so no certificate that treats the channels as separate sector or "
         f"slope-restricted nonlinearities (circle criterion, Zames-Falb multipliers) can exist"

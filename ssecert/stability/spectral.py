@@ -33,7 +33,7 @@ from .._exact import (
     spectral_radius_bound,
 )
 from .._exact_powers import ExactMatrix
-from .._format import one_minus, sig
+from .._format import one_minus, one_plus, sig
 from ..tolerances import EPS
 
 __all__ = ["SchurDecision", "schur_decision", "EXACT_SCHUR_LIMIT"]
@@ -222,6 +222,23 @@ def _decided_by_powers(
             f"the exact powers {source} bound its spectral radius by {below_one(upper, gap)}",
             details,
         )
+    if powers.radius_excess > 0 and not lower > 1.0:
+        # |trace F^m| > n exactly, by less than the float lower bound resolves (1 + 2^-60)
+        m = powers.excess_power
+        details["spectral_radius_excess"] = powers.radius_excess
+        return SchurDecision(
+            "unstable",
+            upper,
+            max(lower, 1.0),
+            f"exact traces: |tr F^{m}| > n",
+            lam,
+            True,
+            f"the exact powers {source} give |trace F^{m}| = "
+            f"{one_plus(powers.trace_excess, n)} > n = {n}, so its spectral radius is at least "
+            f"{one_plus(powers.radius_excess)} > 1: the error does not converge to 0 from every "
+            f"state",
+            details,
+        )
     if powers.trace_reaches_n and not lower > 1.0:
         m = powers.trace_reaches_n
         return SchurDecision(
@@ -231,8 +248,8 @@ def _decided_by_powers(
             f"exact traces: |tr F^{m}| >= n",
             lam,
             True,
-            f"the exact powers {source} give |trace F^{m}| >= n = {n}, so its spectral radius "
-            f"is at least 1: the error does not converge to 0 from every state",
+            f"the exact powers {source} give |trace F^{m}| = n = {n} exactly, so its spectral "
+            f"radius is at least 1: the error does not converge to 0 from every state",
             details,
         )
     if lower > 1.0:
@@ -244,7 +261,7 @@ def _decided_by_powers(
             lam,
             True,
             f"the exact traces of the powers {source} bound its spectral radius below by "
-            f"{_fmt(lower)} > 1",
+            f"{one_plus(lower - 1.0)} > 1",
             details,
         )
     return None
