@@ -1,11 +1,47 @@
 """ssecert certify: files, JSON contract, exit status, Jupyter rendering."""
 
 import json
+import re
+from pathlib import Path
 
 from ssecert import analyze
 from ssecert.certify import certify
 from ssecert.cli import main
 from ssecert.examples import load_example
+from ssecert.report.json import certify_json
+from ssecert.spec import spec_from_dict
+
+ARCHITECTURE = (Path(__file__).resolve().parents[1] / "docs" / "architecture.md").read_text()
+
+
+def _documented(start: str, end: str) -> set[str]:
+    """The names docs/architecture.md puts in backticks from ``start`` to ``end``, leaving out
+    what is in parentheses (the parts of a key)."""
+    begin = ARCHITECTURE.index(start) + len(start)
+    text = ARCHITECTURE[begin : ARCHITECTURE.index(end, begin) + len(end)]
+    text = re.sub(r"\s+", " ", text)
+    while re.search(r"\([^()]*\)", text):
+        text = re.sub(r"\([^()]*\)", "", text)
+    return set(re.findall(r"`([^`]+)`", text))
+
+
+def _analyze_keys() -> set[str]:
+    """The top-level keys of the JSON the document gives as {"ssecert_version", ...}."""
+    start = ARCHITECTURE.index("- JSON: `{") + len("- JSON: `{")
+    text, depth, top = ARCHITECTURE[start:], 0, ""
+    for char in text[: text.index("}`")]:
+        depth += {"{": 1, "}": -1}.get(char, 0)
+        top += char if depth == 0 and char != "}" else ""
+    return set(re.findall(r'"([^"]+)"', top))
+
+
+CERTIFY_KEYS = _documented("`certify` adds", "`spec`")
+
+
+def test_the_documented_json_keys_are_parsed():
+    # what this module pins: if the document's sentences change shape, the parsing says so
+    assert _analyze_keys() == {"ssecert_version", "system", "verdict", "checks", "meta"}
+    assert {"simulations", "certified_region", "spec", "notes"} <= CERTIFY_KEYS
 
 
 def test_certify_without_spec_writes_the_ugv_report(tmp_path, capsys, monkeypatch):
@@ -23,6 +59,8 @@ def test_certify_without_spec_writes_the_ugv_report(tmp_path, capsys, monkeypatc
     assert "<script" not in html and "@import" not in html
     assert data["verdict"] == "fails"
     assert data["checks"]["sparse_observability"]["breaking_set"] == [0]
+    # every key docs/architecture.md names, and no other (no notes: nothing was skipped)
+    assert set(data) == _analyze_keys() | CERTIFY_KEYS - {"notes"}
     sims = data["simulations"]
     assert set(sims) == {"constant-velocity-a", "stealthy"}
     for sim in sims.values():
@@ -52,6 +90,28 @@ def test_automatic_stealthy_scenario_and_seed(tmp_path):
     assert "stealthy (automatic)" in result.simulations
     assert result.simulations["constant-velocity-a"].seed == 3
     assert result.stealthy["residual"] < 1e-9
+    sims = json.loads(certify_json(result))["simulations"]
+    assert set(sims) == {"constant-velocity-a", "stealthy (automatic)"}
+    scenario_keys = _documented("`simulations` (by scenario name:", ";")
+    assert scenario_keys >= {"observer", "final", "series"}
+    assert all(set(sim) == scenario_keys for sim in sims.values())
+
+
+def test_the_json_of_a_plant_without_sparse_observability_has_the_documented_keys():
+    # no observer: no simulation, no region, a note saying so; the stealthy attack is the witness
+    spec = spec_from_dict(
+        {
+            "name": "breakable",
+            "system": {"A": [[0.5, 0.0], [1.0, 0.7]], "C": [[0.0, 1.0], [1.0, 0.0], [1.0, 0.0]]},
+            "attack": {"max_attacked": 1},
+        }
+    )
+    data = json.loads(certify_json(certify(spec)))
+    assert data["verdict"] == "fails" and data["simulations"] == {} and data["notes"]
+    assert set(data) == _analyze_keys() | CERTIFY_KEYS - {"certified_region"}
+    witness_keys = _documented("the `witness` of a failing sparse_observability:", ";")
+    assert witness_keys == {"z", "sensors_a", "sensors_b", "attack_a", "attack_b"}
+    assert witness_keys <= set(data["checks"]["sparse_observability"]["witness"])
 
 
 def test_bad_out_folder_is_a_usage_error(tmp_path, capsys):
