@@ -97,6 +97,19 @@ def test_a_circle_certificate_survives_a_change_of_state_units():
     assert np.all(np.linalg.norm(tail, axis=1) <= 1e-8 * np.linalg.norm(xi0, axis=1))
 
 
+def test_a_circle_criterion_retried_in_balanced_units_draws_its_conclusion_once():
+    # the README's zf-plant with its second state in units 2^200: the circle LMIs fail in the
+    # user's coordinates and again in balanced ones; the retry's reason is what it found there,
+    # and "does not show the observer is unstable" is said once, at the end
+    model = _model(*_rescaled(ZF_PLANT, ZF_OBSERVER, 200))
+    cert = circle_certificate(model)
+    assert cert.verdict.value == "inconclusive"
+    conclusion = "this does not show the observer is unstable"
+    assert "; in balanced state coordinates (xi = diag(" in cert.reason
+    assert cert.reason.count(conclusion) == 1 and cert.reason.endswith(conclusion), cert.reason
+    assert cert.reason.count("no circle-criterion certificate was found or verified") >= 2
+
+
 @pytest.mark.parametrize("k", [7, 14])
 def test_a_zames_falb_certificate_survives_a_change_of_state_units(k):
     plant, observer = _rescaled(ZF_PLANT, ZF_OBSERVER, k)

@@ -467,7 +467,36 @@ def circle_certificate(
     -------
     LMICertificate
     """
-    budget = budget or Budget()
+    search = partial(
+        _circle_search,
+        structure=structure,
+        solver_options=solver_options,
+        clear=clear,
+        budget=budget or Budget(),
+    )
+    cert = search(model, reuse=reuse)
+    if cert.verdict is not Verdict.INCONCLUSIVE or "attempts" not in cert.details:
+        return cert  # certified, decided or refused before any LMI was solved
+    # the LMIs were solved and failed: again in balanced coordinates, by the search alone, so
+    # that its reason says what it found there and the conclusion below is drawn once
+    retry, note = balanced_retry(model, search, enabled=balance, attempts=cert.details["attempts"])
+    if retry is not None:
+        return retry
+    return replace(cert, reason=f"{cert.reason}{note}; this does not show the observer is unstable")
+
+
+def _circle_search(
+    model: LureModel,
+    *,
+    structure: str,
+    solver_options: dict[str, Any] | None,
+    clear: float,
+    budget: Budget,
+    reuse: Sequence[tuple[np.ndarray, np.ndarray]] = (),
+) -> LMICertificate:
+    """``circle_certificate`` in the coordinates ``model`` is written in: the certificate, the
+    pre-checks' verdict, a refusal, or inconclusive with what the LMIs (``details["attempts"]``)
+    gave."""
     refusal = _model_refusal(model, budget)
     if refusal:
         return LMICertificate(
@@ -504,21 +533,6 @@ def circle_certificate(
         if ok:
             return _holds(model, P, t, margin, bound, st, {**details, "attempts": attempts})
         info["verification_problem"] = problem
-    retry, note = balanced_retry(
-        model,
-        partial(
-            circle_certificate,
-            structure=structure,
-            solver_options=solver_options,
-            clear=clear,
-            budget=budget,
-            balance=False,
-        ),
-        enabled=balance,
-        attempts=attempts,
-    )
-    if retry is not None:
-        return retry
     return LMICertificate(
         Verdict.INCONCLUSIVE,
         "circle",
@@ -526,8 +540,6 @@ def circle_certificate(
             "no circle-criterion certificate was found or verified (LMI "
             + "; ".join(f"{a['structure']}: {a['status']}" for a in attempts)
             + ")"
-            + note
-            + "; this does not show the observer is unstable"
         ),
         details={**details, "attempts": attempts},
     )
