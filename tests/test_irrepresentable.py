@@ -2,11 +2,14 @@
 
 import itertools
 import math
+from fractions import Fraction
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
-from ssecert import System, irrepresentable, irrepresentable_constant
+from ssecert import System, Tolerances, irrepresentable, irrepresentable_constant
 from ssecert.examples import load_example
 
 
@@ -85,3 +88,212 @@ def test_budget():
 def test_bad_mode():
     with pytest.raises(ValueError, match="mode"):
         irrepresentable(System([[1.0]], [[1.0]]), 1, mode="rows")
+
+
+# ---------------------------------------------------------------------------
+# units: a change of state units changes nothing; a sensor's units change rho, never a rank
+
+ZF_PLANT = ([[-0.4, -0.9], [1.1, -0.4]], [[0.9, -0.2], [0.7, 0.5], [0.8, 0.7]])  # README
+DAMPED_PLANT = (  # README, "damped"
+    [[0.98, 0.17, 0.0, 0.0], [-0.17, 0.98, 0.0, 0.0], [0.0, 0.0, 0.9, 0.4], [0.0, 0.0, -0.4, 0.9]],
+    [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1], [1, 0, 1, 0], [0, 1, 0, 1]],
+)
+PACKAGED = ["lasso-example-1", "notes-example-0", "notes-example-1", "notes-example-2",
+            "notes-example-3", "ugv"]  # fmt: skip
+CLAIM = "within the precision of its data"
+
+
+def _plant(name):
+    """(A, C, s, horizon) of a README plant or a packaged example."""
+    if name in ("zf-plant", "damped"):
+        A, C = ZF_PLANT if name == "zf-plant" else DAMPED_PLANT
+        return np.asarray(A, dtype=float), np.asarray(C, dtype=float), 1, None
+    spec = load_example(name)
+    return spec.system.A, spec.system.C, spec.max_attacked, spec.horizon
+
+
+def _state_units(A, C, j, k):
+    """x' = T x with T = diag(1, .., 2^k, ..) (state j): A' = T A T^-1, C' = C T^-1, exactly."""
+    t = np.ones(A.shape[0])
+    t[j] = 2.0**k
+    return A * t[:, None] / t[None, :], C / t[None, :]
+
+
+def _sensor_units(C, i, k):
+    """Sensor i's row of C times 2^k, exactly."""
+    d = np.ones(C.shape[0])
+    d[i] = 2.0**k
+    return C * d[:, None]
+
+
+def _exact_rows(A, C, tau):
+    """Rows of O_tau as Fractions (row t p + i is C_i A^t)."""
+    A = [[Fraction(float(x)) for x in row] for row in np.asarray(A)]
+    block = [[Fraction(float(x)) for x in row] for row in np.asarray(C)]
+    n, rows = len(A), []
+    for _ in range(tau):
+        rows.extend(block)
+        block = [[sum(b[k] * A[k][j] for k in range(n)) for j in range(n)] for b in block]
+    return rows
+
+
+def _exact_rho(O, inside):
+    """rho(S) in rational arithmetic; None where O_Sbar lacks full column rank."""
+    n = len(O[0])
+    bar = [row for r, row in enumerate(O) if r not in set(inside)]
+    M = [[sum(b[i] * b[j] for b in bar) for j in range(n)] + [O[r][i] for r in inside]
+         for i in range(n)]  # fmt: skip
+    for c in range(n):  # Gauss-Jordan on [O_Sbar^T O_Sbar | O_S^T]
+        pivot = next((r for r in range(c, n) if M[r][c] != 0), None)
+        if pivot is None:
+            return None
+        M[c], M[pivot] = M[pivot], M[c]
+        M[c] = [x / M[c][c] for x in M[c]]
+        for r in range(n):
+            if r != c and M[r][c] != 0:
+                M[r] = [a - M[r][c] * b for a, b in zip(M[r], M[c])]
+    X = [row[n:] for row in M]
+    return max(sum(abs(sum(b[i] * X[i][j] for i in range(n))) for j in range(len(inside)))
+               for b in bar)  # fmt: skip
+
+
+def _exact_worst(A, C, s, horizon):
+    """The worst rho over block supports of s sensors, exactly (inf when some O_Sbar is
+    rank deficient)."""
+    p, tau = len(C), horizon or len(A)
+    O = _exact_rows(A, C, tau)
+    worst = Fraction(0)
+    for S in itertools.combinations(range(p), s):
+        value = _exact_rho(O, [t * p + i for i in S for t in range(tau)])
+        if value is None:
+            return math.inf
+        worst = max(worst, value)
+    return worst
+
+
+def _same(a, b, rel):
+    return a == b or (math.isfinite(a) and math.isfinite(b) and abs(a - b) <= rel * abs(b))
+
+
+@pytest.mark.parametrize("name", ["zf-plant", "damped", *PACKAGED])
+def test_a_change_of_state_units_changes_neither_verdict_nor_value(name):
+    A, C, s, horizon = _plant(name)
+    base = irrepresentable(System(A, C), s, horizon=horizon)
+    for j in range(A.shape[0]):
+        for k in (30, 50, -60, 200):
+            check = irrepresentable(System(*_state_units(A, C, j, k)), s, horizon=horizon)
+            assert check.verdict == base.verdict, (j, k, check.summary)
+            assert _same(check.value, base.value, 1e-9), (j, k, check.value, base.value)
+            assert CLAIM not in check.summary
+
+
+@pytest.mark.parametrize("name", ["zf-plant", "damped", *PACKAGED])
+def test_a_sensors_units_change_rho_but_never_make_a_false_rank_claim(name):
+    """rho in a sensor's new units against rational arithmetic: the verdict is the exact
+    one (or inconclusive, saying why), the value within its stated error estimate."""
+    A, C, s, horizon = _plant(name)
+    for i in range(C.shape[0]):
+        for k in (30, 50, -60, 200):
+            C2 = _sensor_units(C, i, k)
+            check = irrepresentable(System(A, C2), s, horizon=horizon)
+            exact = _exact_worst(A, C2, s, horizon)
+            assert CLAIM not in check.summary, (i, k, check.summary)
+            if check.verdict.value == "inconclusive":
+                assert abs(exact - 1) <= 1e-9 or "cannot be told from 1" in check.summary
+                continue
+            assert check.verdict.value == ("holds" if exact < 1 else "fails"), (i, k)
+            if math.isfinite(exact):
+                error = abs(check.value - float(exact)) / float(exact)
+                assert error <= max(check.evidence["value_relative_error_estimate"], 4e-16)
+
+
+def test_a_constant_that_grows_with_a_sensors_units_is_accurate():
+    # notes-example-2 with y1 in units 2^-29: rho = 2^29 exactly on the support y3; whitening
+    # by the whole of O_tau printed 536870921.19 (relative error 1.7e-8)
+    A, C, s, horizon = _plant("notes-example-2")
+    C2 = _sensor_units(C, 0, -29)
+    assert _exact_worst(A, C2, s, horizon) == 2**29
+    check = irrepresentable(System(A, C2), s, horizon=horizon)
+    assert check.verdict.value == "fails" and check.fields["worst_support"] == [2]
+    error = abs(check.value - 2.0**29) / 2.0**29
+    assert error < 1e-12
+    assert error <= check.evidence["value_relative_error_estimate"]
+    # lasso-example-1 with y1 in units 2^30: rho = 2^29 on y1
+    check = irrepresentable(System([[1.0]], _sensor_units(np.ones((3, 1)), 0, 30)), 1, horizon=1)
+    assert check.value == pytest.approx(2.0**29, rel=1e-15) and check.fields["worst_support"] == [0]
+
+
+def test_a_constant_that_rests_on_a_cancellation_is_inconclusive_with_its_error():
+    # y1 in units 2^-60 alone tells state 1 from state 3 once y3 is attacked: rho = 2^60
+    # exactly, but an error of one ulp in the other rows (whose difference cancels) moves it
+    # by 100%; the condition number of O_Sbar in the sensors' units says so
+    A, C, s, horizon = _plant("notes-example-2")
+    check = irrepresentable(System(A, _sensor_units(C, 0, -60)), s, horizon=horizon)
+    assert check.verdict.value == "inconclusive"
+    assert "cannot be told from 1" in check.summary
+    assert check.evidence["value_relative_error_estimate"] > 1
+
+
+def test_a_claim_of_rank_deficiency_within_precision_states_its_singular_value():
+    # exactly, O_tau has rank 2; in floating point it looks like rank 1
+    check = irrepresentable(System(np.diag([1.0, 1.0 + 2.0**-52]), np.ones((3, 2))), 1, horizon=2)
+    assert check.verdict.value == "inconclusive" and CLAIM in check.summary
+    smallest = check.evidence["exact_rank_check"]["scaled_smallest_singular_value"]
+    assert smallest < 2.0**-52 and f"{smallest:.2g} times its largest" in check.summary
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_rho_from_the_rows_matches_the_definition(seed):
+    """support_rho (QR of O_Sbar, rows sorted) against pinv on well-scaled rows, and against
+    rational arithmetic on rows 2^40 apart."""
+    from ssecert.structure._irrepresentable_scan import StackedRows, support_rho
+
+    rng = np.random.default_rng(seed)
+    O = rng.integers(-3, 4, size=(8, 3)).astype(float)
+    supports = np.array(list(itertools.combinations(range(8), 2)))
+    rho, codes, _ = support_rho(StackedRows.of(O), supports, Tolerances())
+    direct = [irrepresentable_constant(O, S) for S in supports]
+    assert np.allclose(rho, direct, rtol=1e-12)
+    assert np.array_equal(np.isinf(rho), codes == 0)
+    O[0] *= 2.0**40
+    rho, _, _ = support_rho(StackedRows.of(O), supports, Tolerances())
+    exact = _exact_rows(np.eye(3), O, 1)
+    for value, S in zip(rho, supports):
+        truth = _exact_rho(exact, list(S))
+        assert (
+            (value == math.inf)
+            if truth is None
+            else value == pytest.approx(float(truth), rel=1e-12)
+        )
+
+
+@st.composite
+def _integer_plants(draw):
+    n = draw(st.integers(2, 4))
+    p = draw(st.integers(3, 6))
+    entries = st.integers(-3, 3)
+    A = draw(st.lists(st.lists(entries, min_size=n, max_size=n), min_size=n, max_size=n))
+    C = draw(st.lists(st.lists(entries, min_size=n, max_size=n), min_size=p, max_size=p))
+    j = draw(st.integers(0, n - 1))
+    return np.array(A, dtype=float), np.array(C, dtype=float), j
+
+
+@given(_integer_plants())
+@settings(deadline=None)
+def test_state_units_property(plant):
+    """Random small integer plants, s = 1: the verdict (and rho, to 1e-9) is the same after a
+    power-of-two change of one state's units, and no rescaling (of a state or of a sensor)
+    claims a rank deficiency within precision: these plants' ranks are far from any."""
+    A, C, j = plant
+    exact = _exact_worst(A, C, 1, None)
+    base = irrepresentable(System(A, C), 1)
+    assert CLAIM not in base.summary
+    if base.verdict.value != "inconclusive":
+        assert base.verdict.value == ("holds" if exact < 1 else "fails")
+    for k in (30, -30, 50, 200, -200):
+        check = irrepresentable(System(*_state_units(A, C, j, k)), 1)
+        assert check.verdict == base.verdict, (k, check.summary, base.summary)
+        assert _same(check.value, base.value, 1e-9), (k, check.value, base.value)
+        assert CLAIM not in check.summary
+        sensor = irrepresentable(System(A, _sensor_units(C, j % C.shape[0], k)), 1)
+        assert CLAIM not in sensor.summary

@@ -3,8 +3,15 @@
 The engine behind ``ssecert.structure.irrepresentable``: with Q the
 orthonormal factor of O_tau, the Gramian Q_Sbar^T Q_Sbar = I - Q_S^T Q_S of
 each support is formed by the colex enumeration, screened for positive
-definiteness, and rho follows from one dense product per batch of supports;
-the supports that fail screening are decided by an SVD of Q_Sbar.
+definiteness with a margin, and rho follows from one dense product per batch
+of supports.  The Gramian's rounding (about eps) reaches rho amplified by
+1 / lambda_min(I - Q_S^T Q_S), so the supports below the margin
+(``VALUE_SCREEN``, and among them every rank deficient one) are decided on the
+rows of O_tau themselves (``StackedRows``): the rank by an SVD of O_Sbar with
+its rows and columns scaled by powers of two to unit size, rho by a
+Householder QR of O_Sbar with its rows in decreasing size.  Neither depends on
+the units of a state or of a sensor: whitening by all of O_tau does, where one
+sensor's rows are 2^30 times the others'.
 """
 
 from __future__ import annotations
@@ -17,15 +24,33 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from .._exact import pow2_row_scaling, pow2_scale
 from .._linalg import screen_positive_definite, stacked_rank
 from ..budget import Budget
 from ..parallel import map_ranges, rank_ranges
 from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances
 from ._combinatorics import DEFAULT_CHUNK_BYTES, DEFAULT_MEMORY, colex_blocks
 
-__all__ = ["ScanPlan", "SupportScan", "plan_scan", "scan_supports"]
+__all__ = [
+    "ScanPlan",
+    "StackedRows",
+    "SupportScan",
+    "VALUE_SCREEN",
+    "plan_scan",
+    "scan_supports",
+    "sensor_units_condition",
+    "support_rho",
+]
 
 _SUB = 128  # largest number of supports per dense product
+
+#: Margin of the Gramian screening: a support whose whitened Gramian I - Q_S^T Q_S has an
+#: eigenvalue below it (or below ``Tolerances.screen_rtol``) is decided on the rows of O_tau
+#: (``support_rho``).  Above it the Gramian's rounding reaches rho amplified by at most
+#: 2^10; below it rho >= sqrt((1 - 2^-10) / (2^-10 h)) > 1 for h < 1023 attacked rows
+#: (||O_Sbar^dagger^T O_S^T||_2^2 = (1 - lambda_min) / lambda_min), so the supports sent
+#: there all fail Theorem 1's condition.
+VALUE_SCREEN = 2.0**-10
 
 
 class ScanPlan(NamedTuple):
@@ -37,6 +62,7 @@ class ScanPlan(NamedTuple):
     nbytes: float
     flops: float
     per_support: float
+    refine_batch: int = 1  # supports per stacked SVD and QR of their O_Sbar
 
 
 def plan_scan(
@@ -47,7 +73,11 @@ def plan_scan(
     colex_memory = int(min(DEFAULT_MEMORY, budget.memory // 8))
     nbytes, flops, per_support = _cost(n, p, tau, items, h, total, mode, colex_memory)
     batch = int(max(1, min(_SUB, (budget.memory // 4) // per_support)))
-    return ScanPlan(h, colex_memory, batch, nbytes, flops, per_support)
+    M = p * tau
+    # O_Sbar, its scaled copy, its Q factor and SVD, O_S and the product: (4 n + 2 h + 1) M
+    per_refined = 8.0 * (M * (4 * n + 2 * h + 1) + n * n)
+    refine_batch = int(max(1, min(_SUB, (budget.memory // 4) // per_refined)))
+    return ScanPlan(h, colex_memory, batch, nbytes, flops, per_support, refine_batch)
 
 
 def _cost(
@@ -84,19 +114,21 @@ class SupportScan:
     worst: float = -1.0
     worst_support: tuple[int, ...] | None = None
     infinite: tuple[int, ...] | None = None  # the first support whose O_Sbar is rank deficient
+    infinite_smallest: float = math.nan  # its sigma_min / sigma_max, rows and columns scaled
     n_inf: int = 0
     borderline: int = 0
     stopped_after: int | None = None  # supports checked when the time budget stopped the scan
 
-    def add_refined(self, codes: np.ndarray, subsets: np.ndarray) -> None:
-        """Count the SVD rank decisions of refined supports; keep the first deficient one."""
+    def add_refined(self, codes: np.ndarray, subsets: np.ndarray, smallest: np.ndarray) -> None:
+        """Count the SVD rank decisions of refined supports; keep the first deficient one (with
+        its relative smallest singular value)."""
         self.borderline += int(np.count_nonzero(codes == BORDERLINE))
-        deficient = subsets[codes == ZERO]
-        self.n_inf += deficient.shape[0]
-        for row in deficient:
-            cand = tuple(int(x) for x in row)
+        zero = np.flatnonzero(codes == ZERO)
+        self.n_inf += zero.size
+        for j in zero:
+            cand = tuple(int(x) for x in subsets[j])
             if self.infinite is None or cand < self.infinite:
-                self.infinite = cand
+                self.infinite, self.infinite_smallest = cand, float(smallest[j])
 
     def add_finite(self, rho: np.ndarray, subsets: np.ndarray) -> None:
         """Keep the largest finite rho, with the first support among its near-ties."""
@@ -112,7 +144,7 @@ class SupportScan:
         self.borderline += other.borderline
         self.n_inf += other.n_inf
         if other.infinite is not None and (self.infinite is None or other.infinite < self.infinite):
-            self.infinite = other.infinite
+            self.infinite, self.infinite_smallest = other.infinite, other.infinite_smallest
         if other.worst_support is not None:
             self._keep(other.worst, other.worst_support)
 
@@ -124,6 +156,116 @@ class SupportScan:
             self.worst, self.worst_support = max(self.worst, top), min(self.worst_support, cand)
 
 
+@dataclass(frozen=True)
+class StackedRows:
+    """O_tau as the scan reads it.
+
+    ``O`` is O_tau in the plant's own sensor units (any state coordinates: rho does not
+    depend on them) times one power of two; ``Q`` its orthonormal QR factor, which whitens
+    the Gramians; ``equilibrated`` each row of ``O`` scaled by a power of two to a largest
+    entry in [1, 2) (the rank of any set of rows is that of ``O``'s, exactly); ``size_rank``
+    each row's place in decreasing size (the order of a row-sorted Householder QR).
+    """
+
+    O: np.ndarray
+    Q: np.ndarray
+    equilibrated: np.ndarray
+    size_rank: np.ndarray
+
+    @classmethod
+    def of(cls, O: np.ndarray) -> StackedRows:
+        """The scan's view of a finite O_tau."""
+        O = np.asarray(O, dtype=float)
+        if O.size:
+            O = O * pow2_scale(float(np.abs(O).max()))  # exact: no overflow in the products
+        rows = pow2_row_scaling(O)
+        order = np.argsort(-np.max(np.abs(O), axis=1, initial=0.0), kind="stable")
+        size_rank = np.empty(O.shape[0], dtype=np.int64)
+        size_rank[order] = np.arange(O.shape[0])
+        Q, _ = np.linalg.qr(O)
+        return cls(O, Q, rows[:, None] * O, size_rank)
+
+
+def support_rho(
+    rows: StackedRows, inside: np.ndarray, tol: Tolerances
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Rank decision and rho of supports from the rows of O_tau, whatever their units.
+
+    The rank of O_Sbar is decided by an SVD with its rows and columns scaled
+    by powers of two to unit size, so no sensor's or state's units tip it.
+    rho follows from a Householder QR of O_Sbar (columns scaled the same way,
+    a change of state coordinates) with its rows sorted by decreasing size:
+    O_Sbar = Q_b R, so O_Sbar^dagger^T O_S^T = Q_b R^-T O_S^T, without the
+    normal equations and without whitening by rows outside O_Sbar: the
+    rounding reaches rho amplified by at most about the condition number of
+    O_Sbar in the sensors' units (``sensor_units_condition``), and by about
+    that of the scaled O_Sbar where the rows' sizes do not cancel.
+
+    Parameters
+    ----------
+    rows : StackedRows
+    inside : ndarray of int, shape (N, h)
+        Rows of O_tau in each support S.
+    tol : Tolerances
+
+    Returns
+    -------
+    rho : ndarray, shape (N,)
+        inf where O_Sbar is rank deficient, NaN where the decision is borderline.
+    codes : ndarray of int8, shape (N,)
+        ZERO, BORDERLINE or NONZERO for the smallest singular value.
+    smallest : ndarray, shape (N,)
+        sigma_min / sigma_max of the scaled O_Sbar.
+    """
+    N, h = inside.shape
+    m, n = rows.O.shape
+    mask = np.ones((N, m), dtype=bool)
+    np.put_along_axis(mask, inside, False, axis=1)
+    outside = np.nonzero(mask)[1].reshape(N, m - h)
+    by_size = np.argsort(rows.size_rank[outside], axis=1, kind="stable")
+    outside = np.take_along_axis(outside, by_size, axis=1)
+    scaled = rows.equilibrated[outside]  # (N, m - h, n)
+    with np.errstate(over="ignore"):
+        columns = pow2_row_scaling(np.abs(scaled).max(axis=1, initial=0.0).reshape(-1, 1))
+    columns = columns.reshape(N, 1, n)
+    codes, smallest, _ = stacked_rank(scaled * columns, tolerances=tol)
+    rho = np.where(codes == ZERO, math.inf, math.nan)
+    full = np.flatnonzero(codes == NONZERO)
+    if full.size:
+        B = rows.O[outside[full]] * columns[full]
+        Y = rows.O[inside[full]] * columns[full]
+        Qb, R = np.linalg.qr(B)
+        with np.errstate(all="ignore"):
+            Z = _forward_substitution(R.transpose(0, 2, 1), Y.transpose(0, 2, 1))
+            rho[full] = np.abs(Qb @ Z).sum(axis=2).max(axis=1) if m > h else 0.0
+    return rho, codes, smallest
+
+
+def _forward_substitution(L: np.ndarray, Y: np.ndarray) -> np.ndarray:
+    """X with L X = Y for a batch of lower triangular L (N, n, n) and Y (N, n, h), row by row
+    over the whole batch (a zero pivot gives inf or NaN in that matrix only)."""
+    X = np.empty(Y.shape)
+    for i in range(L.shape[-1]):
+        known = np.einsum("nj,njh->nh", L[:, i, :i], X[:, :i]) if i else 0.0
+        X[:, i] = (Y[:, i] - known) / L[:, i, i, None]
+    return X
+
+
+def sensor_units_condition(rows: StackedRows, inside: np.ndarray) -> float:
+    """sigma_max / sigma_min of O_Sbar for one support (``inside``, its rows of O_tau) in the
+    sensors' own units, its columns scaled by powers of two to unit size (state units are
+    free): the amplification of the rounding that bounds ``support_rho``'s error."""
+    mask = np.ones(rows.O.shape[0], dtype=bool)
+    mask[np.asarray(inside, dtype=np.int64).ravel()] = False
+    B = rows.O[mask]
+    if B.shape[0] < B.shape[1]:
+        return math.inf
+    with np.errstate(over="ignore"):
+        B = B * pow2_row_scaling(np.abs(B).max(axis=0, initial=0.0).reshape(-1, 1))[None, :]
+    s = np.linalg.svd(B, compute_uv=False)
+    return float(s[0] / s[-1]) if s.size and s[-1] > 0 else math.inf
+
+
 # supports per task on Dask workers, at least (fewer cost more to send than to decide)
 MIN_CHUNK_SUPPORTS = 20_000
 
@@ -132,7 +274,7 @@ MIN_CHUNK_SUPPORTS = 20_000
 class _ScanTask:
     """What every range of supports reads (sent once to Dask workers)."""
 
-    Q: np.ndarray
+    rows: StackedRows
     rows_of: np.ndarray
     G: np.ndarray  # per-item Gramians U_i^T U_i
     k: int
@@ -141,7 +283,7 @@ class _ScanTask:
 
 
 def scan_supports(
-    Q: np.ndarray,
+    rows: StackedRows,
     rows_of: np.ndarray,
     k: int,
     plan: ScanPlan,
@@ -162,8 +304,8 @@ def scan_supports(
     (``stopped_after``): the verdict is decided, the worst value is a lower
     bound.
     """
-    U = Q[rows_of]  # (items, r, n)
-    task = _ScanTask(Q, rows_of, np.einsum("irn,irm->inm", U, U), k, plan, tol)
+    U = rows.Q[rows_of]  # (items, r, n)
+    task = _ScanTask(rows, rows_of, np.einsum("irn,irm->inm", U, U), k, plan, tol)
     ranges = rank_ranges(total, client, MIN_CHUNK_SUPPORTS)
     if len(ranges) == 1:
         return _scan_range(task, ranges[0], progress, deadline, stop_above)
@@ -183,14 +325,13 @@ def _scan_range(
     """rho over the supports whose colex ranks lie in ``ranks`` (see ``scan_supports`` for
     the deadline)."""
     scan = SupportScan()
-    Q, rows_of = task.Q, task.rows_of
     lo, hi = ranks
     done = 0
-    base = np.eye(Q.shape[1])
+    base = np.eye(task.rows.Q.shape[1])
     blocks = colex_blocks(task.G, base, task.k, memory=task.plan.colex_memory, start=lo, stop=hi)
     for block in blocks:
         subsets = block.subsets()
-        rho = _block_rho(Q, rows_of, block.matrices, subsets, task.plan.batch, task.tol, scan)
+        rho = _block_rho(task, block.matrices, subsets, scan)
         scan.add_finite(rho, subsets)
         done += len(block)
         if progress is not None:
@@ -202,26 +343,23 @@ def _scan_range(
 
 
 def _block_rho(
-    Q: np.ndarray,
-    rows_of: np.ndarray,
-    matrices: np.ndarray,
-    subsets: np.ndarray,
-    batch: int,
-    tol: Tolerances,
-    scan: SupportScan,
+    task: _ScanTask, matrices: np.ndarray, subsets: np.ndarray, scan: SupportScan
 ) -> np.ndarray:
-    """rho of one block: screened supports in dense batches, the rest by SVD (tallied in scan)."""
-    ok = screen_positive_definite(matrices, tol.screen_rtol)
+    """rho of one block: screened supports in dense batches, the rest from the rows of O_tau
+    (tallied in scan)."""
+    Q, rows_of, plan = task.rows.Q, task.rows_of, task.plan
+    ok = screen_positive_definite(matrices, max(task.tol.screen_rtol, VALUE_SCREEN))
     rho = np.full(matrices.shape[0], np.nan)
     good = np.flatnonzero(ok)
-    for start in range(0, good.size, batch):
-        sel = good[start : start + batch]
+    for start in range(0, good.size, plan.batch):
+        sel = good[start : start + plan.batch]
         rho[sel] = _rho_batch(Q, rows_of, matrices[sel], subsets[sel])
     bad = np.flatnonzero(~ok)
-    if bad.size:
-        r_bad, codes = _rho_refine(Q, rows_of, subsets[bad], tol)
-        rho[bad] = r_bad
-        scan.add_refined(codes, subsets[bad])
+    for start in range(0, bad.size, plan.refine_batch):
+        sel = bad[start : start + plan.refine_batch]
+        inside = rows_of[subsets[sel]].reshape(sel.size, -1)
+        rho[sel], codes, smallest = support_rho(task.rows, inside, task.tol)
+        scan.add_refined(codes, subsets[sel], smallest)
     return rho
 
 
@@ -240,26 +378,3 @@ def _rho_batch(
     sums = full.reshape(Q.shape[0], N, h).sum(axis=2).T  # (N, p tau)
     np.put_along_axis(sums, rows, 0.0, axis=1)  # keep only rows outside S
     return sums.max(axis=1)
-
-
-def _rho_refine(
-    Q: np.ndarray, rows_of: np.ndarray, subsets: np.ndarray, tol: Tolerances
-) -> tuple[np.ndarray, np.ndarray]:
-    """Exact rank decision by SVD for supports that failed screening, and rho."""
-    N = subsets.shape[0]
-    m = Q.shape[0]
-    rho = np.empty(N)
-    codes = np.empty(N, dtype=np.int8)
-    for j in range(N):
-        mask = np.ones(m, dtype=bool)
-        rows = rows_of[subsets[j]].ravel()
-        mask[rows] = False
-        Qbar = Q[mask]
-        c, _, _ = stacked_rank(Qbar[None], tolerances=tol)
-        codes[j] = c[0]
-        if c[0] == NONZERO:
-            M = np.linalg.pinv(Qbar).T @ Q[rows].T
-            rho[j] = np.abs(M).sum(axis=1).max()
-        else:
-            rho[j] = math.inf if c[0] == ZERO else math.nan
-    return rho, codes

@@ -15,6 +15,14 @@ rho is invariant under a change of state coordinates, so O_tau is replaced
 by the orthonormal factor Q of its QR decomposition: then
 O_Sbar^T O_Sbar = I - Q_S^T Q_S, a sum over the items of S that the colex
 enumeration engine forms for many supports per numpy call.
+
+Units.  The states are taken in balanced power-of-two units (rho does not
+change).  A sensor's units do change rho (its attack column is an identity
+column, its l1 penalty weighs the attack in those units), but no rank: every
+rank is decided with the rows of C (or of O_Sbar) and the states scaled by
+powers of two to unit size, and a support is said to be rank deficient
+"within the precision of its data" only with its smallest singular value,
+so scaled, stated beside the claim.
 """
 
 from __future__ import annotations
@@ -29,14 +37,22 @@ import numpy as np
 
 from .._exact import exact_stacked_rank
 from .._format import sig
-from .._linalg import staircase
+from .._linalg import balanced_units, staircase
 from .._validation import as_choice, as_float_option, as_int_option
 from ..budget import Budget, bounded_comb, format_count, log10_comb
 from ..parallel import ChunkError
 from ..results import Check, Verdict
 from ..system import System
-from ..tolerances import Tolerances
-from ._irrepresentable_scan import ScanPlan, SupportScan, plan_scan, scan_supports
+from ..tolerances import EPS, Tolerances
+from ._irrepresentable_scan import (
+    ScanPlan,
+    StackedRows,
+    SupportScan,
+    plan_scan,
+    scan_supports,
+    sensor_units_condition,
+    support_rho,
+)
 from .sparse import DEFAULT_MAX_SETS, DEFAULT_TIME_BUDGET
 
 __all__ = ["irrepresentable", "irrepresentable_constant", "MODES"]
@@ -84,6 +100,7 @@ class _Verdicts:
     """What every verdict of one call shows: its fields, evidence, tolerances and sensor names."""
 
     system: System
+    ranks: System  # the same plant with rows and states in unit powers of two: rank decisions
     mode: str
     k: int
     tau: int
@@ -220,14 +237,14 @@ def irrepresentable(
     budget = budget or Budget()
     if not isinstance(system, System):
         raise TypeError(f"system must be a System, got {type(system).__name__}")
-    system = _states_balanced(system)
+    system, ranks = _states_balanced(system)
     mode = as_choice(mode, "mode", MODES)
     tau = system.n if horizon is None else as_int_option(horizon, "horizon", min_value=1)
     max_sets = as_int_option(max_sets, "max_sets", min_value=1)
     items = system.p if mode == "block" else system.p * tau
     k = as_int_option(support_size, "support_size", min_value=0)
     total = bounded_comb(items, k, max_sets)
-    out = _start(system, mode, k, tau, items, total, budget, tol)
+    out = _start(system, ranks, mode, k, tau, items, total, budget, tol)
     decided = _decided_by_size(out, items, total, max_sets, tol)
     if decided is not None:
         return decided
@@ -247,17 +264,17 @@ def irrepresentable(
             None,
             f"The stacked observability matrix overflows over {tau} steps.",
         )
-    deficient = _rank_deficient(out, tol)
+    rows = StackedRows.of(O)
+    deficient = _rank_deficient(out, rows, tol)
     if deficient is not None:
         return deficient
 
-    Q, _ = np.linalg.qr(O)
     deadline = None
     if time_budget is not None and client is None:
         deadline = time.monotonic() + as_float_option(time_budget, "time_budget", min_value=0.0)
     try:
         scan = scan_supports(
-            Q, rows_of, k, plan, tol, total, progress, client,
+            rows, rows_of, k, plan, tol, total, progress, client,
             deadline=deadline, stop_above=1.0 + tol.irrepresentable_rtol,
         )  # fmt: skip
     except ChunkError as exc:
@@ -269,28 +286,32 @@ def irrepresentable(
             f"The Dask workers failed twice on the supports with colex ranks {lo:,} to "
             f"{hi - 1:,} ({exc.cause!r}).",
         )
-    return _scan_verdict(out, scan, O, rows_of, tol, total, time_budget)
+    return _scan_verdict(out, scan, rows, rows_of, tol, total, time_budget)
 
 
-def _states_balanced(system: System) -> System:
-    """The plant in balanced power-of-two state units (x = S x_b, exact): rho(S) depends on
-    O_tau only through its range, which a change of state coordinates keeps, so the value is
-    the same, but no state's units tip a rank decision.  Sensor rows are not rescaled: that
-    would weigh the Lasso's l1 penalty differently and change rho."""
-    from .._exact import pow2_row_scaling
-    from .._linalg import state_balancing
+def _states_balanced(system: System) -> tuple[System, System]:
+    """The plant in balanced power-of-two state units (x = S x_b, exact), and the same plant
+    with its sensors' rows and A also scaled by powers of two (``balanced_units``).
 
-    s = state_balancing(system.A, pow2_row_scaling(system.C)[:, None] * system.C)
-    if s is None:
-        return system
+    rho(S) depends on O_tau only through its range, which a change of state coordinates
+    keeps, so the first gives the same value.  Its sensor rows are the user's: rescaling them
+    would weigh the Lasso's l1 penalty differently and change rho.  The second has the same
+    ranks (of O_tau and of every O_Sbar) exactly, and decides them: a sensor in units 2^-60,
+    or a state in units 2^60 that one sensor alone sees (C = I), has a row far below the
+    others' that a rank threshold relative to the whole of C would take for zero."""
+    units = balanced_units(system)
+    if not units.balanced:
+        return system, units.system
+    s = units.states
     A = system.A * (s[None, :] / s[:, None])
-    return System(A, system.C * s[None, :], sensors=system.sensors, name=system.name)
+    balanced = System(A, system.C * s[None, :], sensors=system.sensors, name=system.name)
+    return balanced, units.system
 
 
 def _scan_verdict(
     out: _Verdicts,
     scan: SupportScan,
-    O: np.ndarray,
+    rows: StackedRows,
     rows_of: np.ndarray,
     tol: Tolerances,
     total: int,
@@ -306,7 +327,7 @@ def _scan_verdict(
             "supports": total,
         }
     if scan.infinite is not None:
-        return _infinite_verdict(out, scan, rows_of, total)
+        return _infinite_verdict(out, scan, rows_of, total, tol)
     if scan.borderline:
         return out.check(
             Verdict.INCONCLUSIVE,
@@ -314,11 +335,12 @@ def _scan_verdict(
             None,
             f"{scan.borderline} support(s) have a borderline rank decision for O_Sbar.",
         )
-    return _worst_verdict(out, scan, O, rows_of, tol)
+    return _worst_verdict(out, scan, rows, rows_of, tol)
 
 
 def _start(
     system: System,
+    ranks: System,
     mode: str,
     k: int,
     tau: int,
@@ -330,8 +352,11 @@ def _start(
     """The call's verdict maker, with the evidence known before any computation."""
     evidence: dict[str, Any] = {
         "method_detail": (
-            "every support enumerated; rho from the QR-whitened stacked observability matrix; "
-            "worst support recomputed with numpy.linalg.pinv"
+            "every support enumerated, states in balanced power-of-two units; rho from the "
+            "QR-whitened stacked observability matrix where the support's whitened Gramian "
+            "passes a Cholesky screening with margin 2^-10, else from a Householder QR of "
+            "O_Sbar with its rows sorted by size; every rank decided with the rows and columns "
+            "scaled by powers of two to unit size; worst support recomputed by that QR"
         ),
         "definition": "rho(S) = || O_Sbar (O_Sbar^T O_Sbar)^-1 O_S^T ||_inf (largest row sum)",
         "supports": total,
@@ -340,7 +365,7 @@ def _start(
     if total is None:
         evidence["supports_log10"] = log10_comb(items, k)
     tol_out = {"irrepresentable_rtol": tol.irrepresentable_rtol, **tol.to_dict()}
-    return _Verdicts(system, mode, k, tau, evidence, tol_out)
+    return _Verdicts(system, ranks, mode, k, tau, evidence, tol_out)
 
 
 def _decided_by_size(
@@ -387,18 +412,20 @@ def _without_attack(out: _Verdicts, tol: Tolerances) -> Check:
     """Support size 0: fails (rho inf) when O_tau is rank deficient, else holds with rho 0."""
     system, tau = out.system, out.tau
     n, steps = system.n, min(out.tau, system.n)
-    sc0 = staircase(system.A, system.C, max_steps=steps, tolerances=tol)
+    sc0 = staircase(out.ranks.A, out.ranks.C, max_steps=steps, tolerances=tol)
     if sc0.rank < n and not sc0.problem:
-        doubt = _exact_doubt(system, range(system.p * steps), steps, out.evidence)
+        O = system.observability_matrix(steps)
+        doubt = _exact_doubt(system, range(system.p * steps), steps, out.evidence, O, tol)
+        if doubt is None:
+            return out.check(
+                Verdict.FAILS,
+                math.inf,
+                (),
+                f"O_tau (horizon {tau}) has rank {sc0.rank} < n = {n}: even without "
+                f"attack the state is not determined, so rho is inf.",
+            )
         if doubt:
             return out.check(Verdict.INCONCLUSIVE, math.nan, None, f"O_tau (horizon {tau}) {doubt}")
-        return out.check(
-            Verdict.FAILS,
-            math.inf,
-            (),
-            f"O_tau (horizon {tau}) has rank {sc0.rank} < n = {n}: even without "
-            f"attack the state is not determined, so rho is inf.",
-        )
     return out.check(
         Verdict.HOLDS,
         0.0,
@@ -435,11 +462,11 @@ def _rows_of_items(p: int, tau: int, mode: str) -> np.ndarray:
     return np.arange(p * tau, dtype=np.int64)[:, None]
 
 
-def _rank_deficient(out: _Verdicts, tol: Tolerances) -> Check | None:
+def _rank_deficient(out: _Verdicts, rows: StackedRows, tol: Tolerances) -> Check | None:
     """The verdict when O_tau's rank is below n or undecided (so is every O_Sbar's), or None."""
     system, tau = out.system, out.tau
     n = system.n
-    sc = staircase(system.A, system.C, max_steps=tau, tolerances=tol)
+    sc = staircase(out.ranks.A, out.ranks.C, max_steps=tau, tolerances=tol)
     out.evidence["rank_O_tau"] = sc.rank
     if sc.rank >= n and not sc.problem:
         return None
@@ -451,9 +478,13 @@ def _rank_deficient(out: _Verdicts, tol: Tolerances) -> Check | None:
             f"The rank of O_tau cannot be decided: {sc.problem}.",
         )
     steps = min(tau, n)
-    doubt = _exact_doubt(system, range(system.p * steps), steps, out.evidence)
+    kept = range(system.p * steps)
+    doubt = _exact_doubt(system, kept, steps, out.evidence, rows.O[: system.p * steps], tol)
     if doubt:
         return out.check(Verdict.INCONCLUSIVE, math.nan, None, f"O_tau (horizon {tau}) {doubt}")
+    if doubt is not None:  # full rank exactly, and clearly so in floating point
+        out.evidence["rank_O_tau"] = n
+        return None
     first = tuple(range(out.k))
     return out.check(
         Verdict.FAILS,
@@ -466,12 +497,16 @@ def _rank_deficient(out: _Verdicts, tol: Tolerances) -> Check | None:
     )
 
 
-def _infinite_verdict(out: _Verdicts, scan: SupportScan, rows_of: np.ndarray, total: int) -> Check:
+def _infinite_verdict(
+    out: _Verdicts, scan: SupportScan, rows_of: np.ndarray, total: int, tol: Tolerances
+) -> Check:
     """Fails on the first support whose O_Sbar is rank deficient, unless the exact data doubt it."""
     infinite = scan.infinite
     assert infinite is not None
     kept = np.setdiff1d(np.arange(out.system.p * out.tau), rows_of[list(infinite)].ravel())
-    doubt = _exact_doubt(out.system, kept, out.tau, out.evidence)
+    doubt = _exact_doubt(
+        out.system, kept, out.tau, out.evidence, None, tol, smallest=scan.infinite_smallest
+    )
     label = out.label(infinite)
     if doubt:
         return out.check(
@@ -494,15 +529,23 @@ def _infinite_verdict(out: _Verdicts, scan: SupportScan, rows_of: np.ndarray, to
 
 
 def _worst_verdict(
-    out: _Verdicts, scan: SupportScan, O: np.ndarray, rows_of: np.ndarray, tol: Tolerances
+    out: _Verdicts, scan: SupportScan, rows: StackedRows, rows_of: np.ndarray, tol: Tolerances
 ) -> Check:
-    """The worst rho recomputed by pinv, then compared with 1 within the tolerance band."""
+    """The worst rho recomputed from the rows of O_tau, then compared with 1 within the
+    tolerance band."""
     worst, support = scan.worst, scan.worst_support
     assert support is not None
-    direct = irrepresentable_constant(O, rows_of[list(support)].ravel())
-    out.evidence["worst_support_recomputed_with_pinv"] = direct
+    inside = rows_of[list(support)].reshape(1, -1)
+    direct = float(support_rho(rows, inside, tol)[0][0])
+    kappa = sensor_units_condition(rows, inside)
     rel = abs(direct - worst) / max(1.0, abs(worst))
+    # the scan's value is within rel of the QR's, whose rounding reaches rho amplified by at
+    # most about O_Sbar's condition number (normwise backward stability of Householder QR)
+    estimate = rel + (rows.O.shape[0] - inside.shape[1] + rows.O.shape[1]) * EPS * kappa
+    out.evidence["worst_support_recomputed"] = direct
     out.evidence["recompute_relative_difference"] = rel
+    out.evidence["worst_support_condition"] = kappa
+    out.evidence["value_relative_error_estimate"] = estimate
     label = out.label(support)
     if not math.isfinite(direct) or rel > 1e-6:
         return out.check(
@@ -514,6 +557,18 @@ def _worst_verdict(
         )
     margin = 1.0 - worst
     band = tol.irrepresentable_rtol
+    if abs(margin) > band and estimate * abs(worst) >= abs(margin):
+        return out.check(
+            Verdict.INCONCLUSIVE,
+            worst,
+            support,
+            f"The worst constant {worst:.6g} on {label} cannot be told from 1: its relative "
+            f"error may reach {estimate:.2g} (O_Sbar's condition number in the sensors' units "
+            f"is {kappa:.2g}).",
+            margin=margin,
+        )
+    if estimate > band:
+        label += f"; relative error about {estimate:.1g}: O_Sbar's condition number is {kappa:.2g}"
     if worst < 1.0 - band:
         return out.check(
             Verdict.HOLDS,
@@ -551,21 +606,75 @@ def _worst_verdict(
     )
 
 
-def _exact_doubt(system: System, rows: Any, steps: int, evidence: dict[str, Any]) -> str:
-    """Why a floating-point rank deficiency of some rows of O_steps is not trusted, or "".
+def _exact_doubt(
+    system: System,
+    rows: Any,
+    steps: int,
+    evidence: dict[str, Any],
+    O: np.ndarray | None,
+    tol: Tolerances,
+    *,
+    smallest: float | None = None,
+) -> str | None:
+    """Why a floating-point rank deficiency of some rows of O_steps is not trusted.
 
     The rows are taken with the data as exact rationals: full column rank
     there (modulo a prime, a proof) means the deficiency hinged on digits
     below the data's precision.  An exact kernel vector confirms it; beyond
-    the exact budgets the floating-point decision stands.
+    the exact budgets the floating-point decision stands.  The claim that the
+    rows are within the precision of their data of a rank deficient matrix is
+    made only with their smallest singular value, the rows and columns scaled
+    by powers of two to unit size, within the rank tolerance band (``smallest``,
+    or measured on ``O``'s rows); where it is clearly above, the exact rank
+    stands and "" is returned.
+
+    Returns
+    -------
+    str or None
+        None where the deficiency stands (confirmed exactly or beyond the
+        budgets), "" where the rows have full rank (exactly, and clearly in
+        floating point), else the reason the rank is in doubt.
     """
     exact = exact_stacked_rank(system.A, system.C, rows, steps)
     evidence["exact_rank_check"] = exact.to_dict()
     if exact.state != "observable":
+        return None
+    if smallest is None:
+        assert O is not None
+        smallest = _scaled_smallest(O[np.asarray(list(rows), dtype=np.int64)])
+    m, n = len(rows), system.n
+    if not math.isfinite(smallest):
+        return (
+            "looks rank deficient in floating point, where its rows overflow; with the data "
+            f"taken exactly it has full column rank (rank {n} modulo a prime), so rho depends "
+            "on digits the floating-point rows do not have."
+        )
+    rtol = tol.rtol(m, n)
+    band = tol.borderline_factor * rtol
+    evidence["exact_rank_check"]["scaled_smallest_singular_value"] = smallest
+    if smallest > band:
         return ""
     return (
-        "looks rank deficient in floating point, but with the data taken exactly it has full "
-        f"column rank (rank {system.n} modulo a prime): the plant is within the precision of its "
-        "data of one where Theorem 1's assumption fails, so rho depends on digits the data do "
-        "not have."
+        f"looks rank deficient in floating point: with its rows and columns scaled by powers "
+        f"of two to unit size, its smallest singular value is {smallest:.2g} times its largest "
+        f"({smallest / EPS:.2g} ulp of 1; rank tolerance {rtol / EPS:.3g} ulps, borderline "
+        f"band up to {band / EPS:.3g}). With the data taken exactly it has full column rank (rank "
+        f"{n} modulo a prime): the plant is within the precision of its data of one where "
+        "Theorem 1's assumption fails, so rho depends on digits the data do not have."
     )
+
+
+def _scaled_smallest(rows: np.ndarray) -> float:
+    """sigma_min / sigma_max of a matrix with rows and columns scaled by powers of two to unit
+    size (0 when it has fewer rows than columns)."""
+    from .._exact import pow2_row_scaling
+
+    m, n = rows.shape
+    if m < n or n == 0:
+        return 0.0
+    if not np.all(np.isfinite(rows)):
+        return math.nan
+    scaled = pow2_row_scaling(rows)[:, None] * rows
+    scaled = scaled * pow2_row_scaling(scaled.T)[None, :]
+    s = np.linalg.svd(scaled, compute_uv=False)
+    return float(s[-1] / s[0]) if s[0] > 0 else 0.0
