@@ -167,9 +167,12 @@ def test_stealthy_witness_beyond_the_float_range_is_shown_in_scaled_units():
 
 
 def test_ambiguous_eigenvalue_grouping_does_not_block_a_clear_observability_verdict():
-    # eigenvalues 0.5 and 0.5 + 2^-45 with independent eigenvectors; C alone has rank 2
+    # eigenvalues 0.5 and 0.5 + 2^-45 with independent eigenvectors; C alone has rank 2 (four
+    # rows [1, 1] hold the states' units together: with two, the balancing scales the 2^-45
+    # coupling up to 2^-27 and the eigenvalues are no longer ambiguous)
     d = 2.0**-45
-    system = System([[0.5 + d, 0.0], [-d, 0.5]], [[-1.0, 0.0], [1.0, 1.0], [1.0, 1.0], [-1.0, 0.0]])
+    C = [[-1.0, 0.0], [1.0, 1.0], [1.0, 1.0], [1.0, 1.0], [1.0, 1.0], [-1.0, 0.0]]
+    system = System([[0.5 + d, 0.0], [-d, 0.5]], C)
     check = observability(system)
     assert check.verdict.value == "holds"
     assert "eigenvalue_grouping_ambiguous" in check.evidence
@@ -317,8 +320,10 @@ def test_eigenvalue_grouping_tests_each_component_once(monkeypatch):
 
 def test_a_certain_breaking_set_is_found_past_undecided_smaller_sets():
     # A = I: any 4 removed sensors leave one row, so s = 2 fails whatever the last digits; the
-    # sets of 3 are within precision of breaking (rows [1, 0] and [1, 2^-52] are nearly parallel)
-    C = [[1.0, 0.0], [1.0, 2.0**-52], [0.0, 1.0], [1.0, 1.0], [1.0, -1.0]]
+    # sets of 3 are within precision of breaking (rows [1, 1] and [1, 1 + 2^-52] are nearly
+    # parallel; rows [1, 0] and [1, 2^-52] were, until the balancing scaled the states 2^17
+    # apart)
+    C = [[1.0, 1.0], [1.0, 1.0 + 2.0**-52], [0.0, 1.0], [1.0, 0.0], [1.0, -1.0]]
     check = sparse_observability(System(np.eye(2), C), 2, method="enumeration")
     assert check.verdict.value == "fails"
     assert check.fields["max_removable_is_upper_bound"]
