@@ -160,6 +160,19 @@ def _exact_or_none(A: np.ndarray, C: np.ndarray, states: np.ndarray) -> np.ndarr
     return states
 
 
+def far_units(M: np.ndarray) -> np.ndarray | None:
+    """Powers of two s that balance the square matrix M (diag(s)^-1 M diag(s)) by the
+    least-squares scaling of its entries' logarithms (``_log_balancing``) when they spread by
+    2^16 or more, else None."""
+    M = np.asarray(M, dtype=float)
+    if M.shape[0] < 2 or not np.all(np.isfinite(M)):
+        return None
+    exponents = _log_balancing(M, np.zeros((0, M.shape[0])))
+    if exponents.max() - exponents.min() < _EXTREME_EXPONENTS:
+        return None
+    return np.ldexp(1.0, exponents)
+
+
 def _log_balancing(A: np.ndarray, C: np.ndarray) -> np.ndarray:
     """Integer exponents e, the states' units 2^e that make the entries of S^-1 A S and
     D C S closest to their matrix's own scale in the least-squares sense of their logarithms

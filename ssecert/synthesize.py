@@ -713,16 +713,28 @@ def verify_synthesis(design: Any, proposal: Any, *, clear: float = 100.0) -> dic
         return {"verified": False, "problem": proposal.status}
     model = LureModel.from_design(design)
     g = proposal.g * (1 + 1e-6) + 1e-9  # a slightly larger gain, so that the margin survives
+    t = proposal.multipliers if proposal.multipliers is not None else np.zeros(0)
+    alpha = float(proposal.alpha or 0.0)
     ok, margin, bound, problem = verify_certificate(
-        model,
-        proposal.P,
-        proposal.multipliers if proposal.multipliers is not None else np.zeros(0),
-        kind="iss",
-        alpha=float(proposal.alpha or 0.0),
-        g=g,
-        clear=clear,
+        model, proposal.P, t, kind="iss", alpha=alpha, g=g, clear=clear
     )
     out: dict[str, Any] = {"verified": bool(ok), "margin": margin, "error_bound": bound}
+    s = None if ok else model.balancing(canonical=True)
+    if s is not None:  # the same inequality by congruence, in balanced state coordinates
+        scale = np.ones(proposal.P.shape[0])
+        scale[: model.N] = s
+        P_b = proposal.P * scale[:, None] * scale[None, :]
+        if np.all(np.isfinite(P_b)) and np.array_equal(
+            P_b / scale[:, None] / scale[None, :], proposal.P
+        ):
+            ok, margin, bound, problem = verify_certificate(
+                model.scaled(s), P_b, t, kind="iss", alpha=alpha, g=g, clear=clear
+            )
+            if ok:
+                out = {"verified": True, "margin": margin, "error_bound": bound,
+                       "state_scaling": s.tolist(),
+                       "margin_coordinates": "verified in the balanced coordinates "
+                       "xi = diag(state_scaling) xi_b"}  # fmt: skip
     if ok:
         out.update(alpha=float(proposal.alpha or 0.0), gamma=float(np.sqrt(g)))
     else:

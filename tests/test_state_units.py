@@ -318,3 +318,28 @@ def test_sparse_observability_keeps_its_verdict_on_random_plants_in_far_units():
             t[-1] = 2.0**k
             scaled = sparse_observability(System(A * t[:, None] / t[None, :], C / t[None, :]), 1)
             assert scaled.verdict == plain, (A.tolist(), C.tolist(), k)
+
+
+def test_a_gain_synthesised_for_far_units_is_certified_with_its_own_decay():
+    # the damped plant with state 1 in units 2^30 smaller: every synthesis LMI failed
+    # (infeasible_inaccurate, SolverError) and `ssecert design` found no design; solved in
+    # balanced state coordinates (the error norm kept in the user's units) the gain comes
+    # back, and the design built with it is certified with the synthesis's own decay
+    from ssecert.design.synthesis import synthesize_gain, with_gain
+    from ssecert.synthesize import certified_gain, verify_synthesis
+
+    t = np.array([1.0, 2.0**30, 1.0, 1.0])
+    A = np.array(DAMPED_A) * t[:, None] / t[None, :]
+    C = np.array(DAMPED_C, dtype=float) / t[None, :]
+    observer = {"kind": "elastic_net", "gain": "pinv", "step": 0.1, "shrink": 0.3,
+                "threshold": 0.1}  # fmt: skip
+    spec = _spec({"A": A.tolist(), "C": C.tolist()}, observer)
+    template = build_observer(spec.system, spec.observer)
+    proposal = synthesize_gain(template, alpha=0.05)
+    assert proposal.L is not None
+    design = with_gain(template, proposal.L)
+    stability, gain = certified_gain(design)
+    assert stability.verdict == gain.verdict == Verdict.HOLDS
+    own = verify_synthesis(design, proposal)
+    assert own["verified"] and own["alpha"] == pytest.approx(0.05)
+    assert own["state_scaling"][1] / own["state_scaling"][0] == 2.0**30

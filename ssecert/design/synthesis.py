@@ -98,8 +98,9 @@ def synthesize_gain(
     model, refusal = _model(design, budget)
     if refusal:
         return GainSynthesis(None, None, refusal, _since(start))
-    problem, variables = _dissipation_problem(model, design, alpha, linear=linear)
-    return _solved(problem, variables, start, time_limit)
+    units = _Units.of(design, model)
+    problem, variables = _dissipation_problem(*units.problem_data, alpha, linear=linear)
+    return units.back(_solved(problem, variables, start, time_limit))
 
 
 def synthesize_rate_gain(
@@ -127,13 +128,14 @@ def synthesize_rate_gain(
         return None if time_limit is None else max(time_limit - _since(start), 0.1)
 
     # one parametrised problem: cvxpy canonicalises it once, each solve only sets alpha
-    problem, variables = _dissipation_problem(model, design, 0.5, gamma=gamma, linear=linear)
+    units = _Units.of(design, model)
+    problem, variables = _dissipation_problem(*units.problem_data, 0.5, gamma=gamma, linear=linear)
     low, high, best = 0.0, 1.0, None
     for _ in range(RATE_BISECTIONS if bisections is None else max(int(bisections), 1)):
         if time_limit is not None and _since(start) >= time_limit:
             break
         variables["alpha"].value = 0.5 * (low + high)
-        found = _solved(problem, variables, start, left())
+        found = units.back(_solved(problem, variables, start, left()))
         if found.L is None:
             high = float(variables["alpha"].value)
         else:
@@ -144,7 +146,7 @@ def synthesize_rate_gain(
         return GainSynthesis(None, None, f"no decay above {high:.3g} is feasible", _since(start))
     # the last feasible alpha sits at the edge: back off so that the certificate has a margin
     variables["alpha"].value = backoff * low
-    inner = _solved(problem, variables, start, left())
+    inner = units.back(_solved(problem, variables, start, left()))
     return replace(inner if inner.L is not None else best, seconds=_since(start))
 
 
@@ -173,9 +175,64 @@ def _refusal(model: LureModel, design: ObserverDesign, budget: Budget | None) ->
     )
 
 
+@dataclass(frozen=True)
+class _Units:
+    """The coordinates x = diag(s) x_b the synthesis LMI is solved in: powers of two that
+    balance the plant's states (``state_balancing``), so that an LMI solver meets a plant
+    written with states in units 2^30 apart as it meets the plant in its own units.  The
+    attack, the channels and the error norm |e| keep the user's units (``LureModel.scaled``
+    keeps Ce S), so the LMI is the user's, by an exact congruence; the error's weight Ce S
+    is then divided by a power of two c (its largest entry in [1, 2)), which divides
+    V, the multipliers and gamma^2 by c^2: the same LMI, without entries 2^60 apart."""
+
+    model: LureModel
+    A: np.ndarray
+    sensing: np.ndarray
+    states: np.ndarray | None = None
+    weight: float = 1.0
+
+    @classmethod
+    def of(cls, design: ObserverDesign, model: LureModel) -> _Units:
+        from .._exact import pow2_row_scaling, pow2_scale
+        from .._linalg import state_balancing
+
+        A, S = design.system.A, design.sensing
+        s = state_balancing(A, pow2_row_scaling(S)[:, None] * S, canonical=True)
+        if s is None or model.n_e != A.shape[0]:
+            return cls(model, A, S)
+        full = np.concatenate([s, np.ones(model.N - model.n_e)])
+        balanced = model.scaled(full)
+        top = float(np.max(np.abs(balanced.Ce))) if balanced.Ce.size else 0.0
+        c = 1.0 / pow2_scale(top) if top > 0 and np.isfinite(top) else 1.0
+        balanced = replace(balanced, Ce=balanced.Ce / c)
+        return cls(balanced, A * (s[None, :] / s[:, None]), S * s[None, :], s, c)
+
+    @property
+    def problem_data(self) -> tuple[LureModel, np.ndarray, np.ndarray]:
+        return self.model, self.A, self.sensing
+
+    def back(self, found: GainSynthesis) -> GainSynthesis:
+        """The solve's gain, P, multipliers and gamma in the user's coordinates:
+        L = S L_b, P = c^2 S^-1 P_b S^-1, T = c^2 T_b, gamma = c gamma_b."""
+        s, c = self.states, self.weight
+        if s is None or found.L is None:
+            return found
+        full = np.concatenate([s, np.ones(self.model.N - self.model.n_e)])
+        P = None if found.P is None else c * c * found.P / (full[:, None] * full[None, :])
+        return replace(
+            found,
+            L=s[:, None] * found.L,
+            P=P,
+            multipliers=None if found.multipliers is None else c * c * found.multipliers,
+            g=None if found.g is None else c * c * found.g,
+            gamma_proposed=None if found.gamma_proposed is None else c * found.gamma_proposed,
+        )
+
+
 def _dissipation_problem(
     model: LureModel,
-    design: ObserverDesign,
+    A_p: np.ndarray,
+    S: np.ndarray,
     alpha: float,
     *,
     gamma: float | None = None,
@@ -183,13 +240,11 @@ def _dissipation_problem(
 ) -> tuple[Any, dict[str, Any]]:
     """The dissipation LMI with Y = P1 L, in Schur form on the P1 block only (the a_hat
     block's V(xi+) = w' D w is linear in D), minimising g = gamma^2 (or, with ``gamma``,
-    only feasible with g <= gamma^2)."""
+    only feasible with g <= gamma^2), for the plant matrix A_p and sensing S."""
     import cvxpy as cp
 
-    n = design.system.n
-    S = design.sensing
+    n = A_p.shape[0]
     N, m, r = model.N, model.m, model.r
-    A_p = design.system.A
     P1 = cp.Variable((n, n), symmetric=True)
     Y = cp.Variable((n, S.shape[0]))
     g = cp.Variable(nonneg=True)

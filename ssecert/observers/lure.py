@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._exact_powers import Dyadic, ExactMatrix, dyadic
+from .._linalg import far_units
 
 if TYPE_CHECKING:
     from .base import ObserverDesign
@@ -215,10 +216,13 @@ class LureModel:
             error,
         )
 
-    def balancing(self, spread: float = 16.0) -> np.ndarray | None:
+    def balancing(self, spread: float = 16.0, *, canonical: bool = False) -> np.ndarray | None:
         """Powers of two s that balance the large-signal loop A + q B Cw (LAPACK's gebal
         through ``scipy.linalg.matrix_balance``), or None when they spread less than
         ``spread`` or the scaled model would not be exact (an entry under- or overflowing).
+        With ``canonical``, the least-squares scaling of the loop's logarithms where its
+        states are in units 2^16 or more apart (``far_units``: every power-of-two change of
+        state units gives the same balanced loop), gebal's otherwise.
 
         An LMI solver fails on a Lur'e model whose states are in very different units; the
         model in the coordinates xi = diag(s) xi_b (``scaled``) is the same system, written
@@ -232,8 +236,10 @@ class LureModel:
             loop = self.vertex(self.q)
             if not np.all(np.isfinite(loop)):
                 return None
-            _, (s, _) = matrix_balance(loop, permute=False, separate=True)
-            s = np.asarray(s, dtype=float)
+            s = far_units(loop) if canonical else None
+            if s is None:
+                _, (s, _) = matrix_balance(loop, permute=False, separate=True)
+                s = np.asarray(s, dtype=float)
             if not np.all(np.isfinite(s) & (s > 0)) or s.max() < spread * s.min():
                 return None
             exponents = np.log2(s)

@@ -409,23 +409,29 @@ def balanced_retry(
     attempts: list[dict[str, Any]] | None = None,
 ) -> tuple[LMICertificate | None, str]:
     """``certify`` run again on the model in balanced state coordinates (``LureModel.
-    balancing``), its certificate written back for ``model`` (with ``attempts``, those made
-    in the original coordinates, as ``unbalanced_attempts``); (None, why) when not
-    ``enabled``, when there is no balancing to try or when it certifies nothing."""
-    s = model.balancing() if enabled else None
-    if s is None:
-        return None, ""
-    cert = certify(model.scaled(s))
-    if cert.verdict is Verdict.HOLDS:
-        back = to_original_coordinates(cert, s, model.N)
-        if back is not None and attempts is not None:
-            back = replace(back, details={**back.details, "unbalanced_attempts": attempts})
-        if back is not None:
-            return back, ""
-        why = "its P does not scale back exactly"
-    else:
-        why = cert.reason
-    return None, f"; in balanced state coordinates (xi = {scaling_text(s)} xi_b): {why}"
+    balancing``: gebal's, then the canonical one where it differs), its certificate written
+    back for ``model`` (with ``attempts``, those made in the original coordinates, as
+    ``unbalanced_attempts``); (None, why) when not ``enabled``, when there is no balancing to
+    try or when it certifies nothing."""
+    notes = ""
+    tried: list[np.ndarray] = []
+    for canonical in (False, True) if enabled else ():
+        s = model.balancing(canonical=canonical)
+        if s is None or any(np.array_equal(s, other) for other in tried):
+            continue
+        tried.append(s)
+        cert = certify(model.scaled(s))
+        if cert.verdict is Verdict.HOLDS:
+            back = to_original_coordinates(cert, s, model.N)
+            if back is not None and attempts is not None:
+                back = replace(back, details={**back.details, "unbalanced_attempts": attempts})
+            if back is not None:
+                return back, ""
+            why = "its P does not scale back exactly"
+        else:
+            why = cert.reason
+        notes += f"; in balanced state coordinates (xi = {scaling_text(s)} xi_b): {why}"
+    return None, notes
 
 
 def circle_certificate(
@@ -679,7 +685,7 @@ def iss_certificate(
 
 
 def iss_from_circle(
-    model: LureModel, circle: LMICertificate, *, clear: float = 100.0
+    model: LureModel, circle: LMICertificate, *, clear: float = 100.0, balance: bool = True
 ) -> LMICertificate:
     """ISS decay and l2 gain from a verified circle certificate, without a new SDP.
 
@@ -695,6 +701,11 @@ def iss_from_circle(
     circle : LMICertificate
         A verified (``holds``) circle certificate of ``model``.
     clear : float, default 100
+    balance : bool, default True
+        When the gain does not verify in the model's coordinates, compute it again in
+        balanced state coordinates (``LureModel.balancing``, gebal's then the canonical),
+        the circle certificate carried there exactly: a state in units 2^30 apart weighs 2^60 in |e|^2 against the
+        others, and the margin relative to ||P|| is lost in the user's coordinates only.
 
     Returns
     -------
@@ -727,6 +738,18 @@ def iss_from_circle(
         model, kappa * P, kappa * t, alpha, g, clear
     )
     if not ok:
+        tried: list[np.ndarray] = []
+        for canonical in (False, True) if balance else ():
+            s = model.balancing(canonical=canonical)
+            if s is None or any(np.array_equal(s, other) for other in tried):
+                continue
+            tried.append(s)
+            carried = replace(circle, details={**circle.details, "state_scaling": s})
+            again = where_verified(
+                model, carried, partial(iss_from_circle, clear=clear, balance=False)
+            )
+            if again is not None and again.verdict is Verdict.HOLDS:
+                return again
         return LMICertificate(Verdict.INCONCLUSIVE, "iss", reason=f"gain not verified: {problem}")
     return LMICertificate(
         Verdict.HOLDS,
