@@ -166,15 +166,18 @@ def _next_top(top: list[int], low: int, q: int) -> bool:
     return False
 
 
-def _tops(q: int, k: int, m: int, start: int, stop: int) -> Iterator[tuple[int, int, list[int]]]:
+def _tops(
+    q: int, k: int, m: int, start: int, stop: int, first: tuple[int, ...] | None = None
+) -> Iterator[tuple[int, int, list[int]]]:
     """(colex rank of its first subset, number of subsets, top) of each top, the k - m
-    largest items, whose subsets meet the ranks [start, stop); the list is reused."""
+    largest items, whose subsets meet the ranks [start, stop); the list is reused.
+    ``first``: the subset of rank ``start``, when known."""
     if m == k:
         yield 0, math.comb(q, k), []
         return
     # tops: (k - m)-subsets t_1 < ... of {m, ..., q-1}, in colex order, from the one that
     # holds rank ``start`` (its m smallest items are the bottom, the rest the top)
-    top = list(colex_unrank(start, k)[m:])
+    top = list((colex_unrank(start, k) if first is None else first)[m:])
     while True:
         offset = sum(math.comb(t, m + j + 1) for j, t in enumerate(top))
         if offset >= stop:
@@ -399,7 +402,8 @@ class ColexScreen:
         self._cursor: list[Any] | None = None
         self._upper: tuple[tuple[int, ...], np.ndarray | None] = ((), None)
         self.factors = factors if sign == -1.0 and (m32 > 0 or k == 1) and m32 < k else None
-        self._bounds: tuple[int, tuple[float, np.ndarray, np.ndarray] | None] = (-1, None)
+        # the bounds of the last few largest items asked (ranges ascending or descending)
+        self._bounds: dict[int, tuple[float, np.ndarray, np.ndarray] | None] = {}
         # tier 1 is skipped for this many batches after one where it left most subsets open
         self._skip = 0
         self._slack = 0.0 if self.factors is None else _bound_slack(items, base, self.factors, k)
@@ -464,7 +468,9 @@ class ColexScreen:
         ascending order continue the walk through the tops where the last one stopped)."""
         cursor = self._cursor
         if cursor is None or cursor[0] > start:
-            tops = _tops(self.items.shape[0], self.k, self.m32, start, self.stop)
+            # (ranges asked in descending order start a walk each, from the vectorized unrank)
+            subset = tuple(self.subsets(np.array([start]))[0].tolist())
+            tops = _tops(self.items.shape[0], self.k, self.m32, start, self.stop, subset)
             cursor = self._cursor = [start, tops, next(tops, None)]
         cursor[0] = stop
         pieces = []
@@ -503,13 +509,18 @@ class ColexScreen:
         of the smallest eigenvalue of ``H = base - items[t]``, upper bounds c[b] of
         ``||H^(-1/2) factors[b].T||^2`` for b < t, and the sums of c over the rows of the
         single-precision level below t (None when H is too ill-conditioned).  The last
-        item's is kept: the ranks ascend, so does their largest item."""
-        if self._bounds[0] != t:
+        three items' are kept: consecutive ranks share their largest item, and batches
+        asked in descending order each ask theirs in ascending order."""
+        if t in self._bounds:
+            bound = self._bounds.pop(t)
+        else:
             assert self.factors is not None
             shared = _shared_bound(self.base - self.items[t], self.factors, t)
             bound = None if shared is None else (*shared, _level_sums(shared[1], self.m32))
-            self._bounds = (t, bound)
-        return self._bounds[1]
+            if len(self._bounds) >= 3:
+                del self._bounds[next(iter(self._bounds))]
+        self._bounds[t] = bound  # the most recent last
+        return bound
 
     def lower_bounds(
         self, pieces: list[tuple[int, int, int, tuple[int, ...]]], size: int

@@ -8,15 +8,19 @@ a single-precision Cholesky factorization with a proven margin, LAPACK's
 where neither is conclusive; the decisions are LAPACK's); the sets that
 fail are decided by an exact rank test of their kept sensors (``_refine``);
 on the level that decides the verdict, the sets closest to breaking are kept
-for the re-checks.  The findings do not depend on how the level is split
-into ranges, so ranges run in-process, on Dask workers, or (a small
-synthetic level) in the cost model's calibration give the same answers.
+for the re-checks.  The batches are screened, and the failures refined, in
+lexicographic order of the removed sets, so that a search for the first
+breaking set ends there, and a deadline leaves the first sets decided.  The
+findings do not depend on how the level is split into ranges, so ranges
+run in-process, on Dask workers, or (a small synthetic level) in the cost
+model's calibration give the same answers.
 """
 
 from __future__ import annotations
 
 import itertools
 import math
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -37,22 +41,34 @@ Progress = Callable[[int, int], None]
 class _Level:
     checked: int = 0
     failures: dict[tuple[int, ...], np.ndarray] = field(default_factory=dict)
-    # positions in lexicographic order of the sets with a borderline rank decision
+    # positions in lexicographic order of the sets with a borderline rank decision, ascending
     borderline_at: list[int] = field(default_factory=list)
     # (proxy, lexicographic position, kept sensors) of the sets closest to breaking: the
     # smallest by (proxy, position), whatever the split of the level into ranges
     critical: list[tuple[float, int, tuple[int, ...]]] = field(default_factory=list)
+    # the failing sets decided by ``_refine`` and the seconds it took (the cost model's)
+    refined: int = 0
+    refine_seconds: float = 0.0
+    ended: bool = False  # ``stop`` ended the search: the later sets were not checked
+    # the deadline passed first: ``checked`` counts the sets decided, the first ones in
+    # lexicographic order, and the later ones were not checked
+    cut_short: bool = False
 
     @property
     def borderline(self) -> int:
         return len(self.borderline_at)
 
     def merge(self, other: _Level) -> None:
-        """Add the findings of another range of the same level."""
+        """Add the findings of another range of the same level (the next one in
+        lexicographic order)."""
         self.checked += other.checked
         self.failures.update(other.failures)
         self.borderline_at.extend(other.borderline_at)
         self.critical = sorted(self.critical + other.critical)[:_CRITICAL]
+        self.refined += other.refined
+        self.refine_seconds += other.refine_seconds
+        self.ended |= other.ended
+        self.cut_short |= other.cut_short
 
 
 @dataclass(frozen=True)
@@ -88,17 +104,33 @@ def _screen_margin(task: _LevelTask) -> float:
 _BATCH_SETS = 4096
 
 
+# failing sets decided together by ``_refine``'s SVDs: between two groups the scan can end
+_REFINE_SETS = 256
+
+
 def _scan_range(
-    task: _LevelTask, ranks: tuple[int, int], progress: Progress | None = None
+    task: _LevelTask,
+    ranks: tuple[int, int],
+    progress: Progress | None = None,
+    *,
+    stop: Callable[[_Level], bool] | None = None,
+    deadline: float | None = None,
 ) -> _Level:
     """Check the removals whose colex ranks lie in ``ranks`` (one chunk of a level; the
     sensors in ``task`` in reverse order, so a set of colex rank r is at position
     ``C(q, k) - 1 - r`` in the lexicographic order of the removed sets).
 
-    The sets are screened in batches of consecutive ranks; the failures are refined
-    block by block, the blocks of ``colex_blocks`` (the rank tolerance of ``_refine``
-    depends on the sets decided together), a block that runs into the next batch once
-    that batch is screened."""
+    The sets are screened in batches of consecutive ranks, from the last ranks down (in
+    lexicographic order); the failures are refined block by block, the blocks of
+    ``colex_blocks`` (the rank tolerance of ``_refine`` depends on the sets decided
+    together), once the whole block is screened, in ``_refine``'s groups of
+    ``_REFINE_SETS``, from the last down.  The findings do not depend on the order.
+
+    ``stop(part)`` is offered the failures of each group, in lexicographic order; once it
+    returns True the later sets are not checked (``ended``).  Once ``deadline`` (a
+    ``time.monotonic()`` value) has passed, checked between batches and between groups, the
+    scan ends (``cut_short``) and ``checked`` counts the sets decided, the first ones in
+    lexicographic order."""
     n = task.proj.shape[-1]
     level = _Level()
     candidates: list[tuple[float, int, tuple[int, ...]]] = []
@@ -111,8 +143,12 @@ def _scan_range(
     size = min(_BATCH_SETS, hi - lo)
     work = np.empty((n, n, size), dtype=np.float32)
     diagonal = np.empty((n, size), dtype=np.float32)
-    pending = np.zeros(0, dtype=np.int64)  # failures of a block that runs past the batch
-    for first, last in source.batches(size):
+    pending = np.zeros(0, dtype=np.int64)  # failures of the blocks not wholly screened yet
+    for first in reversed(range(lo, hi, size)):
+        if deadline is not None and time.monotonic() > deadline:
+            level.cut_short = True
+            break
+        last = min(first + size, hi)
         threshold = None
         if task.critical:
             threshold = candidates[-1][0] if len(candidates) >= _CRITICAL else np.inf
@@ -121,42 +157,77 @@ def _scan_range(
             _keep_closest(
                 candidates, screen, task.shift, task.rest, math.comb(task.rest.size, task.k)
             )
-        failed = np.concatenate([pending, first + np.flatnonzero(~screen.ok)])
-        pending = _refine_blocks(task, source, failed, last, level)
+        failed = np.concatenate([first + np.flatnonzero(~screen.ok), pending])
         level.checked += last - first
+        pending = _refine_blocks(task, source, failed, first, level, stop, deadline)
+        if level.ended or level.cut_short:
+            break
         if progress is not None:
             progress(level.checked, hi - lo)
+    if level.cut_short:
+        # only the sets above the lowest rank not decided count (a lexicographic prefix)
+        level.checked = hi - (int(pending[-1]) + 1 if pending.size else hi - level.checked)
+        level.cut_short = level.checked < hi - lo
+    level.borderline_at.sort()
     level.critical = candidates
     return level
 
 
 def _refine_blocks(
-    task: _LevelTask, source: ColexScreen, failed: np.ndarray, screened: int, level: _Level
+    task: _LevelTask,
+    source: ColexScreen,
+    failed: np.ndarray,
+    screened: int,
+    level: _Level,
+    stop: Callable[[_Level], bool] | None = None,
+    deadline: float | None = None,
 ) -> np.ndarray:
-    """Refine the failures (ascending colex ranks) block by block, as each block of
-    ``colex_blocks`` alone would be, where the whole block is screened (its ranks below
-    ``screened``); returns the failures of the block that is not."""
+    """Refine the failures (ascending colex ranks) of the blocks of ``colex_blocks`` that are
+    wholly screened (that begin at ``screened`` or above), each as that block alone would be,
+    from the last group down (``_scan_range``); returns the failures not refined, those of
+    the block that is not wholly screened or, once the scan ends, all below."""
     if failed.size == 0:
         return failed
+    begins, _ = source.spans(failed)
+    cut = int(np.searchsorted(begins, screened, side="left"))
+    edges = np.flatnonzero(begins[cut + 1 :] != begins[cut:-1]) + cut + 1
+    for a, b in reversed(list(itertools.pairwise([cut, *edges.tolist(), failed.size]))):
+        for g in reversed(range(a, b, _REFINE_SETS)):
+            _refine_group(task, source, failed[g : min(g + _REFINE_SETS, b)], level, stop)
+            if level.ended:
+                return failed[:g]
+            if deadline is not None and time.monotonic() > deadline:
+                level.cut_short = True
+                return failed[:g]
+    return failed[:cut]
+
+
+def _refine_group(
+    task: _LevelTask,
+    source: ColexScreen,
+    ranks: np.ndarray,
+    level: _Level,
+    stop: Callable[[_Level], bool] | None,
+) -> None:
+    """Decide the failures of one group (ascending colex ranks) by ``_refine``, record them
+    in ``level`` and offer them to ``stop``."""
     rest, full, q = task.rest, task.full, task.rest.size
     total = math.comb(q, task.k)
-    begins, ends = source.spans(failed)
-    cut = int(np.searchsorted(ends, screened, side="right"))
-    if cut == 0:
-        return failed
-    edges = np.flatnonzero(begins[1:cut] != begins[: cut - 1]) + 1
-    for a, b in itertools.pairwise([0, *edges.tolist(), cut]):
-        if b <= a:
-            continue
-        subsets = source.subsets(failed[a:b])
-        codes, _, nulls = _refine(task.P, task.ranks, subsets, q, task.tol, task.errors)
-        for rank, row, code, zvec in zip(failed[a:b].tolist(), subsets, codes, nulls):
-            removed = tuple(sorted(full.tolist() + rest[row].tolist()))
-            if code == ZERO:
-                level.failures[removed] = zvec
-            elif code == BORDERLINE:
-                level.borderline_at.append(total - 1 - rank)
-    return failed[cut:]
+    began = time.monotonic()
+    subsets = source.subsets(ranks)
+    codes, _, nulls = _refine(task.P, task.ranks, subsets, q, task.tol, task.errors)
+    level.refine_seconds += time.monotonic() - began
+    level.refined += ranks.size
+    part = _Level()
+    for rank, row, code, zvec in zip(ranks.tolist(), subsets, codes, nulls):
+        removed = tuple(sorted(full.tolist() + rest[row].tolist()))
+        if code == ZERO:
+            level.failures[removed] = zvec
+            part.failures[removed] = zvec
+        elif code == BORDERLINE:
+            level.borderline_at.append(total - 1 - rank)
+    if stop is not None and part.failures and stop(part):
+        level.ended = True
 
 
 def _keep_closest(

@@ -42,7 +42,7 @@ from ._combinatorics import (
     count_subsets,
     level_split,
 )
-from ._level_scan import _Level, _LevelTask, _scan_range
+from ._level_scan import _BATCH_SETS, _REFINE_SETS, _Level, _LevelTask, _refine, _scan_range
 from .cost import cost_of_the_rest, rounded_seconds, verdict_cost
 from .observability import pbh_margins
 
@@ -52,6 +52,7 @@ __all__: list[str] = []
 Progress = Callable[[int, int], None]
 
 REFUTATION_LIMIT = 5_000  # float failures confirmed exactly per enumeration (about 1 ms each)
+_REFINE_TIMING = 16  # copies of a set refined to time the refinement on a plant
 
 
 @dataclass
@@ -87,9 +88,11 @@ def _enumeration(
 
     The verdict needs the sets of up to 2s sensors; larger sets only refine
     max_removable, and with ``time_budget`` (seconds from the start) a level
-    whose predicted end is past it is not started: the result is then a
-    lower bound, with ``details["stopped_by_time_budget"]``.  With a Dask
-    ``client`` each level is split over the workers, with the same findings.
+    whose predicted end is past it is not started, and one still running
+    when it ends stops there (the sets checked are the first in
+    lexicographic order): the result is then a lower bound, with
+    ``details["stopped_by_time_budget"]``.  With a Dask ``client`` each
+    level is split over the workers, with the same findings.
     """
     start = time.monotonic()
     n, p = system.n, system.p
@@ -120,7 +123,7 @@ def _enumeration(
         if scan.past_time_budget(k, time_budget) or scan.past_set_budget(k, max_sets, time_budget):
             break
         began = time.monotonic()
-        level = scan.level(k)
+        level = scan.level(k, time_budget)
         if level is not None and cost is not None and k == max(scan.target, 0):
             cost["measured_seconds_for_verdict"] = rounded_seconds(time.monotonic() - start)
         going = level is not None and scan.go_on(k, level)
@@ -188,6 +191,12 @@ class _Levels:
         self.undecided: int | None = None  # size of the first removal level with undecided sets
         self.found = _Found()  # the current level's confirmed failures
         self.best_critical: list[tuple[float, int, tuple[int, ...]]] = []
+        # failing sets refined by SVD so far, the seconds it took, and (once timed) the
+        # seconds per set of a refinement on this plant before any was needed
+        self.refined, self.refine_seconds = 0, 0.0
+        self._refine_rate: float | None = None
+        self._largest: list[np.ndarray] | None = None  # for ``_first_certain``
+        self.time_budget: float | None = None  # of the level scanned last
         if self.target < 0:
             # every set of 2s sensors keeps a sensor that alone observes the state
             dropped = set(full[: 2 * s].tolist())
@@ -206,7 +215,7 @@ class _Levels:
             return False
         q, count = self.rest.size, math.comb(self.rest.size, k)
         elapsed = time.monotonic() - self.start
-        predicted = elapsed + count * elapsed / out.checked
+        predicted = elapsed + self.predicted_seconds(k, elapsed, time_budget - elapsed)
         if predicted <= time_budget:
             return False
         out.needed = count_subsets(q, range(k, q + 1))
@@ -225,6 +234,71 @@ class _Levels:
         )
         return True
 
+    def predicted_seconds(self, k: int, elapsed: float, left: float) -> float:
+        """Seconds level k is predicted to take: the sets its scan checks, in lexicographic
+        order up to the first one certain to break the plant (``_first_certain``) or all of
+        them, at the seconds per set of the screening so far, and the failing sets it refines
+        by SVD (as many per set as so far, and the group of ``_refine`` that holds the
+        certain one) at the seconds per failing set so far, or else timed on that set (only
+        when the screening leaves ``left`` seconds for them)."""
+        count = math.comb(self.rest.size, k)
+        screening = max(elapsed - self.refine_seconds, 0.0) / self.out.checked
+        certain = self._first_certain(k)
+        checked = count
+        if certain is not None:
+            # the scan screens whole batches, from the first set in lexicographic order
+            position = self._position(certain, k)
+            checked = min(count, -(-(position + 1) // _BATCH_SETS) * _BATCH_SETS)
+        seconds = checked * screening
+        failing = checked * self.refined / self.out.checked
+        if certain is not None:
+            failing += min(checked, _REFINE_SETS)
+        if failing and seconds < left:
+            seconds += failing * self._seconds_per_refined(certain)
+        return seconds
+
+    def _seconds_per_refined(self, certain: tuple[int, ...] | None) -> float:
+        """Seconds per failing set refined by SVD: as measured so far, or else timed on
+        ``_REFINE_TIMING`` copies of the set certain to break the plant (once)."""
+        if self.refined:
+            return self.refine_seconds / self.refined
+        if self._refine_rate is None:
+            if certain is None:
+                return 0.0
+            index = {int(sensor): i for i, sensor in enumerate(self.rest)}
+            rows = np.array([[index[i] for i in certain if i in index]] * _REFINE_TIMING)
+            began = time.monotonic()
+            _refine(self.P, self.sub.ranks[self.rest], rows, self.rest.size, self.tol,
+                    self.sub.errors[self.rest])  # fmt: skip
+            self._refine_rate = (time.monotonic() - began) / _REFINE_TIMING
+        return self._refine_rate
+
+    def _first_certain(self, k: int) -> tuple[int, ...] | None:
+        """The first removal of level k, in lexicographic order, that certainly breaks the
+        plant: the kept sensors' observable dimensions add up to less than n (their sum
+        of subspaces cannot be the state space); None when there is none."""
+        r = self.sub.ranks[self.rest].astype(np.int64)
+        q, n = r.size, self.system.n
+        need = int(r.sum()) - n + 1  # the removed sensors' dimensions must add up to this
+        if k == 0:
+            return tuple(self.full.tolist()) if need <= 0 else None
+        if self._largest is None:
+            # [j][i]: the sum of the i + 1 largest dimensions among sensors j, j + 1, ...
+            self._largest = [np.cumsum(np.sort(r[j:])[::-1]) for j in range(q)]
+        best = self._largest
+        if k > q or best[0][k - 1] < need:
+            return None
+        chosen: list[int] = []
+        total, j = 0, 0
+        for slot in range(k):
+            left = k - slot - 1
+            while total + r[j] + (best[j + 1][left - 1] if left else 0) < need:
+                j += 1
+            chosen.append(j)
+            total += int(r[j])
+            j += 1
+        return tuple(sorted(self.full.tolist() + self.rest[chosen].tolist()))
+
     def past_set_budget(self, k: int, max_sets: int, time_budget: float | None) -> bool:
         """Whether level k would take the enumeration past ``max_sets`` (then a lower bound,
         with what the rest would cost)."""
@@ -242,10 +316,14 @@ class _Levels:
         )
         return True
 
-    def level(self, k: int) -> _Level | None:
+    def level(self, k: int, time_budget: float | None = None) -> _Level | None:
         """Scan level k (on the Dask workers when there is a client); None, with the reason,
-        when a range of it failed twice there."""
+        when a range of it failed twice there.  A level past the verdict's ends when the
+        ``time_budget`` (seconds from the start) does."""
         self.found = _Found()
+        self.time_budget, deadline = time_budget, None
+        if time_budget is not None and k > max(self.target, 0):
+            deadline = self.start + time_budget
         try:
             level = _scan_level(
                 self.P,
@@ -261,6 +339,7 @@ class _Levels:
                 errors=self.sub.errors[self.rest],
                 client=self.client,
                 stop=self._confirms,
+                deadline=deadline,
             )
         except ChunkError as exc:
             out = self.out
@@ -280,6 +359,8 @@ class _Levels:
             )
             return None
         self.out.checked += level.checked
+        self.refined += level.refined
+        self.refine_seconds += level.refine_seconds
         if level.critical:
             self.best_critical = level.critical
         return level
@@ -304,6 +385,9 @@ class _Levels:
         if first is not None:
             self._breaking(k, level, first, z_first, within)
             return False
+        if level.cut_short:
+            self._cut_short(k, level, within)
+            return False
         if self.undecided is not None and not (level.borderline or within):
             return k < self.target
         if level.borderline or within:
@@ -319,6 +403,31 @@ class _Levels:
             # a larger set of at most 2s sensors may still break the plant for certain
             return k < self.target
         return True
+
+    def _cut_short(self, k: int, level: _Level, within: list[tuple[int, ...]]) -> None:
+        """The time budget ended level k after its first ``level.checked`` sets in
+        lexicographic order, none of which breaks the plant: max_removable is at least the
+        size of the level before."""
+        out, q = self.out, self.rest.size
+        count, removed = math.comb(q, k), self.removed(k)
+        out.status = "lower_bound"
+        out.max_removable = removed - 1
+        out.needed = count_subsets(q, range(k, q + 1)) - level.checked
+        if (level.borderline or within) and self.undecided is None:
+            self.undecided = removed
+            self._undecided_reasons(k, level, within)
+        out.details["stopped_by_time_budget"] = {
+            "time_budget_seconds": self.time_budget,
+            "elapsed_seconds": round(time.monotonic() - self.start, 3),
+            "level_sets": count,
+            "level_sets_checked": level.checked,
+            "level_removed_sensors": removed,
+        }
+        out.problems.append(
+            f"the refinement stopped at the time budget of {self.time_budget:g} s after "
+            f"{level.checked:,} of the {count:,} sets of {removed} sensors (the first in "
+            f"lexicographic order; none breaks the plant); --exact computes the exact value"
+        )
 
     def _breaking(
         self,
@@ -510,6 +619,7 @@ def _scan_level(
     errors: np.ndarray | None = None,
     client: Any | None = None,
     stop: Callable[[_Level], bool] | None = None,
+    deadline: float | None = None,
 ) -> _Level:
     """Check the removals of ``full`` plus k sensors of ``rest``, in lexicographic order.
 
@@ -518,9 +628,13 @@ def _scan_level(
     down.  The level is split into ranges of ranks (on the Dask workers with
     a ``client``); the sums, screening and refinement of each set do not
     depend on the split, so the findings are the in-process ones.
-    ``stop(part)`` is offered each range's findings in that order; once it
-    returns True, the later ranges (lexicographically later sets) are not
-    checked, and the level holds the findings so far.
+    ``stop(part)`` is offered the findings in that order (in-process, each
+    group of failures that ``_refine`` decides together; on Dask, each
+    range's); once it returns True, the later sets are not checked, and the
+    level holds the findings so far.  Once ``deadline`` (a
+    ``time.monotonic()`` value) has passed, the level ends likewise
+    (``cut_short``; in-process between batches of sets and groups of
+    failures, on Dask between ranges), ``checked`` counting the sets decided.
     """
     q = rest.size
     n = proj.shape[-1]
@@ -538,12 +652,42 @@ def _scan_level(
         tol, critical, errors[back],
     )  # fmt: skip
     chunks = _chunks(task, client, segments=stop is not None)[::-1]
+    if client is None:
+        level = _Level()
+        total, done = sum(hi - lo for lo, hi in chunks), 0
+        for chunk in chunks:
+            part = _scan_range(
+                task, chunk, _from(progress, done, total), stop=stop, deadline=deadline
+            )
+            level.merge(part)
+            done += chunk[1] - chunk[0]
+            if part.ended or part.cut_short:
+                break
+        return level
     if len(chunks) == 1:
         level = _scan_range(task, chunks[0], progress)
         if stop is not None:
-            stop(level)
+            level.ended = stop(level)
         return level
+    offered = 0
+
+    def ends(part: _Level) -> bool:
+        nonlocal offered
+        offered += 1
+        if stop is not None and stop(part):
+            part.ended = True
+        elif deadline is not None and offered < len(chunks) and time.monotonic() > deadline:
+            part.cut_short = True
+        return part.ended or part.cut_short
+
     level = _Level()
-    for part in map_ranges(_scan_range, task, chunks, client, progress, stop=stop):
+    for part in map_ranges(_scan_range, task, chunks, client, progress, stop=ends):
         level.merge(part)
     return level
+
+
+def _from(progress: Progress | None, done: int, total: int) -> Progress | None:
+    """``progress`` of a range that starts ``done`` sets into a level of ``total``."""
+    if progress is None:
+        return None
+    return lambda checked, _: progress(done + checked, total)

@@ -259,10 +259,12 @@ def sparse_observability(
     time_budget : float or None, default 5
         Seconds the enumeration may spend refining max_removable once the
         verdict is decided (every set of up to 2s sensors checked): a level
-        of larger sets predicted to end past it is not started, and
-        max_removable is then a lower bound (``max_removable_is_lower_bound``,
-        with the reason).  None computes the exact value however long it
-        takes.  The verdict itself is never cut short by it.
+        of larger sets predicted to end past it is not started, one still
+        running when it ends stops there (the sets it checked are the first
+        in lexicographic order), and max_removable is then a lower bound
+        (``max_removable_is_lower_bound``, with the reason).  None computes
+        the exact value however long it takes.  The verdict itself is never
+        cut short by it.
     client : dask.distributed.Client, optional
         Split each level of the enumeration over the client's workers (in
         ranges of colex ranks).  The answer is the in-process one: the same
