@@ -19,6 +19,13 @@ the enumeration checks every set of up to 2s = 6 sensors.  Also timed: the
 eigenspace method on a generic n = 50, p = 1000 plant, where the
 enumeration (C(1000, 6) sets) is out of reach.
 
+The refinement past the verdict against its time budget: static plants
+(A = I, n = 10) with 20 and 26 generic sensors, s = 2, where every set of
+p - 9 removed sensors breaks the plant (the kept rows cannot span the
+state): the seconds of the check beside the budget it was given, and what
+it answered (the exact max_removable, or a lower bound and where the budget
+stopped it).
+
     python benchmarks/bench_enumeration.py [--sample N] [--repeat N]
 """
 
@@ -104,6 +111,64 @@ def modal_plant(seed: int = 0, n: int = 10, p: int = 30, sees: float = 0.5) -> S
     Cm[rng.random((p, n)) >= sees] = 0.0
     T, T_inv = _unimodular(rng, n)
     return System(T @ M @ T_inv, Cm @ T_inv, name=f"modal-n{n}-p{p}")
+
+
+def identity_plant(n: int = 10, p: int = 20, seed: int = 0) -> System:
+    """A = I with p generic sensors: removing any p - n + 1 of them breaks the plant, every set
+    of that level failing the screening, and no smaller set does."""
+    rng = np.random.default_rng(seed)
+    return System(np.eye(n), rng.standard_normal((p, n)), name=f"identity-n{n}-p{p}")
+
+
+@dataclass(frozen=True)
+class Budgeted:
+    """One sparse_observability call with a time budget: its seconds and what it answered."""
+
+    label: str
+    budget: float
+    seconds: float  # the whole check (the budget counts from the enumeration's start)
+    refinement: float  # past the verdict
+    verdict: str
+    max_removable: int | None
+    lower_bound: bool
+    stopped: dict[str, Any] | None
+
+
+def budgeted(system: System, s: int, budget: float, label: str) -> Budgeted:
+    timing: dict[str, float] = {}
+    check = sparse_observability(system, s, time_budget=budget, timing=timing)
+    return Budgeted(
+        label=label,
+        budget=budget,
+        seconds=timing["seconds"],
+        refinement=timing["refinement_seconds"],
+        verdict=check.verdict.value,
+        max_removable=check.fields["max_removable"],
+        lower_bound=bool(check.fields.get("max_removable_is_lower_bound")),
+        stopped=check.evidence.get("stopped_by_time_budget"),
+    )
+
+
+def measure_budgets() -> list[Budgeted]:
+    """The refinement against its time budget on the static plants."""
+    out = []
+    for p, budgets in ((20, (5.0, 1.0, 0.0)), (26, (5.0, 1.0))):
+        system = identity_plant(p=p)
+        label = f"{system.name} (A = I, s = 2; every set of {p - 9} breaks it)"
+        out.extend(budgeted(system, 2, budget, label) for budget in budgets)
+    return out
+
+
+def _answer(b: Budgeted) -> str:
+    text = f"{b.verdict}, max_removable {'>= ' if b.lower_bound else '= '}{b.max_removable}"
+    if b.stopped is not None and "level_sets_checked" in b.stopped:
+        text += (
+            f", stopped after {b.stopped['level_sets_checked']:,} of the "
+            f"{b.stopped['level_sets']:,} sets of {b.stopped['level_removed_sensors']} sensors"
+        )
+    elif b.stopped is not None:
+        text += f", the {b.stopped['next_level_sets']:,} sets of the next level not started"
+    return text
 
 
 @dataclass(frozen=True)
@@ -203,6 +268,7 @@ class Results:
     big_label: str
     big_sets: int
     big_eigenspace: Decision
+    budgets: list[Budgeted]
 
 
 def measure(*, sample: int, repeat: int) -> Results:
@@ -232,6 +298,7 @@ def measure(*, sample: int, repeat: int) -> Results:
         big_label="generic n = 50, p = 1000, s = 3",
         big_sets=math.comb(1000, 6),
         big_eigenspace=decide(big, 3, "eigenspace", repeat),
+        budgets=measure_budgets(),
     )
 
 
@@ -257,6 +324,11 @@ def print_results(r: Results) -> None:
         f"eigenspace method, {r.big_label}: {big.verdict}, max_removable = "
         f"{big.max_removable}, {big.seconds:.3f} s (target < 1 s)"
     )
+    for b in r.budgets:
+        print(
+            f"{b.label}, time budget {b.budget:g} s: {b.seconds:.3f} s (refinement "
+            f"{b.refinement:.3f} s); {_answer(b)}"
+        )
 
 
 def to_rows(r: Results) -> list[dict[str, Any]]:
@@ -301,6 +373,23 @@ def to_rows(r: Results) -> list[dict[str, Any]]:
     out.append(row("eigenspace vs enumeration", r.big_label, big.seconds, None, "-", note))
     if enum.cost is not None:
         out.append(cost_model_row(r.modal_label, enum.cost))
+    for b in r.budgets:
+        note = f"{_answer(b)}; refinement {b.refinement:.3g} s"
+        if b.budget == 0:
+            # the verdict only: no refinement, nothing to compare the seconds with
+            out.append(row("refinement vs time budget", f"{b.label}, budget 0", b.seconds,
+                           None, "-", note))  # fmt: skip
+            continue
+        out.append(
+            row(
+                "refinement vs time budget",
+                f"{b.label}, budget {b.budget:g} s",
+                b.seconds,
+                b.budget,
+                "the time budget (seconds allowed)",
+                note,
+            )
+        )
     return out
 
 
