@@ -306,11 +306,14 @@ def balanced_units(system: System, *, spread: float = 16.0) -> Units:
         C_b = C * states[None, :]
         balanced, alpha_b = unit_normalized(System(A_b, C_b))
         rows = pow2_row_scaling(C_b)
+        sensors = plain.sensors * rows
+    if not np.all((sensors > 0) & (sensors < np.inf) & (sensors >= np.finfo(float).tiny)):
+        return plain  # a sensor's units would leave the float range: no state balancing
     return Units(
         System(balanced.A, balanced.C, sensors=system.sensors, name=system.name),
         alpha_b,
         states,
-        plain.sensors * rows,
+        sensors,
     )
 
 
