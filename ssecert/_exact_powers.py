@@ -93,7 +93,9 @@ class Dyadic:
 
     def distance_bound(self, M: np.ndarray) -> float:
         """An upper bound on ||self - M||_2 for the float matrix ``M`` (the Frobenius norm of
-        the exact difference, rounded up)."""
+        the exact difference, rounded up; infinite when M has a non-finite entry)."""
+        if not np.all(np.isfinite(np.asarray(M, dtype=float))):
+            return math.inf
         diff = self - dyadic(M)
         top = max((abs(int(v)) for v in diff.ints.flat), default=0)
         if top == 0:

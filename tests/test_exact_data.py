@@ -346,3 +346,26 @@ def test_a_large_sso_window_decides_its_error_block_alone():
     assert gain.verdict.value == "fails" and "O_tau" in gain.summary
     assert gain.method == "exact powers of A - L C"
     assert observer_stability_check(design)[0].verdict.value == "fails"
+
+
+@pytest.mark.parametrize(
+    "A, C",
+    [
+        ([[1.0, 0.0], [0.0, 1.0]], [[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]),
+        ([[0.5, 0.0], [0.0, 0.5]], [[1.0, 0.0], [0.0, 1.0], [1.0, 1.0], [1.0, -1.0], [2.0, 1.0]]),
+    ],
+)
+def test_a_step_of_1e308_is_inconclusive_not_an_internal_error(tmp_path, capsys, A, C):
+    # the error dynamics overflow: normF**2 raised OverflowError in the dead zone's Lyapunov
+    # check, and eigvals / distance bounds met infinite matrices (exit 4)
+    import json
+
+    from ssecert.cli import main
+
+    spec = {"name": "huge-step", "system": {"A": A, "C": C}, "attack": {"max_attacked": 1},
+            "observer": {"kind": "dsso", "gain": "deadbeat", "step": 1e308, "threshold": 0.1}}  # fmt: skip
+    path = tmp_path / "huge-step.json"
+    path.write_text(json.dumps(spec))
+    assert main(["analyze", str(path), "--seed", "0", "--time-budget", "2"]) in (1, 3)
+    out = capsys.readouterr().out
+    assert "observer_stability: inconclusive" in out

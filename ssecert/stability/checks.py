@@ -88,6 +88,15 @@ def observer_stability_check(
         summary = f"No stability certificate: not attempted: {refusal}."
         return _no_certificate(title, summary, "circle criterion (LMI, Clarabel)"), None
     model = design.observer_kind.lure_model(design)
+    with np.errstate(all="ignore"):
+        loop = model.vertex(model.q)
+    if not all(np.all(np.isfinite(M)) for M in (model.A, model.B, model.Cw, model.E, loop)):
+        summary = (
+            "No stability certificate: the error dynamics' matrices leave the float range (an "
+            "entry of A - L C, the gain or the sector's vertex loop beyond 1.8e308), so nothing "
+            "can be computed or replayed in floating point."
+        )
+        return _no_certificate(title, summary, "circle criterion (LMI, Clarabel)"), None
     cert = circle_certificate(model, budget=budget, clear=tol.certificate_clear)
     if cert.verdict == "inconclusive" and cert.details.get("attempts"):
         # the LMIs were solved and failed: a dynamic multiplier may succeed

@@ -173,6 +173,17 @@ def _prechecks(model: LureModel) -> tuple[Verdict | None, str, dict[str, Any]]:
     n = model.n_e
     F = model.A[:n, :n]
     details: dict[str, Any] = {}
+    with np.errstate(all="ignore"):
+        loop = model.vertex(model.q) if model.m else model.A
+    parts = (model.A, model.B, model.Cw, model.E, model.Dw, model.Ce, loop)
+    if not all(np.all(np.isfinite(part)) for part in parts):
+        return (
+            Verdict.INCONCLUSIVE,
+            "the error dynamics' matrices leave the float range (an entry of A - L C, the "
+            "sector's vertex loop or the channels beyond 1.8e308): no certificate can be "
+            "computed or verified in floating point",
+            details,
+        )
     rho_F = float(np.abs(np.linalg.eigvals(F)).max()) if n else 0.0
     details["spectral_radius_F"] = rho_F
     if rho_F >= 1 - 1e-12:

@@ -331,7 +331,11 @@ def _check_solution(
     decrease = P - F.T @ P @ F
     decrease = 0.5 * (decrease + decrease.T)
     # rounding in forming F^T P F and in eigvalsh, relative to ||P||
-    bound = 10 * n * EPS * (normF**2 + 1.0) + (2.0 * normF + rounding) * rounding * (1 + 1e-12)
+    bound = 10 * n * EPS * (normF * normF + 1.0) + (2.0 * normF + rounding) * rounding * (1 + 1e-12)
+    if not (np.all(np.isfinite(decrease)) and np.all(np.isfinite(P)) and math.isfinite(bound)):
+        # F or P beyond the float range (a step of 1e308): nothing is verified
+        nan = np.full(n, math.nan)
+        return _Checked(P, decrease, -math.inf, -math.inf, nan, normP, math.inf, math.inf, residual)
     dec_min = float(np.linalg.eigvalsh(decrease)[0]) / normP if n else 1.0
     p_eigs = np.linalg.eigvalsh(P)
     p_min = float(p_eigs[0]) / normP
