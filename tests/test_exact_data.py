@@ -369,3 +369,10 @@ def test_a_step_of_1e308_is_inconclusive_not_an_internal_error(tmp_path, capsys,
     assert main(["analyze", str(path), "--seed", "0", "--time-budget", "2"]) in (1, 3)
     out = capsys.readouterr().out
     assert "observer_stability: inconclusive" in out
+    # the certified region's map runs the cells around that step: undecided, not an error
+    folder = tmp_path / "out"
+    assert main(["certify", str(path), "--out", str(folder), "--seed", "0", "--runs", "2"]) in (
+        1,
+        3,
+    )
+    assert (folder / "huge-step.json").exists()

@@ -252,6 +252,14 @@ class LureModel:
                 return None
         return s
 
+    def finite(self) -> bool:
+        """Whether every matrix of the model, and the loop at the sector's vertex, is within
+        the float range (an observer step of 1e308 is not): nothing else can be computed."""
+        with np.errstate(all="ignore"):
+            loop = self.vertex(self.q) if self.m else self.A
+        parts = (self.A, self.B, self.Cw, self.E, self.Dw, self.Ce, loop)
+        return all(bool(np.all(np.isfinite(part))) for part in parts)
+
     def phi(self, w: np.ndarray) -> np.ndarray:
         """The nonlinearity q * soft_threshold(w), componentwise."""
         return self.q * np.sign(w) * np.maximum(np.abs(w) - self.threshold, 0.0)

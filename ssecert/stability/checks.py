@@ -88,9 +88,7 @@ def observer_stability_check(
         summary = f"No stability certificate: not attempted: {refusal}."
         return _no_certificate(title, summary, "circle criterion (LMI, Clarabel)"), None
     model = design.observer_kind.lure_model(design)
-    with np.errstate(all="ignore"):
-        loop = model.vertex(model.q)
-    if not all(np.all(np.isfinite(M)) for M in (model.A, model.B, model.Cw, model.E, loop)):
+    if not model.finite():
         summary = (
             "No stability certificate: the error dynamics' matrices leave the float range (an "
             "entry of A - L C, the gain or the sector's vertex loop beyond 1.8e308), so nothing "

@@ -173,10 +173,7 @@ def _prechecks(model: LureModel) -> tuple[Verdict | None, str, dict[str, Any]]:
     n = model.n_e
     F = model.A[:n, :n]
     details: dict[str, Any] = {}
-    with np.errstate(all="ignore"):
-        loop = model.vertex(model.q) if model.m else model.A
-    parts = (model.A, model.B, model.Cw, model.E, model.Dw, model.Ce, loop)
-    if not all(np.all(np.isfinite(part)) for part in parts):
+    if not model.finite():
         return (
             Verdict.INCONCLUSIVE,
             "the error dynamics' matrices leave the float range (an entry of A - L C, the "

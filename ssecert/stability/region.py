@@ -173,6 +173,8 @@ def _undecided_point(model: LureModel) -> tuple[str, float]:
     from .periodic import periodic_orbit
     from .roa import region_of_attraction
 
+    if not model.finite():
+        return "", 0.0  # beyond the float range: nothing decided at this point
     dead = region_of_attraction(model, widen=False)
     if dead.get("unstable") is True:
         return "local instability", 0.0
