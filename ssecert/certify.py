@@ -175,7 +175,9 @@ def certify(
         skipped (simulations, region), with the estimate in the reason.
     time_budget : float or None, default 5
         Seconds spent refining max_removable once the verdict is decided;
-        None for the exact value (``analyze``).
+        None for the exact value (``analyze``).  The certified region's map
+        starts no grid point after ``region_time_limit(time_budget)`` seconds
+        (the budget, at least 30 s; no limit with None).
     tolerances : Tolerances, optional
         The tolerances of every check and of the observer's gain (default
         ``Tolerances()``); each check reports those its verdict rests on.
@@ -236,7 +238,7 @@ def certify(
     region_map = None
     family = design.observer_kind.region_family(design) if region and design is not None else None
     if family is not None:
-        region_map = _region(family, notes, say, budget)
+        region_map = _region(family, notes, say, budget, region_time_limit(time_budget))
     return CertifyResult(
         spec=spec,
         certificate=cert,
@@ -334,7 +336,19 @@ def _simulations(
     return simulations
 
 
-def _region(design: Any, notes: list[str], say: Progress, budget: Budget) -> Any | None:
+def region_time_limit(time_budget: float | None) -> float | None:
+    """Seconds after which the certified region's map starts no grid point: the time budget,
+    at least ``REGION_SECONDS`` (a map is a few seconds on the examples; a D-SSO whose
+    points need Zames-Falb multipliers took minutes), none without a budget."""
+    return None if time_budget is None else max(float(time_budget), REGION_SECONDS)
+
+
+REGION_SECONDS = 30.0
+
+
+def _region(
+    design: Any, notes: list[str], say: Progress, budget: Budget, time_limit: float | None = None
+) -> Any | None:
     """The certified (shrink, step) map of ``design``, its kind's region family."""
     from .stability.lmi import lmi_cost
     from .stability.region import region_map
@@ -367,7 +381,14 @@ def _region(design: Any, notes: list[str], say: Progress, budget: Budget) -> Any
     if refusal:
         notes.append(f"certified region not mapped: {refusal}")
         return None
-    return region_map(design, shrinks, steps, budget=budget)
+    found = region_map(design, shrinks, steps, budget=budget, time_limit=time_limit)
+    if found.not_reached:
+        notes.append(
+            f"certified region map stopped at its time limit of {time_limit:g} s: "
+            f"{found.not_reached} of {found.verdicts.size} grid points not reached "
+            "(inconclusive); --time-budget raises the limit"
+        )
+    return found
 
 
 def _command(spec: Spec, seed: int | None, simulate: bool) -> str:

@@ -278,3 +278,21 @@ def test_region_map_fails_cells_carry_their_witness_and_undecided_cells_a_radius
         )
         witness = divergence_witness(model)
         assert witness is not None and witness["growth"] >= 100
+
+
+def test_region_map_starts_no_point_past_its_time_limit():
+    # a D-SSO whose points need Zames-Falb multipliers mapped its grid for minutes after a
+    # design search of 5 s; past the limit the points left are inconclusive and counted
+    from ssecert.certify import REGION_SECONDS, region_time_limit
+
+    spec = load_example("ugv")
+    design = build_observer(
+        spec.system,
+        {"kind": "elastic_net", "gain": "deadbeat", "step": 0.1, "threshold": 0.1, "shrink": 0.5},
+    )
+    rm = region_map(design, [0.3, 0.5], [0.05, 0.1], time_limit=0.0)
+    assert rm.not_reached == 4 and all(v == "inconclusive" for v in rm.verdicts.flat)
+    assert rm.solves == 0 and rm.to_dict()["cells_not_reached"] == 4
+    assert "cells_not_reached" not in region_map(design, [0.5], [0.1]).to_dict()
+    assert region_time_limit(None) is None
+    assert region_time_limit(0.0) == REGION_SECONDS and region_time_limit(500.0) == 500.0

@@ -40,7 +40,8 @@ class RegionMap:
     kind of witness of each point that fails; ``radii`` the certified radius
     of initial errors (inf where certified, 0 where it fails or none is);
     ``zames_falb`` the points certified by a Zames-Falb multiplier (not by
-    the circle criterion), with the multiplier's order.
+    the circle criterion), with the multiplier's order; ``not_reached`` the points left
+    undecided (inconclusive) because ``time_limit`` seconds had passed.
     """
 
     shrinks: np.ndarray
@@ -54,6 +55,8 @@ class RegionMap:
     witnesses: dict[tuple[int, int], str] = field(default_factory=dict)
     radii: np.ndarray | None = None
     zames_falb: dict[tuple[int, int], int] = field(default_factory=dict)
+    not_reached: int = 0
+    time_limit: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -82,6 +85,11 @@ class RegionMap:
                 }
                 for (i, j), (P, t) in sorted(self.certificates.items())
             ],
+            **(
+                {"cells_not_reached": self.not_reached, "time_limit": self.time_limit}
+                if self.not_reached
+                else {}
+            ),
         }
 
 
@@ -92,6 +100,7 @@ def region_map(
     *,
     solver_options: dict[str, Any] | None = None,
     budget: Budget | None = None,
+    time_limit: float | None = None,
 ) -> RegionMap:
     """Certified region of a sparse observer over (shrink, step).
 
@@ -100,7 +109,8 @@ def region_map(
     certified neighbours (no solver), then by solving the block-diagonal
     LMI, then the LMI with cross terms.  ``budget`` (default ``Budget()``)
     bounds each solve, as in ``circle_certificate``: a point whose LMIs do
-    not fit is inconclusive.
+    not fit is inconclusive.  No point is started after ``time_limit``
+    seconds: the points left are inconclusive (``not_reached``).
     """
     start = time.perf_counter()
     shrink_grid = np.asarray(shrinks, dtype=float)
@@ -111,9 +121,13 @@ def region_map(
     witnesses: dict[tuple[int, int], str] = {}
     radii = np.zeros((shrink_grid.size, step_grid.size))
     multipliers: dict[tuple[int, int], int] = {}
-    solves = reused = 0
+    solves = reused = not_reached = 0
     for i, q in enumerate(shrink_grid):
         for j, nu in enumerate(step_grid):
+            if time_limit is not None and time.perf_counter() - start > time_limit:
+                verdicts[i, j] = Verdict.INCONCLUSIVE
+                not_reached += 1
+                continue
             model = LureModel.from_design(replace(design, shrink=float(q), step=float(nu)))
             neighbours = [found[k] for k in ((i - 1, j), (i, j - 1), (i - 1, j - 1)) if k in found]
             cert = circle_certificate(
@@ -163,6 +177,8 @@ def region_map(
         witnesses,
         radii,
         multipliers,
+        not_reached,
+        time_limit,
     )
 
 
