@@ -166,9 +166,9 @@ def _failure_words(
         f"{witness['beta']:.3g}, so it grows without bound once |w' xi| > "
         f"{witness['escape_level']:.3g}; replayed: from an initial error of norm "
         f"{witness['norms'][0]:.3g} (a_hat(0) = "
-        f"{'0' if not np.any(witness['initial_attack_estimate']) else 'as given'}) it reaches "
-        f"{witness['norms'][1]:.3g} in {witness['steps']} steps without attack."
-        + _replay_disagrees(witness, "growth"),
+        f"{'0' if not np.any(witness['initial_attack_estimate']) else 'as given'}) the error "
+        f"state (e, a_hat) reaches norm {witness['norms'][1]:.3g} in {witness['steps']} steps "
+        "without attack." + _replay_disagrees(witness, "growth"),
         "large-signal divergence (eigenvector bound, replayed)",
         abs(mu) - 1.0,
         witness["eigenvalue_error_bound"],
