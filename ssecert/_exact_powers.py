@@ -229,16 +229,27 @@ def exact_error_matrix(
 
 
 def exact_observability_matrix(
-    A: np.ndarray, C: np.ndarray, tau: int, *, max_bits: int = 1_000_000
+    A: np.ndarray,
+    C: np.ndarray,
+    tau: int,
+    *,
+    max_bits: int = 1_000_000,
+    max_total_bits: float = 5e7,
 ) -> Dyadic | None:
     """O_tau = [C; C A; ...; C A^(tau-1)] formed exactly from the floats of A and C, or None
-    when an entry would exceed ``max_bits`` bits."""
+    when an entry would exceed ``max_bits`` bits or all of them ``max_total_bits`` (the
+    entries of C A^k grow by A's bits at each power, so O_tau holds about tau^2 / 2 times
+    them: a window of 3,000 spent minutes in the products of its exact gain)."""
     Ad, row = dyadic(A), dyadic(C)
     blocks = [row]
+    total = float(row.bits() * row.ints.size)
     for _ in range(1, tau):
         if row.bits() + Ad.bits() > max_bits:
             return None
         row = row @ Ad
+        total += float(row.bits() * row.ints.size)
+        if total > max_total_bits:
+            return None
         blocks.append(row)
     return Dyadic.block([[b] for b in blocks])
 
