@@ -105,9 +105,12 @@ def observer_gain_check(design: ObserverDesign, *, tolerances: Tolerances | None
         fields["spectral_radius"] = cert.contraction
         summary = f"The linear error dynamics e+ = (A - L C) e are stable: {cert.reason}."
     elif verdict is Verdict.HOLDS:
+        radius = f"spectral radius {sig(_known(cert.spectral_radius))}"
+        if not np.any(F):  # the floats may have underflowed (A (I - step S'S)^m, m large)
+            radius = "its floats are the zero matrix, computed spectral radius 0"
         summary = (
-            f"The linear error dynamics e+ = (A - L C) e are stable (spectral radius "
-            f"{sig(_known(cert.spectral_radius))}), certified by a Lyapunov matrix P: the error "
+            f"The linear error dynamics e+ = (A - L C) e are stable ({radius}), certified by a "
+            f"Lyapunov matrix P: the error "
             f"contracts at least by {sig(_known(cert.contraction))} per step in the P-norm."
             + balanced_lyapunov_note(cert)
         )
