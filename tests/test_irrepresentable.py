@@ -297,3 +297,12 @@ def test_state_units_property(plant):
         assert CLAIM not in check.summary
         sensor = irrepresentable(System(A, _sensor_units(C, j % C.shape[0], k)), 1)
         assert CLAIM not in sensor.summary
+
+
+def test_an_exact_constant_of_one_fails_by_rational_arithmetic():
+    # A = I, C = [e1; e2; e1 + e2], tau = 2: rho on sensor y1 is exactly 1 (holds needs < 1);
+    # the floats give 1 + 4.4e-16, within the tolerance band, and the check said inconclusive
+    check = irrepresentable(System(np.eye(2), [[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]), 1)
+    assert check.verdict.value == "fails"
+    assert check.evidence["worst_support_exact_value"] == "1"
+    assert check.witness["exact_value"] == "1" and "exactly 1" in check.summary

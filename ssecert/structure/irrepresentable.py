@@ -31,6 +31,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from fractions import Fraction
 from typing import Any
 
 import numpy as np
@@ -597,13 +598,71 @@ def _worst_verdict(
             witness={"support": list(support), "support_names": out.names(support), "value": worst},
             extra={"value_is_lower_bound": True} if stopped is not None else None,
         )
+    exact = _exact_rho(out.system, out.tau, rows_of[list(support)].ravel())
+    if exact is not None:
+        out.evidence["worst_support_exact_value"] = str(exact)
+    if exact is not None and exact >= 1:
+        return out.check(
+            Verdict.FAILS,
+            worst,
+            support,
+            f"The irrepresentable constant on support {label} is "
+            f"{'exactly 1' if exact == 1 else f'{float(exact):.17g} >= 1 exactly'} (computed in "
+            f"rational arithmetic from the floats of A and C): Lasso's support recovery is "
+            "not guaranteed there.",
+            margin=margin,
+            witness={
+                "support": list(support),
+                "support_names": out.names(support),
+                "value": float(exact),
+                "exact_value": str(exact),
+            },
+        )
     return out.check(
         Verdict.INCONCLUSIVE,
         worst,
         support,
-        f"The worst constant {worst:.12g} is within {band:g} of 1.",
+        f"The worst constant {worst:.12g} is within {band:g} of 1"
+        + (
+            f" (its exact value on {label} is {float(exact):.17g} < 1; another support may "
+            "be as close)."
+            if exact is not None
+            else "."
+        ),
         margin=margin,
     )
+
+
+def _exact_rho(system: System, tau: int, inside: np.ndarray) -> Fraction | None:
+    """rho(S) = || O_Sbar (O_Sbar' O_Sbar)^-1 O_S' ||_inf in rational arithmetic from the
+    floats of A and C (the rows ``inside`` of O_tau form S), or None when O_tau is beyond
+    ``EXACT_RHO_ENTRIES`` entries or its exact bits, or O_Sbar lacks full column rank."""
+    from .._exact_powers import exact_observability_matrix
+    from .._rational import product, solve
+
+    n = system.n
+    if system.p * tau * n > EXACT_RHO_ENTRIES or n == 0:
+        return None
+    exact = exact_observability_matrix(system.A, system.C, tau, max_total_bits=1e6)
+    if exact is None:
+        return None
+    O = exact.to_fractions()
+    chosen = {int(i) for i in inside}
+    O_S = [row for i, row in enumerate(O) if i in chosen]
+    O_Sbar = [row for i, row in enumerate(O) if i not in chosen]
+    gram = product([list(col) for col in zip(*O_Sbar)], O_Sbar)
+    columns = []
+    for row in O_S:
+        x = solve(gram, list(row))
+        if x is None:
+            return None
+        columns.append(x)
+    M = product(O_Sbar, [list(r) for r in zip(*columns)]) if columns else []
+    return max((sum((abs(v) for v in r), Fraction(0)) for r in M), default=Fraction(0))
+
+
+#: the largest O_tau (entries) whose worst support is recomputed exactly near 1
+EXACT_RHO_ENTRIES = 2_000
 
 
 def _exact_doubt(
