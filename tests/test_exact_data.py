@@ -389,3 +389,20 @@ def test_an_exact_observability_matrix_is_formed_within_its_total_bits():
     exact = exact_observability_matrix(A, C, 50)
     assert exact is not None and exact.shape == (150, 2)
     assert exact.to_fractions()[3 * 49][0] == (Fraction(0.9) ** 49)
+
+
+def test_a_step_of_1e200_fails_by_a_divergent_trajectory_replayed_within_the_float_range():
+    # the large-signal loop has the eigenvalue -1e200: a replay of two steps overflowed and the
+    # observer was left inconclusive ("which does not mean the observer is unstable")
+    from ssecert.stability.checks import observer_stability_check
+
+    spec = spec_from_dict(
+        {"name": "step-1e200", "system": {"A": np.eye(2).tolist(),
+         "C": [[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]}, "attack": {"max_attacked": 1},
+         "observer": {"kind": "dsso", "gain": "deadbeat", "step": 1e200, "threshold": 0.1}}
+    )  # fmt: skip
+    check, _ = observer_stability_check(build_observer(spec.system, spec.observer))
+    assert check.verdict.value == "fails"
+    witness = check.witness
+    assert witness["kind"] == "divergent trajectory" and witness["steps"] == 1
+    assert np.isfinite(witness["norms"][1]) and witness["norms"][1] > 1e100 * witness["norms"][0]

@@ -167,8 +167,9 @@ def _failure_words(
         f"{witness['escape_level']:.3g}; replayed: from an initial error of norm "
         f"{witness['norms'][0]:.3g} (a_hat(0) = "
         f"{'0' if not np.any(witness['initial_attack_estimate']) else 'as given'}) the error "
-        f"state (e, a_hat) reaches norm {witness['norms'][1]:.3g} in {witness['steps']} steps "
-        "without attack." + _replay_disagrees(witness, "growth"),
+        f"state (e, a_hat) reaches norm {witness['norms'][1]:.3g} in {witness['steps']} "
+        f"step{'' if witness['steps'] == 1 else 's'} without attack."
+        + _replay_disagrees(witness, "growth"),
         "large-signal divergence (eigenvector bound, replayed)",
         abs(mu) - 1.0,
         witness["eigenvalue_error_bound"],
@@ -277,7 +278,9 @@ def _observer_replay(design: ObserverDesign, witness: dict[str, Any]) -> dict[st
         back = float(np.linalg.norm(path[-1] - path[0]))
         out.update(return_residual=back, agrees=back <= 1e-9 * max(start, 1.0))
     else:
-        growth = float(np.linalg.norm(path[-1]) / start) if start > 0 else float("nan")
+        from .divergence import safe_norms
+
+        growth = float(safe_norms(path[-1]) / start) if start > 0 else float("nan")
         out.update(growth=growth, agrees=bool(growth >= 0.5 * float(witness.get("growth", 0))))
     return out
 

@@ -25,7 +25,7 @@ import numpy as np
 
 from ..observers.lure import LureModel
 
-__all__ = ["divergence_witness", "GROWTH"]
+__all__ = ["divergence_witness", "safe_norms", "GROWTH"]
 
 GROWTH = 1000.0  # the factor by which the replayed trajectory must grow along w
 MAX_STEPS = 5000  # longest replay
@@ -61,7 +61,7 @@ def divergence_witness(model: LureModel) -> dict[str, Any] | None:
     along = np.abs(path @ w)
     if not (np.all(np.isfinite(along)) and along[-1] >= GROWTH * along[0] * 0.5):
         return None
-    norms = np.linalg.norm(path, axis=1)
+    norms = safe_norms(path)
     return {
         **inner,
         "left_eigenvector": w,
@@ -92,10 +92,17 @@ def _in_units(model: LureModel) -> dict[str, Any] | None:
     steps = min(MAX_STEPS, math.ceil(math.log(GROWTH) / math.log(abs(mu))) + 1)
     with np.errstate(over="ignore", invalid="ignore"):
         path = model.simulate(xi0, steps)
-    along = np.abs(path @ w)
-    if not (np.all(np.isfinite(along)) and along[-1] >= GROWTH * along[0] * 0.5):
+        along = np.abs(path @ w)
+    # a loop eigenvalue of 1e200 leaves the float range in two steps: the replay ends at its
+    # last finite step, which must show the growth
+    finite = np.isfinite(along) & np.all(np.isfinite(path), axis=-1)
+    steps = int(np.argmin(finite)) - 1 if not np.all(finite) else steps
+    if steps < 1:
         return None
-    norms = np.linalg.norm(path, axis=1)
+    path, along = path[: steps + 1], along[: steps + 1]
+    if not along[-1] >= GROWTH * along[0] * 0.5:
+        return None
+    norms = safe_norms(path)
     return {
         "kind": "divergent trajectory",
         "large_signal_eigenvalue": complex(mu),
@@ -113,6 +120,14 @@ def _in_units(model: LureModel) -> dict[str, Any] | None:
         "replay": "simulate xi+ = A xi + B q S(Cw xi) from (initial_error, "
         "initial_attack_estimate) for `steps` steps (no attack)",
     }
+
+
+def safe_norms(path: np.ndarray) -> np.ndarray:
+    """The 2-norm of each state of ``path`` without overflow (entries near 1e200 square to
+    inf): scaled by the largest entry first."""
+    top = np.max(np.abs(path), axis=-1)
+    safe = np.where(top > 0, top, 1.0)
+    return top * np.linalg.norm(path / safe[..., None], axis=-1)
 
 
 def _dominant_left_pair(
