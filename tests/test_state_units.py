@@ -343,3 +343,34 @@ def test_a_gain_synthesised_for_far_units_is_certified_with_its_own_decay():
     own = verify_synthesis(design, proposal)
     assert own["verified"] and own["alpha"] == pytest.approx(0.05)
     assert own["state_scaling"][1] / own["state_scaling"][0] == 2.0**30
+
+
+def test_the_dead_zone_region_survives_far_state_units():
+    # the thesis's UGV D-SSO (step 1.5, radius 0.0667) with its states in units
+    # diag(2^30, 2^-20): the balanced retry carried the floats' a-priori rounding bound times
+    # the scaling's spread 2^51 (an error bound of 1e27), so no Lyapunov function verified;
+    # measured on the exact matrices the region holds, its radius within the spec's units
+    from ssecert.observers.lure import LureModel
+    from ssecert.stability.roa import region_of_attraction
+
+    t = np.array([2.0**30, 2.0**-20])
+    observer = {"kind": "dsso", "gain": "deadbeat", "step": 1.5, "threshold": 0.1}
+    spec = _spec(UGV_PLANT, observer)
+    L = build_observer(spec.system, spec.observer).L
+    A = np.asarray(UGV_PLANT["A"]) * t[:, None] / t[None, :]
+    C = np.asarray(UGV_PLANT["C"], dtype=float) / t[None, :]
+    scaled = _spec(
+        {"A": A.tolist(), "C": C.tolist()}, {**observer, "gain": (t[:, None] * L).tolist()}
+    )
+    own = region_of_attraction(LureModel.from_design(build_observer(spec.system, spec.observer)))
+    far = region_of_attraction(
+        LureModel.from_design(build_observer(scaled.system, scaled.observer))
+    )
+    assert own["radius"] > 0.06 and far["radius"] > 0
+    # initial errors on the certified sphere, in the spec's units, converge
+    model = LureModel.from_design(build_observer(scaled.system, scaled.observer))
+    e0 = np.random.default_rng(0).standard_normal((100, 2))
+    e0 *= far["radius"] / np.linalg.norm(e0, axis=1, keepdims=True)
+    xi0 = np.hstack([e0, np.zeros((100, model.N - 2))])
+    tail = model.simulate(xi0, 2000)[-1][:, :2]
+    assert np.all(np.linalg.norm(tail, axis=1) <= 1e-6 * far["radius"])

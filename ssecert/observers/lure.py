@@ -104,6 +104,9 @@ class LureModel:
     formation_error: float = 0.0
     # the exact error block F alone (n_e x n_e), when it can be formed without the whole model
     exact_error: ExactMatrix | None = field(default=None, compare=False, repr=False)
+    # the spread of the state scaling the model is written in (``scaled``): its a-priori
+    # bound grew by it, so the rounding is measured on the exact matrices where they are known
+    spread: float = 1.0
 
     def exact(self) -> ExactLure | None:
         """The exact matrices of the model (formed once), or None beyond their budget."""
@@ -131,6 +134,8 @@ class LureModel:
             return None if exact is None else exact.A[:k, :k]
 
         finite = math.isfinite(self.formation_error)
+        if self.spread > 1.0 and self.exact() is not None:
+            finite = False  # measured on the exact matrices: spread times the bound is loose
         return ExactMatrix(
             build,
             self.formation_error if finite else None,
@@ -214,6 +219,7 @@ class LureModel:
             build,
             self.formation_error * spread,
             error,
+            self.spread * spread,
         )
 
     def balancing(self, spread: float = 16.0, *, canonical: bool = False) -> np.ndarray | None:

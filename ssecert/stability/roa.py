@@ -87,11 +87,16 @@ def region_of_attraction(
     found = _region_in_units(model, seed, piecewise, widen)
     if found["radius"] > 0:
         return found
-    s = model.balancing()
-    if s is None:
-        return found
-    inner = _region_in_units(model.scaled(s), seed, piecewise, widen)
-    if not inner["radius"] > 0:
+    tried: list[np.ndarray] = []
+    for canonical in (False, True):  # gebal's balancing, then the log scaling where it differs
+        s = model.balancing(canonical=canonical)
+        if s is None or any(np.array_equal(s, other) for other in tried):
+            continue
+        tried.append(s)
+        inner = _region_in_units(model.scaled(s), seed, piecewise, widen)
+        if inner["radius"] > 0:
+            break
+    else:
         return found
     low = float(np.min(s[: model.n_e]))
     out = {**inner, "radius": float(inner["radius"]) * low, "state_scaling": s}
