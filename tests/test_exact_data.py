@@ -406,3 +406,17 @@ def test_a_step_of_1e200_fails_by_a_divergent_trajectory_replayed_within_the_flo
     witness = check.witness
     assert witness["kind"] == "divergent trajectory" and witness["steps"] == 1
     assert np.isfinite(witness["norms"][1]) and witness["norms"][1] > 1e100 * witness["norms"][0]
+
+
+def test_an_error_weight_of_2_to_the_1000_is_not_an_internal_error(tmp_path, capsys):
+    # A = [[0.5, 2^1000], [0, 0.5]] (a nonnormal plant with its second state in units 2^1000
+    # smaller), zero gain: the l2 gain's output scaling squared a power of two past the floats
+    import json
+
+    spec = {"name": "far", "system": {"A": [[0.5, 2.0**1000], [0.0, 0.5]], "C": [[1.0, 0.0]]},
+            "attack": {"max_attacked": 0},
+            "observer": {"kind": "luenberger", "gain": [[0.0], [0.0]]}}  # fmt: skip
+    path = tmp_path / "far.json"
+    path.write_text(json.dumps(spec))
+    assert main(["analyze", str(path), "--seed", "0", "--time-budget", "2"]) in (0, 1, 3)
+    assert "internal error" not in capsys.readouterr().err

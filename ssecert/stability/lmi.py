@@ -403,9 +403,10 @@ def output_scaled(model: LureModel, spread: float = 16.0) -> tuple[float, LureMo
     norm = float(np.linalg.norm(model.Ce, 2)) if model.Ce.size else 0.0
     if not np.isfinite(norm) or norm <= 0.0 or 1.0 / spread < norm < spread:
         return 1.0, model
-    c = 2.0 ** round(float(np.log2(norm)))
-    if not (np.isfinite(c**2) and c**2 > 0.0):
+    exponent = round(float(np.log2(norm)))
+    if abs(exponent) > 511:  # c^2, and the certificate scaled back by it, would leave the floats
         return 1.0, model
+    c = 2.0**exponent
     return c, replace(model, Ce=model.Ce / c)
 
 
