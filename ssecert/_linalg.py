@@ -160,17 +160,68 @@ def _exact_or_none(A: np.ndarray, C: np.ndarray, states: np.ndarray) -> np.ndarr
     return states
 
 
-def far_units(M: np.ndarray) -> np.ndarray | None:
-    """Powers of two s that balance the square matrix M (diag(s)^-1 M diag(s)) by the
-    least-squares scaling of its entries' logarithms (``_log_balancing``) when they spread by
-    2^16 or more, else None."""
-    M = np.asarray(M, dtype=float)
-    if M.shape[0] < 2 or not np.all(np.isfinite(M)):
+def anchored_units(A: np.ndarray, inputs: np.ndarray, outputs: np.ndarray) -> np.ndarray | None:
+    """Powers of two s for the states of x+ = A x + inputs u, w = outputs x, with u and w in
+    fixed units, that bring the entries of S^-1 A S, S^-1 inputs and outputs S closest to 1
+    in the least-squares sense of their logarithms (``_anchored_exponents``), when they
+    spread the states and the fixed units by 2^16 or more; else None.
+
+    The fixed units anchor the scaling: a model written with its states in units 2^k gets
+    the exponents e + k (up to the rounding of the solve), so every power-of-two change of
+    state units gives back the same balanced model, its states also placed against the
+    channels' units (which a similarity of the states alone, like gebal's, leaves free)."""
+    A = np.asarray(A, dtype=float)
+    n = A.shape[0]
+    inputs = np.asarray(inputs, dtype=float).reshape(n, -1)
+    outputs = np.asarray(outputs, dtype=float).reshape(-1, n)
+    if n == 0 or not all(np.all(np.isfinite(M)) for M in (A, inputs, outputs)):
         return None
-    exponents = _log_balancing(M, np.zeros((0, M.shape[0])))
-    if exponents.max() - exponents.min() < _EXTREME_EXPONENTS:
+    exponents = _anchored_exponents(A, inputs, outputs)
+    anchored = inputs.size + outputs.size > 0
+    top = max(int(exponents.max()), 0) if anchored else int(exponents.max())
+    low = min(int(exponents.min()), 0) if anchored else int(exponents.min())
+    if top - low < _EXTREME_EXPONENTS:
         return None
     return np.ldexp(1.0, exponents)
+
+
+def _anchored_exponents(A: np.ndarray, inputs: np.ndarray, outputs: np.ndarray) -> np.ndarray:
+    """Integer exponents e minimising, over the nonzero entries, the sum of squares of
+    log2|A_ij| + e_j - e_i (i != j), log2|inputs_ij| - e_i and log2|outputs_ij| + e_j (the
+    inputs and outputs in fixed units).  A group of states linked to no input or output is
+    placed with its first state at 0."""
+    from scipy.sparse.csgraph import connected_components
+
+    n = A.shape[0]
+    off = (A != 0) & ~np.eye(n, dtype=bool)
+    W = np.where(off, _log2_abs(A), 0.0)
+    M = off.astype(float)
+    seen_in, seen_out = inputs != 0, outputs != 0
+    W_in = np.where(seen_in, _log2_abs(inputs), 0.0)
+    W_out = np.where(seen_out, _log2_abs(outputs), 0.0)
+    anchors = seen_in.sum(axis=1) + seen_out.sum(axis=0)
+    links = M + M.T
+    N = np.diag(links.sum(axis=1) + anchors) - links
+    rhs = W.sum(axis=1) - W.sum(axis=0) + W_in.sum(axis=1) - W_out.sum(axis=0)
+    graph = np.zeros((n + 1, n + 1))  # node n: the fixed units
+    graph[:n, :n] = links
+    graph[:n, n] = graph[n, :n] = anchors
+    _, labels = connected_components(graph != 0, directed=False)
+    free = np.ones(n, dtype=bool)
+    for label in np.unique(labels[:n]):
+        if label != labels[n]:
+            free[np.flatnonzero(labels[:n] == label)[0]] = False
+    x = np.zeros(n)
+    if np.any(free):
+        block, target = N[np.ix_(free, free)], rhs[free]
+        try:
+            x[free] = np.linalg.solve(block, target)
+        except np.linalg.LinAlgError:
+            x[free] = np.linalg.lstsq(block, target, rcond=None)[0]
+    exponents = np.floor(x + 0.5)
+    if not np.all(np.isfinite(exponents)):
+        return np.zeros(n, dtype=int)
+    return exponents.astype(int)
 
 
 def _log_balancing(A: np.ndarray, C: np.ndarray) -> np.ndarray:

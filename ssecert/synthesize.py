@@ -719,8 +719,12 @@ def verify_synthesis(design: Any, proposal: Any, *, clear: float = 100.0) -> dic
         model, proposal.P, t, kind="iss", alpha=alpha, g=g, clear=clear
     )
     out: dict[str, Any] = {"verified": bool(ok), "margin": margin, "error_bound": bound}
-    s = None if ok else model.balancing(canonical=True)
-    if s is not None:  # the same inequality by congruence, in balanced state coordinates
+    tried = [] if proposal.state_scaling is None else [np.asarray(proposal.state_scaling)]
+    if not ok:
+        tried += [s for s in model.balancings() if not any(np.array_equal(s, t) for t in tried)]
+    for s in () if ok else tried:
+        # the same inequality by congruence, in balanced state coordinates: first those the
+        # synthesis solved in
         scale = np.ones(proposal.P.shape[0])
         scale[: model.N] = s
         P_b = proposal.P * scale[:, None] * scale[None, :]
@@ -735,6 +739,7 @@ def verify_synthesis(design: Any, proposal: Any, *, clear: float = 100.0) -> dic
                        "state_scaling": s.tolist(),
                        "margin_coordinates": "verified in the balanced coordinates "
                        "xi = diag(state_scaling) xi_b"}  # fmt: skip
+                break
     if ok:
         out.update(alpha=float(proposal.alpha or 0.0), gamma=float(np.sqrt(g)))
     else:

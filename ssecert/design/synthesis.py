@@ -53,6 +53,9 @@ class GainSynthesis:
     P: np.ndarray | None = None
     multipliers: np.ndarray | None = None
     g: float | None = None
+    # the state coordinates x = diag(state_scaling) x_b the LMI was solved in (None: the
+    # user's), where its certificate is best verified
+    state_scaling: np.ndarray | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -226,6 +229,7 @@ class _Units:
             multipliers=None if found.multipliers is None else c * c * found.multipliers,
             g=None if found.g is None else c * c * found.g,
             gamma_proposed=None if found.gamma_proposed is None else c * found.gamma_proposed,
+            state_scaling=full,
         )
 
 

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._exact_powers import Dyadic, ExactMatrix, dyadic
-from .._linalg import far_units
+from .._linalg import anchored_units
 
 if TYPE_CHECKING:
     from .base import ObserverDesign
@@ -226,9 +226,10 @@ class LureModel:
         """Powers of two s that balance the large-signal loop A + q B Cw (LAPACK's gebal
         through ``scipy.linalg.matrix_balance``), or None when they spread less than
         ``spread`` or the scaled model would not be exact (an entry under- or overflowing).
-        With ``canonical``, the least-squares scaling of the loop's logarithms where its
-        states are in units 2^16 or more apart (``far_units``: every power-of-two change of
-        state units gives the same balanced loop), gebal's otherwise.
+        With ``canonical``, the least-squares scaling of the logarithms of A, [B E] and Cw
+        with the channels and the attack in their own units (``anchored_units``), where it
+        moves the states 2^16 or more from each other or from those units, else None: every
+        power-of-two change of the states' units gives the same balanced model.
 
         An LMI solver fails on a Lur'e model whose states are in very different units; the
         model in the coordinates xi = diag(s) xi_b (``scaled``) is the same system, written
@@ -239,15 +240,18 @@ class LureModel:
         if self.N == 0:
             return None
         with np.errstate(all="ignore"):  # a model at the ends of the float range: no scaling
-            loop = self.vertex(self.q)
-            if not np.all(np.isfinite(loop)):
-                return None
-            s = far_units(loop) if canonical else None
-            if s is None:
+            if canonical:
+                s = anchored_units(self.A, np.hstack([self.B, self.E]), self.Cw)
+                if s is None:
+                    return None
+            else:
+                loop = self.vertex(self.q)
+                if not np.all(np.isfinite(loop)):
+                    return None
                 _, (s, _) = matrix_balance(loop, permute=False, separate=True)
                 s = np.asarray(s, dtype=float)
-            if not np.all(np.isfinite(s) & (s > 0)) or s.max() < spread * s.min():
-                return None
+                if not np.all(np.isfinite(s) & (s > 0)) or s.max() < spread * s.min():
+                    return None
             exponents = np.log2(s)
             if not np.array_equal(exponents, np.round(exponents)):
                 return None
@@ -257,6 +261,17 @@ class LureModel:
             if not np.array_equal(getattr(back, name), getattr(self, name)):
                 return None
         return s
+
+    def balancings(self) -> list[np.ndarray]:
+        """The distinct state scalings to retry an LMI in (``balancing``): gebal's, then the
+        canonical one where the states' units are far apart (the same balanced model whatever
+        units the spec writes them in)."""
+        found: list[np.ndarray] = []
+        for canonical in (False, True):
+            s = self.balancing(canonical=canonical)
+            if s is not None and not any(np.array_equal(s, other) for other in found):
+                found.append(s)
+        return found
 
     def finite(self) -> bool:
         """Whether every matrix of the model, and the loop at the sector's vertex, is within

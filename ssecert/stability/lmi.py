@@ -379,9 +379,17 @@ def where_verified(
     s = np.asarray(s, dtype=float)
     scale = np.ones(cert.P.shape[0])
     scale[: model.N] = s
+    with np.errstate(over="ignore"):
+        P_b = cert.P * scale[:, None] * scale[None, :]
+    if not np.all(np.isfinite(P_b)):
+        return LMICertificate(
+            Verdict.INCONCLUSIVE,
+            cert.kind,
+            reason="the certificate's P leaves the float range in its balanced coordinates",
+        )
     inside = replace(
         cert,
-        P=cert.P * scale[:, None] * scale[None, :],
+        P=P_b,
         details={k: v for k, v in cert.details.items() if k != "state_scaling"},
     )
     found = compute(model.scaled(s), inside)
@@ -418,17 +426,12 @@ def balanced_retry(
     attempts: list[dict[str, Any]] | None = None,
 ) -> tuple[LMICertificate | None, str]:
     """``certify`` run again on the model in balanced state coordinates (``LureModel.
-    balancing``: gebal's, then the canonical one where it differs), its certificate written
+    balancings``: gebal's, then the canonical one where units are far apart), its certificate written
     back for ``model`` (with ``attempts``, those made in the original coordinates, as
     ``unbalanced_attempts``); (None, why) when not ``enabled``, when there is no balancing to
     try or when it certifies nothing."""
     notes = ""
-    tried: list[np.ndarray] = []
-    for canonical in (False, True) if enabled else ():
-        s = model.balancing(canonical=canonical)
-        if s is None or any(np.array_equal(s, other) for other in tried):
-            continue
-        tried.append(s)
+    for s in model.balancings() if enabled else ():
         cert = certify(model.scaled(s))
         if cert.verdict is Verdict.HOLDS:
             back = to_original_coordinates(cert, s, model.N)
@@ -436,7 +439,11 @@ def balanced_retry(
                 back = replace(back, details={**back.details, "unbalanced_attempts": attempts})
             if back is not None:
                 return back, ""
-            why = "its P does not scale back exactly"
+            why = (
+                "its P, written for the spec's coordinates (entries scaled by up to "
+                f"2^{2 * int(np.max(np.abs(np.log2(s))))}), would leave the float range or "
+                "lose digits"
+            )
         else:
             why = cert.reason
         notes += f"; in balanced state coordinates (xi = {scaling_text(s)} xi_b): {why}"
@@ -712,7 +719,7 @@ def iss_from_circle(
     clear : float, default 100
     balance : bool, default True
         When the gain does not verify in the model's coordinates, compute it again in
-        balanced state coordinates (``LureModel.balancing``, gebal's then the canonical),
+        balanced state coordinates (``LureModel.balancings``),
         the circle certificate carried there exactly: a state in units 2^30 apart weighs 2^60 in |e|^2 against the
         others, and the margin relative to ||P|| is lost in the user's coordinates only.
 
@@ -727,11 +734,31 @@ def iss_from_circle(
     elsewhere = where_verified(model, circle, partial(iss_from_circle, clear=clear))
     if elsewhere is not None:
         return elsewhere
+    found = _gain_from_circle(model, circle, clear)
+    if found.verdict is Verdict.HOLDS or not balance:
+        return found
+    for s in model.balancings():
+        carried = replace(circle, details={**circle.details, "state_scaling": s})
+        again = where_verified(model, carried, partial(iss_from_circle, clear=clear, balance=False))
+        if again is not None and again.verdict is Verdict.HOLDS:
+            return again
+    return found
+
+
+def _gain_from_circle(model: LureModel, circle: LMICertificate, clear: float) -> LMICertificate:
+    """``iss_from_circle`` in the model's own coordinates."""
+    assert circle.P is not None
     P, t = circle.P, circle.multipliers if circle.multipliers is not None else np.zeros(0)
     alpha = 0.5 * float(circle.decay or 0.0)
     k = model.N + model.m
     perf = iss_matrix(model, np.zeros_like(P), np.zeros_like(t), alpha, 0.0)  # |e|^2 only
     base = iss_matrix(model, P, t, alpha, 0.0) - perf
+    if not (np.all(np.isfinite(base)) and np.all(np.isfinite(perf))):
+        return LMICertificate(
+            Verdict.INCONCLUSIVE,
+            "iss",
+            reason="the dissipation matrix of the circle certificate leaves the float range",
+        )
     x, g = _smallest_gain(_schur_gain(base, perf, k), _scale_grid(model, base, k))
     if not np.isfinite(g):
         return LMICertificate(
@@ -747,18 +774,6 @@ def iss_from_circle(
         model, kappa * P, kappa * t, alpha, g, clear
     )
     if not ok:
-        tried: list[np.ndarray] = []
-        for canonical in (False, True) if balance else ():
-            s = model.balancing(canonical=canonical)
-            if s is None or any(np.array_equal(s, other) for other in tried):
-                continue
-            tried.append(s)
-            carried = replace(circle, details={**circle.details, "state_scaling": s})
-            again = where_verified(
-                model, carried, partial(iss_from_circle, clear=clear, balance=False)
-            )
-            if again is not None and again.verdict is Verdict.HOLDS:
-                return again
         return LMICertificate(Verdict.INCONCLUSIVE, "iss", reason=f"gain not verified: {problem}")
     return LMICertificate(
         Verdict.HOLDS,

@@ -87,12 +87,7 @@ def region_of_attraction(
     found = _region_in_units(model, seed, piecewise, widen)
     if found["radius"] > 0:
         return found
-    tried: list[np.ndarray] = []
-    for canonical in (False, True):  # gebal's balancing, then the log scaling where it differs
-        s = model.balancing(canonical=canonical)
-        if s is None or any(np.array_equal(s, other) for other in tried):
-            continue
-        tried.append(s)
+    for s in model.balancings():
         inner = _region_in_units(model.scaled(s), seed, piecewise, widen)
         if inner["radius"] > 0:
             break

@@ -107,8 +107,8 @@ def _first_order(F: np.ndarray, rounding: float = 0.0) -> tuple[complex, float]:
     y = vl[:, j] / np.linalg.norm(vl[:, j])
     x = vr[:, j] / np.linalg.norm(vr[:, j])
     dot = abs(np.vdot(y, x))
-    kappa = 1.0 / dot if dot > 0 else np.inf
     with np.errstate(over="ignore", invalid="ignore"):
+        kappa = 1.0 / dot if dot > 0 else np.inf  # a subnormal dot: infinite
         bound = (n * EPS * np.linalg.norm(F, 2) + rounding) * kappa
     return complex(lam[j]), float(bound) if np.isfinite(bound) else np.inf
 
