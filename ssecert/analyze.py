@@ -203,6 +203,7 @@ def analyze(
     eig = eigen_clusters(units.system.A, tolerances=tol, unit=units.alpha)
     clock.lap("eigenvalues", None)
     sparse_timing: dict[str, float] = {}
+    observer_timings: dict[str, float] = {}
     checks: list[Check] = [
         clock.lap("observability", observability(system, tolerances=tol, eigen=eig)),
         clock.lap("sparse_observability", sparse_observability(
@@ -247,6 +248,7 @@ def analyze(
                     context=context,
                     tolerances=tol,
                     constant_attacks=default_attacks(system.p, spec.max_attacked, spec.scenarios),
+                    timings=observer_timings,
                 ),
             )
         )
@@ -255,7 +257,7 @@ def analyze(
         context.put(sparse_key(spec.max_attacked), checks[1])
     notes.extend(_short_horizon_notes(spec, checks[0]))
     meta = _meta(spec, seed, budget, notes)
-    meta["timings"] = clock.record(sparse_timing)
+    meta["timings"] = clock.record(sparse_timing, observer_timings)
     return Certificate(system=system, checks=tuple(checks), meta=meta)
 
 
@@ -273,11 +275,13 @@ class _Clock:
         self.last = now
         return result
 
-    def record(self, sparse: dict[str, float]) -> dict[str, float]:
-        """Seconds of each step and of the whole run (``analyze``), and the sparse-observability
-        check's split into deciding the verdict and refining max_removable past it."""
+    def record(self, sparse: dict[str, float], observer: dict[str, float]) -> dict[str, float]:
+        """Seconds of each step and of the whole run (``analyze``), each observer check's
+        (``observer_checks.ID``), and the sparse-observability check's split into deciding the
+        verdict and refining max_removable past it."""
         out = {"analyze": rounded_seconds(time.monotonic() - self.start)}
         out.update((name, rounded_seconds(t)) for name, t in self.seconds.items())
+        out.update((f"observer_checks.{k}", rounded_seconds(t)) for k, t in observer.items())
         if sparse:
             out["sparse_observability.to_verdict"] = rounded_seconds(sparse["seconds_to_verdict"])
             out["sparse_observability.refinement"] = rounded_seconds(sparse["refinement_seconds"])

@@ -146,3 +146,10 @@ def test_the_run_times_are_in_meta_timings_only(tmp_path):
     assert main(["certify", "ugv", "--out", str(tmp_path), "--seed", "0"]) == 1
     doc = json.loads((tmp_path / "ugv.json").read_text())
     assert "observer_checks" in doc["meta"]["timings"] and "timing" not in doc["meta"]
+    # each observer check's seconds, within the observer checks' whole
+    timings = doc["meta"]["timings"]
+    ids = ["observer_gain", "observer_stability", "iss_gain", "thesis_assumptions",
+           "region_of_attraction"]  # fmt: skip
+    each = [timings[f"observer_checks.{k}"] for k in ids]
+    assert all(t >= 0 for t in each)
+    assert sum(each) <= timings["observer_checks"] * 1.01 + 0.01

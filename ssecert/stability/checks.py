@@ -6,9 +6,10 @@ JSON ids: ``observer_gain`` and ``observer_stability`` (required),
 
 from __future__ import annotations
 
+import time
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -48,6 +49,8 @@ from .periodic import periodic_orbit
 from .roa import region_of_attraction
 from .thesis import thesis_assumptions
 from .zames_falb import zames_falb_certificate, zames_falb_gain
+
+_T = TypeVar("_T")
 
 __all__ = [
     "observer_checks",
@@ -707,6 +710,7 @@ def observer_checks(
     context: AnalysisContext | None = None,
     tolerances: Tolerances | None = None,
     constant_attacks: Sequence[tuple[str, np.ndarray]] = (),
+    timings: dict[str, float] | None = None,
 ) -> list[Check]:
     """All observer checks of a spec's ``[observer]`` section.
 
@@ -733,6 +737,9 @@ def observer_checks(
         Named constant attack vectors (length p): ``iss_gain`` reports where
         the error goes under each (``ssecert.stability.constant_attack``;
         ``analyze`` passes ``default_attacks`` of the spec).
+    timings : dict, optional
+        Filled with the wall-clock seconds of each check (building the observer counted in
+        ``observer_gain``), as ``meta.timings`` reports them.
 
     Returns
     -------
@@ -752,6 +759,7 @@ def observer_checks(
      ('region_of_attraction', 'holds')]
     """
     tol = Tolerances.check(tolerances)
+    clock = _Laps(timings)
     try:
         design = shared(
             context,
@@ -796,13 +804,16 @@ def observer_checks(
             fields={},
         )
         return [gain, stab]
-    checks = [observer_gain_check(design, tolerances=tol)]
-    stability, cert = observer_stability_check(design, budget=budget, tolerances=tol)
+    checks = [clock.lap("observer_gain", observer_gain_check(design, tolerances=tol))]
+    stability, cert = clock.lap(
+        "observer_stability", observer_stability_check(design, budget=budget, tolerances=tol)
+    )
     undecided = stability.verdict is Verdict.INCONCLUSIVE
-    region = (
+    region = clock.lap(
+        "region_of_attraction",
         region_of_attraction_check(design, seed=seed, piecewise=undecided, budget=budget)
         if design.sparse
-        else None
+        else None,
     )
     if region is not None and stability.verdict is Verdict.HOLDS:
         prefix = "No region of attraction is certified: "
@@ -832,15 +843,38 @@ def observer_checks(
         )
     checks.append(stability)
     checks.append(
-        iss_gain_check(
-            design, cert, budget=budget, tolerances=tol, constant_attacks=constant_attacks
+        clock.lap(
+            "iss_gain",
+            iss_gain_check(
+                design, cert, budget=budget, tolerances=tol, constant_attacks=constant_attacks
+            ),
         )
     )
     if design.sparse:
-        checks.append(thesis_assumptions_check(design, observability, seed=seed, budget=budget))
+        checks.append(
+            clock.lap(
+                "thesis_assumptions",
+                thesis_assumptions_check(design, observability, seed=seed, budget=budget),
+            )
+        )
     if region is not None:
         checks.append(region)
     return checks
+
+
+class _Laps:
+    """Wall-clock seconds of each observer check, into ``timings`` (nothing without it)."""
+
+    def __init__(self, timings: dict[str, float] | None) -> None:
+        self.timings = timings
+        self.last = time.monotonic()
+
+    def lap(self, name: str, result: _T) -> _T:
+        now = time.monotonic()
+        if self.timings is not None:
+            self.timings[name] = now - self.last
+        self.last = now
+        return result
 
 
 def region_of_attraction_check(
