@@ -378,6 +378,22 @@ def test_a_step_of_1e308_is_inconclusive_not_an_internal_error(tmp_path, capsys,
     assert (folder / "huge-step.json").exists()
 
 
+def test_an_elastic_net_with_a_step_of_1e308_in_far_units_ends_in_verdicts():
+    # the canonical balancing put the dead zone's loop in coordinates where its Lyapunov
+    # solution is not finite: the residual's 2-norm (an SVD of NaNs) ended in LinAlgError
+    from ssecert import analyze, spec_from_dict
+
+    spec = spec_from_dict(
+        {"name": "huge-step", "system": {"A": [[1.0, 0.0099], [0.0, 0.9876]],
+         "C": [[1, 0], [0, 1], [0, 1], [1, 1]]}, "attack": {"max_attacked": 1},
+         "observer": {"kind": "elastic_net", "gain": "pinv", "step": 1e308, "threshold": 0.1,
+                      "shrink": 0.5}}
+    )  # fmt: skip
+    cert = analyze(spec)
+    assert cert["observer_stability"].verdict.value != "holds"
+    assert cert["region_of_attraction"].verdict.value == "inconclusive"
+
+
 def test_an_exact_observability_matrix_is_formed_within_its_total_bits():
     # the entries of C A^k grow by A's 53 bits per power: a window of 3,000 formed an exact
     # O_tau of about 10^9 bits and its exact gain's products ran for minutes; beyond the total
