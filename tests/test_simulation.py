@@ -79,6 +79,20 @@ def test_runs_are_reproducible_whatever_the_batch():
         assert np.abs(full.noise).max() <= 0.1
 
 
+def test_noise_and_magnitudes_at_the_end_of_the_float_range_are_drawn():
+    # uniform(-1e308, 1e308) raised OverflowError (its range 2e308 is not a float): exit 4 in
+    # simulate and certify; drawn within the bounds instead, and small bounds draw as before
+    system = random_plant(4)
+    sc = {"attack": "constant", "count": 1, "magnitude": (1e308, 1.7e308), "noise": 1e308}
+    data = generate(system, sc, range(3), 10, seed=0)
+    assert np.all(np.isfinite(data.noise)) and np.abs(data.noise).max() <= 1e308
+    assert np.abs(data.noise).max() > 1e306
+    attacked = np.abs(data.attack[data.attack != 0])
+    assert np.all((attacked >= 1e308) & (attacked <= 1.7e308))
+    plain = generate(system, {**sc, "magnitude": (4.0, 5.0), "noise": 0.1}, range(3), 10, seed=0)
+    assert 0.05 < np.abs(plain.noise).max() <= 0.1
+
+
 def test_switching_support_changes_with_the_period():
     system = random_plant(4, p=10)
     sc = {"attack": "switching", "count": 3, "magnitude": (4.0, 5.0), "period": 5, "noise": 0.0}

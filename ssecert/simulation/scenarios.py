@@ -63,7 +63,16 @@ def run_rng(seed: int, run: int) -> np.random.Generator:
 
 def _magnitudes(rng: np.random.Generator, size: int, magnitude: Sequence[float]) -> np.ndarray:
     lo, hi = magnitude
-    return rng.uniform(lo, hi, size) * rng.choice([-1.0, 1.0], size)
+    return _uniform(rng, lo, hi, size) * rng.choice([-1.0, 1.0], size)
+
+
+def _uniform(rng: np.random.Generator, lo: float, hi: float, size: Any) -> np.ndarray:
+    """``rng.uniform(lo, hi, size)``, also where hi - lo is beyond the float range (a noise
+    bound of 1e308): then drawn in halves of the range, which ``uniform`` can take."""
+    if np.isfinite(float(hi) - float(lo)):
+        return rng.uniform(lo, hi, size)
+    middle = 0.5 * lo + 0.5 * hi
+    return middle + rng.uniform(-0.5, 0.5, size) * 2.0 * (0.5 * hi - 0.5 * lo)
 
 
 def _support(rng: np.random.Generator, p: int, scenario: Mapping[str, Any]) -> np.ndarray:
@@ -169,5 +178,5 @@ def generate(
         else:  # pragma: no cover - the spec validator refuses other kinds
             raise ValueError(f"unknown attack kind {kind!r}")
         if noise_bound > 0:
-            noise[:, j, :] = rng.uniform(-noise_bound, noise_bound, (steps, p))
+            noise[:, j, :] = _uniform(rng, -noise_bound, noise_bound, (steps, p))
     return ScenarioData(run_ids, x0, attack, noise)
