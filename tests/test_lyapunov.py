@@ -59,3 +59,25 @@ def test_rounding_above_one_is_not_called_unstable():
     Q, _ = np.linalg.qr(rng.standard_normal((12, 12)))
     cert = lyapunov_certificate(Q @ J @ Q.T)
     assert cert.verdict != "fails"
+
+
+@pytest.mark.parametrize("k", [700, 900])
+def test_a_lyapunov_matrix_for_states_2_to_the_900_apart_is_written_in_the_users_units(k):
+    # F = [[0.5, 2^k], [0, 0.7]] (a triangular matrix in units 2^k apart, radius 0.7): P was
+    # solved in balanced coordinates, but S^-1 P_b S^-1 has entries 2^-1202 there (underflow)
+    # and the certificate was dropped; a positive multiple of it centres its entries
+    from fractions import Fraction
+
+    F = np.array([[0.5, 2.0**k], [0.0, 0.7]])
+    cert = lyapunov_certificate(F)
+    assert cert.verdict.value == "holds"
+    P = cert.P
+    assert np.all(np.isfinite(P)) and P[0, 0] > 0
+    # P > 0 and P - F'PF > 0, in exact arithmetic on the printed floats
+    Pq = [[Fraction(x) for x in row] for row in P.tolist()]
+    Fq = [[Fraction(x) for x in row] for row in F.tolist()]
+    FtPF = [[sum(Fq[a][i] * Pq[a][b] * Fq[b][j] for a in range(2) for b in range(2))
+             for j in range(2)] for i in range(2)]  # fmt: skip
+    D = [[Pq[i][j] - FtPF[i][j] for j in range(2)] for i in range(2)]
+    for M in (Pq, D):
+        assert M[0][0] > 0 and M[0][0] * M[1][1] - M[0][1] * M[1][0] > 0

@@ -236,16 +236,22 @@ def _in_balanced_units(
     cert = _certificate_in_units(F_b, np.eye(F.shape[0]), clear, exact_b)
     if cert.verdict is not Verdict.HOLDS or cert.P is None:
         return None
+    # any positive multiple of P is a Lyapunov matrix: c = max(s) min(s) centres the entries
+    # c / (s_i s_j) on 1, so states 2^900 apart give a P of entries within 2^+-900
+    exponents = int(k.max() + k.min()) - k[:, None] - k[None, :]  # of c / (s_i s_j)
     with np.errstate(all="ignore"):
-        P = cert.P / s[:, None] / s[None, :]
-    if not (np.all(np.isfinite(P)) and np.array_equal(P * s[:, None] * s[None, :], cert.P)):
-        return None  # not exactly representable in the user's coordinates
+        P = np.ldexp(cert.P, exponents)
+        if not (np.all(np.isfinite(P)) and np.array_equal(np.ldexp(P, -exponents), cert.P)):
+            return None  # not exactly representable in the user's coordinates
+    c = float(np.ldexp(1.0, int(k.max() + k.min())))
     proof = {
         "state_scaling": s,
         "balanced_P": cert.P,
+        "P_factor": c,
         "note": "P was verified in the coordinates e = diag(state_scaling) e_b (with F_b = "
-        "S^-1 F S, Q = I there) and written back exactly as P = S^-1 P_b S^-1; margin, error "
-        "bound and decrease are those of the balanced coordinates",
+        "S^-1 F S, Q = I there) and written back exactly as P = c S^-1 P_b S^-1, c = "
+        "P_factor = max(s) min(s) (a power of two); margin, error bound and decrease are "
+        "those of the balanced coordinates",
     }
     return replace(cert, P=P, proof=proof)
 
