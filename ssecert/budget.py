@@ -196,9 +196,10 @@ class Budget:
                 f"budget of {format_bytes(self.memory)} (--memory-budget)"
             )
         if flops > self.work:
+            need, have = _apart(flops, self.work)
             return (
-                f"{what} needs about {flops:.2g} floating-point operations, over the work "
-                f"budget of {self.work:.2g} (--work-budget)"
+                f"{what} needs about {need} floating-point operations, over the work "
+                f"budget of {have} (--work-budget)"
             )
         return ""
 
@@ -210,3 +211,13 @@ class Budget:
 
     def to_dict(self) -> dict[str, float]:
         return {"memory_bytes": self.memory, "work_flops": self.work}
+
+
+def _apart(a: float, b: float) -> tuple[str, str]:
+    """``a`` and ``b`` in two significant digits, or as many more as tell them apart
+    (1.0000001e12 over a budget of 1e12 is not "1e+12 over 1e+12")."""
+    for digits in range(2, 18):
+        left, right = f"{a:.{digits}g}", f"{b:.{digits}g}"
+        if left != right:
+            return left, right
+    return f"{a!r}", f"{b!r}"

@@ -436,3 +436,36 @@ def test_an_error_weight_of_2_to_the_1000_is_not_an_internal_error(tmp_path, cap
     path.write_text(json.dumps(spec))
     assert main(["analyze", str(path), "--seed", "0", "--time-budget", "2"]) in (0, 1, 3)
     assert "internal error" not in capsys.readouterr().err
+
+
+def test_messages_name_what_was_shown():
+    # an SSO with inner steps: the matrix checked is A (I - step S'S)^m, not A - L C with the
+    # one-step L printed beside it
+    from ssecert import analyze, spec_from_dict
+    from ssecert.budget import Budget
+    from ssecert.report.cells import margin_text
+    from ssecert.testing import assert_schur
+
+    spec = spec_from_dict(
+        {"name": "sso", "system": {"A": [[1.0, 0.0099], [0.0, 0.9876]],
+         "C": [[1, 0], [0, 1], [0, 1], [1, 1]]}, "attack": {"max_attacked": 1},
+         "observer": {"kind": "sso", "step": 0.1, "threshold": 0.1, "window": 2,
+                      "inner_steps": 100}}
+    )  # fmt: skip
+    gain = analyze(spec)["observer_gain"]
+    assert gain.value_name == "spectral radius of A (I - step S' S)^100"
+    assert "e+ = (A (I - step S' S)^100) e" in gain.summary
+    assert "100 inner steps" in gain.evidence["error_matrix"]
+    # an eigenvalue 1 - 2^-53 is not written "1"
+    with pytest.raises(AssertionError, match=r"modulus 1 - 1\.1e-16"):
+        assert_schur([[1 - 2.0**-53, 1.0], [0.0, 1 - 2.0**-53]])
+    # an estimate just over its budget is not "1e+12 over 1e+12"
+    assert "1.0000001e+12 floating-point operations, over the work budget of 1e+12" in (
+        Budget(work=1e12).refusal("x", flops=1.0000001e12)
+    )
+    # a deadbeat margin 1 - 2.2e-16 is not "1"
+    ugv = analyze(spec_from_dict({"name": "u", "system": {"A": [[1.0, 0.0099], [0.0, 0.9876]],
+                  "C": [[1, 0], [0, 1], [0, 1]]}, "attack": {"max_attacked": 1},
+                  "observer": {"kind": "dsso", "gain": "deadbeat", "step": 0.7,
+                               "threshold": 0.1}}))["observer_gain"]  # fmt: skip
+    assert ugv.margin != 1.0 and margin_text(ugv).startswith("1 - ")

@@ -77,8 +77,12 @@ def value_text(check: Check) -> str:
 
 
 def margin_text(check: Check) -> str:
-    """The check's margin, rounded ("-" when it has none)."""
-    return number(check.margin, versus=0.0)
+    """The check's margin, rounded ("-" when it has none); one that rounds onto 1 without being
+    1 (1 - a spectral radius of 2.2e-16) as its distance from it."""
+    text = number(check.margin, versus=0.0)
+    if text == "1" and check.margin is not None and float(check.margin) != 1.0:
+        return number(check.margin, versus=1.0)
+    return text
 
 
 def named(name: str, text: str) -> str:

@@ -96,6 +96,12 @@ def observer_gain_check(design: ObserverDesign, *, tolerances: Tolerances | None
     }
     if gain.method == "deadbeat":
         return _deadbeat_check(design, fields, evidence, title)
+    what = error_matrix_name(design)
+    if what != "A - L C":
+        evidence["error_matrix"] = (
+            f"F = {what}: the error map of the {design.inner_steps} inner steps per sample "
+            "(L is one inner step's gain, step A S')"
+        )
     cert = lyapunov_certificate(F, exact=_exact(design), clear=tol.certificate_clear)
     fields["spectral_radius"] = cert.spectral_radius
     evidence.update(_lyapunov_evidence(cert))
@@ -103,24 +109,24 @@ def observer_gain_check(design: ObserverDesign, *, tolerances: Tolerances | None
     shown = exact_radius(cert)
     if verdict is Verdict.HOLDS and cert.method == "exact powers":
         fields["spectral_radius"] = cert.contraction
-        summary = f"The linear error dynamics e+ = (A - L C) e are stable: {cert.reason}."
+        summary = f"The linear error dynamics e+ = ({what}) e are stable: {cert.reason}."
     elif verdict is Verdict.HOLDS:
         radius = f"spectral radius {sig(_known(cert.spectral_radius))}"
         if not np.any(F):  # the floats may have underflowed (A (I - step S'S)^m, m large)
             radius = "its floats are the zero matrix, computed spectral radius 0"
         summary = (
-            f"The linear error dynamics e+ = (A - L C) e are stable ({radius}), certified by a "
+            f"The linear error dynamics e+ = ({what}) e are stable ({radius}), certified by a "
             f"Lyapunov matrix P: the error "
             f"contracts at least by {sig(_known(cert.contraction))} per step in the P-norm."
             + balanced_lyapunov_note(cert)
         )
     elif verdict is Verdict.FAILS:
         summary = (
-            f"A - L C is not stable: {cert.reason}. With this gain the error does not "
+            f"{what} is not stable: {cert.reason}. With this gain the error does not "
             f"vanish even without attack."
         )
     else:
-        summary = f"The stability of A - L C could not be certified: {cert.reason}."
+        summary = f"The stability of {what} could not be certified: {cert.reason}."
     return Check(
         id="observer_gain",
         title=title,
@@ -130,9 +136,13 @@ def observer_gain_check(design: ObserverDesign, *, tolerances: Tolerances | None
         margin=cert.margin,
         method="discrete Lyapunov (dlyap)"
         if cert.method == "lyapunov"
-        else "exact powers of A - L C",
+        else f"exact powers of {what}",
         # exact powers bound the spectral radius; their margin is that bound's distance from 1
-        value_name="" if shown is None else shown.name,
+        value_name=(
+            shown.name.replace("A - L C", what)
+            if shown is not None
+            else ("" if what == "A - L C" else f"spectral radius of {what}")
+        ),
         margin_name="" if cert.method == "lyapunov" else "1 - spectral radius bound",
         value_text="" if shown is None else shown.text,
         fields=fields,
@@ -199,9 +209,15 @@ def _overflowed_check(design: ObserverDesign, tol: Tolerances) -> Check:
     )
 
 
+def error_matrix_name(design: ObserverDesign) -> str:
+    """The design's linear error matrix in words: A - L C, or for an SSO with m inner steps
+    per sample A (I - step S' S)^m (its L is one inner step's gain)."""
+    return f"A (I - step S' S)^{design.inner_steps}" if design.inner_steps > 1 else "A - L C"
+
+
 def overflow_reason(design: ObserverDesign) -> str:
     """Why the design's error matrix is not finite, in words."""
-    what = f"A (I - step S' S)^{design.inner_steps}" if design.inner_steps > 1 else "A - L C"
+    what = error_matrix_name(design)
     return (
         f"{what} overflows in floating point (entries beyond 1e308), and its exact value is "
         f"beyond the budget of exact arithmetic"
@@ -236,7 +252,11 @@ def _deadbeat_check(
         id="observer_gain",
         title=title,
         method="deadbeat (exact powers of the printed A - L C)",
-        value_name="nilpotency index",
+        # the printed A - L C is nilpotent only where its exact powers vanish; else the index
+        # counts the steps after which they vanish to rounding
+        value_name="nilpotency index"
+        if details.get("exactly_nilpotent")
+        else "steps to vanish (to rounding)",
         margin_name="1 - spectral radius bound",
         fields=fields,
         evidence=evidence,

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from .._format import sig
+from .._format import readable, sig
 from .._validation import as_float_option, as_int_option, as_real_matrix, describe
 from ..results import Certificate, Check, Verdict
 from ..spec import Spec
@@ -44,6 +44,17 @@ def _num(x: Any, digits: int = 4) -> str:
             return f"{x.real:.{digits}g}"
         return f"{x.real:.{digits}g}{'+' if x.imag >= 0 else '-'}{abs(x.imag):.{digits}g}j"
     return f"{x:.{digits}g}"
+
+
+def _num_versus_one(z: complex) -> str:
+    """An eigenvalue in 12 significant digits; a real one that rounds onto +-1 as its distance
+    from it ("1 - 1.1e-16")."""
+    if z.imag == 0 and abs(abs(z.real) - 1.0) < 1e-6:
+        text = readable(abs(z.real), 12, versus=1.0)
+        if z.real > 0:
+            return text
+        return f"-({text})" if " " in text else f"-{text}"
+    return _num(z, 12)
 
 
 def _vector(v: Any, limit: int = 8) -> str:
@@ -512,7 +523,10 @@ def assert_schur(M: Any) -> Any:
     if cert.witness is not None and "eigenvalue" in cert.witness:
         worst = complex(cert.witness["eigenvalue"])
     # enough digits to tell 1 + 1e-9 from 1
-    where = f"eigenvalue {_num(worst, 12)} has modulus {abs(worst):.12g}"
+    # (a modulus that rounds onto 1 is written as its distance from it: 1 - 1.1e-16)
+    where = (
+        f"eigenvalue {_num_versus_one(worst)} has modulus {readable(abs(worst), 12, versus=1.0)}"
+    )
     if cert.verdict is Verdict.FAILS:
         w = cert.witness or {}
         proof = w.get("proof") or {}
