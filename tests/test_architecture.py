@@ -168,6 +168,7 @@ def test_the_graph_is_what_it_seems():
     assert _layer("ssecert.observers.sso") == 1 and _layer("ssecert.report.html") == 5
 
 
+@pytest.mark.slow
 def test_certify_builds_the_observer_and_decides_sparse_observability_once(monkeypatch):
     # the observer built for the checks is the one simulated; the stealthy scenario replays
     # the certificate's own witness

@@ -4,6 +4,8 @@ import json
 import re
 from pathlib import Path
 
+import pytest
+
 from ssecert import analyze
 from ssecert.certify import certify
 from ssecert.cli import main
@@ -44,6 +46,7 @@ def test_the_documented_json_keys_are_parsed():
     assert {"simulations", "certified_region", "spec", "notes"} <= CERTIFY_KEYS
 
 
+@pytest.mark.slow
 def test_certify_without_spec_writes_the_ugv_report(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
     code = main(["certify"])
@@ -83,6 +86,7 @@ def test_no_sim_json_to_stdout(tmp_path, capsys):
     assert (tmp_path / "notes-example-3.html").exists()
 
 
+@pytest.mark.slow
 def test_automatic_stealthy_scenario_and_seed(tmp_path):
     spec = load_example("ugv")
     spec = spec.__class__(**{**spec.__dict__, "scenarios": spec.scenarios[:1]})
@@ -131,6 +135,7 @@ def test_results_render_in_jupyter():
     assert "why-not-correctable" in full and "<html" not in full
 
 
+@pytest.mark.slow
 def test_the_run_times_are_in_meta_timings_only(tmp_path):
     cert = analyze(load_example("random-n15-p30"), time_budget=0.5)
     timings = cert.meta["timings"]

@@ -542,6 +542,7 @@ def test_version(capsys):
 # ---------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_process_analyze_ugv_json():
     proc = run_process(["analyze", "ugv", "--json", "-"])
     assert proc.returncode == 1, proc.stderr
@@ -551,6 +552,7 @@ def test_process_analyze_ugv_json():
     assert "sparse_observability" in proc.stderr
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "args, fragment",
     [
@@ -569,6 +571,7 @@ def test_process_bad_input(args, fragment):
     assert proc.stdout == ""
 
 
+@pytest.mark.slow
 def test_process_npz_without_max_attacked(tmp_path):
     path = write_plant_npz(tmp_path)
     proc = run_process(["analyze", path.name], cwd=tmp_path)

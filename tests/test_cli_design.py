@@ -11,6 +11,7 @@ from ssecert import load_spec
 from ssecert.cli import main
 
 
+@pytest.mark.slow
 def test_design_writes_a_spec_report_and_certificate_that_certify_reproduces(tmp_path, capsys):
     out = tmp_path / "out"
     out.mkdir()
@@ -67,6 +68,7 @@ def test_a_dsso_on_an_integrator_gets_no_design_and_a_hint(tmp_path, capsys):
     assert list(tmp_path.iterdir()) == []  # nothing written
 
 
+@pytest.mark.slow
 def test_the_roa_objective_designs_a_dsso(tmp_path, capsys):
     status = main(["design", "ugv", "--objective", "roa", "--out", str(tmp_path), "--runs", "2",
                    "--json", "-"])  # fmt: skip
@@ -81,6 +83,7 @@ def test_the_roa_objective_designs_a_dsso(tmp_path, capsys):
     assert "--objective roa is for --observer dsso" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_the_time_budget_ends_the_search_and_says_so(tmp_path, capsys):
     status = main(
         ["design", "ugv", "--out", str(tmp_path), "--time-budget", "0", "--runs", "2"]
@@ -95,6 +98,7 @@ def test_an_unknown_kind_is_refused(capsys):
     assert "--observer" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_a_plant_file_designs_with_the_number_of_attacked_sensors(tmp_path, capsys):
     import numpy as np
 
@@ -119,6 +123,7 @@ def test_json_may_not_overwrite_what_design_writes(tmp_path, capsys):
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_the_report_reproduces_the_design_command_and_names_the_certificate_alone(tmp_path, capsys):
     argv = ["design", "ugv", "--out", str(tmp_path), "--runs", "2", "--seed", "3",
             "--time-budget", "0"]  # fmt: skip
@@ -130,6 +135,7 @@ def test_the_report_reproduces_the_design_command_and_names_the_certificate_alon
     assert alone and "--seed 3 --runs 2 --out ANOTHER_FOLDER" in alone[0]
 
 
+@pytest.mark.slow
 def test_the_rate_objective_designs_a_luenberger_observer_for_a_chain(tmp_path, capsys):
     spec = tmp_path / "chain.toml"
     spec.write_text(
@@ -144,6 +150,7 @@ def test_the_rate_objective_designs_a_luenberger_observer_for_a_chain(tmp_path, 
     assert result["decay"] > 0.5 and result["candidates"][0]["synthesis_certificate"]["verified"]
 
 
+@pytest.mark.slow
 def test_an_unobservable_unstable_plant_gets_the_reason(tmp_path, capsys):
     spec = tmp_path / "unobs.toml"
     spec.write_text(

@@ -222,6 +222,7 @@ def test_stopping_rule_and_reported_fields():
 # batches
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", sorted(VARIANTS))
 def test_batched_calls_equal_per_run_calls(method):
     rng = np.random.default_rng(7)

@@ -34,6 +34,7 @@ def plant() -> System:
     return _damped_plant()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", ["luenberger", "elastic_net"])
 def test_the_default_design_is_clearly_faster_than_a_stable_plant(plant, kind):
     result = design_observer(plant, kind, time_budget=20)
@@ -149,6 +150,7 @@ def test_the_comparison_reads_the_absolute_error_not_the_relative_one():
     assert out["scenarios"][0]["comparison"] == "worse"
 
 
+@pytest.mark.slow
 def test_design_on_a_stable_plant_plots_the_tradeoff_and_names_its_metric(plant, tmp_path, capsys):
     from ssecert._spec_write import dumps
 
@@ -206,6 +208,7 @@ def test_assert_recovers_takes_an_absolute_tolerance_for_a_decaying_state(plant)
     assert_recovers(design, scenario, 1e-3, atol=1.01 * bias)
 
 
+@pytest.mark.slow
 def test_a_fast_plant_and_a_dsso_get_designs_that_use_their_sensors():
     C = [[1.0, 0.0], [0.0, 1.0], [1.0, 1.0], [1.0, -1.0]]
     fast = System(np.diag([0.3, 0.2]), np.array(C))

@@ -98,6 +98,7 @@ def test_colex_ranges_give_the_same_matrices_bit_for_bit():
             assert np.array_equal(np.concatenate([b.subsets() for b in parts]), subsets)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("design", [_two_planted_breaking_sets, _holding])
 def test_dask_gives_the_in_process_answer(design, client, small_chunks):
     spec = spec_from_dict(design())
@@ -112,6 +113,7 @@ def test_dask_gives_the_in_process_answer(design, client, small_chunks):
         assert check.verdict.value == "holds"
 
 
+@pytest.mark.slow
 def test_the_command_line_runs_the_enumeration_on_workers(tmp_path, capsys, small_chunks):
     path = tmp_path / "planted.json"
     path.write_text(json.dumps(_two_planted_breaking_sets()))
@@ -185,6 +187,7 @@ def test_the_irrepresentable_scan_on_dask_gives_the_in_process_answer(seed, clie
     assert spread.evidence == local.evidence
 
 
+@pytest.mark.slow
 def test_an_unreachable_scheduler_is_a_clear_error(tmp_path, capsys, monkeypatch):
     from ssecert import parallel
 

@@ -61,6 +61,7 @@ def test_the_thesis_design_is_not_called_divergent():
     assert check.verdict.value == "inconclusive"
 
 
+@pytest.mark.slow
 @settings(max_examples=25, deadline=None)
 @given(
     seed=st.integers(0, 10_000),
@@ -243,6 +244,7 @@ def _lasso_sso(window: int, step: float) -> dict:
     }
 
 
+@pytest.mark.slow
 def test_an_sso_with_inner_steps_gets_the_radius_its_dead_zone_proves():
     cert = analyze(spec_from_dict(_lasso_sso(1, 0.01)))
     assert cert["observer_stability"].verdict.value == "inconclusive"

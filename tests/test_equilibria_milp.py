@@ -2,6 +2,7 @@
 patterns): a mixed-integer search (HiGHS) finds them, and exact arithmetic confirms them."""
 
 import numpy as np
+import pytest
 
 from ssecert import analyze, spec_from_dict
 from ssecert.observers import build_observer
@@ -30,6 +31,7 @@ def _planted(extra: int) -> dict:
     }
 
 
+@pytest.mark.slow
 def test_a_planted_equilibrium_among_3_to_the_14_patterns_is_found_and_replayed():
     cert = analyze(spec_from_dict(_planted(12)))
     check = cert["observer_stability"]
@@ -60,6 +62,7 @@ def _random_model(rng):
     return LureModel.from_design(build_observer(spec.system, spec.observer))
 
 
+@pytest.mark.slow
 def test_the_mixed_integer_search_agrees_with_the_enumeration():
     rng = np.random.default_rng(0)
     compared = found = 0

@@ -38,6 +38,7 @@ def _verdicts(cert):
 # L C below half an ulp of A
 
 
+@pytest.mark.slow
 def test_an_elastic_net_gain_below_rounding_gets_no_fails():
     # F = 1 - 1e-17 exactly: the float product A - L C rounds to 1.0
     cert = analyze(
@@ -127,6 +128,7 @@ def _rounding_level_designs(draw):
     return A, C, L
 
 
+@pytest.mark.slow
 @settings(max_examples=40, deadline=None)
 @given(_rounding_level_designs())
 def test_gain_verdicts_at_the_rounding_level_agree_with_exact_arithmetic(design):
@@ -143,6 +145,7 @@ def test_gain_verdicts_at_the_rounding_level_agree_with_exact_arithmetic(design)
             assert not stable, (check.id, check.summary)
 
 
+@pytest.mark.slow
 @settings(max_examples=25, deadline=None)
 @given(_rounding_level_designs(), st.sampled_from([0.5, 0.9]))
 def test_sparse_observer_verdicts_at_the_rounding_level_agree_with_exact_arithmetic(design, shrink):
@@ -262,6 +265,7 @@ def test_an_sso_gain_derived_from_its_step_is_exact_from_the_step():
     assert observer_stability_check(design)[0].verdict.value == "fails"
 
 
+@pytest.mark.slow
 def test_an_sso_error_matrix_that_overflows_is_inconclusive_not_an_error(tmp_path, capsys):
     plant = {"A": [[1.0, 0.0099], [0.0, 0.9876]], "C": [[1, 0], [0, 1], [0, 1], [1, 1]]}
     data = {"name": "o", "system": plant, "attack": {"max_attacked": 1}}
@@ -348,6 +352,7 @@ def test_a_large_sso_window_decides_its_error_block_alone():
     assert observer_stability_check(design)[0].verdict.value == "fails"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "A, C",
     [

@@ -187,6 +187,7 @@ def test_a_change_of_state_units_changes_neither_verdict_nor_value(name):
             assert CLAIM not in check.summary
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["zf-plant", "damped", *PACKAGED])
 def test_a_sensors_units_change_rho_but_never_make_a_false_rank_claim(name):
     """rho in a sensor's new units against rational arithmetic: the verdict is the exact
@@ -278,6 +279,7 @@ def _integer_plants(draw):
     return np.array(A, dtype=float), np.array(C, dtype=float), j
 
 
+@pytest.mark.slow
 @given(_integer_plants())
 @settings(deadline=None)
 def test_state_units_property(plant):

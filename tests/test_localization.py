@@ -103,6 +103,7 @@ def test_fixed_point_is_the_cvxpy_minimiser_of_the_reported_objective(method, q_
 # -- decoding -------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_finds_the_cell_and_a_spoofed_sensor_without_noise():
     exact = total = 0
     for seed in range(10):
@@ -117,6 +118,7 @@ def test_finds_the_cell_and_a_spoofed_sensor_without_noise():
     assert exact >= 0.9 * total
 
 
+@pytest.mark.slow
 def test_few_attacked_sensors_with_random_signs():
     hits = total = 0
     for seed in range(10):
@@ -140,6 +142,7 @@ def test_unknown_transmit_power_is_absorbed_by_the_common_offset():
     assert np.all(np.abs(res.offset + 6.0) < 0.1)
 
 
+@pytest.mark.slow
 def test_batched_snapshots_equal_single_ones():
     dic = rss_dictionary(seed=8)
     sc = localization_scenario(dic, runs=5, attacked=2, seed=8)
@@ -153,6 +156,7 @@ def test_batched_snapshots_equal_single_ones():
     assert len(batch.attacked_sensors()) == 5
 
 
+@pytest.mark.slow
 def test_too_many_attacks_give_a_flagged_answer_not_a_crash():
     dic = rss_dictionary(seed=0)
     sc = localization_scenario(dic, runs=6, attacked=15, seed=0)

@@ -51,6 +51,7 @@ def test_custom_q_is_symmetrised():
     assert np.allclose(F.T @ cert.P @ F - cert.P + Qs, 0, atol=1e-10)
 
 
+@pytest.mark.slow
 def test_rounding_above_one_is_not_called_unstable():
     """A 12 x 12 Jordan block at 0.95 in a rotated basis: computed eigenvalues reach 1.0019,
     the exact ones stay below 0.999; the witness decays, so the verdict is not 'fails'."""

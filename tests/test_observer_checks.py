@@ -39,6 +39,7 @@ def spec_with(observer):
         ),
     ],
 )
+@pytest.mark.slow
 def test_every_kind_gets_its_checks(observer, stability):
     cert = analyze(spec_with(observer))
     ids = [c.id for c in cert.checks]

@@ -78,6 +78,7 @@ def test_builtin_kinds_are_registered():
         assert get_kind(name).name == name
 
 
+@pytest.mark.slow
 def test_a_kind_defined_in_a_test_is_certified_simulated_and_reported(damped):
     spec = spec_from_dict(_spec())
     assert spec.observer == {"kind": "damped_pinv", "factor": 0.5}
@@ -103,6 +104,7 @@ def test_a_kind_defined_in_a_test_fails_when_it_should(damped):
     assert result.certificate["observer_stability"].verdict.value == "fails"
 
 
+@pytest.mark.slow
 def test_a_kind_defined_in_a_test_through_the_cli(damped, tmp_path, capsys):
     spec_file = tmp_path / "plugin.json"
     spec_file.write_text(json.dumps(_spec()))

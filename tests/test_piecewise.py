@@ -83,6 +83,7 @@ def test_emptiness_certificates_are_exact_and_respect_the_box():
     assert pw._empty_in_box(np.array([[1.0, 0.0], [-1.0, 1.0]]), 10.0) is None
 
 
+@pytest.mark.slow
 def test_the_ugv_dsso_region_is_far_larger_than_its_dead_zone():
     model = _ugv_model(0.7)
     found = pw.piecewise_region(model, floor=0.1429)
@@ -99,6 +100,7 @@ def test_the_ugv_dsso_region_is_far_larger_than_its_dead_zone():
     assert np.linalg.norm(path[-1], axis=1).max() <= 1e-9
 
 
+@pytest.mark.slow
 def test_the_verification_rejects_a_tampered_function():
     model = _ugv_model(0.7)
     regions = pw._Regions(model)
@@ -115,6 +117,7 @@ def test_the_verification_rejects_a_tampered_function():
     assert bad[2] and bad[0] < 0
 
 
+@pytest.mark.slow
 def test_a_divergent_design_gets_no_region_beyond_its_divergence():
     model = _ugv_model(1.5)
     witness = divergence_witness(model)
@@ -146,6 +149,7 @@ def test_the_check_reports_the_piecewise_region_only_when_asked():
     assert "piecewise-quadratic" in wide.summary and "ball of radius" in wide.summary
 
 
+@pytest.mark.slow
 def test_the_verification_requires_the_dead_zone_decrease():
     model = _ugv_model(0.7)
     regions = pw._Regions(model)

@@ -161,6 +161,7 @@ def test_an_unrelated_test_keeps_hypothesis_defaults(files):
     )
 
 
+@pytest.mark.slow
 def test_an_unrelated_deadline_still_fails(files):
     files.makepyfile(test_slow=SLOW)
     _, result, _ = _run(files)
@@ -174,6 +175,7 @@ def test_an_unrelated_deadline_still_fails(files):
     result.assert_outcomes(passed=1)
 
 
+@pytest.mark.slow
 def test_tests_that_use_ssecert_get_its_profile(files):
     files.makepyfile(
         test_uses=USES_SSECERT, test_strategies=STRATEGIES, test_dotted=DOTTED, test_z=UNRELATED
@@ -196,6 +198,7 @@ def test_tests_that_use_ssecert_get_its_profile(files):
     assert again["marked"] == seen["marked"]
 
 
+@pytest.mark.slow
 def test_a_profile_chosen_for_every_test(files):
     files.makepyfile(test_unrelated=UNRELATED)
     seen, result, after = _run(files, "--ssecert-profile", "thorough")
@@ -247,6 +250,7 @@ def test_the_entry_point_imports_nothing_heavy():
     assert run.stdout.split() == ["_ssecert_pytestplugin"]
 
 
+@pytest.mark.slow
 def test_a_pytest_run_that_does_not_use_ssecert_does_not_import_it(pytester):
     pytester.makepyfile(
         test_plain=f"""
@@ -261,6 +265,7 @@ def test_a_pytest_run_that_does_not_use_ssecert_does_not_import_it(pytester):
     result.stdout.fnmatch_lines(["ssecert: hypothesis profile 'ssecert-quick' (for tests*"])
 
 
+@pytest.mark.slow
 def test_the_plugin_loads_by_name_without_autoload(pytester, monkeypatch):
     monkeypatch.setenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", "1")
     pytester.makepyfile(

@@ -48,6 +48,7 @@ def test_nilpotency_index_is_invariant_under_scaling():
         assert deadbeat_gain(System(alpha * A, C)).details["nilpotency_index"] == 6
 
 
+@pytest.mark.slow
 def test_rounding_does_not_make_a_stable_gain_fail(capsys):
     code = main(["analyze", str(DATA / "jordan12.toml")])
     out = capsys.readouterr().out
@@ -208,6 +209,7 @@ def test_sparse_observability_of_an_exactly_unobservable_plant_is_minus_one():
     assert check.verdict.value == "fails" and check.fields["max_removable"] == -1
 
 
+@pytest.mark.slow
 def test_a_diverging_simulation_says_so(tmp_path, capsys):
     spec = tmp_path / "d.toml"
     spec.write_text(
@@ -332,6 +334,7 @@ def test_a_certain_breaking_set_is_found_past_undecided_smaller_sets():
     assert check.witness["verified"] and len(check.fields["breaking_set"]) == 4
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("scale, gain_row", [(1e-308, "holds"), (1e-310, "inconclusive")])
 def test_sensor_rows_near_the_bottom_of_the_float_range_end_in_verdicts(scale, gain_row):
     """C of order 1e-308 put exact powers of 1e308 past 2.0 ** 1024 in the spectral bound (an

@@ -708,6 +708,7 @@ def test_a_file_above_the_size_limit_is_refused_before_reading(tmp_path, capsys,
     )
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("fmt", ["toml", "json"])
 def test_a_million_row_matrix_is_refused_before_building_arrays(tmp_path, capsys, fmt):
     rows = "[1]," * 10**6
@@ -990,6 +991,7 @@ def test_out_that_is_a_file(tmp_path, capsys):
     )
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="no /proc here")
 @pytest.mark.parametrize("option", ["--out", "--json"])
 def test_an_impossible_output_path(tmp_path, capsys, option):
@@ -1018,6 +1020,7 @@ def test_a_read_only_folder(tmp_path, capsys):
     assert listing(folder) == []
 
 
+@pytest.mark.slow
 def test_a_folder_that_refuses_files(tmp_path, capsys, monkeypatch):
     # what a read-only folder does when the check before the run cannot see it
     # (root, network file systems): the write fails, the message names the file
@@ -1116,6 +1119,7 @@ def assert_old_reports_intact(out: Path) -> None:
     assert (out / "ugv.json").read_text() == "old json"
 
 
+@pytest.mark.slow
 def test_interrupt_while_rendering(tmp_path, capsys, monkeypatch, old_reports):
     import ssecert.report.html as html
 
@@ -1130,6 +1134,7 @@ def test_interrupt_while_rendering(tmp_path, capsys, monkeypatch, old_reports):
     assert status == 130 and not (tmp_path / "new").exists()
 
 
+@pytest.mark.slow
 def test_renderer_failing_half_way(tmp_path, capsys, monkeypatch, old_reports):
     import ssecert.report.json as json_report
 
@@ -1152,6 +1157,7 @@ def test_renderer_failing_half_way(tmp_path, capsys, monkeypatch, old_reports):
     assert not (tmp_path / "copy.json").exists()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("fail_at", [1, 2, 3])
 def test_disk_full_while_writing(tmp_path, capsys, monkeypatch, old_reports, fail_at):
     calls = []
@@ -1179,6 +1185,7 @@ def test_disk_full_while_writing(tmp_path, capsys, monkeypatch, old_reports, fai
     assert not (tmp_path / "copy.json").exists()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("failure", [KeyboardInterrupt, OSError])
 def test_failure_between_renames_restores_the_old_files(
     tmp_path, capsys, monkeypatch, old_reports, failure
@@ -1255,6 +1262,7 @@ def run_quietly(capsys: Any, *argv: str) -> tuple[int, str, str]:
     return status, out, err
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list_examples())
 def test_packaged_examples_raise_no_warning(tmp_path, capsys, name):
     status, out, _ = run_quietly(capsys, "analyze", name)
@@ -1263,6 +1271,7 @@ def test_packaged_examples_raise_no_warning(tmp_path, capsys, name):
     assert status in (0, 1, 3) and "note:" not in out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "name, observer",
     [
@@ -1285,6 +1294,7 @@ def test_degenerate_plants_raise_no_warning(tmp_path, capsys, name, observer):
             assert status in (0, 1, 3), err
 
 
+@pytest.mark.slow
 def test_what_the_warnings_said_is_kept(tmp_path, capsys):
     path = degenerate_spec(tmp_path, "huge", 0)
     status, out, _ = run_quietly(capsys, "analyze", str(path), "--json", str(tmp_path / "a.json"))
@@ -1301,6 +1311,7 @@ def test_what_the_warnings_said_is_kept(tmp_path, capsys):
     assert "overflow encountered" in (tmp_path / "huge.html").read_text()
 
 
+@pytest.mark.slow
 def test_no_warning_reaches_stderr_of_a_fresh_interpreter(tmp_path):
     path = degenerate_spec(tmp_path, "huge", 2)
     env = {k: v for k, v in os.environ.items() if k != "PYTHONWARNINGS"}
@@ -1358,6 +1369,7 @@ def test_reports_name_the_spec_as_typed(tmp_path, capsys, monkeypatch, typed):
     assert json.loads(out)["meta"]["spec"]["source"] == typed
 
 
+@pytest.mark.slow
 def test_packaged_examples_are_named_by_name(tmp_path, capsys):
     package = str(Path(ssecert.__file__).parent)
     assert cli(capsys, "certify", "ugv", "--out", str(tmp_path), "--no-sim")[0] == 1
@@ -1375,6 +1387,7 @@ def _masked(html: str, document: dict[str, Any]) -> tuple[str, str]:
     return html, json.dumps(document, indent=1)  # keeps the order of the keys
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("simulate", [False, True], ids=["no-sim", "with-simulations"])
 def test_regenerating_a_report_changes_only_its_date(tmp_path, capsys, monkeypatch, simulate):
     monkeypatch.chdir(tmp_path)

@@ -148,6 +148,7 @@ SERIES_DESIGNS = json.loads(
 )
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("index", range(len(SERIES_DESIGNS)))
 def test_sso_designs_whose_thesis_search_once_raised(index):
     """Random SSO designs whose Assumption 3 search raised "the series for Pi did not
@@ -167,6 +168,7 @@ def test_sso_designs_whose_thesis_search_once_raised(index):
         assert "terms" in reason or "overflow" in reason
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", range(12))
 def test_random_designs_of_every_kind_analyze_without_exception(seed):
     spec = spec_from_dict(random_design(seed, KINDS[seed % 5]))
@@ -217,6 +219,7 @@ def _failing_solve(mode):
     return solve
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "mode", ["raise", "infeasible_inaccurate", "solver_error", "optimal", "nan"]
 )
@@ -309,6 +312,7 @@ max_attacked = 1
 """
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("where", ["option", "spec"])
 def test_huge_horizon_is_inconclusive_with_the_estimate(tmp_path, capsys, where):
     """Within the spec's limit (10,000 steps) the irrepresentable check of this plant would
@@ -363,6 +367,7 @@ def test_s_far_above_p_returns_at_once(method):
     assert "exceeds the 6 available sensors" in irr.summary
 
 
+@pytest.mark.slow
 def test_s_far_above_p_through_analyze_and_certify(tmp_path, capsys):
     spec = (
         PLANT3.replace("max_attacked = 1", "max_attacked = 1000000000000")
@@ -411,6 +416,7 @@ def test_astronomically_many_supports_respect_the_budget():
     assert "over the work budget of 1e+12" in work.summary
 
 
+@pytest.mark.slow
 def test_irrepresentable_stays_within_a_small_memory_budget():
     rng = np.random.default_rng(2)
     A = rng.standard_normal((6, 6))
@@ -457,6 +463,7 @@ def _window_spec(window):
     )
 
 
+@pytest.mark.slow
 def test_sso_window_50_lmi_is_refused_with_the_estimate():
     spec = _window_spec(50)
     design = build_observer(spec.system, spec.observer)
@@ -571,6 +578,7 @@ def test_certify_skips_a_scenario_over_the_budget(tmp_path):
     assert "needs about" in skipped["skipped"] and "memory budget" in skipped["skipped"]
 
 
+@pytest.mark.slow
 def test_simulation_chunks_fit_a_small_memory_budget(tmp_path):
     from ssecert import load_spec
 

@@ -96,6 +96,7 @@ def test_deadbeat_gain_is_judged_as_printed_not_as_its_exact_value():
     assert not check.verified and check.radius_lower > 1
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", range(12))
 def test_deadbeat_holds_only_with_a_certified_printed_gain(seed):
     """Random single-sensor plants, n = 11..14, scaled up: the deadbeat loop is very
@@ -122,6 +123,7 @@ def test_verify_deadbeat_on_an_exact_integer_gain():
     assert check.radius_upper == 0.0
 
 
+@pytest.mark.slow
 @given(
     seed=st.integers(0, 2**32 - 1),
     n=st.integers(2, 7),
@@ -156,6 +158,7 @@ def test_sensor_units_do_not_change_verdicts():
     assert sparse.verdict.value == "holds" and sparse.fields["max_removable"] == 1
 
 
+@pytest.mark.slow
 @given(
     seed=st.integers(0, 2**32 - 1),
     kind=st.sampled_from(["distinct", "jordan", "mixed"]),
@@ -271,6 +274,7 @@ def test_a_mode_seen_by_two_to_the_minus_fifty_is_a_change_of_units_away_from_cl
 # hidden structure, horizon
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [3, 159, 188, 194, 247, 496, 524, 526] + list(range(20)))
 def test_hidden_jordan_structure_is_never_answered_wrongly(seed):
     """Exact integer plants whose Jordan blocks an integer similarity hides; once gave

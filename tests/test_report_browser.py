@@ -75,6 +75,7 @@ def ugv_page(tmp_path_factory):
         driver.quit()
 
 
+@pytest.mark.slow
 def test_report_renders_without_console_errors(ugv_page):
     from selenium.webdriver.common.by import By
 

@@ -71,6 +71,7 @@ def _significant_digits(token):
     return len(mantissa)
 
 
+@pytest.mark.slow
 def test_the_report_shows_the_plant_with_sensor_names(ugv):
     page, _ = ugv
     design = _section(page, "design")
@@ -110,6 +111,7 @@ def test_summary_numbers_are_rounded_and_never_minus_zero(ugv):
     assert "0.9999999999999997" not in summary
 
 
+@pytest.mark.slow
 def test_each_summary_row_names_its_value_and_margin(ugv, certified):
     for page in (ugv[0], render_report(certified)):
         rows = _rows(page)

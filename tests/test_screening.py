@@ -171,6 +171,7 @@ def _reference(task: _LevelTask, ranks: tuple[int, int]) -> _Level:
     return level
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("plant", range(7))
 def test_level_scan_finds_what_lapack_on_every_block_finds(plant):
     tol = Tolerances()

@@ -132,6 +132,7 @@ def test_stealthy_replay_is_indistinguishable():
             xa, xb = A @ xa, A @ xb
 
 
+@pytest.mark.slow
 def test_dask_and_in_process_runs_are_bitwise_identical():
     pytest.importorskip("dask.distributed")
     from ssecert.parallel import dask_client

@@ -167,6 +167,7 @@ def test_oracle_forgets_a_wrong_prior_without_noise():
     assert np.abs(traj.a_hat[-1] - u[-2]).max() < 1e-6 * 2.0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", range(4))
 def test_sise_is_exact_without_noise_and_known_x0(seed):
     A, B, C = plant(20 + seed, n=10, p=8, m=5)
@@ -217,6 +218,7 @@ def test_empty_oracle_support_is_the_kalman_filter_ignoring_the_input():
 # -- tracking with noise --------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_sise_beats_a_kalman_filter_that_ignores_the_input():
     n, p, m = 20, 12, 10
     Q, R = 0.01 * np.eye(n), 0.01 * np.eye(m)
@@ -247,6 +249,7 @@ def test_sise_beats_a_kalman_filter_that_ignores_the_input():
     assert sise < 2.5 * oracle
 
 
+@pytest.mark.slow
 def test_batched_runs_equal_single_runs():
     A, B, C = plant(12, n=10, p=8, m=5)
     Q, R = 0.01 * np.eye(10), 0.01 * np.eye(5)

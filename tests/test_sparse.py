@@ -116,6 +116,7 @@ def _never_wrong(pl, seed, method):
     return decided
 
 
+@pytest.mark.slow
 @given(seed=st.integers(0, 2**32 - 1), kind=st.sampled_from(KINDS), integer=st.booleans())
 def test_methods_agree_property(seed, kind, integer):
     """Neither method is ever wrong; on exact (integer) data auto always decides.
@@ -213,6 +214,7 @@ def test_budget_gives_lower_bound_or_inconclusive():
     assert "--max-sets" in starved.summary
 
 
+@pytest.mark.slow
 def test_scan_removals_matches_exact_rank_reference():
     """Every set of removed sensors decided as an exact rational rank would."""
     rng = np.random.default_rng(11)
@@ -245,6 +247,7 @@ def test_progress_is_reported_during_enumeration():
     assert calls and all(0 < d <= t for d, t in calls)
 
 
+@pytest.mark.slow
 def test_eigenspace_answers_large_generic_plant():
     rng = np.random.default_rng(0)
     system = System(rng.standard_normal((50, 50)), rng.standard_normal((1000, 50)))

@@ -368,6 +368,7 @@ print(outcomes)
 """
 
 
+@pytest.mark.slow
 def test_corrupted_mat_and_npz_files_never_crash(tmp_path):
     count = 5000 if THOROUGH else 400
     done = subprocess.run(

@@ -110,6 +110,7 @@ def test_a_circle_criterion_retried_in_balanced_units_draws_its_conclusion_once(
     assert cert.reason.count("no circle-criterion certificate was found or verified") >= 2
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("k", [7, 14])
 def test_a_zames_falb_certificate_survives_a_change_of_state_units(k):
     plant, observer = _rescaled(ZF_PLANT, ZF_OBSERVER, k)
@@ -163,6 +164,7 @@ def test_large_state_units_keep_the_certificate_its_gain_and_the_constant_attack
     assert np.allclose(record["bias"], xi[: model.n_e], rtol=1e-9)
 
 
+@pytest.mark.slow
 def test_a_zames_falb_gain_survives_a_change_of_state_units():
     plant, observer = _rescaled(ZF_PLANT, ZF_OBSERVER, 14)
     gain = analyze(_spec(plant, observer))["iss_gain"]
@@ -176,6 +178,7 @@ def test_a_zames_falb_gain_survives_a_change_of_state_units():
     assert np.sum(e**2) <= gain.value**2 * np.sum(a**2)
 
 
+@pytest.mark.slow
 def test_the_thesis_design_keeps_its_region_of_attraction_in_other_units():
     # the UGV's D-SSO (shrink 1): undecided, with a certified region of radius 10 in its own
     # units; with the velocity in units 2^17 times smaller the region is proved in balanced
@@ -196,6 +199,7 @@ def test_the_thesis_design_keeps_its_region_of_attraction_in_other_units():
     assert np.all(np.linalg.norm(tail, axis=1) <= 1e-9 * region.value)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("k", [30, -40])
 def test_structural_checks_keep_their_verdicts_and_margins_in_other_state_units(k):
     # the zf-plant with its second state in units 2^30 times smaller lost sparse observability
@@ -245,6 +249,7 @@ def test_a_state_seen_only_through_its_diagonal_and_one_sensor_keeps_observabili
     )
 
 
+@pytest.mark.slow
 def test_power_of_two_state_units_keep_observability_on_random_integer_plants():
     """One or more states of random small integer plants in units 2^+-50 and 2^+-200."""
     rng = np.random.default_rng(5)
@@ -320,6 +325,7 @@ def test_sparse_observability_keeps_its_verdict_on_random_plants_in_far_units():
             assert scaled.verdict == plain, (A.tolist(), C.tolist(), k)
 
 
+@pytest.mark.slow
 def test_a_gain_synthesised_for_far_units_is_certified_with_its_own_decay():
     # the damped plant with state 1 in units 2^30 smaller: every synthesis LMI failed
     # (infeasible_inaccurate, SolverError) and `ssecert design` found no design; solved in
@@ -401,6 +407,7 @@ def test_every_far_change_of_state_units_gives_the_same_balanced_lure_model():
         assert len(seen) == 1
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("plant", "observer", "units"),
     [(ZF_PLANT, ZF_OBSERVER, (-100, 0)), (ZF_PLANT, ZF_OBSERVER, (200, -200)),
@@ -416,6 +423,7 @@ def test_observer_stability_holds_with_states_in_units_far_apart(plant, observer
     assert "verified in balanced coordinates xi = diag(" in check.summary
 
 
+@pytest.mark.slow
 def test_a_plant_in_units_at_the_end_of_the_float_range_answers_without_an_error():
     # the UGV's elastic net with its position in units 2^1000: the gain's dissipation matrix
     # and the certificate's P in balanced coordinates leave the float range (LinAlgError in

@@ -86,6 +86,7 @@ def test_a_spec_written_back_reads_as_the_same_spec():
     assert (again.max_attacked, again.horizon) == (spec.max_attacked, spec.horizon)
 
 
+@pytest.mark.slow
 def test_the_designed_observer_written_to_toml_certifies_with_the_same_gain():
     import tomllib
 
@@ -150,6 +151,7 @@ def test_a_certificate_of_another_gain_is_not_verified():
     assert not verify_synthesis(with_gain(template, found.L * 3.0), found)["verified"]
 
 
+@pytest.mark.slow
 def test_the_roa_objective_widens_the_thesis_region_of_attraction():
     from ssecert.synthesize import design_observer
 
@@ -181,6 +183,7 @@ def test_settling_step():
     assert settling_step(np.array([1.0, 0.0, 0.5, 0.5])) == 2  # overshoot: settles when back
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", range(2))
 def test_on_random_plants_the_report_compares_the_designs_on_the_same_seeds(seed):
     """The synthesised design is certified; the comparison says exactly where its simulated

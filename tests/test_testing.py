@@ -552,6 +552,7 @@ def _run(pytester, *args):
     return values, result, after
 
 
+@pytest.mark.slow
 def test_profiles_quick_for_ssecert_tests_and_thorough_on_demand(pytester):
     pytester.makepyfile(test_counting=MARKED_COUNTING)
     quick, result, after = _run(pytester)
@@ -611,6 +612,7 @@ def test_hypothesis_verbosity_keeps_the_ssecert_profile(pytester):
     assert after == "default-with-verbose-verbosity"
 
 
+@pytest.mark.slow
 def test_ini_option_and_project_profiles(pytester):
     pytester.makepyfile(test_counting=COUNTING)
     pytester.makeini("[pytest]\nssecert_profile = thorough\n")
@@ -655,6 +657,7 @@ def test_example_fixture_in_property_tests(pytester):
     )
 
 
+@pytest.mark.slow
 def test_plugin_works_without_hypothesis(pytester):
     # packages that shadow hypothesis and fail to import, as an absent package does
     shadow = pytester.mkdir("no_hypothesis")
