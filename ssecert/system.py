@@ -92,6 +92,94 @@ class System:
         object.__setattr__(self, "C", C)
         object.__setattr__(self, "sensors", sensors)
 
+    @classmethod
+    def from_control(
+        cls, sys: Any, *, sensors: Sequence[str] | None = None, name: str | None = None
+    ) -> System:
+        """The plant of a discrete-time python-control ``StateSpace`` (``control.ss(A, B, C,
+        D, dt)``, dt > 0 or True).
+
+        B and D are not used: a known input enters the plant and the estimate alike and
+        cancels in the estimation error, so it changes no verdict.  The sensors are named
+        after the system's output labels unless ``sensors`` is given.
+
+        Raises
+        ------
+        TypeError
+            If ``sys`` is not a python-control state-space system (a transfer function is
+            converted by ``control.ss`` first).
+        ValueError
+            If ``sys`` is a continuous-time system (discretise it first, for example with
+            ``control.c2d(sys, Ts)``).
+
+        Examples
+        --------
+        >>> import control as ct
+        >>> plant = ct.ss([[1.0, 0.0099], [0.0, 0.9876]], [[0.0], [1.0]],
+        ...               [[1, 0], [0, 1], [0, 1]], 0, 0.01, outputs=["pos", "vel-a", "vel-b"])
+        >>> System.from_control(plant, name="ugv").sensors
+        ('pos', 'vel-a', 'vel-b')
+        """
+        if not all(hasattr(sys, key) for key in ("A", "C", "dt")):
+            raise TypeError(
+                "sys must be a python-control StateSpace (control.ss(A, B, C, D, dt)), got "
+                f"{describe(sys)}"
+            )
+        dt = sys.dt
+        if dt is None or dt is False or (not isinstance(dt, bool) and float(dt) == 0.0):
+            raise ValueError(
+                f"sys must be a discrete-time system (dt > 0 or True), got dt = {dt!r}: "
+                "discretise it first, for example with control.c2d(sys, Ts)"
+            )
+        labels = getattr(sys, "output_labels", None)
+        if sensors is None and labels is not None and len(labels) == np.shape(sys.C)[0]:
+            sensors = [str(label) for label in labels]
+        given = str(getattr(sys, "name", "") or "")
+        if not given or given.startswith("sys["):  # python-control's generated name
+            given = "system"
+        return cls._from_matrices(sys.A, sys.C, sensors, name or given)
+
+    @classmethod
+    def from_scipy(
+        cls, sys: Any, *, sensors: Sequence[str] | None = None, name: str = "system"
+    ) -> System:
+        """The plant of a discrete-time ``scipy.signal.dlti`` (state space, transfer function
+        or zeros-poles-gain, converted by ``to_ss``).  B and D are not used (see
+        ``from_control``).
+
+        Raises
+        ------
+        TypeError
+            If ``sys`` is not a ``scipy.signal`` LTI system.
+        ValueError
+            If ``sys`` is continuous-time (``scipy.signal.lti``: discretise it first, for
+            example with its ``to_discrete(dt)``).
+
+        Examples
+        --------
+        >>> from scipy import signal
+        >>> plant = signal.dlti([[0.5, 1.0], [0.0, 0.7]], [[0.0], [1.0]], [[1.0, 0.0]], [[0.0]],
+        ...                     dt=0.1)
+        >>> System.from_scipy(plant).C
+        array([[1., 0.]])
+        """
+        from scipy import signal
+
+        if not isinstance(sys, signal.lti) and not isinstance(sys, signal.dlti):
+            raise TypeError(f"sys must be a scipy.signal dlti system, got {describe(sys)}")
+        if not isinstance(sys, signal.dlti):
+            raise ValueError(
+                "sys must be a discrete-time system (scipy.signal.dlti), got a continuous-time "
+                "scipy.signal.lti: discretise it first, for example with sys.to_discrete(dt)"
+            )
+        ss = sys.to_ss()
+        return cls._from_matrices(ss.A, ss.C, sensors, name)
+
+    @classmethod
+    def _from_matrices(cls, A: Any, C: Any, sensors: Sequence[str] | None, name: str) -> System:
+        names = sensors if sensors is None or isinstance(sensors, str) else tuple(sensors)
+        return cls(np.asarray(A, dtype=float), np.asarray(C, dtype=float), names, name)  # type: ignore[arg-type]
+
     @property
     def n(self) -> int:
         """Number of states."""
