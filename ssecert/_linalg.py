@@ -211,17 +211,7 @@ def _anchored_exponents(A: np.ndarray, inputs: np.ndarray, outputs: np.ndarray) 
     for label in np.unique(labels[:n]):
         if label != labels[n]:
             free[np.flatnonzero(labels[:n] == label)[0]] = False
-    x = np.zeros(n)
-    if np.any(free):
-        block, target = N[np.ix_(free, free)], rhs[free]
-        try:
-            x[free] = np.linalg.solve(block, target)
-        except np.linalg.LinAlgError:
-            x[free] = np.linalg.lstsq(block, target, rcond=None)[0]
-    exponents = np.floor(x + 0.5)
-    if not np.all(np.isfinite(exponents)):
-        return np.zeros(n, dtype=int)
-    return exponents.astype(int)
+    return _rounded_solution(N, rhs, free)[:n]
 
 
 def _log_balancing(A: np.ndarray, C: np.ndarray) -> np.ndarray:
@@ -266,16 +256,22 @@ def _log_balancing(A: np.ndarray, C: np.ndarray) -> np.ndarray:
     free = np.ones(n + 1, dtype=bool)
     free[np.unique(labels, return_index=True)[1]] = False  # each part's first state
     free[n] = N[n, n] > 0
-    x = np.zeros(n + 1)
+    return _rounded_solution(N, rhs, free)[:n]
+
+
+def _rounded_solution(N: np.ndarray, rhs: np.ndarray, free: np.ndarray) -> np.ndarray:
+    """The normal equations N x = rhs solved for the ``free`` unknowns (the others 0), each
+    rounded to the nearest integer (all 0 when the solve is not finite)."""
+    x = np.zeros(rhs.size)
     if np.any(free):
         block, target = N[np.ix_(free, free)], rhs[free]
         try:
             x[free] = np.linalg.solve(block, target)
         except np.linalg.LinAlgError:
             x[free] = np.linalg.lstsq(block, target, rcond=None)[0]
-    exponents = np.floor(x[:n] + 0.5)
+    exponents = np.floor(x + 0.5)
     if not np.all(np.isfinite(exponents)):
-        return np.zeros(n, dtype=int)
+        return np.zeros(rhs.size, dtype=int)
     return exponents.astype(int)
 
 
