@@ -18,6 +18,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any, NamedTuple
 
@@ -388,9 +389,12 @@ def unit_normalized(system: System) -> tuple[System, float]:
 
 
 def matrix_norm(M: np.ndarray) -> float:
-    """Spectral norm, or 0 for an empty matrix."""
+    """Spectral norm, 0 for an empty matrix, infinite when an entry is not finite (no SVD of
+    a NaN)."""
     if M.size == 0:
         return 0.0
+    if not np.all(np.isfinite(M)):
+        return math.inf
     return float(np.linalg.norm(M, 2))
 
 

@@ -12,7 +12,7 @@ from dataclasses import replace
 from typing import Any
 
 from ._linalg import balanced_units, eigen_clusters
-from .budget import Budget
+from .budget import Budget, Laps
 from .context import AnalysisContext, sparse_key
 from .observers import get_kind, observer_kinds
 from .results import Certificate, Check, Verdict
@@ -261,19 +261,8 @@ def analyze(
     return Certificate(system=system, checks=tuple(checks), meta=meta)
 
 
-class _Clock:
-    """Wall-clock seconds of each step of a run, for the certificate's ``meta.timings``."""
-
-    def __init__(self) -> None:
-        self.start = self.last = time.monotonic()
-        self.seconds: dict[str, float] = {}
-
-    def lap(self, name: str, result: Any) -> Any:
-        """Record the seconds since the previous lap under ``name``; return ``result``."""
-        now = time.monotonic()
-        self.seconds[name] = now - self.last
-        self.last = now
-        return result
+class _Clock(Laps):
+    """``Laps`` of an analysis, and the certificate's ``meta.timings`` from them."""
 
     def record(self, sparse: dict[str, float], observer: dict[str, float]) -> dict[str, float]:
         """Seconds of each step and of the whole run (``analyze``), each observer check's

@@ -17,7 +17,9 @@ from __future__ import annotations
 
 import math
 import re
+import time
 from dataclasses import dataclass
+from typing import TypeVar
 
 __all__ = [
     "Budget",
@@ -221,3 +223,22 @@ def _apart(a: float, b: float) -> tuple[str, str]:
         if left != right:
             return left, right
     return f"{a!r}", f"{b!r}"
+
+
+_T = TypeVar("_T")
+
+
+class Laps:
+    """Wall-clock seconds of each step of a run, into ``seconds`` (the caller's dict when
+    given), for the certificate's ``meta.timings``."""
+
+    def __init__(self, seconds: dict[str, float] | None = None) -> None:
+        self.start = self.last = time.monotonic()
+        self.seconds: dict[str, float] = {} if seconds is None else seconds
+
+    def lap(self, name: str, result: _T) -> _T:
+        """Record the seconds since the previous lap under ``name``; return ``result``."""
+        now = time.monotonic()
+        self.seconds[name] = now - self.last
+        self.last = now
+        return result

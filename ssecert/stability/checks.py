@@ -6,15 +6,14 @@ JSON ids: ``observer_gain`` and ``observer_stability`` (required),
 
 from __future__ import annotations
 
-import time
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
-from typing import Any, TypeVar
+from typing import Any
 
 import numpy as np
 
 from .._format import one_minus, sig
-from ..budget import Budget, ResourceLimitError
+from ..budget import Budget, Laps, ResourceLimitError
 from ..context import OBSERVER, AnalysisContext, shared
 from ..design.gains import GainError
 from ..observers import ObserverDesign, build_observer
@@ -49,8 +48,6 @@ from .periodic import periodic_orbit
 from .roa import region_of_attraction
 from .thesis import thesis_assumptions
 from .zames_falb import zames_falb_certificate, zames_falb_gain
-
-_T = TypeVar("_T")
 
 __all__ = [
     "observer_checks",
@@ -759,7 +756,7 @@ def observer_checks(
      ('region_of_attraction', 'holds')]
     """
     tol = Tolerances.check(tolerances)
-    clock = _Laps(timings)
+    clock = Laps(timings)
     try:
         design = shared(
             context,
@@ -860,21 +857,6 @@ def observer_checks(
     if region is not None:
         checks.append(region)
     return checks
-
-
-class _Laps:
-    """Wall-clock seconds of each observer check, into ``timings`` (nothing without it)."""
-
-    def __init__(self, timings: dict[str, float] | None) -> None:
-        self.timings = timings
-        self.last = time.monotonic()
-
-    def lap(self, name: str, result: _T) -> _T:
-        now = time.monotonic()
-        if self.timings is not None:
-            self.timings[name] = now - self.last
-        self.last = now
-        return result
 
 
 def region_of_attraction_check(

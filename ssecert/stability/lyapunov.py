@@ -17,6 +17,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from .._exact_powers import ExactMatrix
+from .._linalg import matrix_norm
 from .._validation import as_real_matrix
 from ..results import Verdict
 from ..tolerances import EPS
@@ -318,13 +319,6 @@ class _Checked(NamedTuple):
     residual: float
 
 
-def _norm2(M: np.ndarray) -> float:
-    """The 2-norm of M, infinite when an entry is not finite (no SVD of a NaN)."""
-    if not np.all(np.isfinite(M)):
-        return math.inf
-    return float(np.linalg.norm(M, 2)) if M.size else 0.0
-
-
 def _check_solution(
     F: np.ndarray, Q: np.ndarray | None, P: np.ndarray, rounding: float = 0.0
 ) -> _Checked:
@@ -333,13 +327,13 @@ def _check_solution(
     ||F - F_exact||_2 for the exact matrix F stands for: ||F'PF - F_e'PF_e|| is at most
     (2 ||F|| + rounding) rounding ||P||, which the bound takes in."""
     n = F.shape[0]
-    normF = _norm2(F)
+    normF = matrix_norm(F)
     with np.errstate(all="ignore"):
         P = 0.5 * (P + P.T)
-        normP = max(_norm2(P), np.finfo(float).tiny)
+        normP = max(matrix_norm(P), np.finfo(float).tiny)
         residual = math.nan
         if Q is not None:
-            residual = _norm2(F.T @ P @ F - P + Q) / max(_norm2(Q), np.finfo(float).tiny)
+            residual = matrix_norm(F.T @ P @ F - P + Q) / max(matrix_norm(Q), np.finfo(float).tiny)
         decrease = P - F.T @ P @ F
     decrease = 0.5 * (decrease + decrease.T)
     # rounding in forming F^T P F and in eigvalsh, relative to ||P||
