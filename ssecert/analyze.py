@@ -202,7 +202,7 @@ def analyze(
     units = balanced_units(system)
     eig = eigen_clusters(units.system.A, tolerances=tol, unit=units.alpha)
     clock.lap("eigenvalues", None)
-    sparse_timing: dict[str, float] = {}
+    sparse_timing: dict[str, Any] = {}
     observer_timings: dict[str, float] = {}
     checks: list[Check] = [
         clock.lap("observability", observability(system, tolerances=tol, eigen=eig)),
@@ -256,6 +256,7 @@ def analyze(
     if context is not None:  # the final (reconciled) check: its witness is the one reported
         context.put(sparse_key(spec.max_attacked), checks[1])
     notes.extend(_short_horizon_notes(spec, checks[0]))
+    notes.extend(f"sparse_observability: {text}" for text in sparse_timing.get("placement", []))
     meta = _meta(spec, seed, budget, notes)
     meta["timings"] = clock.record(sparse_timing, observer_timings)
     return Certificate(system=system, checks=tuple(checks), meta=meta)
@@ -264,7 +265,7 @@ def analyze(
 class _Clock(Laps):
     """``Laps`` of an analysis, and the certificate's ``meta.timings`` from them."""
 
-    def record(self, sparse: dict[str, float], observer: dict[str, float]) -> dict[str, float]:
+    def record(self, sparse: dict[str, Any], observer: dict[str, float]) -> dict[str, float]:
         """Seconds of each step and of the whole run (``analyze``), each observer check's
         (``observer_checks.ID``), and the sparse-observability check's split into deciding the
         verdict and refining max_removable past it."""

@@ -8,6 +8,7 @@ give bitwise-identical arrays.
 from __future__ import annotations
 
 import contextlib
+import itertools
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
@@ -40,6 +41,14 @@ def max_local_workers() -> int:
     return max(8, 4 * (os.cpu_count() or 1))
 
 
+# The local cluster's workers start without the glibc trim threshold that Dask's nanny sets
+# by default (MALLOC_TRIM_THRESHOLD_=65536, against the fragmentation of long-lived workers):
+# with it, the enumeration's per-batch temporaries are returned to the system and faulted in
+# again batch after batch, and a range of sets took 1.3-1.4x as long on a worker as
+# in-process (benchmarks/bench_distributed.py).  A value set in the environment still wins.
+_LOCAL_WORKER_CONFIG = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}
+
+
 @contextlib.contextmanager
 def dask_client(address: str | None = None, *, workers: int | None = None) -> Iterator[Any]:
     """A dask.distributed Client: an existing scheduler when ``address`` is given,
@@ -53,6 +62,7 @@ def dask_client(address: str | None = None, *, workers: int | None = None) -> It
         worker, within ``CONNECT_SECONDS``.
     """
     try:
+        import dask
         from dask.distributed import Client, LocalCluster
     except ImportError as exc:  # pragma: no cover - depends on the extras installed
         raise DaskUnavailable(
@@ -80,9 +90,10 @@ def dask_client(address: str | None = None, *, workers: int | None = None) -> It
             f"workers must be between 1 and {max_local_workers()} (four per core of this "
             f"machine) for a local cluster, got {workers}; use an address for a larger one"
         )
-    cluster = LocalCluster(
-        n_workers=workers or 2, threads_per_worker=1, processes=True, dashboard_address=":0"
-    )
+    with dask.config.set(_LOCAL_WORKER_CONFIG):
+        cluster = LocalCluster(
+            n_workers=workers or 2, threads_per_worker=1, processes=True, dashboard_address=":0"
+        )
     client = Client(cluster)
     try:
         yield client
@@ -196,13 +207,20 @@ def worker_threads(client: Any | None) -> int:
 
 
 def rank_ranges(total: int, client: Any | None, smallest: int) -> list[tuple[int, int]]:
-    """Ranges [lo, hi) covering 0..total: one without a client, else about four per worker
-    thread, none smaller than ``smallest`` (below it a task costs more than it saves)."""
-    if client is None or total <= 0:
+    """Ranges [lo, hi) covering 0..total: one without a client, else up to four per worker
+    thread, none smaller than ``smallest`` (below it a task costs more than it saves), and a
+    whole number of rounds of the workers where there are at least as many ranges as threads
+    (so that none waits for a last range run alone).  One range when two would be smaller
+    than ``smallest``: the work is run in-process."""
+    fit = total // max(smallest, 1)
+    if client is None or total <= 0 or fit < 2:
         return [(0, total)]
-    pieces = max(1, min(4 * worker_threads(client), total // max(smallest, 1)))
-    step = -(-total // pieces)
-    return [(lo, min(lo + step, total)) for lo in range(0, total, step)]
+    threads = worker_threads(client)
+    pieces = min(4 * threads, fit)
+    if pieces >= threads:
+        pieces -= pieces % threads
+    bounds = [total * i // pieces for i in range(pieces + 1)]  # sizes differ by one at most
+    return list(itertools.pairwise(bounds))
 
 
 def map_ranges(

@@ -1,6 +1,7 @@
 """Enumeration split into ranges of colex ranks: the same answer in-process and on Dask."""
 
 import contextlib
+import itertools
 import json
 import math
 
@@ -10,6 +11,7 @@ import pytest
 from ssecert import System
 from ssecert.analyze import analyze
 from ssecert.cli import main
+from ssecert.parallel import rank_ranges
 from ssecert.report.json import certificate_json
 from ssecert.spec import spec_from_dict
 from ssecert.structure import _irrepresentable_scan, enumeration
@@ -77,6 +79,7 @@ def small_chunks(monkeypatch):
     # split even these small levels into many ranges
     monkeypatch.setattr(enumeration, "MIN_CHUNK_SETS", 1)
     monkeypatch.setattr(enumeration, "_CHUNK_OVER_LEVEL", 0)
+    monkeypatch.setattr(enumeration, "MIN_WORKER_SETS", 1)
     monkeypatch.setattr(_irrepresentable_scan, "MIN_CHUNK_SUPPORTS", 1)
 
 
@@ -122,8 +125,57 @@ def test_the_command_line_runs_the_enumeration_on_workers(tmp_path, capsys, smal
     code = main(["analyze", str(path), "--method", "enumeration", "--workers", "2", "--json", "-"])
     assert code == 1
     spread = json.loads(capsys.readouterr().out)
+    # what ran where is said in the notes (small_chunks: every level of 2 sensors or more is
+    # split, the levels of 0 and 1 sensor are one set or fewer sets than ranges)
+    (note,) = [n for n in spread["meta"]["notes"] if n.startswith("sparse_observability: Dask")]
+    assert "the sets of 2 sensors in" in note
+    assert not any("Dask" in n for n in local["meta"]["notes"])
     local.pop("meta"), spread.pop("meta")
     assert spread == local
+
+
+class _Threads:
+    """A stand-in for a Dask client with the given worker threads."""
+
+    def __init__(self, threads: int) -> None:
+        self.threads = threads
+
+    def nthreads(self) -> dict[str, int]:
+        return {f"w{i}": 1 for i in range(self.threads)}
+
+
+@pytest.mark.parametrize(
+    ("total", "smallest", "threads", "pieces"),
+    [
+        (10, 6, 2, 1),  # two ranges would be under the smallest: in-process
+        (11, 6, 2, 1),
+        (12, 6, 2, 2),
+        (100, 10, 2, 8),  # up to four per thread
+        (70, 10, 2, 6),  # 7 would leave a last range alone on a worker
+        (50, 10, 3, 3),
+        (25, 10, 3, 2),  # fewer ranges than threads: as many as fit
+        (0, 10, 2, 1),
+    ],
+)
+def test_rank_ranges_are_whole_rounds_of_the_workers(total, smallest, threads, pieces):
+    ranges = rank_ranges(total, _Threads(threads), smallest)
+    assert len(ranges) == pieces
+    assert ranges[0][0] == 0 and ranges[-1][1] == total
+    assert all(a[1] == b[0] for a, b in itertools.pairwise(ranges))
+    if pieces > 1:
+        assert min(hi - lo for lo, hi in ranges) >= smallest
+    assert rank_ranges(total, None, smallest) == [(0, total)]
+
+
+def test_placement_note_names_the_levels_in_process_and_on_the_workers():
+    outcome = enumeration._Outcome("enumeration", "exact", on_workers={6: 6})
+    outcome.in_process.extend([0, 1, 2, 3, 4, 5])
+    note = enumeration.placement_note(outcome)
+    assert note is not None
+    assert note.startswith("Dask workers: the sets of 6 sensors in 6 ranges; in-process: ")
+    assert "the sets of 0 to 5 sensors" in note
+    assert "1,000,000" in note  # two ranges of the smallest size on the workers
+    assert enumeration.placement_note(enumeration._Outcome("enumeration", "exact")) is None
 
 
 def test_a_range_that_fails_twice_ends_the_enumeration_with_the_reason(monkeypatch, small_chunks):

@@ -53,6 +53,7 @@ class _Level:
     # the deadline passed first: ``checked`` counts the sets decided, the first ones in
     # lexicographic order, and the later ones were not checked
     cut_short: bool = False
+    ranges: int = 1  # the ranges the level was split into (more than one: on Dask workers)
 
     @property
     def borderline(self) -> int:

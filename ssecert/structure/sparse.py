@@ -57,7 +57,7 @@ from ._combinatorics import count_subsets
 from ._rechecks import _cross_check, _recheck_holds
 from .cost import rounded_seconds, verdict_cost
 from .eigenspace import _eigenspace, search_seconds
-from .enumeration import Progress, _enumeration, _Outcome
+from .enumeration import Progress, _enumeration, _Outcome, placement_note
 from .observability import observability
 from .removals import RemovalScan, scan_removals
 
@@ -229,7 +229,7 @@ def sparse_observability(
     eigen: EigenAnalysis | None = None,
     time_budget: float | None = DEFAULT_TIME_BUDGET,
     client: Any | None = None,
-    timing: dict[str, float] | None = None,
+    timing: dict[str, Any] | None = None,
 ) -> Check:
     """Decide s-sparse observability and find the weakest sensor set.
 
@@ -276,8 +276,10 @@ def sparse_observability(
         Filled with the seconds the check took (``seconds``), those it took
         to decide the verdict (``seconds_to_verdict``: everything but the
         refinement) and those it spent refining max_removable past the
-        verdict (``refinement_seconds``).  Kept out of the check, whose
-        JSON is the same from one run to the next.
+        verdict (``refinement_seconds``), and with a ``client``, what ran
+        where (``placement``: sentences naming the levels run on the workers
+        and those run in-process).  Kept out of the check, whose JSON is the
+        same from one run to the next and with or without Dask.
 
     Returns
     -------
@@ -340,6 +342,9 @@ def sparse_observability(
         timing.update(
             seconds=seconds, seconds_to_verdict=seconds - refining, refinement_seconds=refining
         )
+        notes = [note for o in tried if (note := placement_note(o)) is not None]
+        if notes:
+            timing["placement"] = notes
     return check
 
 
