@@ -7,7 +7,7 @@ import pytest
 
 from ssecert import System
 from ssecert.structure import enumeration, sparse
-from ssecert.structure.cost import calibrate, level_seconds, workers_for
+from ssecert.structure.cost import calibrate, level_seconds, verdict_cost, workers_for
 from ssecert.structure.sparse import sparse_observability
 
 
@@ -36,6 +36,28 @@ def test_a_large_enumeration_records_its_estimate_and_time(monkeypatch):
     assert cost["sets_for_verdict"] == sum(math.comb(20, k) for k in range(5))
     assert cost["seconds_for_verdict"] > 0 and cost["measured_seconds_for_verdict"] > 0
     assert cost["worker_threads"] == 1 and cost["rates"]["n"] == 4
+
+
+class _Threads:
+    def __init__(self, threads: int) -> None:
+        self.threads = threads
+
+    def nthreads(self) -> dict[str, int]:
+        return {f"w{i}": 1 for i in range(self.threads)}
+
+
+def test_the_estimate_on_workers_shares_only_the_levels_the_workers_run():
+    # p = 30, up to 6 removed (n = 10): every level under 1,000,000 sets runs in-process
+    alone = verdict_cost(30, 10, 6, None, None)["seconds_for_verdict"]
+    assert verdict_cost(30, 10, 6, _Threads(2), None)["seconds_for_verdict"] == alone
+    # p = 40: the 3,838,380 sets of 6 are shared by two threads, the smaller levels are not
+    big = level_seconds(40, 6, 10, critical=True)
+    rest = sum(level_seconds(40, k, 10) for k in range(6))
+    spread = verdict_cost(40, 10, 6, _Threads(2), None)["seconds_for_verdict"]
+    assert spread == pytest.approx(rest + big / 2, rel=0.01)
+    assert verdict_cost(40, 10, 6, _Threads(4), None)["seconds_for_verdict"] == pytest.approx(
+        rest + big / 4, rel=0.01
+    )
 
 
 def test_a_small_enumeration_is_not_calibrated():

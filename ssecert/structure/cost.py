@@ -38,7 +38,7 @@ from ._combinatorics import (
     count_subsets,
     level_split,
 )
-from ._level_scan import _LevelTask, _scan_range
+from ._level_scan import MIN_WORKER_SETS, _LevelTask, _scan_range
 
 __all__ = [
     "Rates",
@@ -175,12 +175,21 @@ def workers_for(seconds: float, budget: float | None) -> int | None:
     return max(1, math.ceil(seconds / budget))
 
 
-def _levels_seconds(q: int, n: int, first: int, target: int) -> float:
-    """Estimated seconds of the levels ``first`` to ``target`` (at least level ``first``); the
-    sets closest to breaking are ranked on level ``target``."""
+def _levels_seconds(q: int, n: int, first: int, target: int, threads: int = 1) -> float:
+    """Estimated seconds of the levels ``first`` to ``target`` (at least level ``first``) on
+    ``threads`` worker threads; the sets closest to breaking are ranked on level ``target``.
+    A level is shared by as many threads as it has ranges of ``MIN_WORKER_SETS`` (one, run
+    in-process, when it has fewer than two)."""
     return sum(
-        level_seconds(q, k, n, critical=(k == target)) for k in range(first, max(target, first) + 1)
+        level_seconds(q, k, n, critical=(k == target)) / _sharing(math.comb(q, k), threads)
+        for k in range(first, max(target, first) + 1)
     )
+
+
+def _sharing(sets: int, threads: int) -> int:
+    """Worker threads that share a level of ``sets`` sets (``parallel.rank_ranges``)."""
+    fit = sets // MIN_WORKER_SETS
+    return 1 if fit < 2 else min(threads, fit)
 
 
 def rounded_seconds(seconds: float) -> float:
@@ -198,7 +207,7 @@ def verdict_cost(
     threads = worker_threads(client)
     record: dict[str, Any] = {
         "sets_for_verdict": sets,
-        "seconds_for_verdict": rounded_seconds(seconds / threads),
+        "seconds_for_verdict": rounded_seconds(_levels_seconds(q, n, 0, target, threads)),
         "worker_threads": threads,
         "rates": calibrate(n).to_dict(),
     }
@@ -217,7 +226,7 @@ def cost_of_the_rest(
         return ""
     seconds = _levels_seconds(q, n, k, target)
     threads = worker_threads(client)
-    about = rounded_seconds(seconds / threads)
+    about = rounded_seconds(_levels_seconds(q, n, k, target, threads))
     text = f" (the rest of the verdict's sets would take about {about:g} s here"
     workers = workers_for(seconds, time_budget)
     if workers is not None and workers > threads:

@@ -42,7 +42,15 @@ from ._combinatorics import (
     count_subsets,
     level_split,
 )
-from ._level_scan import _BATCH_SETS, _REFINE_SETS, _Level, _LevelTask, _refine, _scan_range
+from ._level_scan import (
+    _BATCH_SETS,
+    _REFINE_SETS,
+    MIN_WORKER_SETS,
+    _Level,
+    _LevelTask,
+    _refine,
+    _scan_range,
+)
 from .cost import cost_of_the_rest, rounded_seconds, verdict_cost
 from .observability import pbh_margins
 
@@ -602,10 +610,7 @@ def _resolve_failures(
 # this many times the precomputed partial sums every range recomputes
 MIN_CHUNK_SETS = 200_000
 _CHUNK_OVER_LEVEL = 20
-# ... and on Dask workers, of at least this many: a level of 658,008 sets (n = 10) took longer
-# in 3 ranges on 2 workers than in-process (0.23-0.25 s against 0.15-0.23 s), each range
-# paying for its task, its data and its own partial sums
-MIN_WORKER_SETS = 500_000
+# ... and on Dask workers, of at least ``MIN_WORKER_SETS``
 
 
 def _chunks(task: _LevelTask, client: Any | None, segments: bool = False) -> list[tuple[int, int]]:
