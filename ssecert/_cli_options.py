@@ -180,6 +180,13 @@ def _dask(args: argparse.Namespace) -> Any:
     return dask_client(args.scheduler, workers=args.workers)
 
 
+def _device(args: argparse.Namespace) -> str | None:
+    """The device ``--device`` asks for, checked to be usable here (None: the CPU)."""
+    from .structure.device import resolve_device
+
+    return resolve_device(getattr(args, "device", "cpu"))
+
+
 def _add_analysis_options(parser: argparse.ArgumentParser) -> None:
     """Options shared by ``certify`` and ``analyze``."""
     from .budget import DEFAULT_TIME_BUDGET
@@ -208,6 +215,13 @@ def _add_analysis_options(parser: argparse.ArgumentParser) -> None:
         choices=("auto", "enumeration", "eigenspace"),
         default="auto",
         help="sparse-observability method (default auto)",
+    )
+    parser.add_argument(
+        "--device",
+        choices=("cpu", "cuda"),
+        default="cpu",
+        help="screen the enumeration's sensor sets on this device (cuda: PyTorch or CuPy, the "
+        "gpu extra; the answer is the CPU's)",
     )
     refine = parser.add_mutually_exclusive_group()
     refine.add_argument(

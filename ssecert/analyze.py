@@ -148,6 +148,7 @@ def analyze(
     context: AnalysisContext | None = None,
     time_budget: float | None = DEFAULT_TIME_BUDGET,
     client: Any | None = None,
+    device: str | None = None,
 ) -> Certificate:
     """Run the structural checks of a design.
 
@@ -175,6 +176,9 @@ def analyze(
     client : dask.distributed.Client, optional
         Split the enumerations (sensor sets, attack supports) over the
         client's workers, with the same answers as in-process.
+    device : {"cpu", "cuda", "numpy"}, optional
+        Screen the sensor sets of the sparse-observability enumeration on
+        an accelerator, with the same answers (``sparse_observability``).
     context : AnalysisContext, optional
         Where the run keeps what later steps share (the observer built from
         the design, the sparse-observability check whose stealthy attack the
@@ -219,6 +223,7 @@ def analyze(
             time_budget=time_budget,
             client=client,
             timing=sparse_timing,
+            device=device,
         )),
         clock.lap("irrepresentable", irrepresentable(
             system,

@@ -142,6 +142,7 @@ def certify(
     time_budget: float | None = DEFAULT_TIME_BUDGET,
     tolerances: Tolerances | None = None,
     set_progress: Callable[[str, int, int], None] | None = None,
+    device: str | None = None,
 ) -> CertifyResult:
     """Certify a design: every check, the simulations and the report data.
 
@@ -184,6 +185,9 @@ def certify(
     set_progress : callable, optional
         ``set_progress(check_id, done, total)`` during long enumerations
         (``analyze``'s ``progress``).
+    device : {"cpu", "cuda", "numpy"}, optional
+        Screen the sparse-observability enumeration's sensor sets on an
+        accelerator, with the same answers (``analyze``).
 
     Returns
     -------
@@ -208,6 +212,7 @@ def certify(
         "seed": base_seed,
         "budget": budget,
         "time_budget": time_budget,
+        "device": device,
     }
     if max_sets is not None:
         kwargs["max_sets"] = max_sets

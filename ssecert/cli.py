@@ -35,6 +35,7 @@ from ._cli_options import (
     _add_dask_options,
     _budget,
     _dask,
+    _device,
     _nonnegative_int,
     _positive_int,
     _Progress,
@@ -243,6 +244,7 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     spec = load_argument(args.spec, max_attacked=args.max_attacked, horizon=args.horizon)
     to_stdout_json = args.json_path == "-"
     human = sys.stderr if to_stdout_json else sys.stdout
+    device = _device(args)  # before any work: an unusable device is refused at once
     progress = _Progress(sys.stderr, quiet=to_stdout_json)
     try:
         with _warnings_as_notes() as log, _dask(args) as client:
@@ -255,6 +257,7 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
                 budget=_budget(args),
                 time_budget=args.time_budget,
                 client=client,
+                device=device,
             )
     finally:
         progress.close()
@@ -300,6 +303,7 @@ def _cmd_certify(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
             sys.stderr.write(f"ssecert: {message}...\n")
             sys.stderr.flush()
 
+    device = _device(args)  # before any work: an unusable device is refused at once
     words = ["ssecert", "certify", *(list(argv) if argv is not None else sys.argv[2:])]
     command = " ".join(words if argv is not None else ["ssecert", *sys.argv[1:]])
     with _warnings_as_notes() as log, _dask(args) as client, contextlib.closing(counter):
@@ -316,6 +320,7 @@ def _cmd_certify(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
             time_budget=args.time_budget,
             client=client,
             set_progress=counter,
+            device=device,
         )
         result.to_dict()  # simulation metrics are computed here: their warnings are notes too
     notes = log.notes()
@@ -469,6 +474,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     from .design.gains import GainError
     from .parallel import ChunkError, DaskUnavailable
     from .spec import SpecError, one_line
+    from .structure.device import DeviceUnavailable
 
     parser = _build_parser()
     args = None
@@ -504,6 +510,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except DaskUnavailable as exc:
         option = "--scheduler" if getattr(args, "scheduler", None) else "--workers"
         sys.stderr.write(f"ssecert: error: {option}: {one_line(str(exc))}\n")
+        return EXIT_BAD_INPUT
+    except DeviceUnavailable as exc:
+        device = getattr(args, "device", "cuda")
+        sys.stderr.write(f"ssecert: error: --device {device}: {one_line(str(exc))}\n")
         return EXIT_BAD_INPUT
     except ChunkError as exc:  # a simulation chunk failed twice on the workers
         sys.stderr.write(f"ssecert: error: {one_line(str(exc))}\n")

@@ -33,6 +33,7 @@ from .._linalg import (
     single_passed,
     single_screen,
 )
+from .device import DeviceKernel
 
 __all__ = [
     "ColexScreen",
@@ -350,6 +351,9 @@ class ColexScreen:
         rounded (tier 1).
     single_memory : int
         Bytes allowed for the single-precision level of partial sums.
+    device : DeviceKernel, optional
+        Tier 2 on an accelerator (``ssecert.structure.device``), for every
+        batch and without tier 1; the decisions stay LAPACK's.
     """
 
     def __init__(
@@ -366,6 +370,7 @@ class ColexScreen:
         stop: int | None = None,
         factors: np.ndarray | None = None,
         single_memory: int = DEFAULT_SINGLE_MEMORY,
+        device: DeviceKernel | None = None,
     ) -> None:
         q, n = items.shape[0], base.shape[-1]
         if not 0 <= k <= q:
@@ -407,6 +412,7 @@ class ColexScreen:
         # tier 1 is skipped for this many batches after one where it left most subsets open
         self._skip = 0
         self._slack = 0.0 if self.factors is None else _bound_slack(items, base, self.factors, k)
+        self.device = device
 
     def batches(self, size: int) -> Iterator[tuple[int, int]]:
         """Consecutive ranges of ``size`` ranks covering the range."""
@@ -484,25 +490,53 @@ class ColexScreen:
             cursor[2] = next(cursor[1], None)
         return pieces
 
-    def fill(self, pieces: list[tuple[int, int, int, tuple[int, ...]]], out: np.ndarray) -> None:
-        """The single-precision matrices minus the margin of the pieces (``_pieces``), batch
-        last, into ``out``."""
+    def _single(self) -> np.ndarray:
+        """The single-precision level of partial sums minus the margin, batch last."""
         if self._sums32 is None:
             n = self.base.shape[-1]
             shifted = np.asarray(self.base - self.margin * np.eye(n), dtype=np.float32)
             self._sums32 = _single_level(self._signed32, shifted, self.m32)
-        sums = self._sums32
+        return self._sums32
+
+    def _top_total(self, top: tuple[int, ...]) -> np.ndarray | None:
+        """The single-precision sum of a top's items (None for no top), added to the level's
+        partial sums: its largest item plus the sum of the others (kept for the next top)."""
+        if not top:
+            return None
+        rest = top[1:]
+        if rest != self._upper[0]:
+            self._upper = (rest, self._signed32[list(rest)].sum(axis=0) if rest else None)
+        upper = self._upper[1]
+        return self._signed32[top[0]] if upper is None else self._signed32[top[0]] + upper
+
+    def fill(self, pieces: list[tuple[int, int, int, tuple[int, ...]]], out: np.ndarray) -> None:
+        """The single-precision matrices minus the margin of the pieces (``_pieces``), batch
+        last, into ``out``."""
+        sums = self._single()
         for row, first, last, top in pieces:
             where = out[:, :, row : row + last - first]
-            if not top:
+            total = self._top_total(top)
+            if total is None:
                 np.copyto(where, sums[:, :, first:last])
-                continue
-            rest = top[1:]
-            if rest != self._upper[0]:
-                self._upper = (rest, self._signed32[list(rest)].sum(axis=0) if rest else None)
-            upper = self._upper[1]
-            total = self._signed32[top[0]] if upper is None else self._signed32[top[0]] + upper
-            np.add(sums[:, :, first:last], total[:, :, None], out=where)
+            else:
+                np.add(sums[:, :, first:last], total[:, :, None], out=where)
+
+    def _single_tier(
+        self,
+        pieces: list[tuple[int, int, int, tuple[int, ...]]],
+        N: int,
+        work: np.ndarray,
+        diagonal: np.ndarray,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Tier 2 on the whole batch: (passed, smallest pivot) of each single-precision
+        factorization, on the device when there is one."""
+        if self.device is not None:
+            tops = [(row, first, last, self._top_total(top)) for row, first, last, top in pieces]
+            return self.device.screen(self._single(), tops, N)
+        mats, diag = work[:, :, :N], diagonal[:, :N]
+        self.fill(pieces, mats)
+        cholesky_batch_last(mats, diag)
+        return single_passed(diag)
 
     def _bound(self, t: int) -> tuple[float, np.ndarray, np.ndarray] | None:
         """(lambda, c, sums) of tier 1 for the subsets whose largest item is t: a lower bound
@@ -568,7 +602,8 @@ class ColexScreen:
         """
         N = stop - start
         pieces = self._pieces(start, stop)
-        tried = self._skip == 0
+        # on a device, tier 2 screens the whole batch: tier 1 would keep the CPU busy meanwhile
+        tried = self._skip == 0 and self.device is None
         self._skip = max(self._skip - 1, 0)
         bound = self.lower_bounds(pieces, N) if tried else np.full(N, -np.inf)
         ok = bound > 0
@@ -579,15 +614,12 @@ class ColexScreen:
             rows = np.flatnonzero(~ok | (screen.low <= threshold))
         else:
             rows = np.flatnonzero(~ok)
-        if rows.size > max(64, N // 50):
+        if rows.size > max(64, N // 50) or (self.device is not None and rows.size):
             if tried and self.factors is not None and rows.size > N // 2:
                 self._skip = 8
             # many subsets left open: tier 2 for the whole batch (a few calls), then LAPACK for
             # those it leaves open
-            mats, diag = work[:, :, :N], diagonal[:, :N]
-            self.fill(pieces, mats)
-            cholesky_batch_last(mats, diag)
-            passed, smallest = single_passed(diag)
+            passed, smallest = self._single_tier(pieces, N, work, diagonal)
             ok |= passed
             if screen.low is not None:
                 low = smallest.astype(np.float64)

@@ -28,6 +28,7 @@ import numpy as np
 
 from .._linalg import single_precision_margin, stacked_rank
 from ..tolerances import BORDERLINE, ZERO, Tolerances
+from . import device as accelerator
 from ._combinatorics import ColexScreen, ScreenedBatch
 
 __all__: list[str] = []
@@ -87,6 +88,7 @@ class _LevelTask:
     tol: Tolerances
     critical: bool
     errors: np.ndarray
+    device: str | None = None  # screen on this accelerator (``device.DEVICES``), else the CPU
 
 
 def _screen_margin(task: _LevelTask) -> float:
@@ -143,12 +145,23 @@ def _scan_range(
     lo, hi = ranks
     if lo >= hi:
         return level
+    kernel = None
+    if task.device is not None and hi - lo >= accelerator.DEVICE_MIN_SETS:
+        kernel = accelerator.device_kernel(task.device)
     source = ColexScreen(
-        task.proj, task.shifted, task.k, _screen_margin(task), start=lo, stop=hi, factors=task.P
+        task.proj,
+        task.shifted,
+        task.k,
+        _screen_margin(task),
+        start=lo,
+        stop=hi,
+        factors=task.P,
+        device=kernel,
     )
-    size = min(_BATCH_SETS, hi - lo)
-    work = np.empty((n, n, size), dtype=np.float32)
-    diagonal = np.empty((n, size), dtype=np.float32)
+    size = min(_BATCH_SETS if kernel is None else accelerator.DEVICE_BATCH_SETS, hi - lo)
+    room = 0 if kernel is not None else size  # the CPU's single-precision tier's buffers
+    work = np.empty((n, n, room), dtype=np.float32)
+    diagonal = np.empty((n, room), dtype=np.float32)
     pending = np.zeros(0, dtype=np.int64)  # failures of the blocks not wholly screened yet
     for first in reversed(range(lo, hi, size)):
         if deadline is not None and time.monotonic() > deadline:

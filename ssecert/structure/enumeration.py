@@ -95,6 +95,7 @@ def _enumeration(
     exact: ExactPlant | None = None,
     time_budget: float | None = None,
     client: Any | None = None,
+    device: str | None = None,
 ) -> _Outcome:
     """Remove every set of sensors, smallest first, until one breaks observability.
 
@@ -104,7 +105,8 @@ def _enumeration(
     when it ends stops there (the sets checked are the first in
     lexicographic order): the result is then a lower bound, with
     ``details["stopped_by_time_budget"]``.  With a Dask ``client`` each
-    level is split over the workers, with the same findings.
+    level is split over the workers, with the same findings; with a ``device``
+    (``device.DEVICES``) the sets are screened there, with the same findings.
     """
     start = time.monotonic()
     n, p = system.n, system.p
@@ -127,6 +129,7 @@ def _enumeration(
     if rest.size == 0:
         return _only_all_sensors(out, n, p, s)
     scan = _Levels(system, s, tol, eig, exact, client, progress, sub, full, rest, out, start)
+    scan.device = device
     cost = _verdict_cost(rest.size, n, scan.target, client, time_budget)
     if cost is not None:
         out.details["cost_estimate"] = cost
@@ -209,6 +212,7 @@ class _Levels:
         self._refine_rate: float | None = None
         self._largest: list[np.ndarray] | None = None  # for ``_first_certain``
         self.time_budget: float | None = None  # of the level scanned last
+        self.device: str | None = None  # the accelerator that screens the sets
         if self.target < 0:
             # every set of 2s sensors keeps a sensor that alone observes the state
             dropped = set(full[: 2 * s].tolist())
@@ -352,6 +356,7 @@ class _Levels:
                 client=self.client,
                 stop=self._confirms,
                 deadline=deadline,
+                device=self.device,
             )
         except ChunkError as exc:
             out = self.out
@@ -642,6 +647,7 @@ def _scan_level(
     client: Any | None = None,
     stop: Callable[[_Level], bool] | None = None,
     deadline: float | None = None,
+    device: str | None = None,
 ) -> _Level:
     """Check the removals of ``full`` plus k sensors of ``rest``, in lexicographic order.
 
@@ -671,7 +677,7 @@ def _scan_level(
     back = slice(None, None, -1)
     task = _LevelTask(
         P[back], ranks[back], proj[back], base - shift * np.eye(n), shift, k, rest[back], full,
-        tol, critical, errors[back],
+        tol, critical, errors[back], device,
     )  # fmt: skip
     chunks = _chunks(task, client, segments=stop is not None)[::-1]
     if client is None:

@@ -56,6 +56,7 @@ from ._breaking_set import _failure
 from ._combinatorics import count_subsets
 from ._rechecks import _cross_check, _recheck_holds
 from .cost import rounded_seconds, verdict_cost
+from .device import resolve_device
 from .eigenspace import _eigenspace, search_seconds
 from .enumeration import Progress, _enumeration, _Outcome, placement_note
 from .observability import observability
@@ -125,6 +126,7 @@ def _run(
     exact: ExactPlant | None = None,
     time_budget: float | None = None,
     client: Any | None = None,
+    device: str | None = None,
 ) -> tuple[_Outcome, list[_Outcome], dict[str, float]]:
     n, p = system.n, system.p
     sub: SensorSubspaces | None = None
@@ -166,6 +168,7 @@ def _run(
                 exact,
                 time_budget=time_budget,
                 client=client,
+                device=device,
             )
             if (
                 outcome.details.get("stopped_by_time_budget")
@@ -230,6 +233,7 @@ def sparse_observability(
     time_budget: float | None = DEFAULT_TIME_BUDGET,
     client: Any | None = None,
     timing: dict[str, Any] | None = None,
+    device: str | None = None,
 ) -> Check:
     """Decide s-sparse observability and find the weakest sensor set.
 
@@ -280,6 +284,15 @@ def sparse_observability(
         where (``placement``: sentences naming the levels run on the workers
         and those run in-process).  Kept out of the check, whose JSON is the
         same from one run to the next and with or without Dask.
+    device : {"cpu", "cuda", "numpy"}, optional
+        Where the enumeration screens its sets (None or ``"cpu"``: numpy
+        and LAPACK).  ``"cuda"`` screens each range of 65,536 sets or more
+        on a GPU (PyTorch with CUDA, else CuPy, with array-api-compat: the
+        ``gpu`` extra); ``"numpy"`` runs that code on the CPU (slower, for
+        testing it).  The accelerator only proves sets observable; every
+        other decision is LAPACK's on the CPU, so the answer is the one
+        without it, bit for bit.  ``DeviceUnavailable`` when the device
+        cannot be used here.
 
     Returns
     -------
@@ -314,9 +327,11 @@ def sparse_observability(
     exact = ExactPlant(system.A, system.C)
     if time_budget is not None:
         time_budget = as_float_option(time_budget, "time_budget", min_value=0.0)
+    device = resolve_device(device)
     outcome, tried, estimates = _run(
-        work, s, method, max_sets, tol, progress, eig, exact, time_budget=time_budget, client=client
-    )
+        work, s, method, max_sets, tol, progress, eig, exact,
+        time_budget=time_budget, client=client, device=device,
+    )  # fmt: skip
     for o in tried:
         for item in o.details.get("eigenvalues", []):
             item["eigenvalue"] = item["eigenvalue"] / alpha

@@ -1,0 +1,234 @@
+"""Screening sensor sets on an accelerator: the single-precision tier of ``ColexScreen``
+written against the Python array API standard, so that PyTorch or CuPy run it on a GPU and
+numpy runs the very same code in the test suite.
+
+An accelerator only proves: where its single-precision factorization of a Gramian minus the
+screening margin succeeds, LAPACK's float64 factorization of the Gramian succeeds too, and its
+smallest pivot is at least the accelerator's (``ssecert._linalg.single_precision_margin``; the
+proof holds for any IEEE single-precision arithmetic that factors column by column as
+``cholesky_batch_last`` does, whatever the order of its sums and with or without fused
+multiply-adds).  Every set it does not prove, every failure and every proxy of the sets closest
+to breaking is LAPACK's on the CPU, as without it: the answer does not depend on the device.
+
+The matrices it factors are those of the CPU tier, bit for bit: the single-precision level of
+partial sums (computed on the CPU, sent once per range) plus each block's top, summed in single
+precision on the CPU and added on the device.  ``device="numpy"`` runs this module's code on
+the CPU, so that the test suite checks it (and array-api-strict checks that it uses the
+standard only) on machines without a GPU.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Any
+
+import numpy as np
+
+__all__ = ["DEVICES", "DeviceUnavailable", "resolve_device"]
+
+#: the devices ``device=`` accepts: ``"cpu"`` (numpy and LAPACK, the default), ``"cuda"``
+#: (PyTorch with CUDA, else CuPy) and ``"numpy"`` (the accelerator's code run by numpy on the
+#: CPU: slower than ``"cpu"``, for testing that code on a machine without a GPU)
+DEVICES = ("cpu", "cuda", "numpy")
+
+# sets screened together on a device: large enough to keep a GPU busy (about 400 MB of
+# single-precision 10 x 10 matrices), ...
+DEVICE_BATCH_SETS = 1 << 20
+# ... and a range of fewer sets stays on the CPU, whose bound and batches are faster there
+DEVICE_MIN_SETS = 1 << 16
+
+
+class DeviceUnavailable(RuntimeError):
+    """The device asked for cannot be used here: its array library is not installed, or it has
+    no GPU."""
+
+
+def _check(name: str) -> str:
+    if name not in DEVICES:
+        raise ValueError(f"device must be one of {', '.join(DEVICES)}, got {name!r}")
+    return name
+
+
+def resolve_device(device: str | None) -> str | None:
+    """The device name to screen sets on (None: the CPU path), checked to be usable here.
+
+    Raises
+    ------
+    ValueError
+        For a name not in ``DEVICES``.
+    DeviceUnavailable
+        With what to install, when the device cannot be used.
+    """
+    if device is None or _check(device) == "cpu":
+        return None
+    device_kernel(device)  # imports its library once, raising if it cannot run
+    return device
+
+
+@functools.cache
+def device_kernel(name: str) -> DeviceKernel:
+    """The kernel of a device name, built once per process (its library imported once)."""
+    return DeviceKernel(*_namespace(_check(name)), name=name)
+
+
+def _namespace(name: str) -> tuple[Any, Any]:
+    """(array namespace, device) of a device name."""
+    if name == "numpy":
+        return _compat("numpy") or np, "cpu"
+    if _compat("numpy") is None:
+        raise DeviceUnavailable(
+            "screening on cuda needs array-api-compat and PyTorch with CUDA or CuPy; install "
+            "them with: python -m pip install 'ssecert[gpu]' torch"
+        )
+    problems = []
+    try:
+        import torch
+
+        if torch.cuda.is_available():
+            return _compat("torch"), torch.device("cuda")
+        problems.append("PyTorch sees no CUDA device")
+    except ImportError:
+        problems.append("PyTorch is not installed")
+    try:
+        import cupy
+
+        cupy.cuda.runtime.getDeviceCount()
+        return _compat("cupy"), None
+    except ImportError:
+        problems.append("CuPy is not installed")
+    except Exception as exc:  # CUDA's own errors: no driver, no device
+        problems.append(f"CuPy finds no CUDA device ({exc})")
+    raise DeviceUnavailable(
+        f"no CUDA device to screen on: {'; '.join(problems)} (install PyTorch with CUDA, "
+        "python -m pip install torch, or CuPy)"
+    )
+
+
+def _compat(library: str) -> Any:
+    """array-api-compat's namespace for a library, None when array-api-compat is missing."""
+    import importlib
+
+    try:
+        return importlib.import_module(f"array_api_compat.{library}")
+    except ImportError:
+        return None
+
+
+def cholesky_diagonal(xp: Any, A: Any) -> Any:
+    """The diagonal of the Cholesky factors of a batch stored with the batch last.
+
+    The algorithm of ``ssecert._linalg.cholesky_batch_last`` (left-looking,
+    column by column, each column scaled by the reciprocal of its pivot), in
+    the array API standard only and without writing into views; the
+    products of the earlier columns are taken off one by one rather than
+    summed first (the margin's error bound holds for any order of the sums,
+    so the proof is the same, though the last bits may differ).  A matrix
+    that is not positive definite gets a NaN or a non-positive entry.
+
+    Parameters
+    ----------
+    xp : array namespace
+    A : array, shape (n, n, N)
+        The matrices ``A[:, :, b]`` (their lower triangles are read).
+
+    Returns
+    -------
+    array, shape (n, N)
+    """
+    n = A.shape[0]
+    columns: list[Any] = []  # columns[k]: rows k..n-1 of the factor's column k
+    diagonal = []
+    for j in range(n):
+        column = A[j:, j, :]
+        for k in range(j):
+            below = columns[k][j - k :, :]
+            column = column - below * below[0:1, :]
+        root = xp.sqrt(column[0, :])
+        diagonal.append(root)
+        if j + 1 < n:
+            columns.append(xp.concat([root[None, :], column[1:, :] * (1.0 / root)[None, :]]))
+    return xp.stack(diagonal)
+
+
+class DeviceKernel:
+    """The single-precision tier of ``ColexScreen`` on one device.
+
+    Parameters
+    ----------
+    xp : array namespace
+    device : object
+        The namespace's device (None: its default).
+    name : str
+        What the user asked for (``DEVICES``).
+    """
+
+    def __init__(self, xp: Any, device: Any, *, name: str) -> None:
+        self.xp, self.device, self.name = xp, device, name
+        self._loaded: tuple[int, Any] | None = None  # (id of the host level, its device copy)
+
+    def _put(self, array: np.ndarray) -> Any:
+        return self.xp.asarray(array, device=self.device)
+
+    def screen(
+        self, level: np.ndarray, pieces: list[tuple[int, int, int, Any]], size: int
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Factor the ``size`` single-precision matrices of the pieces on the device.
+
+        Parameters
+        ----------
+        level : ndarray of float32, shape (n, n, M)
+            The single-precision level of partial sums (the screening margin taken off),
+            sent to the device once (kept while the same array is passed).
+        pieces : list of (row, first, last, top)
+            Rows ``row .. row + last - first`` of the batch are the level's matrices
+            ``first .. last - 1`` plus ``top`` (an (n, n) float32 array, or None).
+        size : int
+
+        Returns
+        -------
+        passed : ndarray of bool, shape (size,)
+            Every pivot positive and finite.
+        smallest : ndarray of float32, shape (size,)
+            The smallest pivot (meaningful where passed).
+        """
+        xp = self.xp
+        if self._loaded is None or self._loaded[0] != id(level):
+            self._loaded = (id(level), self._put(level))
+        sums = self._loaded[1]
+        n = level.shape[0]
+        # each row's piece, its row in the level and its top, found on the device from the
+        # pieces alone (a few hundred numbers sent, not one index per set)
+        tops = [np.zeros((n, n), dtype=np.float32)]
+        starts, offsets, which = [], [], []
+        for row, first, _, top in pieces:
+            starts.append(row)
+            offsets.append(first - row)
+            which.append(0 if top is None else len(tops))
+            if top is not None:
+                tops.append(top)
+        positions = xp.arange(size, device=self.device)
+        piece = xp.searchsorted(self._put(np.array(starts)), positions, side="right") - 1
+        rows = positions + xp.take(self._put(np.array(offsets)), piece)
+        matrices = xp.take(sums, rows, axis=2)
+        if len(tops) > 1:
+            totals = self._put(np.stack(tops, axis=2))
+            matrices = matrices + xp.take(
+                totals, xp.take(self._put(np.array(which)), piece), axis=2
+            )
+        with np.errstate(all="ignore"):  # NaN pivots of the failures (numpy underneath)
+            diagonal = cholesky_diagonal(xp, matrices)
+            smallest = xp.min(diagonal, axis=0)
+            passed = (smallest > 0) & xp.isfinite(xp.sum(diagonal, axis=0))
+        return _to_numpy(passed), _to_numpy(smallest)
+
+
+def _to_numpy(x: Any) -> np.ndarray:
+    """A device array as a numpy array on the host."""
+    if isinstance(x, np.ndarray):
+        return x
+    module = type(x).__module__
+    if module.startswith("torch"):
+        return x.cpu().numpy()
+    if module.startswith("cupy"):
+        return x.get()
+    return np.from_dlpack(x)

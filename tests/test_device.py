@@ -1,0 +1,177 @@
+"""The accelerator path of the enumeration: the same code on numpy (and on array-api-strict,
+the standard only) gives the CPU's answers, bit for bit; an unusable device is refused."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from ssecert import System
+from ssecert._linalg import cholesky_batch_last, single_passed
+from ssecert.cli import main
+from ssecert.structure import device as accelerator
+from ssecert.structure._combinatorics import ColexScreen
+from ssecert.structure.device import (
+    DeviceKernel,
+    DeviceUnavailable,
+    cholesky_diagonal,
+    resolve_device,
+)
+from ssecert.structure.sparse import sparse_observability
+
+
+def _namespaces():
+    """numpy (as ``device="numpy"`` runs the kernel) and, where installed (the test extra),
+    array-api-strict: the standard and nothing else."""
+    out = [pytest.param(accelerator._namespace("numpy")[0], id="numpy")]
+    try:
+        import array_api_strict
+    except ImportError:  # pragma: no cover - in the test extra
+        return out
+    return [*out, pytest.param(array_api_strict, id="array-api-strict")]
+
+
+def _batch(rng, n, N):
+    """Batch-last float32 matrices: positive definite, indefinite and nearly singular."""
+    G = rng.standard_normal((N, n, n + 2)).astype(np.float32)
+    A = G @ G.transpose(0, 2, 1)
+    A[: N // 3] -= 3.0 * np.eye(n, dtype=np.float32)  # many indefinite
+    A[N // 3 : N // 3 + 5, :, 0] = 0.0  # singular: a zero row and column
+    A[N // 3 : N // 3 + 5, 0, :] = 0.0
+    return np.ascontiguousarray(A.transpose(1, 2, 0))
+
+
+@pytest.mark.parametrize("xp", _namespaces())
+def test_the_array_api_factorization_decides_as_the_cpu_one(xp):
+    rng = np.random.default_rng(0)
+    for n in (1, 2, 5, 10):
+        work = _batch(rng, n, 300)
+        with np.errstate(all="ignore"):
+            ours = accelerator._to_numpy(cholesky_diagonal(xp, xp.asarray(work)))
+        cpu = np.empty((n, work.shape[2]), dtype=np.float32)
+        cholesky_batch_last(work.copy(), cpu)
+        passed, smallest = single_passed(cpu)
+        with np.errstate(invalid="ignore"):
+            ours_passed = (ours.min(axis=0) > 0) & np.isfinite(ours.sum(axis=0))
+        # far from the edge, both decide alike and agree to single-precision rounding
+        assert np.array_equal(ours_passed, passed)
+        assert np.allclose(ours[:, passed], cpu[:, passed], rtol=1e-4, atol=1e-6)
+        assert 0 < passed.sum() < passed.size
+
+
+def test_numpy_and_the_standard_alone_factor_bit_for_bit_alike():
+    strict = pytest.importorskip("array_api_strict")
+    work = _batch(np.random.default_rng(1), 7, 200)
+    with np.errstate(all="ignore"):
+        a = accelerator._to_numpy(cholesky_diagonal(np, work))
+        b = accelerator._to_numpy(cholesky_diagonal(strict, strict.asarray(work)))
+    assert np.array_equal(a, b, equal_nan=True)
+
+
+def _screens(kernel, k=4, q=14, n=4, critical=True):
+    """The same level screened on the CPU and through ``kernel``: (ok, proxies) of each."""
+    rng = np.random.default_rng(3)
+    factors = np.zeros((q, n, n))
+    factors[:, 0, :] = rng.standard_normal((q, n))  # one row per sensor, ...
+    factors[: q - 4, 0, 2:] = 0.0  # ... all but 4 in one plane: removing 3 of the 4 breaks
+    items = np.einsum("qrn,qrm->qnm", factors, factors)
+    shift = 1e-9
+    base = items.sum(axis=0) - shift * np.eye(n)
+    margin = 1e-5
+    total = math.comb(q, k)
+    out = []
+    for device in (None, kernel):
+        source = ColexScreen(
+            items, base, k, margin, factors=factors, device=device, single_memory=4096
+        )
+        work = np.empty((n, n, total), dtype=np.float32)
+        diagonal = np.empty((n, total), dtype=np.float32)
+        oks, proxies = [], []
+        for first, last in source.batches(97):  # many pieces and batches
+            screen = source.screen(first, last, shift, np.inf if critical else None, work, diagonal)
+            oks.append(screen.ok)
+            if critical:
+                proxies.append(screen.proxies(np.arange(last - first), shift))
+        out.append((np.concatenate(oks), np.concatenate(proxies) if critical else None))
+    return out
+
+
+@pytest.mark.parametrize("xp", _namespaces())
+def test_a_level_screened_through_the_kernel_is_decided_as_on_the_cpu(xp):
+    kernel = DeviceKernel(xp, None, name="test")
+    (cpu_ok, cpu_proxy), (dev_ok, dev_proxy) = _screens(kernel)
+    assert np.array_equal(dev_ok, cpu_ok)
+    assert np.array_equal(dev_proxy, cpu_proxy)  # LAPACK's, bit for bit
+    assert 0 < cpu_ok.sum() < cpu_ok.size  # both kinds of sets
+    (cpu_ok, _), (dev_ok, _) = _screens(kernel, critical=False)
+    assert np.array_equal(dev_ok, cpu_ok)
+
+
+def _answer(check):
+    evidence = dict(check.evidence)
+    evidence.pop("cost_estimate", None)  # measured times
+    return json.dumps(
+        [check.verdict.value, check.fields, evidence, check.witness], sort_keys=True, default=str
+    )
+
+
+@pytest.fixture
+def small_device_batches(monkeypatch):
+    monkeypatch.setattr(accelerator, "DEVICE_MIN_SETS", 0)
+    monkeypatch.setattr(accelerator, "DEVICE_BATCH_SETS", 1000)
+
+
+def _planted(p=12, seed=0):
+    """A = I (n = 4), sensors 0 to p - 4 in one plane: removing the 3 others and any one of
+    them leaves a plane, a planted breaking set of 4."""
+    C = np.random.default_rng(seed).standard_normal((p, 4))
+    C[: p - 3, 2:] = 0.0
+    return System(np.eye(4), C)
+
+
+@pytest.mark.parametrize(
+    ("system", "s"),
+    [
+        (_planted(), 2),  # fails: a planted set
+        (System(np.eye(4), np.random.default_rng(1).standard_normal((16, 4))), 2),  # holds
+        (System(np.eye(3), np.random.default_rng(2).standard_normal((12, 3))), 3),
+    ],
+)
+def test_device_numpy_gives_the_cpu_answer_bit_for_bit(system, s, small_device_batches):
+    cpu = sparse_observability(system, s, method="enumeration", time_budget=None)
+    dev = sparse_observability(system, s, method="enumeration", time_budget=None, device="numpy")
+    assert _answer(dev) == _answer(cpu)
+
+
+def test_the_device_names_are_checked():
+    assert resolve_device(None) is None and resolve_device("cpu") is None
+    assert resolve_device("numpy") == "numpy"
+    with pytest.raises(ValueError, match="device must be one of cpu, cuda, numpy"):
+        resolve_device("gpu")
+
+
+def test_cuda_without_a_gpu_library_is_refused_with_what_to_install(monkeypatch):
+    import builtins
+
+    real = builtins.__import__
+
+    def no_gpu(name, *args, **kwargs):
+        if name in ("torch", "cupy") or name.startswith(("torch.", "cupy.")):
+            raise ImportError(name)
+        return real(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_gpu)
+    accelerator.device_kernel.cache_clear()
+    with pytest.raises(DeviceUnavailable, match="PyTorch is not installed; CuPy is not"):
+        resolve_device("cuda")
+
+
+def test_the_command_line_refuses_an_unusable_device_before_any_work(monkeypatch, capsys):
+    def unusable(name):
+        raise DeviceUnavailable("no CUDA device to screen on: PyTorch sees no CUDA device")
+
+    monkeypatch.setattr(accelerator, "device_kernel", unusable)
+    assert main(["analyze", "notes-example-2", "--device", "cuda"]) == 2
+    err = capsys.readouterr().err
+    assert "ssecert: error: --device cuda: no CUDA device to screen on" in err
