@@ -96,3 +96,35 @@ def test_the_mixed_integer_search_works_in_units_of_the_threshold():
         assert witness is not None, note
         e = np.asarray(witness["initial_error"])
         assert abs(abs(e[0]) / threshold - 3.1468531468531) < 1e-9 and not np.any(e[1:])
+
+
+def test_the_mixed_integer_search_keeps_one_time_limit_for_all_its_solves(monkeypatch):
+    # every candidate refused by exact arithmetic: the search goes on with what time is left,
+    # and ends at its limit with the reason
+    import scipy.optimize
+
+    rng = np.random.default_rng(0)
+    model = None
+    while model is None:
+        model = _random_model(rng)
+    limits, clock = [], [0.0]
+
+    class _Result:
+        status, message = 0, "Optimal"
+
+        def __init__(self, nv):
+            self.x = np.zeros(nv)
+
+    def solve(c, constraints, integrality, bounds, options):
+        limits.append(options["time_limit"])
+        clock[0] += 4.0  # each solve takes 4 s
+        return _Result(c.size)
+
+    monkeypatch.setattr(scipy.optimize, "milp", solve)
+    monkeypatch.setattr(equilibria, "_confirm", lambda model, signs: None)
+    monkeypatch.setattr(equilibria.time, "monotonic", lambda: clock[0])
+    witness, note = equilibria._milp_search(model)
+    assert witness is None
+    assert limits == [10.0, 6.0, 2.0]  # 10 s in all (MILP_SECONDS), not 10 s each
+    assert "found 3 candidate patterns that exact arithmetic refused" in note
+    assert note.endswith("refused; its time limit of 10 s ended it")

@@ -23,6 +23,7 @@ globally asymptotically stable.
 
 from __future__ import annotations
 
+import time
 from fractions import Fraction
 from typing import Any
 
@@ -37,7 +38,7 @@ __all__ = ["nonzero_equilibrium", "attacked_equilibria", "MAX_PATTERNS"]
 MAX_PATTERNS = 3**10  # patterns tried exhaustively (59,049)
 _BATCH = 4096
 MILP_BOX = 1e4  # the mixed-integer search looks at |w_i| <= MILP_BOX * threshold
-MILP_SECONDS = 10.0  # time limit of one mixed-integer solve
+MILP_SECONDS = 10.0  # time limit of the mixed-integer search, all its solves together
 MILP_ROUNDS = 5  # solves, each excluding the patterns that exact arithmetic refused
 
 
@@ -154,18 +155,22 @@ def _milp_search(model: LureModel) -> tuple[dict[str, Any] | None, str]:
     upper = np.concatenate([np.full(N, np.inf), np.full(m, q * (W + lam)), np.ones(2 * m)])
     integrality = np.concatenate([np.zeros(N + m), np.ones(2 * m)])
     refused = 0
+    deadline = time.monotonic() + MILP_SECONDS
     for _ in range(MILP_ROUNDS):
+        left = deadline - time.monotonic()
+        if left <= 0:
+            break
         result = milp(
             np.zeros(nv),
             constraints=LinearConstraint(np.array(rows), lo, hi),
             integrality=integrality,
             bounds=Bounds(lower, upper),
-            options={"time_limit": MILP_SECONDS},
+            options={"time_limit": left},
         )
         if result.x is None:
             what = {
                 2: "none (HiGHS found the patterns infeasible; a solver's claim, not re-checked)",
-                1: f"undecided (the solver's time limit of {MILP_SECONDS:g} s was reached)",
+                1: f"undecided (the search's time limit of {MILP_SECONDS:g} s was reached)",
             }.get(result.status, f"undecided (the solver stopped: {result.message.strip()})")
             return None, (
                 f"{what}: a mixed-integer search over the 3^{m} active/sign patterns "
@@ -188,9 +193,10 @@ def _milp_search(model: LureModel) -> tuple[dict[str, Any] | None, str]:
         ones = np.concatenate([signs > 0, signs < 0])
         cut[N + m :] = np.where(ones, -1.0, 1.0)
         add(cut, 1.0 - float(ones.sum()), np.inf)
+    ended = "" if refused == MILP_ROUNDS else f"; its time limit of {MILP_SECONDS:g} s ended it"
     return None, (
         f"undecided: a mixed-integer search over the 3^{m} active/sign patterns found "
-        f"{refused} candidate patterns that exact arithmetic refused"
+        f"{refused} candidate patterns that exact arithmetic refused{ended}"
     )
 
 
