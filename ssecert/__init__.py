@@ -22,12 +22,14 @@ from ._version import __version__
 
 if TYPE_CHECKING:  # the lazily imported names, for type checkers and editors
     from .analyze import analyze
+    from .certify import certify
     from .results import Certificate, Check, Verdict
     from .spec import Spec, SpecError, load_spec, spec_from_dict
     from .structure.attacks import StealthyAttack, stealthy_attack
     from .structure.irrepresentable import irrepresentable, irrepresentable_constant
     from .structure.observability import observability, observability_index
     from .structure.sparse import RemovalScan, scan_removals, sparse_observability
+    from .synthesize import design
     from .system import System
     from .tolerances import Tolerances
 
@@ -43,6 +45,8 @@ _LAZY = {
     "Verdict": ".results",
     "Tolerances": ".tolerances",
     "analyze": ".analyze",
+    "certify": ".certify",
+    "design": ".synthesize",
     "observability": ".structure.observability",
     "observability_index": ".structure.observability",
     "sparse_observability": ".structure.sparse",
@@ -66,6 +70,8 @@ __all__ = [
     "Verdict",
     "Tolerances",
     "analyze",
+    "certify",
+    "design",
     "observability",
     "observability_index",
     "sparse_observability",
@@ -91,16 +97,24 @@ def __dir__() -> list[str]:
     return sorted({*globals(), *_LAZY})
 
 
+# functions named like a submodule or subpackage: ``ssecert.analyze(spec)`` and the module
+# ``ssecert.analyze``, ``ssecert.certify(spec)`` and ``ssecert.certify``,
+# ``ssecert.design(plant)`` and the package of gains ``ssecert.design``
+_FUNCTIONS = ("analyze", "certify", "design")
+
+
 class _Package(types.ModuleType):
     """The package's module type: a function named like its submodule stays the attribute.
 
     Importing ``ssecert.analyze`` (the module) binds it as the package's attribute
     ``analyze``, which is the function ``ssecert.analyze(spec)``; that binding is refused,
-    so the function is found (lazily) whoever imported the module first.
+    so the function is found (lazily) whoever imported the module first.  The modules stay
+    importable by name (``from ssecert.design import place_gain``, ``import
+    ssecert.certify``): Python finds them in ``sys.modules``.
     """
 
     def __setattr__(self, name: str, value: Any) -> None:
-        if isinstance(value, types.ModuleType) and _LAZY.get(name) == f".{name}":
+        if isinstance(value, types.ModuleType) and name in _FUNCTIONS:
             return
         super().__setattr__(name, value)
 

@@ -7,13 +7,14 @@ import importlib.metadata
 import platform
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import replace
 from typing import Any
 
 from ._linalg import balanced_units, eigen_clusters
 from .budget import Budget, Laps
 from .context import AnalysisContext, sparse_key
+from .inputs import as_spec
 from .observers import get_kind, observer_kinds
 from .results import Certificate, Check, Verdict
 from .spec import Spec
@@ -137,8 +138,11 @@ def _installed_version(module: str) -> str:
 
 
 def analyze(
-    spec: Spec,
+    spec: Any,
     *,
+    max_attacked: int | None = None,
+    horizon: int | None = None,
+    observer: Mapping[str, Any] | None = None,
     method: str = "auto",
     max_sets: int = DEFAULT_MAX_SETS,
     seed: int = 0,
@@ -154,8 +158,15 @@ def analyze(
 
     Parameters
     ----------
-    spec : Spec
-        A validated design (``load_spec`` or ``spec_from_dict``).
+    spec : Spec, System, control.StateSpace, scipy.signal.dlti, str or path
+        A validated design (``load_spec`` or ``spec_from_dict``), or what
+        ``ssecert.inputs.as_spec`` makes one of: a plant (then
+        ``max_attacked`` is required), a discrete-time python-control or
+        SciPy system, a spec file or a packaged example's name.
+    max_attacked, horizon : int, optional
+        s and tau, overriding the spec's.
+    observer : mapping, optional
+        An ``[observer]`` section, replacing the spec's.
     method : {"auto", "enumeration", "eigenspace"}, default "auto"
         Sparse-observability method.
     max_sets : int, default 50,000,000
@@ -199,6 +210,7 @@ def analyze(
     >>> cert.verdict.value, cert["sparse_observability"].fields["breaking_set"]
     ('fails', [0, 2])
     """
+    spec = as_spec(spec, max_attacked=max_attacked, horizon=horizon, observer=observer)
     tol = Tolerances.check(tolerances)
     system = spec.system
     clock = _Clock()

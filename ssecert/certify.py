@@ -10,7 +10,7 @@ JSON, HTML and the terminal.
 from __future__ import annotations
 
 import shlex
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -20,6 +20,7 @@ from ._display import html_display
 from .analyze import analyze
 from .budget import Budget, ResourceLimitError
 from .context import OBSERVER, AnalysisContext
+from .inputs import as_spec
 from .results import Certificate, Verdict, to_jsonable
 from .spec import SCENARIO_DEFAULTS, Spec
 from .structure.sparse import DEFAULT_TIME_BUDGET
@@ -126,8 +127,12 @@ def _stealthy_demo(spec: Spec, witness: Mapping[str, Any], seed: int) -> dict[st
 
 
 def certify(
-    spec: Spec,
+    spec: Any,
     *,
+    max_attacked: int | None = None,
+    horizon: int | None = None,
+    observer: Mapping[str, Any] | None = None,
+    scenarios: Sequence[Mapping[str, Any]] | None = None,
     seed: int | None = None,
     simulate: bool = True,
     runs: int | None = None,
@@ -148,7 +153,16 @@ def certify(
 
     Parameters
     ----------
-    spec : Spec
+    spec : Spec, System, control.StateSpace, scipy.signal.dlti, str or path
+        The design, or what ``ssecert.inputs.as_spec`` makes one of (a plant
+        with ``max_attacked``, a discrete-time python-control or SciPy system,
+        a spec file, a packaged example's name).
+    max_attacked, horizon : int, optional
+        s and tau, overriding the spec's.
+    observer : mapping, optional
+        An ``[observer]`` section, replacing the spec's.
+    scenarios : sequence of mappings, optional
+        ``[[scenario]]`` sections, replacing the spec's.
     seed : int, optional
         Replaces every scenario's seed (and seeds the stealthy-attack check).
     simulate : bool, default True
@@ -200,6 +214,9 @@ def certify(
     >>> result.certificate.verdict.value, result.stealthy["sensors_a"]
     ('fails', [2])
     """
+    spec = as_spec(
+        spec, max_attacked=max_attacked, horizon=horizon, observer=observer, scenarios=scenarios
+    )
     say = progress or (lambda message: None)
     base_seed = 0 if seed is None else int(seed)
     budget = budget or Budget()

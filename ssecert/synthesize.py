@@ -125,6 +125,50 @@ class DesignResult:
     choice: str = ""
 
 
+def design(
+    plant: Any,
+    kind: str = "elastic_net",
+    *,
+    objective: str = "gain",
+    threshold: float = 0.1,
+    time_budget: float = 60.0,
+    min_decay: float | None = None,
+) -> DesignResult:
+    """Search the best certified design of ``kind`` for a plant (``ssecert.design``).
+
+    ``design_observer`` for any plant ``ssecert.inputs.as_system`` takes.
+
+    Parameters
+    ----------
+    plant : System, Spec, control.StateSpace, scipy.signal.dlti, str or path
+        A plant, a spec (its plant), a discrete-time python-control or SciPy
+        system, a spec file or a packaged example's name.
+    kind, objective, threshold, time_budget, min_decay
+        As for ``design_observer``.
+
+    Returns
+    -------
+    DesignResult
+
+    Examples
+    --------
+    >>> import ssecert
+    >>> result = ssecert.design("ugv", time_budget=5)
+    >>> result.observer["kind"], result.linear_radius < result.plant_radius
+    ('elastic_net', True)
+    """
+    from .inputs import as_system
+
+    return design_observer(
+        as_system(plant),
+        kind,
+        objective=objective,
+        threshold=threshold,
+        time_budget=time_budget,
+        min_decay=min_decay,
+    )
+
+
 def design_observer(
     system: System,
     kind: str = "elastic_net",

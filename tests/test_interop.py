@@ -44,3 +44,68 @@ def test_continuous_time_systems_and_other_objects_are_refused_with_the_way_out(
         System.from_scipy(signal.lti([[0.0]], [[1.0]], [[1.0]], [[0.0]]))
     with pytest.raises(TypeError, match="scipy.signal dlti"):
         System.from_scipy(np.eye(2))
+
+
+def _answers(cert) -> str:
+    from ssecert.report.json import certificate_json
+
+    document = __import__("json").loads(certificate_json(cert))
+    document.pop("meta")
+    return document
+
+
+def test_the_top_level_functions_take_python_control_and_scipy_systems():
+    import ssecert
+
+    A, C = UGV.system.A, UGV.system.C
+    plant = ct.ss(A, [[0.0], [1.0]], C, np.zeros((3, 1)), 0.01)
+    observer = {"kind": "sso", "step": 0.2, "threshold": 0.1}
+    spec = Spec("system", System.from_control(plant), max_attacked=1, horizon=2)
+    direct = ssecert.analyze(spec)
+    assert _answers(ssecert.analyze(plant, max_attacked=1)) == _answers(direct)
+    dlti = signal.dlti(A, [[0.0], [1.0]], C, np.zeros((3, 1)), dt=0.01)
+    from_scipy = Spec("system", System.from_scipy(dlti), max_attacked=1, horizon=2)
+    assert _answers(ssecert.analyze(dlti, max_attacked=1)) == _answers(ssecert.analyze(from_scipy))
+    result = ssecert.certify(plant, max_attacked=1, observer=observer, simulate=False)
+    assert result.certificate["observer_gain"].verdict.value == "holds"
+    assert result.spec.observer["kind"] == "sso" and result.spec.max_attacked == 1
+
+
+def test_the_top_level_functions_stay_functions_beside_their_modules():
+    import importlib
+
+    import ssecert
+
+    for name in ("analyze", "certify", "design"):
+        importlib.import_module(f"ssecert.{name}")  # the module or package of that name
+        assert callable(getattr(ssecert, name)), name
+    from ssecert.design.gains import deadbeat_gain  # the package of gains stays importable
+
+    assert callable(deadbeat_gain)
+
+
+def test_a_spec_file_an_example_name_and_overrides_are_taken():
+    import ssecert
+    from ssecert.inputs import as_spec
+
+    assert ssecert.analyze("notes-example-2").verdict.value == "fails"
+    ugv = as_spec("ugv", max_attacked=0)
+    assert ugv.max_attacked == 0 and ugv.observer == UGV.observer and ugv.name == UGV.name
+    for name in ("ugv", "notes-example-1", "random-n15-p30"):
+        spec = load_example(name)
+        again = as_spec(spec, max_attacked=spec.max_attacked, horizon=spec.horizon)
+        assert again.system == spec.system and again.observer == spec.observer
+        assert again.scenarios == spec.scenarios and again.name == spec.name
+        assert as_spec(spec) is spec
+
+
+def test_a_plant_without_its_attack_bound_or_another_object_is_refused():
+    from ssecert.inputs import as_spec
+    from ssecert.spec import SpecError
+
+    with pytest.raises(TypeError, match="max_attacked is required when the design is a plant"):
+        as_spec(UGV.system)
+    with pytest.raises(TypeError, match="design: expected a Spec, a System.*got int"):
+        as_spec(42, max_attacked=1)
+    with pytest.raises(SpecError, match="observer.threshold"):
+        as_spec(UGV.system, max_attacked=1, observer={"kind": "sso", "step": 0.2})

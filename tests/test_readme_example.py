@@ -6,6 +6,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 README = Path(__file__).resolve().parents[1] / "README.md"
 SECTION = "## Property tests in your own pytest suite"
 FILE = "test_ssecert_properties.py"
@@ -63,3 +65,36 @@ def test_readme_example_runs_as_shown(tmp_path):
     assert len(shown_errors) >= 4
     for line in shown_errors:
         assert line in out.splitlines(), line
+
+
+@pytest.mark.slow
+def test_the_python_section_runs_and_prints_what_its_comments_say():
+    # each line `expression  # literal` of the README's Python section evaluates to the literal
+    import ast
+    import warnings
+
+    text = README.read_text(encoding="utf-8")
+    start = text.index("\n## Python\n")
+    end = text.find("\n## ", start + 1)
+    blocks = re.findall(r"```python\n(.*?)```", text[start:end], re.S)
+    assert len(blocks) >= 2
+    checked = 0
+    for body in blocks:
+        namespace: dict = {}
+        pending: list[str] = []  # the lines since the last one checked, run before it
+        for line in body.splitlines():
+            code, _, comment = line.partition("  # ")
+            try:
+                expected = ast.literal_eval(comment.strip()) if comment else None
+            except (ValueError, SyntaxError):
+                expected = None
+            if expected is None:
+                pending.append(line)
+                continue
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                exec(compile("\n".join(pending), "README", "exec"), namespace)
+                assert eval(code, namespace) == expected, line
+            pending = []
+            checked += 1
+    assert checked >= 4
