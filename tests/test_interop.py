@@ -59,7 +59,7 @@ def test_the_top_level_functions_take_python_control_and_scipy_systems():
 
     A, C = UGV.system.A, UGV.system.C
     plant = ct.ss(A, [[0.0], [1.0]], C, np.zeros((3, 1)), 0.01)
-    observer = {"kind": "sso", "step": 0.2, "threshold": 0.1}
+    observer = {"kind": "luenberger", "gain": "place", "poles": [0.5, 0.6]}
     spec = Spec("system", System.from_control(plant), max_attacked=1, horizon=2)
     direct = ssecert.analyze(spec)
     assert _answers(ssecert.analyze(plant, max_attacked=1)) == _answers(direct)
@@ -68,7 +68,7 @@ def test_the_top_level_functions_take_python_control_and_scipy_systems():
     assert _answers(ssecert.analyze(dlti, max_attacked=1)) == _answers(ssecert.analyze(from_scipy))
     result = ssecert.certify(plant, max_attacked=1, observer=observer, simulate=False)
     assert result.certificate["observer_gain"].verdict.value == "holds"
-    assert result.spec.observer["kind"] == "sso" and result.spec.max_attacked == 1
+    assert result.spec.observer["kind"] == "luenberger" and result.spec.max_attacked == 1
 
 
 def test_the_top_level_functions_stay_functions_beside_their_modules():
@@ -109,3 +109,23 @@ def test_a_plant_without_its_attack_bound_or_another_object_is_refused():
         as_spec(42, max_attacked=1)
     with pytest.raises(SpecError, match="observer.threshold"):
         as_spec(UGV.system, max_attacked=1, observer={"kind": "sso", "step": 0.2})
+
+
+def test_a_linear_observer_exports_to_python_control_and_runs_alike():
+    from ssecert.inputs import as_spec
+    from ssecert.observers import build_observer
+
+    spec = as_spec("ugv", observer={"kind": "luenberger", "gain": "place", "poles": [0.5, 0.6]})
+    design = build_observer(spec.system, spec.observer)
+    observer = design.to_control()
+    assert observer.isdtime() and list(observer.input_labels) == list(spec.system.sensors)
+    assert np.allclose(np.sort(np.abs(ct.poles(observer))), [0.5, 0.6])
+    # the same estimates as x_hat+ = A x_hat + L (y - C x_hat), from x_hat(0) = 0
+    y = np.random.default_rng(0).standard_normal((3, 20))
+    response = ct.forced_response(observer, U=y, X0=np.zeros(2))
+    x_hat = np.zeros(2)
+    for k in range(20):
+        assert np.allclose(response.outputs[:, k], x_hat, atol=1e-12)
+        x_hat = spec.system.A @ x_hat + design.L @ (y[:, k] - spec.system.C @ x_hat)
+    with pytest.raises(ValueError, match="a dsso observer is not linear.*error_matrix"):
+        build_observer(UGV.system, UGV.observer).to_control()

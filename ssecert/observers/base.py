@@ -96,6 +96,41 @@ class ObserverDesign:
         """True for observers that also estimate the attack."""
         return self.observer_kind.estimates_attack
 
+    def to_control(self) -> Any:
+        """The observer as a discrete-time python-control ``StateSpace``, where it is linear.
+
+        A Luenberger observer x_hat(k+1) = (A - L C) x_hat(k) + L y(k): inputs the sensors
+        (by name), outputs the estimate ``x_hat[0]`` ... (sampling time unspecified, ``dt =
+        True``).
+
+        Raises
+        ------
+        ValueError
+            For an observer that estimates the attack (its soft thresholds are not linear),
+            naming the linear part it has.
+        """
+        if self.sparse or self.window != 1:
+            rows, cols = self.error_matrix.shape
+            raise ValueError(
+                f"a {self.kind} observer is not linear (its soft thresholds estimate the "
+                "attack), so it has no StateSpace; its linear error dynamics while the attack "
+                f"estimate is zero are its error_matrix (F = A - L S, {rows} x {cols})"
+            )
+        import control
+
+        A, L = self.system.A, self.L
+        n, p = L.shape
+        return control.ss(
+            A - L @ self.sensing,
+            L,
+            np.eye(n),
+            np.zeros((n, p)),
+            True,
+            inputs=list(self.system.sensors),
+            outputs=[f"x_hat[{i}]" for i in range(n)],
+            name=f"{self.system.name}_observer",
+        )
+
     def to_dict(self) -> dict[str, Any]:
         return self.observer_kind.describe(self)
 
