@@ -162,11 +162,20 @@ class ObserverKind:
         observer): its certificates are LMIs on a Lur'e model, the thesis's
         assumptions are checked, and its certified (shrink, step) region is
         mapped.
+    key_schemas : mapping, optional
+        A JSON Schema for each of ``keys`` but ``kind`` (the spec file's
+        schema, ``ssecert.schemas.spec_schema``, is built from them).
+    required_keys : tuple of str
+        The keys the table must hold.
     """
 
     name: ClassVar[str]
     keys: ClassVar[tuple[str, ...]]
     estimates_attack: ClassVar[bool] = False
+    #: JSON Schemas of its keys but ``kind`` (``ssecert.schemas``; a kind without them is
+    #: described as an object with its ``kind``), and those it requires
+    key_schemas: ClassVar[Mapping[str, Any] | None] = None
+    required_keys: ClassVar[tuple[str, ...]] = ()
 
     def parse(self, table: SpecTable, n: int, p: int) -> dict[str, Any]:
         """The validated parameters of an ``[observer]`` table (``kind`` excluded).
@@ -317,6 +326,34 @@ class ObserverKind:
 
 
 # Shared by several kinds ---------------------------------------------------
+
+
+#: JSON Schema fragments of the observers' keys (``ObserverKind.key_schemas``)
+MATRIX_SCHEMA: dict[str, Any] = {
+    "type": "array",
+    "minItems": 1,
+    "items": {"type": "array", "minItems": 1, "items": {"type": "number"}},
+    "description": "a matrix as a list of rows",
+}
+POSITIVE_SCHEMA: dict[str, Any] = {"type": "number", "exclusiveMinimum": 0}
+POLES_SCHEMA: dict[str, Any] = {
+    "type": "array",
+    "minItems": 1,
+    "items": {
+        "oneOf": [
+            {"type": "number"},
+            {"type": "array", "items": {"type": "number"}, "minItems": 2, "maxItems": 2},
+        ]
+    },
+    "description": 'one pole per state (with gain = "place"): a number or [re, im], complex '
+    "ones in conjugate pairs",
+}
+UNIT_SHRINK_SCHEMA: dict[str, Any] = {"const": 1, "description": "1 (the default)"}
+
+
+def gain_schema(choices: tuple[str, ...]) -> dict[str, Any]:
+    """The schema of ``gain``: one of ``choices`` or an n x p matrix."""
+    return {"oneOf": [{"enum": list(choices)}, MATRIX_SCHEMA], "default": "deadbeat"}
 
 
 def parse_gain(

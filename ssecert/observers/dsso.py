@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import replace
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -18,10 +18,14 @@ from ..budget import Budget
 from ..system import System
 from ..tolerances import Tolerances
 from .base import (
+    POLES_SCHEMA,
+    POSITIVE_SCHEMA,
+    UNIT_SHRINK_SCHEMA,
     ObserverDesign,
     ObserverKind,
     check_finite,
     gain_from_choice,
+    gain_schema,
     parse_gain,
     parse_unit_shrink,
     soft_lure_model,
@@ -78,6 +82,14 @@ class SoftThresholdObserverKind(ObserverKind):
 class DecoupledSSO(SoftThresholdObserverKind):
     name = "dsso"
     keys = ("kind", "gain", "poles", "step", "threshold", "shrink")
+    key_schemas: ClassVar[Mapping[str, Any]] = {
+        "gain": gain_schema(("deadbeat", "pinv", "place")),
+        "poles": POLES_SCHEMA,
+        "step": POSITIVE_SCHEMA,
+        "threshold": POSITIVE_SCHEMA,
+        "shrink": UNIT_SHRINK_SCHEMA,
+    }
+    required_keys = ("step", "threshold")
 
     def parse(self, table: SpecTable, n: int, p: int) -> dict[str, Any]:
         out = parse_gain(table, n, p, ("deadbeat", "pinv", "place"))

@@ -8,10 +8,18 @@ default identity).
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Mapping
+from typing import Any, ClassVar
 
 from .._spec_table import SpecTable
-from .base import GAIN_CHOICES, parse_gain
+from .base import (
+    GAIN_CHOICES,
+    MATRIX_SCHEMA,
+    POLES_SCHEMA,
+    POSITIVE_SCHEMA,
+    gain_schema,
+    parse_gain,
+)
 from .dsso import SoftThresholdObserverKind
 from .registry import register
 
@@ -22,6 +30,15 @@ __all__ = ["ElasticNet"]
 class ElasticNet(SoftThresholdObserverKind):
     name = "elastic_net"
     keys = ("kind", "gain", "poles", "step", "threshold", "shrink", "L2")
+    key_schemas: ClassVar[Mapping[str, Any]] = {
+        "gain": gain_schema(GAIN_CHOICES),
+        "poles": POLES_SCHEMA,
+        "step": POSITIVE_SCHEMA,
+        "threshold": POSITIVE_SCHEMA,
+        "shrink": {"type": "number", "exclusiveMinimum": 0, "exclusiveMaximum": 1},
+        "L2": MATRIX_SCHEMA,
+    }
+    required_keys = ("step", "threshold", "shrink")
 
     def parse(self, table: SpecTable, n: int, p: int) -> dict[str, Any]:
         out = parse_gain(table, n, p, GAIN_CHOICES)

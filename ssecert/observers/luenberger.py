@@ -7,13 +7,21 @@ Spec keys: ``gain`` (``"deadbeat"``, the default, ``"place"`` with
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, ClassVar
 
 from .._spec_table import SpecTable
 from ..budget import Budget
 from ..system import System
 from ..tolerances import Tolerances
-from .base import ObserverDesign, ObserverKind, check_finite, gain_from_choice, parse_gain
+from .base import (
+    POLES_SCHEMA,
+    ObserverDesign,
+    ObserverKind,
+    check_finite,
+    gain_from_choice,
+    gain_schema,
+    parse_gain,
+)
 from .registry import register
 from .simulators import LinearObserver
 
@@ -24,6 +32,10 @@ __all__ = ["Luenberger"]
 class Luenberger(ObserverKind):
     name = "luenberger"
     keys = ("kind", "gain", "poles")
+    key_schemas: ClassVar[Mapping[str, Any]] = {
+        "gain": gain_schema(("deadbeat", "place", "pinv")),
+        "poles": POLES_SCHEMA,
+    }
 
     def parse(self, table: SpecTable, n: int, p: int) -> dict[str, Any]:
         return parse_gain(table, n, p, ("deadbeat", "place", "pinv"))

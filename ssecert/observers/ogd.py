@@ -6,14 +6,14 @@ Spec keys: ``step`` (required, > 0); ``gain`` may only say ``"ogd"``.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, ClassVar
 
 from .._spec_table import SpecTable
 from ..budget import Budget
 from ..design.gains import ogd_gain
 from ..system import System
 from ..tolerances import Tolerances
-from .base import ObserverDesign, ObserverKind, check_finite
+from .base import POSITIVE_SCHEMA, ObserverDesign, ObserverKind, check_finite
 from .registry import register
 from .simulators import LinearObserver
 
@@ -24,6 +24,11 @@ __all__ = ["OnlineGradient"]
 class OnlineGradient(ObserverKind):
     name = "ogd"
     keys = ("kind", "gain", "step")
+    key_schemas: ClassVar[Mapping[str, Any]] = {
+        "gain": {"const": "ogd", "default": "ogd"},
+        "step": POSITIVE_SCHEMA,
+    }
+    required_keys = ("step",)
 
     def parse(self, table: SpecTable, n: int, p: int) -> dict[str, Any]:
         gain = table.get("gain", "ogd")

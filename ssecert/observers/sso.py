@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -20,7 +20,13 @@ from ..budget import Budget, ResourceLimitError
 from ..design.gains import Gain, GainError, ogd_gain
 from ..system import System
 from ..tolerances import Tolerances, product_rounding
-from .base import ObserverDesign, check_finite, parse_unit_shrink
+from .base import (
+    POSITIVE_SCHEMA,
+    UNIT_SHRINK_SCHEMA,
+    ObserverDesign,
+    check_finite,
+    parse_unit_shrink,
+)
 from .dsso import SoftThresholdObserverKind
 from .dynamic import DynamicObserver
 from .lure import ExactLure, LureModel
@@ -39,6 +45,14 @@ MAX_DEAD_ZONE_ROWS = 20_000
 class SparseSoftObserverKind(SoftThresholdObserverKind):
     name = "sso"
     keys = ("kind", "step", "threshold", "shrink", "window", "inner_steps")
+    key_schemas: ClassVar[Mapping[str, Any]] = {
+        "step": POSITIVE_SCHEMA,
+        "threshold": POSITIVE_SCHEMA,
+        "shrink": UNIT_SHRINK_SCHEMA,
+        "window": {"type": "integer", "minimum": 1, "default": 1},
+        "inner_steps": {"type": "integer", "minimum": 1, "default": 1},
+    }
+    required_keys = ("step", "threshold")
 
     def parse(self, table: SpecTable, n: int, p: int) -> dict[str, Any]:
         out: dict[str, Any] = {}

@@ -1,0 +1,271 @@
+"""JSON Schemas of the spec file and of the certificate, built from the code that reads and
+writes them.
+
+``spec_schema()`` describes a spec file (TOML or JSON, as parsed): its tables and their keys
+are those the spec reader accepts (the key lists it checks against, and each observer kind's
+``keys`` with its ``key_schemas``), so a key added to the reader without a schema makes the
+schema fail to build.  ``certificate_schema()`` describes the JSON of ``ssecert analyze`` and
+``ssecert certify``: the document, every check's common fields, and the fields scripts rely on
+for each check (docs/architecture.md, "JSON").
+
+A schema says what a document looks like; what it cannot say (finite numbers, matrix shapes
+that agree with each other, poles in conjugate pairs, sensors below p, which keys one attack
+needs) ssecert checks when it reads the spec, naming the key.
+
+    ssecert schema spec > spec.schema.json
+
+Examples
+--------
+>>> import jsonschema
+>>> from ssecert.schemas import spec_schema
+>>> jsonschema.validate({"system": {"A": [[1.0]], "C": [[1.0]]}}, spec_schema())
+"""
+
+from __future__ import annotations
+
+import copy
+from typing import Any
+
+__all__ = ["certificate_schema", "spec_schema", "SCHEMAS"]
+
+DRAFT = "https://json-schema.org/draft/2020-12/schema"
+
+_NUMBER: dict[str, Any] = {"type": "number"}
+# a float of the certificate: a number, or "Infinity", "-Infinity", "NaN" (strict JSON)
+_REAL: dict[str, Any] = {"oneOf": [{"type": "number"}, {"enum": ["Infinity", "-Infinity", "NaN"]}]}
+_INDEX_LIST: dict[str, Any] = {"type": "array", "items": {"type": "integer", "minimum": 0}}
+
+# the spec's top-level keys and their schemas; the system's, the attack's and a scenario's keys
+# (each list is checked against the one the reader uses)
+_SCENARIO: dict[str, dict[str, Any]] = {
+    "name": {"type": "string", "minLength": 1},
+    "attack": {"enum": None},  # ATTACK_KINDS, filled in
+    "sensors": {**_INDEX_LIST, "minItems": 1, "description": "attacked sensors (0-based)"},
+    "count": {"type": "integer", "minimum": 1, "description": "a random support of this size"},
+    "magnitude": {
+        "oneOf": [
+            {"type": "number", "minimum": 0},
+            {
+                "type": "array",
+                "items": {"type": "number", "minimum": 0},
+                "minItems": 2,
+                "maxItems": 2,
+            },
+        ],
+        "description": "the range [low, high] of |a_i| (one number: both)",
+    },
+    "period": {"type": "integer", "minimum": 1},
+    "noise": {"type": "number", "minimum": 0},
+    "steps": {"type": "integer", "minimum": 1},
+    "runs": {"type": "integer", "minimum": 1},
+    "seed": {"type": "integer", "minimum": 0},
+}
+
+
+def _keys(table: dict[str, Any], keys: tuple[str, ...], where: str) -> dict[str, Any]:
+    """The schemas of ``keys``, which must be exactly those of ``table``."""
+    if set(keys) != set(table):
+        missing = sorted(set(keys) - set(table))
+        extra = sorted(set(table) - set(keys))
+        raise RuntimeError(
+            f"the schema of {where} is out of date: missing {missing}, extra {extra}"
+        )
+    return {key: table[key] for key in keys}
+
+
+def _observer_schemas() -> list[dict[str, Any]]:
+    """One schema per registered observer kind, told apart by ``kind``."""
+    from .observers import get_kind, observer_kinds
+
+    out = []
+    for name in observer_kinds():
+        kind = get_kind(name)
+        if kind.key_schemas is None:  # a kind registered without schemas: its kind alone
+            out.append({"type": "object", "properties": {"kind": {"const": name}},
+                        "required": ["kind"]})  # fmt: skip
+            continue
+        others = tuple(k for k in kind.keys if k != "kind")
+        properties = {"kind": {"const": name}, **_keys(dict(kind.key_schemas), others, name)}
+        schema: dict[str, Any] = {
+            "type": "object",
+            "title": f"observer kind {name}",
+            "properties": properties,
+            "required": ["kind", *kind.required_keys],
+            "additionalProperties": False,
+        }
+        out.append(schema)
+    return out
+
+
+def spec_schema() -> dict[str, Any]:
+    """The JSON Schema of a spec file (the parsed TOML or JSON document)."""
+    from ._spec_files import _SYSTEM_KEYS
+    from ._spec_scenarios import _SCENARIO_KEYS, ATTACK_KINDS
+    from ._spec_table import MAX_NAME_LENGTH
+    from .observers.base import MATRIX_SCHEMA
+    from .spec import _ATTACK_KEYS, _NAME_RE, _TOP_KEYS, MAX_HORIZON
+
+    scenario = copy.deepcopy(_SCENARIO)
+    scenario["attack"] = {"enum": list(ATTACK_KINDS)}
+    scenario_schema = {
+        "type": "object",
+        "properties": _keys(scenario, _SCENARIO_KEYS, "a scenario"),
+        "required": ["name", "attack"],
+        "additionalProperties": False,
+        "allOf": [
+            {
+                "if": {"properties": {"attack": {"enum": ["switching", "sinusoidal"]}}},
+                "then": {"required": ["period"]},
+                "else": {"not": {"required": ["period"]}},
+            },
+            {
+                "if": {"properties": {"attack": {"enum": ["none", "stealthy"]}}},
+                "then": {"not": {"anyOf": [{"required": ["sensors"]}, {"required": ["count"]}]}},
+            },
+        ],
+    }
+    system = {
+        "A": {**MATRIX_SCHEMA, "description": "n x n state matrix"},
+        "C": {**MATRIX_SCHEMA, "description": "p x n output matrix, a row per sensor"},
+        "sensors": {
+            "type": "array",
+            "items": {"type": "string", "minLength": 1, "maxLength": MAX_NAME_LENGTH},
+            "uniqueItems": True,
+            "description": "unique sensor names (default y1 ... yp)",
+        },
+    }
+    attack = {
+        "max_attacked": {"type": "integer", "minimum": 0, "description": "s"},
+        "horizon": {"type": "integer", "minimum": 1, "maximum": MAX_HORIZON,
+                    "description": "tau (default n)"},
+    }  # fmt: skip
+    top = {
+        "name": {"type": "string", "pattern": _NAME_RE.pattern, "maxLength": MAX_NAME_LENGTH,
+                 "description": "names the report files (default: the file's name)"},
+        "system": {
+            "type": "object",
+            "properties": _keys(system, _SYSTEM_KEYS, "[system]"),
+            "required": ["A", "C"],
+            "additionalProperties": False,
+        },
+        "attack": {
+            "type": "object",
+            "properties": _keys(attack, _ATTACK_KEYS, "[attack]"),
+            "additionalProperties": False,
+        },
+        "observer": {"oneOf": _observer_schemas()},
+        "scenario": {"oneOf": [scenario_schema, {"type": "array", "items": scenario_schema}]},
+    }  # fmt: skip
+    return {
+        "$schema": DRAFT,
+        "$id": "https://ssecert.invalid/schemas/spec.schema.json",
+        "title": "ssecert spec file",
+        "description": "A plant x(k+1) = A x(k), y(k) = C x(k) + a(k), the number s of "
+        "sensors an attacker may control, an optional observer and simulation scenarios.",
+        "type": "object",
+        "properties": _keys(top, _TOP_KEYS, "the spec"),
+        "required": ["system"],
+        "additionalProperties": False,
+    }
+
+
+# the fields scripts rely on, per check (docs/architecture.md, "JSON"); a check may have more
+_CHECK_FIELDS: dict[str, dict[str, Any]] = {
+    "observability": {"observability_index": {"type": ["integer", "null"]}},
+    "sparse_observability": {
+        "max_removable": {"type": ["integer", "null"], "minimum": -1},
+        "max_removable_is_lower_bound": {"type": "boolean"},
+        "max_correctable": {"type": ["integer", "null"], "minimum": -1},
+        "breaking_set": {"oneOf": [_INDEX_LIST, {"type": "null"}]},
+    },
+    "irrepresentable": {
+        "worst_support": {"oneOf": [_INDEX_LIST, {"type": "null"}]},
+        "horizon": {"type": "integer", "minimum": 1},
+        "mode": {"type": "string"},
+    },
+    "observer_gain": {"L": {"type": "array"}, "spectral_radius": _REAL},
+}
+_REQUIRED_FIELDS: dict[str, list[str]] = {
+    "observability": ["observability_index"],
+    "sparse_observability": [
+        "max_removable", "max_removable_is_lower_bound", "max_correctable", "breaking_set",
+    ],
+    "irrepresentable": ["horizon"],
+    "observer_gain": ["L", "spectral_radius"],
+}  # fmt: skip
+
+
+def _check_schema(check_id: str | None) -> dict[str, Any]:
+    common = {
+        "verdict": {"enum": ["holds", "fails", "inconclusive"]},
+        "title": {"type": "string"},
+        "summary": {"type": "string"},
+        "required": {"type": "boolean", "description": "counts towards the exit status"},
+        "applies": {"type": "boolean"},
+        "value": {
+            "type": ["number", "string", "null"],
+            "description": 'a number, "Infinity" or a word',
+        },
+        "value_name": {"type": ["string", "null"]},
+        "margin": {"oneOf": [_REAL, {"type": "null"}]},
+        "margin_name": {"type": ["string", "null"]},
+        "method": {"type": ["string", "null"]},
+        "witness": {"type": ["object", "null"]},
+        "evidence": {"type": "object"},
+        "tolerances": {"type": ["object", "null"]},
+    }
+    fields = _CHECK_FIELDS.get(check_id or "", {})
+    return {
+        "type": "object",
+        "properties": {**common, **fields},
+        "required": ["verdict", "title", "summary", "required", "applies", "evidence",
+                     *_REQUIRED_FIELDS.get(check_id or "", [])],
+    }  # fmt: skip
+
+
+def certificate_schema() -> dict[str, Any]:
+    """The JSON Schema of the certificate of ``ssecert analyze`` and ``ssecert certify``."""
+    checks = {name: _check_schema(name) for name in _CHECK_FIELDS}
+    return {
+        "$schema": DRAFT,
+        "$id": "https://ssecert.invalid/schemas/certificate.schema.json",
+        "title": "ssecert certificate",
+        "description": "Every check's verdict with its evidence; the top-level verdict follows "
+        "the exit status (fails if a required check fails, else inconclusive if one is, else "
+        "holds).",
+        "type": "object",
+        "properties": {
+            "ssecert_version": {"type": "string"},
+            "system": {
+                "type": "object",
+                "properties": {
+                    "name": {"type": "string"},
+                    "n": {"type": "integer", "minimum": 1},
+                    "p": {"type": "integer", "minimum": 1},
+                    "sensors": {"type": "array", "items": {"type": "string"}},
+                },
+                "required": ["name", "n", "p", "sensors"],
+            },
+            "verdict": {"enum": ["holds", "fails", "inconclusive"]},
+            "checks": {
+                "type": "object",
+                "properties": checks,
+                "required": ["observability", "sparse_observability"],
+                "propertyNames": {"pattern": "^[a-z][a-z0-9_]*$"},
+                "additionalProperties": _check_schema(None),
+            },
+            "meta": {"type": "object"},
+            # ``ssecert certify`` adds these
+            "spec": {"$ref": "https://ssecert.invalid/schemas/spec.schema.json"},
+            "simulations": {"type": "object"},
+            "reproduce": {"type": "string"},
+            "seed": {"type": ["integer", "null"]},
+            "notes": {"type": "array", "items": {"type": "string"}},
+        },
+        "required": ["ssecert_version", "system", "verdict", "checks"],
+        "$defs": {"spec": spec_schema()},
+    }
+
+
+#: the schemas by the name ``ssecert schema NAME`` takes
+SCHEMAS = {"spec": spec_schema, "certificate": certificate_schema}
