@@ -42,13 +42,19 @@ def _type(schema: dict[str, Any]) -> str:
     if "enum" in schema:
         return "one of " + ", ".join(f"``{json.dumps(v)}``" for v in schema["enum"])
     if "oneOf" in schema:
-        return " or ".join(_type(s) for s in schema["oneOf"])
+        kinds = list(dict.fromkeys(_type(s) for s in schema["oneOf"]))  # each once
+        return " or ".join(kinds)
     kind = schema.get("type", "any")
     if kind == "array":
         items = schema.get("items", {})
         if items.get("type") == "array":
             return "matrix (list of rows of numbers)"
-        return f"list of {_type(items) if items else 'values'}"
+        if not items:
+            return "list of values"
+        word, _, rest = _type(items).partition(" (")
+        return f"list of {word}s" + (f" ({rest}" if rest else "")
+    if kind == "object":
+        return "table"
     text = " or ".join(kind) if isinstance(kind, list) else str(kind)
     bounds = []
     for key, sign in (("minimum", ">="), ("exclusiveMinimum", ">"), ("maximum", "<="),
