@@ -51,6 +51,8 @@ def _type(schema: dict[str, Any]) -> str:
             return "matrix (list of rows of numbers)"
         if not items:
             return "list of values"
+        if " or " in _type(items):
+            return f"list, each {_type(items)}"
         word, _, rest = _type(items).partition(" (")
         return f"list of {word}s" + (f" ({rest}" if rest else "")
     if kind == "object":
