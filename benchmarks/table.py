@@ -121,6 +121,13 @@ BENCHMARKS: dict[str, tuple[str, str]] = {
         "(the device's screening and the CPU's share) in the same run, same answer required; "
         "sets per second on each, and the machine. No row where no GPU is usable.",
     ),
+    "exact": (
+        "bench_exact.py",
+        "ssecert's exact observability (a Krylov rank modulo a prime, an exact kernel vector "
+        "when it is short) against python-flint (the observability matrix of the integer-scaled "
+        "data, its fmpz rank and nullspace) on random plants, observable and with one state "
+        "unseen, n = 5 to 30; same answer required. No row without python-flint.",
+    ),
     "design": (
         "bench_design.py",
         "Observer synthesis on the 15-state, 30-sensor random-n15-p30 plant: ssecert's "
@@ -153,6 +160,7 @@ ORDER = (
     "large plants",
     "Dask workers vs in-process",
     "accelerator screening vs CPU",
+    "exact observability vs python-flint",
     "cost model",
     "cost model projection",
     "shared analysis context",
