@@ -11,9 +11,9 @@ from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
 
-from ._linalg import balanced_units, eigen_clusters
 from .budget import Budget, Laps
 from .context import AnalysisContext, sparse_key
+from .numerics.linalg import balanced_units, eigen_clusters
 from .observers import get_kind, observer_kinds
 from .results import Certificate, Check, Verdict
 from .spec import Spec

@@ -14,10 +14,16 @@ from typing import Any
 
 import numpy as np
 
-from .._exact_powers import Dyadic, ExactMatrix, as_dyadic, dyadic, exact_observability_matrix
 from .._spec_table import SpecTable
 from ..budget import Budget, ResourceLimitError
 from ..design.gains import Gain, GainError, ogd_gain
+from ..numerics.exact_powers import (
+    Dyadic,
+    ExactMatrix,
+    as_dyadic,
+    dyadic,
+    exact_observability_matrix,
+)
 from ..system import System
 from ..tolerances import Tolerances, product_rounding
 from .base import ObserverDesign, check_finite, parse_unit_shrink
