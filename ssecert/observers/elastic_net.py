@@ -8,12 +8,14 @@ default identity).
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from .._spec_table import SpecTable
 from .base import GAIN_CHOICES, parse_gain
 from .dsso import SoftThresholdObserverKind
 from .registry import register
+
+if TYPE_CHECKING:  # annotations only: the spec package imports the observers
+    from ..spec.table import SpecTable
 
 __all__ = ["ElasticNet"]
 

@@ -7,15 +7,17 @@ Spec keys: ``gain`` (``"deadbeat"``, the default, ``"place"`` with
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from .._spec_table import SpecTable
 from ..budget import Budget
 from ..system import System
 from ..tolerances import Tolerances
 from .base import ObserverDesign, ObserverKind, check_finite, gain_from_choice, parse_gain
 from .registry import register
 from .simulators import LinearObserver
+
+if TYPE_CHECKING:  # annotations only: the spec package imports the observers
+    from ..spec.table import SpecTable
 
 __all__ = ["Luenberger"]
 

@@ -10,11 +10,10 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .._spec_table import SpecTable
 from ..budget import Budget, ResourceLimitError
 from ..design.gains import Gain, GainError, ogd_gain
 from ..numerics.exact_powers import (
@@ -32,6 +31,9 @@ from .dynamic import DynamicObserver
 from .lure import ExactLure, LureModel
 from .registry import register
 from .simulators import WindowSSO
+
+if TYPE_CHECKING:  # annotations only: the spec package imports the observers
+    from ..spec.table import SpecTable
 
 __all__ = ["SparseSoftObserverKind", "MAX_DEAD_ZONE_ROWS"]
 
