@@ -128,6 +128,18 @@ def test_no_module_imports_a_higher_layer(module):
     assert not upward, f"{module} (layer {mine}) imports {upward}"
 
 
+def test_no_module_sits_below_its_package():
+    # importing ssecert.a.b runs ssecert/a/__init__.py first: a module placed in a lower layer
+    # than its package would bring the package's layer with it
+    for module in MODULES:
+        parts = module.split(".")
+        for i in range(2, len(parts)):
+            package = ".".join(parts[:i])
+            assert _layer(module) >= _layer(package), (
+                f"{module} (layer {_layer(module)}) is inside {package} (layer {_layer(package)})"
+            )
+
+
 def test_no_import_cycles():
     state: dict[str, int] = {}  # 1 on the stack, 2 done
     stack: list[str] = []
