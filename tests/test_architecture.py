@@ -44,10 +44,6 @@ LAYERS = {
     5: ("ssecert.report",),
     6: (
         "ssecert.cli",
-        "ssecert._cli_options",
-        "ssecert._cli_audit",
-        "ssecert._cli_design",
-        "ssecert._cli_files",
         "ssecert.testing",
         "ssecert.__main__",
         "ssecert",
