@@ -2,7 +2,7 @@
 
 ssecert decides the observability of the exact data (A, C) (the floats taken as rationals) by a
 Krylov rank modulo a prime (a proof when it is n) and, when that rank is short, an exact kernel
-vector re-checked in integers (``ssecert._exact.exact_observability``).  The reference is
+vector re-checked in integers (``ssecert.numerics.exact.exact_observability``).  The reference is
 python-flint (FLINT's fmpz matrices): the floats scaled to integers by powers of two, the
 observability matrix formed exactly, its rank (``fmpz_mat.rank``) and, when short, a kernel
 vector (``nullspace``).  Both must agree.  Plants: random Gaussian (observable) and the same with
@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from _common import best_of, row, yes_no
 
-from ssecert._exact import exact_observability
+from ssecert.numerics.exact import exact_observability
 
 NAME = "exact observability vs python-flint"
 SIZES = ((5, 3), (10, 6), (20, 12), (30, 20))

@@ -41,7 +41,7 @@ import numpy as np
 from _common import best_of, row
 from bench_enumeration import modal_plant
 
-from ssecert._linalg import balanced_units, sensor_subspaces
+from ssecert.numerics.linalg import balanced_units, sensor_subspaces
 from ssecert.structure.enumeration import _scan_level
 from ssecert.tolerances import Tolerances
 

@@ -11,10 +11,10 @@ from collections.abc import Callable, Mapping
 from dataclasses import replace
 from typing import Any
 
-from ._linalg import balanced_units, eigen_clusters
 from .budget import Budget, Laps
 from .context import AnalysisContext, sparse_key
 from .inputs import as_spec
+from .numerics.linalg import balanced_units, eigen_clusters
 from .observers import get_kind, observer_kinds
 from .results import Certificate, Check, Verdict
 from .spec import Spec

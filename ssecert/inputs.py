@@ -80,8 +80,8 @@ def as_spec(
     TypeError
         For a design of another type, or a plant without ``max_attacked``.
     """
-    from ._spec_write import spec_document
     from .spec import Spec, spec_from_dict
+    from .spec.write import spec_document
 
     if isinstance(design, (str, os.PathLike)):
         spec = _load(os.fspath(design), max_attacked=max_attacked, horizon=horizon)

@@ -99,17 +99,14 @@ def _observer_schemas() -> list[dict[str, Any]]:
 
 def spec_schema() -> dict[str, Any]:
     """The JSON Schema of a spec file (the parsed TOML or JSON document)."""
-    from ._spec_files import _SYSTEM_KEYS
-    from ._spec_scenarios import _SCENARIO_KEYS, ATTACK_KINDS
-    from ._spec_table import MAX_NAME_LENGTH
     from .observers.base import MATRIX_SCHEMA
-    from .spec import _ATTACK_KEYS, _NAME_RE, _TOP_KEYS, MAX_HORIZON
+    from .spec import ATTACK_KINDS, MAX_HORIZON, MAX_NAME_LENGTH, NAME_PATTERN, TABLE_KEYS
 
     scenario = copy.deepcopy(_SCENARIO)
     scenario["attack"] = {"enum": list(ATTACK_KINDS)}
     scenario_schema = {
         "type": "object",
-        "properties": _keys(scenario, _SCENARIO_KEYS, "a scenario"),
+        "properties": _keys(scenario, TABLE_KEYS["scenario"], "a scenario"),
         "required": ["name", "attack"],
         "additionalProperties": False,
         "allOf": [
@@ -140,17 +137,17 @@ def spec_schema() -> dict[str, Any]:
                     "description": "tau (default n)"},
     }  # fmt: skip
     top = {
-        "name": {"type": "string", "pattern": _NAME_RE.pattern, "maxLength": MAX_NAME_LENGTH,
+        "name": {"type": "string", "pattern": NAME_PATTERN, "maxLength": MAX_NAME_LENGTH,
                  "description": "names the report files (default: the file's name)"},
         "system": {
             "type": "object",
-            "properties": _keys(system, _SYSTEM_KEYS, "[system]"),
+            "properties": _keys(system, TABLE_KEYS["system"], "[system]"),
             "required": ["A", "C"],
             "additionalProperties": False,
         },
         "attack": {
             "type": "object",
-            "properties": _keys(attack, _ATTACK_KEYS, "[attack]"),
+            "properties": _keys(attack, TABLE_KEYS["attack"], "[attack]"),
             "additionalProperties": False,
         },
         "observer": {"oneOf": _observer_schemas()},
@@ -163,7 +160,7 @@ def spec_schema() -> dict[str, Any]:
         "description": "A plant x(k+1) = A x(k), y(k) = C x(k) + a(k), the number s of "
         "sensors an attacker may control, an optional observer and simulation scenarios.",
         "type": "object",
-        "properties": _keys(top, _TOP_KEYS, "the spec"),
+        "properties": _keys(top, TABLE_KEYS[""], "the spec"),
         "required": ["system"],
         "additionalProperties": False,
     }

@@ -801,7 +801,7 @@ WORSE_RTOL = 0.05  # a synthesised design is worse when its final mean error is 
 def design_spec_text(spec: Any, result: DesignResult, kind: str) -> str:
     """The spec file of the synthesised design: ``spec`` with the synthesised ``[observer]``
     and the name NAME-design (so that ``ssecert certify`` of it writes NAME-design.html)."""
-    from ._spec_write import dumps, spec_document
+    from .spec.write import dumps, spec_document
 
     if result.observer is None:
         raise ValueError("no design to write: the search certified none")

@@ -115,7 +115,7 @@ class _Terminal:
 
 
 def test_the_progress_line_shows_the_time_left_and_is_quiet_when_asked():
-    from ssecert.cli import _Progress
+    from ssecert.cli.options import _Progress
 
     terminal = _Terminal()
     progress = _Progress(terminal)

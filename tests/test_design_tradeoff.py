@@ -152,7 +152,7 @@ def test_the_comparison_reads_the_absolute_error_not_the_relative_one():
 
 @pytest.mark.slow
 def test_design_on_a_stable_plant_plots_the_tradeoff_and_names_its_metric(plant, tmp_path, capsys):
-    from ssecert._spec_write import dumps
+    from ssecert.spec.write import dumps
 
     spec = {
         "name": "damped",

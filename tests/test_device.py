@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from ssecert import System
-from ssecert._linalg import cholesky_batch_last, single_passed
 from ssecert.cli import main
+from ssecert.numerics.linalg import cholesky_batch_last, single_passed
 from ssecert.structure import device as accelerator
 from ssecert.structure._combinatorics import ColexScreen
 from ssecert.structure.device import (

@@ -403,7 +403,7 @@ def test_an_exact_observability_matrix_is_formed_within_its_total_bits():
     # the entries of C A^k grow by A's 53 bits per power: a window of 3,000 formed an exact
     # O_tau of about 10^9 bits and its exact gain's products ran for minutes; beyond the total
     # budget the design's floats are used (their rounding bounded a priori)
-    from ssecert._exact_powers import exact_observability_matrix
+    from ssecert.numerics.exact_powers import exact_observability_matrix
 
     A, C = np.array([[0.9, 0.2], [0.0, 0.8]]), np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]])
     assert exact_observability_matrix(A, C, 3000) is None

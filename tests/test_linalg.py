@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy.linalg import block_diag
 
-from ssecert._linalg import (
+from ssecert.numerics.linalg import (
     eigen_clusters,
     screen_positive_definite,
     sensor_subspaces,

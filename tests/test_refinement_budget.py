@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from ssecert import System
-from ssecert._linalg import balanced_units, sensor_subspaces
+from ssecert.numerics.linalg import balanced_units, sensor_subspaces
 from ssecert.structure import _level_scan
 from ssecert.structure.enumeration import _Levels, _Outcome, _scan_level
 from ssecert.structure.sparse import sparse_observability

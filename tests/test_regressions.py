@@ -310,13 +310,13 @@ def test_near_zero_distances_are_not_printed_as_zero():
 def test_eigenvalue_grouping_tests_each_component_once(monkeypatch):
     # a dense plant: every pair of eigenvalues is a candidate edge, but a component is tested
     # only when it grows (at most n - 1 times), not once per edge inside it
-    from ssecert import _eigen
+    from ssecert.numerics import eigen
 
     calls = []
-    original = _eigen._compatible
-    monkeypatch.setattr(_eigen, "_compatible", lambda *args: calls.append(1) or original(*args))
+    original = eigen._compatible
+    monkeypatch.setattr(eigen, "_compatible", lambda *args: calls.append(1) or original(*args))
     n = 60
-    _eigen.eigen_clusters(np.random.default_rng(0).standard_normal((n, n)))
+    eigen.eigen_clusters(np.random.default_rng(0).standard_normal((n, n)))
     assert len(calls) <= n - 1
 
 
@@ -364,6 +364,6 @@ def test_sensor_rows_near_the_bottom_of_the_float_range_end_in_verdicts(scale, g
 
 
 def test_a_power_bound_beyond_the_float_range_is_infinite():
-    from ssecert._exact_powers import _pow2
+    from ssecert.numerics.exact_powers import _pow2
 
     assert _pow2(1e4) == np.inf and _pow2(1023.5) < np.inf and _pow2(-1e5) == 0.0

@@ -1311,6 +1311,16 @@ def test_what_the_warnings_said_is_kept(tmp_path, capsys):
     assert "overflow encountered" in (tmp_path / "huge.html").read_text()
 
 
+def test_a_note_names_the_module_of_the_package_that_warned():
+    # the innermost module of ssecert on the stack, wherever in the package the CLI lives
+    from ssecert.cli import _warnings_as_notes
+
+    where = Path(ssecert.__file__).parent / "structure" / "sparse.py"
+    with _warnings_as_notes() as log:
+        exec(compile("import warnings; warnings.warn('overflow in x')", str(where), "exec"))
+    assert log.notes() == ["overflow in x (in ssecert.structure.sparse)"]
+
+
 @pytest.mark.slow
 def test_no_warning_reaches_stderr_of_a_fresh_interpreter(tmp_path):
     path = degenerate_spec(tmp_path, "huge", 2)

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from ssecert import System
-from ssecert._linalg import (
+from ssecert.numerics.linalg import (
     balanced_units,
     cholesky_or_nan,
     screen_positive_definite,

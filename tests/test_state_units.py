@@ -290,7 +290,7 @@ def test_the_damped_plant_keeps_its_margin_with_a_state_in_far_units(k, state):
 def test_every_far_change_of_units_gives_the_same_balanced_plant():
     """The least-squares scaling of the logarithms moves with the data: states, sensors and
     A's scale in any power-of-two units far apart give one balanced plant, bit for bit."""
-    from ssecert._linalg import balanced_units
+    from ssecert.numerics.linalg import balanced_units
 
     rng = np.random.default_rng(3)
     for _ in range(20):

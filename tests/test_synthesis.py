@@ -76,7 +76,7 @@ def test_a_spec_written_back_reads_as_the_same_spec():
     import tomllib
 
     from ssecert import spec_from_dict
-    from ssecert._spec_write import dumps, spec_document
+    from ssecert.spec.write import dumps, spec_document
 
     spec = load_example("ugv")
     again = spec_from_dict(tomllib.loads(dumps(spec_document(spec))))
@@ -91,7 +91,7 @@ def test_the_designed_observer_written_to_toml_certifies_with_the_same_gain():
     import tomllib
 
     from ssecert import analyze, spec_from_dict
-    from ssecert._spec_write import dumps, spec_document
+    from ssecert.spec.write import dumps, spec_document
     from ssecert.synthesize import design_observer
 
     spec = load_example("ugv")

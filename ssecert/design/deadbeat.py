@@ -234,7 +234,7 @@ def verify_deadbeat(
     >>> check.verified, check.radius_lower > 4
     (False, True)
     """
-    from .._exact import exact_error_matrix, spectral_radius_bound
+    from ..numerics.exact import exact_error_matrix, spectral_radius_bound
 
     A = np.asarray(as_real_matrix(A, "A"), dtype=float)
     n = A.shape[0]
@@ -248,7 +248,7 @@ def verify_deadbeat(
     F = exact_error_matrix(A, L, C)
     # the norms are measured in balanced state coordinates (F_b = S^-1 F S, exactly), so that
     # a state written in other units does not make a large F look small against ||A||
-    from .._linalg import state_balancing
+    from ..numerics.linalg import state_balancing
 
     s = state_balancing(A, C)
     if s is not None:
@@ -372,7 +372,7 @@ def deadbeat_gain(
     >>> g.verified, g.details["nilpotency_index"]
     (True, 3)
     """
-    from .._exact import pow2_row_scaling, pow2_scale
+    from ..numerics.exact import pow2_row_scaling, pow2_scale
 
     if system is not None:
         A, C = system.A, system.C
@@ -382,7 +382,7 @@ def deadbeat_gain(
     # Units: the construction runs on alpha S^-1 A S and D C S with powers of two alpha, D
     # and S (the states balanced, exact), so that no sensor's or state's units or the plant's
     # scale decide a rank; L = S L_n D / alpha maps the gain back exactly.
-    from .._linalg import state_balancing
+    from ..numerics.linalg import state_balancing
 
     D = pow2_row_scaling(C)
     s = state_balancing(A, D[:, None] * C)
@@ -399,7 +399,7 @@ def deadbeat_gain(
             f"smallest nonzero entry is {np.min(np.abs(C[C != 0])):.3g})"
         )
     F = A - L @ C
-    from .._linalg import staircase
+    from ..numerics.linalg import staircase
 
     index = staircase(alpha * A_s, D_s[:, None] * C_s, tolerances=tol).index
     test = verify_deadbeat(A, L, C, rtol=tol.deadbeat_rtol, clear=tol.certificate_clear)
@@ -543,7 +543,7 @@ def exact_deadbeat_gain(A: Sequence[Sequence[Any]], C: Sequence[Sequence[Any]]) 
     L = np.array(Le.evalf(17).tolist(), dtype=float)
     Af = np.array(Ae.evalf(17).tolist(), dtype=float)
     Cf = np.array(Ce.evalf(17).tolist(), dtype=float)
-    from .._linalg import staircase
+    from ..numerics.linalg import staircase
 
     obs_index = staircase(Af, Cf).index
     return Gain(

@@ -196,8 +196,8 @@ class _Units:
 
     @classmethod
     def of(cls, design: ObserverDesign, model: LureModel) -> _Units:
-        from .._exact import pow2_row_scaling, pow2_scale
-        from .._linalg import state_balancing
+        from ..numerics.exact import pow2_row_scaling, pow2_scale
+        from ..numerics.linalg import state_balancing
 
         A, S = design.system.A, design.sensing
         s = state_balancing(A, pow2_row_scaling(S)[:, None] * S, canonical=True)

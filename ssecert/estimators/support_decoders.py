@@ -194,7 +194,7 @@ def _screen(
     G - shift I has no Cholesky factor get -inf: the caller decides them
     exactly.
     """
-    from .._linalg import screen_positive_definite
+    from ..numerics.linalg import screen_positive_definite
 
     G = np.broadcast_to(gram0, (supports.shape[0],) + gram0.shape).copy()
     b = np.broadcast_to(moment0, (supports.shape[0], moment0.shape[0])).copy()

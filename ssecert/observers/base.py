@@ -26,15 +26,15 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
-from .._exact_powers import Dyadic, ExactMatrix, as_dyadic, dyadic, exact_error_matrix
-from .._spec_table import SpecTable
 from ..budget import Budget
 from ..design.gains import Gain, GainError, deadbeat_gain, ogd_gain, pinv_gain, place_gain
+from ..numerics.exact_powers import Dyadic, ExactMatrix, as_dyadic, dyadic, exact_error_matrix
 from ..system import System
 from ..tolerances import Tolerances, product_rounding
 from .lure import EXACT_ENTRIES, ExactLure, LureModel
 
 if TYPE_CHECKING:
+    from ..spec.table import SpecTable
     from .dynamic import DynamicObserver
 
 __all__ = ["ObserverDesign", "ObserverKind", "LINEAR_GAINS", "GAIN_CHOICES"]

@@ -9,11 +9,10 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import replace
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
-from .._spec_table import SpecTable
 from ..budget import Budget
 from ..system import System
 from ..tolerances import Tolerances
@@ -34,6 +33,9 @@ from .dynamic import DynamicObserver
 from .lure import LureModel
 from .registry import register
 from .simulators import SparseSoftObserver
+
+if TYPE_CHECKING:  # annotations only: the spec package imports the observers
+    from ..spec.table import SpecTable
 
 __all__ = ["DecoupledSSO", "SoftThresholdObserverKind"]
 

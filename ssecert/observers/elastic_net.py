@@ -9,9 +9,8 @@ default identity).
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
-from .._spec_table import SpecTable
 from .base import (
     GAIN_CHOICES,
     MATRIX_SCHEMA,
@@ -22,6 +21,9 @@ from .base import (
 )
 from .dsso import SoftThresholdObserverKind
 from .registry import register
+
+if TYPE_CHECKING:  # annotations only: the spec package imports the observers
+    from ..spec.table import SpecTable
 
 __all__ = ["ElasticNet"]
 

@@ -7,9 +7,8 @@ Spec keys: ``gain`` (``"deadbeat"``, the default, ``"place"`` with
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
-from .._spec_table import SpecTable
 from ..budget import Budget
 from ..system import System
 from ..tolerances import Tolerances
@@ -24,6 +23,9 @@ from .base import (
 )
 from .registry import register
 from .simulators import LinearObserver
+
+if TYPE_CHECKING:  # annotations only: the spec package imports the observers
+    from ..spec.table import SpecTable
 
 __all__ = ["Luenberger"]
 

@@ -22,8 +22,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .._exact_powers import Dyadic, ExactMatrix, dyadic
-from .._linalg import anchored_units
+from ..numerics.exact_powers import Dyadic, ExactMatrix, dyadic
+from ..numerics.linalg import anchored_units
 
 if TYPE_CHECKING:
     from .base import ObserverDesign

@@ -6,9 +6,8 @@ Spec keys: ``step`` (required, > 0); ``gain`` may only say ``"ogd"``.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
-from .._spec_table import SpecTable
 from ..budget import Budget
 from ..design.gains import ogd_gain
 from ..system import System
@@ -16,6 +15,9 @@ from ..tolerances import Tolerances
 from .base import POSITIVE_SCHEMA, ObserverDesign, ObserverKind, check_finite
 from .registry import register
 from .simulators import LinearObserver
+
+if TYPE_CHECKING:  # annotations only: the spec package imports the observers
+    from ..spec.table import SpecTable
 
 __all__ = ["OnlineGradient"]
 

@@ -10,14 +10,19 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
-from .._exact_powers import Dyadic, ExactMatrix, as_dyadic, dyadic, exact_observability_matrix
-from .._spec_table import SpecTable
 from ..budget import Budget, ResourceLimitError
 from ..design.gains import Gain, GainError, ogd_gain
+from ..numerics.exact_powers import (
+    Dyadic,
+    ExactMatrix,
+    as_dyadic,
+    dyadic,
+    exact_observability_matrix,
+)
 from ..system import System
 from ..tolerances import Tolerances, product_rounding
 from .base import (
@@ -32,6 +37,9 @@ from .dynamic import DynamicObserver
 from .lure import ExactLure, LureModel
 from .registry import register
 from .simulators import WindowSSO
+
+if TYPE_CHECKING:  # annotations only: the spec package imports the observers
+    from ..spec.table import SpecTable
 
 __all__ = ["SparseSoftObserverKind", "MAX_DEAD_ZONE_ROWS"]
 

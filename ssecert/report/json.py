@@ -7,8 +7,8 @@ from pathlib import Path
 from typing import Any
 
 from .._io import atomic_write_text
-from .._spec_write import spec_document
 from ..results import Certificate, to_jsonable
+from ..spec.write import spec_document
 
 __all__ = ["certificate_json", "write_json", "certify_json"]
 

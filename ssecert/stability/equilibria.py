@@ -29,8 +29,8 @@ from typing import Any
 
 import numpy as np
 
-from .._rational import product, solve
 from ..budget import Budget, format_count
+from ..numerics.rational import product, solve
 from ..observers.lure import LureModel
 
 __all__ = ["nonzero_equilibrium", "attacked_equilibria", "MAX_PATTERNS"]

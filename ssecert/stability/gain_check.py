@@ -15,9 +15,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .._exact_powers import ExactMatrix
 from .._format import one_minus, one_plus, sig
 from ..design.gains import GainError
+from ..numerics.exact_powers import ExactMatrix
 from ..observers import ObserverDesign
 from ..results import Check, Verdict
 from ..system import System

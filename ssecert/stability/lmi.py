@@ -259,7 +259,7 @@ def _prechecks(model: LureModel) -> tuple[Verdict | None, str, dict[str, Any]]:
 def _exact_vertex(model: LureModel) -> Any:
     """The exact large-signal loop A + q B Cw of the spec's data (an ``ExactMatrix``; of the
     model's own floats when they are its data)."""
-    from .._exact_powers import ExactMatrix
+    from ..numerics.exact_powers import ExactMatrix
 
     def build() -> Any:
         exact = model.exact()
@@ -273,7 +273,7 @@ def _exact_vertex(model: LureModel) -> Any:
 def _exact_corner(model: LureModel, gains: np.ndarray) -> Any:
     """The exact loop A + B diag(k) Cw of the spec's data for the corner ``gains`` (each 0 or
     the float q; of the model's own floats when they are its data)."""
-    from .._exact_powers import Dyadic, ExactMatrix
+    from ..numerics.exact_powers import Dyadic, ExactMatrix
 
     def build() -> Any:
         exact = model.exact()

@@ -16,9 +16,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .._exact_powers import ExactMatrix
-from .._linalg import matrix_norm
 from .._validation import as_real_matrix
+from ..numerics.exact_powers import ExactMatrix
+from ..numerics.linalg import matrix_norm
 from ..results import Verdict
 from ..tolerances import EPS
 
@@ -219,8 +219,8 @@ def _in_balanced_units(
     two from LAPACK's balancing, exact), written back as P = S^-1 P_b S^-1; None when there
     is no balancing or it certifies nothing.  A matrix whose states are in very different
     units has a P that floating point cannot verify in those units."""
-    from .._exact_powers import dyadic
-    from .._linalg import state_balancing
+    from ..numerics.exact_powers import dyadic
+    from ..numerics.linalg import state_balancing
 
     s = state_balancing(F, np.zeros((0, F.shape[0])))
     if s is None:

@@ -21,8 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from .._rational import product, solve
 from ..budget import Budget
+from ..numerics.rational import product, solve
 from ..observers.lure import LureModel
 
 __all__ = ["periodic_orbit", "periodic_orbit_cost"]

@@ -107,7 +107,7 @@ class _Regions:
         exact = model.exact()
         if exact is None:
             return None
-        from .._rational import product
+        from ..numerics.rational import product
 
         A, B, Cw = exact.fractions("A"), exact.fractions("B"), exact.fractions("Cw")
         q, N = Fraction(model.q), model.N

@@ -25,8 +25,8 @@ from typing import Any
 
 import numpy as np
 
-from .._rational import fractions, is_positive_definite, product, solve
 from ..budget import Budget
+from ..numerics.rational import fractions, is_positive_definite, product, solve
 from ..observers.lure import LureModel
 from ..results import Verdict
 from .lyapunov import lyapunov_certificate, verified_decrease

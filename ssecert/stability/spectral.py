@@ -24,7 +24,8 @@ from typing import Any
 
 import numpy as np
 
-from .._exact import (
+from .._format import one_minus, one_plus, sig
+from ..numerics.exact import (
     Dyadic,
     PowerBound,
     dyadic,
@@ -32,8 +33,7 @@ from .._exact import (
     shift_by,
     spectral_radius_bound,
 )
-from .._exact_powers import ExactMatrix
-from .._format import one_minus, one_plus, sig
+from ..numerics.exact_powers import ExactMatrix
 from ..tolerances import EPS
 
 __all__ = ["SchurDecision", "schur_decision", "EXACT_SCHUR_LIMIT"]

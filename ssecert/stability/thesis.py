@@ -33,10 +33,10 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .._exact import dyadic, exact_kernel_vector
-from .._exact_powers import ExactMatrix
 from .._format import factor_above, readable, sig
 from ..budget import Budget
+from ..numerics.exact import dyadic, exact_kernel_vector
+from ..numerics.exact_powers import ExactMatrix
 from ..observers import ObserverDesign
 from ..results import Verdict, combine_verdicts
 from ..tolerances import EPS

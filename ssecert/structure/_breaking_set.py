@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from .._exact import ExactObservability, ExactPlant
+from ..numerics.exact import ExactObservability, ExactPlant
 from ..results import Verdict
 from ..system import System
 from ..tolerances import Tolerances
@@ -94,7 +94,7 @@ def _confirm_breaking_set(
     An independent confirmation that the kept sensors do not observe the plant:
     a staircase on the floats and a Krylov rank on the exact data.
     """
-    from .._linalg import staircase
+    from ..numerics.linalg import staircase
 
     kept = [i for i in range(system.p) if i not in set(B)]
     sc_rank = (

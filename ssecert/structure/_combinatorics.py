@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from .._linalg import (
+from ..numerics.linalg import (
     cholesky_batch_last,
     cholesky_or_nan,
     single_passed,
@@ -328,7 +328,7 @@ class ColexScreen:
        batch last (``cholesky_batch_last``): where that succeeds LAPACK's
        float64 factorization provably succeeds too, and its smallest pivot
        is at least the single-precision one
-       (``ssecert._linalg.single_precision_margin``).  Their own level of
+       (``ssecert.numerics.linalg.single_precision_margin``).  Their own level of
        partial sums, deeper than the float64 one (their rounding is part of
        the margin), makes a batch a few broadcast additions.
     3. LAPACK (``numpy.linalg.cholesky``) on the float64 matrices.

@@ -24,9 +24,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .._exact import pow2_row_scaling, pow2_scale
-from .._linalg import screen_positive_definite, stacked_rank
 from ..budget import Budget
+from ..numerics.exact import pow2_row_scaling, pow2_scale
+from ..numerics.linalg import screen_positive_definite, stacked_rank
 from ..parallel import map_ranges, rank_ranges
 from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances
 from ._combinatorics import DEFAULT_CHUNK_BYTES, DEFAULT_MEMORY, colex_blocks

@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._linalg import single_precision_margin, stacked_rank
+from ..numerics.linalg import single_precision_margin, stacked_rank
 from ..tolerances import BORDERLINE, ZERO, Tolerances
 from . import device as accelerator
 from ._combinatorics import ColexScreen, ScreenedBatch

@@ -14,8 +14,8 @@ from typing import Any
 
 import numpy as np
 
-from .._exact import ExactPlant
-from .._linalg import EigenAnalysis, SensorSubspaces
+from ..numerics.exact import ExactPlant
+from ..numerics.linalg import EigenAnalysis, SensorSubspaces
 from ..system import System
 from ..tolerances import NONZERO, ZERO, Tolerances
 from ._combinatorics import count_subsets
@@ -126,7 +126,7 @@ def _recheck_holds(
     the margin (smallest relative PBH singular value found), the records and
     a problem string (empty when every re-check agrees).
     """
-    from .._linalg import staircase
+    from ..numerics.linalg import staircase
 
     records = []
     margin = None

@@ -361,8 +361,8 @@ def _in_scaled_units(
     tol: Tolerances,
 ) -> StealthyAttack | None:
     """The witness on (gamma A, D C), powers of two, when the plant's own overflows early."""
-    from .._exact import pow2_row_scaling
-    from .._linalg import unit_normalized
+    from ..numerics.exact import pow2_row_scaling
+    from ..numerics.linalg import unit_normalized
 
     work, gamma = unit_normalized(system)
     if gamma == 1.0:

@@ -4,7 +4,7 @@ numpy runs the very same code in the test suite.
 
 An accelerator only proves: where its single-precision factorization of a Gramian minus the
 screening margin succeeds, LAPACK's float64 factorization of the Gramian succeeds too, and its
-smallest pivot is at least the accelerator's (``ssecert._linalg.single_precision_margin``; the
+smallest pivot is at least the accelerator's (``ssecert.numerics.linalg.single_precision_margin``; the
 proof holds for any IEEE single-precision arithmetic that factors column by column as
 ``cholesky_batch_last`` does, whatever the order of its sums and with or without fused
 multiply-adds).  Every set it does not prove, every failure and every proxy of the sets closest
@@ -117,7 +117,7 @@ def _compat(library: str) -> Any:
 def cholesky_diagonal(xp: Any, A: Any) -> Any:
     """The diagonal of the Cholesky factors of a batch stored with the batch last.
 
-    The algorithm of ``ssecert._linalg.cholesky_batch_last`` (left-looking,
+    The algorithm of ``ssecert.numerics.linalg.cholesky_batch_last`` (left-looking,
     column by column, each column scaled by the reciprocal of its pivot), in
     the array API standard only and without writing into views; the
     products of the earlier columns are taken off one by one rather than

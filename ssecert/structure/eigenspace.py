@@ -18,9 +18,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._exact import ExactPlant
 from .._format import distance as format_distance
-from .._linalg import (
+from ..numerics.exact import ExactPlant
+from ..numerics.linalg import (
     EigenAnalysis,
 )
 from ..system import System

@@ -27,9 +27,9 @@ from typing import Any
 
 import numpy as np
 
-from .._exact import ExactPlant
 from .._format import distance as format_distance
-from .._linalg import (
+from ..numerics.exact import ExactPlant
+from ..numerics.linalg import (
     EigenAnalysis,
     SensorSubspaces,
     sensor_subspaces,
@@ -533,7 +533,7 @@ def _clearly_observable(
     """Float evidence, independent of the Krylov screening, that (A, C_kept) is observable
     with a margin beyond the borderline band (PBH at every eigenvalue group and the
     conservative staircase)."""
-    from .._linalg import staircase
+    from ..numerics.linalg import staircase
 
     if eig is None or eig.problems or not kept:
         return False

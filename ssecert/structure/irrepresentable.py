@@ -36,11 +36,11 @@ from typing import Any
 
 import numpy as np
 
-from .._exact import exact_stacked_rank
 from .._format import sig
-from .._linalg import balanced_units, staircase
 from .._validation import as_choice, as_float_option, as_int_option
 from ..budget import Budget, bounded_comb, format_count, log10_comb
+from ..numerics.exact import exact_stacked_rank
+from ..numerics.linalg import balanced_units, staircase
 from ..parallel import ChunkError
 from ..results import Check, Verdict
 from ..system import System
@@ -637,8 +637,8 @@ def _exact_rho(system: System, tau: int, inside: np.ndarray) -> Fraction | None:
     """rho(S) = || O_Sbar (O_Sbar' O_Sbar)^-1 O_S' ||_inf in rational arithmetic from the
     floats of A and C (the rows ``inside`` of O_tau form S), or None when O_tau is beyond
     ``EXACT_RHO_ENTRIES`` entries or its exact bits, or O_Sbar lacks full column rank."""
-    from .._exact_powers import exact_observability_matrix
-    from .._rational import product, solve
+    from ..numerics.exact_powers import exact_observability_matrix
+    from ..numerics.rational import product, solve
 
     n = system.n
     if system.p * tau * n > EXACT_RHO_ENTRIES or n == 0:
@@ -726,7 +726,7 @@ def _exact_doubt(
 def _scaled_smallest(rows: np.ndarray) -> float:
     """sigma_min / sigma_max of a matrix with rows and columns scaled by powers of two to unit
     size (0 when it has fewer rows than columns)."""
-    from .._exact import pow2_row_scaling
+    from ..numerics.exact import pow2_row_scaling
 
     m, n = rows.shape
     if m < n or n == 0:

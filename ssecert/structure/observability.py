@@ -22,13 +22,20 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 import numpy as np
 
 from .._format import distance as format_distance
-from .._linalg import EigenAnalysis, Staircase, Units, eigen_clusters, matrix_norm, staircase
+from ..numerics.linalg import (
+    EigenAnalysis,
+    Staircase,
+    Units,
+    eigen_clusters,
+    matrix_norm,
+    staircase,
+)
 from ..results import Check, Verdict
 from ..system import System
 from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances, classify
 
 if TYPE_CHECKING:
-    from .._exact import ExactObservability
+    from ..numerics.exact import ExactObservability
 
 __all__ = ["observability", "pbh_margins", "observability_index", "unobservable_residual"]
 
@@ -143,8 +150,8 @@ def observability(
     >>> check.verdict.value, check.fields["observability_index"]
     ('holds', 20)
     """
-    from .._exact import ExactPlant
-    from .._linalg import balanced_units
+    from ..numerics.exact import ExactPlant
+    from ..numerics.linalg import balanced_units
 
     if not isinstance(system, System):
         raise TypeError(f"system must be a System, got {type(system).__name__}")

@@ -12,9 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._exact import ExactPlant
-from .._linalg import balanced_units, eigen_clusters, sensor_subspaces
 from .._validation import as_int_option
+from ..numerics.exact import ExactPlant
+from ..numerics.linalg import balanced_units, eigen_clusters, sensor_subspaces
 from ..system import System
 from ..tolerances import Tolerances
 from .enumeration import Progress, _clearly_observable, _scan_level

@@ -39,16 +39,16 @@ from typing import Any
 
 import numpy as np
 
-from .._exact import ExactPlant
-from .._linalg import (
+from .._validation import as_choice, as_float_option, as_int_option
+from ..budget import DEFAULT_TIME_BUDGET
+from ..numerics.exact import ExactPlant
+from ..numerics.linalg import (
     EigenAnalysis,
     SensorSubspaces,
     balanced_units,
     eigen_clusters,
     sensor_subspaces,
 )
-from .._validation import as_choice, as_float_option, as_int_option
-from ..budget import DEFAULT_TIME_BUDGET
 from ..results import Check, Verdict
 from ..system import System
 from ..tolerances import Tolerances

@@ -23,8 +23,8 @@ def load_argument(text: str, **overrides: Any) -> Any:
     relative) and a packaged example by its name, never by the absolute path
     of the machine that ran the command.
     """
-    from .examples import example_path, list_examples
-    from .spec import load_spec
+    from ..examples import example_path, list_examples
+    from ..spec import load_spec
 
     if not text:
         raise UsageError("SPEC is empty; give a spec file or a packaged example name")
@@ -77,7 +77,7 @@ def output_file(option: str, text: str | None) -> Path | None:
 
 def write_outputs(files: Mapping[Path, str]) -> None:
     """Write the files all or nothing, creating their folders; UsageError naming the path."""
-    from ._io import write_files
+    from .._io import write_files
 
     created: list[Path] = []
     try:

@@ -22,7 +22,14 @@ from typing import Any
 
 import numpy as np
 
-from ._spec_table import (
+from .._validation import (
+    MAX_MATRIX_DIM,
+    MAX_MATRIX_ENTRIES,
+    check_size,
+    describe,
+    show_int,
+)
+from .table import (
     INT64_MAX,
     INT64_MIN,
     MATRIX_LIMITS,
@@ -30,13 +37,6 @@ from ._spec_table import (
     SpecError,
     spec_error,
     suggest,
-)
-from ._validation import (
-    MAX_MATRIX_DIM,
-    MAX_MATRIX_ENTRIES,
-    check_size,
-    describe,
-    show_int,
 )
 
 MAX_TEXT_BYTES = 16 * 2**20
@@ -220,7 +220,7 @@ def _read_mat(raw: bytes, source: str) -> dict[str, Any]:
     """Variables of a MATLAB .mat file (v4 or v5), checked before SciPy reads them."""
     import scipy.io
 
-    from ._matfile import MatFormatError, variables
+    from .._matfile import MatFormatError, variables
 
     try:
         major, _ = scipy.io.matlab.matfile_version(io.BytesIO(raw))

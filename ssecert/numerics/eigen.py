@@ -3,7 +3,7 @@
 ``eigen_clusters`` groups the computed eigenvalues from their condition
 numbers and a defect-aware radius (beyond rounding, a group must make
 A - mu I singular at its mean), computes each group's eigenspace and
-reports every doubtful grouping instead of guessing.  ``ssecert._linalg``
+reports every doubtful grouping instead of guessing.  ``ssecert.numerics.linalg``
 re-exports these names.
 """
 
@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg
 
-from .tolerances import BORDERLINE, EPS, ZERO, Tolerances, classify
+from ..tolerances import BORDERLINE, EPS, ZERO, Tolerances, classify
 
 __all__ = ["EigenCluster", "EigenAnalysis", "eigen_clusters"]
 
@@ -183,7 +183,7 @@ def _spectrum(A: np.ndarray, tol: Tolerances) -> _Spectrum:
     """The eigenvalues of A with their condition numbers, error bounds and rank threshold."""
     A = np.asarray(A, dtype=float)
     n = A.shape[0]
-    # _linalg.matrix_norm, written out: _linalg imports this module
+    # linalg.matrix_norm, written out: linalg imports this module
     norm = max(float(np.linalg.norm(A, 2)) if A.size else 0.0, np.finfo(float).tiny)
     lam, kappa = _eigen_condition(A)
     delta = np.minimum(n * EPS * norm * kappa, norm)

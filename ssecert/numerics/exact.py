@@ -5,7 +5,7 @@ integer matrix times a power of two.  Two kinds of exact decision are built
 on that:
 
 * **powers of a float matrix** (``spectral_radius_bound``, in
-  ``ssecert._exact_powers`` and re-exported here): F = A - L C formed
+  ``ssecert.numerics.exact_powers`` and re-exported here): F = A - L C formed
   exactly from the floats of A, L and C, its powers computed in integers,
   and rho(F) <= ||F^m||_inf^(1/m) for any m: a certified bound on the
   spectral radius of the very matrix a report prints, which no eigenvalue
@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from ._exact_powers import (
+from .exact_powers import (
     Dyadic,
     PowerBound,
     dyadic,

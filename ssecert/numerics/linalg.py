@@ -1,6 +1,6 @@
 """Numerical building blocks of the structural analyses.
 
-* ``eigen_clusters`` (from ``ssecert._eigen``): eigenvalues grouped into
+* ``eigen_clusters`` (from ``ssecert.numerics.eigen``): eigenvalues grouped into
   clusters with their eigenspaces, grouping decided from condition numbers
   and a defect-aware radius, every doubtful grouping reported instead of
   guessed;
@@ -24,9 +24,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ._eigen import EigenAnalysis, EigenCluster, eigen_clusters
-from .system import System
-from .tolerances import BORDERLINE, NONZERO, ZERO, Tolerances, classify
+from ..system import System
+from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances, classify
+from .eigen import EigenAnalysis, EigenCluster, eigen_clusters
 
 __all__ = [
     "EigenCluster",
@@ -110,7 +110,7 @@ def _state_balancing(
     """
     from scipy.linalg import matrix_balance
 
-    from ._exact import pow2_scale
+    from .exact import pow2_scale
 
     A = np.asarray(A, dtype=float)
     C = np.asarray(C, dtype=float).reshape(-1, A.shape[0])
@@ -311,7 +311,7 @@ def _observability_balancing(A: np.ndarray, C: np.ndarray) -> np.ndarray:
     of the scaled plant.  A state in units 2^50 has a column 2^50 times its neighbours'
     throughout; a coupling inside A that is large or small against the diagonal does not
     move the columns apart."""
-    from ._exact import pow2_row_scaling
+    from .exact import pow2_row_scaling
 
     n, p = A.shape[0], C.shape[0]
     if p == 0 or not np.all(np.isfinite(A)):
@@ -340,7 +340,7 @@ def balanced_units(system: System, *, spread: float = 16.0) -> Units:
     decisions of the plant in its own units.  The rows of C are renormalised after the state
     scaling.
     """
-    from ._exact import pow2_row_scaling
+    from .exact import pow2_row_scaling
 
     work, alpha = unit_normalized(system)
     n = system.n
@@ -376,7 +376,7 @@ def unit_normalized(system: System) -> tuple[System, float]:
     float range) can tip a rank threshold.  Returns the scaled plant and
     alpha (eigenvalues of the scaled A are alpha times those of A).
     """
-    from ._exact import pow2_row_scaling, pow2_scale
+    from .exact import pow2_row_scaling, pow2_scale
 
     A, C = system.A, system.C
     with np.errstate(over="ignore"):

@@ -14,7 +14,7 @@ import re
 from collections.abc import Mapping
 from typing import Any
 
-from ._validation import (
+from .._validation import (
     MAX_MATRIX_DIM,
     MAX_MATRIX_ENTRIES,
     as_choice,
@@ -178,7 +178,7 @@ class SpecTable:
     >>> t.positive("threshold")
     Traceback (most recent call last):
     ...
-    ssecert._spec_table.SpecError: x.toml: key 'observer.threshold': missing (required)
+    ssecert.spec.table.SpecError: x.toml: key 'observer.threshold': missing (required)
     """
 
     def __init__(self, source: str, prefix: str, table: Any) -> None:

@@ -15,7 +15,7 @@ KIND_NAMES = {"elastic-net": "elastic_net", "elastic_net": "elastic_net", "dsso"
 
 
 def add_design_parser(sub: Any) -> None:
-    from ._cli_options import _nonnegative_int, _positive_int, _seconds
+    from .options import _nonnegative_int, _positive_int, _seconds
 
     design = sub.add_parser(
         "design",
@@ -97,12 +97,12 @@ def cmd_design(args: argparse.Namespace, argv: Sequence[str] | None = None) -> i
     import sys
     import tomllib
 
-    from ._cli_files import UsageError, load_argument, output_file, output_folder, write_outputs
-    from .report.html import render_report
-    from .report.json import certify_json
-    from .results import to_jsonable
-    from .spec import spec_from_dict
-    from .synthesize import design_observer, design_report, design_spec_text
+    from ..report.html import render_report
+    from ..report.json import certify_json
+    from ..results import to_jsonable
+    from ..spec import spec_from_dict
+    from ..synthesize import design_observer, design_report, design_spec_text
+    from .files import UsageError, load_argument, output_file, output_folder, write_outputs
 
     folder = output_folder("--out", args.out)
     target = output_file("--json", args.json_path)
@@ -232,7 +232,7 @@ def _print_design(
     """The terminal summary: the search, both designs' certified numbers, each scenario."""
     import numpy as np
 
-    from ._format import one_minus
+    from .._format import one_minus
 
     searched = f"{len(result.candidates)} candidates in {result.seconds:.1f} s"
     if not result.complete:
@@ -274,7 +274,7 @@ def _print_design(
         out.write(f"  synthesised: certified decay {result.decay:.3g} per step (V(k+1) <= "
                   f"{one_minus(result.decay)} V(k))\n")  # fmt: skip
     if result.linear_radius is not None and result.plant_radius is not None:
-        from .synthesize import FAST_PLANT, no_faster
+        from ..synthesize import FAST_PLANT, no_faster
 
         slow = no_faster(result.linear_radius, result.plant_radius)
         if result.plant_radius <= FAST_PLANT:
@@ -341,8 +341,8 @@ def _decay(text: str) -> float:
 def _sparse_limit(spec: Any) -> str:
     """What no observer can do on this plant ('' when it is 2s-sparse observable): the
     certified gain bounds the error under attack, it does not make it vanish."""
-    from .results import Verdict
-    from .structure.sparse import sparse_observability
+    from ..results import Verdict
+    from ..structure.sparse import sparse_observability
 
     check = sparse_observability(spec.system, spec.max_attacked, time_budget=0)
     if check.verdict is not Verdict.FAILS:

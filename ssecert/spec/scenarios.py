@@ -13,20 +13,20 @@ import numbers
 from collections.abc import Mapping
 from typing import Any
 
-from ._spec_table import (
+from .._validation import (
+    as_choice,
+    as_float_option,
+    as_index_list,
+    as_real_matrix,
+    describe,
+)
+from .table import (
     check_keys,
     check_name,
     convert,
     require,
     spec_error,
     spec_int,
-)
-from ._validation import (
-    as_choice,
-    as_float_option,
-    as_index_list,
-    as_real_matrix,
-    describe,
 )
 
 ATTACK_KINDS = ("none", "constant", "switching", "sinusoidal", "random", "stealthy")

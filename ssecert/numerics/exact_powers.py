@@ -6,7 +6,7 @@ is formed exactly from the floats of A, L and C (``exact_error_matrix``),
 its powers are computed in integers, and rho(F) <= ||F^m||_inf^(1/m) for any
 m (``spectral_radius_bound``): a certified bound on the spectral radius of
 the very matrix a report prints, which no eigenvalue solver gives for a
-nearly nilpotent F.  ``ssecert._exact`` re-exports these names.
+nearly nilpotent F.  ``ssecert.numerics.exact`` re-exports these names.
 """
 
 from __future__ import annotations
@@ -298,7 +298,7 @@ class ExactMatrix:
         """F = A - L C from the floats of A and the floats (or exact values) of L and C; the
         a-priori bound on fl(A - L C) is Higham's when L and C are given as floats."""
         if bound is None and not isinstance(C, Dyadic) and not isinstance(L, Dyadic):
-            from .tolerances import product_rounding
+            from ..tolerances import product_rounding
 
             bound = product_rounding(L, C, A)
         return cls(lambda: exact_error_matrix(A, L, C), bound, source)

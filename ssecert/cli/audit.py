@@ -39,7 +39,7 @@ def cmd_audit(args: argparse.Namespace) -> int:
 
     from proofs_checks import all_claims, audit_json, render_audit, run_audit
 
-    from ._cli_files import UsageError, output_folder, write_outputs
+    from .files import UsageError, output_folder, write_outputs
 
     folder = output_folder("--out", args.out)
     claims = all_claims()

@@ -1,43 +1,9 @@
-"""Design specifications: TOML (primary), JSON, NumPy .npz and MATLAB .mat.
+"""The spec itself: ``Spec``, ``load_spec`` and ``spec_from_dict``.
 
-A TOML spec (JSON has the same structure)::
-
-    name = "ugv"
-    [system]
-    A = [[1.0, 0.0099], [0.0, 0.9876]]
-    C = [[1, 0], [0, 1], [0, 1]]
-    sensors = ["position", "velocity-a", "velocity-b"]   # optional
-    [attack]
-    max_attacked = 1        # s
-    horizon = 2             # tau, default n
-    [observer]              # optional
-    kind = "dsso"
-    ...
-    [[scenario]]            # optional, repeatable
-    name = "constant"
-    attack = "constant"
-    ...
-
-``.npz`` and ``.mat`` files hold the variables ``A`` and ``C`` (and
-optionally ``sensors``); s comes from ``max_attacked=`` (``--max-attacked``)
-and tau from ``horizon=`` (``--horizon``, default n).  Every key is
-validated and unknown keys are refused; errors name the file and the key.
-
-Limits, checked before a file is parsed or an array is built, so that a
-wrong or hostile file costs a message and not a frozen machine:
-
-- TOML and JSON files: at most ``MAX_TEXT_BYTES`` (16 MiB: an 800 x 800
-  matrix at full precision; TOML is parsed at a few MB/s and every number
-  becomes a Python object), .npz and .mat files ``MAX_BINARY_BYTES``
-  (256 MiB), the place for larger plants;
-- every matrix: at most ``MAX_MATRIX_DIM`` (10,000) rows and columns and
-  ``MAX_MATRIX_ENTRIES`` (10,000,000) entries; every list at most
-  ``MAX_MATRIX_DIM`` items;
-- the horizon: at most ``MAX_HORIZON`` (10,000) steps;
-- integers: the 64-bit range TOML allows (-2^63 to 2^63 - 1), also in JSON;
-- nesting: ``MAX_NESTING`` (16) levels of tables and lists (a spec needs 4);
-- names (the spec's, sensors', scenarios'): at most ``MAX_NAME_LENGTH``
-  (128) characters; no text may hold control characters or invalid Unicode.
+A file's bytes are read and parsed by ``ssecert.spec.files``, each table is
+validated here (the plant, the attack bound, the observer through its kind)
+and the scenarios by ``ssecert.spec.scenarios``; ``ssecert.spec`` documents
+the format and re-exports the public names.
 """
 
 from __future__ import annotations
@@ -51,17 +17,23 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ._spec_files import (
+from .._validation import (
+    as_choice,
+    as_real_matrix,
+    describe,
+)
+from ..observers import BUILTIN_KINDS, get_kind, observer_kinds
+from ..system import System
+from .files import (
     _SYSTEM_KEYS,
     MAX_BINARY_BYTES,
-    MAX_NESTING,
     MAX_TEXT_BYTES,
     _check_document,
     _parse_text,
     _read_arrays,
 )
-from ._spec_scenarios import ATTACK_KINDS, SCENARIO_DEFAULTS, read_scenarios
-from ._spec_table import (
+from .scenarios import read_scenarios
+from .table import (
     INT64_MAX,
     MATRIX_LIMITS,
     MAX_NAME_LENGTH,
@@ -75,32 +47,8 @@ from ._spec_table import (
     spec_error,
     spec_int,
 )
-from ._validation import (
-    MAX_MATRIX_DIM,
-    MAX_MATRIX_ENTRIES,
-    as_choice,
-    as_real_matrix,
-    describe,
-)
-from .observers import BUILTIN_KINDS, get_kind, observer_kinds
-from .system import System
 
-__all__ = [
-    "Spec",
-    "SpecError",
-    "load_spec",
-    "spec_from_dict",
-    "OBSERVER_KINDS",
-    "ATTACK_KINDS",
-    "SCENARIO_DEFAULTS",
-    "MAX_TEXT_BYTES",
-    "MAX_BINARY_BYTES",
-    "MAX_MATRIX_DIM",
-    "MAX_MATRIX_ENTRIES",
-    "MAX_HORIZON",
-    "MAX_NESTING",
-    "MAX_NAME_LENGTH",
-]
+__all__ = ["Spec", "load_spec", "spec_from_dict", "OBSERVER_KINDS", "MAX_HORIZON"]
 
 MAX_HORIZON = 10_000
 

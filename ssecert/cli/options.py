@@ -94,7 +94,7 @@ def _positive_int(text: str) -> int:
 
 
 def _local_workers(text: str) -> int:
-    from .parallel import max_local_workers
+    from ..parallel import max_local_workers
 
     value = _integer(text, 1, scientific=True)
     limit = max_local_workers()
@@ -120,7 +120,7 @@ def _seconds(text: str) -> float:
 
 
 def _add_budget_options(parser: argparse.ArgumentParser) -> None:
-    from .budget import parse_bytes, parse_operations
+    from ..budget import parse_bytes, parse_operations
 
     def checked(parse: Any) -> Any:
         def convert(text: str) -> Any:
@@ -146,7 +146,7 @@ def _add_budget_options(parser: argparse.ArgumentParser) -> None:
 
 
 def _budget(args: argparse.Namespace) -> Any:
-    from .budget import Budget
+    from ..budget import Budget
 
     return Budget(
         **{
@@ -175,21 +175,21 @@ def _dask(args: argparse.Namespace) -> Any:
     """A context giving the Dask client the options ask for, else None."""
     if not (args.scheduler or args.workers):
         return contextlib.nullcontext(None)
-    from .parallel import dask_client
+    from ..parallel import dask_client
 
     return dask_client(args.scheduler, workers=args.workers)
 
 
 def _device(args: argparse.Namespace) -> str | None:
     """The device ``--device`` asks for, checked to be usable here (None: the CPU)."""
-    from .structure.device import resolve_device
+    from ..structure.device import resolve_device
 
     return resolve_device(getattr(args, "device", "cpu"))
 
 
 def _add_analysis_options(parser: argparse.ArgumentParser) -> None:
     """Options shared by ``certify`` and ``analyze``."""
-    from .budget import DEFAULT_TIME_BUDGET
+    from ..budget import DEFAULT_TIME_BUDGET
 
     parser.add_argument(
         "--max-attacked",

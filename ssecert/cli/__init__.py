@@ -11,6 +11,11 @@ terminal as such: each distinct one becomes a one-line note in the output and
 in the report (where it was raised and how often), because a floating-point
 overflow may explain an inconclusive verdict; deprecation warnings of the
 libraries, which say nothing about the design, are dropped.
+
+This module builds the parser and runs ``certify``, ``analyze``, ``simulate``
+and ``examples``; the package's other modules hold the options shared by the
+commands (``options``), the spec argument and the output files (``files``),
+and the ``audit`` and ``design`` commands.
 """
 
 from __future__ import annotations
@@ -26,10 +31,11 @@ from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any, NoReturn
 
-from ._cli_audit import add_audit_parser, cmd_audit
-from ._cli_design import add_design_parser, cmd_design
-from ._cli_files import UsageError, load_argument, output_file, output_folder, write_outputs
-from ._cli_options import (
+from .._version import __version__
+from .audit import add_audit_parser, cmd_audit
+from .design import add_design_parser, cmd_design
+from .files import UsageError, load_argument, output_file, output_folder, write_outputs
+from .options import (
     _add_analysis_options,
     _add_budget_options,
     _add_dask_options,
@@ -40,7 +46,6 @@ from ._cli_options import (
     _positive_int,
     _Progress,
 )
-from ._version import __version__
 
 __all__ = ["main"]
 
@@ -200,7 +205,7 @@ class _WarningLog:
     @staticmethod
     def _origin() -> str | None:
         """The innermost ssecert module (not the CLI) on the stack."""
-        root = os.path.dirname(os.path.abspath(__file__))
+        root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # the package
         for frame in reversed(traceback.extract_stack()):
             name = os.path.abspath(frame.filename)
             if name.startswith(root + os.sep) and name != os.path.abspath(__file__):
@@ -210,7 +215,7 @@ class _WarningLog:
 
     def notes(self, *, besides: _WarningLog | None = None) -> list[str]:
         """One line per distinct warning (those of ``besides`` left out)."""
-        from .spec import one_line
+        from ..spec import one_line
 
         notes = []
         for (category, text), (count, origin) in self.seen.items():
@@ -236,9 +241,9 @@ def _warnings_as_notes() -> Iterator[_WarningLog]:
 
 
 def _cmd_analyze(args: argparse.Namespace) -> int:
-    from .analyze import analyze
-    from .report.json import certificate_json
-    from .report.table import render_table
+    from ..analyze import analyze
+    from ..report.json import certificate_json
+    from ..report.table import render_table
 
     target = output_file("--json", args.json_path)
     spec = load_argument(args.spec, max_attacked=args.max_attacked, horizon=args.horizon)
@@ -281,10 +286,10 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
 
 
 def _cmd_certify(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
-    from .certify import certify
-    from .report.html import render_report
-    from .report.json import certify_json
-    from .report.table import render_table
+    from ..certify import certify
+    from ..report.html import render_report
+    from ..report.json import certify_json
+    from ..report.table import render_table
 
     out_dir = output_folder("--out", args.out)
     target = output_file("--json", args.json_path)
@@ -346,9 +351,9 @@ def _cmd_certify(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
 def _cmd_simulate(args: argparse.Namespace) -> int:
     import json
 
-    from .design.gains import GainError
-    from .results import to_jsonable
-    from .simulation.engine import simulate_spec
+    from ..design.gains import GainError
+    from ..results import to_jsonable
+    from ..simulation.engine import simulate_spec
 
     target = output_file("--json", args.json_path)
     spec = load_argument(args.spec, max_attacked=args.max_attacked)
@@ -454,7 +459,7 @@ def _simulation_table(spec: Any, scenarios: dict[str, Any]) -> str:
 
 
 def _cmd_examples(args: argparse.Namespace) -> int:
-    from .examples import example_path, list_examples
+    from ..examples import example_path, list_examples
 
     if args.name is None:
         for name in list_examples():
@@ -470,11 +475,11 @@ def _cmd_examples(args: argparse.Namespace) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``ssecert`` command; returns the exit status."""
-    from .budget import ResourceLimitError
-    from .design.gains import GainError
-    from .parallel import ChunkError, DaskUnavailable
-    from .spec import SpecError, one_line
-    from .structure.device import DeviceUnavailable
+    from ..budget import ResourceLimitError
+    from ..design.gains import GainError
+    from ..parallel import ChunkError, DaskUnavailable
+    from ..spec import SpecError, one_line
+    from ..structure.device import DeviceUnavailable
 
     parser = _build_parser()
     args = None
@@ -543,7 +548,3 @@ def main(argv: Sequence[str] | None = None) -> int:
         )
         traceback.print_exc(limit=6, file=sys.stderr)
         return EXIT_INTERNAL
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
