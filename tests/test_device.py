@@ -175,3 +175,30 @@ def test_the_command_line_refuses_an_unusable_device_before_any_work(monkeypatch
     assert main(["analyze", "notes-example-2", "--device", "cuda"]) == 2
     err = capsys.readouterr().err
     assert "ssecert: error: --device cuda: no CUDA device to screen on" in err
+
+
+@pytest.mark.slow
+def test_no_level_is_taken_for_another_when_the_device_copies(monkeypatch, small_device_batches):
+    # a GPU keeps its own copy of each range's level: one plant after another, each range must
+    # factor its own (an unobservable plant stays unobservable after any other)
+    monkeypatch.setattr(
+        DeviceKernel,
+        "_put",
+        lambda self, a: self.xp.asarray(np.array(a, copy=True), device=self.device),
+    )
+    monkeypatch.setattr(accelerator, "DEVICE_BATCH_SETS", 7)
+    unseen = System(np.eye(2), [[1.0, 0.0], [2.0, 0.0], [3.0, 0.0]])  # no sensor sees x2
+    cpu = _answer(sparse_observability(unseen, 0, method="enumeration", time_budget=None))
+    for trial in range(12):
+        rng = np.random.default_rng(trial)
+        n, p = int(rng.integers(3, 7)), int(rng.integers(8, 14))
+        C = rng.standard_normal((p, n))
+        C[: p // 2, -1] = 0.0
+        other = System(np.eye(n), C)
+        expected = sparse_observability(other, 2, method="enumeration", time_budget=None)
+        got = sparse_observability(other, 2, method="enumeration", time_budget=None, device="numpy")
+        assert _answer(got) == _answer(expected), trial
+        again = sparse_observability(
+            unseen, 0, method="enumeration", time_budget=None, device="numpy"
+        )
+        assert _answer(again) == cpu, trial

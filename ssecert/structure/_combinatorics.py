@@ -413,6 +413,7 @@ class ColexScreen:
         self._skip = 0
         self._slack = 0.0 if self.factors is None else _bound_slack(items, base, self.factors, k)
         self.device = device
+        self._single_device: Any = None  # the single-precision level on the device
 
     def batches(self, size: int) -> Iterator[tuple[int, int]]:
         """Consecutive ranges of ``size`` ranks covering the range."""
@@ -531,8 +532,10 @@ class ColexScreen:
         """Tier 2 on the whole batch: (passed, smallest pivot) of each single-precision
         factorization, on the device when there is one."""
         if self.device is not None:
+            if self._single_device is None:  # this range's level, on the device once
+                self._single_device = self.device.load(self._single())
             tops = [(row, first, last, self._top_total(top)) for row, first, last, top in pieces]
-            return self.device.screen(self._single(), tops, N)
+            return self.device.screen(self._single_device, tops, N)
         mats, diag = work[:, :, :N], diagonal[:, :N]
         self.fill(pieces, mats)
         cholesky_batch_last(mats, diag)

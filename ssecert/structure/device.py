@@ -164,21 +164,26 @@ class DeviceKernel:
 
     def __init__(self, xp: Any, device: Any, *, name: str) -> None:
         self.xp, self.device, self.name = xp, device, name
-        self._loaded: tuple[int, Any] | None = None  # (id of the host level, its device copy)
 
     def _put(self, array: np.ndarray) -> Any:
         return self.xp.asarray(array, device=self.device)
 
+    def load(self, level: np.ndarray) -> Any:
+        """The single-precision level of partial sums on the device (a copy the caller keeps
+        for as long as it screens that level: the kernel keeps none, so that one caller's
+        level is never taken for another's)."""
+        return self._put(np.ascontiguousarray(level))
+
     def screen(
-        self, level: np.ndarray, pieces: list[tuple[int, int, int, Any]], size: int
+        self, level: Any, pieces: list[tuple[int, int, int, Any]], size: int
     ) -> tuple[np.ndarray, np.ndarray]:
         """Factor the ``size`` single-precision matrices of the pieces on the device.
 
         Parameters
         ----------
-        level : ndarray of float32, shape (n, n, M)
-            The single-precision level of partial sums (the screening margin taken off),
-            sent to the device once (kept while the same array is passed).
+        level : device array of float32, shape (n, n, M)
+            The single-precision level of partial sums (the screening margin taken off), as
+            ``load`` put it on the device.
         pieces : list of (row, first, last, top)
             Rows ``row .. row + last - first`` of the batch are the level's matrices
             ``first .. last - 1`` plus ``top`` (an (n, n) float32 array, or None).
@@ -191,10 +196,7 @@ class DeviceKernel:
         smallest : ndarray of float32, shape (size,)
             The smallest pivot (meaningful where passed).
         """
-        xp = self.xp
-        if self._loaded is None or self._loaded[0] != id(level):
-            self._loaded = (id(level), self._put(level))
-        sums = self._loaded[1]
+        xp, sums = self.xp, level
         n = level.shape[0]
         # each row's piece, its row in the level and its top, found on the device from the
         # pieces alone (a few hundred numbers sent, not one index per set)
