@@ -153,3 +153,11 @@ def test_certify_documents_validate_with_their_spec(name):
     assert _valid(document, CERTIFICATE)
     document["spec"]["observer"] = {"kind": "kalman"}  # the spec inside is checked too
     assert not _valid(document, CERTIFICATE)
+
+
+@pytest.mark.parametrize("name", ["spec", "certificate"])
+def test_the_command_line_prints_each_schema(name, capsys):
+    from ssecert.cli import main
+
+    assert main(["schema", name]) == 0
+    assert json.loads(capsys.readouterr().out) == SCHEMAS[name]()

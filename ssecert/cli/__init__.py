@@ -173,6 +173,17 @@ def _build_parser() -> argparse.ArgumentParser:
         description="List packaged example specs, or print one.",
     )
     examples.add_argument("name", nargs="?", help="example to print")
+
+    schema = sub.add_parser(
+        "schema",
+        help="print the JSON Schema of a spec file or of the certificate",
+        description=(
+            "Print the JSON Schema (draft 2020-12) of a spec file or of the JSON certificate "
+            "of 'ssecert analyze' and 'ssecert certify', built from the code that reads and "
+            "writes them: editors and scripts validate against it."
+        ),
+    )
+    schema.add_argument("name", choices=("spec", "certificate"), help="which schema")
     add_audit_parser(sub)
     add_design_parser(sub)
     return parser
@@ -458,6 +469,15 @@ def _simulation_table(spec: Any, scenarios: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _cmd_schema(args: argparse.Namespace) -> int:
+    import json
+
+    from ..schemas import SCHEMAS
+
+    sys.stdout.write(json.dumps(SCHEMAS[args.name](), indent=2) + "\n")
+    return 0
+
+
 def _cmd_examples(args: argparse.Namespace) -> int:
     from ..examples import example_path, list_examples
 
@@ -497,6 +517,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _cmd_certify(args, argv[1:] if argv is not None else None)
         if args.command == "examples":
             return _cmd_examples(args)
+        if args.command == "schema":
+            return _cmd_schema(args)
         if args.command == "simulate":
             return _cmd_simulate(args)
         if args.command == "audit":
