@@ -176,8 +176,15 @@ class _Walker:
 def _unsupported(class_id: int, name: str | None) -> MatFormatError:
     what = CLASS_NAMES.get(class_id, f"array of unknown class {class_id}")
     where = f"variable {name!r} is" if name is not None else "a cell array holds"
+    way_out = ""
+    if "object" in what:  # a state-space model saved whole, say
+        way_out = (
+            "; save its matrices instead: [A, B, C, D, Ts] = ssdata(sys); "
+            "save(file, 'A', 'B', 'C', 'D', 'Ts', '-v7')"
+        )
     return MatFormatError(
-        f"{where} a MATLAB {what}; only numeric and char arrays (and cell arrays of them) are read"
+        f"{where} a MATLAB {what}; only numeric and char arrays (and cell arrays of them) are "
+        f"read{way_out}"
     )
 
 

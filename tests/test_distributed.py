@@ -128,7 +128,7 @@ def test_the_command_line_runs_the_enumeration_on_workers(tmp_path, capsys, smal
     # what ran where is said in the notes (small_chunks: every level of 2 sensors or more is
     # split, the levels of 0 and 1 sensor are one set or fewer sets than ranges)
     (note,) = [n for n in spread["meta"]["notes"] if n.startswith("sparse_observability: Dask")]
-    assert "the sets of 2 sensors in" in note
+    assert "Dask workers: the sets of 1 and 2 sensors in " in note
     assert not any("Dask" in n for n in local["meta"]["notes"])
     local.pop("meta"), spread.pop("meta")
     assert spread == local
@@ -172,10 +172,24 @@ def test_placement_note_names_the_levels_in_process_and_on_the_workers():
     outcome.in_process.extend([0, 1, 2, 3, 4, 5])
     note = enumeration.placement_note(outcome)
     assert note is not None
-    assert note.startswith("Dask workers: the sets of 6 sensors in 6 ranges; in-process: ")
-    assert "the sets of 0 to 5 sensors" in note
-    assert "1,000,000" in note  # two ranges of the smallest size on the workers
+    assert note.startswith(
+        "Dask workers: the sets of 6 sensors in 6 ranges; in-process: the sets of 0 to 5 sensors;"
+    )
+    assert "ranges of at least 500,000 sets and 20 times the partial sums" in note
     assert enumeration.placement_note(enumeration._Outcome("enumeration", "exact")) is None
+    # levels split alike are named together; a run with no level on the workers says so
+    many = enumeration._Outcome("enumeration", "exact", on_workers={2: 8, 3: 8, 4: 8, 5: 6})
+    many.in_process.extend([0, 1])
+    note = enumeration.placement_note(many)
+    assert note is not None and note.startswith(
+        "Dask workers: the sets of 2 to 4 sensors in 8 ranges each; the sets of 5 sensors in "
+        "6 ranges; in-process: the sets of 0 and 1 sensors;"
+    )
+    small = enumeration._Outcome("enumeration", "exact")
+    small.in_process.extend([0, 1, 2])
+    note = enumeration.placement_note(small)
+    assert note is not None
+    assert note.startswith("every level ran in-process (the sets of 0 to 2 sensors), none on")
 
 
 def test_a_range_that_fails_twice_ends_the_enumeration_with_the_reason(monkeypatch, small_chunks):

@@ -765,7 +765,7 @@ NPZ_ROWS = [
     ("three-d", {"A": np.ones((2, 2, 2))}, "system.A", "2-D"),
     ("sensors-numbers", {"sensors": np.arange(3)}, "sensors", "strings"),
     ("sensors-duplicate", {"sensors": np.array(["a", "a", "b"])}, "system.sensors", "unique"),
-    ("unknown-variable", {"B": np.eye(2)}, "B", "unknown variable"),
+    ("unknown-variable", {"Q": np.eye(2)}, "Q", "unknown variable"),
     (
         "misspelt-variable",
         {"sensor": np.array(["a", "b", "c"])},
@@ -849,13 +849,13 @@ def _cells(*names: str) -> np.ndarray:
 
 
 MAT_ROWS = [
-    ("no-expected-variables", {"B": np.eye(2), "D": np.zeros((3, 1))}, "B", "unknown variable"),
+    ("no-expected-variables", {"B": np.eye(2), "D": np.zeros((3, 1))}, "A", "missing"),
     ("only-A", {"A": np.array(A2)}, "C", "missing"),
     ("lower-case", {"a": np.array(A2), "c": np.array(C3)}, "a", "did you mean 'A'"),
     (
         "extra-variables",
-        {"A": np.array(A2), "C": np.array(C3), "Ts": 0.01},
-        "Ts",
+        {"A": np.array(A2), "C": np.array(C3), "Ts": 0.01, "Q": np.eye(2)},
+        "Q",
         "unknown variable",
     ),
     ("complex", {"A": np.array(A2) * 1j, "C": np.array(C3)}, "system.A", "complex"),

@@ -657,7 +657,7 @@ def test_npz_without_max_attacked(tmp_path):
 @pytest.mark.parametrize(
     "extra, key, fragments",
     [
-        ({"B": np.eye(2)}, "B", ("unknown variable",)),
+        ({"Q": np.eye(2)}, "Q", ("unknown variable", "B, D and Ts are read and not used")),
         ({"sensor": np.array(["a", "b", "c"])}, "sensor", ("did you mean 'sensors'",)),
         ({"c": np.eye(2)}, "c", ("did you mean 'C'",)),
     ],
@@ -781,6 +781,47 @@ def test_mat_unknown_variable(tmp_path):
     path = tmp_path / "plant.mat"
     scipy.io.savemat(path, {"A": np.array(A2), "C": np.array(C3), "Q": np.eye(2)})
     expect_error(path, "unknown variable", key="Q", max_attacked=1)
+
+
+def test_mat_state_space_save_is_read_and_its_input_matrices_noted(tmp_path):
+    # [A, B, C, D, Ts] = ssdata(sys); save(file, 'A', 'B', 'C', 'D', 'Ts')
+    path = tmp_path / "ss.mat"
+    B, D = np.array([[0.0], [0.01]]), np.zeros((3, 1))
+    scipy.io.savemat(path, {"A": np.array(A2), "B": B, "C": np.array(C3), "D": D, "Ts": 0.01})
+    with pytest.warns(UserWarning, match=r"ss\.mat: B, D and Ts read and not used"):
+        spec = load_spec(path, max_attacked=1)
+    assert spec.system == System(A2, C3, name="ss")
+    npz = tmp_path / "ss.npz"
+    np.savez(npz, A=np.array(A2), B=B, C=np.array(C3), Ts=np.array(-1.0))  # unspecified Ts
+    with pytest.warns(UserWarning, match="B and Ts read and not used"):
+        assert load_spec(npz, max_attacked=1).system.C.shape == (3, 2)
+
+
+@pytest.mark.parametrize(
+    ("extra", "key", "fragment"),
+    [
+        ({"Ts": 0.0}, "Ts", "continuous-time model"),
+        ({"Ts": -2.0}, "Ts", "expected a sampling time > 0"),
+        ({"Ts": np.array([0.1, 0.2])}, "Ts", "expected a sampling time"),
+        ({"B": np.zeros((3, 1))}, "B", "expected 2 rows (those of A)"),
+        ({"D": np.zeros((2, 1))}, "D", "expected 3 rows (those of C)"),
+        ({"B": np.zeros((2, 1)), "D": np.zeros((3, 2))}, "D", "expected the columns of B (1)"),
+    ],
+)
+def test_mat_state_space_save_with_wrong_matrices(tmp_path, extra, key, fragment):
+    path = tmp_path / "ss.mat"
+    scipy.io.savemat(path, {"A": np.array(A2), "C": np.array(C3), **extra})
+    expect_error(path, fragment, key=key, max_attacked=1)
+
+
+def test_mat_state_space_object_is_refused_with_the_way_out(tmp_path):
+    from scipy.io.matlab import MatlabObject
+
+    model = MatlabObject(np.zeros((1, 1), dtype=[("a", object)]), classname="ss")
+    model[0, 0]["a"] = np.eye(2)
+    path = tmp_path / "sys.mat"
+    scipy.io.savemat(path, {"sys": model})
+    expect_error(path, "ssdata(sys)", max_attacked=1)
 
 
 def test_mat_complex_matrix(tmp_path):

@@ -251,13 +251,21 @@ def _warnings_as_notes() -> Iterator[_WarningLog]:
         yield log
 
 
+def _load(text: str, **overrides: Any) -> tuple[Any, list[str]]:
+    """The spec argument (``load_argument``) and the notes its reading raised (the variables of
+    a MATLAB save that are not used, say)."""
+    with _warnings_as_notes() as log:
+        spec = load_argument(text, **overrides)
+    return spec, log.notes()
+
+
 def _cmd_analyze(args: argparse.Namespace) -> int:
     from ..analyze import analyze
     from ..report.json import certificate_json
     from ..report.table import render_table
 
     target = output_file("--json", args.json_path)
-    spec = load_argument(args.spec, max_attacked=args.max_attacked, horizon=args.horizon)
+    spec, load_notes = _load(args.spec, max_attacked=args.max_attacked, horizon=args.horizon)
     to_stdout_json = args.json_path == "-"
     human = sys.stderr if to_stdout_json else sys.stdout
     device = _device(args)  # before any work: an unusable device is refused at once
@@ -277,9 +285,9 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
             )
     finally:
         progress.close()
-    if log.notes():
+    if load_notes or log.notes():
         meta = dict(cert.meta or {})
-        meta["notes"] = [*meta.get("notes", []), *log.notes()]
+        meta["notes"] = [*meta.get("notes", []), *load_notes, *log.notes()]
         cert = dataclasses.replace(cert, meta=meta)
     with _warnings_as_notes() as render_log:
         document = certificate_json(cert)
@@ -304,7 +312,7 @@ def _cmd_certify(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
 
     out_dir = output_folder("--out", args.out)
     target = output_file("--json", args.json_path)
-    spec = load_argument(args.spec, max_attacked=args.max_attacked, horizon=args.horizon)
+    spec, load_notes = _load(args.spec, max_attacked=args.max_attacked, horizon=args.horizon)
     html_path, json_path = out_dir / f"{spec.name}.html", out_dir / f"{spec.name}.json"
     for path in (html_path, json_path):
         if path.is_dir():
@@ -339,7 +347,7 @@ def _cmd_certify(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
             device=device,
         )
         result.to_dict()  # simulation metrics are computed here: their warnings are notes too
-    notes = log.notes()
+    notes = [*load_notes, *log.notes()]
     if notes:
         result = dataclasses.replace(result, notes=(*result.notes, *notes))
     say("writing the report")
@@ -367,7 +375,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from ..simulation.engine import simulate_spec
 
     target = output_file("--json", args.json_path)
-    spec = load_argument(args.spec, max_attacked=args.max_attacked)
+    spec, load_notes = _load(args.spec, max_attacked=args.max_attacked)
     if spec.observer is None or not spec.scenarios:
         raise UsageError(
             f"{spec.source}: simulate needs an [observer] section and at least one [[scenario]]"
@@ -400,13 +408,14 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         }
         table = _simulation_table(spec, results["scenarios"])
     human = sys.stderr if args.json_path == "-" else sys.stdout
-    if log.notes():
-        document["notes"] = log.notes()
+    notes = [*load_notes, *log.notes()]
+    if notes:
+        document["notes"] = notes
     text = json.dumps(to_jsonable(document), indent=2, allow_nan=False) + "\n"
     if target is not None:
         write_outputs({target: text})
     human.write(table)
-    for note in log.notes():
+    for note in notes:
         human.write(f"note: {note}\n")
     if args.json_path == "-":
         sys.stdout.write(text)

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import sys
+import warnings
 from collections.abc import Sequence
 from typing import Any
 
@@ -94,7 +96,6 @@ def cmd_design(args: argparse.Namespace, argv: Sequence[str] | None = None) -> i
     certificate, print the comparison; the exit status of the written design's certificate
     (1 when none was certified)."""
     import hashlib
-    import sys
     import tomllib
 
     from ..report.html import render_report
@@ -106,7 +107,11 @@ def cmd_design(args: argparse.Namespace, argv: Sequence[str] | None = None) -> i
 
     folder = output_folder("--out", args.out)
     target = output_file("--json", args.json_path)
-    spec = load_argument(args.spec, max_attacked=args.max_attacked)
+    with warnings.catch_warnings(record=True) as caught:  # the spec's notes, said once
+        warnings.simplefilter("always", UserWarning)
+        spec = load_argument(args.spec, max_attacked=args.max_attacked)
+    for warning in caught:
+        sys.stderr.write(f"note: {str(warning.message).splitlines()[0]}\n")
     own = spec.observer or {}
     kind = KIND_NAMES[args.observer] if args.observer else "elastic_net"
     if args.objective == "roa" and not args.observer:

@@ -12,6 +12,7 @@ import hashlib
 import os
 import re
 import stat
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -31,6 +32,7 @@ from .files import (
     _check_document,
     _parse_text,
     _read_arrays,
+    unused_variables,
 )
 from .scenarios import read_scenarios
 from .table import (
@@ -339,6 +341,9 @@ def load_spec(
                 f"{source}: a {suffix} file holds only the plant; give the number of attacked "
                 f"sensors with --max-attacked (max_attacked=...)"
             )
+        note = unused_variables(source, arrays)
+        if note is not None:  # a note in the CLI's output (its warnings become notes)
+            warnings.warn(note, UserWarning, stacklevel=2)
         data: Any = {"system": {k: arrays[k] for k in _SYSTEM_KEYS if k in arrays}}
         default = "system"
     else:

@@ -43,6 +43,10 @@ MAX_TEXT_BYTES = 16 * 2**20
 MAX_BINARY_BYTES = 256 * 2**20
 MAX_NESTING = 16
 _SYSTEM_KEYS = ("A", "C", "sensors")
+# the variables of an .npz or .mat file: the system's, and those of a MATLAB save of a
+# state-space model (``[A, B, C, D, Ts] = ssdata(sys)``), which are checked and not used
+_ARRAY_KEYS = ("A", "B", "C", "D", "Ts", "sensors")
+UNUSED_KEYS = ("B", "D", "Ts")
 _NPY_MAGIC = b"\x93NUMPY"
 
 
@@ -290,11 +294,59 @@ def _read_arrays(raw: bytes, suffix: str, source: str) -> dict[str, Any]:
     """Variables of an .npz or .mat file."""
     data = _read_npz(raw, source) if suffix == ".npz" else _read_mat(raw, source)
     for key in data:
-        if key not in _SYSTEM_KEYS:  # pragma: no cover - refused before loading
+        if key not in _ARRAY_KEYS:  # pragma: no cover - refused before loading
             raise spec_error(source, key, "unknown variable; expected A, C and optionally sensors")
     if "sensors" in data:
         data["sensors"] = _names(source, data["sensors"])
     return data
+
+
+def unused_variables(source: str, arrays: dict[str, Any]) -> str | None:
+    """Check the B, D and Ts of a state-space save against A and C, and say they are not used
+    (None when the file has none of them).
+
+    B (n x m) and D (p x m) must have the rows of A and C and the same columns; Ts is the
+    sampling time, positive or -1 (MATLAB's unspecified), never 0 (a continuous-time model).
+    """
+    present = [key for key in UNUSED_KEYS if key in arrays]
+    if not present:
+        return None
+    n = np.shape(arrays["A"])[0]
+    p = np.shape(np.atleast_2d(arrays["C"]))[0]
+    columns: dict[str, int] = {}
+    for key, rows, of in (("B", n, "A"), ("D", p, "C")):
+        if key in arrays:
+            value = np.atleast_2d(np.asarray(arrays[key], dtype=float))
+            if value.ndim != 2 or value.shape[0] != rows:
+                raise spec_error(
+                    source,
+                    key,
+                    f"expected {rows} rows (those of {of}), got shape {value.shape}",
+                )
+            columns[key] = value.shape[1]
+    if len(set(columns.values())) > 1:
+        raise spec_error(
+            source, "D", f"expected the columns of B ({columns['B']}), got {columns['D']}"
+        )
+    if "Ts" in arrays:
+        ts = np.asarray(arrays["Ts"], dtype=float).ravel()
+        if ts.size != 1 or not np.isfinite(ts[0]) or not (ts[0] > 0 or ts[0] == -1):
+            got = ts.tolist() if ts.size != 1 else ts[0]
+            if ts.size == 1 and ts[0] == 0:
+                raise spec_error(
+                    source,
+                    "Ts",
+                    "0: a continuous-time model; ssecert certifies discrete-time plants, "
+                    "discretise it first (sysd = c2d(sys, T) in MATLAB, control.c2d in Python)",
+                )
+            raise spec_error(
+                source, "Ts", f"expected a sampling time > 0 (or -1, unspecified), got {got}"
+            )
+    names = " and ".join([", ".join(present[:-1]), present[-1]] if len(present) > 1 else present)
+    return (
+        f"{source}: {names} read and not used (a known input cancels in the estimation error; "
+        "the certificates do not depend on the sampling time)"
+    )
 
 
 def _names(source: str, value: Any) -> list[str]:
@@ -381,11 +433,15 @@ def _json_int(text: str) -> int | _TooLongInteger:
 
 
 def _check_variable(source: str, name: str, seen: Collection[str], holder: str) -> None:
-    """SpecError unless ``name`` is a system variable (A, C, sensors) not already read."""
-    if name not in _SYSTEM_KEYS:
-        hint = suggest(name, _SYSTEM_KEYS)
+    """SpecError unless ``name`` is a variable of an array file (A, C, sensors, or B, D and Ts
+    of a state-space save) not already read."""
+    if name not in _ARRAY_KEYS:
+        hint = suggest(name, _ARRAY_KEYS)
         raise spec_error(
-            source, name, f"unknown variable{hint}; expected A, C and optionally sensors"
+            source,
+            name,
+            f"unknown variable{hint}; expected A, C and optionally sensors (B, D and Ts are "
+            "read and not used)",
         )
     if name in seen:
         raise spec_error(source, name, f"{holder} holds this variable twice")

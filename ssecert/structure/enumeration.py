@@ -715,26 +715,41 @@ def _scan_level(
 
 
 def placement_note(outcome: _Outcome) -> str | None:
-    """What ran where, for an enumeration given a Dask client (None without one): the levels
-    too small to gain from the workers (fewer sets than two ranges of ``MIN_WORKER_SETS``)
-    run in-process."""
+    """What ran where, for an enumeration given a Dask client (None without one): a level is
+    split only into ranges of at least ``MIN_WORKER_SETS`` sets and of ``_CHUNK_OVER_LEVEL``
+    times the partial sums each range rebuilds; a level too small for two runs in-process."""
     if not outcome.on_workers and not outcome.in_process:
         return None
+    groups: list[tuple[list[int], int]] = []  # consecutive sizes split alike
+    for size, ranges in outcome.on_workers.items():
+        if groups and groups[-1][1] == ranges and groups[-1][0][-1] == size - 1:
+            groups[-1][0].append(size)
+        else:
+            groups.append(([size], ranges))
     parts = [
-        f"the sets of {size} sensor{'s' if size != 1 else ''} in {ranges} ranges"
-        for size, ranges in outcome.on_workers.items()
+        f"the sets of {_sizes(sizes)} {_sensors(sizes)} in {ranges} ranges"
+        + (" each" if len(sizes) > 1 else "")
+        for sizes, ranges in groups
     ]
-    spread = "; ".join(parts) if parts else "no level"
-    text = f"Dask workers: {spread}"
+    if parts:
+        text = "Dask workers: " + "; ".join(parts)
+        if outcome.in_process:
+            text += f"; in-process: the sets of {_sizes(outcome.in_process)} "
+            text += _sensors(outcome.in_process)
+    else:
+        text = f"every level ran in-process (the sets of {_sizes(outcome.in_process)} "
+        text += f"{_sensors(outcome.in_process)}), none on the Dask workers"
     if outcome.in_process:
-        sizes = outcome.in_process
         text += (
-            f"; in-process: the sets of {_sizes(sizes)} sensor{'s' if sizes != [1] else ''} "
-            f"(a level of fewer than "
-            f"{2 * MIN_WORKER_SETS:,} sets gains nothing from the workers: each range pays for "
-            f"its task and its own partial sums)"
+            f"; a level is split only into ranges of at least {MIN_WORKER_SETS:,} sets and "
+            f"{_CHUNK_OVER_LEVEL} times the partial sums each range rebuilds: a smaller one "
+            "would take longer on the workers"
         )
     return text
+
+
+def _sensors(sizes: list[int]) -> str:
+    return "sensor" if sizes == [1] else "sensors"
 
 
 def _sizes(sizes: list[int]) -> str:
