@@ -40,7 +40,12 @@ _INDEX_LIST: dict[str, Any] = {"type": "array", "items": {"type": "integer", "mi
 _SCENARIO: dict[str, dict[str, Any]] = {
     "name": {"type": "string", "minLength": 1},
     "attack": {"enum": None},  # ATTACK_KINDS, filled in
-    "sensors": {**_INDEX_LIST, "minItems": 1, "description": "attacked sensors (0-based)"},
+    "sensors": {
+        "type": "array",
+        "items": {"oneOf": [{"type": "integer", "minimum": 0}, {"type": "string"}]},
+        "minItems": 1,
+        "description": "attacked sensors: 0-based indices or the sensors' names",
+    },
     "count": {"type": "integer", "minimum": 1, "description": "a random support of this size"},
     "magnitude": {
         "oneOf": [

@@ -69,6 +69,10 @@ OBSERVERS = [
 def _changes():
     """(what, document): valid documents and single changes the reader refuses."""
     yield "valid", _base()
+    named = _base()
+    named["system"]["sensors"] = ["a", "b", "c"]
+    named["scenario"][0]["sensors"] = ["b", 0]
+    yield "sensors by name", named
     for observer in OBSERVERS:
         yield f"valid {observer}", _base(observer)
         kind = observer["kind"]

@@ -1248,6 +1248,17 @@ def test_scenario_defaults():
     }
 
 
+def test_scenario_sensors_by_name_or_index():
+    (scenario,) = scenario_spec({"name": "c", "attack": "constant", "sensors": ["s2", 0]}).scenarios
+    assert scenario["sensors"] == [2, 0]  # kept as indices
+    with pytest.raises(SpecError, match=r"scenario\[0\]\.sensors\[0\]'.*no sensor is named 'S1'"):
+        scenario_spec({"name": "c", "attack": "constant", "sensors": ["S1"]})
+    with pytest.raises(SpecError, match="did you mean 's1'"):
+        scenario_spec({"name": "c", "attack": "constant", "sensors": ["s11"]})
+    with pytest.raises(SpecError, match="repeated sensor indices"):
+        scenario_spec({"name": "c", "attack": "constant", "sensors": ["s0", 0]})
+
+
 def test_scenario_values_are_kept():
     spec = scenario_spec(
         {

@@ -151,7 +151,7 @@ def spec_from_dict(
         max_attacked=s,
         horizon=tau,
         observer=observer,
-        scenarios=read_scenarios(source, data.get("scenario", []), system.p),
+        scenarios=read_scenarios(source, data.get("scenario", []), system.p, system.sensors),
         source=source,
         sha256=sha256,
     )

@@ -27,6 +27,7 @@ from .table import (
     require,
     spec_error,
     spec_int,
+    suggest,
 )
 
 ATTACK_KINDS = ("none", "constant", "switching", "sinusoidal", "random", "stealthy")
@@ -51,8 +52,13 @@ _SCENARIO_KEYS = (
 )
 
 
-def read_scenarios(source: str, raw: Any, p: int) -> tuple[dict[str, Any], ...]:
-    """The ``[[scenario]]`` tables (one table is taken as a list of one), names unique."""
+def read_scenarios(
+    source: str, raw: Any, p: int, names: tuple[str, ...] = ()
+) -> tuple[dict[str, Any], ...]:
+    """The ``[[scenario]]`` tables (one table is taken as a list of one), names unique.
+
+    A scenario's ``sensors`` are 0-based indices or the sensors' ``names`` (the system's),
+    kept as indices."""
     if isinstance(raw, Mapping):
         raw = [raw]
     if not isinstance(raw, list):
@@ -64,7 +70,7 @@ def read_scenarios(source: str, raw: Any, p: int) -> tuple[dict[str, Any], ...]:
     scenarios: list[dict[str, Any]] = []
     seen: set[str] = set()
     for index, table in enumerate(raw):
-        scenario = _scenario(source, f"scenario[{index}]", table, p)
+        scenario = _scenario(source, f"scenario[{index}]", table, p, names)
         if scenario["name"] in seen:
             raise spec_error(
                 source, f"scenario[{index}].name", f"duplicate scenario name {scenario['name']!r}"
@@ -74,7 +80,9 @@ def read_scenarios(source: str, raw: Any, p: int) -> tuple[dict[str, Any], ...]:
     return tuple(scenarios)
 
 
-def _scenario(source: str, prefix: str, table: Any, p: int) -> dict[str, Any]:
+def _scenario(
+    source: str, prefix: str, table: Any, p: int, names: tuple[str, ...] = ()
+) -> dict[str, Any]:
     """One ``[[scenario]]`` table, checked against its attack, with defaults filled in."""
     check_keys(source, prefix, table, _SCENARIO_KEYS)
     name = check_name(
@@ -89,7 +97,7 @@ def _scenario(source: str, prefix: str, table: Any, p: int) -> dict[str, Any]:
         ATTACK_KINDS,
     )
     out: dict[str, Any] = {"name": name, "attack": attack}
-    out.update(_attack_support(source, prefix, table, attack, p))
+    out.update(_attack_support(source, prefix, table, attack, p, names))
     if attack in ("switching", "sinusoidal"):
         out["period"] = convert(
             source,
@@ -110,7 +118,9 @@ def _scenario(source: str, prefix: str, table: Any, p: int) -> dict[str, Any]:
     return out
 
 
-def _attack_support(source: str, prefix: str, table: Any, attack: str, p: int) -> dict[str, Any]:
+def _attack_support(
+    source: str, prefix: str, table: Any, attack: str, p: int, names: tuple[str, ...] = ()
+) -> dict[str, Any]:
     """Which sensors the attack takes: ``{"sensors": [...]}``, ``{"count": k}`` or nothing.
 
     No attack and the stealthy one (whose sensors come from the witness)
@@ -146,11 +156,36 @@ def _attack_support(source: str, prefix: str, table: Any, attack: str, p: int) -
     if not has_sensors:
         return {"count": _attack_count(source, prefix, table["count"], p)}
     sensors = convert(
-        source, f"{prefix}.sensors", as_index_list, table["sensors"], "sensors", upper=p
+        source,
+        f"{prefix}.sensors",
+        as_index_list,
+        _by_name(source, f"{prefix}.sensors", table["sensors"], names),
+        "sensors",
+        upper=p,
     )
     if not sensors:
         raise spec_error(source, f"{prefix}.sensors", "expected at least one sensor")
     return {"sensors": list(sensors)}
+
+
+def _by_name(source: str, key: str, value: Any, names: tuple[str, ...]) -> Any:
+    """The sensors of a list as indices: each a 0-based index or a sensor's name."""
+    if not isinstance(value, list) or not any(isinstance(item, str) for item in value):
+        return value
+    out = []
+    for i, item in enumerate(value):
+        if isinstance(item, str):
+            if item not in names:
+                hint = suggest(item, names)
+                raise spec_error(
+                    source,
+                    f"{key}[{i}]",
+                    f"no sensor is named {item!r}{hint}; the sensors are "
+                    f"{', '.join(names[:12])}{', ...' if len(names) > 12 else ''}",
+                )
+            item = names.index(item)
+        out.append(item)
+    return out
 
 
 def _attack_count(source: str, prefix: str, value: Any, p: int) -> int:
