@@ -15,9 +15,12 @@ counts, not measurements.
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import math
 import re
 import time
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import TypeVar
 
@@ -228,9 +231,27 @@ def _apart(a: float, b: float) -> tuple[str, str]:
 _T = TypeVar("_T")
 
 
+# who is told of each step as it ends (``reporting``): the command line's --verbose
+_REPORT: contextvars.ContextVar[Callable[[str, float], None] | None] = contextvars.ContextVar(
+    "ssecert_step_report", default=None
+)
+
+
+@contextlib.contextmanager
+def reporting(report: Callable[[str, float], None]) -> Iterator[None]:
+    """Call ``report(step, seconds)`` as each step of the analyses ends (every ``Laps.lap``:
+    the checks of ``analyze`` and the observer checks), within the ``with`` block."""
+    token = _REPORT.set(report)
+    try:
+        yield
+    finally:
+        _REPORT.reset(token)
+
+
 class Laps:
     """Wall-clock seconds of each step of a run, into ``seconds`` (the caller's dict when
-    given), for the certificate's ``meta.timings``."""
+    given), for the certificate's ``meta.timings``; each step is also told to the ``reporting``
+    callback when there is one."""
 
     def __init__(self, seconds: dict[str, float] | None = None) -> None:
         self.start = self.last = time.monotonic()
@@ -241,4 +262,7 @@ class Laps:
         now = time.monotonic()
         self.seconds[name] = now - self.last
         self.last = now
+        report = _REPORT.get()
+        if report is not None:
+            report(name, self.seconds[name])
         return result

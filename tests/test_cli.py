@@ -585,3 +585,27 @@ def test_process_version():
     assert proc.returncode == 0
     assert proc.stdout.strip() == f"ssecert {ssecert.__version__}"
     assert "Traceback" not in proc.stderr
+
+
+def test_quiet_prints_nothing_and_still_writes_the_json(tmp_path, capsys):
+    target = tmp_path / "c.json"
+    assert main(["analyze", "notes-example-2", "--quiet", "--json", str(target)]) == 1
+    out, err = capsys.readouterr()
+    assert out == "" and err == ""
+    assert json.loads(target.read_text())["verdict"] == "fails"
+    assert main(["analyze", "notes-example-2", "--quiet", "--json", "-"]) == 1
+    out, err = capsys.readouterr()
+    assert json.loads(out)["verdict"] == "fails" and err == ""
+
+
+def test_verbose_says_each_step_as_it_ends(capsys):
+    assert main(["analyze", "notes-example-2", "--verbose"]) == 1
+    err = capsys.readouterr().err.splitlines()
+    steps = [line.split(":")[1].strip() for line in err if line.startswith("ssecert: ")]
+    assert steps[:4] == ["eigenvalues", "observability", "sparse observability", "irrepresentable"]
+    assert all(line.endswith(" s") for line in err if line.startswith("ssecert: "))
+
+
+def test_quiet_and_verbose_exclude_each_other(capsys):
+    assert main(["analyze", "notes-example-2", "--quiet", "--verbose"]) == 2
+    assert "not allowed with argument" in capsys.readouterr().err

@@ -39,12 +39,14 @@ from .options import (
     _add_analysis_options,
     _add_budget_options,
     _add_dask_options,
+    _add_output_options,
     _budget,
     _dask,
     _device,
     _nonnegative_int,
     _positive_int,
     _Progress,
+    _steps,
 )
 
 __all__ = ["main"]
@@ -106,6 +108,7 @@ def _build_parser() -> argparse.ArgumentParser:
     )
     _add_analysis_options(certify)
     _add_dask_options(certify, "the enumeration and the runs")
+    _add_output_options(certify)
 
     analyze = sub.add_parser(
         "analyze",
@@ -125,6 +128,7 @@ def _build_parser() -> argparse.ArgumentParser:
     )
     _add_analysis_options(analyze)
     _add_dask_options(analyze, "the enumeration")
+    _add_output_options(analyze)
     analyze.add_argument(
         "--seed",
         type=_nonnegative_int,
@@ -166,6 +170,7 @@ def _build_parser() -> argparse.ArgumentParser:
     )
     _add_dask_options(simulate, "the runs")
     _add_budget_options(simulate)
+    _add_output_options(simulate)
 
     examples = sub.add_parser(
         "examples",
@@ -251,6 +256,16 @@ def _warnings_as_notes() -> Iterator[_WarningLog]:
         yield log
 
 
+class _Silent:
+    """Where --quiet sends what a command would print for people."""
+
+    def write(self, text: str) -> int:
+        return len(text)
+
+    def flush(self) -> None:
+        pass
+
+
 def _load(text: str, **overrides: Any) -> tuple[Any, list[str]]:
     """The spec argument (``load_argument``) and the notes its reading raised (the variables of
     a MATLAB save that are not used, say)."""
@@ -267,11 +282,11 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     target = output_file("--json", args.json_path)
     spec, load_notes = _load(args.spec, max_attacked=args.max_attacked, horizon=args.horizon)
     to_stdout_json = args.json_path == "-"
-    human = sys.stderr if to_stdout_json else sys.stdout
+    human = _Silent() if args.quiet else sys.stderr if to_stdout_json else sys.stdout
     device = _device(args)  # before any work: an unusable device is refused at once
-    progress = _Progress(sys.stderr, quiet=to_stdout_json)
+    progress = _Progress(sys.stderr, quiet=to_stdout_json or args.quiet)
     try:
-        with _warnings_as_notes() as log, _dask(args) as client:
+        with _warnings_as_notes() as log, _dask(args) as client, _steps(args):
             cert = analyze(
                 spec,
                 method=args.method,
@@ -317,20 +332,26 @@ def _cmd_certify(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
     for path in (html_path, json_path):
         if path.is_dir():
             raise UsageError(f"--out {args.out}: {path} is a folder; the report needs that name")
-    human = sys.stderr if args.json_path == "-" else sys.stdout
-    tty = sys.stderr.isatty() and args.json_path != "-"
-    counter = _Progress(sys.stderr, quiet=args.json_path == "-")
+    human = _Silent() if args.quiet else sys.stderr if args.json_path == "-" else sys.stdout
+    # the stages: on a terminal, or wherever --verbose asks for them
+    stages = not args.quiet and (args.verbose or (sys.stderr.isatty() and args.json_path != "-"))
+    counter = _Progress(sys.stderr, quiet=args.json_path == "-" or args.quiet)
 
     def say(message: str) -> None:
         counter.close()
-        if tty:
+        if stages:
             sys.stderr.write(f"ssecert: {message}...\n")
             sys.stderr.flush()
 
     device = _device(args)  # before any work: an unusable device is refused at once
     words = ["ssecert", "certify", *(list(argv) if argv is not None else sys.argv[2:])]
     command = " ".join(words if argv is not None else ["ssecert", *sys.argv[1:]])
-    with _warnings_as_notes() as log, _dask(args) as client, contextlib.closing(counter):
+    with (
+        _warnings_as_notes() as log,
+        _dask(args) as client,
+        contextlib.closing(counter),
+        _steps(args),
+    ):
         result = certify(
             spec,
             seed=args.seed,
@@ -407,7 +428,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             },
         }
         table = _simulation_table(spec, results["scenarios"])
-    human = sys.stderr if args.json_path == "-" else sys.stdout
+    human = _Silent() if args.quiet else sys.stderr if args.json_path == "-" else sys.stdout
     notes = [*load_notes, *log.notes()]
     if notes:
         document["notes"] = notes

@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import math
+import sys
 import time
 from typing import Any, TextIO
 
@@ -155,6 +156,34 @@ def _budget(args: argparse.Namespace) -> Any:
             if value
         }
     )
+
+
+def _add_output_options(parser: argparse.ArgumentParser) -> None:
+    """--quiet and --verbose."""
+    talk = parser.add_mutually_exclusive_group()
+    talk.add_argument(
+        "--quiet",
+        action="store_true",
+        help="print nothing but errors (files and --json - are written as usual)",
+    )
+    talk.add_argument(
+        "--verbose",
+        action="store_true",
+        help="say each step of the analysis as it ends, with its seconds, on stderr",
+    )
+
+
+def _steps(args: argparse.Namespace) -> Any:
+    """A context telling stderr of each step as it ends under --verbose (else nothing)."""
+    if not getattr(args, "verbose", False):
+        return contextlib.nullcontext()
+    from ..budget import reporting
+
+    def report(step: str, seconds: float) -> None:
+        sys.stderr.write(f"ssecert: {step.replace('_', ' ')}: {seconds:.2f} s\n")
+        sys.stderr.flush()
+
+    return reporting(report)
 
 
 def _add_dask_options(parser: argparse.ArgumentParser, work: str) -> None:
