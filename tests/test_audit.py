@@ -90,3 +90,13 @@ def test_a_finding_without_its_evidence_is_refused():
         Finding("holds", "fine", {})
     with pytest.raises(ValueError, match="plain JSON"):
         Finding("fails", "bad", {"method": "randomised"}, counterexample={"A": object()})
+
+
+@pytest.mark.slow
+def test_a_claim_alone_prints_without_touching_the_reports_folder(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    claim = next(iter(all_claims()))
+    assert main(["audit", "--claim", claim]) == 0
+    out = capsys.readouterr().out
+    assert f"\n{claim}: " in out and "audit written" not in out
+    assert not (tmp_path / "reports").exists()

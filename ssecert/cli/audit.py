@@ -23,7 +23,11 @@ def add_audit_parser(sub: Any) -> None:
         ),
     )
     audit.add_argument(
-        "--out", default="reports", metavar="DIR", help="folder of audit.html and audit.json"
+        "--out",
+        default=None,
+        metavar="DIR",
+        help="folder of audit.html and audit.json (default ./reports; with --claim, nothing is "
+        "written unless --out is given)",
     )
     audit.add_argument(
         "--claim",
@@ -34,14 +38,17 @@ def add_audit_parser(sub: Any) -> None:
 
 
 def cmd_audit(args: argparse.Namespace) -> int:
-    """Run the audit; 0 once audit.html and audit.json are written."""
+    """Run the audit; 0 once audit.html and audit.json are written (with --claim alone, once
+    the claims are printed)."""
     import json
 
     from proofs_checks import all_claims, audit_json, render_audit, run_audit
 
     from .files import UsageError, output_folder, write_outputs
 
-    folder = output_folder("--out", args.out)
+    # a run of a few claims prints them and leaves the whole audit's report as it is
+    write = args.out is not None or not args.claim
+    folder = output_folder("--out", args.out or "reports") if write else None
     claims = all_claims()
     wanted = args.claim
     if wanted:
@@ -60,8 +67,9 @@ def cmd_audit(args: argparse.Namespace) -> int:
     outcomes = run_audit(wanted, progress=progress)
     if tty:
         sys.stderr.write("\r" + " " * 70 + "\r")
-    html, js = folder / "audit.html", folder / "audit.json"
-    write_outputs({html: render_audit(outcomes), js: audit_json(outcomes)})  # both or neither
+    if folder is not None:
+        html, js = folder / "audit.html", folder / "audit.json"
+        write_outputs({html: render_audit(outcomes), js: audit_json(outcomes)})  # both or none
     width = max(len(o.claim.id) for o in outcomes)
     for o in outcomes:
         print(f"{o.claim.id:<{width}}  {o.finding.verdict:<11}  {o.claim.where}")
@@ -82,6 +90,8 @@ def cmd_audit(args: argparse.Namespace) -> int:
     fails = len(outcomes) - counts["holds"] - counts["conditional"]
     print(
         f"\n{len(outcomes)} claims: {counts['holds']} hold, {counts['conditional']} conditional, "
-        f"{fails} fail\naudit written to {html} and {js}"
+        f"{fails} fail"
     )
+    if folder is not None:
+        print(f"audit written to {html} and {js}")
     return 0
