@@ -37,6 +37,7 @@ LAYERS = {
         "ssecert.system",
         "ssecert.parallel",
         "ssecert.context",
+        "ssecert.solvers",
     ),
     1: ("ssecert.design", "ssecert.observers"),
     2: ("ssecert.spec", "ssecert.examples", "ssecert.inputs", "ssecert.schemas"),

@@ -46,6 +46,7 @@ from .options import (
     _nonnegative_int,
     _positive_int,
     _Progress,
+    _solver,
     _steps,
 )
 
@@ -284,9 +285,10 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     to_stdout_json = args.json_path == "-"
     human = _Silent() if args.quiet else sys.stderr if to_stdout_json else sys.stdout
     device = _device(args)  # before any work: an unusable device is refused at once
+    solver = _solver(args)  # likewise an unusable solver
     progress = _Progress(sys.stderr, quiet=to_stdout_json or args.quiet)
     try:
-        with _warnings_as_notes() as log, _dask(args) as client, _steps(args):
+        with _warnings_as_notes() as log, _dask(args) as client, _steps(args), solver:
             cert = analyze(
                 spec,
                 method=args.method,
@@ -344,6 +346,7 @@ def _cmd_certify(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
             sys.stderr.flush()
 
     device = _device(args)  # before any work: an unusable device is refused at once
+    solver = _solver(args)  # likewise an unusable solver
     words = ["ssecert", "certify", *(list(argv) if argv is not None else sys.argv[2:])]
     command = " ".join(words if argv is not None else ["ssecert", *sys.argv[1:]])
     with (
@@ -351,6 +354,7 @@ def _cmd_certify(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
         _dask(args) as client,
         contextlib.closing(counter),
         _steps(args),
+        solver,
     ):
         result = certify(
             spec,

@@ -186,6 +186,21 @@ def _steps(args: argparse.Namespace) -> Any:
     return reporting(report)
 
 
+def _solver(args: argparse.Namespace) -> Any:
+    """A context solving the LMIs with the solver ``--solver`` names (checked at once)."""
+    name = getattr(args, "solver", None)
+    if not name:
+        return contextlib.nullcontext()
+    from ..solvers import check_solver, using_solver
+    from .files import UsageError
+
+    try:
+        check_solver(name)
+    except ValueError as exc:
+        raise UsageError(f"--solver {name}: {exc}") from None
+    return using_solver(name)
+
+
 def _add_dask_options(parser: argparse.ArgumentParser, work: str) -> None:
     parser.add_argument(
         "--scheduler",
@@ -244,6 +259,13 @@ def _add_analysis_options(parser: argparse.ArgumentParser) -> None:
         choices=("auto", "enumeration", "eigenspace"),
         default="auto",
         help="sparse-observability method (default auto)",
+    )
+    parser.add_argument(
+        "--solver",
+        metavar="NAME",
+        default=None,
+        help="conic solver of the LMIs, any installed one cvxpy supports for them (default "
+        "CLARABEL; every certificate is re-verified in numpy whichever solves it)",
     )
     parser.add_argument(
         "--device",

@@ -32,6 +32,7 @@ import numpy as np
 from ..budget import Budget
 from ..observers.base import ObserverDesign
 from ..observers.lure import LureModel
+from ..solvers import solve_conic
 
 __all__ = [
     "GainSynthesis",
@@ -302,7 +303,7 @@ def _solved(
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # a candidate: certified afterwards either way
-            problem.solve(solver=cp.CLARABEL, **options)
+            solve_conic(problem, **options)
     except (cp.error.SolverError, ArithmeticError, ValueError) as exc:
         return GainSynthesis(None, None, f"solver failed ({type(exc).__name__})", _since(start))
     P1, Y, g = variables["P1"].value, variables["Y"].value, variables["g"].value

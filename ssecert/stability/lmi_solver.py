@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from ..observers.lure import LureModel
+from ..solvers import solve_conic, solver_name
 
 __all__ = ["ETA", "lmi_cost"]
 
@@ -72,7 +73,7 @@ def _solve(
     cons.append(M << -ETA * np.eye(size))
     objective = cp.Minimize(g) if g is not None else cp.Minimize(0)
     problem = cp.Problem(objective, cons)
-    info: dict[str, Any] = {"solver": "CLARABEL", "structure": structure, "lmi_size": size}
+    info: dict[str, Any] = {"solver": solver_name(), "structure": structure, "lmi_size": size}
     if not _run_clarabel(problem, options, info, start):
         return None, None, None, info
     return _solution(problem, P, t, g, info)
@@ -147,12 +148,10 @@ def _run_clarabel(
     """Solve with Clarabel, recording the status and time in ``info``; True when optimal."""
     import warnings
 
-    import cvxpy as cp
-
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)  # verified below, not trusted
-            problem.solve(solver=cp.CLARABEL, **options)
+            solve_conic(problem, **options)
     except Exception as exc:  # solver failure is an answer: inconclusive
         info.update(
             status=f"solver error: {type(exc).__name__}: {exc}".rstrip(": "),

@@ -29,6 +29,7 @@ from ..budget import Budget
 from ..numerics.rational import fractions, is_positive_definite, product, solve
 from ..observers.lure import LureModel
 from ..results import Verdict
+from ..solvers import solve_conic
 from .lyapunov import lyapunov_certificate, verified_decrease
 from .piecewise import piecewise_region
 
@@ -229,7 +230,7 @@ def _lmi_matrix(model: LureModel) -> np.ndarray | None:
         with warnings.catch_warnings():
             # an inaccurate solution is only a candidate like any other: it is verified
             warnings.simplefilter("ignore")
-            problem.solve(solver=cp.CLARABEL)
+            solve_conic(problem)
     except (cp.error.SolverError, ArithmeticError, ValueError):
         return None
     if Y.value is None or not np.all(np.isfinite(Y.value)):

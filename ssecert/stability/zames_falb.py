@@ -58,6 +58,7 @@ import numpy as np
 from ..budget import Budget
 from ..observers.lure import LureModel
 from ..results import Verdict
+from ..solvers import solver_name
 from ..tolerances import EPS
 from .lmi import (
     LMICertificate,
@@ -248,7 +249,7 @@ def _solve(
     ]
     problem = cp.Problem(cp.Minimize(g) if g is not None else cp.Minimize(0), cons)
     info: dict[str, Any] = {
-        "solver": "CLARABEL",
+        "solver": solver_name(),
         "order": nu,
         "coefficients": "signed" if signed else "nonnegative",
         "lmi_size": Z,
