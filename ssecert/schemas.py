@@ -183,9 +183,12 @@ _CHECK_FIELDS: dict[str, dict[str, Any]] = {
     "irrepresentable": {
         "worst_support": {"oneOf": [_INDEX_LIST, {"type": "null"}]},
         "horizon": {"type": "integer", "minimum": 1},
-        "mode": {"type": "string"},
+        "mode": {"type": ["string", "null"]},
     },
-    "observer_gain": {"L": {"type": "array"}, "spectral_radius": _REAL},
+    "observer_gain": {
+        "L": {"type": ["array", "null"], "description": "null when no gain could be computed"},
+        "spectral_radius": {"oneOf": [_REAL, {"type": "null"}]},
+    },
 }
 _REQUIRED_FIELDS: dict[str, list[str]] = {
     "observability": ["observability_index"],

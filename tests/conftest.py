@@ -20,7 +20,40 @@ pytest_plugins = ["pytester"]
 _ENVIRONMENT_PROFILES = {"thorough": "thorough", "quick": "quick", "ci": "quick"}
 
 
+def _follow_their_schema() -> None:
+    """Every certificate the tests render (``certificate_json``, ``certify_json``) is checked
+    against its JSON Schema (``ssecert.schemas``): patched before the test modules import
+    them, so that a document that does not follow the schema fails the test that made it."""
+    try:
+        import jsonschema
+    except ImportError:  # the test extra has it; a bare run checks nothing here
+        return
+    import json
+
+    from ssecert.report import json as rendering
+    from ssecert.schemas import certificate_schema
+
+    validator = jsonschema.Draft202012Validator(certificate_schema())
+
+    def checked(render):
+        def wrapper(*args, **kwargs):
+            text = render(*args, **kwargs)
+            error = next(iter(validator.iter_errors(json.loads(text))), None)
+            if error is not None:
+                where = "/".join(str(p) for p in error.absolute_path)
+                raise AssertionError(
+                    f"the certificate breaks its schema at {where}: {error.message}"
+                )
+            return text
+
+        return wrapper
+
+    rendering.certificate_json = checked(rendering.certificate_json)
+    rendering.certify_json = checked(rendering.certify_json)
+
+
 def pytest_configure(config):
+    _follow_their_schema()
     # runs before the plugin's pytest_configure (trylast), which loads the profile
     name = os.environ.get("HYPOTHESIS_PROFILE")
     if (

@@ -63,13 +63,20 @@ def test_to_jsonable_handles_numpy_complex_and_non_finite():
 
 
 def test_certificate_json_is_strict_and_written_atomically(tmp_path):
+    # the two checks every certificate has, one with a non-finite value
     check = Check(
-        id="x", title="x", verdict="fails", summary="s", value=math.inf, evidence={"m": np.eye(2)}
-    )
-    cert = Certificate(System([[1.0]], [[1.0]]), [check])
+        id="observability", title="x", verdict="fails", summary="s", value=math.inf,
+        evidence={"m": np.eye(2)}, fields={"observability_index": None},
+    )  # fmt: skip
+    sparse = Check(
+        id="sparse_observability", title="y", verdict="fails", summary="s",
+        fields={"max_removable": -1, "max_removable_is_lower_bound": False,
+                "max_correctable": -1, "breaking_set": []},
+    )  # fmt: skip
+    cert = Certificate(System([[1.0]], [[1.0]]), [check, sparse])
     text = certificate_json(cert)
     data = json.loads(text, parse_constant=lambda c: pytest.fail(f"non-strict literal {c}"))
-    assert data["checks"]["x"]["value"] == "Infinity"
+    assert data["checks"]["observability"]["value"] == "Infinity"
     path = write_json(cert, tmp_path / "out.json")
     assert json.loads(path.read_text()) == data
     assert [p.name for p in tmp_path.iterdir()] == ["out.json"]
