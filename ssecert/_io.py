@@ -62,12 +62,12 @@ def _destination(path: Path) -> tuple[Path, bool]:
     return path, not stat.S_ISREG(mode)
 
 
-def _stage(final: Path, text: str) -> str:
-    """Write ``text`` to a new temporary file beside ``final``; return its name."""
+def _stage(final: Path, text: str | bytes) -> str:
+    """Write ``text`` (or bytes) to a new temporary file beside ``final``; return its name."""
     folder = final.parent if str(final.parent) else Path(".")
     fd, tmp = tempfile.mkstemp(prefix=f".{final.name}.", suffix=".tmp", dir=folder)
     try:
-        with os.fdopen(fd, "w", encoding="utf-8") as handle:
+        with _opened(fd, text) as handle:
             handle.write(text)
             handle.flush()
             os.fsync(handle.fileno())
@@ -84,6 +84,13 @@ def _stage(final: Path, text: str) -> str:
     return tmp
 
 
+def _opened(target: Any, content: str | bytes) -> Any:
+    """``target`` (a path or a file descriptor) opened for ``content``: UTF-8 text or bytes."""
+    if isinstance(content, bytes):
+        return open(target, "wb")
+    return open(target, "w", encoding="utf-8")
+
+
 def _unlink(name: str) -> None:
     try:
         os.unlink(name)
@@ -92,14 +99,16 @@ def _unlink(name: str) -> None:
 
 
 def write_files(
-    files: Mapping[str, str] | Mapping[Path, str] | Mapping[str | Path, str],
+    files: Mapping[str, str | bytes]
+    | Mapping[Path, str | bytes]
+    | Mapping[str | Path, str | bytes],
 ) -> list[Path]:
-    """Write several text files (UTF-8), all or nothing.
+    """Write several files (text as UTF-8, or bytes), all or nothing.
 
     Parameters
     ----------
     files : mapping
-        Destination path -> text.
+        Destination path -> text or bytes.
 
     Returns
     -------
@@ -126,7 +135,7 @@ def write_files(
                 else:
                     staged.append((_stage(final, text), final))
         for path, final, text in streams:
-            with _naming(path), open(final, "w", encoding="utf-8") as handle:
+            with _naming(path), _opened(final, text) as handle:
                 handle.write(text)
         for tmp, final in staged:
             backup, existed = None, final.exists()

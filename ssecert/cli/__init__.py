@@ -29,6 +29,7 @@ import traceback
 import warnings
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
+from pathlib import Path
 from typing import Any, NoReturn
 
 from .._version import __version__
@@ -126,6 +127,12 @@ def _build_parser() -> argparse.ArgumentParser:
         metavar="PATH",
         dest="json_path",
         help="write the JSON certificate to PATH ('-' for stdout)",
+    )
+    analyze.add_argument(
+        "--mat",
+        metavar="PATH",
+        dest="mat_path",
+        help="write the certificate's vectors and matrices to a MATLAB .mat file",
     )
     _add_analysis_options(analyze)
     _add_dask_options(analyze, "the enumeration")
@@ -281,6 +288,9 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     from ..report.table import render_table
 
     target = output_file("--json", args.json_path)
+    if args.mat_path == "-":
+        raise UsageError("--mat -: a .mat file is binary; give a file path")
+    mat_target = output_file("--mat", args.mat_path)
     spec, load_notes = _load(args.spec, max_attacked=args.max_attacked, horizon=args.horizon)
     to_stdout_json = args.json_path == "-"
     human = _Silent() if args.quiet else sys.stderr if to_stdout_json else sys.stdout
@@ -309,8 +319,15 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     with _warnings_as_notes() as render_log:
         document = certificate_json(cert)
         table = render_table(cert)
+    outputs: dict[Path, str | bytes] = {}
     if target is not None:
-        write_outputs({target: document})
+        outputs[target] = document
+    if mat_target is not None:
+        from ..report.mat import certificate_mat
+
+        outputs[mat_target] = certificate_mat(cert)
+    if outputs:
+        write_outputs(outputs)  # both or neither
     human.write(table)
     for note in render_log.notes(besides=log):
         human.write(f"note: {note}\n")
@@ -318,6 +335,8 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
         sys.stdout.write(document)
     elif target is not None:
         human.write(f"JSON written to {args.json_path}\n")
+    if mat_target is not None:
+        human.write(f"matrices written to {args.mat_path}\n")
     return cert.exit_code
 
 
