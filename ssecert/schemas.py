@@ -196,7 +196,7 @@ _REQUIRED_FIELDS: dict[str, list[str]] = {
         "max_removable", "max_removable_is_lower_bound", "max_correctable", "breaking_set",
     ],
     "irrepresentable": ["horizon"],
-    "observer_gain": ["L", "spectral_radius"],
+    "observer_gain": ["L"],
 }  # fmt: skip
 
 
