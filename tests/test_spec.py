@@ -792,7 +792,8 @@ def test_mat_state_space_save_is_read_and_its_input_matrices_noted(tmp_path):
         spec = load_spec(path, max_attacked=1)
     assert spec.system == System(A2, C3, name="ss")
     npz = tmp_path / "ss.npz"
-    np.savez(npz, A=np.array(A2), B=B, C=np.array(C3), Ts=np.array(-1.0))  # unspecified Ts
+    # one input saved as a vector; Ts unspecified
+    np.savez(npz, A=np.array(A2), B=B.ravel(), C=np.array(C3), Ts=np.array(-1.0))
     with pytest.warns(UserWarning, match="B and Ts read and not used"):
         assert load_spec(npz, max_attacked=1).system.C.shape == (3, 2)
 

@@ -316,7 +316,9 @@ def unused_variables(source: str, arrays: dict[str, Any]) -> str | None:
     columns: dict[str, int] = {}
     for key, rows, of in (("B", n, "A"), ("D", p, "C")):
         if key in arrays:
-            value = np.atleast_2d(np.asarray(arrays[key], dtype=float))
+            value = np.asarray(arrays[key], dtype=float)
+            if value.ndim == 1 or (value.ndim == 2 and value.shape[0] == 1 and rows > 1):
+                value = value.reshape(-1, 1)  # one input, saved as a vector
             if value.ndim != 2 or value.shape[0] != rows:
                 raise spec_error(
                     source,
