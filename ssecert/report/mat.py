@@ -12,7 +12,6 @@ number where two would clash).
 from __future__ import annotations
 
 import io
-import json
 import math
 import re
 from typing import Any
@@ -59,8 +58,8 @@ def _name(path: list[str]) -> str:
 
 def certificate_arrays(certificate: Certificate | dict[str, Any]) -> dict[str, Any]:
     """The certificate's vectors and matrices by variable name (see the module doc)."""
-    document = json.loads(json.dumps(certificate.to_dict()
-                                     if isinstance(certificate, Certificate) else certificate))  # fmt: skip
+    # the JSON document's values (to_dict is JSON-ready: lists, numbers, "Infinity")
+    document = certificate.to_dict() if isinstance(certificate, Certificate) else certificate
     system = document["system"]
     out: dict[str, Any] = {}
     if isinstance(certificate, Certificate):
