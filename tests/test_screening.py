@@ -203,6 +203,39 @@ def test_level_scan_finds_what_lapack_on_every_block_finds(plant):
                 assert got.critical == want.critical
 
 
+@pytest.mark.parametrize("plant, pivots", [(0, False), (1, True), (5, False)])
+def test_the_verdict_level_ranks_the_closest_sets_as_lapack(plant, pivots, monkeypatch):
+    """The verdict's level (the closest sets ranked, every tier's bound in use against a
+    finite threshold) finds LAPACK's closest sets and failures, on plants far from breaking
+    and on one with repeated sensors (tied proxies)."""
+    from ssecert.structure import _combinatorics, _level_scan
+
+    monkeypatch.setattr(_level_scan, "_BATCH_SETS", 256)  # many batches: finite thresholds
+    asked = []
+    pivot_shared = _combinatorics._pivot_shared
+    monkeypatch.setattr(
+        _combinatorics, "_pivot_shared", lambda *a: asked.append(a[2]) or pivot_shared(*a)
+    )
+    tol = Tolerances()
+    system = balanced_units(_plants()[plant]).system
+    sub = sensor_subspaces(system.A, system.C, tolerances=tol)
+    rest = np.flatnonzero(sub.ranks < system.n)[::-1]
+    P = sub.bases[rest]
+    proj = np.einsum("qkn,qkm->qnm", P, P)
+    q, n = rest.size, system.n
+    shift = max(tol.screen_rtol * q, 10.0 * float(np.sum(sub.errors[rest])) ** 2)
+    k = max(j for j in range(q) if math.comb(q, j) <= 12000 and j <= q // 2)
+    task = _LevelTask(
+        P, sub.ranks[rest], proj, proj.sum(axis=0) - shift * np.eye(n), shift, k,
+        rest, np.zeros(0, dtype=np.int64), tol, True, sub.errors[rest],
+    )  # fmt: skip
+    total = math.comb(q, k)
+    got, want = _scan_range(task, (0, total)), _reference(task, (0, total))
+    assert got.failures.keys() == want.failures.keys()
+    assert got.critical == want.critical and len(got.critical) == _CRITICAL
+    assert bool(asked) == pivots  # where the eigenvalue's bound did not do, the pivots'
+
+
 def test_the_shared_bound_is_below_the_smallest_eigenvalue():
     """Tier 1's bound (the sets sharing their largest sensor) never exceeds the smallest
     eigenvalue of a set's Gramian less LAPACK's error, and decides most sets of a plant far
@@ -223,7 +256,18 @@ def test_the_shared_bound_is_below_the_smallest_eigenvalue():
         False, sub.errors,
     )  # fmt: skip
     source = ColexScreen(proj, shifted, k, _screen_margin(task), factors=P)
-    bound = source.lower_bounds(source._pieces(0, total), total)
-    exact = np.linalg.eigvalsh(source.matrices(np.arange(total)))[:, 0]
+    pieces = source._pieces(0, total)
+    matrices = source.matrices(np.arange(total))
+    bound = source.lower_bounds(pieces, total, -np.inf)  # the eigenvalue's bound alone
+    exact = np.linalg.eigvalsh(matrices)[:, 0]
     assert np.all(bound <= exact)
     assert np.mean(bound > 0) > 0.5
+    # with the pivots' bound wherever it is asked: below the square of LAPACK's smallest
+    # pivot, and at least the eigenvalue's bound
+    factors = cholesky_or_nan(matrices)
+    pivots = np.min(np.diagonal(factors, axis1=1, axis2=2), axis=1) ** 2
+    failed = ~np.isfinite(pivots)
+    both = source.lower_bounds(pieces, total, np.inf)
+    assert np.all(both[failed] <= 0) and np.all(both[~failed] <= pivots[~failed])
+    assert np.all(both >= bound)
+    assert np.mean(both > bound) > 0.5  # above the eigenvalue's, most often
