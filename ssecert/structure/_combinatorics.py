@@ -617,11 +617,11 @@ class ColexScreen:
                     # most open: the whole piece, no gather
                     where = slice(None) if 2 * open_.size > piece.size else open_
                     rows = slice(first, last) if 2 * open_.size > piece.size else first + open_
-                    least = None
-                    for g in range(d.size):
+                    least = d[0] * ((1.0 - rest[0]) - sg[0, rows])
+                    for g in range(1, d.size):
                         run = (1.0 - rest[g]) - sg[g, rows]
                         run *= d[g]
-                        least = run if least is None else np.minimum(least, run, out=least)
+                        np.minimum(least, run, out=least)
                     piece[where] = np.maximum(piece[where], least)
             low[row : row + last - first] = piece
         return low
