@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import enum
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -22,6 +22,8 @@ __all__ = [
     "Certificate",
     "to_jsonable",
     "combine_verdicts",
+    "Step",
+    "decide",
     "QUANTITY_NAMES",
 ]
 
@@ -289,3 +291,65 @@ class Certificate:
 # notebooks show checks and certificates as the report does
 Check._repr_html_ = html_display("check_fragment")  # type: ignore[attr-defined]
 Certificate._repr_html_ = html_display("certificate_fragment")  # type: ignore[attr-defined]
+
+
+@dataclass(frozen=True)
+class Step:
+    """One step of a check graph (``decide``): ``build`` is called once with the outcomes of
+    the steps named in ``needs``, in that order.
+
+    Attributes
+    ----------
+    name : str
+    build : callable
+    needs : tuple of str
+        Steps that come before this one, whose outcomes it reads.
+    timed : bool
+        Whether its seconds are recorded under its name (``meta.timings``).
+    """
+
+    name: str
+    build: Callable[..., Any]
+    needs: tuple[str, ...] = ()
+    timed: bool = True
+
+
+def decide(steps: Sequence[Step], laps: Any | None = None) -> dict[str, Any]:
+    """Run a check graph: every step once, in the order given, each from the outcomes of the
+    steps it needs, so that no check is edited once built and the order that decides what a
+    check says is declared where the steps are.
+
+    Parameters
+    ----------
+    steps : sequence of Step
+        Each step after those it needs.
+    laps : ssecert.budget.Laps, optional
+        Records the seconds of each timed step.
+
+    Returns
+    -------
+    dict
+        Each step's outcome by name.
+
+    Examples
+    --------
+    >>> out = decide([Step("a", lambda: 2), Step("b", lambda a: a + 1, needs=("a",))])
+    >>> out["b"]
+    3
+    >>> decide([Step("b", lambda a: a, needs=("a",))])
+    Traceback (most recent call last):
+    ...
+    ValueError: step 'b' needs 'a', which is not an earlier step
+    """
+    done: dict[str, Any] = {}
+    for step in steps:
+        if step.name in done:
+            raise ValueError(f"step {step.name!r} appears twice")
+        for need in step.needs:
+            if need not in done:
+                raise ValueError(f"step {step.name!r} needs {need!r}, which is not an earlier step")
+        outcome = step.build(*(done[need] for need in step.needs))
+        done[step.name] = (
+            laps.lap(step.name, outcome) if laps is not None and step.timed else outcome
+        )
+    return done

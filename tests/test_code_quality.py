@@ -53,3 +53,73 @@ def test_every_test_module_keeps_a_quick_test():
         whole = re.search(r"^pytestmark = pytest\.mark\.slow", text, re.MULTILINE)
         assert whole is None, f"{path.name}: mark its slow tests one by one"
         assert text.count("@pytest.mark.slow\n") < tests, path.name
+
+
+_VERDICT_WORDS = {"holds", "fails", "inconclusive"}
+_PROSE = ("reason", "summary", "problem", "note", "why")
+# the renderers write the words: they may read them
+_RENDERERS = ("report/", "cli/", "testing/assertions.py")
+
+
+def _prose_name(node: object) -> bool:
+    import ast
+
+    name = node.id if isinstance(node, ast.Name) else getattr(node, "attr", None)
+    return isinstance(name, str) and any(word in name.lower() for word in _PROSE)
+
+
+def _reads_text(tree: object) -> list[tuple[int, str]]:
+    """Where code decides from a sentence: a verdict compared with its name, or a reason,
+    summary or problem searched for a word."""
+    import ast
+
+    found = []
+    for node in ast.walk(tree):  # type: ignore[arg-type]
+        if isinstance(node, ast.Compare):
+            sides = [node.left, *node.comparators]
+            words = [s.value for s in sides if isinstance(s, ast.Constant)]
+            if any(isinstance(op, (ast.Eq, ast.NotEq)) for op in node.ops) and (
+                _VERDICT_WORDS & {w for w in words if isinstance(w, str)}
+            ):
+                found.append((node.lineno, ast.unparse(node)))
+            if any(isinstance(op, (ast.In, ast.NotIn)) for op in node.ops) and any(
+                _prose_name(s) for s in node.comparators
+            ):
+                found.append((node.lineno, ast.unparse(node)))
+        if (
+            isinstance(node, ast.Call)
+            and isinstance(node.func, ast.Attribute)
+            and node.func.attr in ("startswith", "endswith", "find", "index", "count")
+            and _prose_name(node.func.value)
+        ):
+            found.append((node.lineno, ast.unparse(node)))
+    return found
+
+
+def test_no_decision_is_read_from_a_sentence():
+    """Verdicts and decisions travel as enums, flags and numbers; no code outside the renderers
+    compares a verdict with its name or searches a reason, summary or problem for a word."""
+    import ast
+
+    package = ROOT / "ssecert"
+    offenders = []
+    for path in sorted(package.rglob("*.py")):
+        where = path.relative_to(package).as_posix()
+        if where.startswith(_RENDERERS):
+            continue
+        for line, code in _reads_text(ast.parse(path.read_text(), str(path))):
+            offenders.append(f"ssecert/{where}:{line}: {code}")
+    assert not offenders, "\n".join(offenders)
+
+
+def test_the_sentence_reader_finds_what_it_names():
+    import ast
+
+    code = (
+        "a = cert.verdict == 'inconclusive'\n"
+        "b = 'is not stable' in found.reason\n"
+        "c = problem.startswith('budget')\n"
+        "d = check.verdict is Verdict.HOLDS\n"
+        "e = 'radius' in evidence\n"
+    )
+    assert [line for line, _ in _reads_text(ast.parse(code))] == [1, 2, 3]

@@ -18,7 +18,7 @@ from ..context import OBSERVER, AnalysisContext, shared
 from ..design.gains import GainError
 from ..observers import ObserverDesign, build_observer
 from ..observers.lure import LureModel, scaling_text
-from ..results import Check, Verdict
+from ..results import Check, Step, Verdict, decide
 from ..system import System
 from ..tolerances import Tolerances
 from .constant_attack import constant_attack_outcomes
@@ -96,17 +96,17 @@ def observer_stability_check(
         )
         return _no_certificate(title, summary, "circle criterion (LMI, Clarabel)"), None
     cert = circle_certificate(model, budget=budget, clear=tol.certificate_clear)
-    if cert.verdict == "inconclusive" and cert.details.get("attempts"):
+    if cert.verdict is Verdict.INCONCLUSIVE and cert.details.get("attempts"):
         # the LMIs were solved and failed: a dynamic multiplier may succeed
         zf = zames_falb_certificate(model, budget=budget, clear=tol.certificate_clear)
-        if zf.verdict == Verdict.HOLDS:
+        if zf.verdict is Verdict.HOLDS:
             return _zames_falb_stability_check(design, model, zf, tol, title), (model, zf)
         cert = replace(
             cert,
             reason=f"{cert.reason}; {zf.reason}",
             details={**cert.details, "zames_falb": zf.details},
         )
-    if cert.verdict == "inconclusive":
+    if cert.verdict is Verdict.INCONCLUSIVE:
         witness, searched, cycled = divergence_witness(model), "", ""
         if witness is None:
             witness, searched = nonzero_equilibrium(model, budget=budget)
@@ -801,62 +801,67 @@ def observer_checks(
             fields={},
         )
         return [gain, stab]
-    checks = [clock.lap("observer_gain", observer_gain_check(design, tolerances=tol))]
-    stability, cert = clock.lap(
-        "observer_stability", observer_stability_check(design, budget=budget, tolerances=tol)
-    )
-    undecided = stability.verdict is Verdict.INCONCLUSIVE
-    region = clock.lap(
-        "region_of_attraction",
-        region_of_attraction_check(design, seed=seed, piecewise=undecided, budget=budget)
-        if design.sparse
-        else None,
-    )
-    if region is not None and stability.verdict is Verdict.HOLDS:
-        prefix = "No region of attraction is certified: "
-        alone = (
-            f"{region.value:.4g}."
-            if region.verdict is Verdict.HOLDS
-            else f"no radius: {region.summary.removeprefix(prefix)}"
-        )
-        region = replace(
-            region,
-            verdict=Verdict.HOLDS,
-            value=float("inf"),
-            fields={"radius": float("inf")},
-            summary="From every initial error the error converges to 0 without attack: "
-            f"observer_stability's certificate is global. (Its dead zone alone certifies {alone})",
-            method=region.method
-            if region.verdict is Verdict.HOLDS
-            else "observer_stability's global certificate",
-            evidence={**region.evidence, "dead_zone_radius": region.value},
-        )
-    if region is not None and stability.verdict is Verdict.INCONCLUSIVE and region.value:
-        stability = replace(
-            stability,
-            summary=f"{stability.summary} What is proved: the error converges from every initial "
-            f"error with ||e(0)|| <= {region.value:.3g} and a_hat(0) = 0 (region_of_attraction).",
-            evidence={**stability.evidence, "certified_region_radius": region.value},
-        )
-    checks.append(stability)
-    checks.append(
-        clock.lap(
-            "iss_gain",
-            iss_gain_check(
-                design, cert, budget=budget, tolerances=tol, constant_attacks=constant_attacks
+    # what each check needs comes before it; each is built once (``decide``)
+    sparse = design.sparse
+    steps = [
+        Step("observer_gain", lambda: observer_gain_check(design, tolerances=tol)),
+        Step(
+            "observer_stability",
+            lambda: observer_stability_check(design, budget=budget, tolerances=tol),
+        ),
+        Step(
+            "region_of_attraction",
+            lambda stability: (
+                region_of_attraction_check(design, seed=seed, budget=budget, stability=stability[0])
+                if sparse
+                else None
             ),
-        )
-    )
-    if design.sparse:
-        checks.append(
-            clock.lap(
+            needs=("observer_stability",),
+        ),
+        Step(
+            "stability_check",
+            lambda stability, region: _stability_with_region(stability[0], region),
+            needs=("observer_stability", "region_of_attraction"),
+            timed=False,
+        ),
+        Step(
+            "iss_gain",
+            lambda stability: iss_gain_check(
+                design,
+                stability[1],
+                budget=budget,
+                tolerances=tol,
+                constant_attacks=constant_attacks,
+            ),
+            needs=("observer_stability",),
+        ),
+    ]
+    if sparse:
+        steps.append(
+            Step(
                 "thesis_assumptions",
-                thesis_assumptions_check(design, observability, seed=seed, budget=budget),
+                lambda: thesis_assumptions_check(design, observability, seed=seed, budget=budget),
             )
         )
-    if region is not None:
-        checks.append(region)
+    out = decide(steps, clock)
+    order = ("observer_gain", "stability_check", "iss_gain", "thesis_assumptions")
+    checks = [out[name] for name in order if name in out]
+    if out["region_of_attraction"] is not None:
+        checks.append(out["region_of_attraction"])
     return checks
+
+
+def _stability_with_region(stability: Check, region: Check | None) -> Check:
+    """observer_stability as reported: an undecided stability check says what
+    region_of_attraction proves (the step after both in ``observer_checks``)."""
+    if region is None or stability.verdict is not Verdict.INCONCLUSIVE or not region.value:
+        return stability
+    return replace(
+        stability,
+        summary=f"{stability.summary} What is proved: the error converges from every initial "
+        f"error with ||e(0)|| <= {region.value:.3g} and a_hat(0) = 0 (region_of_attraction).",
+        evidence={**stability.evidence, "certified_region_radius": region.value},
+    )
 
 
 def region_of_attraction_check(
@@ -865,11 +870,49 @@ def region_of_attraction_check(
     seed: int = 0,
     piecewise: bool = False,
     budget: Budget | None = None,
+    stability: Check | None = None,
 ) -> Check | None:
     """Advisory: the radius of initial estimation errors from which a sparse observer provably
     converges without attack (the invariant part of its dead zone, and with ``piecewise`` a
     piecewise-quadratic Lyapunov function when it certifies more); None for a design without
-    a Lur'e model."""
+    a Lur'e model.
+
+    With the observer's ``stability`` check: the piecewise function is tried when it is
+    undecided, and when it holds the region is every initial error (its certificate is
+    global), the dead zone's radius kept in the evidence."""
+    if stability is not None:
+        piecewise = stability.verdict is Verdict.INCONCLUSIVE
+    alone = _region_alone(design, seed=seed, piecewise=piecewise, budget=budget)
+    if alone is None or stability is None or stability.verdict is not Verdict.HOLDS:
+        return alone
+    prefix = "No region of attraction is certified: "
+    words = (
+        f"{alone.value:.4g}."
+        if alone.verdict is Verdict.HOLDS
+        else f"no radius: {alone.summary.removeprefix(prefix)}"
+    )
+    return Check(
+        id=alone.id,
+        title=alone.title,
+        verdict=Verdict.HOLDS,
+        summary="From every initial error the error converges to 0 without attack: "
+        f"observer_stability's certificate is global. (Its dead zone alone certifies {words})",
+        value=float("inf"),
+        margin=alone.margin,
+        method=alone.method
+        if alone.verdict is Verdict.HOLDS
+        else "observer_stability's global certificate",
+        required=alone.required,
+        fields={"radius": float("inf")},
+        evidence={**alone.evidence, "dead_zone_radius": alone.value},
+    )
+
+
+def _region_alone(
+    design: ObserverDesign, *, seed: int, piecewise: bool, budget: Budget | None
+) -> Check | None:
+    """``region_of_attraction_check`` from the observer's dead zone (and piecewise function)
+    alone."""
     if design.observer_kind.lure_gap(design) is None:
         refusal = _lure_model_refusal(design, budget)
         if refusal:

@@ -14,6 +14,7 @@ import functools
 import itertools
 import math
 import time
+from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
@@ -105,8 +106,8 @@ def _smallest_support(
             )
             out.checked += used
         if problem:
-            out.problems.append(f"eigenvalue {eig.label(cluster.center)}: {problem}")
-            if problem.startswith("budget"):
+            out.problems.append(f"eigenvalue {eig.label(cluster.center)}: {problem.text}")
+            if problem.budget:
                 out.status = "budget"
             continue
         critical.extend(crit)
@@ -125,9 +126,18 @@ def _smallest_support(
     return best, best_z, critical
 
 
+@dataclass(frozen=True)
+class _Problem:
+    """Why an eigenspace was left undecided: ``text`` for the report, ``budget`` when its
+    search ran out of hyperplanes or time (the method's status is then "budget")."""
+
+    text: str
+    budget: bool = False
+
+
 def _eigenvector_support(
     W: np.ndarray, V: np.ndarray, thr: float, s: int, tol: Tolerances
-) -> tuple[list, list, str]:
+) -> tuple[list, list, _Problem | None]:
     """The sensors that see a simple eigenvalue's eigenvector, its critical set, or a problem."""
     p = W.shape[0]
     mags = np.abs(W[:, 0])
@@ -136,12 +146,14 @@ def _eigenvector_support(
         return (
             [],
             [],
-            f"sensor(s) {np.flatnonzero(codes == BORDERLINE).tolist()} see its eigenvector "
-            f"with a borderline magnitude",
+            _Problem(
+                f"sensor(s) {np.flatnonzero(codes == BORDERLINE).tolist()} see its eigenvector "
+                f"with a borderline magnitude"
+            ),
         )
     support = tuple(int(i) for i in np.flatnonzero(codes == NONZERO))
     order = np.argsort(-mags, kind="stable")
-    return [(len(support), support, V[:, 0])], [_critical_entry(mags, order, s, p)], ""
+    return [(len(support), support, V[:, 0])], [_critical_entry(mags, order, s, p)], None
 
 
 def _exactly_breaking(
@@ -264,7 +276,7 @@ def _hyperplanes(
     tol: Tolerances,
     budget: int,
     deadline: float | None = None,
-) -> tuple[list, list, str, int]:
+) -> tuple[list, list, _Problem | None, int]:
     """Smallest supports of W u over u != 0 for an eigenspace of dimension g > 1."""
     p, g = W.shape
     _, sv, vh = np.linalg.svd(W, full_matrices=True)
@@ -272,18 +284,19 @@ def _hyperplanes(
     sv = np.concatenate([sv, np.zeros(g - sv.size)])  # fewer sensors than g: rank < g
     rank_codes = classify(sv / smax, thr, factor=tol.borderline_factor)
     if np.any(rank_codes == BORDERLINE):
-        return [], [], "the sensors' view of its eigenspace has a borderline rank", 0
+        return [], [], _Problem("the sensors' view of its eigenspace has a borderline rank"), 0
     if np.any(rank_codes == ZERO):
         u = vh[-1].conj()
-        return [(0, (), V @ u)], [], "", 0
+        return [(0, (), V @ u)], [], None, 0
     row_norm = np.linalg.norm(W, axis=1)
     row_codes = classify(row_norm, thr, factor=tol.borderline_factor)
     if np.any(row_codes == BORDERLINE):
-        return [], [], "a sensor sees its eigenspace with a borderline magnitude", 0
+        return [], [], _Problem("a sensor sees its eigenspace with a borderline magnitude"), 0
     rows = np.flatnonzero(row_codes == NONZERO)
     total = math.comb(rows.size, g - 1)
     if total > budget:
-        return [], [], f"budget: {total:,} hyperplanes exceed the remaining budget", 0
+        problem = _Problem(f"budget: {total:,} hyperplanes exceed the remaining budget", True)
+        return [], [], problem, 0
     candidates: list[tuple[int, tuple[int, ...], np.ndarray]] = []
     critical: list[tuple[float, tuple[int, ...]]] = []
     best_size = None
@@ -292,19 +305,15 @@ def _hyperplanes(
     done = 0
     while True:
         if deadline is not None and time.monotonic() > deadline:
-            return (
-                [],
-                [],
-                f"budget: the time budget ended after {done:,} of {total:,} hyperplanes",
-                done,
-            )
+            ended = f"budget: the time budget ended after {done:,} of {total:,} hyperplanes"
+            return [], [], _Problem(ended, True), done
         idx = np.array(list(itertools.islice(combos, chunk)), dtype=np.int64).reshape(-1, g - 1)
         if idx.shape[0] == 0:
             break
         done += idx.shape[0]
         view = _chunk_view(W, idx, thr, tol)
         if view.borderline:
-            return [], [], "a hyperplane through its sensor rows is borderline", total
+            return [], [], _Problem("a hyperplane through its sensor rows is borderline"), total
         if view.used.size:
             candidates, best_size = _smallest_so_far(view, V, candidates, best_size)
             critical = _most_critical(view, critical, s)
@@ -313,7 +322,7 @@ def _hyperplanes(
         support = tuple(int(i) for i in rows)
         candidates = [(len(support), support, V @ u)]
     candidates.sort(key=lambda c: (c[0], c[1]))
-    return candidates[:1], critical, "", total
+    return candidates[:1], critical, None, total
 
 
 @functools.lru_cache(maxsize=64)
