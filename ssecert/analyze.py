@@ -16,7 +16,7 @@ from .context import AnalysisContext, sparse_key
 from .inputs import as_spec
 from .numerics.linalg import balanced_units, eigen_clusters
 from .observers import get_kind, observer_kinds
-from .results import Certificate, Check, Verdict
+from .results import Certificate, Check, Step, Verdict, decide
 from .spec import Spec
 from .structure.cost import rounded_seconds
 from .structure.irrepresentable import irrepresentable
@@ -86,6 +86,11 @@ def reconcile(checks: list[Check]) -> tuple[list[Check], list[str]]:
     matrix) are compared; a contradicting pair becomes inconclusive, each
     naming the other, so that a defect shows as an open question and never
     as a confident answer.  Returns the checks and notes for the report.
+
+    It is the last step of ``analyze``, after every check it compares has
+    been built (``decide``); the checks themselves are built from the same
+    eigenvalues and the observability check they need, so it finds nothing
+    on a correct run: what it finds is a defect, reported as such.
     """
     by_id = {c.id: c for c in checks}
     notes: list[str] = []
@@ -220,9 +225,9 @@ def analyze(
     clock.lap("eigenvalues", None)
     sparse_timing: dict[str, Any] = {}
     observer_timings: dict[str, float] = {}
-    checks: list[Check] = [
-        clock.lap("observability", observability(system, tolerances=tol, eigen=eig)),
-        clock.lap("sparse_observability", sparse_observability(
+    steps = [
+        Step("observability", lambda: observability(system, tolerances=tol, eigen=eig)),
+        Step("sparse_observability", lambda: sparse_observability(
             system,
             spec.max_attacked,
             method=method,
@@ -237,7 +242,7 @@ def analyze(
             timing=sparse_timing,
             device=device,
         )),
-        clock.lap("irrepresentable", irrepresentable(
+        Step("irrepresentable", lambda: irrepresentable(
             system,
             spec.max_attacked,
             horizon=spec.horizon,
@@ -253,13 +258,14 @@ def analyze(
         from .stability.checks import observer_checks
         from .stability.constant_attack import default_attacks
 
-        checks.extend(
-            clock.lap(
+        observer_section = spec.observer
+        steps.append(
+            Step(
                 "observer_checks",
-                observer_checks(
+                lambda observable: observer_checks(
                     system,
-                    spec.observer,
-                    observability=checks[0],
+                    observer_section,
+                    observability=observable,
                     seed=seed,
                     budget=budget,
                     context=context,
@@ -267,8 +273,14 @@ def analyze(
                     constant_attacks=default_attacks(system.p, spec.max_attacked, spec.scenarios),
                     timings=observer_timings,
                 ),
+                needs=("observability",),
             )
         )
+    decided = decide(steps, clock)
+    checks: list[Check] = [
+        decided["observability"], decided["sparse_observability"], decided["irrepresentable"],
+        *decided.get("observer_checks", []),
+    ]  # fmt: skip
     checks, notes = reconcile(checks)
     if context is not None:  # the final (reconciled) check: its witness is the one reported
         context.put(sparse_key(spec.max_attacked), checks[1])
