@@ -43,7 +43,9 @@ if TYPE_CHECKING:
 __all__ = ["ObserverDesign", "ObserverKind", "LINEAR_GAINS", "GAIN_CHOICES"]
 
 LINEAR_GAINS = ("deadbeat", "place", "pinv")
-# gains the spec defines by a step (L = step A S^T): exact from the step, not from the floats
+# gains the spec defines by a step (L = step A S^T): exact from the step, not from the floats;
+# gain methods (``Gain.method``), whatever kind's design holds them (an SSO's region family is
+# an elastic-net design with the SSO's gain)
 DERIVED_GAINS = ("ogd", "sso")
 GAIN_CHOICES = ("deadbeat", "place", "ogd", "pinv")
 # the grids ``ssecert design`` searches for the kinds with a step, and a shrink
@@ -433,14 +435,14 @@ def parse_gain(
     return out
 
 
-def parse_unit_shrink(table: SpecTable, kind: str) -> float:
-    """The shrink of an SSO or D-SSO: 1, written or not."""
+def parse_unit_shrink(table: SpecTable, kind: str, instead: str) -> float:
+    """The shrink of an SSO or D-SSO: 1, written or not (the kind ``instead`` for another)."""
     if "shrink" in table:
         shrink = table.real("shrink", table.get("shrink"))
         if shrink != 1.0:
             raise table.error(
                 "shrink",
-                f'the {kind} observer has shrink = 1; use kind = "elastic_net" for '
+                f'the {kind} observer has shrink = 1; use kind = "{instead}" for '
                 f"shrink < 1, got {shrink}",
             )
     return 1.0

@@ -112,7 +112,7 @@ class DecoupledSSO(SoftThresholdObserverKind):
         out = parse_gain(table, n, p, ("deadbeat", "pinv", "place"))
         out["step"] = table.positive("step")
         out["threshold"] = table.positive("threshold")
-        out["shrink"] = parse_unit_shrink(table, self.name)
+        out["shrink"] = parse_unit_shrink(table, self.name, "elastic_net")
         return out
 
     def design_axes(self, objective: str) -> tuple[tuple[Any, ...], tuple[Any, ...]]:

@@ -68,7 +68,7 @@ class SparseSoftObserverKind(SoftThresholdObserverKind):
         out: dict[str, Any] = {}
         out["step"] = table.positive("step")
         out["threshold"] = table.positive("threshold")
-        out["shrink"] = parse_unit_shrink(table, self.name)
+        out["shrink"] = parse_unit_shrink(table, self.name, "elastic_net")
         out["window"] = table.integer("window", 1, min_value=1)
         out["inner_steps"] = table.integer("inner_steps", 1, min_value=1)
         return out
