@@ -12,9 +12,12 @@ the attack.  The error matrix of the linear part is F = A - L S.
 An observer kind (one module of this package each) is a subclass of
 ``ObserverKind`` registered under the name a spec's ``[observer] kind``
 gives.  It reads its spec table, builds an ``ObserverDesign``, writes the
-design's error dynamics in Lur'e form for the certificates, and gives the
-batched simulator; spec loading, certification, simulation and the report
-use only these methods and never a kind's name.
+design's error dynamics in Lur'e form for the certificates, gives the
+batched simulator, says what ``ssecert design`` searches (``design_axes``,
+``design_section``) and draws its parameters for ``ssecert.testing``
+(``parameter_strategy``); spec loading, certification, simulation, the
+report, the design command and the strategies use only these methods and
+attributes and never a kind's name.
 """
 
 from __future__ import annotations

@@ -628,7 +628,8 @@ def observer_designs(
     ``ssecert.design.observer.build_observer`` computes without
     ``GainError``, and one ``[[scenario]]`` named ``"nominal"`` (no attack,
     50 steps, 4 runs, seed 0).  Valid does not mean certified: drawn designs
-    may fail ``assert_certified``.  Parameters are drawn from:
+    may fail ``assert_certified``.  Each kind draws its own keys
+    (``ObserverKind.parameter_strategy``); the built-in kinds draw from:
 
     =============  ==============================================================
     key            drawn from
@@ -651,8 +652,9 @@ def observer_designs(
     ----------
     system : System or strategy of System
         The plant, or a strategy such as ``observable_systems(3, 2)``.
-    kinds : sequence of str, default all five kinds
-        Observer kinds to draw from: luenberger, ogd, sso, dsso, elastic_net.
+    kinds : sequence of str, default all five built-in kinds
+        Observer kinds to draw from: luenberger, ogd, sso, dsso, elastic_net, or any
+        registered kind that gives a ``parameter_strategy``.
     max_attacked : int or strategy of int, default 0
         s, written to the spec's ``[attack]`` section.
 
