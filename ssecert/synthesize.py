@@ -3,10 +3,13 @@
 It sits beside ``analyze`` and ``certify`` (it certifies every candidate as they do); the
 gain synthesis itself is ``ssecert.design.synthesis``.
 
-A candidate is a point of a small grid of the scalar parameters: (shrink, step)
-for the elastic-net observer, the step for the D-SSO (shrink 1), nothing for
-a Luenberger observer.  Its gain comes out of the synthesis LMI of
-``ssecert.design.synthesis`` (for the ``roa`` objective also the deadbeat
+A candidate is a point of a small grid of the scalar parameters, which the
+kind declares (``ObserverKind.design_axes`` and ``design_section``; which
+kinds are offered, for which objectives, and which is the default, are the
+kinds' own declarations too): (shrink, step) for the elastic-net observer,
+the step for the D-SSO (shrink 1), nothing for a Luenberger observer.  Its
+gain comes out of the synthesis LMI of ``ssecert.design.synthesis`` (or is
+a named gain the cell keeps: the D-SSO's ``roa`` grid also tries the deadbeat
 gain), and the design built with it is certified exactly as ``ssecert
 analyze`` certifies a spec (``observer_stability_check`` and
 ``iss_gain_check``): only verified numbers count.  The synthesis's own
@@ -47,12 +50,14 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from .observers import get_kind, observer_kinds
+from .observers.base import DESIGN_SHRINKS, DESIGN_STEPS
 from .results import Verdict
 from .system import System
 
@@ -64,15 +69,79 @@ __all__ = [
     "no_faster",
     "tradeoff_front",
     "design_observer",
+    "design_kinds",
+    "default_kind",
+    "objective_refusal",
     "verify_synthesis",
     "SHRINKS",
     "STEPS",
 ]
 
-SHRINKS = (0.3, 0.5, 0.7, 0.9)
-STEPS = (0.1, 0.3, 0.5, 0.7, 1.0)
-KINDS = ("elastic_net", "dsso", "luenberger")
+SHRINKS = DESIGN_SHRINKS
+STEPS = DESIGN_STEPS
 OBJECTIVES = ("gain", "rate", "roa")
+# why an objective that only some kinds take is refused to the others
+ONLY_FOR = {"roa": "the other kinds are certified globally or not at all"}
+
+
+def default_kind(objective: str) -> str:
+    """The kind designed for ``objective`` when none is named: the first registered kind
+    whose ``design_default_for`` holds it; ValueError when none does.
+
+    Examples
+    --------
+    >>> default_kind("gain"), default_kind("roa")
+    ('elastic_net', 'dsso')
+    """
+    for name in observer_kinds():
+        if objective in get_kind(name).design_default_for:
+            return name
+    raise ValueError(f"objective: no observer kind is designed for {objective!r} by default")
+
+
+def design_kinds() -> tuple[str, ...]:
+    """The kinds ``design`` offers (those with ``design_objectives``): the default kind of
+    the first objective, then the others by name.
+
+    Examples
+    --------
+    >>> design_kinds()
+    ('elastic_net', 'dsso', 'luenberger')
+    """
+    names = sorted(name for name in observer_kinds() if get_kind(name).design_objectives)
+    first = [default_kind(OBJECTIVES[0])] if names else []
+    return (*first, *(name for name in names if name not in first))
+
+
+def objective_refusal(objective: str, kind: str, *, option: str = "", given: str = "") -> str:
+    """Why ``kind`` is not designed for ``objective``, naming the kinds that are ('' when
+    ``kind`` is one of them); with ``option`` (``--observer``) in the command line's words,
+    ``given`` the name the command line was given.
+
+    Examples
+    --------
+    >>> objective_refusal("roa", "luenberger").split(":")[0]
+    "objective 'roa' is for the D-SSO (shrink 1), got kind 'luenberger'"
+    >>> objective_refusal("roa", "dsso")
+    ''
+    """
+    if objective in get_kind(kind).design_objectives:
+        return ""
+    takers = [get_kind(name) for name in design_kinds()]
+    names = []
+    for taker in takers:
+        if objective in taker.design_objectives:
+            words = f"{option} {taker.name}" if option else taker.label or f"the {taker.name}"
+            names.append(f"{words} ({taker.design_note})" if taker.design_note else words)
+    why = ONLY_FOR.get(objective, f"the other kinds are not designed for {objective!r}")
+    if option:
+        got = f"--objective {objective} is for {' or '.join(names)}, got {option} {given or kind}"
+    else:
+        got = f"objective {objective!r} is for {' or '.join(names)}, got kind {kind!r}"
+    return f"{got}: {why}"
+
+
+DEFAULT_KIND = default_kind(OBJECTIVES[0])
 
 
 @dataclass(frozen=True)
@@ -127,7 +196,7 @@ class DesignResult:
 
 def design(
     plant: Any,
-    kind: str = "elastic_net",
+    kind: str = DEFAULT_KIND,
     *,
     objective: str = "gain",
     threshold: float = 0.1,
@@ -171,7 +240,7 @@ def design(
 
 def design_observer(
     system: System,
-    kind: str = "elastic_net",
+    kind: str = DEFAULT_KIND,
     *,
     objective: str = "gain",
     threshold: float = 0.1,
@@ -183,10 +252,11 @@ def design_observer(
     Parameters
     ----------
     system : System
-    kind : {"elastic_net", "dsso", "luenberger"}
-        The SSO is not offered: its gain is fixed by its step (L = step A C^T).
+    kind : str, default "elastic_net"
+        One of ``design_kinds()``: "elastic_net", "dsso" or "luenberger" of the built-in
+        kinds (the SSO is not offered: its gain is fixed by its step, L = step A C^T).
     objective : {"gain", "rate", "roa"}
-        ``roa`` for the D-SSO only.
+        One of the kind's ``design_objectives``: ``roa`` for the D-SSO only.
     threshold : float, default 0.1
         The soft threshold (kept fixed: the certificates of ``gain`` and ``rate`` do not
         depend on it; the region of attraction scales with it).
@@ -209,17 +279,16 @@ def design_observer(
     >>> result.observer["kind"], result.linear_radius < result.plant_radius
     ('elastic_net', True)
     """
-    if kind not in KINDS:
-        raise ValueError(f"kind: expected one of {', '.join(KINDS)}, got {kind!r}")
+    kinds = design_kinds()
+    if kind not in kinds:
+        raise ValueError(f"kind: expected one of {', '.join(kinds)}, got {kind!r}")
     if objective not in OBJECTIVES:
         raise ValueError(f"objective: expected one of {', '.join(OBJECTIVES)}, got {objective!r}")
-    if objective == "roa" and kind != "dsso":
-        raise ValueError(
-            f"objective 'roa' is for the D-SSO (shrink 1), got kind {kind!r}: the other kinds "
-            "are certified globally or not at all"
-        )
+    refusal = objective_refusal(objective, kind)
+    if refusal:
+        raise ValueError(refusal)
     start = time.perf_counter()
-    rows, cols = _axes(kind, objective)
+    rows, cols = get_kind(kind).design_axes(objective)
     plant_radius = _radius(system.A)
     front: list[dict[str, Any]] = []
     alpha = DEFAULT_DECAY if min_decay is None else float(min_decay)
@@ -278,7 +347,7 @@ def design_observer(
         )  # fmt: skip
     best = min(kept, key=lambda c: kept[c][0])
     record = tried[best]
-    if objective == "gain" and record.get("decay") is None:
+    if objective == "gain" and record.get("decay") is None and record["gain"] == "synthesised":
         choice += (
             "; the synthesis's own certificate of that decay did not verify in numpy for "
             "this design (no candidate's did): its stability and l2 gain are certified by the "
@@ -380,22 +449,12 @@ def _rate_gain(template: Any, **options: Any) -> tuple[Any, dict[str, Any]]:
     return proposal, own
 
 
-def _params(system: System, kind: str, row: Any, step: Any, threshold: float) -> dict[str, Any]:
-    """The ``[observer]`` section of one grid cell, with a zero gain (the synthesis replaces
-    it)."""
-    params: dict[str, Any] = {"kind": kind, "gain": np.zeros((system.n, system.p)).tolist()}
-    if kind != "luenberger":
-        params.update(step=step, threshold=threshold)
-    if kind == "elastic_net":
-        params["shrink"] = row
-    return params
-
-
-def _template(system: System, kind: str, row: Any, step: Any, threshold: float) -> Any:
+def _template(system: System, kind: str, row: Any, col: Any, threshold: float) -> Any:
     """The design of one grid cell with a zero gain."""
     from .observers import build_observer
 
-    return build_observer(system, _params(system, kind, row, step, threshold))
+    section = get_kind(kind).design_section(system, row, col, threshold=threshold)
+    return build_observer(system, {**section, "gain": np.zeros((system.n, system.p)).tolist()})
 
 
 def tradeoff_front(
@@ -551,18 +610,9 @@ def _knee(points: list[dict[str, Any]]) -> dict[str, Any]:
     return points[int(order[int(np.argmax(chord - ys))])]
 
 
-def _axes(kind: str, objective: str) -> tuple[list[Any], list[Any]]:
-    """The grid's two axes: (shrink or gain choice, step)."""
-    if kind == "luenberger":
-        return [None], [None]
-    if kind == "dsso":
-        return (["deadbeat", "synthesised"] if objective == "roa" else [1.0]), list(STEPS)
-    return list(SHRINKS), list(STEPS)
-
-
 def _search(
-    rows: list[Any],
-    cols: list[Any],
+    rows: Sequence[Any],
+    cols: Sequence[Any],
     tried: dict[tuple[int, int], dict[str, Any]],
     run: Callable[[tuple[int, int]], bool],
     score: Callable[[tuple[int, int]], Any],
@@ -612,21 +662,21 @@ def _evaluator(
     from .design.synthesis import synthesize_gain, with_gain
     from .observers import build_observer
 
-    def evaluate(row: Any, step: Any) -> tuple[dict[str, Any], Found | None]:
-        params = _params(system, kind, row, step, threshold)
-        record: dict[str, Any] = {
-            k: v for k, v in params.items() if k in ("step", "shrink", "threshold")
-        }
-        template = build_observer(system, params)
-        if objective == "roa" and row == "deadbeat":
-            record["gain"] = "deadbeat"
+    def evaluate(row: Any, col: Any) -> tuple[dict[str, Any], Found | None]:
+        params = get_kind(kind).design_section(system, row, col, threshold=threshold)
+        record: dict[str, Any] = {k: v for k, v in params.items() if k not in ("kind", "gain")}
+        named = params.get("gain")
+        if not isinstance(named, list):  # no gain to synthesise: a named one, or the kind's
             try:
-                design = build_observer(system, {**params, "gain": "deadbeat"})
-            except ValueError as exc:  # no deadbeat gain for this plant
-                record["synthesis"] = f"no deadbeat gain: {exc}"
+                design = build_observer(system, params)
+            except ValueError as exc:  # no such gain for this plant
+                record["gain"] = named
+                record["synthesis"] = f"no {named} gain: {exc}" if named else f"no gain: {exc}"
                 return record, None
+            record["gain"] = named if named is not None else design.gain.method
             proposal = None
         else:
+            template = build_observer(system, params)
             record["gain"] = "synthesised"
             limit = max(remaining(), 1.0)
             if objective == "rate":
@@ -659,8 +709,9 @@ def _evaluator(
             gamma=iss.value if iss.verdict is Verdict.HOLDS else None,
             decay=decay,
         )
-        gain = "deadbeat" if proposal is None else np.asarray(design.L).tolist()
-        observer = {**params, "gain": gain}
+        observer = dict(params)
+        if proposal is not None:
+            observer["gain"] = np.asarray(design.L).tolist()
         if objective == "roa":
             radius = _certified_radius(design, stability)
             record["radius"] = radius
@@ -940,7 +991,7 @@ def _design_row(label: str, result: Any) -> dict[str, Any]:
     row: dict[str, Any] = {
         "design": label,
         "kind": observer.get("kind"),
-        "gain": gain if isinstance(gain, str) else ("LMI" if label == "synthesised" else "matrix"),
+        "gain": gain if isinstance(gain, str) else _gain_words(label, gain, cert),
         **{k: observer.get(k) for k in ("step", "threshold", "shrink") if k in observer},
         "linear_radius": _linear_radius(result),
     }
@@ -951,6 +1002,17 @@ def _design_row(label: str, result: Any) -> dict[str, Any]:
             if check.value is not None and check.verdict is Verdict.HOLDS:
                 row[f"{check_id}_value"] = check.value
     return row
+
+
+def _gain_words(label: str, gain: Any, cert: Any) -> str:
+    """How the comparison names a gain given as a matrix (or, for a synthesised design of a
+    kind whose parameters define its gain, not given: its method)."""
+    if label != "synthesised":
+        return "matrix"
+    if gain is not None:
+        return "LMI"
+    check = cert.get("observer_gain")
+    return str(check.fields.get("gain_method")) if check is not None else "matrix"
 
 
 def _linear_radius(result: Any) -> float | None:

@@ -206,3 +206,38 @@ def test_certify_builds_the_observer_and_decides_sparse_observability_once(monke
     result = modules["ssecert.certify"].certify(load_example("ugv"), seed=0, runs=2, steps=20)
     assert not isinstance(result.simulations["stealthy"], dict)  # simulated, not skipped
     assert calls == {"sparse_observability": 1, "build_observer": 1}
+
+
+def _code_strings(path: Path) -> list[tuple[int, str]]:
+    """The string constants of a module's code (docstrings left out), with their lines."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    docstrings = {
+        id(node.body[0].value)
+        for node in ast.walk(tree)
+        if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef))
+        and node.body
+        and isinstance(node.body[0], ast.Expr)
+        and isinstance(node.body[0].value, ast.Constant)
+    }
+    return [
+        (node.lineno, node.value)
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Constant) and isinstance(node.value, str)
+        if id(node) not in docstrings
+    ]
+
+
+def test_no_module_outside_the_observers_names_a_kind():
+    # a kind is one module: what the spec reader, the checks, the design command and the
+    # strategies need of it, it declares (ObserverKind); "ogd" is also a gain's name
+    from ssecert.observers import GAIN_CHOICES, get_kind, observer_kinds
+
+    names = {n for k in observer_kinds() for n in (k, *get_kind(k).aliases)} - set(GAIN_CHOICES)
+    found = [
+        f"{module}:{line}: {text!r}"
+        for module, path in MODULES.items()
+        if not module.startswith("ssecert.observers")
+        for line, text in _code_strings(path)
+        if text in names
+    ]
+    assert not found, found

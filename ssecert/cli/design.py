@@ -12,8 +12,37 @@ from typing import Any
 
 __all__: list[str] = []
 
-KIND_NAMES = {"elastic-net": "elastic_net", "elastic_net": "elastic_net", "dsso": "dsso",
-              "luenberger": "luenberger"}  # fmt: skip
+
+def _kind_names() -> dict[str, str]:
+    """The names ``--observer`` takes: each kind ``ssecert design`` offers, by name and by
+    alias, to the kind it names."""
+    from ..observers import get_kind
+    from ..synthesize import design_kinds
+
+    out = {}
+    for name in design_kinds():
+        out.update(dict.fromkeys((name, *get_kind(name).aliases), name))
+    return out
+
+
+def _kinds_help() -> str:
+    """The help of ``--observer``: the default kind (and those of the other objectives),
+    then the others by name."""
+    from ..observers import get_kind
+    from ..synthesize import OBJECTIVES, default_kind, design_kinds
+
+    def shown(name: str) -> str:
+        return (*get_kind(name).aliases, name)[0]
+
+    first, *others = design_kinds()
+    defaults = "".join(
+        f"; {shown(default_kind(o))} with --objective {o}"
+        for o in OBJECTIVES
+        if default_kind(o) != first
+    )
+    rest = [shown(name) for name in others]
+    either = " or ".join([", ".join(rest[:-1]), rest[-1]] if len(rest) > 1 else rest)
+    return f"{shown(first)} (default{defaults})" + (f", {either}" if either else "")
 
 
 def add_design_parser(sub: Any) -> None:
@@ -39,10 +68,7 @@ def add_design_parser(sub: Any) -> None:
     )
     design.add_argument("spec", metavar="SPEC", help="spec file or packaged example name")
     design.add_argument(
-        "--observer",
-        choices=sorted(KIND_NAMES),
-        metavar="KIND",
-        help="elastic-net (default; dsso with --objective roa), dsso or luenberger",
+        "--observer", choices=sorted(_kind_names()), metavar="KIND", help=_kinds_help()
     )
     design.add_argument(
         "--objective",
@@ -102,7 +128,13 @@ def cmd_design(args: argparse.Namespace, argv: Sequence[str] | None = None) -> i
     from ..report.json import certify_json
     from ..results import to_jsonable
     from ..spec import spec_from_dict
-    from ..synthesize import design_observer, design_report, design_spec_text
+    from ..synthesize import (
+        default_kind,
+        design_observer,
+        design_report,
+        design_spec_text,
+        objective_refusal,
+    )
     from .files import UsageError, load_argument, output_file, output_folder, write_outputs
 
     folder = output_folder("--out", args.out)
@@ -113,14 +145,13 @@ def cmd_design(args: argparse.Namespace, argv: Sequence[str] | None = None) -> i
     for warning in caught:
         sys.stderr.write(f"note: {str(warning.message).splitlines()[0]}\n")
     own = spec.observer or {}
-    kind = KIND_NAMES[args.observer] if args.observer else "elastic_net"
-    if args.objective == "roa" and not args.observer:
-        kind = "dsso"
-    if args.objective == "roa" and kind != "dsso":
-        raise UsageError(
-            f"--objective roa is for --observer dsso (shrink 1), got --observer {args.observer}: "
-            "the other kinds are certified globally or not at all"
-        )
+    if args.observer:
+        kind = _kind_names()[args.observer]
+    else:
+        kind = default_kind(args.objective)
+    refusal = objective_refusal(args.objective, kind, option="--observer", given=args.observer)
+    if refusal:
+        raise UsageError(refusal)
     threshold = float(own.get("threshold") or 0.1)
     human = sys.stderr if args.json_path == "-" else sys.stdout
     tty = sys.stderr.isatty() and args.json_path != "-"
@@ -235,9 +266,9 @@ def _print_design(
     paths: dict[str, Any],
 ) -> None:
     """The terminal summary: the search, both designs' certified numbers, each scenario."""
-    import numpy as np
 
     from .._format import one_minus
+    from ..observers import get_kind
 
     searched = f"{len(result.candidates)} candidates in {result.seconds:.1f} s"
     if not result.complete:
@@ -247,20 +278,9 @@ def _print_design(
         out.write(f"  note: {limit}\n")
     if result.observer is None:
         out.write(f"  no design: {result.reason}\n")
-        if kind == "dsso" and args.objective != "roa":
-            import numpy as np
-
-            at_one = np.any(np.abs(np.linalg.eigvals(spec.system.A) - 1.0) <= 1e-9)
-            why = (
-                "the plant has an eigenvalue at 1, so no quadratic certificate can exist"
-                if at_one
-                else "its sector [0, 1] contains the identity, which quadratic certificates "
-                "rarely survive"
-            )
-            out.write(
-                f"  (a D-SSO has shrink 1 and {why}; try --observer elastic-net, or "
-                "--objective roa for the largest certified region of attraction)\n"
-            )
+        hint = get_kind(kind).design_hint(spec.system, args.objective)
+        if hint:
+            out.write(f"  ({hint})\n")
         return
     comparison = report.comparison
     for d in comparison["designs"]:

@@ -13,8 +13,9 @@ elastic_net (elastic_net) any                                    shrink in (0, 1
 ========================  =====================================  ===============
 
 A kind is a subclass of ``ObserverKind`` decorated with ``register``; the
-spec loader, the certificates, the simulations and the report reach every
-kind through ``get_kind`` and the design's ``observer_kind``.  See
+spec loader, the certificates, the simulations, the report, ``ssecert
+design`` and ``ssecert.testing`` reach every kind through ``get_kind`` and
+the design's ``observer_kind``.  See
 CONTRIBUTING.md for adding one.
 """
 

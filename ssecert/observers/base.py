@@ -12,13 +12,17 @@ the attack.  The error matrix of the linear part is F = A - L S.
 An observer kind (one module of this package each) is a subclass of
 ``ObserverKind`` registered under the name a spec's ``[observer] kind``
 gives.  It reads its spec table, builds an ``ObserverDesign``, writes the
-design's error dynamics in Lur'e form for the certificates, and gives the
-batched simulator; spec loading, certification, simulation and the report
-use only these methods and never a kind's name.
+design's error dynamics in Lur'e form for the certificates, gives the
+batched simulator, says what ``ssecert design`` searches (``design_axes``,
+``design_section``) and draws its parameters for ``ssecert.testing``
+(``parameter_strategy``); spec loading, certification, simulation, the
+report, the design command and the strategies use only these methods and
+attributes and never a kind's name.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -34,15 +38,23 @@ from ..tolerances import Tolerances, product_rounding
 from .lure import EXACT_ENTRIES, ExactLure, LureModel
 
 if TYPE_CHECKING:
+    from hypothesis.strategies import SearchStrategy
+
     from ..spec.table import SpecTable
     from .dynamic import DynamicObserver
 
 __all__ = ["ObserverDesign", "ObserverKind", "LINEAR_GAINS", "GAIN_CHOICES"]
 
 LINEAR_GAINS = ("deadbeat", "place", "pinv")
-# gains the spec defines by a step (L = step A S^T): exact from the step, not from the floats
+# gains the spec defines by a step (L = step A S^T): exact from the step, not from the floats;
+# gain methods (``Gain.method``), whatever kind's design holds them (an SSO's region family is
+# an elastic-net design with the SSO's gain)
 DERIVED_GAINS = ("ogd", "sso")
 GAIN_CHOICES = ("deadbeat", "place", "ogd", "pinv")
+# the grids ``ssecert design`` searches for the kinds with a step, and a shrink
+# (``ssecert.synthesize.STEPS`` and ``SHRINKS``)
+DESIGN_STEPS = (0.1, 0.3, 0.5, 0.7, 1.0)
+DESIGN_SHRINKS = (0.3, 0.5, 0.7, 0.9)
 
 
 @dataclass(frozen=True)
@@ -62,6 +74,10 @@ class ObserverDesign:
         nu (or epsilon), lambda and q; None for linear observers.
     L2 : ndarray, shape (m, m), or None
     window, inner_steps : int
+    parameters : dataclass instance or None
+        The kind's own parameters beyond the general form above (a frozen dataclass the
+        kind declares, shown with the design); None for the built-in kinds, which the
+        general form describes.
     """
 
     kind: str
@@ -74,6 +90,7 @@ class ObserverDesign:
     L2: np.ndarray | None = None
     window: int = 1
     inner_steps: int = 1
+    parameters: Any = None
 
     @property
     def observer_kind(self) -> ObserverKind:
@@ -167,6 +184,16 @@ class ObserverKind:
         schema, ``ssecert.schemas.spec_schema``, is built from them).
     required_keys : tuple of str
         The keys the table must hold.
+    aliases : tuple of str
+        Other names the command line accepts for it (``ssecert design --observer``); its
+        help writes the first.
+    label, design_note : str
+        How messages name it ("the D-SSO") and what sets it apart ("shrink 1").
+    design_objectives : tuple of str
+        The objectives of ``ssecert design`` it can be designed for (``design_axes`` and
+        ``design_section`` say how); none: ``ssecert design`` does not offer it.
+    design_default_for : tuple of str
+        The objectives for which ``ssecert design`` designs it when no kind is named.
     """
 
     name: ClassVar[str]
@@ -176,6 +203,11 @@ class ObserverKind:
     #: described as an object with its ``kind``), and those it requires
     key_schemas: ClassVar[Mapping[str, Any] | None] = None
     required_keys: ClassVar[tuple[str, ...]] = ()
+    aliases: ClassVar[tuple[str, ...]] = ()
+    label: ClassVar[str] = ""
+    design_note: ClassVar[str] = ""
+    design_objectives: ClassVar[tuple[str, ...]] = ()
+    design_default_for: ClassVar[tuple[str, ...]] = ()
 
     def parse(self, table: SpecTable, n: int, p: int) -> dict[str, Any]:
         """The validated parameters of an ``[observer]`` table (``kind`` excluded).
@@ -322,7 +354,39 @@ class ObserverKind:
                 window=design.window,
                 inner_steps=design.inner_steps,
             )
+        if design.parameters is not None:
+            out.update(dataclasses.asdict(design.parameters))
         return out
+
+    # What ``ssecert design`` and ``ssecert.testing`` ask of a kind
+
+    def design_axes(self, objective: str) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
+        """The two axes of the grid ``ssecert design`` searches for ``objective``: the values
+        of each handed to ``design_section`` (one cell, the gain alone, by default)."""
+        return (None,), (None,)
+
+    def design_section(
+        self, system: System, row: Any, col: Any, *, threshold: float
+    ) -> dict[str, Any]:
+        """The ``[observer]`` section of the grid cell (``row``, ``col``) of ``design_axes``.
+
+        Its ``gain`` is a zero n x p matrix where the synthesis LMI is to choose it
+        (``ssecert.design.synthesis``), or a named gain the design keeps as it is;
+        ``threshold`` is the soft threshold the search keeps fixed, for a kind that has one.
+        """
+        return {"kind": self.name, "gain": np.zeros((system.n, system.p)).tolist()}
+
+    def design_hint(self, system: System, objective: str) -> str:
+        """What to try instead when ``ssecert design`` certified no design of this kind for
+        ``objective`` ('' when nothing is suggested)."""
+        return ""
+
+    def parameter_strategy(self, system: System) -> SearchStrategy[dict[str, Any]]:
+        """A hypothesis strategy of the keys of its ``[observer]`` table but ``kind``, valid
+        for ``system`` (``ssecert.testing.observer_designs`` draws from it; a draw whose gain
+        cannot be built is rejected there).  Import hypothesis inside: it is needed only for
+        testing."""
+        raise NotImplementedError(f"observer kind {self.name!r} has no parameter strategy")
 
 
 # Shared by several kinds ---------------------------------------------------
@@ -374,14 +438,14 @@ def parse_gain(
     return out
 
 
-def parse_unit_shrink(table: SpecTable, kind: str) -> float:
-    """The shrink of an SSO or D-SSO: 1, written or not."""
+def parse_unit_shrink(table: SpecTable, kind: str, instead: str) -> float:
+    """The shrink of an SSO or D-SSO: 1, written or not (the kind ``instead`` for another)."""
     if "shrink" in table:
         shrink = table.real("shrink", table.get("shrink"))
         if shrink != 1.0:
             raise table.error(
                 "shrink",
-                f'the {kind} observer has shrink = 1; use kind = "elastic_net" for '
+                f'the {kind} observer has shrink = 1; use kind = "{instead}" for '
                 f"shrink < 1, got {shrink}",
             )
     return 1.0

@@ -17,6 +17,7 @@ from ..budget import Budget
 from ..system import System
 from ..tolerances import Tolerances
 from .base import (
+    DESIGN_STEPS,
     POLES_SCHEMA,
     POSITIVE_SCHEMA,
     UNIT_SHRINK_SCHEMA,
@@ -35,6 +36,8 @@ from .registry import register
 from .simulators import SparseSoftObserver
 
 if TYPE_CHECKING:  # annotations only: the spec package imports the observers
+    from hypothesis.strategies import SearchStrategy
+
     from ..spec.table import SpecTable
 
 __all__ = ["DecoupledSSO", "SoftThresholdObserverKind"]
@@ -79,6 +82,14 @@ class SoftThresholdObserverKind(ObserverKind):
     def region_family(self, design: ObserverDesign) -> ObserverDesign | None:
         return replace(design, kind="elastic_net")
 
+    def design_section(
+        self, system: System, row: Any, col: Any, *, threshold: float
+    ) -> dict[str, Any]:
+        """The gain to synthesise, the step ``col`` and the threshold."""
+        section = super().design_section(system, row, col, threshold=threshold)
+        section.update(step=col, threshold=threshold)
+        return section
+
 
 @register
 class DecoupledSSO(SoftThresholdObserverKind):
@@ -92,10 +103,63 @@ class DecoupledSSO(SoftThresholdObserverKind):
         "shrink": UNIT_SHRINK_SCHEMA,
     }
     required_keys = ("step", "threshold")
+    label = "the D-SSO"
+    design_note = "shrink 1"
+    design_objectives = ("gain", "rate", "roa")
+    design_default_for = ("roa",)
 
     def parse(self, table: SpecTable, n: int, p: int) -> dict[str, Any]:
         out = parse_gain(table, n, p, ("deadbeat", "pinv", "place"))
         out["step"] = table.positive("step")
         out["threshold"] = table.positive("threshold")
-        out["shrink"] = parse_unit_shrink(table, self.name)
+        out["shrink"] = parse_unit_shrink(table, self.name, "elastic_net")
         return out
+
+    def design_axes(self, objective: str) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
+        """The steps; for the region of attraction also the deadbeat gain beside the
+        synthesised one."""
+        rows = ("deadbeat", "synthesised") if objective == "roa" else (1.0,)
+        return rows, DESIGN_STEPS
+
+    def design_section(
+        self, system: System, row: Any, col: Any, *, threshold: float
+    ) -> dict[str, Any]:
+        section = super().design_section(system, row, col, threshold=threshold)
+        if row == "deadbeat":
+            section["gain"] = "deadbeat"
+        return section
+
+    def design_hint(self, system: System, objective: str) -> str:
+        """Shrink 1 rarely admits a global certificate: the elastic net, or the region of
+        attraction."""
+        if objective == "roa":
+            return ""
+        at_one = np.any(np.abs(np.linalg.eigvals(system.A) - 1.0) <= 1e-9)
+        why = (
+            "the plant has an eigenvalue at 1, so no quadratic certificate can exist"
+            if at_one
+            else "its sector [0, 1] contains the identity, which quadratic certificates "
+            "rarely survive"
+        )
+        return (
+            f"a D-SSO has shrink 1 and {why}; try --observer elastic-net, or --objective roa "
+            "for the largest certified region of attraction"
+        )
+
+    def parameter_strategy(self, system: System) -> SearchStrategy[dict[str, Any]]:
+        """deadbeat, place, pinv or an explicit matrix (where it can be computed), step in
+        [0.05, 1], threshold in [0.01, 0.5]."""
+        from hypothesis import strategies as st
+
+        from .strategies import STEP, THRESHOLD, gain_drawer, real
+
+        draw_gain = gain_drawer(system, ("deadbeat", "place", "pinv", "matrix"))
+
+        @st.composite
+        def tables(draw: Any) -> dict[str, Any]:
+            out = draw_gain(draw)
+            out["step"] = real(draw, STEP)
+            out["threshold"] = real(draw, THRESHOLD)
+            return out
+
+        return tables()

@@ -11,7 +11,10 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any, ClassVar
 
+from ..system import System
 from .base import (
+    DESIGN_SHRINKS,
+    DESIGN_STEPS,
     GAIN_CHOICES,
     MATRIX_SCHEMA,
     POLES_SCHEMA,
@@ -23,6 +26,8 @@ from .dsso import SoftThresholdObserverKind
 from .registry import register
 
 if TYPE_CHECKING:  # annotations only: the spec package imports the observers
+    from hypothesis.strategies import SearchStrategy
+
     from ..spec.table import SpecTable
 
 __all__ = ["ElasticNet"]
@@ -41,6 +46,10 @@ class ElasticNet(SoftThresholdObserverKind):
         "L2": MATRIX_SCHEMA,
     }
     required_keys = ("step", "threshold", "shrink")
+    aliases = ("elastic-net",)
+    label = "the elastic-net observer"
+    design_objectives = ("gain", "rate")
+    design_default_for = ("gain", "rate")
 
     def parse(self, table: SpecTable, n: int, p: int) -> dict[str, Any]:
         out = parse_gain(table, n, p, GAIN_CHOICES)
@@ -59,3 +68,38 @@ class ElasticNet(SoftThresholdObserverKind):
                 "L2", table.get("L2"), shape=(p, p), shape_hint="p x p: sensors by sensors"
             )
         return out
+
+    def design_axes(self, objective: str) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
+        """The shrinks and the steps."""
+        return DESIGN_SHRINKS, DESIGN_STEPS
+
+    def design_section(
+        self, system: System, row: Any, col: Any, *, threshold: float
+    ) -> dict[str, Any]:
+        section = super().design_section(system, row, col, threshold=threshold)
+        section["shrink"] = row
+        return section
+
+    def parameter_strategy(self, system: System) -> SearchStrategy[dict[str, Any]]:
+        """deadbeat, place, ogd, pinv or an explicit matrix (where it can be computed), step
+        in [0.05, 1], threshold in [0.01, 0.5], shrink in [0.1, 0.95] and, half the draws,
+        a diagonal L2 with entries in [0.5, 1]."""
+        import numpy as np
+        from hypothesis import strategies as st
+
+        from .strategies import SHRINK, STEP, THRESHOLD, gain_drawer, real
+
+        draw_gain = gain_drawer(system, ("deadbeat", "place", "ogd", "pinv", "matrix"))
+
+        @st.composite
+        def tables(draw: Any) -> dict[str, Any]:
+            out = draw_gain(draw)
+            out["step"] = real(draw, STEP)
+            out["threshold"] = real(draw, THRESHOLD)
+            out["shrink"] = real(draw, SHRINK)
+            if draw(st.booleans()):
+                weights = [real(draw, (0.5, 1.0)) for _ in range(system.p)]
+                out["L2"] = np.diag(weights).tolist()
+            return out
+
+        return tables()

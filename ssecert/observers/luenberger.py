@@ -25,6 +25,8 @@ from .registry import register
 from .simulators import LinearObserver
 
 if TYPE_CHECKING:  # annotations only: the spec package imports the observers
+    from hypothesis.strategies import SearchStrategy
+
     from ..spec.table import SpecTable
 
 __all__ = ["Luenberger"]
@@ -38,6 +40,8 @@ class Luenberger(ObserverKind):
         "gain": gain_schema(("deadbeat", "place", "pinv")),
         "poles": POLES_SCHEMA,
     }
+    label = "the Luenberger observer"
+    design_objectives = ("gain", "rate")
 
     def parse(self, table: SpecTable, n: int, p: int) -> dict[str, Any]:
         return parse_gain(table, n, p, ("deadbeat", "place", "pinv"))
@@ -50,3 +54,12 @@ class Luenberger(ObserverKind):
 
     def simulator(self, design: ObserverDesign) -> LinearObserver:
         return LinearObserver(design.system.A, design.system.C, design.gain.L)
+
+    def parameter_strategy(self, system: System) -> SearchStrategy[dict[str, Any]]:
+        """deadbeat, place, pinv or an explicit matrix, where it can be computed."""
+        from hypothesis import strategies as st
+
+        from .strategies import gain_drawer
+
+        draw_gain = gain_drawer(system, ("deadbeat", "place", "pinv", "matrix"))
+        return st.composite(lambda draw: draw_gain(draw))()

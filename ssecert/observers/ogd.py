@@ -8,6 +8,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any, ClassVar
 
+import numpy as np
+
 from ..budget import Budget
 from ..design.gains import ogd_gain
 from ..system import System
@@ -17,6 +19,8 @@ from .registry import register
 from .simulators import LinearObserver
 
 if TYPE_CHECKING:  # annotations only: the spec package imports the observers
+    from hypothesis.strategies import SearchStrategy
+
     from ..spec.table import SpecTable
 
 __all__ = ["OnlineGradient"]
@@ -55,3 +59,12 @@ class OnlineGradient(ObserverKind):
 
     def simulator(self, design: ObserverDesign) -> LinearObserver:
         return LinearObserver(design.system.A, design.system.C, design.gain.L)
+
+    def parameter_strategy(self, system: System) -> SearchStrategy[dict[str, Any]]:
+        """step f / ||C||^2, f in [0.05, 1]."""
+        from hypothesis import strategies as st
+
+        from .strategies import STEP, real
+
+        norm_C = max(float(np.linalg.norm(system.C, 2)), 1e-300)
+        return st.composite(lambda draw: {"step": real(draw, STEP) / norm_C**2})()

@@ -39,6 +39,8 @@ from .registry import register
 from .simulators import WindowSSO
 
 if TYPE_CHECKING:  # annotations only: the spec package imports the observers
+    from hypothesis.strategies import SearchStrategy
+
     from ..spec.table import SpecTable
 
 __all__ = ["SparseSoftObserverKind", "MAX_DEAD_ZONE_ROWS"]
@@ -66,7 +68,7 @@ class SparseSoftObserverKind(SoftThresholdObserverKind):
         out: dict[str, Any] = {}
         out["step"] = table.positive("step")
         out["threshold"] = table.positive("threshold")
-        out["shrink"] = parse_unit_shrink(table, self.name)
+        out["shrink"] = parse_unit_shrink(table, self.name, "elastic_net")
         out["window"] = table.integer("window", 1, min_value=1)
         out["inner_steps"] = table.integer("inner_steps", 1, min_value=1)
         return out
@@ -122,6 +124,25 @@ class SparseSoftObserverKind(SoftThresholdObserverKind):
             window=window,
             inner_steps=int(params.get("inner_steps", 1)),
         )
+
+    def parameter_strategy(self, system: System) -> SearchStrategy[dict[str, Any]]:
+        """window 1..n, inner_steps 1..3, step f / ||O_tau||^2 with f in [0.05, 1],
+        threshold in [0.01, 0.5]."""
+        from hypothesis import strategies as st
+
+        from .strategies import STEP, THRESHOLD, real
+
+        @st.composite
+        def tables(draw: Any) -> dict[str, Any]:
+            window = draw(st.integers(1, system.n))
+            sensing = system.C if window == 1 else system.observability_matrix(window)
+            out: dict[str, Any] = {"window": window, "inner_steps": draw(st.integers(1, 3))}
+            norm = max(float(np.linalg.norm(sensing, 2)) ** 2, 1e-300)
+            out["step"] = real(draw, STEP) / norm
+            out["threshold"] = real(draw, THRESHOLD)
+            return out
+
+        return tables()
 
     def _windowed(self, design: ObserverDesign) -> bool:
         return design.window > 1 or design.inner_steps > 1

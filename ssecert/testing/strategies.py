@@ -30,7 +30,6 @@ of ``ssecert.testing`` does not.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -40,6 +39,9 @@ from hypothesis import strategies as st
 from hypothesis.strategies import SearchStrategy
 
 from .._validation import as_float_option, describe
+from ..observers import ObserverKind, get_kind, observer_kinds
+from ..observers.strategies import POLE_RADIUS as _POLE_RADIUS
+from ..observers.strategies import grid_spectrum as _spectrum
 from ..spec import OBSERVER_KINDS, Spec, spec_from_dict
 from ..system import System
 
@@ -58,10 +60,6 @@ ATTACK_SHAPES = ("constant", "switching", "sinusoidal")
 FIXED_SUPPORT_SHAPES = ("constant", "sinusoidal")
 _SEEDS = st.integers(0, 2**32 - 1)
 _MAGNITUDE = (0.5, 2.0)  # nonzero entries of the modal output matrix
-_STEP = (0.05, 1.0)  # observer step sizes (relative to ||C||^2 for gradient gains)
-_THRESHOLD = (0.01, 0.5)
-_SHRINK = (0.1, 0.95)
-_POLE_RADIUS = 0.9
 
 
 # ---------------------------------------------------------------------------
@@ -112,37 +110,6 @@ def _choices(value: Any, name: str, allowed: Sequence[str]) -> tuple[str, ...]:
 
 # ---------------------------------------------------------------------------
 # plants
-
-
-def _distinct(draw: Any, items: Sequence[Any], k: int) -> list[Any]:
-    """k distinct items, drawn without replacement (no rejected draws)."""
-    remaining = list(items)
-    return [remaining.pop(draw(st.integers(0, len(remaining) - 1))) for _ in range(k)]
-
-
-def _spectrum(
-    draw: Any, n: int, radius: float, *, pairs: bool = True, dyadic: bool = False
-) -> list[tuple[float, float]]:
-    """n eigenvalues: reals (re, 0) and complex pairs (a, b), b > 0, counted twice.
-
-    They lie on a grid of spacing radius / K inside the closed disc of that
-    radius, so any two differ by at least radius / K; K = max(6, n), or the
-    next power of two (at least 8) with ``dyadic``, so that the grid values
-    are exact binary fractions.
-    """
-    K = max(6, n) if not dyadic else 2 ** max(3, math.ceil(math.log2(max(n, 1))))
-    count = draw(st.integers(0, n // 2)) if pairs else 0
-    # ordered so that draws shrink towards small eigenvalues
-    values = sorted(range(-K, K + 1), key=lambda k: (abs(k), k))
-    grid = sorted(
-        ((a, b) for a in range(-K, K + 1) for b in range(1, K + 1) if a * a + b * b <= K * K),
-        key=lambda ab: (ab[0] ** 2 + ab[1] ** 2, ab),
-    )
-    reals = _distinct(draw, values, n - 2 * count)
-    complex_ = _distinct(draw, grid, count)
-    return [(radius * k / K, 0.0) for k in reals] + [
-        (radius * a / K, radius * b / K) for a, b in complex_
-    ]
 
 
 def _modal_blocks(spectrum: list[tuple[float, float]]) -> tuple[np.ndarray, list[list[int]]]:
@@ -598,77 +565,6 @@ def sparse_attacks(
 # observer designs
 
 
-def _feasible_gains(system: System) -> dict[str, Any]:
-    """Which named gains can be computed for this plant (deadbeat L when it exists)."""
-    from ..design.gains import GainError, deadbeat_gain, pinv_gain
-
-    out: dict[str, Any] = {"deadbeat": None, "pinv": False}
-    try:
-        out["deadbeat"] = deadbeat_gain(system).L
-    except GainError:
-        pass
-    try:
-        pinv_gain(system)
-        out["pinv"] = True
-    except GainError:
-        pass
-    return out
-
-
-def _poles(draw: Any, n: int) -> list[Any]:
-    """n distinct poles in the disc of radius 0.9, in the spec's format."""
-    poles: list[Any] = []
-    for a, b in _spectrum(draw, n, _POLE_RADIUS):
-        if b == 0:
-            poles.append(a)
-        else:
-            poles.extend([[a, b], [a, -b]])
-    return poles
-
-
-def _float(draw: Any, bounds: tuple[float, float]) -> float:
-    return draw(st.floats(*bounds, allow_nan=False, allow_infinity=False))
-
-
-def _gain(draw: Any, system: System, kind: str, feasible: dict[str, Any]) -> dict[str, Any]:
-    """The gain keys of an [observer] table (gain, poles)."""
-    from ..design.gains import GainError, place_gain
-
-    allowed = {
-        "luenberger": ("deadbeat", "place", "pinv", "matrix"),
-        "dsso": ("deadbeat", "place", "pinv", "matrix"),
-        "elastic_net": ("deadbeat", "place", "ogd", "pinv", "matrix"),
-    }[kind]
-    options = [
-        g
-        for g in allowed
-        if g in ("ogd", "matrix")
-        or (g in ("deadbeat", "place") and feasible["deadbeat"] is not None)
-        or (g == "pinv" and feasible["pinv"])
-    ]
-    gain = draw(st.sampled_from(options))
-    if gain == "place":
-        poles = _poles(draw, system.n)
-        try:
-            place_gain(system, [complex(*q) if isinstance(q, list) else q for q in poles])
-        except GainError:
-            # control.place refuses some pairs (e.g. rank-deficient C): use the deadbeat gain
-            return {"gain": "deadbeat"}
-        return {"gain": "place", "poles": poles}
-    if gain != "matrix":
-        return {"gain": gain}
-    if feasible["deadbeat"] is None:
-        step = _float(draw, _STEP) / max(float(np.linalg.norm(system.C, 2)) ** 2, 1e-300)
-        L = step * system.A @ system.C.T
-    else:
-        poles = _poles(draw, system.n)
-        try:
-            L = place_gain(system, [complex(*q) if isinstance(q, list) else q for q in poles]).L
-        except GainError:
-            L = feasible["deadbeat"]
-    return {"gain": np.asarray(L, dtype=float).tolist()}
-
-
 @st.composite
 def _designs(
     draw: Any,
@@ -686,35 +582,15 @@ def _designs(
             raise TypeError(
                 f"the strategy given as system must draw System objects, drew {describe(plant)}"
             )
-        feasible = _feasible_gains(plant)
+        tables = {}  # each kind's strategy is the plant's
     else:
         plant = system
-        if "feasible" not in cache:
-            cache["feasible"] = _feasible_gains(plant)
-        feasible = cache["feasible"]
+        tables = cache  # one plant: each kind's strategy made once
     s = draw(max_attacked)
     kind = draw(st.sampled_from(kinds))
-    table: dict[str, Any] = {"kind": kind}
-    norm_C = max(float(np.linalg.norm(plant.C, 2)), 1e-300)
-    if kind in ("luenberger", "dsso", "elastic_net"):
-        table.update(_gain(draw, plant, kind, feasible))
-    if kind == "ogd":
-        table["step"] = _float(draw, _STEP) / norm_C**2
-    elif kind == "sso":
-        window = draw(st.integers(1, plant.n))
-        sensing = plant.C if window == 1 else plant.observability_matrix(window)
-        table["window"] = window
-        table["inner_steps"] = draw(st.integers(1, 3))
-        table["step"] = _float(draw, _STEP) / max(float(np.linalg.norm(sensing, 2)) ** 2, 1e-300)
-    elif kind in ("dsso", "elastic_net"):
-        table["step"] = _float(draw, _STEP)
-    if kind in ("sso", "dsso", "elastic_net"):
-        table["threshold"] = _float(draw, _THRESHOLD)
-    if kind == "elastic_net":
-        table["shrink"] = _float(draw, _SHRINK)
-        if draw(st.booleans()):
-            weights = [_float(draw, (0.5, 1.0)) for _ in range(plant.p)]
-            table["L2"] = np.diag(weights).tolist()
+    if kind not in tables:
+        tables[kind] = get_kind(kind).parameter_strategy(plant)
+    table: dict[str, Any] = {"kind": kind, **draw(tables[kind])}
     data = {
         "name": f"{kind}-design",
         "system": {"A": plant.A.tolist(), "C": plant.C.tolist(), "sensors": list(plant.sensors)},
@@ -730,6 +606,15 @@ def _designs(
     return spec
 
 
+def _drawable() -> tuple[str, ...]:
+    """The registered kinds that give a parameter strategy."""
+    return tuple(
+        name
+        for name in observer_kinds()
+        if type(get_kind(name)).parameter_strategy is not ObserverKind.parameter_strategy
+    )
+
+
 def observer_designs(
     system: System | SearchStrategy[System],
     *,
@@ -743,7 +628,8 @@ def observer_designs(
     ``ssecert.design.observer.build_observer`` computes without
     ``GainError``, and one ``[[scenario]]`` named ``"nominal"`` (no attack,
     50 steps, 4 runs, seed 0).  Valid does not mean certified: drawn designs
-    may fail ``assert_certified``.  Parameters are drawn from:
+    may fail ``assert_certified``.  Each kind draws its own keys
+    (``ObserverKind.parameter_strategy``); the built-in kinds draw from:
 
     =============  ==============================================================
     key            drawn from
@@ -766,8 +652,9 @@ def observer_designs(
     ----------
     system : System or strategy of System
         The plant, or a strategy such as ``observable_systems(3, 2)``.
-    kinds : sequence of str, default all five kinds
-        Observer kinds to draw from: luenberger, ogd, sso, dsso, elastic_net.
+    kinds : sequence of str, default all five built-in kinds
+        Observer kinds to draw from: luenberger, ogd, sso, dsso, elastic_net, or any
+        registered kind that gives a ``parameter_strategy``.
     max_attacked : int or strategy of int, default 0
         s, written to the spec's ``[attack]`` section.
 
@@ -799,5 +686,5 @@ def observer_designs(
             f"system must be a System or a hypothesis strategy of System objects, "
             f"got {describe(system)}"
         )
-    chosen = _choices(kinds, "kinds", OBSERVER_KINDS)
+    chosen = _choices(kinds, "kinds", _drawable())
     return _designs(system, chosen, _size(max_attacked, "max_attacked", 0), {})
