@@ -1820,3 +1820,23 @@ def test_select_sensors():
         system.select_sensors([0, 0])
     with pytest.raises(ValueError, match="at least one"):
         system.select_sensors([])
+
+
+def test_a_spec_written_back_reads_as_itself_with_every_attack_kind(tmp_path):
+    """spec_document + dumps round-trip every scenario kind (no attack takes no magnitude:
+    the reader fills in the default and refuses one written)."""
+    from ssecert.spec.write import dumps, spec_document
+
+    data = {
+        "name": "round-trip",
+        "system": {"A": [[0.5, 0.1], [0.0, 0.4]], "C": [[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]},
+        "attack": {"max_attacked": 1},
+        "scenario": [{"attack": kind} for kind in ("none", "stealthy")]
+        + [{"attack": "constant", "sensors": [0], "magnitude": 2.0}],
+    }
+    spec = spec_from_dict(data)
+    path = tmp_path / "spec.toml"
+    path.write_text(dumps(spec_document(spec)))
+    again = load_spec(path)
+    assert again.scenarios == spec.scenarios
+    assert np.array_equal(again.system.A, spec.system.A)

@@ -30,8 +30,17 @@ def spec_document(spec: Any, observer: Mapping[str, Any] | None = None) -> dict[
     if section is not None:
         data["observer"] = {k: v for k, v in section.items() if v is not None}
     if spec.scenarios:
-        data["scenario"] = [{k: v for k, v in sc.items() if v is not None} for sc in spec.scenarios]
+        data["scenario"] = [_scenario(sc) for sc in spec.scenarios]
     return data
+
+
+def _scenario(scenario: Mapping[str, Any]) -> dict[str, Any]:
+    """A scenario's table as its file holds it: no attack takes no magnitude (the reader fills
+    in the default range and refuses one written)."""
+    out = {k: v for k, v in scenario.items() if v is not None}
+    if out.get("attack") == "none":
+        out.pop("magnitude", None)
+    return out
 
 
 def dumps(data: Mapping[str, Any]) -> str:
