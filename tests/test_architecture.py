@@ -43,7 +43,7 @@ LAYERS = {
     2: ("ssecert.spec", "ssecert.examples", "ssecert.inputs", "ssecert.schemas"),
     3: ("ssecert.structure", "ssecert.stability", "ssecert.simulation", "ssecert.estimators"),
     4: ("ssecert.analyze", "ssecert.certify", "ssecert.synthesize"),
-    5: ("ssecert.report",),
+    5: ("ssecert.report", "ssecert.experiments"),
     6: (
         "ssecert.cli",
         "ssecert.testing",

@@ -50,6 +50,7 @@ from .options import (
     _solver,
     _steps,
 )
+from .reproduce import add_reproduce_parser, cmd_reproduce
 
 __all__ = ["main"]
 
@@ -199,6 +200,7 @@ def _build_parser() -> argparse.ArgumentParser:
     schema.add_argument("name", choices=("spec", "certificate"), help="which schema")
     add_audit_parser(sub)
     add_design_parser(sub)
+    add_reproduce_parser(sub)
     return parser
 
 
@@ -578,6 +580,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return cmd_audit(args)
         if args.command == "design":
             return cmd_design(args, argv[1:] if argv is not None else None)
+        if args.command == "reproduce":
+            return cmd_reproduce(args)
         raise UsageError(f"unknown command {args.command!r}")  # pragma: no cover
     except (UsageError, SpecError, ResourceLimitError) as exc:
         sys.stderr.write(f"ssecert: error: {one_line(str(exc))}\n")

@@ -1,0 +1,110 @@
+"""``ssecert reproduce``: the registry of the documents' experiments, the agreement line
+computed from the numbers, and the report."""
+
+import json
+import re
+
+import pytest
+
+from ssecert.cli import main
+from ssecert.experiments import (
+    Match,
+    Result,
+    Settings,
+    agreement,
+    all_experiments,
+    render_reproduce,
+    reproduce_json,
+    run_experiments,
+)
+
+# every table, figure and worked example of the five documents
+EXPECTED = (
+    [f"lasso.fig{i}" for i in range(1, 5)]
+    + [f"thesis.fig6_{i}" for i in range(1, 8)]
+    + [f"notes.example{i}" for i in range(4)]
+    + ["pruning.fig1", "pruning.fig2", "pruning.table1"]
+    + [f"sise.fig{i}" for i in range(1, 5)]
+)
+
+
+def test_every_table_figure_and_example_has_an_id_in_document_order():
+    assert list(all_experiments()) == EXPECTED
+    for entry in all_experiments().values():
+        assert re.match(r"^[a-z]+\.(fig|table|example)\d", entry.id)
+        assert entry.where and entry.measures
+        assert entry.run is not None or entry.why_not  # one not run says why
+
+
+@pytest.mark.parametrize(
+    "ours, match",
+    [
+        ({"error": 0.1, "exact": True}, Match.REPRODUCED),
+        ({"error": 0.104, "exact": True}, Match.REPRODUCED),
+        ({"error": 0.13, "exact": True}, Match.CLOSE),
+        ({"error": 0.3, "exact": True}, Match.DIFFERS),
+        ({"error": 0.1, "exact": False}, Match.DIFFERS),
+        ({"other": 1.0}, Match.NOT_COMPARABLE),
+        ({"error": None, "exact": None}, Match.NOT_COMPARABLE),
+    ],
+)
+def test_the_agreement_line_follows_the_numbers(ours, match):
+    line = agreement({"error": 0.1, "exact": True}, ours)
+    assert line.match is match
+    assert line.words.startswith(match.value)
+
+
+def test_the_agreement_line_names_what_differs_and_by_how_much():
+    line = agreement({"error": 0.1, "rate": 2.0}, {"error": 0.1, "rate": 3.0})
+    assert (line.worst, line.by) == ("rate", 0.5)
+    assert "rate" in line.words and "50%" in line.words
+    claims = agreement({"exact": True, "fragile": True}, {"exact": True, "fragile": False})
+    assert claims.disagree == ("fragile",)
+    # a document's 0 and ours not: an infinite relative gap, unless a floor is given
+    assert agreement({"e": 0.0}, {"e": 1e-9}).match is Match.DIFFERS
+    assert agreement({"e": 0.0}, {"e": 1e-9}, floor=1e-6).match is Match.REPRODUCED
+
+
+def test_the_notes_examples_reproduce_and_a_wrong_claim_would_differ():
+    outcomes = run_experiments([f"notes.example{i}" for i in range(4)])
+    assert [o.agreement.match for o in outcomes] == [Match.REPRODUCED] * 4
+    example2 = outcomes[2].result
+    assert example2 is not None and example2.ours["sparsest C z"] == 2
+    # the same numbers against a document that said otherwise
+    wrong = Result(paper={**example2.paper, "corrects h = 1": True}, ours=example2.ours)
+    assert agreement(wrong.paper, wrong.ours).match is Match.DIFFERS
+
+
+def test_the_report_holds_every_experiment_with_the_same_keys():
+    outcomes = run_experiments(["notes.example3", "lasso.fig1"], Settings(seed=3))
+    data = json.loads(reproduce_json(outcomes))["experiments"]
+    assert list(data) == ["notes.example3", "lasso.fig1"]
+    for entry in data.values():
+        assert set(entry) >= {"document", "where", "paper", "ours", "agreement", "unstated",
+                              "command", "seconds"}  # fmt: skip
+    assert data["notes.example3"]["paper"].keys() == data["notes.example3"]["ours"].keys()
+    assert data["notes.example3"]["command"] == "ssecert reproduce notes.example3 --seed 3"
+    assert data["lasso.fig1"]["match"] == "not run"
+    assert data["lasso.fig1"]["agreement"].startswith("not run: ")
+    html = render_reproduce(outcomes)
+    assert 'id="notes.example3"' in html and "1 reproduced" in html and "1 not run" in html
+
+
+def test_settings_count_the_runs():
+    assert Settings().count(5, 50) == 5
+    assert Settings(quick=False).count(5, 50) == 50
+    assert Settings(runs=7).count(5, 50) == 7
+
+
+def test_the_command_lists_runs_and_refuses(tmp_path, capsys):
+    assert main(["reproduce", "--list"]) == 0
+    listed = capsys.readouterr().out
+    assert all(i in listed for i in EXPECTED)
+    assert main(["reproduce", "lasso.fig9"]) == 2
+    assert "lasso.fig9: no such experiment" in capsys.readouterr().err
+    out = tmp_path / "out"
+    assert main(["reproduce", "notes.example1", "--out", str(out)]) == 0
+    assert "notes.example1  reproduced" in capsys.readouterr().out
+    data = json.loads((out / "reproduce.json").read_text())
+    assert list(data["experiments"]) == ["notes.example1"]
+    assert (out / "reproduce.html").read_text().startswith("<!DOCTYPE html>")
