@@ -44,7 +44,7 @@ from typing import Any
 import numpy as np
 from _common import as_in, compare_values, decade, fill, record_experiment, which_is_better
 
-from ssecert.estimators.sise import SISE, OracleSISE
+from ssecert.experiments.sise import sise_errors as experiment
 
 #: "very close to the benchmark", read as: SISE's mean errors at most this times the oracle's.
 CLOSE = 1.5
@@ -57,65 +57,6 @@ PERFECT = 0.999
 PAPER_DECADE = -2
 #: A mean pulled up by a few runs: at least this times the median over runs.
 SKEWED = 1.2
-
-
-def simulate_plant(rng, n, m, p, runs, steps, amplitude):
-    """One random plant of Sec. IV and `runs` trajectories of it."""
-    A = rng.standard_normal((n, n)) / np.sqrt(n)
-    B = np.eye(n)[:, :p]
-    C = rng.standard_normal((m, n))
-    x = rng.standard_normal((runs, n))
-    u = np.zeros((steps, runs, p))
-    where = rng.integers(p, size=runs)
-    u[:, np.arange(runs), where] = amplitude * rng.choice([-1.0, 1.0], (steps, runs))
-    xs, ys = [x], []
-    for k in range(steps):
-        ys.append(x @ C.T + 0.1 * rng.standard_normal((runs, m)))
-        x = x @ A.T + u[k] @ B.T + 0.1 * rng.standard_normal((runs, n))
-        xs.append(x)
-    return A, B, C, np.array(xs), np.array(ys), u
-
-
-def experiment(n, m, p, *, runs, plants, steps, seed, amplitude, lasso_rtol):
-    """Relative errors per (k, run) of SISE and the oracle; SISE's support hits."""
-    rng = np.random.default_rng(seed)
-    per = [runs // plants + (i < runs % plants) for i in range(plants)]
-    out = {"sise": ([], []), "oracle": ([], [])}
-    hits = []  # one (steps - 1, runs of the plant) array per plant
-    Q, R = 0.01 * np.eye(n), 0.01 * np.eye(m)
-    t0 = time.perf_counter()
-    for count in per:
-        if count == 0:
-            continue
-        A, B, C, xs, ys, u = simulate_plant(rng, n, m, p, count, steps, amplitude)
-        estimators = {
-            "sise": SISE(A, B, C, Q=Q, R=R, lasso_weight=1.0, sparsity=1, lasso_rtol=lasso_rtol),
-            "oracle": OracleSISE(A, B, C, Q=Q, R=R, support=u != 0),
-        }
-        for name, est in estimators.items():
-            state = est.initial_state(count)
-            x_err, u_err, hit = [], [], []
-            for k in range(steps):
-                state = est.step(state, ys[k])
-                x_err.append(
-                    np.linalg.norm(state["x_hat"] - xs[k], axis=1) / np.linalg.norm(xs[k], axis=1)
-                )
-                if k >= 1:  # u_hat from y(k) estimates u(k - 1)
-                    u_err.append(
-                        np.linalg.norm(state["u_hat"] - u[k - 1], axis=1)
-                        / np.linalg.norm(u[k - 1], axis=1)
-                    )
-                    hit.append(np.all(state["support"] == (u[k - 1] != 0), axis=1))
-            out[name][0].append(np.array(x_err))
-            out[name][1].append(np.array(u_err))
-            if name == "sise":
-                hits.append(np.array(hit))
-    seconds = time.perf_counter() - t0
-    errors = {
-        name: (np.concatenate(xe, axis=1), np.concatenate(ue, axis=1))
-        for name, (xe, ue) in out.items()
-    }
-    return errors, np.concatenate(hits, axis=1), seconds
 
 
 def measure(args: argparse.Namespace) -> dict[str, Any]:

@@ -30,6 +30,8 @@ EXPECTED = (
 
 def test_every_table_figure_and_example_has_an_id_in_document_order():
     assert list(all_experiments()) == EXPECTED
+    runnable = {i for i, e in all_experiments().items() if e.run is not None}
+    assert runnable >= {"notes.example0", "sise.fig1", "sise.fig2", "sise.fig3"}
     for entry in all_experiments().values():
         assert re.match(r"^[a-z]+\.(fig|table|example)\d", entry.id)
         assert entry.where and entry.measures
@@ -108,3 +110,18 @@ def test_the_command_lists_runs_and_refuses(tmp_path, capsys):
     data = json.loads((out / "reproduce.json").read_text())
     assert list(data["experiments"]) == ["notes.example1"]
     assert (out / "reproduce.html").read_text().startswith("<!DOCTYPE html>")
+
+
+@pytest.mark.slow
+def test_a_randomised_experiment_is_reproducible_from_its_seed():
+    from ssecert.experiments import sise
+
+    first = run_experiments(["sise.fig2"], Settings(runs=2, seed=5))[0]
+    sise._summary.cache_clear()
+    again = run_experiments(["sise.fig2"], Settings(runs=2, seed=5))[0]
+    assert first.result is not None and again.result is not None
+    assert first.result.table == again.result.table
+    assert first.result.ours == again.result.ours
+    assert first.command == "ssecert reproduce sise.fig2 --runs 2 --seed 5"
+    other = run_experiments(["sise.fig2"], Settings(runs=2, seed=6))[0]
+    assert other.result is not None and other.result.table != first.result.table
