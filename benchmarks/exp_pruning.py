@@ -43,148 +43,19 @@ comparison in it is computed from the table (``conclusion``).
 from __future__ import annotations
 
 import argparse
-import time
 from typing import Any
 
-import numpy as np
 from _common import as_in, fill, record_experiment
 
-from ssecert import System
-from ssecert.estimators.pruning import (
-    l1_decode,
-    pruned_weighted_l1_window_observer,
-    weighted_l1_observer,
+from ssecert.experiments.pruning import (
+    LARGE_GAIN,
+    LIMITED_GAIN,
+    M_SENSORS,
+    N_STATES,
+    PruningOptions,
+    breakdown,
+    measure,
 )
-from ssecert.estimators.pruning_attacks import successful_attack
-
-M_SENSORS = 20
-N_STATES = 10
-#: "the resiliency is improved a lot" by pruning, read as: the breakdown moves by at
-#: least this much in P_A.
-LARGE_GAIN = 0.2
-#: "the improvement is limited" with the raw prior, read as: it moves by less than this.
-LIMITED_GAIN = 0.1
-
-
-def random_plant(rng: np.random.Generator, window: int) -> np.ndarray:
-    """Stacked window matrix H of a Gaussian (A, C), A scaled to spectral radius 1."""
-    A = rng.standard_normal((N_STATES, N_STATES))
-    A /= np.max(np.abs(np.linalg.eigvals(A)))
-    C = rng.standard_normal((M_SENSORS, N_STATES))
-    return System(A, C).observability_matrix(window)
-
-
-def one_run(rng: np.random.Generator, attacked: int, args: argparse.Namespace) -> dict:
-    """Relative errors of the three observers and the pruned prior's quality for one trial."""
-    H = random_plant(rng, args.window)
-    rows = H.shape[0]
-    x = rng.standard_normal(N_STATES)
-    y = H @ x
-    sensors = rng.choice(M_SENSORS, attacked, replace=False)
-    support = [step * M_SENSORS + i for step in range(args.window) for i in sensors]
-    silent = True
-    if support:
-        eps = args.eps_rel * float(np.sum(np.abs(y)))
-        attack = successful_attack(H, support, eps)
-        silent = attack.detector_silent
-        y = y + attack.attack
-
-    safe = np.ones(rows, dtype=bool)
-    safe[support] = False
-    if args.prior_model == "paper":
-        probs = rng.uniform(2.0 * args.true_rate - 1.0, 1.0, rows)
-        prior_right = rng.random(rows) < probs
-    else:
-        # The published code's model: p_i >= 0.5 with probability T_r, and the prior is
-        # right exactly when p_i > 0.5 (no Bernoulli draw).
-        high = rng.random(rows) < args.true_rate
-        probs = np.where(high, rng.uniform(0.5, 1.0, rows), rng.uniform(0.0, 0.5, rows))
-        prior_right = probs > 0.5
-    prior_safe = np.flatnonzero(np.where(prior_right, safe, ~safe))
-
-    def error(x_hat: np.ndarray) -> float:
-        return float(np.linalg.norm(x_hat - x) / np.linalg.norm(x))
-
-    plain = l1_decode(H, y)
-    with_prior = weighted_l1_observer(H, y, prior_safe, omega=args.omega)
-    pruned = pruned_weighted_l1_window_observer(
-        H, y, prior_safe, probs, sensors=M_SENSORS, reliability=args.reliability, omega=args.omega
-    )
-    trusted = list(pruned.trusted)
-    return {
-        "plain": error(plain),
-        "prior": error(with_prior.x_hat),
-        "pruned": error(pruned.x_hat),
-        "ppv_prior": float(np.mean(safe[prior_safe])) if prior_safe.size else float("nan"),
-        "ppv_pruned": float(np.mean(safe[trusted])) if trusted else float("nan"),
-        "trusted": len(trusted),
-        "all_right": float(np.all(safe[trusted])) if trusted else float("nan"),
-        "silent": silent,
-    }
-
-
-def breakdown(table: list[dict], key: str) -> float | None:
-    """Attack percentage where the success rate falls below 1/2 for good (linear interpolation).
-
-    0 if it is never 1/2 or more; None if it is still 1/2 or more at the last row.
-    """
-    rates = [row[key] for row in table]
-    above = [i for i, rate in enumerate(rates) if rate >= 0.5]
-    if not above:
-        return 0.0
-    last = above[-1]
-    if last == len(rates) - 1:
-        return None
-    a, b = table[last], table[last + 1]
-    fraction = (a[key] - 0.5) / (a[key] - b[key])
-    return a["P_A"] + fraction * (b["P_A"] - a["P_A"])
-
-
-def measure(args: argparse.Namespace) -> dict[str, Any]:
-    """Success rates and prior quality per attack percentage (plain numbers, JSON-ready)."""
-    start = time.perf_counter()
-    table = []
-    for attacked in range(0, M_SENSORS + 1, args.step):
-        results = [
-            one_run(np.random.default_rng([args.seed, attacked, run]), attacked, args)
-            for run in range(args.runs)
-        ]
-
-        def mean(key: str, results: list = results) -> float:
-            values = [float(r[key]) for r in results if not np.isnan(r[key])]
-            return float(np.mean(values)) if values else float("nan")
-
-        row = {
-            key: float(np.mean([r[key] < args.tol for r in results]))
-            for key in ("plain", "prior", "pruned")
-        }
-        row.update(
-            P_A=attacked / M_SENSORS,
-            k=attacked,
-            ppv_one=mean("all_right"),
-            ppv_prior=mean("ppv_prior"),
-            ppv_pruned=mean("ppv_pruned"),
-            trusted=mean("trusted"),
-            silent=mean("silent"),
-        )
-        table.append(row)
-    options = (
-        "runs",
-        "window",
-        "true_rate",
-        "reliability",
-        "omega",
-        "eps_rel",
-        "tol",
-        "step",
-        "prior_model",
-        "seed",
-    )
-    return {
-        "options": {key: getattr(args, key) for key in options},
-        "rows": table,
-        "seconds": time.perf_counter() - start,
-    }
 
 
 def report(numbers: dict[str, Any]) -> str:
@@ -324,7 +195,8 @@ def main() -> None:
         parser.error("--runs, --window and --step must be positive")
     if not 0.5 <= args.true_rate <= 1.0:
         parser.error("--true-rate must lie in [0.5, 1] for Uniform[2 T_r - 1, 1] to be a law")
-    numbers = measure(args)
+    fields = PruningOptions.__dataclass_fields__
+    numbers = measure(PruningOptions(**{k: getattr(args, k) for k in fields}))
     print(report(numbers))
     print()
     print(conclusion(numbers))
