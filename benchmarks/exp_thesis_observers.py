@@ -31,162 +31,21 @@ runs; then a paragraph whose every comparison is computed from these numbers
 from __future__ import annotations
 
 import argparse
-import math
 import time
 from typing import Any
 
-import numpy as np
 from _common import compare_values, fill, record_experiment, which_is_better
 
-from ssecert.examples import load_example
-from ssecert.observers import build_observer, observer_from_design
-from ssecert.simulation.engine import grid_search, simulate_scenario
-from ssecert.simulation.metrics import mse
-from ssecert.simulation.scenarios import generate
-
-ATTACKED = 3
-ALPHA = 0.5
-#: The D-SSO's values of the thesis's Sec. 6.1, set "empirically" there.
-THESIS_DSSO = {"step": 0.7, "threshold": 0.1}
-QUICK_GRID = {
-    "step": [0.1, 0.3, 0.7],
-    "threshold": [0.05, 0.1, 0.2],
-    "shrink": [0.9, 0.95, 0.99],
-}
-FULL_GRID = {
-    "step": [0.1, 0.2, 0.3, 0.5, 0.7, 0.9, 1.0, 1.2],
-    "threshold": [0.01, 0.02, 0.05, 0.1, 0.2, 0.5],
-    "shrink": [0.9, 0.95, 0.98, 0.99, 0.995],
-}
-TUNING_STEPS, TUNING_SEED = 400, 1
-#: The thesis's words for the new observer (Sec. 6.2.7), read as rules on the numbers.
-CLOSE_TO_ZERO = 1e-6  # final MSE at most this fraction of the initial MSE
-SUPPORT_IDENTIFIED = 0.05  # final mean support error at most this
-MSE_ATOL = 1e-20  # MSEs below this are zero in floating point: a tie
-SUPPORT_ATOL = 0.01
-OBSERVERS = ("D-SSO", "elastic net", "D-SSO (6.1)")
-BASE = {"attack": "constant", "count": ATTACKED, "magnitude": (4.0, 5.0), "noise": 0.0, "seed": 0}
-SCENARIOS = {
-    "constant": BASE,
-    "switching (every 400)": {**BASE, "attack": "switching", "period": 400},
-    "sinusoidal": {**BASE, "attack": "sinusoidal", "period": 100},
-}
-NO_ATTACK = "no attack (a_hat(0) rnd)"
-
-
-def no_attack(design, runs: int, steps: int, seed: int) -> tuple[float, float, float]:
-    """No attack, a_hat(0) random (the thesis's set-up): initial and final MSE, support error.
-
-    The support error is the fraction of runs whose attack estimate is not exactly zero
-    at the end (any false alarm).
-    """
-    system = design.system
-    data = generate(system, {"attack": "none", "noise": 0.0}, range(runs), steps, seed=seed)
-    x, ys, xs = data.x0.copy(), [], []
-    for _ in range(steps):
-        ys.append(x @ system.C.T)
-        xs.append(x)
-        x = x @ system.A.T
-    xs.append(x)
-    obs = observer_from_design(design)
-    state = obs.initial_state(runs)
-    rng = np.random.default_rng(seed)
-    state["a_hat"] = rng.uniform(-5, 5, state["a_hat"].shape) * (
-        rng.random(state["a_hat"].shape) < 0.1
-    )
-    traj = obs.run(np.array(ys), state)
-    initial = float(np.mean(mse(traj.x_hat[0], xs[0])))
-    final = float(np.mean(mse(traj.x_hat[-1], xs[-1])))
-    support = float(np.mean(np.any(np.abs(traj.a_hat[-1]) > 1e-9, axis=1)))
-    return initial, final, support
-
-
-def tune(system, observer: dict[str, Any], grid: dict[str, list[float]], runs: int):
-    """Grid search of one observer with cost (6.1); the best finite-cost point and all costs."""
-    result = grid_search(
-        system,
-        observer,
-        {**BASE, "name": "tuning"},
-        grid,
-        runs=runs,
-        steps=TUNING_STEPS,
-        seed=TUNING_SEED,
-        alpha=ALPHA,
-    )
-    finite = [pt for pt in result.points if math.isfinite(pt["cost"])]
-    best = min(finite, key=lambda pt: pt["cost"]) if finite else result.best
-    return best, result.points
-
-
-def measure(runs: int, steps: int, grid: dict[str, list[float]]) -> dict[str, Any]:
-    """Tune both observers, simulate the four scenarios (plain numbers, JSON-ready)."""
-    system = load_example("random-n15-p30").system
-    tuning_runs = max(10, runs // 5)
-    dsso = {"kind": "dsso", "gain": "deadbeat", "shrink": 1.0, **THESIS_DSSO}
-    en = {"kind": "elastic_net", "gain": "deadbeat", "step": 0.3, "threshold": 0.1}
-    dsso_grid = {key: grid[key] for key in ("step", "threshold")}
-    tuned: dict[str, Any] = {}
-    observers: dict[str, dict[str, Any]] = {}
-    for label, base, g in (
-        ("D-SSO", dsso, dsso_grid),
-        ("elastic net", {**en, "shrink": 0.95}, grid),
-    ):
-        best, points = tune(system, base, g, tuning_runs)
-        thesis = next(
-            (
-                pt["cost"]
-                for pt in points
-                if all(pt["params"].get(k) == v for k, v in THESIS_DSSO.items())
-            ),
-            None,
-        )
-        tuned[label] = {
-            "grid": g,
-            "points": len(points),
-            "diverged": sum(not math.isfinite(pt["cost"]) for pt in points),
-            "best": best["params"],
-            "cost": best["cost"],
-            "sharing_best_cost": sum(
-                math.isclose(pt["cost"], best["cost"], rel_tol=1e-9) for pt in points
-            ),
-            "cost_at_thesis_values": thesis if label == "D-SSO" else None,
-        }
-        observers[label] = {**base, **best["params"]}
-    observers["D-SSO (6.1)"] = dsso
-    results = []
-    for label, obs in observers.items():
-        design = build_observer(system, obs)
-        initial, final, support = no_attack(design, runs, steps, 7)
-        results.append(
-            {"scenario": NO_ATTACK, "observer": label, "mse_initial": initial}
-            | {"mse": final, "support_error": support}
-        )
-    for name, sc in SCENARIOS.items():
-        for label, obs in observers.items():
-            design = build_observer(system, obs)
-            res = simulate_scenario(
-                design, {**sc, "name": name}, runs=runs, steps=steps, max_attacked=ATTACKED
-            )
-            final = res.final()
-            results.append(
-                {
-                    "scenario": name,
-                    "observer": label,
-                    "mse_initial": float(np.mean(res.mse[0])),
-                    "mse": float(final["mse_mean"]),
-                    "support_error": float(final["support_error_mean"]),
-                }
-            )
-    return {
-        "n": system.n,
-        "p": system.p,
-        "h": ATTACKED,
-        "runs": runs,
-        "steps": steps,
-        "tuning": {"runs": tuning_runs, "steps": TUNING_STEPS, "seed": TUNING_SEED, "alpha": ALPHA},
-        "tuned": tuned,
-        "results": results,
-    }
+from ssecert.experiments.thesis import (
+    CLOSE_TO_ZERO,
+    FULL_GRID,
+    MSE_ATOL,
+    QUICK_GRID,
+    SUPPORT_ATOL,
+    SUPPORT_IDENTIFIED,
+    THESIS_DSSO,
+    measure,
+)
 
 
 def _params(params: dict[str, Any]) -> str:

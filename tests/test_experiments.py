@@ -31,7 +31,14 @@ EXPECTED = (
 def test_every_table_figure_and_example_has_an_id_in_document_order():
     assert list(all_experiments()) == EXPECTED
     runnable = {i for i, e in all_experiments().items() if e.run is not None}
-    assert runnable >= {"notes.example0", "sise.fig1", "sise.fig2", "sise.fig3", "pruning.fig1"}
+    assert runnable >= {
+        "notes.example0",
+        "sise.fig1",
+        "sise.fig3",
+        "pruning.fig1",
+        "thesis.fig6_2",
+        "thesis.fig6_5",
+    }
     for entry in all_experiments().values():
         assert re.match(r"^[a-z]+\.(fig|table|example)\d", entry.id)
         assert entry.where and entry.measures
@@ -125,3 +132,15 @@ def test_a_randomised_experiment_is_reproducible_from_its_seed():
     assert first.command == "ssecert reproduce sise.fig2 --runs 2 --seed 5"
     other = run_experiments(["sise.fig2"], Settings(runs=2, seed=6))[0]
     assert other.result is not None and other.result.table != first.result.table
+
+
+@pytest.mark.slow
+def test_the_thesis_scenarios_compare_the_tuned_observers():
+    outcomes = run_experiments(["thesis.fig6_2", "thesis.fig6_3"], Settings(runs=2))
+    for o in outcomes:
+        assert o.result is not None
+        observers = [row["observer"] for row in o.result.table[1:]]
+        assert observers == ["D-SSO", "elastic net", "D-SSO (6.1)"]
+        assert set(o.result.ours) == set(o.result.paper)
+    # no attack: every observer's error dies out and no attack is estimated
+    assert outcomes[0].agreement.match is Match.REPRODUCED
