@@ -214,45 +214,50 @@ def analyze(
     tol = Tolerances.check(tolerances)
     system = spec.system
     clock = _Clock()
+    clock.begin("eigenvalues")
     # shared by the structural checks, which decide in power-of-two units
     units = balanced_units(system)
     eig = eigen_clusters(units.system.A, tolerances=tol, unit=units.alpha)
     clock.lap("eigenvalues", None)
     sparse_timing: dict[str, Any] = {}
     observer_timings: dict[str, float] = {}
+    clock.begin("observability")
     checks: list[Check] = [
-        clock.lap("observability", observability(system, tolerances=tol, eigen=eig)),
-        clock.lap("sparse_observability", sparse_observability(
-            system,
-            spec.max_attacked,
-            method=method,
-            max_sets=max_sets,
-            horizon=spec.horizon,
-            seed=seed,
-            tolerances=tol,
-            progress=_relay(progress, "sparse_observability"),
-            eigen=eig,
-            time_budget=time_budget,
-            client=client,
-            timing=sparse_timing,
-            device=device,
-        )),
-        clock.lap("irrepresentable", irrepresentable(
-            system,
-            spec.max_attacked,
-            horizon=spec.horizon,
-            max_sets=max_sets,
-            tolerances=tol,
-            progress=_relay(progress, "irrepresentable"),
-            budget=budget,
-            client=client,
-            time_budget=time_budget,
-        )),
-    ]  # fmt: skip
+        clock.lap("observability", observability(system, tolerances=tol, eigen=eig))
+    ]
+    clock.begin("sparse_observability")
+    checks.append(clock.lap("sparse_observability", sparse_observability(
+        system,
+        spec.max_attacked,
+        method=method,
+        max_sets=max_sets,
+        horizon=spec.horizon,
+        seed=seed,
+        tolerances=tol,
+        progress=_relay(progress, "sparse_observability"),
+        eigen=eig,
+        time_budget=time_budget,
+        client=client,
+        timing=sparse_timing,
+        device=device,
+    )))  # fmt: skip
+    clock.begin("irrepresentable")
+    checks.append(clock.lap("irrepresentable", irrepresentable(
+        system,
+        spec.max_attacked,
+        horizon=spec.horizon,
+        max_sets=max_sets,
+        tolerances=tol,
+        progress=_relay(progress, "irrepresentable"),
+        budget=budget,
+        client=client,
+        time_budget=time_budget,
+    )))  # fmt: skip
     if spec.observer is not None:
         from .stability.checks import observer_checks
         from .stability.constant_attack import default_attacks
 
+        clock.begin("observer_checks")
         checks.extend(
             clock.lap(
                 "observer_checks",

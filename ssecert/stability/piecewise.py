@@ -60,6 +60,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from ..budget import stage
 from ..observers.lure import LureModel
 from ..tolerances import EPS
 
@@ -223,8 +224,9 @@ def _search(model: LureModel, seed: int, floor: float, clear: float) -> dict[str
     lo, hi = -1, len(ladder)  # ladder[lo] verified, ladder[hi] did not
     while hi - lo > 1:
         mid = (lo + hi) // 2
-        found = _attempt(model, regions, ladder[mid], OUTER * ladder[mid], clear, empty_pairs,
-                         empty_inner)  # fmt: skip
+        with stage(f"piecewise-quadratic LMIs, radius {ladder[mid] * lam:.4g}"):
+            found = _attempt(model, regions, ladder[mid], OUTER * ladder[mid], clear,
+                             empty_pairs, empty_inner)  # fmt: skip
         attempts.append({"radius": ladder[mid] * lam, **found.record})
         if found.ok:
             best, lo = found, mid
