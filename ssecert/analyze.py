@@ -219,6 +219,7 @@ def analyze(
     tol = Tolerances.check(tolerances)
     system = spec.system
     clock = _Clock()
+    clock.begin("eigenvalues")
     # shared by the structural checks, which decide in power-of-two units
     units = balanced_units(system)
     eig = eigen_clusters(units.system.A, tolerances=tol, unit=units.alpha)

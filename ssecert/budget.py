@@ -22,7 +22,7 @@ import re
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
-from typing import TypeVar
+from typing import Protocol, TypeVar
 
 __all__ = [
     "Budget",
@@ -36,6 +36,9 @@ __all__ = [
     "parse_operations",
     "bounded_comb",
     "log10_comb",
+    "StageListener",
+    "stage",
+    "watching_stages",
 ]
 
 DEFAULT_MEMORY = 2 * 2**30  # bytes
@@ -248,20 +251,90 @@ def reporting(report: Callable[[str, float], None]) -> Iterator[None]:
         _REPORT.reset(token)
 
 
+class StageListener(Protocol):
+    """Told when each stage of an analysis begins and ends (``watching_stages``)."""
+
+    def begin(self, name: str) -> None:
+        """Stage ``name`` begins (inside the stages begun and not yet ended)."""
+
+    def end(self, name: str, seconds: float) -> None:
+        """Stage ``name``, the innermost one begun, ends after ``seconds``."""
+
+
+# who is told of each stage as it begins and ends (``watching_stages``): the progress display
+_STAGES: contextvars.ContextVar[StageListener | None] = contextvars.ContextVar(
+    "ssecert_stages", default=None
+)
+
+
+@contextlib.contextmanager
+def watching_stages(listener: StageListener) -> Iterator[None]:
+    """Tell ``listener`` of each stage (``stage``, and every step of a ``Laps``) as it begins
+    and ends, within the ``with`` block.  Stages nest: a step of the observer checks begins and
+    ends inside the step ``observer_checks`` of ``analyze``.
+
+    Examples
+    --------
+    >>> class Printed:
+    ...     def begin(self, name): print("begin", name)
+    ...     def end(self, name, seconds): print("end", name)
+    >>> with watching_stages(Printed()), stage("outer"), stage("inner"):
+    ...     pass
+    begin outer
+    begin inner
+    end inner
+    end outer
+    """
+    token = _STAGES.set(listener)
+    try:
+        yield
+    finally:
+        _STAGES.reset(token)
+
+
+@contextlib.contextmanager
+def stage(name: str) -> Iterator[None]:
+    """A stage of an analysis named ``name`` (say ``"piecewise LMIs, radius 10"``), told to the
+    ``watching_stages`` listener as it begins and ends; nothing without one."""
+    listener = _STAGES.get()
+    if listener is None:
+        yield
+        return
+    start = time.monotonic()
+    listener.begin(name)
+    try:
+        yield
+    finally:
+        listener.end(name, time.monotonic() - start)
+
+
 class Laps:
     """Wall-clock seconds of each step of a run, into ``seconds`` (the caller's dict when
     given), for the certificate's ``meta.timings``; each step is also told to the ``reporting``
-    callback when there is one."""
+    callback when there is one, and to the ``watching_stages`` listener as it begins
+    (``begin``) and ends."""
 
     def __init__(self, seconds: dict[str, float] | None = None) -> None:
         self.start = self.last = time.monotonic()
         self.seconds: dict[str, float] = {} if seconds is None else seconds
+        self.begun: str | None = None
+
+    def begin(self, name: str) -> None:
+        """Step ``name`` begins (its ``lap`` ends it): told to the stage listener."""
+        listener = _STAGES.get()
+        if listener is not None:
+            self.begun = name
+            listener.begin(name)
 
     def lap(self, name: str, result: _T) -> _T:
         """Record the seconds since the previous lap under ``name``; return ``result``."""
         now = time.monotonic()
         self.seconds[name] = now - self.last
         self.last = now
+        listener = _STAGES.get()
+        if listener is not None and self.begun == name:
+            listener.end(name, self.seconds[name])
+        self.begun = None
         report = _REPORT.get()
         if report is not None:
             report(name, self.seconds[name])

@@ -324,7 +324,7 @@ def decide(steps: Sequence[Step], laps: Any | None = None) -> dict[str, Any]:
     steps : sequence of Step
         Each step after those it needs.
     laps : ssecert.budget.Laps, optional
-        Records the seconds of each timed step.
+        Records the seconds of each timed step, begun (for the stage display) as it starts.
 
     Returns
     -------
@@ -348,8 +348,9 @@ def decide(steps: Sequence[Step], laps: Any | None = None) -> dict[str, Any]:
         for need in step.needs:
             if need not in done:
                 raise ValueError(f"step {step.name!r} needs {need!r}, which is not an earlier step")
+        clock = laps if step.timed else None
+        if clock is not None and getattr(clock, "begun", None) != step.name:
+            clock.begin(step.name)  # the stage display shows it while it runs
         outcome = step.build(*(done[need] for need in step.needs))
-        done[step.name] = (
-            laps.lap(step.name, outcome) if laps is not None and step.timed else outcome
-        )
+        done[step.name] = clock.lap(step.name, outcome) if clock is not None else outcome
     return done

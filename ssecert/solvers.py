@@ -5,7 +5,8 @@ The certificates do not trust a solver: every matrix a solver proposes is re-ver
 is found, never what is claimed.  ``using_solver`` sets the solver for the analyses within its
 block; ``solve_conic`` runs a cvxpy problem with it, translating Clarabel's options (tolerances,
 iterations, time limit) to the solver's own names where it has them.  The piecewise region's
-LMIs are solved by Clarabel's own interface whatever the choice (they are built for it).
+LMIs go to Clarabel's own interface when Clarabel is the choice (they are assembled in its
+form), and through cvxpy to any other solver (``ssecert.stability._conic``).
 """
 
 from __future__ import annotations

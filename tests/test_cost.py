@@ -100,42 +100,6 @@ def test_an_eigenspace_search_past_its_allowance_gives_way_to_the_enumeration(
         assert check.fields["max_removable"] == exact.fields["max_removable"]
 
 
-class _Terminal:
-    def __init__(self) -> None:
-        self.text = ""
-
-    def isatty(self) -> bool:
-        return True
-
-    def write(self, text: str) -> None:
-        self.text += text
-
-    def flush(self) -> None:
-        pass
-
-
-def test_the_progress_line_shows_the_time_left_and_is_quiet_when_asked():
-    from ssecert.cli.options import _Progress
-
-    terminal = _Terminal()
-    progress = _Progress(terminal)
-    progress.start -= 10.0  # shown after the first second
-    progress("sparse_observability", 0, 1000)
-    progress.level_start -= 4.0  # 4 s into the level
-    progress.last -= 1.0  # past the throttle
-    progress("sparse_observability", 250, 1000)
-    assert "sparse_observability: 250/1,000 sets" in terminal.text
-    assert "about 12 s left" in terminal.text
-    progress.close()
-    assert terminal.text.endswith("\r") and not progress.shown
-
-    quiet = _Terminal()
-    silent = _Progress(quiet, quiet=True)
-    silent.start -= 10.0
-    silent("sparse_observability", 250, 1000)
-    assert quiet.text == ""
-
-
 def test_a_failing_irrepresentable_scan_stops_at_the_time_budget(monkeypatch):
     import functools
 

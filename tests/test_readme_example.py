@@ -1,4 +1,5 @@
-"""The README's property-test example runs as written, with nothing else configured."""
+"""The examples of the README and of the guide's Python and property-test pages run as written,
+with nothing else configured."""
 
 import os
 import re
@@ -8,21 +9,30 @@ from pathlib import Path
 
 import pytest
 
-README = Path(__file__).resolve().parents[1] / "README.md"
-SECTION = "## Property tests in your own pytest suite"
+ROOT = Path(__file__).resolve().parents[1]
+README = ROOT / "README.md"
+GUIDE = ROOT / "docs" / "site" / "guide"
 FILE = "test_ssecert_properties.py"
 
 
-def _section_blocks() -> list[tuple[str, str]]:
-    """(language, body) of the fenced code blocks of the README section."""
+def _blocks(path: Path, section: str | None = None) -> list[tuple[str, str]]:
+    """(language, body) of the fenced code blocks of a page, or of one of its sections."""
+    text = path.read_text(encoding="utf-8")
+    if section is not None:
+        start = text.index(f"\n{section}\n")
+        end = text.find("\n## ", start + 1)
+        text = text[start : end if end >= 0 else None]
+    return re.findall(r"```(\w*)\n(.*?)```", text, re.S)
+
+
+def test_the_readme_links_the_pages_that_hold_its_former_sections():
     text = README.read_text(encoding="utf-8")
-    start = text.index(SECTION)
-    end = text.find("\n## ", start + len(SECTION))
-    return re.findall(r"```(\w*)\n(.*?)```", text[start : end if end >= 0 else None], re.S)
+    for page in sorted(GUIDE.glob("*.md")):
+        assert f"](docs/site/guide/{page.name})" in text, page.name
 
 
 def test_readme_example_runs_as_shown(tmp_path):
-    blocks = _section_blocks()
+    blocks = _blocks(GUIDE / "property-tests.md")
     code = next(body for lang, body in blocks if lang == "python")
     shown = next(body for lang, body in blocks if lang == "text")
     (tmp_path / FILE).write_text(code, encoding="utf-8")
@@ -60,7 +70,7 @@ def test_readme_example_runs_as_shown(tmp_path):
     # the failing test's report names the breaking sensor set by name and index
     assert "Breaking sensor set: position (index 0)" in out
     assert "an attacker on position (index 0)" in out
-    # and the README shows that report as it is
+    # and the page shows that report as it is
     shown_errors = [line for line in shown.splitlines() if line.startswith("E ")]
     assert len(shown_errors) >= 4
     for line in shown_errors:
@@ -68,15 +78,15 @@ def test_readme_example_runs_as_shown(tmp_path):
 
 
 @pytest.mark.slow
-def test_the_python_section_runs_and_prints_what_its_comments_say():
-    # each line `expression  # literal` of the README's Python section evaluates to the literal
+@pytest.mark.parametrize(
+    ("path", "section"), [(README, "## A short example"), (GUIDE / "python.md", None)]
+)
+def test_the_python_examples_run_and_print_what_their_comments_say(path, section):
+    # each line `expression  # literal` of the examples evaluates to the literal
     import ast
     import warnings
 
-    text = README.read_text(encoding="utf-8")
-    start = text.index("\n## Python\n")
-    end = text.find("\n## ", start + 1)
-    blocks = re.findall(r"```python\n(.*?)```", text[start:end], re.S)
+    blocks = [body for lang, body in _blocks(path, section) if lang == "python"]
     assert len(blocks) >= 2
     checked = 0
     for body in blocks:
@@ -93,7 +103,7 @@ def test_the_python_section_runs_and_prints_what_its_comments_say():
                 continue
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                exec(compile("\n".join(pending), "README", "exec"), namespace)
+                exec(compile("\n".join(pending), str(path.name), "exec"), namespace)
                 assert eval(code, namespace) == expected, line
             pending = []
             checked += 1

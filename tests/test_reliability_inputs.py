@@ -14,7 +14,7 @@ analyses' argument checks (``sparse_observability``, ``irrepresentable``,
 Also here: output paths, interrupted runs (no partial report, no temporary
 file), warnings (none reach the terminal), how reports name the spec file,
 and that regenerating a report changes only its date and measured timings.
-README.md, "What ssecert refuses, and why", is this file as a table.
+docs/site/guide/refusals.md, "What ssecert refuses, and why", is this file as a table.
 """
 
 from __future__ import annotations

@@ -21,7 +21,6 @@ and the ``audit`` and ``design`` commands.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import dataclasses
 import os
 import sys
@@ -46,10 +45,10 @@ from .options import (
     _device,
     _nonnegative_int,
     _positive_int,
-    _Progress,
     _solver,
     _steps,
 )
+from .progress import stage_display
 from .reproduce import add_reproduce_parser, cmd_reproduce
 
 __all__ = ["main"]
@@ -298,22 +297,25 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     human = _Silent() if args.quiet else sys.stderr if to_stdout_json else sys.stdout
     device = _device(args)  # before any work: an unusable device is refused at once
     solver = _solver(args)  # likewise an unusable solver
-    progress = _Progress(sys.stderr, quiet=to_stdout_json or args.quiet)
-    try:
-        with _warnings_as_notes() as log, _dask(args) as client, _steps(args), solver:
-            cert = analyze(
-                spec,
-                method=args.method,
-                max_sets=args.max_sets,
-                seed=args.seed,
-                progress=progress,
-                budget=_budget(args),
-                time_budget=args.time_budget,
-                client=client,
-                device=device,
-            )
-    finally:
-        progress.close()
+    display = stage_display(quiet=args.quiet, verbose=args.verbose, json_to_stdout=to_stdout_json)
+    with (
+        display.showing(),
+        _warnings_as_notes() as log,
+        _dask(args) as client,
+        _steps(args),
+        solver,
+    ):
+        cert = analyze(
+            spec,
+            method=args.method,
+            max_sets=args.max_sets,
+            seed=args.seed,
+            progress=display,
+            budget=_budget(args),
+            time_budget=args.time_budget,
+            client=client,
+            device=device,
+        )
     if load_notes or log.notes():
         meta = dict(cert.meta or {})
         meta["notes"] = [*meta.get("notes", []), *load_notes, *log.notes()]
@@ -356,54 +358,42 @@ def _cmd_certify(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
         if path.is_dir():
             raise UsageError(f"--out {args.out}: {path} is a folder; the report needs that name")
     human = _Silent() if args.quiet else sys.stderr if args.json_path == "-" else sys.stdout
-    # the stages: on a terminal, or wherever --verbose asks for them
-    stages = not args.quiet and (args.verbose or (sys.stderr.isatty() and args.json_path != "-"))
-    counter = _Progress(sys.stderr, quiet=args.json_path == "-" or args.quiet)
-
-    def say(message: str) -> None:
-        counter.close()
-        if stages:
-            sys.stderr.write(f"ssecert: {message}...\n")
-            sys.stderr.flush()
-
+    display = stage_display(
+        quiet=args.quiet, verbose=args.verbose, json_to_stdout=args.json_path == "-"
+    )
     device = _device(args)  # before any work: an unusable device is refused at once
     solver = _solver(args)  # likewise an unusable solver
     words = ["ssecert", "certify", *(list(argv) if argv is not None else sys.argv[2:])]
     command = " ".join(words if argv is not None else ["ssecert", *sys.argv[1:]])
-    with (
-        _warnings_as_notes() as log,
-        _dask(args) as client,
-        contextlib.closing(counter),
-        _steps(args),
-        solver,
-    ):
-        result = certify(
-            spec,
-            seed=args.seed,
-            simulate=not args.no_sim,
-            runs=args.runs,
-            method=args.method,
-            max_sets=args.max_sets,
-            progress=say,
-            command=command,
-            budget=_budget(args),
-            time_budget=args.time_budget,
-            client=client,
-            set_progress=counter,
-            device=device,
-        )
-        result.to_dict()  # simulation metrics are computed here: their warnings are notes too
-    notes = [*load_notes, *log.notes()]
-    if notes:
-        result = dataclasses.replace(result, notes=(*result.notes, *notes))
-    say("writing the report")
-    with _warnings_as_notes() as render_log:
-        html = render_report(result)
-        document = certify_json(result)
-    files = {html_path: html, json_path: document}
-    if target is not None:
-        files[target] = document
-    write_outputs(files)
+    with display.showing():
+        with _warnings_as_notes() as log, _dask(args) as client, _steps(args), solver:
+            result = certify(
+                spec,
+                seed=args.seed,
+                simulate=not args.no_sim,
+                runs=args.runs,
+                method=args.method,
+                max_sets=args.max_sets,
+                progress=display.say,
+                command=command,
+                budget=_budget(args),
+                time_budget=args.time_budget,
+                client=client,
+                set_progress=display,
+                device=device,
+            )
+            result.to_dict()  # simulation metrics are computed here: their warnings are notes too
+        notes = [*load_notes, *log.notes()]
+        if notes:
+            result = dataclasses.replace(result, notes=(*result.notes, *notes))
+        display.say("writing the report")
+        with _warnings_as_notes() as render_log:
+            html = render_report(result)
+            document = certify_json(result)
+        files = {html_path: html, json_path: document}
+        if target is not None:
+            files[target] = document
+        write_outputs(files)
     human.write(render_table(result.certificate, compact=True))
     for note in [*notes, *render_log.notes(besides=log)]:
         human.write(f"note: {note}\n")
@@ -426,8 +416,11 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         raise UsageError(
             f"{spec.source}: simulate needs an [observer] section and at least one [[scenario]]"
         )
+    display = stage_display(
+        quiet=args.quiet, verbose=args.verbose, json_to_stdout=args.json_path == "-"
+    )
     with _warnings_as_notes() as log:
-        with _dask(args) as client:
+        with display.showing(), _dask(args) as client:
             try:
                 results = simulate_spec(
                     spec,

@@ -136,6 +136,7 @@ def cmd_design(args: argparse.Namespace, argv: Sequence[str] | None = None) -> i
         objective_refusal,
     )
     from .files import UsageError, load_argument, output_file, output_folder, write_outputs
+    from .progress import stage_display
 
     folder = output_folder("--out", args.out)
     target = output_file("--json", args.json_path)
@@ -154,12 +155,8 @@ def cmd_design(args: argparse.Namespace, argv: Sequence[str] | None = None) -> i
         raise UsageError(refusal)
     threshold = float(own.get("threshold") or 0.1)
     human = sys.stderr if args.json_path == "-" else sys.stdout
-    tty = sys.stderr.isatty() and args.json_path != "-"
-
-    def say(message: str) -> None:
-        if tty:
-            sys.stderr.write(f"ssecert: {message}...\n")
-            sys.stderr.flush()
+    display = stage_display(json_to_stdout=args.json_path == "-")
+    say = display.say
 
     stem = f"{spec.name}-design"
     paths = {ext: folder / f"{stem}.{ext}" for ext in ("toml", "html", "json")}
@@ -168,79 +165,80 @@ def cmd_design(args: argparse.Namespace, argv: Sequence[str] | None = None) -> i
             f"--json {args.json_path}: design writes its spec file, report and certificate "
             f"there ({', '.join(p.name for p in paths.values())}); give another path"
         )
-    say(f"searching {kind} designs ({args.objective})")
-    result = design_observer(
-        spec.system,
-        kind,
-        objective=args.objective,
-        threshold=threshold,
-        time_budget=args.time_budget,
-        min_decay=args.min_decay,
-    )
-    document: dict[str, Any] = {
-        "spec": spec.source,
-        "kind": kind,
-        "objective": args.objective,
-        "design": result.observer,
-        "gamma": result.gamma,
-        "decay": result.decay,
-        "radius": result.radius,
-        "plant_radius": result.plant_radius,
-        "linear_radius": result.linear_radius,
-        "choice": result.choice,
-        "front": result.front,
-        "candidates": result.candidates,
-        "seconds": result.seconds,
-        "complete": result.complete,
-        "time_budget": args.time_budget,
-    }
-    limit = _sparse_limit(spec)
-    if limit:
-        document["sparse_observability"] = limit
-    files: dict[Any, str] = {}
-    report = None
-    if result.observer is not None:
-        text = design_spec_text(spec, result, kind)
-        designed = spec_from_dict(
-            tomllib.loads(text),
-            source=str(paths["toml"]),
-            sha256=hashlib.sha256(text.encode()).hexdigest(),
+    with display.showing():  # cleared before the summary is printed
+        say(f"searching {kind} designs ({args.objective})")
+        result = design_observer(
+            spec.system,
+            kind,
+            objective=args.objective,
+            threshold=threshold,
+            time_budget=args.time_budget,
+            min_decay=args.min_decay,
         )
-        words = ["ssecert", "design", *(list(argv) if argv is not None else sys.argv[2:])]
-        report = design_report(
-            spec,
-            designed,
-            seed=args.seed,
-            runs=args.runs,
-            command=" ".join(words),
-            progress=say,
-            search=result,
-        )
-        options = "".join(
-            f" --{name} {value}" for name, value in (("seed", args.seed), ("runs", args.runs))
-            if value is not None
-        )  # fmt: skip
-        alone = (
-            f"the certificate of the written spec file alone: ssecert certify {paths['toml']}"
-            f"{options} --out ANOTHER_FOLDER (this one holds the design's report)"
-        )
-        report = dataclasses.replace(
-            report, notes=(*report.notes, alone, *([limit] if limit else []))
-        )
-        document["comparison"] = report.comparison
-        document["files"] = {ext: str(path) for ext, path in paths.items()}
-        files = {
-            paths["toml"]: text,
-            paths["html"]: render_report(report),
-            paths["json"]: certify_json(report),
+        document: dict[str, Any] = {
+            "spec": spec.source,
+            "kind": kind,
+            "objective": args.objective,
+            "design": result.observer,
+            "gamma": result.gamma,
+            "decay": result.decay,
+            "radius": result.radius,
+            "plant_radius": result.plant_radius,
+            "linear_radius": result.linear_radius,
+            "choice": result.choice,
+            "front": result.front,
+            "candidates": result.candidates,
+            "seconds": result.seconds,
+            "complete": result.complete,
+            "time_budget": args.time_budget,
         }
-    else:
-        document["reason"] = result.reason
-    rendered = json.dumps(to_jsonable(document), indent=2, allow_nan=False) + "\n"
-    if target is not None:
-        files[target] = rendered
-    if files:
-        write_outputs(files)  # every file or none
+        limit = _sparse_limit(spec)
+        if limit:
+            document["sparse_observability"] = limit
+        files: dict[Any, str] = {}
+        report = None
+        if result.observer is not None:
+            text = design_spec_text(spec, result, kind)
+            designed = spec_from_dict(
+                tomllib.loads(text),
+                source=str(paths["toml"]),
+                sha256=hashlib.sha256(text.encode()).hexdigest(),
+            )
+            words = ["ssecert", "design", *(list(argv) if argv is not None else sys.argv[2:])]
+            report = design_report(
+                spec,
+                designed,
+                seed=args.seed,
+                runs=args.runs,
+                command=" ".join(words),
+                progress=say,
+                search=result,
+            )
+            options = "".join(
+                f" --{name} {value}" for name, value in (("seed", args.seed), ("runs", args.runs))
+                if value is not None
+            )  # fmt: skip
+            alone = (
+                f"the certificate of the written spec file alone: ssecert certify {paths['toml']}"
+                f"{options} --out ANOTHER_FOLDER (this one holds the design's report)"
+            )
+            report = dataclasses.replace(
+                report, notes=(*report.notes, alone, *([limit] if limit else []))
+            )
+            document["comparison"] = report.comparison
+            document["files"] = {ext: str(path) for ext, path in paths.items()}
+            files = {
+                paths["toml"]: text,
+                paths["html"]: render_report(report),
+                paths["json"]: certify_json(report),
+            }
+        else:
+            document["reason"] = result.reason
+        rendered = json.dumps(to_jsonable(document), indent=2, allow_nan=False) + "\n"
+        if target is not None:
+            files[target] = rendered
+        if files:
+            write_outputs(files)  # every file or none
     _print_design(human, spec, kind, args, result, report, limit, paths)
     if report is not None:
         verdict = report.certificate.verdict.value

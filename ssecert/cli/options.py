@@ -1,9 +1,9 @@
-"""The options of the ``ssecert`` command: their types, the budget and Dask options, progress.
+"""The options of the ``ssecert`` command: their types, the budget and Dask options.
 
 ``ssecert.cli`` builds its parser from these: the option types refuse a bad
-value with one line naming what was expected, the shared option groups
-(analysis, budget, Dask) are added to each command that takes them, and
-``_Progress`` draws the enumerations' progress line on a terminal.
+value with one line naming what was expected, and the shared option groups
+(analysis, budget, Dask) are added to each command that takes them; what the
+command shows while it works is ``ssecert.cli.progress``.
 """
 
 from __future__ import annotations
@@ -12,51 +12,11 @@ import argparse
 import contextlib
 import math
 import sys
-import time
-from typing import Any, TextIO
+from typing import Any
 
 __all__: list[str] = []
 
 _INT64_MAX = 2**63 - 1
-
-
-class _Progress:
-    """Throttled progress of the set enumerations on a terminal, with the time left;
-    silent otherwise (and when ``quiet``, e.g. under ``--json -``)."""
-
-    def __init__(self, stream: TextIO, *, quiet: bool = False) -> None:
-        self.stream = stream
-        self.enabled = stream.isatty() and not quiet
-        self.start = time.monotonic()
-        self.last = 0.0
-        self.shown = False
-        self.level: tuple[str, int] | None = None
-        self.level_start = self.start
-
-    def __call__(self, label: str, done: int, total: int) -> None:
-        if not self.enabled:
-            return
-        now = time.monotonic()
-        if self.level != (label, total) or done == 0:  # a new level of sets
-            self.level, self.level_start = (label, total), now
-        if now - self.start < 1.0 or (now - self.last < 0.25 and done < total):
-            return
-        self.last = now
-        pct = 100.0 * done / max(total, 1)
-        elapsed = now - self.level_start
-        left = ""
-        if 0 < done < total and elapsed > 0:
-            left = f", about {elapsed * (total - done) / done:.0f} s left"
-        self.stream.write(f"\r{label}: {done:,}/{total:,} sets ({pct:5.1f}%{left})      ")
-        self.stream.flush()
-        self.shown = True
-
-    def close(self) -> None:
-        """Clear the progress line (before other output, and at the end)."""
-        if self.shown:
-            self.stream.write("\r" + " " * 90 + "\r")
-            self.stream.flush()
-            self.shown = False
 
 
 def _shown(text: str) -> str:

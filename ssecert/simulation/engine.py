@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from ..budget import Budget, ResourceLimitError
+from ..budget import Budget, ResourceLimitError, stage
 from ..context import OBSERVER, AnalysisContext, shared, sparse_key
 from ..observers import ObserverDesign, build_observer, observer_from_design
 from ..parallel import map_ordered
@@ -538,17 +538,18 @@ def simulate_spec(
     out: dict[str, Any] = {}
     for scenario in spec.scenarios:
         try:
-            out[scenario["name"]] = simulate_scenario(
-                design,
-                scenario,
-                runs=runs,
-                steps=steps,
-                seed=seed,
-                max_attacked=spec.max_attacked,
-                client=client,
-                budget=budget,
-                context=context,
-            )
+            with stage(f"scenario {scenario['name']}"):
+                out[scenario["name"]] = simulate_scenario(
+                    design,
+                    scenario,
+                    runs=runs,
+                    steps=steps,
+                    seed=seed,
+                    max_attacked=spec.max_attacked,
+                    client=client,
+                    budget=budget,
+                    context=context,
+                )
         except ResourceLimitError:
             raise
         except ValueError as exc:  # a stealthy scenario on a sparse-observable plant

@@ -7,6 +7,11 @@ constant matrices, and its coefficients are assembled in a few numpy calls
 into Clarabel's form A x + s = b, s in the cone.  Variables are symmetric
 blocks (free, or entrywise nonnegative) and nonnegative scalars.  Only the
 solver's candidate comes out of here: callers verify it.
+
+Clarabel, the default, gets that form directly.  Another solver chosen with
+``ssecert.solvers.using_solver`` (``--solver``) gets the same problem through
+cvxpy: one vector variable x, b - A x nonnegative on the first rows and each
+LMI's block of rows, unpacked into its symmetric matrix, positive semidefinite.
 """
 
 from __future__ import annotations
@@ -82,16 +87,40 @@ class LMIProblem:
     def solve(
         self, *, time_limit: float = 60.0, max_iter: int = 50
     ) -> tuple[np.ndarray | None, dict[str, Any]]:
-        """Clarabel's candidate x (None on failure) and what it reported."""
-        import clarabel
-        from scipy import sparse
+        """The solver's candidate x (None on failure) and what it reported: Clarabel's own
+        interface, or cvxpy with the solver ``ssecert.solvers.solver_name`` names."""
+        from ..solvers import solver_name
 
         start = time.perf_counter()
+        A, b, nonneg, sizes = self._standard_form()
+        name = solver_name()
+        iterations: int | None
+        if name == "CLARABEL":
+            x, status, iterations = _clarabel(A, b, nonneg, sizes, time_limit, max_iter)
+        else:
+            x, status, iterations = _through_cvxpy(A, b, nonneg, sizes, time_limit, max_iter)
+        info = {
+            "solver": name,
+            "status": status,
+            "variables": self._size,
+            "lmis": len(self._lmis),
+            "iterations": iterations,
+            "seconds": round(time.perf_counter() - start, 3),
+        }
+        if x is None:
+            return None, info
+        return (x if np.all(np.isfinite(x)) else None), info
+
+    def _standard_form(self) -> tuple[Any, np.ndarray, int, list[int]]:
+        """A (sparse), b, the number of nonnegative rows (first) and each LMI's size: the
+        problem is b - A x in the nonnegative cone, then in each LMI's PSD triangle cone
+        (Clarabel's svec: the upper triangle column by column, off-diagonals times sqrt 2)."""
+        from scipy import sparse
+
         data: list[np.ndarray] = []
         row_index: list[np.ndarray] = []
         col_index: list[np.ndarray] = []
         b_parts: list[np.ndarray] = []
-        cones: list[Any] = []
         row = 0
         nonneg = [(o, len(r)) for o, _, nn, r, _ in self._blocks if nn]
         if nonneg:
@@ -100,8 +129,9 @@ class LMIProblem:
             row_index.append(np.arange(len(idx)))
             col_index.append(idx)
             b_parts.append(np.zeros(len(idx)))
-            cones.append(clarabel.NonnegativeConeT(len(idx)))
             row = len(idx)
+        first = row
+        sizes = []
         for d, terms, scalars, constant in self._lmis:
             r_out, c_out = _triu(d)
             scale = np.where(r_out == c_out, 1.0, np.sqrt(2.0))
@@ -122,35 +152,89 @@ class LMIProblem:
                 data.append(v[where])
                 row_index.append(row + where)
                 col_index.append(np.full(len(where), self._blocks[handle][0]))
-            cones.append(clarabel.PSDTriangleConeT(d))
+            sizes.append(d)
             row += len(r_out)
         A = sparse.csc_matrix(
             (np.concatenate(data), (np.concatenate(row_index), np.concatenate(col_index))),
             shape=(row, self._size),
         )
-        settings = clarabel.DefaultSettings()
-        settings.verbose = False
-        settings.time_limit = float(time_limit)
-        settings.max_iter = int(max_iter)
-        solver = clarabel.DefaultSolver(
-            sparse.csc_matrix((self._size, self._size)),
-            np.zeros(self._size),
-            A,
-            np.concatenate(b_parts),
-            cones,
-            settings,
-        )
-        solution = solver.solve()
-        status = str(solution.status)
-        info = {
-            "solver": "CLARABEL",
-            "status": status,
-            "variables": self._size,
-            "lmis": len(self._lmis),
-            "iterations": int(solution.iterations),
-            "seconds": round(time.perf_counter() - start, 3),
-        }
-        if status not in ("Solved", "AlmostSolved"):
-            return None, info
-        x = np.asarray(solution.x, dtype=float)
-        return (x if np.all(np.isfinite(x)) else None), info
+        return A, np.concatenate(b_parts), first, sizes
+
+
+def _clarabel(
+    A: Any, b: np.ndarray, nonneg: int, sizes: list[int], time_limit: float, max_iter: int
+) -> tuple[np.ndarray | None, str, int]:
+    """Clarabel's x (None unless solved or almost), its status and iterations."""
+    import clarabel
+    from scipy import sparse
+
+    cones: list[Any] = [clarabel.NonnegativeConeT(nonneg)] if nonneg else []
+    cones += [clarabel.PSDTriangleConeT(d) for d in sizes]
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    settings.time_limit = float(time_limit)
+    settings.max_iter = int(max_iter)
+    size = A.shape[1]
+    solver = clarabel.DefaultSolver(
+        sparse.csc_matrix((size, size)), np.zeros(size), A, b, cones, settings
+    )
+    solution = solver.solve()
+    status = str(solution.status)
+    if status not in ("Solved", "AlmostSolved"):
+        return None, status, int(solution.iterations)
+    return np.asarray(solution.x, dtype=float), status, int(solution.iterations)
+
+
+@functools.lru_cache(maxsize=64)
+def _unpack(d: int) -> Any:
+    """The sparse map from an svec of size d (Clarabel's order and scaling) to the
+    column-major entries of its symmetric d x d matrix."""
+    from scipy import sparse
+
+    rows, cols = _triu(d)
+    scale = np.where(rows == cols, 1.0, 1.0 / np.sqrt(2.0))
+    k = np.arange(len(rows))
+    upper, lower = rows + d * cols, cols + d * rows
+    off = rows != cols
+    return sparse.csr_matrix(
+        (np.r_[scale, scale[off]], (np.r_[upper, lower[off]], np.r_[k, k[off]])),
+        shape=(d * d, len(rows)),
+    )
+
+
+def _through_cvxpy(
+    A: Any, b: np.ndarray, nonneg: int, sizes: list[int], time_limit: float, max_iter: int
+) -> tuple[np.ndarray | None, str, int | None]:
+    """The same problem as cvxpy constraints, solved by ``ssecert.solvers.solve_conic``
+    (Clarabel's options translated for the chosen solver): x (None unless the status is
+    optimal or optimal_inaccurate), cvxpy's status, the solver's iterations when it says."""
+    import warnings
+
+    import cvxpy as cp
+
+    from ..solvers import solve_conic
+
+    x = cp.Variable(A.shape[1])
+    constraints = []
+    if nonneg:
+        constraints.append(A[:nonneg] @ x <= b[:nonneg])
+    row = nonneg
+    for d in sizes:
+        k = d * (d + 1) // 2
+        vec = _unpack(d) @ (b[row : row + k] - A[row : row + k] @ x)
+        S = cp.reshape(vec, (d, d), order="F")
+        constraints.append(0.5 * (S + S.T) >> 0)
+        row += k
+    problem = cp.Problem(cp.Minimize(0), constraints)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # verified by the caller, not trusted
+            solve_conic(problem, time_limit=time_limit, max_iter=max_iter)
+    except Exception as exc:  # a solver failure is an answer: no candidate
+        return None, f"solver error: {type(exc).__name__}: {exc}".rstrip(": "), None
+    stats = problem.solver_stats
+    iterations = getattr(stats, "num_iters", None) if stats is not None else None
+    status = str(problem.status)
+    if status not in ("optimal", "optimal_inaccurate") or x.value is None:
+        return None, status, iterations
+    return np.asarray(x.value, dtype=float), status, iterations

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from .._format import one_minus, sig
-from ..budget import Budget, Laps, ResourceLimitError
+from ..budget import Budget, Laps, ResourceLimitError, stage
 from ..context import OBSERVER, AnalysisContext, shared
 from ..design.gains import GainError
 from ..observers import ObserverDesign, build_observer
@@ -76,9 +76,10 @@ def observer_stability_check(
     tol = Tolerances.check(tolerances)
     title = f"Observer stability ({design.kind})"
     if not design.sparse:
-        lyap = lyapunov_certificate(
-            design.error_matrix, exact=_exact(design), clear=tol.certificate_clear
-        )
+        with stage("Lyapunov certificate"):
+            lyap = lyapunov_certificate(
+                design.error_matrix, exact=_exact(design), clear=tol.certificate_clear
+            )
         return _linear_stability_check(lyap, tol, title), lyap
     gap = design.observer_kind.lure_gap(design)
     if gap:
@@ -95,10 +96,12 @@ def observer_stability_check(
             "can be computed or replayed in floating point."
         )
         return _no_certificate(title, summary, "circle criterion (LMI, Clarabel)"), None
-    cert = circle_certificate(model, budget=budget, clear=tol.certificate_clear)
+    with stage("circle criterion LMIs"):
+        cert = circle_certificate(model, budget=budget, clear=tol.certificate_clear)
     if cert.verdict is Verdict.INCONCLUSIVE and cert.details.get("attempts"):
         # the LMIs were solved and failed: a dynamic multiplier may succeed
-        zf = zames_falb_certificate(model, budget=budget, clear=tol.certificate_clear)
+        with stage("Zames-Falb multiplier LMIs"):
+            zf = zames_falb_certificate(model, budget=budget, clear=tol.certificate_clear)
         if zf.verdict is Verdict.HOLDS:
             return _zames_falb_stability_check(design, model, zf, tol, title), (model, zf)
         cert = replace(
@@ -107,11 +110,14 @@ def observer_stability_check(
             details={**cert.details, "zames_falb": zf.details},
         )
     if cert.verdict is Verdict.INCONCLUSIVE:
-        witness, searched, cycled = divergence_witness(model), "", ""
+        with stage("divergent trajectory search"):
+            witness, searched, cycled = divergence_witness(model), "", ""
         if witness is None:
-            witness, searched = nonzero_equilibrium(model, budget=budget)
+            with stage("nonzero equilibrium search"):
+                witness, searched = nonzero_equilibrium(model, budget=budget)
         if witness is None:
-            witness, cycled = periodic_orbit(model, budget=budget)
+            with stage("periodic orbit search"):
+                witness, cycled = periodic_orbit(model, budget=budget)
         if witness is not None:
             return _witnessed_failure(design, model, cert, witness, tol, title), (model, cert)
         check = _circle_stability_check(design, model, cert, tol, title)
@@ -757,6 +763,7 @@ def observer_checks(
     """
     tol = Tolerances.check(tolerances)
     clock = Laps(timings)
+    clock.begin("observer_gain")  # building the observer is part of it
     try:
         design = shared(
             context,

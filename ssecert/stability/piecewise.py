@@ -31,7 +31,8 @@ box are left out with a Farkas certificate of emptiness, checked in exact
 arithmetic.
 
 The problem is posed in units of the threshold (the dynamics scale with it),
-solved with cvxpy and Clarabel, and nothing of the solver is trusted: every
+solved with Clarabel (or the solver ``--solver`` names, through cvxpy:
+``ssecert.stability._conic``), and nothing of the solver is trusted: every
 LMI is recomputed in numpy from the returned matrices with the multipliers
 clipped to be nonnegative, and must beat a rounding-error bound by the
 factor ``clear``.  The model is symmetric (the soft threshold is odd), so the
@@ -59,6 +60,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from ..budget import stage
 from ..observers.lure import LureModel
 from ..tolerances import EPS
 
@@ -158,7 +160,9 @@ def piecewise_region(
     ``{"radius": 0.0, "reason": ...}`` when none verifies or the model is out
     of reach.
     """
-    key = _key(model, seed, floor, clear)
+    from ..solvers import solver_name
+
+    key = _key(model, seed, floor, clear) + solver_name().encode()  # solvers find differently
     if key in _CACHE:
         return copy.deepcopy(_CACHE[key])
     found = _search(model, seed, floor, clear)
@@ -220,8 +224,9 @@ def _search(model: LureModel, seed: int, floor: float, clear: float) -> dict[str
     lo, hi = -1, len(ladder)  # ladder[lo] verified, ladder[hi] did not
     while hi - lo > 1:
         mid = (lo + hi) // 2
-        found = _attempt(model, regions, ladder[mid], OUTER * ladder[mid], clear, empty_pairs,
-                         empty_inner)  # fmt: skip
+        with stage(f"piecewise-quadratic LMIs, radius {ladder[mid] * lam:.4g}"):
+            found = _attempt(model, regions, ladder[mid], OUTER * ladder[mid], clear,
+                             empty_pairs, empty_inner)  # fmt: skip
         attempts.append({"radius": ladder[mid] * lam, **found.record})
         if found.ok:
             best, lo = found, mid
@@ -247,7 +252,7 @@ def _search(model: LureModel, seed: int, floor: float, clear: float) -> dict[str
         "radius": r * lam * (1 - 1e-12),
         "ball": OUTER * r * lam,
         "method": "piecewise-quadratic Lyapunov function over the soft threshold's "
-        f"{3**model.m} regions (S-procedure LMIs, cvxpy and Clarabel), verified in numpy",
+        f"{3**model.m} regions (S-procedure LMIs, {_solved_by(best)}), verified in numpy",
         "transitions": best.transitions,
         "transitions_empty": best.empty,
         "margin": best.margin,
@@ -255,6 +260,12 @@ def _search(model: LureModel, seed: int, floor: float, clear: float) -> dict[str
         "attempts": attempts,
         "replay": replay,
     }
+
+
+def _solved_by(attempt: _Attempt) -> str:
+    """The solver of a verified attempt, as the method names it."""
+    name = attempt.record["solver"]
+    return "Clarabel" if name == "CLARABEL" else f"{name} through cvxpy"
 
 
 class _RegionLMI(NamedTuple):
@@ -367,6 +378,7 @@ def _attempt(
     x, info = lp.solve(max_iter=MAX_ITER)
     record: dict[str, Any] = {
         "transitions": sum(1 for item in lmis if item.kind == "decrease"),
+        "solver": info["solver"],
         "status": info["status"],
     }
     if x is None:

@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from ..budget import Budget
+from ..budget import Budget, stage
 from ..numerics.rational import fractions, is_positive_definite, product, solve
 from ..observers.lure import LureModel
 from ..results import Verdict
@@ -104,7 +104,8 @@ def region_of_attraction(
 
 def _region_in_units(model: LureModel, seed: int, piecewise: bool, widen: bool) -> dict[str, Any]:
     """``region_of_attraction`` in the model's own coordinates."""
-    found = _dead_zone_region(model, seed, widen)
+    with stage("the dead zone's invariant set"):
+        found = _dead_zone_region(model, seed, widen)
     if not piecewise or model.m == 0:
         return found
     wider = piecewise_region(model, seed=seed, floor=float(found["radius"]))
