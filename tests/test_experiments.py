@@ -144,3 +144,22 @@ def test_the_thesis_scenarios_compare_the_tuned_observers():
         assert set(o.result.ours) == set(o.result.paper)
     # no attack: every observer's error dies out and no attack is estimated
     assert outcomes[0].agreement.match is Match.REPRODUCED
+
+
+def test_the_readme_table_is_written_from_the_committed_report():
+    from pathlib import Path
+
+    from ssecert.experiments import agreement_table
+
+    root = Path(__file__).resolve().parents[1]
+    report = root / "reports" / "reproduce.json"
+    if not report.is_file():
+        pytest.skip("needs the source tree")
+    data = json.loads(report.read_text())
+    assert list(data["experiments"]) == EXPECTED
+    readme = (root / "README.md").read_text()
+    block = readme.split("<!-- reproduce:start -->\n", 1)[1].split("<!-- reproduce:end -->")[0]
+    assert block == agreement_table(data)
+    # the words follow the numbers: another report gives another table
+    data["experiments"]["notes.example0"]["match"] = "differs"
+    assert agreement_table(data) != block

@@ -29,7 +29,7 @@ from ._registry import (
     not_run,
 )
 from .agreement import Agreement, Match, agreement
-from .run import Outcome, render_reproduce, reproduce_json, run_experiments
+from .run import Outcome, agreement_table, render_reproduce, reproduce_json, run_experiments
 
 __all__ = [
     "DOCUMENTS",
@@ -40,6 +40,7 @@ __all__ = [
     "Result",
     "Settings",
     "agreement",
+    "agreement_table",
     "all_experiments",
     "experiment",
     "get_experiment",

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -13,7 +13,7 @@ from ..results import to_jsonable
 from ._registry import DOCUMENTS, Experiment, Result, Settings, all_experiments, get_experiment
 from .agreement import Agreement, Match, agreement
 
-__all__ = ["Outcome", "run_experiments", "reproduce_json", "render_reproduce"]
+__all__ = ["Outcome", "agreement_table", "run_experiments", "reproduce_json", "render_reproduce"]
 
 
 @dataclass(frozen=True)
@@ -145,3 +145,27 @@ def render_reproduce(outcomes: Sequence[Outcome]) -> str:
         )
     env = jinja2.Environment(autoescape=True)
     return env.from_string(_TEMPLATE).render(outcomes=rows, summary=summary)
+
+
+def agreement_table(report: Mapping[str, Any]) -> str:
+    """A Markdown table of the agreement per document, written from ``reproduce.json``'s data:
+    for each document, how many experiments each agreement word got, and those not reproduced
+    with their line."""
+    experiments = report["experiments"]
+    lines = [
+        "| document | experiments | reproduced | close | differs | not comparable | not run |",
+        "| --- | --- | --- | --- | --- | --- | --- |",
+    ]
+    details = []
+    for prefix in DOCUMENTS:
+        mine = {k: v for k, v in experiments.items() if k.split(".", 1)[0] == prefix}
+        if not mine:
+            continue
+        count = {m.value: sum(v["match"] == m.value for v in mine.values()) for m in Match}
+        lines.append(
+            f"| {prefix} | {len(mine)} | " + " | ".join(str(count[m.value]) for m in Match) + " |"
+        )
+        for key, entry in mine.items():
+            if entry["match"] in (Match.DIFFERS.value, Match.CLOSE.value):
+                details.append(f"- `{key}`: {entry['agreement']}")
+    return "\n".join(lines + ([""] + details if details else [])) + "\n"
