@@ -3,6 +3,8 @@
 * ``shrinkage``: soft thresholding, elastic-net and weighted shrinkage;
 * ``decoders``: ISTA, FISTA, IJAM, partial Lasso and elastic net (cvxpy);
 * ``support_decoders``: the l1 (linear program) and l0 (support enumeration) decoders;
+* ``event_triggered``: the event-triggered projected gradient decoder (ETPG) and projected
+  Luenberger observer (ETPL) of Shoukry and Tabuada (2016);
 * ``pruning``: the weighted l1 observer with pruned prior; ``pruning_attacks``: the
   (eps, alpha)-successful attack against it;
 * the dynamic observers (Luenberger, online-gradient, SSO, D-SSO and elastic-net, batched)
@@ -26,6 +28,13 @@ from .decoders import (
     ijam,
     ista,
     partial_lasso_cvxpy,
+)
+from .event_triggered import (
+    ETPGSolution,
+    ETPLObserver,
+    RestrictedEigenvalue,
+    etpg,
+    etpg_condition,
 )
 from .localization import (
     LocalizationResult,
@@ -87,6 +96,11 @@ __all__ = [
     "ijam",
     "l1_decoder",
     "l0_decoder",
+    "etpg",
+    "ETPGSolution",
+    "etpg_condition",
+    "RestrictedEigenvalue",
+    "ETPLObserver",
     "l1_decode",
     "DetectorDecision",
     "detector",
