@@ -5,6 +5,8 @@
 * ``support_decoders``: the l1 (linear program) and l0 (support enumeration) decoders;
 * ``event_triggered``: the event-triggered projected gradient decoder (ETPG) and projected
   Luenberger observer (ETPL) of Shoukry and Tabuada (2016);
+* ``smt``: an exact decoder in the manner of Imhotep-SMT (SAT-proposed supports refuted by
+  least-squares checks; needs the optional z3-solver, the ``smt`` extra);
 * ``pruning``: the weighted l1 observer with pruned prior; ``pruning_attacks``: the
   (eps, alpha)-successful attack against it;
 * the dynamic observers (Luenberger, online-gradient, SSO, D-SSO and elastic-net, batched)
@@ -75,6 +77,7 @@ from .sise import (
     OracleSISE,
     lasso_fista,
 )
+from .smt import SMTSolution, smt_decoder
 from .support_decoders import L0Solution, l0_decoder, l1_decoder
 
 __all__ = [
@@ -101,6 +104,8 @@ __all__ = [
     "etpg_condition",
     "RestrictedEigenvalue",
     "ETPLObserver",
+    "smt_decoder",
+    "SMTSolution",
     "l1_decode",
     "DetectorDecision",
     "detector",
