@@ -3,6 +3,10 @@
 * ``shrinkage``: soft thresholding, elastic-net and weighted shrinkage;
 * ``decoders``: ISTA, FISTA, IJAM, partial Lasso and elastic net (cvxpy);
 * ``support_decoders``: the l1 (linear program) and l0 (support enumeration) decoders;
+* ``event_triggered``: the event-triggered projected gradient decoder (ETPG) and projected
+  Luenberger observer (ETPL) of Shoukry and Tabuada (2016);
+* ``smt``: an exact decoder in the manner of Imhotep-SMT (SAT-proposed supports refuted by
+  least-squares checks; needs the optional z3-solver, the ``smt`` extra);
 * ``pruning``: the weighted l1 observer with pruned prior; ``pruning_attacks``: the
   (eps, alpha)-successful attack against it;
 * the dynamic observers (Luenberger, online-gradient, SSO, D-SSO and elastic-net, batched)
@@ -26,6 +30,13 @@ from .decoders import (
     ijam,
     ista,
     partial_lasso_cvxpy,
+)
+from .event_triggered import (
+    ETPGSolution,
+    ETPLObserver,
+    RestrictedEigenvalue,
+    etpg,
+    etpg_condition,
 )
 from .localization import (
     LocalizationResult,
@@ -66,6 +77,7 @@ from .sise import (
     OracleSISE,
     lasso_fista,
 )
+from .smt import SMTSolution, smt_decoder
 from .support_decoders import L0Solution, l0_decoder, l1_decoder
 
 __all__ = [
@@ -87,6 +99,13 @@ __all__ = [
     "ijam",
     "l1_decoder",
     "l0_decoder",
+    "etpg",
+    "ETPGSolution",
+    "etpg_condition",
+    "RestrictedEigenvalue",
+    "ETPLObserver",
+    "smt_decoder",
+    "SMTSolution",
     "l1_decode",
     "DetectorDecision",
     "detector",
