@@ -46,9 +46,9 @@ from typing import Any
 import numpy as np
 from _common import as_in, compare_values, fill, record_experiment, which_is_better
 
-from ssecert import System
 from ssecert.estimators.decoders import fista
 from ssecert.estimators.support_decoders import l0_decoder, l1_decoder
+from ssecert.experiments.lasso import random_run
 
 N_STATES = 20
 NOISE_BOUND = 1e-4
@@ -59,21 +59,6 @@ EXACT = 1e-9
 #: "a very slight degradation" under noise, read as: noisy error at most this times the
 #: noise-free one, at every p.
 SLIGHT = 1.5
-
-
-def random_run(rng: np.random.Generator, p: int, noise: float):
-    """(O_tau, sensor of each row, y, x(0)) for one random plant, attack and noise."""
-    n, tau, s = N_STATES, N_STATES, p // 5
-    A = rng.standard_normal((n, n))
-    A /= 1.01 * np.abs(np.linalg.eigvals(A)).max()
-    system = System(A, rng.standard_normal((p, n)))
-    O = system.observability_matrix(tau)
-    x0 = rng.uniform(2.0, 3.0, n) * rng.choice([-1.0, 1.0], n)
-    attacked = rng.choice(p, s, replace=False)
-    a = np.zeros((tau, p))
-    a[:, attacked] = rng.uniform(4.0, 5.0, (tau, s)) * rng.choice([-1.0, 1.0], (tau, s))
-    eta = noise * rng.uniform(-1.0, 1.0, tau * p)
-    return O, np.tile(np.arange(p), tau), O @ x0 + a.ravel() + eta, x0
 
 
 def l0_supports(p: int) -> int:

@@ -38,6 +38,8 @@ def test_every_table_figure_and_example_has_an_id_in_document_order():
         "pruning.fig1",
         "thesis.fig6_2",
         "thesis.fig6_5",
+        "lasso.fig1",
+        "lasso.fig2",
     }
     for entry in all_experiments().values():
         assert re.match(r"^[a-z]+\.(fig|table|example)\d", entry.id)
@@ -85,16 +87,16 @@ def test_the_notes_examples_reproduce_and_a_wrong_claim_would_differ():
 
 
 def test_the_report_holds_every_experiment_with_the_same_keys():
-    outcomes = run_experiments(["notes.example3", "lasso.fig1"], Settings(seed=3))
+    outcomes = run_experiments(["notes.example3", "lasso.fig3"], Settings(seed=3))
     data = json.loads(reproduce_json(outcomes))["experiments"]
-    assert list(data) == ["notes.example3", "lasso.fig1"]
+    assert list(data) == ["notes.example3", "lasso.fig3"]
     for entry in data.values():
         assert set(entry) >= {"document", "where", "paper", "ours", "agreement", "unstated",
                               "command", "seconds"}  # fmt: skip
     assert data["notes.example3"]["paper"].keys() == data["notes.example3"]["ours"].keys()
     assert data["notes.example3"]["command"] == "ssecert reproduce notes.example3 --seed 3"
-    assert data["lasso.fig1"]["match"] == "not run"
-    assert data["lasso.fig1"]["agreement"].startswith("not run: ")
+    assert data["lasso.fig3"]["match"] == "not run"
+    assert data["lasso.fig3"]["agreement"].startswith("not run: ")
     html = render_reproduce(outcomes)
     assert 'id="notes.example3"' in html and "1 reproduced" in html and "1 not run" in html
 
@@ -163,3 +165,18 @@ def test_the_readme_table_is_written_from_the_committed_report():
     # the words follow the numbers: another report gives another table
     data["experiments"]["notes.example0"]["match"] = "differs"
     assert agreement_table(data) != block
+
+
+@pytest.mark.slow
+def test_the_lasso_decoders_on_one_point_of_fig1():
+    from ssecert.experiments.lasso import _claims, decode_runs
+
+    pytest.importorskip("z3")
+    point = decode_runs(20, 4, runs=1, seed=0)
+    free, noisy = point["noise-free"], point["noise"]
+    assert free["SMT"]["failed"] == 0 and free["SMT"]["error"] < 1e-9  # exact without noise
+    assert noisy["SMT"]["failed"] == 1  # no support within its tolerance under 1e-4 noise
+    assert free["Lasso"]["error"] < 1e-2 and noisy["Lasso"]["error"] < 1e-2
+    claims = _claims({20: point})
+    assert claims["SMT exact without noise"] and claims["SMT's accuracy critical under noise"]
+    assert decode_runs(20, 4, runs=1, seed=0)["noise"]["Lasso"]["error"] == noisy["Lasso"]["error"]
