@@ -4,7 +4,8 @@
 * ``decoders``: ISTA, FISTA, IJAM, partial Lasso and elastic net (cvxpy);
 * ``support_decoders``: the l1 (linear program) and l0 (support enumeration) decoders;
 * ``pruning``: the weighted l1 observer with pruned prior; ``pruning_attacks``: the
-  (eps, alpha)-successful attack against it;
+  (eps, alpha)-successful attack against it; ``power_grid``: the pruning paper's IEEE 14-bus
+  experiment (Table I);
 * the dynamic observers (Luenberger, online-gradient, SSO, D-SSO and elastic-net, batched)
   live in ``ssecert.observers`` and are re-exported here;
 * ``sise``: sparse-input and state estimation (Kalman-like, Lasso support detection);
@@ -35,6 +36,13 @@ from .localization import (
     localization_scenario,
     path_loss_rss,
     rss_dictionary,
+)
+from .power_grid import (
+    PAPER_TABLE1,
+    ErrorTable,
+    GridExperiment,
+    bdd_escaping_attack,
+    ieee14_table1,
 )
 from .pruning import (
     DetectorDecision,
@@ -102,6 +110,11 @@ __all__ = [
     "successful_attack",
     "AttackVerification",
     "verify_successful_attack",
+    "ErrorTable",
+    "PAPER_TABLE1",
+    "bdd_escaping_attack",
+    "GridExperiment",
+    "ieee14_table1",
     "LassoResult",
     "lasso_fista",
     "SISE",
