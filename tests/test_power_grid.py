@@ -98,6 +98,16 @@ def test_the_luenberger_gain_places_the_drawn_poles(attacked):
     assert np.all((attacked.poles >= 0.1) & (attacked.poles <= 0.5))
 
 
+def test_a_given_gain_replaces_the_placed_one(attacked):
+    run = ieee14_table1(seed=3, gain=attacked.gain, **SHORT)
+    np.testing.assert_array_equal(run.errors, attacked.errors)
+    halved = ieee14_table1(seed=3, gain=attacked.gain / 2, **SHORT)
+    np.testing.assert_array_equal(halved.errors[1:], attacked.errors[1:])
+    assert not np.array_equal(halved.errors[0], attacked.errors[0])
+    with pytest.raises(ValueError, match="gain has the wrong number of columns"):
+        ieee14_table1(gain=np.zeros((10, 5)), **SHORT)
+
+
 def test_the_attack_maximises_the_state_shift_within_the_detector_bound():
     C = load_example("ieee14").system.C
     U = np.linalg.svd(C)[0]
