@@ -153,6 +153,7 @@ EXPECTED_EXAMPLES = {
     "notes-example-3": (3, 5, 1, 1),
     "lasso-example-1": (1, 3, 1, 1),
     "random-n15-p30": (15, 30, 3, 15),
+    "ieee14": (10, 19, 6, 20),
 }
 
 

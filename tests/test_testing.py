@@ -652,7 +652,7 @@ def test_example_fixture_in_property_tests(pytester):
     result.stdout.fnmatch_lines(
         [
             "*ValueError: no packaged ssecert example named "
-            "'no-such-example'; available: lasso-example-1, *ugv"
+            "'no-such-example'; available: *lasso-example-1, *ugv"
         ]
     )
 

@@ -8,7 +8,8 @@
 * ``smt``: an exact decoder in the manner of Imhotep-SMT (SAT-proposed supports refuted by
   least-squares checks; needs the optional z3-solver, the ``smt`` extra);
 * ``pruning``: the weighted l1 observer with pruned prior; ``pruning_attacks``: the
-  (eps, alpha)-successful attack against it;
+  (eps, alpha)-successful attack against it; ``power_grid``: the pruning paper's IEEE 14-bus
+  experiment (Table I);
 * the dynamic observers (Luenberger, online-gradient, SSO, D-SSO and elastic-net, batched)
   live in ``ssecert.observers`` and are re-exported here;
 * ``sise``: sparse-input and state estimation (Kalman-like, Lasso support detection);
@@ -46,6 +47,13 @@ from .localization import (
     localization_scenario,
     path_loss_rss,
     rss_dictionary,
+)
+from .power_grid import (
+    PAPER_TABLE1,
+    ErrorTable,
+    GridExperiment,
+    bdd_escaping_attack,
+    ieee14_table1,
 )
 from .pruning import (
     DetectorDecision,
@@ -121,6 +129,11 @@ __all__ = [
     "successful_attack",
     "AttackVerification",
     "verify_successful_attack",
+    "ErrorTable",
+    "PAPER_TABLE1",
+    "bdd_escaping_attack",
+    "GridExperiment",
+    "ieee14_table1",
     "LassoResult",
     "lasso_fista",
     "SISE",

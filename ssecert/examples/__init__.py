@@ -11,6 +11,9 @@ name                      what it is
                           sensors, one attacked
 ``random-n15-p30``        a random plant like the thesis's simulations: n = 15,
                           p = 30, one eigenvalue at 1, s = 3
+``ieee14``                the IEEE 14-bus system of the pruning paper's Table I:
+                          five machines (rotor angles and speeds, n = 10), 19
+                          meters (speeds and bus injections), s = 6
 ========================  ====================================================
 """
 
