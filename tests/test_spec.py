@@ -1832,8 +1832,8 @@ def test_a_spec_written_back_reads_as_itself_with_every_attack_kind(tmp_path):
         "name": "round-trip",
         "system": {"A": [[0.5, 0.1], [0.0, 0.4]], "C": [[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]},
         "attack": {"max_attacked": 1},
-        "scenario": [{"attack": kind} for kind in ("none", "stealthy")]
-        + [{"attack": "constant", "sensors": [0], "magnitude": 2.0}],
+        "scenario": [{"name": kind, "attack": kind} for kind in ("none", "stealthy")]
+        + [{"name": "constant", "attack": "constant", "sensors": [0], "magnitude": 2.0}],
     }
     spec = spec_from_dict(data)
     path = tmp_path / "spec.toml"
