@@ -40,6 +40,8 @@ def test_every_table_figure_and_example_has_an_id_in_document_order():
         "thesis.fig6_5",
         "lasso.fig1",
         "lasso.fig2",
+        "pruning.table1",
+        "pruning.fig2",
     }
     for entry in all_experiments().values():
         assert re.match(r"^[a-z]+\.(fig|table|example)\d", entry.id)
