@@ -17,7 +17,6 @@ from ssecert.examples import list_examples, load_example
 from ssecert.report.html import render_report
 from ssecert.report.json import certify_json
 
-
 ROOT = Path(__file__).resolve().parents[1]
 START, END = "<!-- reproduce:start -->", "<!-- reproduce:end -->"
 
