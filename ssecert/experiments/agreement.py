@@ -87,7 +87,7 @@ def agreement(
         return Agreement(
             Match.DIFFERS,
             f"differs: ours does not reproduce {', '.join(disagree)}"
-            + ("" if worst is None else f"; the furthest number, {worst}, by {_percent(by)}"),
+            + ("" if not by else f"; the furthest number, {worst}, by {_percent(by)}"),
             worst,
             by,
             disagree,
