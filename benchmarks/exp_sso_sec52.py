@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 from _common import compare_time, compare_values, fill, record_experiment
 
-from ssecert.observers import WindowSSO
+from ssecert.experiments.lasso import sso_observer, sso_plant, sso_trajectory
 from ssecert.simulation.metrics import relative_error, support_error
 
 N_STATES, N_SENSORS, N_ATTACKED = 10, 15, 3
@@ -41,35 +41,7 @@ LAMBDA = 0.1
 PAPER_SECONDS_PER_STEP = {"1": 4e-6, "n": 4e-4}
 
 
-def _plant(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    A = rng.standard_normal((N_STATES, N_STATES))
-    A /= np.abs(np.linalg.eigvals(A)).max()
-    return A, rng.standard_normal((N_SENSORS, N_STATES))
-
-
-def _trajectory(rng, A, C, steps, runs=None):
-    """x(0..steps) and y(0..steps-1) of one run (or ``runs`` runs) under a constant attack."""
-    shape = (N_STATES,) if runs is None else (runs, N_STATES)
-    x = rng.uniform(2, 3, shape) * rng.choice([-1, 1], shape)
-    a = np.zeros(shape[:-1] + (N_SENSORS,))
-    for index in np.ndindex(*shape[:-1]):
-        support = rng.choice(N_SENSORS, N_ATTACKED, replace=False)
-        a[index + (support,)] = rng.uniform(4, 5, N_ATTACKED) * rng.choice([-1, 1], N_ATTACKED)
-    xs, ys = [x], []
-    for _ in range(steps):
-        ys.append(x @ C.T + a)
-        x = x @ A.T
-        xs.append(x)
-    return np.array(xs), np.array(ys), a
-
-
-def _observer(A, C, tau, inner):
-    blocks = [C]
-    for _ in range(tau - 1):
-        blocks.append(blocks[-1] @ A)
-    O = np.vstack(blocks)
-    nu = 1.0 / np.linalg.norm(np.hstack([O, np.eye(O.shape[0])]), 2) ** 2
-    return WindowSSO(A, C, step=nu, threshold=nu * LAMBDA, window=tau, inner_steps=inner)
+_plant, _trajectory, _observer = sso_plant, sso_trajectory, sso_observer
 
 
 def measure(runs: int, steps: int) -> dict[str, Any]:

@@ -42,6 +42,8 @@ def test_every_table_figure_and_example_has_an_id_in_document_order():
         "lasso.fig2",
         "pruning.table1",
         "pruning.fig2",
+        "lasso.fig3",
+        "lasso.fig4",
     }
     for entry in all_experiments().values():
         assert re.match(r"^[a-z]+\.(fig|table|example)\d", entry.id)
@@ -89,16 +91,16 @@ def test_the_notes_examples_reproduce_and_a_wrong_claim_would_differ():
 
 
 def test_the_report_holds_every_experiment_with_the_same_keys():
-    outcomes = run_experiments(["notes.example3", "lasso.fig3"], Settings(seed=3))
+    outcomes = run_experiments(["notes.example3", "sise.fig4"], Settings(seed=3))
     data = json.loads(reproduce_json(outcomes))["experiments"]
-    assert list(data) == ["notes.example3", "lasso.fig3"]
+    assert list(data) == ["notes.example3", "sise.fig4"]
     for entry in data.values():
         assert set(entry) >= {"document", "where", "paper", "ours", "agreement", "unstated",
                               "command", "seconds"}  # fmt: skip
     assert data["notes.example3"]["paper"].keys() == data["notes.example3"]["ours"].keys()
     assert data["notes.example3"]["command"] == "ssecert reproduce notes.example3 --seed 3"
-    assert data["lasso.fig3"]["match"] == "not run"
-    assert data["lasso.fig3"]["agreement"].startswith("not run: ")
+    assert data["sise.fig4"]["match"] == "not run"
+    assert data["sise.fig4"]["agreement"].startswith("not run: ")
     html = render_reproduce(outcomes)
     assert 'id="notes.example3"' in html and "1 reproduced" in html and "1 not run" in html
 
@@ -182,3 +184,15 @@ def test_the_lasso_decoders_on_one_point_of_fig1():
     claims = _claims({20: point})
     assert claims["SMT exact without noise"] and claims["SMT's accuracy critical under noise"]
     assert decode_runs(20, 4, runs=1, seed=0)["noise"]["Lasso"]["error"] == noisy["Lasso"]["error"]
+
+
+@pytest.mark.slow
+def test_the_online_observers_of_fig4_on_a_few_runs():
+    from ssecert.experiments.lasso import observers_over_time
+
+    m = observers_over_time(1, runs=2, seed=0, steps=60)
+    assert set(m) == {"SSO", "ETPL"}
+    for metrics in m.values():
+        assert set(metrics) == {"error", "right", "settles", "seconds"}
+        assert 0 <= metrics["right"] <= 1 and 0 <= metrics["settles"] <= 61
+    assert observers_over_time(1, runs=2, seed=0, steps=60)["SSO"]["error"] == m["SSO"]["error"]
