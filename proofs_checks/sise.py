@@ -12,11 +12,9 @@ from __future__ import annotations
 from fractions import Fraction
 
 import numpy as np
-import scipy.optimize
-import scipy.sparse
 import sympy as sp
 
-from ssecert.estimators.sise import SISE, OracleSISE, lasso_fista
+from ssecert.estimators.sise import SISE, OracleSISE, lasso_fista, recursive_input_estimate
 
 from ._core import Finding, claim
 
@@ -233,38 +231,17 @@ def _sec4_plant(rng: np.random.Generator, runs: int) -> dict[str, np.ndarray]:
     }
 
 
-def _basis_pursuit_blocks(F: list[np.ndarray], rhs: list[np.ndarray]) -> list[np.ndarray]:
-    """min ||u||_1 s.t. F_i u = rhs_i for every block i, as one LP (the blocks do not interact)."""
-    blocks = [scipy.sparse.csr_matrix(np.hstack([Fi, -Fi])) for Fi in F]
-    A_eq = scipy.sparse.block_diag(blocks, format="csr")
-    cost = np.ones(A_eq.shape[1])
-    solution = scipy.optimize.linprog(
-        cost, A_eq=A_eq, b_eq=np.concatenate(rhs), bounds=(0, None), method="highs"
-    )
-    if solution.status != 0:
-        raise RuntimeError(f"basis pursuit failed: {solution.message}")
-    out, start = [], 0
-    for Fi in F:
-        p = Fi.shape[1]
-        out.append(solution.x[start : start + p] - solution.x[start + p : start + 2 * p])
-        start += 2 * p
-    return out
-
-
 def _recursive_14(runs: list[tuple[dict[str, np.ndarray], bool]]) -> np.ndarray:
-    """[14]'s recursion (Sec. II-C) from the exact x(0): u_hat(k-1) = basis pursuit on
-    y(k) - C A x_hat(k-1) = C B u, x_hat(k) = A x_hat(k-1) + B u_hat(k-1). Errors ||x - x_hat||
-    per (plant, noise-free?) pair (the plant's first run, or its noise-free copy) and step."""
-    truth = [pl["clean_x"] if clean else pl["x"][:, 0] for pl, clean in runs]
-    meas = [pl["clean_y"] if clean else pl["y"][:, 0] for pl, clean in runs]
-    est = [x[0] for x in truth]
-    errors = [[0.0] * len(runs)]
-    for k in range(1, _STEPS):
-        rhs = [y[k] - pl["C"] @ pl["A"] @ x for (pl, _), y, x in zip(runs, meas, est)]
-        u_hat = _basis_pursuit_blocks([pl["C"] @ pl["B"] for pl, _ in runs], rhs)
-        est = [pl["A"] @ x + pl["B"] @ uh for (pl, _), x, uh in zip(runs, est, u_hat)]
-        errors.append([float(np.linalg.norm(t[k] - x)) for t, x in zip(truth, est)])
-    return np.array(errors)
+    """[14]'s recursion (Sec. II-C, ``recursive_input_estimate``) from the exact x(0): errors
+    ||x - x_hat|| per (plant, noise-free?) pair (the plant's first run, or its noise-free copy)
+    and step."""
+    errors = []
+    for pl, clean in runs:
+        truth = pl["clean_x"] if clean else pl["x"][:, 0]
+        meas = pl["clean_y"] if clean else pl["y"][:, 0]
+        x_hat, _ = recursive_input_estimate(pl["A"], pl["B"], pl["C"], meas[:_STEPS], truth[0])
+        errors.append(np.linalg.norm(truth[:_STEPS] - x_hat, axis=1))
+    return np.array(errors).T
 
 
 def _sec4_errors(est: SISE, pl: dict[str, np.ndarray]) -> tuple[np.ndarray, ...]:

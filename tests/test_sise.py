@@ -338,3 +338,30 @@ def test_bad_step_and_oracle_inputs():
         lasso_fista(np.eye(2), np.ones(2), -1.0)
     with pytest.raises(ValueError, match=r"\by\b"):
         lasso_fista(np.eye(2), np.ones(3), 1.0)
+
+
+def test_the_recursion_of_reference_14_recovers_a_noise_free_run_and_batches():
+    """[14]'s recursion (``recursive_input_estimate``): exact without noise from the exact
+    x(0) when C B suits compressed sensing; runs batched give each run's own estimates."""
+    from ssecert.estimators.sise import recursive_input_estimate
+
+    rng = np.random.default_rng(14)
+    n, m, p, steps, runs = 8, 6, 8, 12, 3
+    A = rng.standard_normal((n, n)) / np.sqrt(n)
+    B, C = np.eye(n)[:, :p], rng.standard_normal((m, n))
+    x = rng.standard_normal((runs, n))
+    u = np.zeros((steps, runs, p))
+    u[:, np.arange(runs), rng.integers(p, size=runs)] = 3.0
+    xs, ys = [x], []
+    for k in range(steps):
+        ys.append(x @ C.T)
+        x = x @ A.T + u[k] @ B.T
+        xs.append(x)
+    xs, ys = np.array(xs), np.array(ys)
+    x_hat, u_hat = recursive_input_estimate(A, B, C, ys, xs[0])
+    assert np.allclose(x_hat, xs[:steps], atol=1e-8)
+    assert np.allclose(u_hat, u[: steps - 1], atol=1e-8)
+    one_x, one_u = recursive_input_estimate(A, B, C, ys[:, 1], xs[0, 1])
+    assert np.allclose(one_x, x_hat[:, 1]) and np.allclose(one_u, u_hat[:, 1])
+    with pytest.raises(ValueError, match="x0"):
+        recursive_input_estimate(A, B, C, ys, xs[0, :2])
