@@ -45,6 +45,7 @@ def test_every_table_figure_and_example_has_an_id_in_document_order():
         "lasso.fig3",
         "lasso.fig4",
         "sise.fig4",
+        "thesis.fig6_7",
     }
     for entry in all_experiments().values():
         assert re.match(r"^[a-z]+\.(fig|table|example)\d", entry.id)
