@@ -53,60 +53,7 @@ from ssecert.estimators.localization import (
     localization_scenario,
     rss_dictionary,
 )
-
-#: Success rates within this many percentage points are a tie (sampling noise).
-RATE_ATOL = 5.0
-RATE_TIE = f"within {RATE_ATOL:g} percentage points"
-#: Fig. 6.6 shows a success; it is "typical" of a decoder that succeeds in at least this %.
-TYPICAL = 50.0
-DECODERS = {
-    "A": dict(
-        normalize=False, common_offset=False, method="ista", N=1000, rtol=0.0, q_x=0.999, q_a=0.999
-    ),
-    "B": dict(
-        normalize=True, common_offset=False, method="ista", N=1000, rtol=0.0, q_x=0.999, q_a=0.999
-    ),
-    "C": dict(),
-    "D": dict(q_x=0.999, q_a=0.999),
-}
-
-
-def evaluate(attacked, *, runs, dictionaries, xi_std, seed, sign=None):
-    """Success counts of every decoder for `attacked` attacked sensors."""
-    per = [runs // dictionaries + (i < runs % dictionaries) for i in range(dictionaries)]
-    stats = {
-        name: {"cell": 0, "set": 0, "both": 0, "dist": [], "conv": 0, "sec": 0.0, "its": []}
-        for name in (*DECODERS, "kNN")
-    }
-    for i, count in enumerate(per):
-        if count == 0:
-            continue
-        dic = rss_dictionary(seed=seed + i)
-        sc = localization_scenario(
-            dic, runs=count, attacked=attacked, xi_std=xi_std, seed=10_000 + seed + i
-        )
-        y = sc.y if sign is None else dic.D[:, sc.cell].T + sign * np.abs(sc.attack) + sc.noise
-        for name, options in DECODERS.items():
-            t0 = time.perf_counter()
-            res = elastic_net_localization(dic.D, y, **options)
-            st = stats[name]
-            st["sec"] += time.perf_counter() - t0
-            cell_ok = res.cell == sc.cell
-            set_ok = np.all(res.attacked == sc.attacked, axis=1)
-            st["cell"] += int(cell_ok.sum())
-            st["set"] += int(set_ok.sum())
-            st["both"] += int((cell_ok & set_ok).sum())
-            st["conv"] += int(res.converged.sum())
-            st["its"].extend(int(i) for i in np.atleast_1d(res.iterations))
-            st["dist"].extend(
-                np.linalg.norm(dic.cell_centers[res.cell] - dic.cell_centers[sc.cell], axis=1)
-            )
-        knn = np.argmin(((dic.D.T[None, :, :] - y[:, None, :]) ** 2).sum(axis=2), axis=1)
-        stats["kNN"]["cell"] += int((knn == sc.cell).sum())
-        stats["kNN"]["dist"].extend(
-            np.linalg.norm(dic.cell_centers[knn] - dic.cell_centers[sc.cell], axis=1)
-        )
-    return stats
+from ssecert.experiments.thesis import DECODERS, RATE_ATOL, RATE_TIE, TYPICAL, evaluate
 
 
 def measure(args: argparse.Namespace) -> dict[str, Any]:

@@ -8,7 +8,10 @@ import pytest
 
 from ssecert.cli import main
 from ssecert.experiments import (
+    Agreement,
+    Experiment,
     Match,
+    Outcome,
     Result,
     Settings,
     agreement,
@@ -47,6 +50,7 @@ def test_every_table_figure_and_example_has_an_id_in_document_order():
         "sise.fig4",
         "thesis.fig6_7",
         "thesis.fig6_1",
+        "thesis.fig6_6",
     }
     for entry in all_experiments().values():
         assert re.match(r"^[a-z]+\.(fig|table|example)\d", entry.id)
@@ -94,16 +98,19 @@ def test_the_notes_examples_reproduce_and_a_wrong_claim_would_differ():
 
 
 def test_the_report_holds_every_experiment_with_the_same_keys():
-    outcomes = run_experiments(["notes.example3", "thesis.fig6_6"], Settings(seed=3))
+    outcomes = run_experiments(["notes.example3"], Settings(seed=3))
+    never = Experiment("notes.example9", "nowhere", "nothing", None, why_not="a test entry")
+    line = Agreement(Match.NOT_RUN, "not run: a test entry")
+    outcomes.append(Outcome(never, None, line, 0.0, Settings(seed=3)))
     data = json.loads(reproduce_json(outcomes))["experiments"]
-    assert list(data) == ["notes.example3", "thesis.fig6_6"]
+    assert list(data) == ["notes.example3", "notes.example9"]
     for entry in data.values():
         assert set(entry) >= {"document", "where", "paper", "ours", "agreement", "unstated",
                               "command", "seconds"}  # fmt: skip
     assert data["notes.example3"]["paper"].keys() == data["notes.example3"]["ours"].keys()
     assert data["notes.example3"]["command"] == "ssecert reproduce notes.example3 --seed 3"
-    assert data["thesis.fig6_6"]["match"] == "not run"
-    assert data["thesis.fig6_6"]["agreement"].startswith("not run: ")
+    assert data["notes.example9"]["match"] == "not run"
+    assert data["notes.example9"]["agreement"].startswith("not run: ")
     html = render_reproduce(outcomes)
     assert 'id="notes.example3"' in html and "1 reproduced" in html and "1 not run" in html
 
