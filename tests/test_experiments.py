@@ -206,3 +206,20 @@ def test_the_online_observers_of_fig4_on_a_few_runs():
         assert set(metrics) == {"error", "right", "settles", "seconds"}
         assert 0 <= metrics["right"] <= 1 and 0 <= metrics["settles"] <= 61
     assert observers_over_time(1, runs=2, seed=0, steps=60)["SSO"]["error"] == m["SSO"]["error"]
+
+
+def test_a_result_with_a_figure_is_redrawn_in_the_report():
+    from ssecert.experiments import figure
+
+    entry = Experiment("notes.example8", "somewhere", "a curve", None)
+    result = Result(
+        paper={"rises": True},
+        ours={"rises": True},
+        figure=figure("y against x", "x", "y", {"ours": ([1, 2, 3], [1.0, 2.0, 0.0])}, log=True),
+    )
+    line = agreement(result.paper, result.ours)
+    outcome = Outcome(entry, result, line, 0.0, Settings())
+    html = render_reproduce([outcome])
+    assert html.count("<svg") == 1 and "y against x" in html
+    data = json.loads(reproduce_json([outcome]))["experiments"]["notes.example8"]
+    assert data["figure"]["lines"]["ours"] == {"x": [1.0, 2.0, 3.0], "y": [1.0, 2.0, 0.0]}

@@ -25,6 +25,7 @@ from ._registry import (
     Settings,
     all_experiments,
     experiment,
+    figure,
     get_experiment,
     not_run,
 )
@@ -43,6 +44,7 @@ __all__ = [
     "agreement_table",
     "all_experiments",
     "experiment",
+    "figure",
     "get_experiment",
     "not_run",
     "render_reproduce",

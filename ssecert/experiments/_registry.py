@@ -9,6 +9,7 @@ from typing import Any
 
 __all__ = [
     "DOCUMENTS",
+    "figure",
     "Experiment",
     "Result",
     "Settings",
@@ -67,6 +68,10 @@ class Result:
         Rows for the report (the document's layout), optional.
     note : str
         What else a reader needs (whose fault a difference is, as far as it can be shown).
+    figure : mapping, optional
+        The document's figure redrawn with its axes (``figure``): ``title``, ``x`` and ``y``
+        (axis labels), ``log`` (a logarithmic y axis) and ``lines``, ``{label: {"x": [...],
+        "y": [...]}}``.
     """
 
     paper: Mapping[str, Value]
@@ -74,6 +79,7 @@ class Result:
     unstated: Mapping[str, str] = field(default_factory=dict)
     table: list[dict[str, Any]] = field(default_factory=list)
     note: str = ""
+    figure: Mapping[str, Any] | None = None
 
 
 @dataclass(frozen=True)
@@ -165,3 +171,19 @@ def get_experiment(id: str) -> Experiment:
         raise ValueError(
             f"no experiment {id!r}; registered: {', '.join(all_experiments())}"
         ) from None
+
+
+def figure(
+    title: str, x: str, y: str, lines: Mapping[str, tuple[Any, Any]], *, log: bool = False
+) -> dict[str, Any]:
+    """A figure of a ``Result``: ``lines`` maps each curve's label to its (x, y) values."""
+    return {
+        "title": title,
+        "x": x,
+        "y": y,
+        "log": log,
+        "lines": {
+            label: {"x": [float(v) for v in xs], "y": [float(v) for v in ys]}
+            for label, (xs, ys) in lines.items()
+        },
+    }

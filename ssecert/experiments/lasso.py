@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from ._registry import Result, Settings, experiment
+from ._registry import Result, Settings, experiment, figure
 
 __all__ = ["decode_runs", "observers_over_time", "random_run"]
 
@@ -168,6 +168,16 @@ _NOTE = (
 )
 
 
+def _lines(points: dict[int, dict[str, dict[str, dict[str, float]]]]) -> dict[str, tuple]:
+    """Each decoder's mean error against the swept value, noise-free and with noise."""
+    keys = sorted(points)
+    return {
+        f"{method} ({label})": (keys, [points[k][label][method]["error"] for k in keys])
+        for label in ("noise-free", "noise")
+        for method in METHODS
+    }
+
+
 def _table(points: dict[int, dict[str, dict[str, dict[str, float]]]], key: str) -> list[dict]:
     return [
         {key: k, "noise": label, "method": m, **values}
@@ -197,6 +207,13 @@ def fig1(settings: Settings) -> Result:
         },
         table=_table(points, "p"),
         note=_NOTE,
+        figure=figure(
+            "relative state error against p (s = p/5)",
+            "p",
+            "mean relative error",
+            _lines(points),
+            log=True,
+        ),
     )
 
 
@@ -220,6 +237,13 @@ def fig2(settings: Settings) -> Result:
         },
         table=_table(points, "s"),
         note=_NOTE,
+        figure=figure(
+            "relative state error against s (p = 30)",
+            "s",
+            "mean relative error",
+            _lines(points),
+            log=True,
+        ),
     )
 
 
@@ -280,6 +304,7 @@ def observers_over_time(tau: int, runs: int, seed: int, steps: int = SSO_STEPS) 
     out: dict[str, dict[str, list[float]]] = {
         m: {"error": [], "right": [], "settles": [], "seconds": []} for m in ("SSO", "ETPL")
     }
+    curves: dict[str, list[np.ndarray]] = {"SSO": [], "ETPL": []}
     for r in range(runs):
         rng = np.random.default_rng([52, seed, r])
         A, C = sso_plant(rng)
@@ -293,6 +318,12 @@ def observers_over_time(tau: int, runs: int, seed: int, steps: int = SSO_STEPS) 
             traj = obs.run(ys[:, None, :])
             out[name]["seconds"].append((time.perf_counter() - began) / steps)
             d = obs.delay
+            truth_x = xs[: steps + 1 - d] if d else xs[: traj.x_hat.shape[0]]
+            est = traj.x_hat[d : d + truth_x.shape[0], 0]
+            curves[name].append(
+                np.linalg.norm(est - truth_x[: est.shape[0]], axis=1)
+                / np.linalg.norm(truth_x[: est.shape[0]], axis=1)
+            )
             last = traj.x_hat[-1, 0]
             out[name]["error"].append(
                 float(np.linalg.norm(last - xs[steps - d]) / np.linalg.norm(xs[steps - d]))
@@ -303,10 +334,14 @@ def observers_over_time(tau: int, runs: int, seed: int, steps: int = SSO_STEPS) 
             out[name]["right"].append(float(right[-1]))
             wrong = np.flatnonzero(~right)
             out[name]["settles"].append(float(wrong[-1] + 1 if wrong.size else 0))
-    return {
+    summary: dict[str, Any] = {
         name: {key: float(np.mean(values)) for key, values in metrics.items()}
         for name, metrics in out.items()
     }
+    for name, series in curves.items():
+        length = min(len(c) for c in series)
+        summary[name]["series"] = np.mean([c[:length] for c in series], axis=0).tolist()
+    return summary
 
 
 def _fig34(settings: Settings, tau: int, label: str) -> Result:
@@ -354,7 +389,20 @@ def _fig34(settings: Settings, tau: int, label: str) -> Result:
             "attack": "constant in time, magnitudes in [4, 5], random signs",
             "runs": f"{runs} (the paper: 100), {SSO_STEPS} steps, one run at a time",
         },
-        table=[{"SSO": sso, "ETPL": etpl, "paper seconds per step": PAPER_SECONDS[label]}],
+        table=[
+            {
+                "SSO": {k: v for k, v in sso.items() if k != "series"},
+                "ETPL": {k: v for k, v in etpl.items() if k != "series"},
+                "paper seconds per step": PAPER_SECONDS[label],
+            }
+        ],
+        figure=figure(
+            f"relative state error against time (tau = {tau})",
+            "step k",
+            "mean relative state error",
+            {name: (range(len(m[name]["series"])), m[name]["series"]) for name in ("SSO", "ETPL")},
+            log=True,
+        ),
         note="The words read as rules on the means over runs: 'more accurate', a lower relative "
         f"state error at the last step beyond a {TIE:.0%} tie; 'sooner', a lower mean step from "
         "which the support estimate stays right; 'does not always', right at the end in fewer "

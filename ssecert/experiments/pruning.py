@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from ._registry import Result, Settings, experiment
+from ._registry import Result, Settings, experiment, figure
 
 __all__ = ["PruningOptions", "breakdown", "measure"]
 
@@ -209,6 +209,19 @@ def fig1(settings: Settings) -> Result:
         },
         unstated={**UNSTATED, "runs": f"{runs} per row (the paper: 1000)"},
         table=[{"breakdown": points}, *numbers["rows"]],
+        figure=figure(
+            "success rate against the attack percentage",
+            "attack percentage P_A",
+            "success rate",
+            {
+                label: ([r["P_A"] for r in numbers["rows"]], [r[key] for r in numbers["rows"]])
+                for key, label in (
+                    ("plain", "l1 observer without prior"),
+                    ("prior", "weighted l1 observer with prior"),
+                    ("pruned", "weighted l1 observer with prior pruning"),
+                )
+            },
+        ),
         note="The breakdown is the P_A where a success rate falls below 1/2 for good. The "
         f"paper's words are read as: a limited gain moves it by less than {LIMITED_GAIN:g}, a "
         f"large one by at least {LARGE_GAIN:g}.",
@@ -296,6 +309,16 @@ def fig2(settings: Settings) -> Result:
         },
         unstated=_GRID_UNSTATED,
         table=[{"max_abs": run.table.to_dict()["max_abs"], "rms": run.table.to_dict()["rms"]}],
+        figure=figure(
+            "absolute error of delta_1 against time",
+            "step k",
+            "|delta_1 - its estimate|",
+            {
+                name: (range(run.errors.shape[1]), np.abs(run.errors[j, :, 0]))
+                for j, name in enumerate(("LO", "LIO", "WLIP"))
+            },
+            log=True,
+        ),
         note="The figure's words ('works well', 'notable spikes', 'completely eliminates the "
         "spikes') read as rules on each angle's largest and RMS errors, stated in the keys.",
     )

@@ -9,6 +9,8 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from ..results import to_jsonable
 from ._registry import DOCUMENTS, Experiment, Result, Settings, all_experiments, get_experiment
 from .agreement import Agreement, Match, agreement
@@ -46,6 +48,7 @@ class Outcome:
             "unstated": dict(r.unstated) if r is not None else {},
             "table": to_jsonable(r.table) if r is not None else [],
             "note": (r.note if r is not None else e.why_not),
+            "figure": to_jsonable(dict(r.figure)) if r is not None and r.figure else None,
             "command": self.command,
             "seconds": round(self.seconds, 3),
         }
@@ -104,6 +107,7 @@ code{background:#f4f4f4;padding:0 .2em}
 {% endfor %}</table>{% endif %}
 {% if o.unstated %}<p>Left unstated by the document, and chosen here:</p><ul>
 {% for key, value in o.unstated %}<li>{{ key }}: {{ value }}</li>{% endfor %}</ul>{% endif %}
+{% if o.svg %}<figure>{{ o.svg|safe }}</figure>{% endif %}
 {% if o.note %}<p>{{ o.note }}</p>{% endif %}
 <p><code>{{ o.command }}</code> ({{ o.seconds }} s)</p>
 </section>{% endfor %}
@@ -141,6 +145,7 @@ def render_reproduce(outcomes: Sequence[Outcome]) -> str:
                 "id": o.experiment.id,
                 "rows": [(k, _shown(d["paper"].get(k)), _shown(d["ours"].get(k))) for k in keys],
                 "unstated": list(d["unstated"].items()),
+                "svg": _plot(o) if o.result is not None and o.result.figure else "",
             }
         )
     env = jinja2.Environment(autoescape=True)
@@ -169,3 +174,33 @@ def agreement_table(report: Mapping[str, Any]) -> str:
             if entry["match"] in (Match.DIFFERS.value, Match.CLOSE.value):
                 details.append(f"- `{key}`: {entry['agreement']}")
     return "\n".join(lines + ([""] + details if details else [])) + "\n"
+
+
+def _plot(outcome: Outcome) -> str:
+    """The outcome's figure as inline SVG (``ssecert.report.plots``)."""
+    from matplotlib.figure import Figure
+
+    from ..report.plots import PALETTE, plain, svg_figure
+
+    assert outcome.result is not None and outcome.result.figure is not None
+    spec = outcome.result.figure
+    fig = Figure(figsize=(5.6, 3.2), layout="constrained")
+    ax = fig.subplots()
+    colours = [PALETTE["a"], PALETTE.get("b", "#d95f02"), "#7570b3", "#1b9e77", "#e7298a",
+               "#66a61e", "#a6761d", "#666666"]  # fmt: skip
+    for i, (label, line) in enumerate(spec["lines"].items()):
+        xs, ys = np.asarray(line["x"], dtype=float), np.asarray(line["y"], dtype=float)
+        if spec.get("log"):
+            ys = np.where(ys > 0, ys, np.nan)  # a zero has no place on a log axis: a gap
+        dashed = "noise" in label and "noise-free" not in label
+        marker = "o" if xs.size <= 30 else None  # a point per value where there are few
+        ax.plot(xs, ys, color=colours[i % len(colours)], linewidth=1.4, marker=marker,
+                markersize=3, linestyle="--" if dashed else "-", label=plain(label, 60))  # fmt: skip
+    if spec.get("log"):
+        ax.set_yscale("log")
+    ax.set_xlabel(plain(spec["x"], 60))
+    ax.set_ylabel(plain(spec["y"], 60))
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7, loc="best")
+    fig.suptitle(plain(f"{outcome.experiment.id}: {spec['title']}", 90), fontsize=10)
+    return svg_figure(fig, title=outcome.experiment.id)

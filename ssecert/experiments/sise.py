@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from ._registry import Result, Settings, experiment
+from ._registry import Result, Settings, experiment, figure
 
 __all__ = ["sise_against_14", "sise_errors"]
 
@@ -137,7 +137,7 @@ def sise_errors(
 
 
 @functools.lru_cache(maxsize=8)
-def _summary(n: int, m: int, runs: int, plants: int, seed: int) -> dict[str, float]:
+def _summary(n: int, m: int, runs: int, plants: int, seed: int) -> dict[str, Any]:
     """The mean errors over k >= TRANSIENT of SISE and the oracle, and the support hits."""
     errors, hit, _ = sise_errors(
         n, m, P, runs=runs, plants=plants, steps=STEPS, seed=seed, amplitude=math.sqrt(n)
@@ -153,13 +153,41 @@ def _summary(n: int, m: int, runs: int, plants: int, seed: int) -> dict[str, flo
         "u oracle": float(ou[T - 1 :].mean()),
         "support right": float(hit[T - 1 :].mean()),
         "runs with the support right": float(np.mean(hit[T - 1 :].mean(axis=0) > 0.95)),
+        "series": {
+            "x SISE": sx.mean(axis=1).tolist(),
+            "x oracle": ox.mean(axis=1).tolist(),
+            "u SISE": su.mean(axis=1).tolist(),
+            "u oracle": ou.mean(axis=1).tolist(),
+        },
     }
 
 
-def _run(settings: Settings, n: int, m: int) -> dict[str, float]:
+def _run(settings: Settings, n: int, m: int) -> dict[str, Any]:
     runs = settings.count(20, 100)
     plants = min(runs, 4 if settings.quick and settings.runs is None else 10)
     return _summary(n, m, runs, plants, settings.seed)
+
+
+def _plain(r: dict[str, Any]) -> dict[str, Any]:
+    """A summary without its series (for the table)."""
+    return {k: v for k, v in r.items() if k != "series"}
+
+
+def _errors_figure(r: dict[str, Any], setting: str) -> dict[str, Any]:
+    """Fig. 1-3's axes: the mean relative errors of SISE and the oracle against k."""
+    series = r["series"]
+    return figure(
+        f"mean relative errors against time ({setting})",
+        "step k",
+        "mean relative error",
+        {
+            "state, SISE": (range(len(series["x SISE"])), series["x SISE"]),
+            "state, oracle": (range(len(series["x oracle"])), series["x oracle"]),
+            "input, SISE": (range(1, len(series["u SISE"]) + 1), series["u SISE"]),
+            "input, oracle": (range(1, len(series["u oracle"]) + 1), series["u oracle"]),
+        },
+        log=True,
+    )
 
 
 def _less_accurate(a: float, b: float) -> bool:
@@ -193,7 +221,8 @@ def fig1(settings: Settings) -> Result:
             and r["x SISE"] <= CLOSE * r["x oracle"],
         },
         unstated=_unstated(settings),
-        table=[r],
+        table=[_plain(r)],
+        figure=_errors_figure(r, "p = 40, m = 20, n = 50"),
         note="The paper's statements are read as: 'almost all runs', support right in more "
         f"than 95% of the steps in at least {ALMOST_ALL:.0%} of the runs; 'very close to the "
         f"benchmark', within {CLOSE:g} times the oracle's errors.",
@@ -211,7 +240,8 @@ def fig2(settings: Settings) -> Result:
         paper={"perfect support estimation": True},
         ours={"perfect support estimation": r["support right"] > PERFECT},
         unstated=_unstated(settings),
-        table=[r],
+        table=[_plain(r)],
+        figure=_errors_figure(r, "p = 40, m = 30, n = 50"),
         note=f"'Perfect' is read as: right in more than {PERFECT:.1%} of the (run, k) pairs.",
     )
 
@@ -228,7 +258,8 @@ def fig3(settings: Settings) -> Result:
         paper={"less accurate than Experiment 1": True},
         ours={"less accurate than Experiment 1": less},
         unstated=_unstated(settings),
-        table=[r1, r3],
+        table=[_plain(r1), _plain(r3)],
+        figure=_errors_figure(r3, "p = 40, m = 20, n = 70"),
         note=f"Less accurate: both mean errors larger than Experiment 1's by more than {TIE:.0%}.",
     )
 
@@ -301,6 +332,13 @@ def fig4(settings: Settings) -> Result:
             for k in sorted({1, 2, 5, 10, 20, 50, last})
             if k <= last
         ],
+        figure=figure(
+            "mean relative state error against time",
+            "step k",
+            "mean relative state error",
+            {"SISE": (range(len(sise)), sise), "[14]": (range(len(rec)), rec)},
+            log=True,
+        ),
         note=f"'Grow unbounded' read as: [14]'s mean relative error at k = {last} at least "
         f"{GROWS:g} times its value at k = 1; 'more accurate', lower beyond a {TIE:.0%} tie.",
     )
