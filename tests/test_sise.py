@@ -365,3 +365,25 @@ def test_the_recursion_of_reference_14_recovers_a_noise_free_run_and_batches():
     assert np.allclose(one_x, x_hat[:, 1]) and np.allclose(one_u, u_hat[:, 1])
     with pytest.raises(ValueError, match="x0"):
         recursive_input_estimate(A, B, C, ys, xs[0, :2])
+
+
+def test_admm_reaches_the_minimiser_fista_reaches():
+    """The SISE paper solves its Lasso by ADMM; ssecert's SISE uses FISTA: both give the same
+    minimiser (batched, to the KKT conditions), so the support SISE picks is the same."""
+    from ssecert.estimators.sise import lasso_admm
+
+    rng = np.random.default_rng(4)
+    Phi = rng.standard_normal((20, 40))
+    U = np.zeros((6, 40))
+    U[np.arange(6), rng.integers(40, size=6)] = 7.0
+    Y = U @ Phi.T + 0.1 * rng.standard_normal((6, 20))
+    fista_res = lasso_fista(Phi, Y, 1.0, max_iter=20000, rtol=1e-12)
+    admm_res = lasso_admm(Phi, Y, 1.0, max_iter=20000, rtol=1e-12)
+    assert admm_res.converged.all() and fista_res.converged.all()
+    assert np.all(admm_res.kkt_residual < 1e-6)
+    np.testing.assert_allclose(admm_res.solution, fista_res.solution, atol=1e-6)
+    assert np.array_equal(
+        np.argmax(np.abs(admm_res.solution), axis=1), np.argmax(np.abs(fista_res.solution), axis=1)
+    )
+    with pytest.raises(ValueError, match="rho"):
+        lasso_admm(Phi, Y, 1.0, rho=0.0)
