@@ -186,8 +186,10 @@ def test_the_lasso_decoders_on_one_point_of_fig1():
     from ssecert.experiments.lasso import _claims, decode_runs
 
     pytest.importorskip("z3")
-    point = decode_runs(20, 4, runs=1, seed=0)
+    point = decode_runs(20, 4, runs=1, seed=0, sweep=(0.001,))
     free, noisy = point["noise-free"], point["noise"]
+    # a smaller lambda, a smaller bias
+    assert free["Lasso, lambda = 0.001"]["error"] < free["Lasso"]["error"]
     assert free["SMT"]["failed"] == 0 and free["SMT"]["error"] < 1e-9  # exact without noise
     assert noisy["SMT"]["failed"] == 1  # no support within its tolerance under 1e-4 noise
     assert free["Lasso"]["error"] < 1e-2 and noisy["Lasso"]["error"] < 1e-2
