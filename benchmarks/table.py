@@ -35,7 +35,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from ssecert._io import atomic_write_text
+from ssecert.base.atomic import atomic_write_text
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent

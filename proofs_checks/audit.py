@@ -9,7 +9,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from ssecert._io import write_files
+from ssecert.base.atomic import write_files
 
 from ._core import DOCUMENTS, Outcome, all_claims, rounded, run_claim
 

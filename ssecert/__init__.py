@@ -17,8 +17,8 @@ import sys
 import types
 from typing import TYPE_CHECKING, Any
 
-from . import _display
 from ._version import __version__
+from .base import display as _display
 
 if TYPE_CHECKING:  # the lazily imported names, for type checkers and editors
     from .analyze import analyze
@@ -123,7 +123,7 @@ sys.modules[__name__].__class__ = _Package
 
 
 def _render_html(fragment: str, result: Any) -> str:
-    """Notebook display of results (``_display.html_display``), rendered by the report."""
+    """Notebook display of results (``ssecert.base.display.html_display``), rendered by the report."""
     from .report import html
 
     return str(getattr(html, fragment)(result))

@@ -16,8 +16,8 @@ from typing import Any
 
 import numpy as np
 
-from ._display import html_display
 from .analyze import analyze
+from .base.display import html_display
 from .budget import Budget, ResourceLimitError
 from .context import OBSERVER, AnalysisContext
 from .inputs import as_spec

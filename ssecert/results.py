@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from ._display import html_display
+from .base.display import html_display
 
 __all__ = [
     "Verdict",

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from ._validation import as_int_option, as_real_matrix, describe
+from .base.validation import as_int_option, as_real_matrix, describe
 
 __all__ = ["System"]
 
@@ -250,7 +250,7 @@ class System:
 
     def select_sensors(self, keep: Sequence[int]) -> System:
         """The plant seen through the sensors ``keep`` only (0-based, in order)."""
-        from ._validation import as_index_list
+        from .base.validation import as_index_list
 
         keep = as_index_list(keep, "keep", upper=self.p)
         if not keep:

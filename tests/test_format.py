@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from ssecert import System
-from ssecert._format import sig
+from ssecert.base.format import sig
 from ssecert.observers import build_observer
 from ssecert.stability.checks import observer_gain_check
 
@@ -44,7 +44,7 @@ def test_the_terminal_table_keeps_the_sign_of_infinity():
 
 
 def test_one_plus_writes_the_gap_above_one_out():
-    from ssecert._format import one_plus
+    from ssecert.base.format import one_plus
 
     assert one_plus(2.0**-60) == "1 + 8.67e-19"
     assert one_plus(2.0**-60, base=3) == "3 + 8.67e-19"

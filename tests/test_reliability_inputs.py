@@ -1199,7 +1199,7 @@ def test_failure_between_renames_restores_the_old_files(
             raise failure(errno.EIO, "I/O error") if failure is OSError else failure()
         real_replace(src, dst)
 
-    import ssecert._io as io_module
+    import ssecert.base.atomic as io_module
 
     monkeypatch.setattr(io_module.os, "replace", replace)
     status, out, err = cli(capsys, "certify", "ugv", "--no-sim", "--out", str(old_reports))

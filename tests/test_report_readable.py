@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from ssecert import spec_from_dict
-from ssecert._format import readable
+from ssecert.base.format import readable
 from ssecert.certify import certify
 from ssecert.cli import main
 from ssecert.report.html import render_report

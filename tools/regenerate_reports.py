@@ -11,7 +11,7 @@ python tools/regenerate_reports.py [--reproduce-only]
 from pathlib import Path
 
 from proofs_checks import audit_json, render_audit, run_audit
-from ssecert._io import atomic_write_text
+from ssecert.base.atomic import atomic_write_text
 from ssecert.certify import certify
 from ssecert.examples import list_examples, load_example
 from ssecert.report.html import render_report

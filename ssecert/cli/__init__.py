@@ -5,7 +5,7 @@ fails but one is inconclusive; 2 bad input or usage (one line on stderr, no
 traceback); 4 internal error.
 
 Output paths are checked before the checks run, so a typo costs seconds, not
-the whole run; reports are written all or nothing (``ssecert._io``).  Python
+the whole run; reports are written all or nothing (``ssecert.base.atomic``).  Python
 warnings raised by the numerical code while a command runs do not reach the
 terminal as such: each distinct one becomes a one-line note in the output and
 in the report (where it was raised and how often), because a floating-point

@@ -265,7 +265,7 @@ def _print_design(
 ) -> None:
     """The terminal summary: the search, both designs' certified numbers, each scenario."""
 
-    from .._format import one_minus
+    from ..base.format import one_minus
     from ..observers import get_kind
 
     searched = f"{len(result.candidates)} candidates in {result.seconds:.1f} s"

@@ -77,7 +77,7 @@ def output_file(option: str, text: str | None) -> Path | None:
 
 def write_outputs(files: Mapping[Path, str | bytes]) -> None:
     """Write the files all or nothing, creating their folders; UsageError naming the path."""
-    from .._io import write_files
+    from ..base.atomic import write_files
 
     created: list[Path] = []
     try:

@@ -27,8 +27,8 @@ from typing import Any
 
 import numpy as np
 
-from .._format import one_plus, sig
-from .._validation import as_real_matrix
+from ..base.format import one_plus, sig
+from ..base.validation import as_real_matrix
 from ..system import System
 from ..tolerances import Tolerances
 from ._gain import Gain, GainError

@@ -24,7 +24,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .._validation import as_float_option
+from ..base.validation import as_float_option
 from ..system import System
 from ..tolerances import EPS, NONZERO, Tolerances, classify
 from ._gain import Gain, GainError

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from .._validation import as_float_option, as_int_option, as_real_matrix, describe
+from ..base.validation import as_float_option, as_int_option, as_real_matrix, describe
 from ..tolerances import EPS, default_rtol
 from .shrinkage import soft_threshold
 

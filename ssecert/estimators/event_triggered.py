@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from .._validation import as_float_option, as_int_option, as_real_matrix
+from ..base.validation import as_float_option, as_int_option, as_real_matrix
 from ..observers.dynamic import DynamicObserver
 from .decoders import _as_measurements, _as_sensing_matrix
 from .support_decoders import _as_sensor_map

@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from .._validation import as_choice, as_float_option, as_int_option, as_real_matrix, describe
+from ..base.validation import as_choice, as_float_option, as_int_option, as_real_matrix, describe
 from .shrinkage import elastic_net_shrink
 
 __all__ = [

@@ -61,7 +61,7 @@ from typing import Any
 
 import numpy as np
 
-from .._validation import as_float_option, as_int_option, as_real_matrix
+from ..base.validation import as_float_option, as_int_option, as_real_matrix
 from .pruning import l1_decode, prune_support_prior, weighted_l1_observer
 
 __all__ = [

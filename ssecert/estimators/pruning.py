@@ -38,7 +38,7 @@ import numpy as np
 import scipy.optimize
 import scipy.sparse
 
-from .._validation import as_float_option, as_index_list, as_int_option, as_real_matrix
+from ..base.validation import as_float_option, as_index_list, as_int_option, as_real_matrix
 
 __all__ = [
     "l1_decode",

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validation import as_choice, as_float_option, as_index_list, as_real_matrix
+from ..base.validation import as_choice, as_float_option, as_index_list, as_real_matrix
 from ..tolerances import default_rtol
 from .pruning import _SCALINGS, _weighted_l1_fit, detector, l1_decode
 

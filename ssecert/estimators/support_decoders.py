@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from .._validation import as_float_option, as_int_option, describe
+from ..base.validation import as_float_option, as_int_option, describe
 from ..tolerances import EPS, default_rtol
 from .decoders import _as_measurements, _as_sensing_matrix
 

@@ -1,7 +1,7 @@
 """What a report shows of a check's verdict, value and margin: the terminal table and the HTML
 report alike.
 
-Numbers are rounded for people (``ssecert._format.readable``); the JSON keeps them exact.
+Numbers are rounded for people (``ssecert.base.format.readable``); the JSON keeps them exact.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from .._format import readable
+from ..base.format import readable
 from ..results import Check
 
 __all__ = ["verdict_label", "verdict_class", "number", "value_text", "margin_text", "named"]

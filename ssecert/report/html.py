@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 from markupsafe import Markup, escape
 
-from .._io import atomic_write_text
+from ..base.atomic import atomic_write_text
 from ..results import Certificate, Check, Verdict, to_jsonable
 from .cells import margin_text, number, value_text, verdict_class, verdict_label
 

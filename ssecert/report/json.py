@@ -6,7 +6,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from .._io import atomic_write_text
+from ..base.atomic import atomic_write_text
 from ..results import Certificate, to_jsonable
 from ..spec.write import spec_document
 

@@ -45,7 +45,7 @@ The package's modules: ``core`` (``Spec``, ``load_spec``, ``spec_from_dict``),
 the observer kinds) and ``write`` (a spec written back as TOML).
 """
 
-from .._validation import MAX_MATRIX_DIM, MAX_MATRIX_ENTRIES
+from ..base.validation import MAX_MATRIX_DIM, MAX_MATRIX_ENTRIES
 from . import core as _core
 from . import files as _files
 from . import scenarios as _scenarios

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .._validation import (
+from ..base.validation import (
     as_choice,
     as_real_matrix,
     describe,

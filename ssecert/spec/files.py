@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from .._validation import (
+from ..base.validation import (
     MAX_MATRIX_DIM,
     MAX_MATRIX_ENTRIES,
     check_size,
@@ -224,7 +224,7 @@ def _read_mat(raw: bytes, source: str) -> dict[str, Any]:
     """Variables of a MATLAB .mat file (v4 or v5), checked before SciPy reads them."""
     import scipy.io
 
-    from .._matfile import MatFormatError, variables
+    from ..base.matfile import MatFormatError, variables
 
     try:
         major, _ = scipy.io.matlab.matfile_version(io.BytesIO(raw))

@@ -13,7 +13,7 @@ import numbers
 from collections.abc import Mapping
 from typing import Any
 
-from .._validation import (
+from ..base.validation import (
     as_choice,
     as_float_option,
     as_index_list,

@@ -14,7 +14,7 @@ import re
 from collections.abc import Mapping
 from typing import Any
 
-from .._validation import (
+from ..base.validation import (
     MAX_MATRIX_DIM,
     MAX_MATRIX_ENTRIES,
     as_choice,

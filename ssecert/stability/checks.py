@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from .._format import one_minus, sig
+from ..base.format import one_minus, sig
 from ..budget import Budget, Laps, ResourceLimitError, stage
 from ..context import OBSERVER, AnalysisContext, shared
 from ..design.gains import GainError

@@ -15,7 +15,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .._format import one_minus, one_plus, sig
+from ..base.format import one_minus, one_plus, sig
 from ..design.gains import GainError
 from ..numerics.exact_powers import ExactMatrix
 from ..observers import ObserverDesign

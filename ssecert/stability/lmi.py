@@ -48,7 +48,7 @@ from typing import Any
 
 import numpy as np
 
-from .._format import sig
+from ..base.format import sig
 from ..budget import Budget
 from ..observers.lure import LureModel, scaling_text
 from ..results import Verdict

@@ -16,7 +16,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .._validation import as_real_matrix
+from ..base.validation import as_real_matrix
 from ..numerics.exact_powers import ExactMatrix
 from ..numerics.linalg import matrix_norm
 from ..results import Verdict

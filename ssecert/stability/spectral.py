@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from .._format import one_minus, one_plus, sig
+from ..base.format import one_minus, one_plus, sig
 from ..numerics.exact import (
     Dyadic,
     PowerBound,

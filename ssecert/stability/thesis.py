@@ -33,7 +33,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .._format import factor_above, readable, sig
+from ..base.format import factor_above, readable, sig
 from ..budget import Budget
 from ..numerics.exact import dyadic, exact_kernel_vector
 from ..numerics.exact_powers import ExactMatrix

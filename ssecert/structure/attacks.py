@@ -28,7 +28,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .._validation import as_index_list, as_int_option, as_real_matrix
+from ..base.validation import as_index_list, as_int_option, as_real_matrix
 from ..system import System
 from ..tolerances import Tolerances
 

@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from .._format import distance as format_distance
+from ..base.format import distance as format_distance
 from ..numerics.exact import ExactPlant
 from ..numerics.linalg import (
     EigenAnalysis,

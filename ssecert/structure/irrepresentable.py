@@ -36,8 +36,8 @@ from typing import Any
 
 import numpy as np
 
-from .._format import sig
-from .._validation import as_choice, as_float_option, as_int_option
+from ..base.format import sig
+from ..base.validation import as_choice, as_float_option, as_int_option
 from ..budget import Budget, bounded_comb, format_count, log10_comb
 from ..numerics.exact import exact_stacked_rank
 from ..numerics.linalg import balanced_units, staircase

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
-from .._format import distance as format_distance
+from ..base.format import distance as format_distance
 from ..numerics.linalg import (
     EigenAnalysis,
     Staircase,

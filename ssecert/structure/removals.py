@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validation import as_int_option
+from ..base.validation import as_int_option
 from ..numerics.exact import ExactPlant
 from ..numerics.linalg import balanced_units, eigen_clusters, sensor_subspaces
 from ..system import System

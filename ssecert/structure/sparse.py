@@ -39,7 +39,7 @@ from typing import Any
 
 import numpy as np
 
-from .._validation import as_choice, as_float_option, as_int_option
+from ..base.validation import as_choice, as_float_option, as_int_option
 from ..budget import DEFAULT_TIME_BUDGET
 from ..numerics.exact import ExactPlant
 from ..numerics.linalg import (

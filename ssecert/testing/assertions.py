@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from .._format import readable, sig
-from .._validation import as_float_option, as_int_option, as_real_matrix, describe
+from ..base.format import readable, sig
+from ..base.validation import as_float_option, as_int_option, as_real_matrix, describe
 from ..results import Certificate, Check, Verdict
 from ..spec import Spec
 from ..system import System

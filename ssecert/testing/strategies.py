@@ -38,7 +38,7 @@ from hypothesis import reject
 from hypothesis import strategies as st
 from hypothesis.strategies import SearchStrategy
 
-from .._validation import as_float_option, describe
+from ..base.validation import as_float_option, describe
 from ..observers import ObserverKind, get_kind, observer_kinds
 from ..observers.strategies import POLE_RADIUS as _POLE_RADIUS
 from ..observers.strategies import grid_spectrum as _spectrum
