@@ -171,6 +171,22 @@ def _reference(task: _LevelTask, ranks: tuple[int, int]) -> _Level:
     return level
 
 
+def _plant_task(plant: int, k: int, critical: bool) -> _LevelTask:
+    """The level of k removed sensors of one of ``_plants`` (its sensors in reverse order)."""
+    tol = Tolerances()
+    system = balanced_units(_plants()[plant]).system
+    sub = sensor_subspaces(system.A, system.C, tolerances=tol)
+    rest = np.flatnonzero(sub.ranks < system.n)[::-1]
+    P = sub.bases[rest]
+    proj = np.einsum("qkn,qkm->qnm", P, P)
+    q, n = rest.size, system.n
+    shift = max(tol.screen_rtol * q, 10.0 * float(np.sum(sub.errors[rest])) ** 2)
+    return _LevelTask(
+        P, sub.ranks[rest], proj, proj.sum(axis=0) - shift * np.eye(n), shift, k,
+        rest, np.zeros(0, dtype=np.int64), tol, critical, sub.errors[rest],
+    )  # fmt: skip
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("plant", range(7))
 def test_level_scan_finds_what_lapack_on_every_block_finds(plant):
@@ -216,19 +232,9 @@ def test_the_verdict_level_ranks_the_closest_sets_as_lapack(plant, pivots, monke
     monkeypatch.setattr(
         _combinatorics, "_pivot_shared", lambda *a: asked.append(a[2]) or pivot_shared(*a)
     )
-    tol = Tolerances()
-    system = balanced_units(_plants()[plant]).system
-    sub = sensor_subspaces(system.A, system.C, tolerances=tol)
-    rest = np.flatnonzero(sub.ranks < system.n)[::-1]
-    P = sub.bases[rest]
-    proj = np.einsum("qkn,qkm->qnm", P, P)
-    q, n = rest.size, system.n
-    shift = max(tol.screen_rtol * q, 10.0 * float(np.sum(sub.errors[rest])) ** 2)
+    q = _plant_task(plant, 0, True).rest.size
     k = max(j for j in range(q) if math.comb(q, j) <= 12000 and j <= q // 2)
-    task = _LevelTask(
-        P, sub.ranks[rest], proj, proj.sum(axis=0) - shift * np.eye(n), shift, k,
-        rest, np.zeros(0, dtype=np.int64), tol, True, sub.errors[rest],
-    )  # fmt: skip
+    task = _plant_task(plant, k, True)
     total = math.comb(q, k)
     got, want = _scan_range(task, (0, total)), _reference(task, (0, total))
     assert got.failures.keys() == want.failures.keys()

@@ -122,6 +122,27 @@ def _fista_batch(Phi, Y, weight, U0, max_iter, rtol):
     return U, iterations, converged
 
 
+def _lasso_inputs(
+    Phi: Any, y: Any, weight: Any, max_iter: Any, rtol: Any
+) -> tuple[np.ndarray, np.ndarray, bool, float, int, float]:
+    """The checked arguments of a batched Lasso: Phi, y as rows, whether y was one problem,
+    weight, max_iter and rtol."""
+    Phi = as_real_matrix(Phi, "Phi")
+    m = Phi.shape[0]
+    weight = as_float_option(weight, "weight", min_value=0.0, min_inclusive=False)
+    max_iter = as_int_option(max_iter, "max_iter", min_value=1)
+    rtol = as_float_option(rtol, "rtol", min_value=0.0)
+    single = np.ndim(y) == 1
+    Y = as_real_matrix(
+        y,
+        "y",
+        ndim=1 if single else 2,
+        shape=(m,) if single else (None, m),
+        shape_hint="rows of Phi",
+    )
+    return Phi, np.atleast_2d(Y), single, weight, max_iter, rtol
+
+
 def lasso_fista(
     Phi: Any,
     y: Any,
@@ -179,20 +200,8 @@ def lasso_fista(
     >>> bool(res.converged), bool(res.kkt_residual < 1e-6)
     (True, True)
     """
-    Phi = as_real_matrix(Phi, "Phi")
-    m, p = Phi.shape
-    weight = as_float_option(weight, "weight", min_value=0.0, min_inclusive=False)
-    max_iter = as_int_option(max_iter, "max_iter", min_value=1)
-    rtol = as_float_option(rtol, "rtol", min_value=0.0)
-    single = np.ndim(y) == 1
-    Y = as_real_matrix(
-        y,
-        "y",
-        ndim=1 if single else 2,
-        shape=(m,) if single else (None, m),
-        shape_hint="rows of Phi",
-    )
-    Y = np.atleast_2d(Y)
+    Phi, Y, single, weight, max_iter, rtol = _lasso_inputs(Phi, y, weight, max_iter, rtol)
+    p = Phi.shape[1]
     if initial is None:
         U0 = np.zeros((Y.shape[0], p))
     else:
@@ -261,21 +270,8 @@ def lasso_admm(
     >>> bool(res.converged), bool(res.kkt_residual < 1e-6)
     (True, True)
     """
-    Phi = as_real_matrix(Phi, "Phi")
-    m, p = Phi.shape
-    weight = as_float_option(weight, "weight", min_value=0.0, min_inclusive=False)
-    max_iter = as_int_option(max_iter, "max_iter", min_value=1)
-    rtol = as_float_option(rtol, "rtol", min_value=0.0)
-    single = np.ndim(y) == 1
-    Y = np.atleast_2d(
-        as_real_matrix(
-            y,
-            "y",
-            ndim=1 if single else 2,
-            shape=(m,) if single else (None, m),
-            shape_hint="rows of Phi",
-        )
-    )
+    Phi, Y, single, weight, max_iter, rtol = _lasso_inputs(Phi, y, weight, max_iter, rtol)
+    p = Phi.shape[1]
     curvature = 2.0 * float(np.linalg.norm(Phi, 2)) ** 2
     if rho is None:
         rho = curvature if curvature > 0 else 1.0
