@@ -324,12 +324,6 @@ class ColexScreen:
        items)``.  A positive bound (less every rounding of the sums and
        LAPACK's backward error) proves LAPACK's factorization succeeds and
        bounds its smallest pivot, at the cost of a few additions per subset.
-       Where that bound leaves a subset open, a bound of each pivot in turn
-       (``_pivot_shared``: the same argument on the leading blocks of
-       ``H - slack I``) bounds LAPACK's smallest pivot itself, which is
-       often about twice the smallest eigenvalue: it decides most of the
-       subsets of the verdict's level, whose closest sets are ranked by
-       their smallest pivots.
     2. The matrices minus ``margin`` I factored in single precision with the
        batch last (``cholesky_batch_last``): where that succeeds LAPACK's
        float64 factorization provably succeeds too, and its smallest pivot
@@ -415,10 +409,8 @@ class ColexScreen:
         self.factors = factors if sign == -1.0 and (m32 > 0 or k == 1) and m32 < k else None
         # the bounds of the last few largest items asked (ranges ascending or descending)
         self._bounds: dict[int, tuple[float, np.ndarray, np.ndarray] | None] = {}
-        self._pivots: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray] | None] = {}
         # tier 1 is skipped for this many batches after one where it left most subsets open
         self._skip = 0
-        self._misses = 0  # batches in a row where tier 1 left most subsets open
         self._slack = 0.0 if self.factors is None else _bound_slack(items, base, self.factors, k)
         self.device = device
         self._single_device: Any = None  # the single-precision level on the device
@@ -567,37 +559,11 @@ class ColexScreen:
         self._bounds[t] = bound  # the most recent last
         return bound
 
-    def _pivot_bound(self, t: int) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-        """(d, c, sums) of the pivots' bound for the subsets whose largest item is t
-        (``_pivot_shared``, with ``sums[g]`` the sums of ``c[:, g]`` over the rows of the
-        single-precision level below t); kept like ``_bound``'s."""
-        if t in self._pivots:
-            bound = self._pivots.pop(t)
-        else:
-            assert self.factors is not None
-            H = self.base - self.items[t]
-            shared = _pivot_shared(H, self.factors, t, self._slack)
-            if shared is None:
-                bound = None
-            else:  # the sums group by group, each contiguous
-                d, c = shared
-                bound = (d, c, np.ascontiguousarray(_level_sums(c, self.m32).T))
-            if len(self._pivots) >= 3:
-                del self._pivots[next(iter(self._pivots))]
-        self._pivots[t] = bound
-        return bound
-
     def lower_bounds(
-        self,
-        pieces: list[tuple[int, int, int, tuple[int, ...]]],
-        size: int,
-        cut: float = 0.0,
+        self, pieces: list[tuple[int, int, int, tuple[int, ...]]], size: int
     ) -> np.ndarray:
-        """Tier 1: a lower bound of the square of LAPACK's smallest pivot of each matrix
-        (-inf where there is none), positive only where LAPACK's factorization succeeds.
-
-        The smallest eigenvalue's bound less LAPACK's backward error, and where that is
-        at most ``cut`` (-inf: never), the larger of it and the pivots' bound."""
+        """Tier 1: a lower bound of the smallest eigenvalue of each matrix minus LAPACK's
+        backward error (-inf where there is none)."""
         low = np.full(size, -np.inf)
         if self.factors is None:
             return low
@@ -607,23 +573,7 @@ class ColexScreen:
                 continue
             lam, c, sums = bound
             s = sums[first:last] + c[list(top[:-1])].sum()
-            piece = lam * (1.0 - s) - self._slack
-            open_ = np.flatnonzero(piece <= cut)
-            if open_.size:
-                pivots = self._pivot_bound(top[-1])
-                if pivots is not None:
-                    d, cg, sg = pivots
-                    rest = cg[list(top[:-1])].sum(axis=0)
-                    # most open: the whole piece, no gather
-                    where = slice(None) if 2 * open_.size > piece.size else open_
-                    rows = slice(first, last) if 2 * open_.size > piece.size else first + open_
-                    least = d[0] * ((1.0 - rest[0]) - sg[0, rows])
-                    for g in range(1, d.size):
-                        run = (1.0 - rest[g]) - sg[g, rows]
-                        run *= d[g]
-                        np.minimum(least, run, out=least)
-                    piece[where] = np.maximum(piece[where], least)
-            low[row : row + last - first] = piece
+            low[row : row + last - first] = lam * (1.0 - s) - self._slack
         return low
 
     def screen(
@@ -655,14 +605,10 @@ class ColexScreen:
         """
         N = stop - start
         pieces = self._pieces(start, stop)
-        # on a device, tier 2 screens the whole batch: tier 1 would keep the CPU busy meanwhile;
-        # with no closest sets yet (threshold inf), no bound leaves a set out
-        tried = self._skip == 0 and self.device is None and threshold != np.inf
+        # on a device, tier 2 screens the whole batch: tier 1 would keep the CPU busy meanwhile
+        tried = self._skip == 0 and self.device is None
         self._skip = max(self._skip - 1, 0)
-        # the pivots' bound where the eigenvalue's leaves a set open: under the threshold
-        # (less the shift the proxies add) or, with no threshold, not positive
-        cut = 0.0 if threshold is None else threshold - shift
-        bound = self.lower_bounds(pieces, N, cut) if tried else np.full(N, -np.inf)
+        bound = self.lower_bounds(pieces, N) if tried else np.full(N, -np.inf)
         ok = bound > 0
         screen = ScreenedBatch(self, start, ok)
         if threshold is not None:
@@ -671,21 +617,12 @@ class ColexScreen:
             rows = np.flatnonzero(~ok | (screen.low <= threshold))
         else:
             rows = np.flatnonzero(~ok)
-        if tried and 2 * rows.size <= N:
-            self._misses = 0
         if rows.size > max(64, N // 50) or (self.device is not None and rows.size):
             if tried and self.factors is not None and rows.size > N // 2:
-                # tier 1 left most open: skipped for 1, 2, 4, then 8 batches while that lasts
-                self._skip = min(2**self._misses, 8)
-                self._misses += 1
-            # many subsets left open: tier 2 for them (the whole batch in a few calls when
-            # most are open), then LAPACK for those it leaves open
-            if 4 * rows.size > N or self.device is not None:
-                passed, smallest = self._single_tier(pieces, N, work, diagonal)
-            else:
-                passed = np.zeros(N, dtype=bool)
-                smallest = np.zeros(N, dtype=np.float32)
-                passed[rows], smallest[rows] = self._single_rows(pieces, rows, work, diagonal)
+                self._skip = 8
+            # many subsets left open: tier 2 for the whole batch (a few calls), then LAPACK for
+            # those it leaves open
+            passed, smallest = self._single_tier(pieces, N, work, diagonal)
             ok |= passed
             if screen.low is not None:
                 low = smallest.astype(np.float64)
@@ -700,41 +637,15 @@ class ColexScreen:
                 screen.exact[rows] = True
         return screen
 
-    def _single_rows(
-        self,
-        pieces: list[tuple[int, int, int, tuple[int, ...]]],
-        rows: np.ndarray,
-        work: np.ndarray,
-        diagonal: np.ndarray,
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Tier 2 on the given rows of the batch (ascending) only, on the CPU: (passed,
-        smallest pivot) of each, as ``_single_tier`` finds them on the whole batch."""
-        R = rows.size
-        mats, diag = work[:, :, :R], diagonal[:, :R]
-        sums = self._single()
-        for row, first, last, top in pieces:
-            a, b = np.searchsorted(rows, [row, row + last - first])
-            if a == b:
-                continue
-            where = mats[:, :, a:b]
-            picked = sums[:, :, first + rows[a:b] - row]
-            total = self._top_total(top)
-            if total is None:
-                np.copyto(where, picked)
-            else:
-                np.add(picked, total[:, :, None], out=where)
-        cholesky_batch_last(mats, diag)
-        return single_passed(diag)
-
 
 def _level_sums(values: np.ndarray, m: int) -> np.ndarray:
-    """Sums of ``values`` (shape (t,) or (t, g)) over every m-subset of its first axis, in
-    colex order."""
-    sums = np.zeros((1, *values.shape[1:]))
-    count = values.shape[0]
+    """Sums of ``values`` over every m-subset of its indices, in colex order."""
+    sums = np.zeros(1)
     for j in range(1, m + 1):
-        parts = [sums[: math.comb(last, j - 1)] + values[last] for last in range(j - 1, count)]
-        sums = np.concatenate(parts) if parts else np.zeros((0, *values.shape[1:]))
+        parts = [
+            sums[: math.comb(last, j - 1)] + values[last] for last in range(j - 1, values.size)
+        ]
+        sums = np.concatenate(parts) if parts else np.zeros(0)
     return sums
 
 
@@ -774,56 +685,6 @@ def _shared_bound(H: np.ndarray, factors: np.ndarray, t: int) -> tuple[float, np
     Z = np.einsum("brn,nj->brj", factors[:t], V / np.sqrt(lam))
     c = np.linalg.eigvalsh(Z @ Z.transpose(0, 2, 1))[:, -1] if t else np.zeros(0)
     return float(lowest), np.maximum(c, 0.0) * (1 + 1e-5) + 1e-12
-
-
-# the pivots' bound of ``ColexScreen``: each largest item's leading blocks in this many groups
-_PIVOT_GROUPS = 3
-
-
-def _pivot_shared(
-    H: np.ndarray, factors: np.ndarray, t: int, slack: float
-) -> tuple[np.ndarray, np.ndarray] | None:
-    """(d, c) of the pivots' bound for the subsets whose largest item is t: for every
-    subset S of the items below t, the square of LAPACK's smallest pivot of the sum
-    ``H - sum(items[b] for b in S)`` is at least ``min_g d[g] (1 - sum(c[b, g] for b in
-    S))``.
-
-    With ``G = H - slack I = L L^T`` (``slack``: ``_bound_slack``, the roundings of the
-    sums and LAPACK's backward error), the j-th pivot of ``G - sum(F_b^T F_b)`` is the
-    least of ``x^T (G - sum F_b^T F_b) x`` over the x with ``x_j = 1`` and no entry
-    after j, and on those x, ``||F_b x||^2 <= c_bj x^T G x`` with ``c_bj = ||(F_b
-    L^-T)[:, :j+1]||^2`` (the leading block of L is the factor of G's), so the pivot is
-    at least ``L_jj^2 (1 - sum c_bj)``.  LAPACK's computed pivots are the exact ones of
-    the sum plus perturbations within the slack, at least those of ``G - sum F_b^T F_b``
-    (pivots grow with the matrix).  c_bj grows with j: the pivots are taken in
-    ``_PIVOT_GROUPS`` runs, each ending at one of the smallest ``L_jj`` or the last, with
-    the least ``L_jj^2`` of the run and the c of its end.  G's factorization and the
-    solves are backward stable: when G's condition number is below 1e6, d and c are
-    within a relative 1e-8 of the exact ones; they are taken 1e-5 relatively (and c
-    1e-12 absolutely) below and above.  None when G is not that well conditioned.
-    """
-    n = H.shape[-1]
-    G = H - slack * np.eye(n)
-    lam = np.linalg.eigvalsh(G)
-    lowest = lam[0] - 64 * n * _U64 * max(abs(lam[0]), abs(lam[-1]))
-    if not np.all(np.isfinite(lam)) or lowest <= 0 or lam[-1] > 1e6 * lowest:
-        return None
-    L = np.linalg.cholesky(G)
-    pivots = np.diagonal(L) ** 2
-    ends = sorted({*np.argsort(pivots[:-1])[: _PIVOT_GROUPS - 1].tolist(), n - 1})
-    starts = [0, *(e + 1 for e in ends[:-1])]
-    d = np.array([pivots[a : e + 1].min() for a, e in zip(starts, ends)]) * (1 - 1e-5)
-    r = factors.shape[1]
-    # F_b L^-T for b < t, shape (t, r, n): L^-1 F_b^T for all b at once
-    W = np.linalg.solve(L, factors[:t].transpose(2, 0, 1).reshape(n, t * r))
-    W = W.reshape(n, t, r).transpose(1, 2, 0)
-    c = np.zeros((t, len(ends)))
-    for g, e in enumerate(ends):
-        block = W[:, :, : e + 1]
-        gram = block @ block.transpose(0, 2, 1) if r <= e + 1 else block.transpose(0, 2, 1) @ block
-        if t:
-            c[:, g] = np.linalg.eigvalsh(gram)[:, -1]
-    return d, np.maximum(c, 0.0) * (1 + 1e-5) + 1e-12
 
 
 def _proxy_floor(bound: np.ndarray, shift: float) -> np.ndarray:
