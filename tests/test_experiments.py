@@ -225,3 +225,12 @@ def test_a_result_with_a_figure_is_redrawn_in_the_report():
     assert html.count("<svg") == 1 and "y against x" in html
     data = json.loads(reproduce_json([outcome]))["experiments"]["notes.example8"]
     assert data["figure"]["lines"]["ours"] == {"x": [1.0, 2.0, 3.0], "y": [1.0, 2.0, 0.0]}
+
+
+def test_the_readme_table_gives_why_an_experiment_differs():
+    from ssecert.experiments import agreement_table
+
+    entry = {"match": "differs", "agreement": "differs: x by 50%", "why": "y is larger"}
+    table = agreement_table({"experiments": {"notes.example0": entry}})
+    assert "- `notes.example0`: differs: x by 50%. Why: y is larger" in table
+    assert "| notes | 1 | 0 | 0 | 1 | 0 | 0 |" in table

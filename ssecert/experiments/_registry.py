@@ -72,6 +72,9 @@ class Result:
         The document's figure redrawn with its axes (``figure``): ``title``, ``x`` and ``y``
         (axis labels), ``log`` (a logarithmic y axis) and ``lines``, ``{label: {"x": [...],
         "y": [...]}}``.
+    why : str
+        Why ours differs, in a sentence computed from the numbers, as far as they show it
+        (the README's table gives it beside the agreement line).
     """
 
     paper: Mapping[str, Value]
@@ -80,6 +83,7 @@ class Result:
     table: list[dict[str, Any]] = field(default_factory=list)
     note: str = ""
     figure: Mapping[str, Any] | None = None
+    why: str = ""
 
 
 @dataclass(frozen=True)

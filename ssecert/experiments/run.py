@@ -48,6 +48,7 @@ class Outcome:
             "unstated": dict(r.unstated) if r is not None else {},
             "table": to_jsonable(r.table) if r is not None else [],
             "note": (r.note if r is not None else e.why_not),
+            "why": r.why if r is not None else "",
             "figure": to_jsonable(dict(r.figure)) if r is not None and r.figure else None,
             "command": self.command,
             "seconds": round(self.seconds, 3),
@@ -108,6 +109,7 @@ code{background:#f4f4f4;padding:0 .2em}
 {% if o.unstated %}<p>Left unstated by the document, and chosen here:</p><ul>
 {% for key, value in o.unstated %}<li>{{ key }}: {{ value }}</li>{% endfor %}</ul>{% endif %}
 {% if o.svg %}<figure>{{ o.svg|safe }}</figure>{% endif %}
+{% if o.why %}<p><strong>Why:</strong> {{ o.why }}</p>{% endif %}
 {% if o.note %}<p>{{ o.note }}</p>{% endif %}
 <p><code>{{ o.command }}</code> ({{ o.seconds }} s)</p>
 </section>{% endfor %}
@@ -172,7 +174,8 @@ def agreement_table(report: Mapping[str, Any]) -> str:
         )
         for key, entry in mine.items():
             if entry["match"] in (Match.DIFFERS.value, Match.CLOSE.value):
-                details.append(f"- `{key}`: {entry['agreement']}")
+                why = f" Why: {entry['why']}" if entry.get("why") else ""
+                details.append(f"- `{key}`: {entry['agreement']}.{why}")
     return "\n".join(lines + ([""] + details if details else [])) + "\n"
 
 
