@@ -223,6 +223,7 @@ def _code_strings(path: Path) -> list[tuple[int, str]]:
     ]
 
 
+@pytest.mark.slow
 def test_no_module_outside_the_observers_names_a_kind():
     # a kind is one module: what the spec reader, the checks, the design command and the
     # strategies need of it, it declares (ObserverKind); "ogd" is also a gain's name

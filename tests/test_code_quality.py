@@ -96,6 +96,7 @@ def _reads_text(tree: object) -> list[tuple[int, str]]:
     return found
 
 
+@pytest.mark.slow
 def test_no_decision_is_read_from_a_sentence():
     """Verdicts and decisions travel as enums, flags and numbers; no code outside the renderers
     compares a verdict with its name or searches a reason, summary or problem for a word."""

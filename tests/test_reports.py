@@ -18,7 +18,11 @@ def test_every_packaged_example_has_a_report():
     assert (REPORTS / "README.md").is_file()
 
 
-@pytest.mark.parametrize("name", list_examples())
+# certifying the 14-bus system takes several seconds: a slow test
+@pytest.mark.parametrize(
+    "name",
+    [pytest.param(n, marks=pytest.mark.slow) if n == "ieee14" else n for n in list_examples()],
+)
 def test_regenerating_gives_the_same_verdicts(name):
     committed = json.loads((REPORTS / f"{name}.json").read_text())
     result = certify(load_example(name), seed=0, simulate=False, region=False)
