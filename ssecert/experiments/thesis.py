@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from ._registry import Result, Settings, experiment
+from ._registry import Result, Settings, experiment, figure
 
 __all__ = ["FULL_GRID", "QUICK_GRID", "measure", "no_attack", "tune"]
 
@@ -184,6 +184,8 @@ def measure(runs: int, steps: int, grid: dict[str, list[float]], seed: int = 0) 
                     "mse_initial": float(np.mean(res.mse[0])),
                     "mse": _number(last["mse_mean"]),
                     "support_error": _number(last["support_error_mean"]),
+                    # the mean MSE every SERIES_EVERY steps (the figures' curves)
+                    "mse_series": np.mean(res.mse[::SERIES_EVERY], axis=1).tolist(),
                 }
             )
     return {
@@ -204,6 +206,7 @@ def measure(runs: int, steps: int, grid: dict[str, list[float]], seed: int = 0) 
 
 
 STEPS = 1200
+SERIES_EVERY = 10
 
 
 def _number(value: float | None) -> float:
@@ -243,7 +246,22 @@ def _scenario(settings: Settings, scenario: str) -> Result:
             <= SUPPORT_IDENTIFIED,
         },
         unstated={**UNSTATED, "runs": f"{runs} (the thesis: 50)"},
-        table=[{"tuned": numbers["tuned"]}, *rows.values()],
+        table=[
+            {"tuned": numbers["tuned"]},
+            *({k: v for k, v in r.items() if k != "mse_series"} for r in rows.values()),
+        ],
+        figure=figure(
+            f"MSE of the state estimate against time ({scenario})",
+            "step k",
+            "mean MSE over runs",
+            {
+                name: (range(0, SERIES_EVERY * len(r["mse_series"]), SERIES_EVERY), r["mse_series"])
+                for name, r in rows.items()
+            },
+            log=True,
+        )
+        if all("mse_series" in r for r in rows.values())
+        else None,
         note="The thesis's words (Sec. 6.2.7) read as rules: 'close to zero', a final MSE at "
         f"most {CLOSE_TO_ZERO:g} of the initial one; 'identified', a final support error at "
         f"most {SUPPORT_IDENTIFIED:g}. The thesis does not say in words which observer is "
@@ -490,7 +508,7 @@ def ugv_comparison(runs: int, quick: bool, seed: int) -> dict[str, Any]:
     )
     finite = [pt for pt in found.points if math.isfinite(pt["cost"])]
     best = min(finite, key=lambda pt: pt["cost"])["params"] if finite else found.best["params"]
-    rows = {}
+    rows, sweep = {}, []
     for label, section in (("D-SSO", dict(spec.observer or {})), ("elastic net", {**en, **best})):
         design = build_observer(spec.system, section)
         res = simulate_scenario(
@@ -502,7 +520,28 @@ def ugv_comparison(runs: int, quick: bool, seed: int) -> dict[str, Any]:
             "mse": _number(last["mse_mean"]),
             "support_error": _number(last["support_error_mean"]),
         }
-    return {"tuned": best, "rows": rows}
+        # the attack's magnitude, which the thesis does not give, swept
+        for magnitude in UGV_MAGNITUDES:
+            other = simulate_scenario(
+                design,
+                {**scenario, "magnitude": magnitude},
+                runs=runs,
+                steps=STEPS,
+                max_attacked=spec.max_attacked,
+            ).final()
+            sweep.append(
+                {
+                    "observer": label,
+                    "magnitude": list(magnitude),
+                    "mse": _number(other["mse_mean"]),
+                    "support_error": _number(other["support_error_mean"]),
+                }
+            )
+    return {"tuned": best, "rows": rows, "sweep": sweep}
+
+
+#: the UGV attack's magnitudes swept beside the example's [4, 5]
+UGV_MAGNITUDES = ((0.5, 1.0), (1.0, 2.0), (8.0, 10.0))
 
 
 @experiment(
@@ -527,12 +566,17 @@ def fig6_7(settings: Settings) -> Result:
         },
         unstated={
             "attack": "the ugv example's constant-velocity-a scenario: sensor 2 (velocity-a), "
-            "magnitudes in [4, 5], 300 steps (the thesis gives no magnitude)",
+            "magnitudes in [4, 5], 300 steps (the thesis gives no magnitude; [0.5, 1], [1, 2] "
+            "and [8, 10] are swept in the table)",
             "elastic net": f"tuned like Figs. 6.2-6.5 on that scenario: {_params_words(out)}",
             "D-SSO": "the example's spec: deadbeat gain, nu = 0.7, lambda = 0.1 (Sec. 6.1)",
             "runs": f"{runs} (the thesis: 50)",
         },
-        table=[{"tuned": out["tuned"]}, *({"observer": k, **v} for k, v in out["rows"].items())],
+        table=[
+            {"tuned": out["tuned"]},
+            *({"observer": k, **v} for k, v in out["rows"].items()),
+            *out["sweep"],
+        ],
         note=f"'Close to zero' read as a final MSE at most {CLOSE_TO_ZERO:g} of the initial "
         "one, as for Figs. 6.2-6.5. The UGV is not 2-sparse observable (an attack on the "
         "position sensor cannot be told from another position), but an attack on a velocity "
