@@ -205,7 +205,7 @@ def test_the_online_observers_of_fig4_on_a_few_runs():
     m = observers_over_time(1, runs=2, seed=0, steps=60)
     assert set(m) == {"SSO", "ETPL"}
     for metrics in m.values():
-        assert set(metrics) == {"error", "right", "settles", "seconds"}
+        assert set(metrics) == {"error", "right", "settles", "seconds", "series"}
         assert 0 <= metrics["right"] <= 1 and 0 <= metrics["settles"] <= 61
     assert observers_over_time(1, runs=2, seed=0, steps=60)["SSO"]["error"] == m["SSO"]["error"]
 
