@@ -443,7 +443,8 @@ def test_an_error_weight_of_2_to_the_1000_is_not_an_internal_error(tmp_path, cap
     assert "internal error" not in capsys.readouterr().err
 
 
-def test_messages_name_what_was_shown():
+@pytest.mark.slow
+def test_messages_name_what_was_shown():  # a whole analyze of an SSO: about 10 s
     # an SSO with inner steps: the matrix checked is A (I - step S'S)^m, not A - L C with the
     # one-step L printed beside it
     from ssecert import analyze, spec_from_dict
