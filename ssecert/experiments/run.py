@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import math
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -11,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from ..base.format import readable
 from ..results import to_jsonable
 from ._registry import DOCUMENTS, Experiment, Result, Settings, all_experiments, get_experiment
 from .agreement import Agreement, Match, agreement
@@ -122,8 +122,8 @@ def _shown(value: object) -> str:
         return "-"
     if isinstance(value, bool):
         return "yes" if value else "no"
-    if isinstance(value, float) and math.isfinite(value):
-        return f"{value:.4g}"
+    if isinstance(value, float):
+        return readable(value)
     return str(value)
 
 
@@ -189,7 +189,7 @@ def _plot(outcome: Outcome) -> str:
     spec = outcome.result.figure
     fig = Figure(figsize=(5.6, 3.2), layout="constrained")
     ax = fig.subplots()
-    colours = [PALETTE["a"], PALETTE.get("b", "#d95f02"), "#7570b3", "#1b9e77", "#e7298a",
+    colours = [PALETTE["a"], PALETTE["b"], "#7570b3", "#1b9e77", "#e7298a",
                "#66a61e", "#a6761d", "#666666"]  # fmt: skip
     for i, (label, line) in enumerate(spec["lines"].items()):
         xs, ys = np.asarray(line["x"], dtype=float), np.asarray(line["y"], dtype=float)

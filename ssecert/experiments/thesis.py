@@ -265,13 +265,13 @@ def _scenario(settings: Settings, scenario: str) -> Result:
         note="The thesis's words (Sec. 6.2.7) read as rules: 'close to zero', a final MSE at "
         f"most {CLOSE_TO_ZERO:g} of the initial one; 'identified', a final support error at "
         f"most {SUPPORT_IDENTIFIED:g}. The thesis does not say in words which observer is "
-        "better; the table gives both." + _shrink_words(numbers),
-        why=_scenario_why(rows, numbers),
+        "better; the table gives both." + _shrink_words(numbers["tuned"]["elastic net"]["best"]),
+        why=_scenario_why(rows, numbers["tuned"]["elastic net"]["best"]),
     )
 
 
 def _scenario_why(
-    rows: dict[str, dict[str, Any]], numbers: dict[str, Any], dsso: str = "the tuned D-SSO"
+    rows: dict[str, dict[str, Any]], tuned: dict[str, Any], dsso: str = "the tuned D-SSO"
 ) -> str:
     """Why the elastic net misses the thesis's words here, from the numbers."""
     en, other = rows["elastic net"], rows["D-SSO"]
@@ -282,12 +282,13 @@ def _scenario_why(
         f"error {en['support_error']:.2g}; {dsso} at {other['mse']:.2g} and "
         f"{other['support_error']:.2g}."
     )
-    return words + _shrink_words(numbers)
+    return words + _shrink_words(tuned)
 
 
-def _shrink_words(numbers: dict[str, Any]) -> str:
-    """Why the tuned elastic net keeps an error under a persistent attack, when it does."""
-    shrink = numbers["tuned"]["elastic net"]["best"].get("shrink", 1.0)
+def _shrink_words(tuned: dict[str, Any]) -> str:
+    """Why the tuned elastic net (its parameters ``tuned``) keeps an error under a persistent
+    attack, when it does."""
+    shrink = tuned.get("shrink", 1.0)
     if shrink >= 1:
         return ""
     return (
@@ -581,11 +582,9 @@ def fig6_7(settings: Settings) -> Result:
         "one, as for Figs. 6.2-6.5. The UGV is not 2-sparse observable (an attack on the "
         "position sensor cannot be told from another position), but an attack on a velocity "
         "sensor can be: the position sensor and the dynamics expose it."
-        + _shrink_words({"tuned": {"elastic net": {"best": out["tuned"]}}}),
+        + _shrink_words(out["tuned"]),
         why=_scenario_why(
-            {"elastic net": en, "D-SSO": out["rows"]["D-SSO"]},
-            {"tuned": {"elastic net": {"best": out["tuned"]}}},
-            "the example's D-SSO",
+            {"elastic net": en, "D-SSO": out["rows"]["D-SSO"]}, out["tuned"], "the example's D-SSO"
         ),
     )
 
