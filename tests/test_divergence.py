@@ -124,13 +124,13 @@ def test_a_divergence_witness_diverges_and_a_holds_converges(seed, step, thresho
         )
         assert np.all(done | on_its_way)
     region = region_of_attraction(model, seed=seed)
-    if region["radius"] > 0:  # a certified region: errors inside it never leave it
+    if region.radius > 0:  # a certified region: errors inside it never leave it
         e0 = rng.standard_normal((20, model.n_e))
-        e0 *= region["radius"] / np.linalg.norm(e0, axis=1, keepdims=True)
+        e0 *= region.radius / np.linalg.norm(e0, axis=1, keepdims=True)
         xi0 = np.concatenate([e0, np.zeros((20, model.N - model.n_e))], axis=1)
         path = model.simulate(xi0, 300)
-        V = np.einsum("ksi,ij,ksj->ks", path, region["P"], path)
-        assert V.max() <= region["level"] * (1 + 1e-6)
+        V = np.einsum("ksi,ij,ksj->ks", path, region.evidence["P"], path)
+        assert V.max() <= region.evidence["level"] * (1 + 1e-6)
 
 
 def test_no_witness_without_an_eigenvalue_outside_the_unit_circle():

@@ -80,11 +80,12 @@ def test_ugv_cli_reports_observer_checks(capsys):
 
 
 def test_the_region_check_reads_a_flag_not_a_sentence(monkeypatch):
-    """An unstable dead zone fails the region check because ``region_of_attraction`` says
-    ``unstable``; the same words without the flag leave it inconclusive."""
+    """An unstable dead zone fails the region check because ``region_of_attraction``'s code says
+    so; the same words under another code leave it inconclusive."""
     from ssecert.observers import build_observer
     from ssecert.stability import checks
     from ssecert.stability.checks import region_of_attraction_check
+    from ssecert.stability.outcomes import Region, RegionCode
     from ssecert.system import System
 
     system = System(np.array([[1.5]]), np.array([[1.0], [1.0], [1.0]]))
@@ -95,6 +96,8 @@ def test_the_region_check_reads_a_flag_not_a_sentence(monkeypatch):
     )  # fmt: skip
     check = region_of_attraction_check(design)
     assert check.verdict.value == "fails" and check.evidence["unstable"] is True
-    reworded = {"radius": 0.0, "reason": "the dead zone's dynamics is not stable (reworded)"}
-    monkeypatch.setattr(checks, "region_of_attraction", lambda *a, **k: dict(reworded))
-    assert region_of_attraction_check(design).verdict.value == "inconclusive"
+    # the same words under another code: undecided
+    reworded = Region.none(RegionCode.NO_VERIFIED_LYAPUNOV, lyapunov="it is not stable")
+    monkeypatch.setattr(checks, "region_of_attraction", lambda *a, **k: reworded)
+    check = region_of_attraction_check(design)
+    assert check.verdict.value == "inconclusive" and "is not stable" in check.summary

@@ -16,6 +16,7 @@ from ssecert.stability import piecewise as pw
 from ssecert.stability._conic import LMIProblem
 from ssecert.stability.checks import region_of_attraction_check
 from ssecert.stability.divergence import divergence_witness
+from ssecert.stability.outcomes import RegionCode
 
 
 def _ugv_model(step: float) -> LureModel:
@@ -87,16 +88,18 @@ def test_emptiness_certificates_are_exact_and_respect_the_box():
 def test_the_ugv_dsso_region_is_far_larger_than_its_dead_zone():
     model = _ugv_model(0.7)
     found = pw.piecewise_region(model, floor=0.1429)
-    assert found["radius"] >= 5.0 and found["ball"] == pytest.approx(2 * found["radius"])
-    assert found["replay"]["confirmed"] and found["margin"] > 100 * found["error_bound"]
-    assert all("seconds" in a for a in found["attempts"])
+    assert found.code is RegionCode.PIECEWISE_CERTIFIED
+    evidence = found.evidence
+    assert found.radius >= 5.0 and evidence["ball"] == pytest.approx(2 * found.radius)
+    assert evidence["replay"]["confirmed"] and evidence["margin"] > 100 * evidence["error_bound"]
+    assert all("seconds" in a for a in evidence["attempts"])
     # independent: errors inside the radius stay in the ball and converge
     rng = np.random.default_rng(3)
     e0 = rng.standard_normal((100, model.n_e))
-    e0 *= found["radius"] * rng.uniform(0.5, 1, (100, 1)) / np.linalg.norm(e0, axis=1)[:, None]
+    e0 *= found.radius * rng.uniform(0.5, 1, (100, 1)) / np.linalg.norm(e0, axis=1)[:, None]
     xi0 = np.concatenate([e0, np.zeros((100, model.N - model.n_e))], axis=1)
     path = model.simulate(xi0, 2000)
-    assert np.linalg.norm(path, axis=2).max() <= found["ball"]
+    assert np.linalg.norm(path, axis=2).max() <= evidence["ball"]
     assert np.linalg.norm(path[-1], axis=1).max() <= 1e-9
 
 
@@ -123,7 +126,7 @@ def test_a_divergent_design_gets_no_region_beyond_its_divergence():
     witness = divergence_witness(model)
     assert witness is not None
     found = pw.piecewise_region(model)
-    assert found["radius"] < np.linalg.norm(witness["initial_error"])
+    assert found.radius < np.linalg.norm(witness["initial_error"])
 
 
 def test_out_of_reach_models_are_refused_with_the_reason():
@@ -136,7 +139,8 @@ def test_out_of_reach_models_are_refused_with_the_reason():
     }
     design = build_observer(spec.system, spec_from_dict(data).observer)
     found = pw.piecewise_region(LureModel.from_design(design))
-    assert found["radius"] == 0.0 and "not attempted" in found["reason"]
+    assert found.radius == 0.0 and found.code is RegionCode.NOT_ATTEMPTED
+    assert found.facts["channels"] > pw.MAX_CHANNELS
 
 
 def test_the_check_reports_the_piecewise_region_only_when_asked():

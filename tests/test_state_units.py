@@ -372,14 +372,14 @@ def test_the_dead_zone_region_survives_far_state_units():
     far = region_of_attraction(
         LureModel.from_design(build_observer(scaled.system, scaled.observer))
     )
-    assert own["radius"] > 0.06 and far["radius"] > 0
+    assert own.radius > 0.06 and far.radius > 0
     # initial errors on the certified sphere, in the spec's units, converge
     model = LureModel.from_design(build_observer(scaled.system, scaled.observer))
     e0 = np.random.default_rng(0).standard_normal((100, 2))
-    e0 *= far["radius"] / np.linalg.norm(e0, axis=1, keepdims=True)
+    e0 *= far.radius / np.linalg.norm(e0, axis=1, keepdims=True)
     xi0 = np.hstack([e0, np.zeros((100, model.N - 2))])
     tail = model.simulate(xi0, 2000)[-1][:, :2]
-    assert np.all(np.linalg.norm(tail, axis=1) <= 1e-6 * far["radius"])
+    assert np.all(np.linalg.norm(tail, axis=1) <= 1e-6 * far.radius)
 
 
 def _rescaled_by(plant, observer, t):

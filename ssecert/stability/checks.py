@@ -21,6 +21,7 @@ from ..observers.lure import LureModel, scaling_text
 from ..results import Check, Step, Verdict, decide
 from ..system import System
 from ..tolerances import Tolerances
+from . import region_messages
 from .constant_attack import constant_attack_outcomes
 from .divergence import divergence_witness
 from .equilibria import nonzero_equilibrium
@@ -44,6 +45,7 @@ from .lmi import (
     lure_model_cost,
 )
 from .lyapunov import LyapunovCertificate, lyapunov_certificate
+from .outcomes import Region, RegionCode
 from .periodic import periodic_orbit
 from .roa import region_of_attraction
 from .thesis import thesis_assumptions
@@ -890,136 +892,53 @@ def region_of_attraction_check(
     if stability is not None:
         piecewise = stability.verdict is Verdict.INCONCLUSIVE
     alone = _region_alone(design, seed=seed, piecewise=piecewise, budget=budget)
-    if alone is None or stability is None or stability.verdict is not Verdict.HOLDS:
-        return alone
-    prefix = "No region of attraction is certified: "
-    words = (
-        f"{alone.value:.4g}."
-        if alone.verdict is Verdict.HOLDS
-        else f"no radius: {alone.summary.removeprefix(prefix)}"
-    )
-    return Check(
-        id=alone.id,
-        title=alone.title,
-        verdict=Verdict.HOLDS,
-        summary="From every initial error the error converges to 0 without attack: "
-        f"observer_stability's certificate is global. (Its dead zone alone certifies {words})",
-        value=float("inf"),
-        margin=alone.margin,
-        method=alone.method
-        if alone.verdict is Verdict.HOLDS
-        else "observer_stability's global certificate",
-        required=alone.required,
-        fields={"radius": float("inf")},
-        evidence={**alone.evidence, "dead_zone_radius": alone.value},
-    )
+    if alone is None:
+        return None
+    check, region = alone
+    if stability is None or stability.verdict is not Verdict.HOLDS:
+        return check
+    return region_messages.global_region_check(check, region)
 
 
 def _region_alone(
     design: ObserverDesign, *, seed: int, piecewise: bool, budget: Budget | None
-) -> Check | None:
+) -> tuple[Check, Region] | None:
     """``region_of_attraction_check`` from the observer's dead zone (and piecewise function)
-    alone."""
+    alone, with the region it rests on."""
     if design.observer_kind.lure_gap(design) is None:
         refusal = _lure_model_refusal(design, budget)
         if refusal:
-            return _region_check(
-                0.0, {"reason": f"not attempted: {refusal}"}, "", "dead zone (not attempted)"
-            )
+            region = Region.none(RegionCode.NOT_ATTEMPTED, refusal=refusal)
+            return region_messages.refused_region_check(region), region
     try:
         model = design.observer_kind.lure_model(design)
     except NotImplementedError:
         refusal = design.observer_kind.dead_zone_refusal(design)
         if refusal:
-            return _region_check(0.0, {"reason": refusal}, "", "dead zone (not attempted)")
+            region = Region.none(RegionCode.NOT_ATTEMPTED, refusal=refusal, as_given=True)
+            return region_messages.refused_region_check(region), region
         dead_zone = design.observer_kind.dead_zone_model(design)
         if dead_zone is None:
             return None
-        return _dead_zone_only_check(design, dead_zone, seed)
-    found = region_of_attraction(model, seed=seed, piecewise=piecewise, budget=budget)
-    radius = float(found["radius"])
-    evidence = {k: v for k, v in found.items() if k != "radius"}
-    balanced = ""
-    if "state_scaling" in evidence:
-        scaling = scaling_text(evidence["state_scaling"])
-        balanced = (
-            f" Proved in balanced coordinates xi = {scaling} xi_b (the states' units "
-            f"differ widely) for ||e_b(0)|| <= {evidence['balanced_radius']:.4g}, which holds "
-            f"whenever ||e(0)|| <= {radius:.4g}; the other numbers are in those coordinates."
-        )
-    if "ball" in evidence:
-        return _region_check(
-            radius,
-            evidence,
-            f"From every initial estimation error with ||e(0)|| <= {radius:.4g} (a_hat(0) = 0) the "
-            f"error converges to 0 without attack: a piecewise-quadratic Lyapunov function over "
-            f"the soft threshold's regions, verified in numpy, decreases along every step inside "
-            f"the ball of radius {evidence['ball']:.4g} and its sublevel set containing those "
-            f"errors stays in that ball ({evidence['transitions']} transitions between regions "
-            f"checked; the dead zone alone certifies {evidence['dead_zone_radius']:.4g}); "
-            f"{evidence['replay']['samples']} initial errors on that sphere, simulated, converge."
-            + balanced,
-            "piecewise-quadratic Lyapunov function (S-procedure LMIs)",
-        )
-    return _region_check(
-        radius,
-        evidence,
-        f"From every initial estimation error with ||e(0)|| <= {radius:.4g} (a_hat(0) = 0) the "
-        f"error converges to 0 without attack: the largest sublevel set of a verified "
-        f"Lyapunov function of the dead zone's linear dynamics that fits in the dead zone "
-        f"(|Cw_i xi| <= threshold) is invariant; {evidence.get('replay', {}).get('samples')} "
-        f"initial errors on that sphere, simulated, stay in it." + balanced,
-        "invariant sublevel set of the dead zone (Lyapunov)",
-    )
+        region = _dead_zone_only_region(design, dead_zone, seed)
+        return region_messages.inner_steps_region_check(region, dead_zone.m), region
+    region = region_of_attraction(model, seed=seed, piecewise=piecewise, budget=budget)
+    return region_messages.lure_region_check(region), region
 
 
-def _region_check(radius: float, evidence: dict[str, Any], proved: str, method: str) -> Check:
-    """The region_of_attraction Check: holds with the sentence ``proved`` when the radius is
-    positive; fails when the dead zone's own dynamics are unstable; inconclusive otherwise."""
-    if radius > 0:
-        verdict, summary = Verdict.HOLDS, proved
-    else:
-        verdict = Verdict.FAILS if evidence.get("unstable") is True else Verdict.INCONCLUSIVE
-        summary = f"No region of attraction is certified: {evidence.get('reason', '')}."
-    return Check(
-        id="region_of_attraction",
-        title="Certified region of attraction",
-        verdict=verdict,
-        summary=summary,
-        value=radius,
-        margin=evidence.get("lyapunov_margin", evidence.get("margin")),
-        method=method,
-        required=False,
-        fields={"radius": radius},
-        evidence=evidence,
-    )
-
-
-def _dead_zone_only_check(design: ObserverDesign, model: LureModel, seed: int) -> Check:
-    """region_of_attraction of a design known only in its dead zone (an SSO with several
-    inner steps per sample): the invariant sublevel set of the dead zone's linear map, replayed
-    through the observer's own simulator (the attack estimate must stay 0 and the error
-    converge)."""
+def _dead_zone_only_region(design: ObserverDesign, model: LureModel, seed: int) -> Region:
+    """The region of a design known only in its dead zone (an SSO with several inner steps per
+    sample): the invariant sublevel set of the dead zone's linear map, replayed through the
+    observer's own simulator (the attack estimate must stay 0 and the error converge)."""
     found = region_of_attraction(model, seed=seed)
-    radius = float(found["radius"])
-    evidence = {k: v for k, v in found.items() if k not in ("radius", "replay")}
-    if radius > 0:
-        replay = _simulator_region_replay(design, radius, seed)
-        evidence["replay"] = replay
-        if not replay["confirmed"]:
-            radius = 0.0
-            evidence["reason"] = "a simulated initial error inside the radius left the dead zone"
-    return _region_check(
-        radius,
-        evidence,
-        f"From every initial estimation error with ||e(0)|| <= {radius:.4g} (a_hat(0) = 0) the "
-        f"error converges to 0 without attack: while every inner step's soft threshold stays "
-        f"in its dead zone the error follows e+ = A (I - step S' S)^m e, and the largest "
-        f"sublevel set of its verified Lyapunov function inside all {model.m} dead-zone slabs "
-        f"is invariant; {evidence.get('replay', {}).get('samples')} initial errors on that "
-        f"sphere, run through the observer's own simulator, keep a_hat = 0 and converge.",
-        "invariant sublevel set of the dead zone of every inner step (Lyapunov)",
-    )
+    evidence = {k: v for k, v in found.evidence.items() if k != "replay"}
+    if found.radius <= 0:
+        return replace(found, evidence=evidence)
+    replay = _simulator_region_replay(design, found.radius, seed)
+    evidence["replay"] = replay
+    if not replay["confirmed"]:
+        return Region.none(RegionCode.SIMULATOR_REPLAY_FAILED, evidence)
+    return replace(found, evidence=evidence)
 
 
 def _simulator_region_replay(design: ObserverDesign, radius: float, seed: int) -> dict[str, Any]:

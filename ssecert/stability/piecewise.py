@@ -63,6 +63,7 @@ import numpy as np
 from ..budget import stage
 from ..observers.lure import LureModel
 from ..tolerances import EPS
+from .outcomes import Region, RegionCode
 
 __all__ = ["piecewise_region", "MAX_CHANNELS", "MAX_STATES"]
 
@@ -149,16 +150,15 @@ class _Regions:
 
 def piecewise_region(
     model: LureModel, *, seed: int = 0, floor: float = 0.0, clear: float = 100.0
-) -> dict[str, Any]:
+) -> Region:
     """The largest radius of initial errors (a_hat(0) = 0) from which a verified
     piecewise-quadratic Lyapunov function proves convergence without attack.
 
     Searches the radii of ``LADDER`` (in thresholds) by bisection: a radius
     that verifies sends the search up, one that does not (the LMIs grow
     harder as the ball grows) sends it down; radii not above ``floor`` (the
-    radius already certified otherwise) are not tried.  Returns
-    ``{"radius": 0.0, "reason": ...}`` when none verifies or the model is out
-    of reach.
+    radius already certified otherwise) are not tried.  Returns radius 0 with
+    the reason's code when none verifies or the model is out of reach.
     """
     from ..solvers import solver_name
 
@@ -172,7 +172,7 @@ def piecewise_region(
     return copy.deepcopy(found)
 
 
-_CACHE: dict[bytes, dict[str, Any]] = {}  # the search is a pure function of these
+_CACHE: dict[bytes, Region] = {}  # the search is a pure function of these
 
 
 def _key(model: LureModel, *numbers: float) -> bytes:
@@ -182,30 +182,26 @@ def _key(model: LureModel, *numbers: float) -> bytes:
     )
 
 
-def _search(model: LureModel, seed: int, floor: float, clear: float) -> dict[str, Any]:
+def _search(model: LureModel, seed: int, floor: float, clear: float) -> Region:
     """``piecewise_region`` without its cache."""
     if model.m == 0 or model.threshold <= 0:
-        return {"radius": 0.0, "reason": "the observer has no soft threshold"}
+        return Region.none(RegionCode.NO_DEAD_ZONE, piecewise=True)
     if model.m > MAX_CHANNELS or model.N > MAX_STATES:
-        return {
-            "radius": 0.0,
-            "reason": f"not attempted: {model.m} soft-threshold channels and {model.N} error "
-            f"states (the piecewise search handles up to {MAX_CHANNELS} and {MAX_STATES})",
-        }
+        return Region.none(RegionCode.NOT_ATTEMPTED, channels=model.m, states=model.N)
     lam = model.threshold
     with np.errstate(over="ignore"):
         if not np.isfinite((np.float64(OUTER * LADDER[-1]) * lam) ** 2 * (model.N + 1)):
-            return {"radius": 0.0, "reason": "the ball searched is out of floating-point range"}
+            return Region.none(RegionCode.BALL_OUT_OF_RANGE)
     ladder = [r for r in LADDER if r * lam > floor]
     if not ladder:
-        return {"radius": 0.0, "reason": f"every radius tried is within {floor:.4g}"}
+        return Region.none(RegionCode.WITHIN_FLOOR, floor=floor)
     regions = _Regions(model)
     with np.errstate(all="ignore"):
         finite = all(np.all(np.isfinite(T)) for T in regions.T) and all(
             np.all(np.isfinite(G @ T)) for G in regions.G for T in regions.T
         )
     if not finite:
-        return {"radius": 0.0, "reason": "the regions' maps are out of floating-point range"}
+        return Region.none(RegionCode.MAPS_OUT_OF_RANGE)
     unit = replace(model, threshold=1.0)  # the same dynamics, in units of the threshold
     # emptiness in the largest box holds in every smaller one
     empty_pairs = _empty_pairs(regions, unit, OUTER * ladder[-1])
@@ -233,23 +229,14 @@ def _search(model: LureModel, seed: int, floor: float, clear: float) -> dict[str
         else:
             hi = mid
     if best is None:
-        return {
-            "radius": 0.0,
-            "reason": "no piecewise-quadratic Lyapunov function verified",
-            "attempts": attempts,
-        }
+        return Region.none(RegionCode.NO_PIECEWISE_FUNCTION, {"attempts": attempts})
     r = ladder[lo]
     replay = _replay(model, r * lam, OUTER * r * lam, seed)
     if not replay["confirmed"]:
-        return {
-            "radius": 0.0,
-            "reason": "a simulated initial error inside the certified radius did not converge "
-            "(please report this design)",
-            "attempts": attempts,
-            "replay": replay,
-        }
-    return {
-        "radius": r * lam * (1 - 1e-12),
+        return Region.none(
+            RegionCode.PIECEWISE_REPLAY_FAILED, {"attempts": attempts, "replay": replay}
+        )
+    evidence = {
         "ball": OUTER * r * lam,
         "method": "piecewise-quadratic Lyapunov function over the soft threshold's "
         f"{3**model.m} regions (S-procedure LMIs, {_solved_by(best)}), verified in numpy",
@@ -260,6 +247,7 @@ def _search(model: LureModel, seed: int, floor: float, clear: float) -> dict[str
         "attempts": attempts,
         "replay": replay,
     }
+    return Region(r * lam * (1 - 1e-12), RegionCode.PIECEWISE_CERTIFIED, evidence=evidence)
 
 
 def _solved_by(attempt: _Attempt) -> str:

@@ -186,13 +186,14 @@ def _undecided_point(model: LureModel) -> tuple[str, float]:
     """(kind of witness that the point fails with, or '', and its dead zone's radius)."""
     from .divergence import divergence_witness
     from .equilibria import nonzero_equilibrium
+    from .outcomes import RegionCode
     from .periodic import periodic_orbit
     from .roa import region_of_attraction
 
     if not model.finite():
         return "", 0.0  # beyond the float range: nothing decided at this point
     dead = region_of_attraction(model, widen=False)
-    if dead.get("unstable") is True:
+    if dead.code is RegionCode.DEAD_ZONE_UNSTABLE:
         return "local instability", 0.0
     if divergence_witness(model) is not None:
         return "divergent trajectory", 0.0
@@ -200,4 +201,4 @@ def _undecided_point(model: LureModel) -> tuple[str, float]:
         return "nonzero equilibrium", 0.0
     if periodic_orbit(model)[0] is not None:
         return "periodic orbit", 0.0
-    return "", float(dead["radius"])
+    return "", dead.radius

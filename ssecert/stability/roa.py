@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from dataclasses import replace
 from fractions import Fraction
 from typing import Any
 
@@ -31,6 +32,7 @@ from ..observers.lure import LureModel
 from ..results import Verdict
 from ..solvers import solve_conic
 from .lyapunov import lyapunov_certificate, verified_decrease
+from .outcomes import Region, RegionCode
 from .piecewise import piecewise_region
 
 __all__ = ["region_of_attraction"]
@@ -58,15 +60,16 @@ def region_of_attraction(
     piecewise: bool = False,
     widen: bool = True,
     budget: Budget | None = None,
-) -> dict[str, Any]:
+) -> Region:
     """The certified radius of initial estimation errors (a_hat(0) = 0) from which the observer
-    converges without attack, with how it was found; radius 0 with the reason when none is,
-    and ``unstable`` true when the dead zone's linear dynamics are proved unstable (no region
-    exists: the region_of_attraction check then fails).
+    converges without attack, with how it was found; radius 0 with the reason's code when none
+    is (``RegionCode.DEAD_ZONE_UNSTABLE`` when the dead zone's linear dynamics are proved
+    unstable: no region exists, and the region_of_attraction check fails).
 
     With ``piecewise``, a piecewise-quadratic Lyapunov function over the soft threshold's
     regions (``ssecert.stability.piecewise``, up to 3 channels) is also searched, and the
-    larger verified radius is kept (``dead_zone_radius`` then records the other).  Without
+    larger verified radius is kept (the evidence's ``dead_zone_radius`` then records the
+    other).  Without
     ``widen`` only the Lyapunov matrix with Q = I is tried (no LMI: the design-space map).
 
     When nothing is certified and the states' units differ widely, the region is searched
@@ -84,79 +87,81 @@ def region_of_attraction(
         flops=flops,
     )
     if refusal:
-        return {"radius": 0.0, "reason": f"not attempted: {refusal}"}
+        return Region.none(RegionCode.NOT_ATTEMPTED, refusal=refusal)
     found = _region_in_units(model, seed, piecewise, widen)
-    if found["radius"] > 0:
+    if found.radius > 0:
         return found
     for s in model.balancings():
         inner = _region_in_units(model.scaled(s), seed, piecewise, widen)
-        if inner["radius"] > 0:
+        if inner.radius > 0:
             break
     else:
         return found
     low = float(np.min(s[: model.n_e]))
-    out = {**inner, "radius": float(inner["radius"]) * low, "state_scaling": s}
-    out["balanced_radius"] = inner["radius"]
-    if "dead_zone_radius" in out:
-        out["dead_zone_radius"] = float(out["dead_zone_radius"]) * low
-    return out
+    evidence = {**inner.evidence, "state_scaling": s, "balanced_radius": inner.radius}
+    if "dead_zone_radius" in evidence:
+        evidence["dead_zone_radius"] = float(evidence["dead_zone_radius"]) * low
+    return replace(inner, radius=inner.radius * low, evidence=evidence)
 
 
-def _region_in_units(model: LureModel, seed: int, piecewise: bool, widen: bool) -> dict[str, Any]:
+def _region_in_units(model: LureModel, seed: int, piecewise: bool, widen: bool) -> Region:
     """``region_of_attraction`` in the model's own coordinates."""
     with stage("the dead zone's invariant set"):
         found = _dead_zone_region(model, seed, widen)
     if not piecewise or model.m == 0:
         return found
-    wider = piecewise_region(model, seed=seed, floor=float(found["radius"]))
-    if wider["radius"] > found["radius"]:
-        return {**wider, "dead_zone_radius": found["radius"]}
-    return {**found, "piecewise": {k: v for k, v in wider.items() if k != "radius"}}
+    wider = piecewise_region(model, seed=seed, floor=found.radius)
+    if wider.radius > found.radius:
+        return replace(wider, evidence={**wider.evidence, "dead_zone_radius": found.radius})
+    return replace(found, evidence={**found.evidence, "piecewise": wider})
 
 
-def _dead_zone_region(model: LureModel, seed: int, widen: bool = True) -> dict[str, Any]:
+def _dead_zone_region(model: LureModel, seed: int, widen: bool = True) -> Region:
     """The radius of the largest invariant sublevel set of the dead zone's Lyapunov function."""
     if model.m == 0 or model.threshold <= 0:
-        return {"radius": 0.0, "reason": "the observer has no dead zone (no soft threshold)"}
+        return Region.none(RegionCode.NO_DEAD_ZONE)
     n_e = model.n_e
     if n_e < model.N and not np.any(model.A[n_e:]):
         # xi+ = A xi with A = [[F, -L], [0, 0]]: its eigenvalues are F's and 0, so F decides
         # (the exact powers of F alone reach a decision the whole A's may not)
         local = lyapunov_certificate(model.A[:n_e, :n_e], exact=model.exact_A(error_block=True))
         if local.verdict is Verdict.FAILS:
-            return {
-                "radius": 0.0,
-                "unstable": True,
-                "reason": f"the linear dynamics of the dead zone (xi+ = A xi, whose eigenvalues "
-                f"are those of F = A - L C and 0) is not stable: {local.reason}",
-            }
+            return Region.none(
+                RegionCode.DEAD_ZONE_UNSTABLE, error_block=True, lyapunov=local.reason
+            )
     lyap = lyapunov_certificate(model.A, exact=model.exact_A())
     if lyap.verdict is not Verdict.HOLDS or lyap.P is None or lyap.method != "lyapunov":
-        unstable = lyap.verdict is Verdict.FAILS
-        why = "is not stable" if unstable else "has no verified P"
-        return {
-            "radius": 0.0,
-            "unstable": unstable,
-            "reason": f"the linear dynamics of the dead zone (xi+ = A xi) {why}: {lyap.reason}",
-        }
+        code = (
+            RegionCode.DEAD_ZONE_UNSTABLE
+            if lyap.verdict is Verdict.FAILS
+            else RegionCode.NO_VERIFIED_LYAPUNOV
+        )
+        return Region.none(code, lyapunov=lyap.reason)
     found = _region(model, 0.5 * (lyap.P + lyap.P.T), lyap.margin, lyap.error_bound, seed)
-    found["P_from"] = "discrete Lyapunov equation with Q = I"
-    wider = _lmi_matrix(model) if widen and model.N <= LMI_LIMIT and found["radius"] > 0 else None
+    found = _with(found, P_from="discrete Lyapunov equation with Q = I")
+    wider = _lmi_matrix(model) if widen and model.N <= LMI_LIMIT and found.radius > 0 else None
     verified = (
         verified_decrease(model.A, wider, rounding=model.rounding) if wider is not None else None
     )
     if wider is not None and verified is not None:
         other = _region(model, wider, verified[0], verified[1], seed)
-        if other["radius"] > found["radius"]:
-            other["P_from"] = "LMI maximising the radius (cvxpy, Clarabel), verified in numpy"
-            other["radius_with_Q_identity"] = found["radius"]
-            return other
+        if other.radius > found.radius:
+            return _with(
+                other,
+                P_from="LMI maximising the radius (cvxpy, Clarabel), verified in numpy",
+                radius_with_Q_identity=found.radius,
+            )
     return found
+
+
+def _with(region: Region, **evidence: Any) -> Region:
+    """``region`` with more evidence, after its own."""
+    return replace(region, evidence={**region.evidence, **evidence})
 
 
 def _region(
     model: LureModel, P: np.ndarray, margin: float | None, bound: float, seed: int
-) -> dict[str, Any]:
+) -> Region:
     """The radius that the verified Lyapunov matrix ``P`` of the dead zone certifies."""
     Pinv_Cw = np.linalg.solve(P, model.Cw.T)  # columns P^-1 Cw_i'
     spread = np.einsum("ij,ji->i", model.Cw, Pinv_Cw)  # Cw_i P^-1 Cw_i'
@@ -164,35 +169,23 @@ def _region(
     with np.errstate(over="ignore"):
         level = SAFETY * float(np.min(np.float64(model.threshold) ** 2 / spread))
     if not math.isfinite(level):
-        return {
-            "radius": 0.0,
-            "reason": "the dead zone's level set is out of floating-point range "
-            f"(threshold {model.threshold:.3g})",
-        }
+        return Region.none(RegionCode.LEVEL_OUT_OF_RANGE, threshold=model.threshold)
     n_e = model.n_e
     top = float(np.linalg.eigvalsh(P[:n_e, :n_e])[-1])
     # a hair inside, so that the ball lies strictly in the level set on the printed numbers
     radius = math.sqrt(level / top) * (1 - 1e-12) if math.isfinite(level) and top > 0 else 0.0
     if radius <= 0:
-        return {"radius": 0.0, "reason": "the dead zone holds no invariant sublevel set"}
+        return Region.none(RegionCode.NO_INVARIANT_SET)
     exact = _exact_recheck(model, P, level, radius) if model.N <= EXACT_LIMIT else None
     if exact is not None and not all(exact.values()):
-        return {
-            "radius": 0.0,
-            "reason": "the region did not survive its exact re-check "
-            f"({', '.join(k for k, ok in exact.items() if not ok)})",
-            "exact_recheck": exact,
-        }
+        refuted = [k for k, ok in exact.items() if not ok]
+        return Region.none(
+            RegionCode.EXACT_RECHECK_FAILED, {"exact_recheck": exact}, refuted=refuted
+        )
     replay = _replay(model, radius, P, level, seed)
     if not replay["confirmed"]:
-        return {
-            "radius": 0.0,
-            "reason": "a simulated initial error on the certified sphere left the invariant "
-            "set (please report this design)",
-            "replay": replay,
-        }
-    return {
-        "radius": radius,
+        return Region.none(RegionCode.REPLAY_LEFT_SET, {"replay": replay})
+    evidence = {
         "level": level,
         "P": P,
         "lyapunov_margin": margin,
@@ -204,6 +197,7 @@ def _region(
         "method": "largest invariant sublevel set of the dead zone's Lyapunov function",
         "replay": replay,
     }
+    return Region(radius, RegionCode.CERTIFIED, evidence=evidence)
 
 
 def _lmi_matrix(model: LureModel) -> np.ndarray | None:
