@@ -45,7 +45,7 @@ from .lmi import (
     lure_model_cost,
 )
 from .lyapunov import LyapunovCertificate, lyapunov_certificate
-from .outcomes import Region, RegionCode
+from .outcomes import Region, RegionCode, WitnessKind
 from .periodic import periodic_orbit
 from .roa import region_of_attraction
 from .thesis import thesis_assumptions
@@ -143,7 +143,7 @@ def _failure_words(
     nonzero equilibrium (a wrong estimate kept with no attack) or periodic orbit."""
     e = np.array2string(np.asarray(witness["initial_error"]), precision=4)
     start = "The observer is not globally asymptotically stable: "
-    if witness["kind"] == "periodic orbit":
+    if witness["kind"] is WitnessKind.PERIODIC_ORBIT:
         return (
             f"{start}without attack its error cycles for ever with period {witness['period']}, "
             f"confirmed in exact arithmetic: from the estimation error e = {e} and the attack "
@@ -153,7 +153,7 @@ def _failure_words(
             None,
             0.0,
         )
-    if witness["kind"] == "nonzero equilibrium":
+    if witness["kind"] is WitnessKind.NONZERO_EQUILIBRIUM:
         return (
             f"{start}it has a nonzero equilibrium, confirmed in exact arithmetic: from the "
             f"estimation error e = {e} and the attack estimate it pairs with, the error stays "
@@ -236,7 +236,7 @@ def _witnessed_failure(
     summary, method, margin, error_bound = _failure_words(model, witness)
     evidence = _circle_evidence(model, cert)
     evidence["no_certificate"] = cert.reason
-    if witness["kind"] == "divergent trajectory":
+    if witness["kind"] is WitnessKind.DIVERGENT_TRAJECTORY:
         evidence["large_signal_loop"] = model.vertex(model.q)
     return Check(
         id="observer_stability",
@@ -279,10 +279,10 @@ def _observer_replay(design: ObserverDesign, witness: dict[str, Any]) -> dict[st
     path = np.concatenate([traj.x_hat[:, 0], traj.a_hat[:, 0]], axis=1)
     start = float(np.linalg.norm(path[0]))
     out: dict[str, Any] = {"replayed": True, "simulator": type(sim).__name__, "steps": steps}
-    if witness.get("kind") == "nonzero equilibrium":
+    if witness.get("kind") is WitnessKind.NONZERO_EQUILIBRIUM:
         drift = float(np.max(np.linalg.norm(path - path[0], axis=1)))
         out.update(largest_drift=drift, agrees=drift <= 1e-9 * max(start, 1.0))
-    elif witness.get("kind") == "periodic orbit":
+    elif witness.get("kind") is WitnessKind.PERIODIC_ORBIT:
         back = float(np.linalg.norm(path[-1] - path[0]))
         out.update(return_residual=back, agrees=back <= 1e-9 * max(start, 1.0))
     else:

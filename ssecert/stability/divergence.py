@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from ..observers.lure import LureModel
+from .outcomes import WitnessKind
 
 __all__ = ["divergence_witness", "safe_norms", "GROWTH"]
 
@@ -104,7 +105,7 @@ def _in_units(model: LureModel) -> dict[str, Any] | None:
         return None
     norms = safe_norms(path)
     return {
-        "kind": "divergent trajectory",
+        "kind": WitnessKind.DIVERGENT_TRAJECTORY,
         "large_signal_eigenvalue": complex(mu),
         "eigenvalue_error_bound": error,
         "left_eigenvector": w,

@@ -32,6 +32,7 @@ import numpy as np
 from ..budget import Budget, format_count
 from ..numerics.rational import product, solve
 from ..observers.lure import LureModel
+from .outcomes import WitnessKind
 
 __all__ = ["nonzero_equilibrium", "attacked_equilibria", "MAX_PATTERNS"]
 
@@ -346,7 +347,7 @@ def _confirm(
     with np.errstate(all="ignore"):
         moduli = np.sort(np.abs(np.linalg.eigvals(local)))[::-1]
     return {
-        "kind": "nonzero equilibrium",
+        "kind": WitnessKind.NONZERO_EQUILIBRIUM,
         # near the equilibrium the error follows its pattern's affine map: eigenvalues of its
         # linear part beyond 1 make it repelling (still an equilibrium, kept only exactly)
         "local_loop_moduli": moduli[: min(4, moduli.size)],

@@ -15,7 +15,21 @@ from typing import Any
 
 from ..results import Verdict
 
-__all__ = ["Region", "RegionCode"]
+__all__ = ["Region", "RegionCode", "WitnessKind"]
+
+
+class WitnessKind(enum.StrEnum):
+    """What proves an observer unstable (the ``kind`` of a failing observer_stability's witness,
+    and of a failing cell of the region map); its value is what the JSON shows."""
+
+    #: the dead zone's own linear dynamics are unstable (a region map's cell)
+    LOCAL_INSTABILITY = "local instability"
+    #: the large-signal loop diverges along an eigenvector, replayed
+    DIVERGENT_TRAJECTORY = "divergent trajectory"
+    #: a nonzero equilibrium without attack, confirmed exactly
+    NONZERO_EQUILIBRIUM = "nonzero equilibrium"
+    #: a periodic orbit without attack, confirmed exactly
+    PERIODIC_ORBIT = "periodic orbit"
 
 
 class RegionCode(enum.Enum):

@@ -24,6 +24,7 @@ import numpy as np
 from ..budget import Budget
 from ..numerics.rational import product, solve
 from ..observers.lure import LureModel
+from .outcomes import WitnessKind
 
 __all__ = ["periodic_orbit", "periodic_orbit_cost"]
 
@@ -126,7 +127,7 @@ def _confirm(model: LureModel, states: np.ndarray) -> dict[str, Any] | None:
     point = np.array([float(v) for v in x0])
     replay = model.simulate(point, k)
     return {
-        "kind": "periodic orbit",
+        "kind": WitnessKind.PERIODIC_ORBIT,
         "initial_error": point[: model.n_e],
         "initial_attack_estimate": point[model.n_e :],
         "period": k,

@@ -26,6 +26,7 @@ from ..observers import ObserverDesign
 from ..observers.lure import LureModel
 from ..results import Verdict
 from .lmi import circle_certificate
+from .outcomes import WitnessKind
 from .zames_falb import zames_falb_certificate
 
 __all__ = ["RegionMap", "region_map"]
@@ -52,7 +53,7 @@ class RegionMap:
     reused: int
     seconds: float
     certificates: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
-    witnesses: dict[tuple[int, int], str] = field(default_factory=dict)
+    witnesses: dict[tuple[int, int], WitnessKind] = field(default_factory=dict)
     radii: np.ndarray | None = None
     zames_falb: dict[tuple[int, int], int] = field(default_factory=dict)
     not_reached: int = 0
@@ -118,7 +119,7 @@ def region_map(
     verdicts: np.ndarray = np.empty((shrink_grid.size, step_grid.size), dtype=object)
     margins = np.full((shrink_grid.size, step_grid.size), np.nan)
     found: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
-    witnesses: dict[tuple[int, int], str] = {}
+    witnesses: dict[tuple[int, int], WitnessKind] = {}
     radii = np.zeros((shrink_grid.size, step_grid.size))
     multipliers: dict[tuple[int, int], int] = {}
     solves = reused = not_reached = 0
@@ -154,7 +155,7 @@ def region_map(
             verdicts[i, j] = cert.verdict
             if cert.verdict == Verdict.INCONCLUSIVE:
                 kind, radii[i, j] = _undecided_point(model)
-                if kind:
+                if kind is not None:
                     verdicts[i, j], witnesses[(i, j)] = Verdict.FAILS, kind
             if cert.verdict == Verdict.HOLDS:
                 radii[i, j] = np.inf
@@ -182,8 +183,8 @@ def region_map(
     )
 
 
-def _undecided_point(model: LureModel) -> tuple[str, float]:
-    """(kind of witness that the point fails with, or '', and its dead zone's radius)."""
+def _undecided_point(model: LureModel) -> tuple[WitnessKind | None, float]:
+    """(kind of witness that the point fails with, or None, and its dead zone's radius)."""
     from .divergence import divergence_witness
     from .equilibria import nonzero_equilibrium
     from .outcomes import RegionCode
@@ -191,14 +192,14 @@ def _undecided_point(model: LureModel) -> tuple[str, float]:
     from .roa import region_of_attraction
 
     if not model.finite():
-        return "", 0.0  # beyond the float range: nothing decided at this point
+        return None, 0.0  # beyond the float range: nothing decided at this point
     dead = region_of_attraction(model, widen=False)
     if dead.code is RegionCode.DEAD_ZONE_UNSTABLE:
-        return "local instability", 0.0
+        return WitnessKind.LOCAL_INSTABILITY, 0.0
     if divergence_witness(model) is not None:
-        return "divergent trajectory", 0.0
+        return WitnessKind.DIVERGENT_TRAJECTORY, 0.0
     if nonzero_equilibrium(model, milp=False)[0] is not None:  # a map cell: no MILP
-        return "nonzero equilibrium", 0.0
+        return WitnessKind.NONZERO_EQUILIBRIUM, 0.0
     if periodic_orbit(model)[0] is not None:
-        return "periodic orbit", 0.0
-    return "", dead.radius
+        return WitnessKind.PERIODIC_ORBIT, 0.0
+    return None, dead.radius
