@@ -25,6 +25,7 @@ from ssecert.observers import build_observer
 from ssecert.simulation.engine import simulate_scenario, simulate_spec
 from ssecert.stability import lmi, region
 from ssecert.stability.checks import observer_checks
+from ssecert.stability.outcomes import LMICode
 from ssecert.stability.thesis import SeriesError, pi_map, thesis_assumptions
 from ssecert.structure.attacks import WITNESS_MAX_STEPS
 
@@ -295,6 +296,7 @@ def test_iss_gain_from_a_circle_certificate_survives_singular_schur_blocks():
         P=np.zeros_like(circle.P),
         multipliers=circle.multipliers,
         decay=circle.decay,
+        code=LMICode.VERIFIED,
     )
     cert = lmi.iss_from_circle(model, broken)
     assert cert.verdict == "inconclusive" and cert.reason

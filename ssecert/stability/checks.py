@@ -45,7 +45,7 @@ from .lmi import (
     lure_model_cost,
 )
 from .lyapunov import LyapunovCertificate, lyapunov_certificate
-from .outcomes import Region, RegionCode, WitnessKind
+from .outcomes import LMICode, Region, RegionCode, WitnessKind
 from .periodic import periodic_orbit
 from .roa import region_of_attraction
 from .thesis import thesis_assumptions
@@ -100,7 +100,7 @@ def observer_stability_check(
         return _no_certificate(title, summary, "circle criterion (LMI, Clarabel)"), None
     with stage("circle criterion LMIs"):
         cert = circle_certificate(model, budget=budget, clear=tol.certificate_clear)
-    if cert.verdict is Verdict.INCONCLUSIVE and cert.details.get("attempts"):
+    if cert.code is LMICode.NOT_VERIFIED:
         # the LMIs were solved and failed: a dynamic multiplier may succeed
         with stage("Zames-Falb multiplier LMIs"):
             zf = zames_falb_certificate(model, budget=budget, clear=tol.certificate_clear)

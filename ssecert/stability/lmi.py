@@ -54,6 +54,7 @@ from ..observers.lure import LureModel, scaling_text
 from ..results import Verdict
 from .lmi_solver import ETA, _solve, lmi_cost  # noqa: F401  (ETA stays importable here)
 from .lmi_verification import circle_matrix, iss_matrix, verify_certificate
+from .outcomes import LMICode
 
 __all__ = [
     "LureModel",
@@ -117,6 +118,9 @@ class LMICertificate:
     reason : str
     details : dict
         Solver status and times, pre-check results, witness.
+    code : LMICode
+        How it came out (verified, reused, refused, decided before the LMIs, solved and not
+        verified...): decisions read it, never ``details``' keys or ``reason``.
     """
 
     verdict: Verdict
@@ -130,6 +134,7 @@ class LMICertificate:
     structure: str = ""
     reason: str = ""
     details: dict[str, Any] = field(default_factory=dict)
+    code: LMICode = field(kw_only=True)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "verdict", Verdict(self.verdict))  # a name is accepted too
@@ -386,6 +391,7 @@ def where_verified(
             Verdict.INCONCLUSIVE,
             cert.kind,
             reason="the certificate's P leaves the float range in its balanced coordinates",
+            code=LMICode.NOT_REPRESENTABLE,
         )
     inside = replace(
         cert,
@@ -398,7 +404,10 @@ def where_verified(
     back = to_original_coordinates(found, s, model.N)
     if back is None:
         return LMICertificate(
-            Verdict.INCONCLUSIVE, found.kind, reason="the certificate does not scale back exactly"
+            Verdict.INCONCLUSIVE,
+            found.kind,
+            reason="the certificate does not scale back exactly",
+            code=LMICode.NOT_REPRESENTABLE,
         )
     return back
 
@@ -497,7 +506,7 @@ def circle_certificate(
         budget=budget or Budget(),
     )
     cert = search(model, reuse=reuse)
-    if cert.verdict is not Verdict.INCONCLUSIVE or "attempts" not in cert.details:
+    if cert.code is not LMICode.NOT_VERIFIED:
         return cert  # certified, decided or refused before any LMI was solved
     # the LMIs were solved and failed: again in balanced coordinates, by the search alone, so
     # that its reason says what it found there and the conclusion below is drawn once
@@ -526,14 +535,20 @@ def _circle_search(
             "circle",
             reason=f"not attempted: {refusal}",
             details={"budget": budget.to_dict()},
+            code=LMICode.NOT_ATTEMPTED,
         )
     verdict, reason, details = _prechecks(model)
     if verdict is not None:
-        return LMICertificate(verdict, "circle", reason=reason, details=details)
+        return LMICertificate(
+            verdict, "circle", reason=reason, details=details, code=LMICode.DECIDED_BEFORE
+        )
     for P_old, t_old in reuse:
         ok, margin, bound, _ = verify_certificate(model, P_old, t_old, clear=clear)
         if ok:
-            return _holds(model, P_old, t_old, margin, bound, "reused", {**details, "reused": True})
+            return _holds(
+                model, P_old, t_old, margin, bound, "reused", {**details, "reused": True},
+                LMICode.REUSED,
+            )  # fmt: skip
     attempts = []
     structures = STRUCTURES if structure == "auto" else [structure]
     for st in structures:
@@ -553,7 +568,9 @@ def _circle_search(
         ok, margin, bound, problem = verify_certificate(model, P, t, clear=clear)
         info["verified"] = ok
         if ok:
-            return _holds(model, P, t, margin, bound, st, {**details, "attempts": attempts})
+            return _holds(
+                model, P, t, margin, bound, st, {**details, "attempts": attempts}, LMICode.VERIFIED
+            )
         info["verification_problem"] = problem
     return LMICertificate(
         Verdict.INCONCLUSIVE,
@@ -564,6 +581,7 @@ def _circle_search(
             + ")"
         ),
         details={**details, "attempts": attempts},
+        code=LMICode.NOT_VERIFIED,
     )
 
 
@@ -575,6 +593,7 @@ def _holds(
     bound: float,
     structure: str,
     details: dict[str, Any],
+    code: LMICode,
 ) -> LMICertificate:
     lam_max_P = float(np.linalg.eigvalsh(P)[-1])
     normP = float(np.linalg.norm(P, 2))
@@ -590,6 +609,7 @@ def _holds(
         decay=decay,
         structure=structure,
         details=details,
+        code=code,
     )
 
 
@@ -627,10 +647,13 @@ def iss_certificate(
             "iss",
             reason=f"not attempted: {refusal}",
             details={"budget": budget.to_dict()},
+            code=LMICode.NOT_ATTEMPTED,
         )
     verdict, reason, details = _prechecks(model)
     if verdict is not None:
-        return LMICertificate(verdict, "iss", reason=reason, details=details)
+        return LMICertificate(
+            verdict, "iss", reason=reason, details=details, code=LMICode.DECIDED_BEFORE
+        )
     attempts = []
     c, solved = output_scaled(model)  # solved with e in units c, the certificate scaled back
     structures = STRUCTURES if structure == "auto" else [structure]
@@ -669,6 +692,7 @@ def iss_certificate(
                 gamma=float(np.sqrt(g_cert)),
                 structure=st,
                 details={**details, "attempts": attempts, "gamma_squared": g_cert},
+                code=LMICode.VERIFIED,
             )
         info["verification_problem"] = problem
     retry, note = balanced_retry(
@@ -697,6 +721,7 @@ def iss_certificate(
             + note
         ),
         details={**details, "attempts": attempts},
+        code=LMICode.NOT_VERIFIED,
     )
 
 
@@ -729,7 +754,10 @@ def iss_from_circle(
     """
     if circle.verdict != Verdict.HOLDS or circle.P is None:
         return LMICertificate(
-            Verdict.INCONCLUSIVE, "iss", reason="no circle certificate to build on"
+            Verdict.INCONCLUSIVE,
+            "iss",
+            reason="no circle certificate to build on",
+            code=LMICode.NO_BASE,
         )
     elsewhere = where_verified(model, circle, partial(iss_from_circle, clear=clear))
     if elsewhere is not None:
@@ -758,6 +786,7 @@ def _gain_from_circle(model: LureModel, circle: LMICertificate, clear: float) ->
             Verdict.INCONCLUSIVE,
             "iss",
             reason="the dissipation matrix of the circle certificate leaves the float range",
+            code=LMICode.NOT_REPRESENTABLE,
         )
     x, g = _smallest_gain(_schur_gain(base, perf, k), _scale_grid(model, base, k))
     if not np.isfinite(g):
@@ -768,13 +797,19 @@ def _gain_from_circle(model: LureModel, circle: LMICertificate, clear: float) ->
                 "no finite gain from the circle certificate (the Schur complement in the attack "
                 "is not defined for any scaling tried)"
             ),
+            code=LMICode.NOT_VERIFIED,
         )
     kappa = float(np.exp(x))
     ok, margin, bound, problem, g_cert = _verified_gain(
         model, kappa * P, kappa * t, alpha, g, clear
     )
     if not ok:
-        return LMICertificate(Verdict.INCONCLUSIVE, "iss", reason=f"gain not verified: {problem}")
+        return LMICertificate(
+            Verdict.INCONCLUSIVE,
+            "iss",
+            reason=f"gain not verified: {problem}",
+            code=LMICode.NOT_VERIFIED,
+        )
     return LMICertificate(
         Verdict.HOLDS,
         "iss",
@@ -790,6 +825,7 @@ def _gain_from_circle(model: LureModel, circle: LMICertificate, clear: float) ->
             "kappa": kappa,
             "gamma_squared": g_cert,
         },
+        code=LMICode.VERIFIED,
     )
 
 

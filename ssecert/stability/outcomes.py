@@ -15,7 +15,27 @@ from typing import Any
 
 from ..results import Verdict
 
-__all__ = ["Region", "RegionCode", "WitnessKind"]
+__all__ = ["LMICode", "Region", "RegionCode", "WitnessKind"]
+
+
+class LMICode(enum.Enum):
+    """How an LMI certificate (``ssecert.stability.lmi.LMICertificate``) came out."""
+
+    #: holds: solved here and verified in numpy
+    VERIFIED = "verified"
+    #: holds: a neighbouring design's certificate, verified for this one without a solve
+    REUSED = "reused"
+    #: a budget or a size refused the solve before it began
+    NOT_ATTEMPTED = "not attempted"
+    #: structural facts decided before any LMI (an unstable or undecidable linear part, a
+    #: sector vertex within rounding of 1, no nonlinearity): no LMI was solved
+    DECIDED_BEFORE = "decided before the LMIs"
+    #: LMIs solved (their attempts recorded), none verified: this does not show instability
+    NOT_VERIFIED = "not verified"
+    #: no certificate to build on (an ISS gain without a verified circle certificate)
+    NO_BASE = "no certificate to build on"
+    #: a certificate that floating point cannot write in the coordinates asked
+    NOT_REPRESENTABLE = "not representable"
 
 
 class WitnessKind(enum.StrEnum):

@@ -26,7 +26,7 @@ from ..observers import ObserverDesign
 from ..observers.lure import LureModel
 from ..results import Verdict
 from .lmi import circle_certificate
-from .outcomes import WitnessKind
+from .outcomes import LMICode, WitnessKind
 from .zames_falb import zames_falb_certificate
 
 __all__ = ["RegionMap", "region_map"]
@@ -138,16 +138,16 @@ def region_map(
                 reuse=neighbours,
                 budget=budget,
             )
-            if cert.verdict == Verdict.INCONCLUSIVE and cert.details.get("attempts"):
+            if cert.code is LMICode.NOT_VERIFIED:
                 cert = circle_certificate(
                     model, structure="cross", solver_options=solver_options, budget=budget
                 )
                 solves += 1
-            if cert.details.get("reused"):
+            if cert.code is LMICode.REUSED:
                 reused += 1
-            elif cert.details.get("attempts"):
+            elif cert.code in (LMICode.VERIFIED, LMICode.NOT_VERIFIED):
                 solves += 1
-            if cert.verdict == Verdict.INCONCLUSIVE and cert.details.get("attempts"):
+            if cert.code is LMICode.NOT_VERIFIED:
                 zf = zames_falb_certificate(model, solver_options=solver_options, budget=budget)
                 solves += 1
                 if zf.verdict == Verdict.HOLDS:

@@ -70,6 +70,7 @@ from .lmi import (
 )
 from .lmi_solver import ETA, _run_clarabel
 from .lmi_verification import decide
+from .outcomes import LMICode
 
 __all__ = [
     "ORDERS",
@@ -299,7 +300,12 @@ def zames_falb_certificate(
     budget = budget or Budget()
     attempts: list[dict[str, Any]] = []
     if model.m == 0:
-        return LMICertificate(Verdict.INCONCLUSIVE, "zames-falb", reason="no nonlinearity")
+        return LMICertificate(
+            Verdict.INCONCLUSIVE,
+            "zames-falb",
+            reason="no nonlinearity",
+            code=LMICode.DECIDED_BEFORE,
+        )
     corner = channel_vertex_instability(model)
     if corner is not None:
         return LMICertificate(
@@ -307,6 +313,7 @@ def zames_falb_certificate(
             "zames-falb",
             reason=corner_reason(corner),
             details={"channel_corner": corner},
+            code=LMICode.DECIDED_BEFORE,
         )
     # nonnegative coefficients first (the certificate then also proves convergence to the
     # equilibrium of every constant attack), then signed ones (the soft threshold is odd)
@@ -355,6 +362,7 @@ def zames_falb_certificate(
             + note
         ),
         details={"attempts": attempts},
+        code=LMICode.NOT_VERIFIED,
     )
 
 
@@ -392,6 +400,7 @@ def _certificate(
         gamma=None if gamma_squared is None else float(np.sqrt(gamma_squared)),
         structure="full",
         details=details,
+        code=LMICode.VERIFIED,
     )
 
 
@@ -423,7 +432,9 @@ def zames_falb_gain(
     nu = int(stability.details.get("order", ORDERS[0]))
     skip = _refusal(model, nu, True, budget)
     if skip:
-        return LMICertificate(Verdict.INCONCLUSIVE, "iss", reason=f"not attempted: {skip}")
+        return LMICertificate(
+            Verdict.INCONCLUSIVE, "iss", reason=f"not attempted: {skip}", code=LMICode.NOT_ATTEMPTED
+        )
     c, solved = output_scaled(model)  # solved with e in units c, the certificate scaled back
     sol, g, info = _solve(solved, nu, True, solver_options or {})
     if c != 1.0 and sol is not None and g is not None:
@@ -460,6 +471,7 @@ def zames_falb_gain(
                     "method": f"Zames-Falb multiplier of order {nu} (dissipation with the "
                     "attack as input)",
                 },
+                code=LMICode.VERIFIED,
             )
     return _gain_retry(
         model,
@@ -498,4 +510,10 @@ def _gain_retry(
     )
     if retry is not None:
         return retry
-    return LMICertificate(Verdict.INCONCLUSIVE, "iss", reason=reason + note, details=details)
+    return LMICertificate(
+        Verdict.INCONCLUSIVE,
+        "iss",
+        reason=reason + note,
+        details=details,
+        code=LMICode.NOT_VERIFIED,
+    )
