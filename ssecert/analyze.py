@@ -14,6 +14,7 @@ from typing import Any
 from .budget import Budget, Laps
 from .context import AnalysisContext, sparse_key
 from .inputs import as_spec
+from .noise import MeasurementNoise
 from .numerics.linalg import balanced_units, eigen_clusters
 from .observers import get_kind, observer_kinds
 from .results import Certificate, Check, Step, Verdict, decide
@@ -158,6 +159,7 @@ def analyze(
     time_budget: float | None = DEFAULT_TIME_BUDGET,
     client: Any | None = None,
     device: str | None = None,
+    noise: MeasurementNoise | float | None = None,
 ) -> Certificate:
     """Run the structural checks of a design.
 
@@ -199,12 +201,17 @@ def analyze(
         Where the run keeps what later steps share (the observer built from
         the design, the sparse-observability check whose stealthy attack the
         simulations replay); ``certify`` passes its own.
+    noise : MeasurementNoise or float, optional
+        Bounded measurement noise, replacing the spec's ``[noise]`` section (a
+        number: that bound on every sample of every sensor).
 
     Returns
     -------
     Certificate
         Checks ``observability``, ``sparse_observability`` (required) and
-        ``irrepresentable`` (advisory); with an ``[observer]`` section also
+        ``irrepresentable`` (advisory); with noise (the ``noise`` argument or
+        the spec's ``[noise]``) also ``decoder_error_bound`` (advisory); with an
+        ``[observer]`` section also
         ``observer_gain``, ``observer_stability`` (required), ``iss_gain``
         and ``thesis_assumptions`` (advisory).
 
@@ -255,6 +262,15 @@ def analyze(
             time_budget=time_budget,
         )),
     ]  # fmt: skip
+    bounded = _noise_of(spec, noise)
+    if bounded is not None:
+        steps.append(
+            Step(
+                "decoder_error_bound",
+                lambda sparse: _decoder_bound(spec, bounded, sparse, max_sets),
+                needs=("sparse_observability",),
+            )
+        )
     if spec.observer is not None:
         from .stability.checks import observer_checks
         from .stability.constant_attack import default_attacks
@@ -280,6 +296,7 @@ def analyze(
     decided = decide(steps, clock)
     checks: list[Check] = [
         decided["observability"], decided["sparse_observability"], decided["irrepresentable"],
+        *([decided["decoder_error_bound"]] if "decoder_error_bound" in decided else []),
         *decided.get("observer_checks", []),
     ]  # fmt: skip
     checks, notes = reconcile(checks)
@@ -290,6 +307,48 @@ def analyze(
     meta = _meta(spec, seed, budget, notes)
     meta["timings"] = clock.record(sparse_timing, observer_timings)
     return Certificate(system=system, checks=tuple(checks), meta=meta)
+
+
+def _noise_of(spec: Spec, noise: MeasurementNoise | float | None) -> MeasurementNoise | None:
+    """The noise the bounds are certified for: the argument's, else the spec's."""
+    if noise is None:
+        return spec.noise
+    if isinstance(noise, MeasurementNoise):
+        if noise.eta.shape != (spec.system.p,):
+            raise ValueError(
+                f"noise: {noise.eta.size} bounds for the plant's {spec.system.p} sensors"
+            )
+        return noise
+    return MeasurementNoise.read(noise, spec.system.p)
+
+
+def _decoder_bound(spec: Spec, noise: MeasurementNoise, sparse: Check, max_sets: int) -> Check:
+    """The decoder_error_bound check: none exists when sparse_observability found a breaking
+    set (it fails with it), else the certified bound (``decoder_error_bound``)."""
+    from .structure.noise import DEFAULT_MAX_SETS as BOUND_SETS
+    from .structure.noise import BoundCode, DecoderErrorBound, decoder_error_bound
+    from .structure.noise_messages import decoder_bound_check
+
+    breaking = sparse.fields.get("breaking_set")
+    if sparse.verdict is Verdict.FAILS and breaking is not None:
+        found = DecoderErrorBound(
+            BoundCode.NOT_SPARSE_OBSERVABLE,
+            float("inf"),
+            0.0,
+            noise,
+            spec.horizon,
+            spec.max_attacked,
+            facts={"breaking_set": [int(i) for i in breaking]},
+        )
+    else:
+        found = decoder_error_bound(
+            spec.system,
+            spec.max_attacked,
+            noise,
+            horizon=spec.horizon,
+            max_sets=min(max_sets, BOUND_SETS),
+        )
+    return decoder_bound_check(spec.system, found)
 
 
 class _Clock(Laps):

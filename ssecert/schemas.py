@@ -104,6 +104,7 @@ def _observer_schemas() -> list[dict[str, Any]]:
 
 def spec_schema() -> dict[str, Any]:
     """The JSON Schema of a spec file (the parsed TOML or JSON document)."""
+    from .noise import NORMS
     from .observers.base import MATRIX_SCHEMA
     from .spec import ATTACK_KINDS, MAX_HORIZON, MAX_NAME_LENGTH, NAME_PATTERN, TABLE_KEYS
 
@@ -141,6 +142,17 @@ def spec_schema() -> dict[str, Any]:
         "horizon": {"type": "integer", "minimum": 1, "maximum": MAX_HORIZON,
                     "description": "tau (default n)"},
     }  # fmt: skip
+    noise = {
+        "measurement": {
+            "oneOf": [
+                {"type": "number", "minimum": 0},
+                {"type": "array", "items": {"type": "number", "minimum": 0}, "minItems": 1},
+            ],
+            "description": "each sensor's noise bound (one number: every sensor's)",
+        },
+        "norm": {"enum": list(NORMS), "description": '"inf" (every sample, default) or "2" '
+                 "(the window's samples of the sensor together)"},
+    }  # fmt: skip
     top = {
         "name": {"type": "string", "pattern": NAME_PATTERN, "maxLength": MAX_NAME_LENGTH,
                  "description": "names the report files (default: the file's name)"},
@@ -153,6 +165,12 @@ def spec_schema() -> dict[str, Any]:
         "attack": {
             "type": "object",
             "properties": _keys(attack, TABLE_KEYS["attack"], "[attack]"),
+            "additionalProperties": False,
+        },
+        "noise": {
+            "type": "object",
+            "properties": _keys(noise, TABLE_KEYS["noise"], "[noise]"),
+            "required": ["measurement"],
             "additionalProperties": False,
         },
         "observer": {"oneOf": _observer_schemas()},
@@ -189,6 +207,16 @@ _CHECK_FIELDS: dict[str, dict[str, Any]] = {
         "L": {"type": ["array", "null"], "description": "null when no gain could be computed"},
         "spectral_radius": {"oneOf": [_REAL, {"type": "null"}]},
     },
+    "decoder_error_bound": {
+        "bound": {**_REAL, "description": "certified bound of ||x_hat - x||_2 (Infinity: none)"},
+        "lower_bound": {**_REAL, "description": "no decoder guarantees an error below it"},
+        "worst_kept_sensors": _INDEX_LIST,
+        "hardened_bound": _REAL,
+        "sigma_min": _REAL,
+        "noise": {"type": "object", "required": ["measurement", "norm"]},
+        "horizon": {"type": "integer", "minimum": 1},
+        "decoder": {"enum": ["l0"]},
+    },
 }
 _REQUIRED_FIELDS: dict[str, list[str]] = {
     "observability": ["observability_index"],
@@ -197,6 +225,7 @@ _REQUIRED_FIELDS: dict[str, list[str]] = {
     ],
     "irrepresentable": ["horizon"],
     "observer_gain": ["L"],
+    "decoder_error_bound": ["bound", "lower_bound", "noise", "horizon", "decoder"],
 }  # fmt: skip
 
 

@@ -31,6 +31,7 @@ LAYERS = {
         "ssecert.budget",
         "ssecert.results",
         "ssecert.system",
+        "ssecert.noise",
         "ssecert.parallel",
         "ssecert.context",
         "ssecert.solvers",

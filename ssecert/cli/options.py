@@ -80,6 +80,31 @@ def _seconds(text: str) -> float:
     return value
 
 
+def _noise_bound(text: str) -> float:
+    """A finite, non-negative noise bound."""
+    try:
+        if len(text) > 40:
+            raise ValueError(text)
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a noise bound, got {_shown(text)}") from None
+    if not math.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"expected a finite noise bound >= 0, got {text}")
+    return value
+
+
+def _with_noise(spec: Any, args: argparse.Namespace) -> Any:
+    """The spec with ``--noise ETA`` in place of its ``[noise]`` (every sample of every
+    sensor within ETA), when given."""
+    if getattr(args, "noise", None) is None:
+        return spec
+    import dataclasses
+
+    from ..noise import MeasurementNoise
+
+    return dataclasses.replace(spec, noise=MeasurementNoise.uniform(args.noise, spec.system.p))
+
+
 def _add_budget_options(parser: argparse.ArgumentParser) -> None:
     from ..budget import parse_bytes, parse_operations
 
@@ -213,6 +238,15 @@ def _add_analysis_options(parser: argparse.ArgumentParser) -> None:
         metavar="N",
         default=50_000_000,
         help="enumeration budget in sets (default 5e7)",
+    )
+    parser.add_argument(
+        "--noise",
+        type=_noise_bound,
+        metavar="ETA",
+        default=None,
+        help="measurement noise within ETA on every sample of every sensor, replacing the "
+        "spec's [noise]: adds the certified worst-case error of the l0 decoder "
+        "(decoder_error_bound)",
     )
     parser.add_argument(
         "--method",

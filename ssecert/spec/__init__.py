@@ -71,6 +71,7 @@ TABLE_KEYS: dict[str, tuple[str, ...]] = {
     "": _core._TOP_KEYS,
     "system": _files._SYSTEM_KEYS,
     "attack": _core._ATTACK_KEYS,
+    "noise": _core._NOISE_KEYS,
     "scenario": _scenarios._SCENARIO_KEYS,
 }
 #: the names of specs (they name the report files)

@@ -23,6 +23,7 @@ from ..base.validation import (
     as_real_matrix,
     describe,
 )
+from ..noise import NORMS, MeasurementNoise
 from ..observers import BUILTIN_KINDS, get_kind, observer_kinds
 from ..system import System
 from .files import (
@@ -55,8 +56,9 @@ __all__ = ["Spec", "load_spec", "spec_from_dict", "OBSERVER_KINDS", "MAX_HORIZON
 MAX_HORIZON = 10_000
 
 OBSERVER_KINDS = BUILTIN_KINDS
-_TOP_KEYS = ("name", "system", "attack", "observer", "scenario")
+_TOP_KEYS = ("name", "system", "attack", "noise", "observer", "scenario")
 _ATTACK_KEYS = ("max_attacked", "horizon")
+_NOISE_KEYS = ("measurement", "norm")
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
 
 
@@ -77,6 +79,8 @@ class Spec:
         Validated ``[observer]`` section (keys as in docs/architecture.md, "Spec files").
     scenarios : tuple of mapping
         Validated ``[[scenario]]`` sections with defaults filled in.
+    noise : MeasurementNoise or None
+        The ``[noise]`` section: each sensor's bound of its measurement noise.
     source : str
         File path or ``"<dict>"``.
     sha256 : str or None
@@ -89,6 +93,7 @@ class Spec:
     horizon: int
     observer: Mapping[str, Any] | None = None
     scenarios: tuple[Mapping[str, Any], ...] = field(default=())
+    noise: MeasurementNoise | None = None
     source: str = "<dict>"
     sha256: str | None = None
 
@@ -145,6 +150,7 @@ def spec_from_dict(
     observer = None
     if "observer" in data:
         observer = _observer(source, data["observer"], system.n, system.p)
+    noise = _noise(source, data["noise"], system.p) if "noise" in data else None
     return Spec(
         name=name,
         system=system,
@@ -152,6 +158,7 @@ def spec_from_dict(
         horizon=tau,
         observer=observer,
         scenarios=read_scenarios(source, data.get("scenario", []), system.p, system.sensors),
+        noise=noise,
         source=source,
         sha256=sha256,
     )
@@ -263,6 +270,16 @@ def _horizon(source: str, attack_table: Any, horizon: int | None, n: int) -> int
             max_value=MAX_HORIZON,
         )
     return n
+
+
+def _noise(source: str, table: Any, p: int) -> MeasurementNoise:
+    """The ``[noise]`` table: ``measurement`` (one bound or one per sensor) and ``norm``."""
+    if not isinstance(table, Mapping):
+        raise spec_error(source, "noise", f"expected a table, got {describe(table)}")
+    check_keys(source, "noise", table, _NOISE_KEYS)
+    measurement = require(source, table, "measurement", "noise")
+    norm = convert(source, "noise.norm", as_choice, table.get("norm", "inf"), "norm", NORMS)
+    return convert(source, "noise.measurement", MeasurementNoise.read, measurement, p, norm)
 
 
 def _observer(source: str, table: Any, n: int, p: int) -> dict[str, Any]:

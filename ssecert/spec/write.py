@@ -29,6 +29,11 @@ def spec_document(spec: Any, observer: Mapping[str, Any] | None = None) -> dict[
     section = observer if observer is not None else spec.observer
     if section is not None:
         data["observer"] = {k: v for k, v in section.items() if v is not None}
+    noise = getattr(spec, "noise", None)
+    if noise is not None:
+        eta = noise.eta
+        one = eta.size and bool((eta == eta[0]).all())
+        data["noise"] = {"measurement": float(eta[0]) if one else eta, "norm": noise.norm}
     if spec.scenarios:
         data["scenario"] = [_scenario(sc) for sc in spec.scenarios]
     return data

@@ -1,0 +1,434 @@
+"""Certified worst-case error of the l0 decoder under bounded measurement noise.
+
+Over a window of tau steps the stacked measurements are Y = O x + E + N:
+O = O_tau, E nonzero on the rows of at most s attacked sensors (anything
+there), N the noise, bounded on every sensor i either entrywise
+(``norm = "inf"``: |N_i(k)| <= eta_i at every step) or as a block
+(``norm = "2"``: ||N_i||_2 <= eta_i over the window).  The l0 decoder
+(``ssecert.estimators.l0_decoder``, what Imhotep-SMT returns) picks the
+support T_hat of s sensors and the state x_hat whose residual on the other
+sensors is smallest.
+
+The bound.  Let T be the attacked sensors and K = (T u T_hat)^c: at least
+p - 2s sensors, none attacked in either explanation.  Then
+
+    ||O_K (x_hat - x)|| <= ||(Y - O x_hat)_K|| + ||N_K||
+                        <= ||(Y - O x)_{T^c}|| + ||N_K|| = ||N_{T^c}|| + ||N_K||,
+
+the middle step by the decoder's optimality (its residual is at most the
+true state's on T^c).  T^c is K and at most s other sensors, so with
+sigma_K = sigma_min(O_K) and, for each K of exactly p - 2s sensors (a
+larger K only raises sigma_min),
+
+    bound(K) = (sqrt(n_K^2 + m_K^2) + n_K) / sigma_K,
+
+n_K the largest ||N_K|| (sqrt(tau) ||eta_K||_2 entrywise, ||eta_K||_2 for
+blocks) and m_K that of the s noisiest sensors outside K, every error
+x_hat - x has ||x_hat - x||_2 <= max_K bound(K).  The set K that attains
+the maximum is the set to harden: the bound is also reported with its
+sensors' noise halved.
+
+The lower bound.  For the worst K, with v its smallest right singular
+vector and c the largest scale with c |O_i v| / 2 within sensor i's bound
+for every i in K, the data of x (attack on s of the 2s sensors outside K,
+noise c O_K v / 2 on K) equal those of x + c v (attack on the other s,
+noise -c O_K v / 2): no decoder can tell them apart, so none guarantees an
+error below c / 2 (``worst_case_pair`` builds them).
+
+Rigour.  The Gramians O_K' O_K are formed and their smallest eigenvalues
+computed in floating point; every sigma_K used is a lower bound of the
+exact plant's (the spec's A and C): LAPACK's backward error, the rounding
+of the Gramian and of the powers C A^k (an a-priori bound) are taken off.
+The sets with the largest bounds are then decided by an SVD of O_K, with
+its own error taken off.  The reported bound is rounded up and re-checked
+in rational arithmetic from the printed numbers.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+from fractions import Fraction
+from typing import Any
+
+import numpy as np
+
+from ..base.validation import as_int_option
+from ..noise import MeasurementNoise
+from ..system import System
+from ._combinatorics import count_subsets
+
+__all__ = [
+    "BoundCode",
+    "DecoderErrorBound",
+    "decoder_error_bound",
+    "worst_case_pair",
+]
+
+DEFAULT_MAX_SETS = 200_000  # sets of p - 2s sensors whose smallest singular value is computed
+_REFINED = 64  # sets decided by an SVD, the largest bounds first
+_PAIRS = 8  # sets tried for the lower bound: those with the largest bounds, the smallest sigma
+_U = 2.0**-53
+
+
+def _gamma(m: int) -> float:
+    return m * _U / (1 - m * _U)
+
+
+class BoundCode(enum.Enum):
+    """How a decoder error bound came out."""
+
+    #: a finite bound, certified for the exact plant
+    CERTIFIED = "certified"
+    #: every set of p - 2s sensors has full rank only within rounding: no finite bound proved
+    NO_MARGIN = "no margin"
+    #: 2s >= p: no set of sensors is left unattacked in both explanations
+    TOO_FEW_SENSORS = "too few sensors"
+    #: more sets of p - 2s sensors than the limit
+    TOO_MANY_SETS = "too many sets"
+    #: the data or the bounds leave the floating-point range
+    OUT_OF_RANGE = "out of range"
+    #: the printed bound did not survive its rational re-check (please report the plant)
+    RECHECK_FAILED = "re-check failed"
+    #: a set of at most 2s sensors breaks observability (sparse_observability's breaking set,
+    #: in ``facts``): two states explain the same data even without noise, no bound exists
+    NOT_SPARSE_OBSERVABLE = "not 2s-sparse observable"
+
+
+@dataclass(frozen=True)
+class DecoderErrorBound:
+    """The worst-case error of the l0 decoder over a window under bounded noise and at most s
+    attacked sensors (``decoder_error_bound``).
+
+    Attributes
+    ----------
+    code : BoundCode
+    bound : float
+        Certified: ||x_hat - x||_2 <= bound for every attack on at most s sensors and every
+        noise within its bounds (inf when none is certified).
+    lower : float
+        No decoder guarantees an error below this (``worst_case_pair`` on ``lower_kept``);
+        0 when not built.
+    lower_kept : tuple of int
+        The p - 2s sensors of that construction.
+    worst_kept : tuple of int
+        The p - 2s sensors K whose bound(K) is the largest: the set to harden.
+    sigma : float
+        The certified lower bound of sigma_min(O_K) for that set.
+    smallest_sigma : float
+        The certified lower bound of min over every K of sigma_min(O_K).
+    smallest_kept : tuple of int
+        The set where that minimum is attained.
+    hardened : float
+        The bound with the noise of ``worst_kept``'s sensors halved.
+    noise : MeasurementNoise
+    horizon, max_attacked : int
+    sets : int
+        Sets of p - 2s sensors.
+    refined : int
+        Sets decided by an SVD.
+    facts : mapping
+        Numbers the words need (a limit, the data's largest entry).
+    """
+
+    code: BoundCode
+    bound: float
+    lower: float
+    noise: MeasurementNoise
+    horizon: int
+    max_attacked: int
+    worst_kept: tuple[int, ...] = ()
+    sigma: float = 0.0
+    smallest_sigma: float = 0.0
+    smallest_kept: tuple[int, ...] = ()
+    hardened: float = math.inf
+    sets: int = 0
+    refined: int = 0
+    lower_kept: tuple[int, ...] = ()
+    facts: dict[str, Any] = field(default_factory=dict)
+
+
+def _block_errors(system: System, horizon: int) -> np.ndarray:
+    """(p,) upper bounds of ||fl(O_i) - O_i||_F: the rounding of the rows C_i A^k as
+    ``System.sensor_blocks`` forms them (k products by A, each with the error of an inner
+    product of length n: |fl(c A^k) - c A^k| <= ((1 + gamma_n)^k - 1) |c| |A|^k)."""
+    n = system.n
+    absA, row = np.abs(system.A), np.abs(system.C)
+    out = np.zeros(system.p)
+    growth = 1.0 + _gamma(n + 2)
+    for k in range(horizon):
+        if k:
+            row = row @ absA
+            factor = growth**k - 1.0
+            out += (factor * (1 + 1e-6)) ** 2 * np.sum(row**2, axis=1)
+    return np.sqrt(out) * (1 + 1e-6)
+
+
+def _kept_sets(p: int, removed: int) -> np.ndarray:
+    """Every set of ``removed`` sensors, in lexicographic order, shape (C(p, removed), removed)."""
+    import itertools
+
+    return np.array(list(itertools.combinations(range(p), removed)), dtype=np.int64).reshape(
+        -1, removed
+    )
+
+
+def _sigma_lower_from_gramians(
+    blocks: np.ndarray, removed: np.ndarray, chunk: int = 4096
+) -> tuple[np.ndarray, np.ndarray]:
+    """Lower bounds of sigma_min(fl(O_K)) for K the complement of each row of ``removed``, from
+    the smallest eigenvalue of the Gramian (the sum of the kept blocks' Gramians), with the
+    Gramian's rounding and LAPACK's backward error taken off; and the computed values."""
+    p, tau, n = blocks.shape
+    grams = np.einsum("ikn,ikm->inm", blocks, blocks)
+    total = grams.sum(axis=0)
+    frob = np.sum(blocks**2, axis=(1, 2))  # ||O_i||_F^2
+    low = np.empty(removed.shape[0])
+    value = np.empty(removed.shape[0])
+    for start in range(0, removed.shape[0], chunk):
+        rows = removed[start : start + chunk]
+        G = total - grams[rows].sum(axis=1)
+        lam = np.linalg.eigvalsh(G)[:, 0]
+        kept_frob = frob.sum() - frob[rows].sum(axis=1)
+        # forming each Gramian block (tau-term sums) and the sum of all minus the removed ones
+        # (p + 2s terms) rounds by at most gamma(tau + p + 2 + 2s) times the sum of the terms'
+        # absolute values, whose norm is at most the sum of ||O_i||_F^2 over every sensor;
+        # LAPACK's eigenvalues are those of a matrix within 64 n u ||G|| of the one given
+        error = (_gamma(tau + p + rows.shape[1] + 2) * frob.sum() + 64 * n * _U * kept_frob) * (
+            1 + 1e-6
+        )
+        value[start : start + chunk] = np.sqrt(np.maximum(lam, 0.0))
+        low[start : start + chunk] = np.sqrt(np.maximum(lam - error, 0.0))
+    return low, value
+
+
+def _sigma_lower_svd(blocks: np.ndarray, kept: Sequence[int] | np.ndarray) -> float:
+    """A lower bound of sigma_min(fl(O_K)) from its SVD (backward stable: within
+    gamma(c max(m, n)) ||O_K||_2 of the exact singular values)."""
+    O_K = blocks[list(kept)].reshape(-1, blocks.shape[2])
+    sv = np.linalg.svd(O_K, compute_uv=False)
+    if sv.size < blocks.shape[2]:
+        return 0.0
+    error = 64 * max(O_K.shape) * _U * float(sv[0]) * (1 + 1e-6)
+    return max(float(sv[-1]) - error, 0.0)
+
+
+def _noise_terms(block: np.ndarray, removed: np.ndarray, s: int) -> tuple[np.ndarray, np.ndarray]:
+    """(n_K, m_K) of every K (the complement of each row of ``removed``), each rounded up: the
+    largest ||N_K||, and the largest ||N|| of s sensors outside K (the s noisiest of the
+    removed ones)."""
+    p = block.size
+    sq = block**2
+    mask = np.ones((removed.shape[0], p), dtype=bool)
+    np.put_along_axis(mask, removed, False, axis=1)
+    up = 1.0 + _gamma(p + 4)  # the squares, their sum and the square root, rounded
+    n_K = np.sqrt(np.where(mask, sq, 0.0).sum(axis=1) * up) * up
+    outside = np.sort(sq[removed], axis=1)[:, ::-1][:, :s]
+    m_K = np.sqrt(outside.sum(axis=1) * up) * up
+    return n_K, m_K
+
+
+def _bound_of(n_K: Any, m_K: Any, sigma: Any) -> Any:
+    """bound(K), rounded up (each of its few operations by a unit in the last place)."""
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        value = (np.sqrt(n_K**2 + m_K**2) + n_K) / sigma * (1.0 + _gamma(8))
+    return np.where(np.asarray(sigma) > 0, value, np.inf)
+
+
+def decoder_error_bound(
+    system: System,
+    max_attacked: int,
+    noise: MeasurementNoise,
+    *,
+    horizon: int | None = None,
+    max_sets: int = DEFAULT_MAX_SETS,
+) -> DecoderErrorBound:
+    """The certified worst-case estimation error of the l0 decoder over a window.
+
+    Parameters
+    ----------
+    system : System
+    max_attacked : int
+        s, the largest number of attacked sensors.
+    noise : MeasurementNoise
+        Per-sensor bounds of the measurement noise.
+    horizon : int, optional
+        tau, the window (default n).
+    max_sets : int, default 200,000
+        Largest number of sets of p - 2s sensors examined.
+
+    Returns
+    -------
+    DecoderErrorBound
+
+    Examples
+    --------
+    Three sensors of one state, one attacked, noise at most 0.1 on each: the
+    bound (sqrt(2) + 1) 0.1 and no decoder guarantees better than 0.1.
+
+    >>> import numpy as np
+    >>> from ssecert import System
+    >>> plant = System(np.eye(1), np.ones((3, 1)))
+    >>> found = decoder_error_bound(plant, 1, MeasurementNoise.uniform(0.1, 3), horizon=1)
+    >>> round(found.bound, 6), round(found.lower, 6), found.worst_kept
+    (0.241421, 0.1, (0,))
+    """
+    s = as_int_option(max_attacked, "max_attacked", min_value=0)
+    tau = system.n if horizon is None else as_int_option(horizon, "horizon", min_value=1)
+    p = system.p
+    if noise.eta.shape != (p,):
+        raise ValueError(f"noise: {noise.eta.size} bounds for {p} sensors")
+    base: dict[str, Any] = {"noise": noise, "horizon": tau, "max_attacked": s}
+    removed_size = 2 * s
+    if removed_size >= p:
+        return DecoderErrorBound(BoundCode.TOO_FEW_SENSORS, math.inf, 0.0, **base)
+    sets = count_subsets(p, [removed_size])
+    if sets > max_sets:
+        return DecoderErrorBound(
+            BoundCode.TOO_MANY_SETS, math.inf, 0.0, sets=sets, facts={"limit": max_sets}, **base
+        )
+    with np.errstate(all="ignore"):
+        blocks = system.sensor_blocks(tau)
+        finite = bool(np.all(np.isfinite(blocks))) and bool(np.isfinite(np.sum(blocks**2)))
+    if not finite or not np.isfinite(np.sum(noise.block_bounds(tau) ** 2)):
+        return DecoderErrorBound(BoundCode.OUT_OF_RANGE, math.inf, 0.0, sets=sets, **base)
+    removed = _kept_sets(p, removed_size)
+    errors = _block_errors(system, tau)
+    low, _ = _sigma_lower_from_gramians(blocks, removed)
+    # the exact plant's O_K is within ||errors_K|| of the computed one
+    err_K = np.sqrt(np.maximum((errors**2).sum() - (errors[removed] ** 2).sum(axis=1), 0.0))
+    sigma = np.maximum(low - err_K, 0.0)
+    block = noise.block_bounds(tau)
+    n_K, m_K = _noise_terms(block, removed, s)
+    bounds = _bound_of(n_K, m_K, sigma)
+    # the largest bounds decided again by an SVD of O_K (sharper where the Gramian squares
+    # the condition number), until the best refined one is above every set left
+    order = np.argsort(-bounds, kind="stable")
+    refined = 0
+    for j in order[:_REFINED]:
+        kept = np.setdiff1d(np.arange(p), removed[j])
+        better = max(_sigma_lower_svd(blocks, kept) - float(err_K[j]), 0.0)
+        refined += 1
+        if better > sigma[j]:
+            sigma[j] = better
+            bounds[j] = _bound_of(n_K[j], m_K[j], better)
+        rest = order[refined:]
+        if rest.size == 0 or bounds[rest].max() <= bounds[order[:refined]].max():
+            break
+    # ties go to the lexicographically first kept set (the last removed set of the order)
+    last = bounds.size - 1
+    worst = last - int(np.argmax(bounds[::-1]))
+    weakest = last - int(np.argmin(sigma[::-1]))
+    kept_of = lambda j: tuple(int(i) for i in np.setdiff1d(np.arange(p), removed[j]))  # noqa: E731
+    if not np.isfinite(bounds[worst]):
+        return DecoderErrorBound(
+            BoundCode.NO_MARGIN,
+            math.inf,
+            0.0,
+            worst_kept=kept_of(worst),
+            smallest_kept=kept_of(weakest),
+            sets=sets,
+            refined=refined,
+            **base,
+        )
+    bound = _rounded_up(float(bounds[worst]))
+    softer = block.copy()
+    softer[list(kept_of(worst))] *= 0.5
+    n_h, m_h = _noise_terms(softer, removed, s)
+    hardened = _rounded_up(float(np.max(_bound_of(n_h, m_h, sigma))))
+    found = DecoderErrorBound(
+        BoundCode.CERTIFIED,
+        bound,
+        0.0,
+        worst_kept=kept_of(worst),
+        sigma=float(sigma[worst]),
+        smallest_sigma=float(sigma[weakest]),
+        smallest_kept=kept_of(weakest),
+        hardened=hardened,
+        sets=sets,
+        refined=refined,
+        **base,
+    )
+    if not bound_rechecks(found):
+        return replace(found, code=BoundCode.RECHECK_FAILED)
+    # the lower bound: the best pair over the sets with the largest bounds and the smallest
+    # singular values
+    candidates = dict.fromkeys(
+        [int(j) for j in order[:_PAIRS]] + [int(j) for j in np.argsort(sigma)[:_PAIRS]]
+    )
+    best = 0.0
+    best_kept: tuple[int, ...] = ()
+    for j in candidates:
+        pair = worst_case_pair(system, replace(found, lower_kept=kept_of(j)))
+        if pair is not None and pair["lower"] > best:
+            best, best_kept = float(pair["lower"]), kept_of(j)
+    return replace(found, lower=best, lower_kept=best_kept)
+
+
+def _rounded_up(x: float) -> float:
+    """x a few units in the last place up (the bound's own rounding)."""
+    return float(np.nextafter(np.nextafter(x * (1 + 4 * _U), np.inf), np.inf))
+
+
+def _sqrt_upper(q: Fraction) -> Fraction:
+    """A rational r >= sqrt(q)."""
+    r = Fraction(math.sqrt(float(q))) if q > 0 else Fraction(0)
+    while r * r < q:
+        r = Fraction(float(np.nextafter(float(r) * (1 + 1e-15), np.inf)))
+    return r
+
+
+def bound_rechecks(found: DecoderErrorBound) -> bool:
+    """Whether the printed bound, times the printed sigma, is at least sqrt(n_K^2 + m_K^2) +
+    n_K in rational arithmetic (n_K and m_K recomputed exactly from the printed bounds)."""
+    block = [Fraction(float(b)) for b in found.noise.eta]
+    tau = found.horizon
+    kept = set(found.worst_kept)
+    weight = Fraction(tau) if found.noise.norm == "inf" else Fraction(1)
+    nK2 = weight * sum((block[i] ** 2 for i in kept), Fraction(0))
+    outside = sorted((block[i] ** 2 for i in range(len(block)) if i not in kept), reverse=True)
+    mK2 = weight * sum(outside[: found.max_attacked], Fraction(0))
+    need = _sqrt_upper(nK2 + mK2) + _sqrt_upper(nK2)
+    return Fraction(found.bound) * Fraction(found.sigma) >= need
+
+
+def worst_case_pair(system: System, found: DecoderErrorBound) -> dict[str, Any] | None:
+    """Two explanations of the same window's data that no decoder can tell apart, on the set
+    K = ``found.lower_kept`` (see the module's docstring): states x = 0 and x' = c v, the attack
+    of each (on s sensors outside K each), the noise of each (within its bounds) and the data;
+    ``lower`` = c / 2.  None when the set has no positive scale (noise 0 on it)."""
+    tau, s = found.horizon, found.max_attacked
+    kept = list(found.lower_kept)
+    if not kept:
+        return None
+    blocks = system.sensor_blocks(tau)
+    O_K = blocks[kept]  # (|K|, tau, n)
+    _, _, vh = np.linalg.svd(O_K.reshape(-1, system.n))
+    v = vh[-1]
+    Ov = O_K @ v  # (|K|, tau)
+    size = np.max(np.abs(Ov), axis=1) if found.noise.norm == "inf" else np.linalg.norm(Ov, axis=1)
+    eta = found.noise.eta[kept]
+    with np.errstate(divide="ignore"):
+        scales = np.where(size > 0, 2.0 * eta / size, np.inf)
+    c = float(np.min(scales)) * (1 - 1e-12)
+    if not np.isfinite(c) or c <= 0:
+        return None
+    outside = [i for i in range(system.p) if i not in set(kept)]
+    attacked, other = outside[:s], outside[s : 2 * s]
+    Y = np.zeros((system.p, tau))
+    Y[kept] = 0.5 * c * Ov  # x = 0 with noise c O_K v / 2; x' = c v with noise -c O_K v / 2
+    x_other = c * v
+    Y[attacked] = blocks[attacked] @ x_other  # x's attack makes these read x'
+    # on ``other`` the data are x = 0's, noiseless: x' explains them by its attack
+    return {
+        "lower": 0.5 * c,
+        "direction": v,
+        "scale": c,
+        "x": np.zeros(system.n),
+        "x_other": x_other,
+        "attacked": attacked,
+        "attacked_other": other,
+        "measurements": Y,  # (p, tau): sensor i at step k
+    }

@@ -1,0 +1,151 @@
+"""The words of the decoder error bound: the ``decoder_error_bound`` check from its outcome.
+
+``ssecert.structure.noise.decoder_error_bound`` returns a
+``DecoderErrorBound`` (numbers and a ``BoundCode``); this module alone
+writes what a user reads about it.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ..base.format import readable
+from ..results import Check, Verdict
+from ..system import System
+from .noise import BoundCode, DecoderErrorBound, worst_case_pair
+
+__all__ = ["decoder_bound_check", "reason"]
+
+TITLE = "Worst-case error of the l0 decoder under noise"
+VALUE_NAME = "certified bound of ||x_hat - x||_2"
+METHOD = "l0 decoder's optimality on every set of p - 2s sensors (verified sigma_min of O_K)"
+
+
+def reason(found: DecoderErrorBound) -> str:
+    """Why no finite bound is certified (empty for a certified one)."""
+    code, s = found.code, found.max_attacked
+    if code is BoundCode.TOO_FEW_SENSORS:
+        return (
+            f"with {s} attacked sensors no set of sensors is left unattacked in both of two "
+            f"explanations of the data (2s = {2 * s} >= p)"
+        )
+    if code is BoundCode.TOO_MANY_SETS:
+        return (
+            f"{found.sets:,} sets of p - 2s sensors, more than the limit of "
+            f"{found.facts['limit']:,}"
+        )
+    if code is BoundCode.NO_MARGIN:
+        return (
+            "some set of p - 2s sensors does not determine the state with a margin above "
+            "rounding (its smallest singular value is not proved positive)"
+        )
+    if code is BoundCode.OUT_OF_RANGE:
+        return "the observability matrix or the noise bounds leave the floating-point range"
+    if code is BoundCode.RECHECK_FAILED:
+        return "the bound did not survive its re-check in rational arithmetic (please report it)"
+    return ""
+
+
+def _names(system: System, sensors: tuple[int, ...]) -> str:
+    return ", ".join(system.sensors[i] for i in sensors)
+
+
+def _sensors(count: int) -> str:
+    return f"{count} sensor{'' if count == 1 else 's'}"
+
+
+def _noise_words(found: DecoderErrorBound) -> str:
+    eta = found.noise.eta
+    each = (
+        f"{readable(float(eta[0]))} on every sensor"
+        if eta.size and (eta == eta[0]).all()
+        else "the spec's bound on each sensor"
+    )
+    how = (
+        "on every sample"
+        if found.noise.norm == "inf"
+        else f"in 2-norm over the window of {found.horizon} steps"
+    )
+    return f"noise within {each} ({how})"
+
+
+def decoder_bound_check(system: System, found: DecoderErrorBound) -> Check:
+    """The ``decoder_error_bound`` check (advisory) of ``found``: holds with a certified
+    bound, fails when a breaking set of at most 2s sensors proves no bound exists, else
+    inconclusive with the reason."""
+    s, tau = found.max_attacked, found.horizon
+    fields: dict[str, Any] = {
+        "bound": found.bound,
+        "lower_bound": found.lower,
+        "worst_kept_sensors": list(found.worst_kept),
+        "hardened_bound": found.hardened,
+        "sigma_min": found.sigma,
+        "noise": found.noise.to_dict(),
+        "horizon": tau,
+        "decoder": "l0",
+    }
+    evidence: dict[str, Any] = {
+        "sets": found.sets,
+        "sets_refined_by_svd": found.refined,
+        "smallest_sigma_min": found.smallest_sigma,
+        "smallest_sigma_kept_sensors": list(found.smallest_kept),
+        "noise_block_bounds": found.noise.block_bounds(tau),
+        "code": found.code.value,
+    }
+    common: dict[str, Any] = {
+        "id": "decoder_error_bound",
+        "title": TITLE,
+        "method": METHOD,
+        "required": False,
+        "value_name": VALUE_NAME,
+        "fields": fields,
+    }
+    if found.code is BoundCode.NOT_SPARSE_OBSERVABLE:
+        breaking_set = list(found.facts["breaking_set"])
+        return Check(
+            verdict=Verdict.FAILS,
+            summary=f"No decoder has a finite worst-case error: removing sensors "
+            f"{_names(system, tuple(breaking_set))} leaves the state unobservable "
+            f"(sparse_observability), so two states explain the same data with at most "
+            f"{_sensors(s)} attacked, even without noise.",
+            value=float("inf"),
+            evidence=evidence,
+            witness={"breaking_set": list(breaking_set)},
+            **common,
+        )
+    if found.code is not BoundCode.CERTIFIED:
+        return Check(
+            verdict=Verdict.INCONCLUSIVE,
+            summary=f"No worst-case error bound is certified: {reason(found)}.",
+            value=float("inf"),
+            evidence=evidence,
+            **common,
+        )
+    pair = worst_case_pair(system, found)
+    if pair is not None:
+        evidence["lower_bound_construction"] = {
+            "direction": pair["direction"],
+            "scale": pair["scale"],
+            "attacked": pair["attacked"],
+            "attacked_other": pair["attacked_other"],
+            "kept": list(found.lower_kept),
+            "measurements": pair["measurements"],
+        }
+    kept = _names(system, found.worst_kept)
+    lower = (
+        f"; no decoder can guarantee less than {readable(found.lower)} (two states explain the "
+        f"same data with the noise and attacks allowed)"
+        if found.lower > 0
+        else ""
+    )
+    return Check(
+        verdict=Verdict.HOLDS,
+        summary=f"With {_noise_words(found)} and any attack on at most {_sensors(s)}, the l0 "
+        f"decoder's estimate of the window's first state is within {readable(found.bound)} of "
+        f"the truth (2-norm){lower}. The bound is largest with sensors {kept} kept (smallest "
+        f"singular value of their observability matrix at least {readable(found.sigma)}); "
+        f"halving their noise gives {readable(found.hardened)}.",
+        value=found.bound,
+        evidence=evidence,
+        **common,
+    )
