@@ -1,0 +1,286 @@
+"""The certified worst-case error of the l0 decoder under bounded noise (``decoder_error_bound``)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from ssecert import System, analyze, spec_from_dict
+from ssecert.estimators import l0_decoder
+from ssecert.noise import MeasurementNoise
+from ssecert.results import Verdict
+from ssecert.spec import SpecError
+from ssecert.spec.write import spec_document
+from ssecert.structure import noise_messages
+from ssecert.structure.noise import (
+    BoundCode,
+    DecoderErrorBound,
+    bound_rechecks,
+    decoder_error_bound,
+    worst_case_pair,
+)
+
+
+def _decode(system: System, Y: np.ndarray, s: int) -> np.ndarray:
+    """The l0 decoder's state from a window's data Y (p, tau)."""
+    tau = Y.shape[1]
+    O = system.observability_matrix(tau)
+    rows = np.tile(np.arange(system.p), tau)
+    return l0_decoder(O, Y.T.reshape(-1), s, sensors_of_row=rows).x
+
+
+def _noise(rng, eta, tau, norm):
+    p = eta.size
+    if norm == "inf":
+        return rng.uniform(-1, 1, (p, tau)) * eta[:, None]
+    N = rng.standard_normal((p, tau))
+    return N * (eta * rng.uniform(0, 1, p) / np.linalg.norm(N, axis=1))[:, None]
+
+
+def test_three_copies_of_one_state_in_closed_form():
+    """y_i = x + n_i, |n_i| <= eta, one attacked: the decoder keeps the two closest readings;
+    honest x + eta, x - eta and an attack at x + 3 eta - e make it keep (x + eta, attack), an
+    error of 2 eta - e/2 (its exact worst case, approached); the bound is (sqrt 2 + 1) eta and no
+    decoder guarantees less than eta."""
+    eta = 0.01
+    plant = System(np.eye(1), np.ones((3, 1)))
+    found = decoder_error_bound(plant, 1, MeasurementNoise.uniform(eta, 3), horizon=1)
+    assert found.code is BoundCode.CERTIFIED
+    assert found.bound == pytest.approx((math.sqrt(2) + 1) * eta, rel=1e-12)
+    assert found.bound >= (math.sqrt(2) + 1) * eta
+    assert found.lower == pytest.approx(eta, rel=1e-9)
+    x = 0.3
+    Y = np.array([[x + eta], [x - eta], [x + 3 * eta - 1e-9]])
+    error = abs(_decode(plant, Y, 1)[0] - x)
+    assert error == pytest.approx(2 * eta, rel=1e-6) and error <= found.bound
+
+
+def test_orthogonal_sensors_the_bound_and_the_set_to_harden():
+    """A static plant whose sensors see the two states along orthogonal directions, the noisiest
+    sensors sharing a direction: the worst set keeps the fewest of the quiet ones."""
+    C = np.array([[1.0, 0.0], [1.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.0, 1.0], [0.0, 1.0]])
+    plant = System(np.eye(2), C)
+    eta = np.array([0.01, 0.01, 0.01, 0.05, 0.05, 0.05])
+    found = decoder_error_bound(plant, 1, MeasurementNoise(eta), horizon=1)
+    assert found.code is BoundCode.CERTIFIED
+    # every K of 4 keeps one or two sensors per direction: sigma_min = 1 where one is kept
+    assert found.smallest_sigma == pytest.approx(1.0, rel=1e-12)
+    kept = found.worst_kept
+    assert len(kept) == 4 and found.sigma == pytest.approx(1.0, rel=1e-12)
+    n_K = np.linalg.norm(eta[list(kept)])
+    outside = np.sort(np.delete(eta, list(kept)) ** 2)[::-1][:1].sum()
+    assert found.bound == pytest.approx((math.sqrt(n_K**2 + outside) + n_K), rel=1e-12)
+    assert found.hardened < found.bound
+
+
+def test_the_two_explanations_are_what_they_claim():
+    rng = np.random.default_rng(5)
+    for norm in ("inf", "2"):
+        plant = System(rng.standard_normal((3, 3)) * 0.5, rng.standard_normal((7, 3)))
+        eta = rng.uniform(0.01, 0.1, 7)
+        found = decoder_error_bound(plant, 2, MeasurementNoise(eta, norm), horizon=3)
+        assert found.code is BoundCode.CERTIFIED and 0 < found.lower < found.bound
+        pair = worst_case_pair(plant, found)
+        blocks = plant.sensor_blocks(3)
+        Y = pair["measurements"]
+        for x, attacked in (
+            (pair["x"], pair["attacked"]),
+            (pair["x_other"], pair["attacked_other"]),
+        ):
+            honest = [i for i in range(7) if i not in attacked]
+            assert len(attacked) == 2
+            residual = Y[honest] - blocks[honest] @ x
+            size = (
+                np.abs(residual).max(axis=1) if norm == "inf" else np.linalg.norm(residual, axis=1)
+            )
+            assert np.all(size <= eta[honest] * (1 + 1e-9))
+        assert np.linalg.norm(pair["x_other"] - pair["x"]) == pytest.approx(2 * found.lower)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_no_simulated_attack_exceeds_the_bound(seed):
+    """Random plants, noises within the bounds, attacks that make s sensors read a shifted
+    state, and the two-explanation construction: the l0 decoder's error stays below the bound."""
+    rng = np.random.default_rng(seed)
+    checked = 0
+    while checked < 3:
+        n, p = int(rng.integers(1, 4)), int(rng.integers(3, 8))
+        s = int(rng.integers(1, (p - 1) // 2 + 1))
+        tau = int(rng.integers(1, n + 2))
+        plant = System(rng.standard_normal((n, n)) * 0.6, rng.standard_normal((p, n)))
+        eta = rng.uniform(0.01, 0.2, p)
+        norm = ("inf", "2")[checked % 2]
+        found = decoder_error_bound(plant, s, MeasurementNoise(eta, norm), horizon=tau)
+        if found.code is not BoundCode.CERTIFIED:
+            continue
+        checked += 1
+        blocks = plant.sensor_blocks(tau)
+        pair = worst_case_pair(plant, found)
+        estimate = _decode(plant, pair["measurements"], s)
+        for x in (pair["x"], pair["x_other"]):
+            assert np.linalg.norm(estimate - x) <= found.bound
+        for _ in range(40):
+            x = rng.standard_normal(n)
+            Y = blocks @ x + _noise(rng, eta, tau, norm)
+            T = rng.choice(p, s, replace=False)
+            Y[T] = blocks[T] @ (x + rng.standard_normal(n) * found.bound * rng.uniform(0, 3))
+            assert np.linalg.norm(_decode(plant, Y, s) - x) <= found.bound
+
+
+def test_the_printed_bound_is_rechecked_in_rationals():
+    plant = System(np.eye(1), np.ones((5, 1)))
+    found = decoder_error_bound(plant, 2, MeasurementNoise.uniform(0.1, 5), horizon=1)
+    assert bound_rechecks(found)
+    from dataclasses import replace
+
+    assert not bound_rechecks(replace(found, bound=found.bound * (1 - 1e-12)))
+
+
+def test_codes_of_the_bounds_that_are_not_certified():
+    noise = MeasurementNoise.uniform(0.1, 3)
+    plant = System(np.eye(2), np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]))
+    assert decoder_error_bound(plant, 2, noise).code is BoundCode.TOO_FEW_SENSORS
+    # one step of one sensor cannot determine two states
+    assert decoder_error_bound(plant, 1, noise, horizon=1).code is BoundCode.NO_MARGIN
+    many = decoder_error_bound(plant, 1, noise, horizon=1, max_sets=2)
+    assert many.code is BoundCode.TOO_MANY_SETS and many.facts["limit"] == 2
+    huge = System(np.eye(1), np.full((3, 1), 1e200))
+    assert decoder_error_bound(huge, 1, noise).code is BoundCode.OUT_OF_RANGE
+
+
+@pytest.mark.parametrize("code", [c for c in BoundCode if c is not BoundCode.CERTIFIED])
+def test_every_code_has_words_and_a_verdict(code):
+    plant = System(np.eye(1), np.ones((3, 1)))
+    facts = {"limit": 10, "breaking_set": [0, 1]}
+    found = DecoderErrorBound(code, math.inf, 0.0, MeasurementNoise.uniform(0.1, 3), 1, 1,
+                              sets=3, facts=facts)  # fmt: skip
+    check = noise_messages.decoder_bound_check(plant, found)
+    expected = Verdict.FAILS if code is BoundCode.NOT_SPARSE_OBSERVABLE else Verdict.INCONCLUSIVE
+    assert check.verdict is expected and check.required is False
+    assert check.value == math.inf and check.fields["bound"] == math.inf
+    if code is not BoundCode.NOT_SPARSE_OBSERVABLE:
+        assert noise_messages.reason(found) in check.summary
+
+
+def _spec(noise=None, C=None, A=None):
+    data = {
+        "name": "noisy",
+        "system": {"A": A or [[1.0, 0.1], [0.0, 1.0]],
+                   "C": C or [[1.0, 0.0], [0.0, 1.0], [1.0, 1.0], [1.0, -1.0], [2.0, 1.0]]},
+        "attack": {"max_attacked": 1, "horizon": 2},
+    }  # fmt: skip
+    if noise is not None:
+        data["noise"] = noise
+    return data
+
+
+def test_the_noise_section_is_read_written_and_refused_by_name():
+    spec = spec_from_dict(_spec({"measurement": [1e-3, 1e-3, 2e-3, 1e-3, 5e-3], "norm": "2"}))
+    assert spec.noise == MeasurementNoise([1e-3, 1e-3, 2e-3, 1e-3, 5e-3], "2")
+    assert spec_from_dict(spec_document(spec)).noise == spec.noise
+    one = spec_from_dict(_spec({"measurement": 1e-4}))
+    assert one.noise.norm == "inf" and one.noise.eta.tolist() == [1e-4] * 5
+    assert spec_document(one)["noise"] == {"measurement": 1e-4, "norm": "inf"}
+    for bad, where in (
+        ({"measurement": -1.0}, "noise.measurement"),
+        ({"measurement": [1e-3, 1e-3]}, "noise.measurement"),
+        ({"measurement": 1e-3, "norm": "1"}, "noise.norm"),
+        ({"measurement": 1e-3, "bound": 2}, "noise"),
+        ({"norm": "inf"}, "noise.measurement"),
+        ({"measurement": "small"}, "noise.measurement"),
+    ):
+        with pytest.raises(SpecError, match=where.replace(".", r"\.")):
+            spec_from_dict(_spec(bad))
+
+
+def test_analyze_adds_the_check_and_it_fails_with_the_breaking_set():
+    cert = analyze(spec_from_dict(_spec({"measurement": 1e-3})))
+    check = cert["decoder_error_bound"]
+    assert check.verdict is Verdict.HOLDS and check.required is False
+    assert 0 < check.fields["lower_bound"] < check.fields["bound"] < math.inf
+    assert cert.verdict is Verdict.HOLDS
+    # sensor 4 alone sees the second state of a static plant
+    C = [[1.0, 0.0], [1.0, 0.0], [1.0, 0.0], [1.0, 0.0], [0.0, 1.0]]
+    broken = analyze(spec_from_dict(_spec(C=C, A=[[1.0, 0.0], [0.0, 1.0]])), noise=1e-3)
+    assert broken["sparse_observability"].verdict is Verdict.FAILS
+    check = broken["decoder_error_bound"]
+    assert check.verdict is Verdict.FAILS
+    assert check.witness["breaking_set"] == broken["sparse_observability"].fields["breaking_set"]
+    assert "decoder_error_bound" not in analyze(spec_from_dict(_spec()))
+
+
+def test_the_command_line_takes_noise(tmp_path, capsys):
+    from ssecert.cli import main
+
+    path = tmp_path / "noisy.json"
+    path.write_text(json.dumps(_spec()))
+    assert main(["analyze", str(path), "--noise", "1e-3", "--json", "-", "--quiet"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["checks"]["decoder_error_bound"]["verdict"] == "holds"
+    assert doc["checks"]["decoder_error_bound"]["noise"] == {
+        "measurement": [1e-3] * 5,
+        "norm": "inf",
+    }
+    assert main(["analyze", str(path), "--noise", "-1"]) == 2
+    assert "--noise" in capsys.readouterr().err
+
+
+def test_the_bound_follows_the_units():
+    """Every sensor in other units (C and the noise scaled alike) gives the same bound; the
+    states in other units (x = 2 x') halve the bound in x' units.  (The l0 decoder weighs its
+    residual in the sensors' units: one sensor rescaled alone changes what it does.)"""
+    rng = np.random.default_rng(2)
+    A, C = rng.standard_normal((2, 2)) * 0.5, rng.standard_normal((5, 2))
+    eta = rng.uniform(0.01, 0.1, 5)
+    base = decoder_error_bound(System(A, C), 1, MeasurementNoise(eta), horizon=2)
+    for units in (2.0**-30, 3.0, 2.0**40):
+        scaled = decoder_error_bound(
+            System(A, C * units), 1, MeasurementNoise(eta * units), horizon=2
+        )
+        assert scaled.bound == pytest.approx(base.bound, rel=1e-9)
+        assert scaled.lower == pytest.approx(base.lower, rel=1e-9)
+    states = decoder_error_bound(System(A, 2.0 * C), 1, MeasurementNoise(eta), horizon=2)
+    assert states.bound == pytest.approx(base.bound / 2, rel=1e-9)
+
+
+@pytest.mark.slow
+def test_pushing_attacks_on_many_plants_stay_within_the_bound():
+    """The attack that serves the adversary best: the honest sensors' noise saturated along the
+    worst set's weakest direction, the attacked ones reading the state moved along it by up to
+    three bounds; on 120 random plants the l0 decoder's error never exceeds the bound."""
+    rng = np.random.default_rng(11)
+    worst, plants = 0.0, 0
+    while plants < 120:
+        n, p = int(rng.integers(1, 4)), int(rng.integers(3, 9))
+        s = int(rng.integers(1, (p - 1) // 2 + 1))
+        tau = int(rng.integers(1, n + 2))
+        plant = System(rng.standard_normal((n, n)) * 0.7, rng.standard_normal((p, n)))
+        eta = rng.uniform(0.001, 0.3, p) if plants % 3 else np.full(p, 0.05)
+        norm = ("inf", "2")[plants % 2]
+        found = decoder_error_bound(plant, s, MeasurementNoise(eta, norm), horizon=tau)
+        if found.code is not BoundCode.CERTIFIED:
+            continue
+        plants += 1
+        blocks = plant.sensor_blocks(tau)
+        for kept in {found.worst_kept, found.lower_kept, found.smallest_kept}:
+            O_K = blocks[list(kept)].reshape(-1, n)
+            v = np.linalg.svd(O_K)[2][-1]
+            outside = [i for i in range(p) if i not in kept]
+            for sign in (1.0, -1.0):
+                for t in np.linspace(0.1, 3.0, 12) * found.bound:
+                    x = rng.standard_normal(n)
+                    push = sign * (blocks @ v)  # (p, tau)
+                    if norm == "inf":
+                        N = np.sign(push) * eta[:, None]
+                    else:
+                        N = push * (eta / np.maximum(np.linalg.norm(push, axis=1), 1e-300))[:, None]
+                    Y = blocks @ x + N
+                    T = rng.choice(outside, s, replace=False)
+                    Y[T] = blocks[T] @ (x + sign * t * v)
+                    error = np.linalg.norm(_decode(plant, Y, s) - x)
+                    worst = max(worst, error / found.bound)
+                    assert error <= found.bound, (plant, s, tau, eta, norm)
+    assert worst > 0.3  # the search reaches a sizeable part of the bound
