@@ -105,7 +105,7 @@ def spec_page() -> str:
         "when it reads the spec, naming the key.\n\n"
     )
     out += _title("Top level", "-") + _table(top, schema.get("required", []))
-    for name in ("system", "attack"):
+    for name in ("system", "attack", "noise"):
         table = top[name]
         out += _title(f"[{name}]", "-") + _table(table["properties"], table.get("required", []))
     out += _title("[observer]", "-")
