@@ -289,6 +289,7 @@ def analyze(
                     tolerances=tol,
                     constant_attacks=default_attacks(system.p, spec.max_attacked, spec.scenarios),
                     timings=observer_timings,
+                    noise=bounded,
                 ),
                 needs=("observability",),
             )

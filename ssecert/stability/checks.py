@@ -16,12 +16,13 @@ from ..base.format import one_minus, sig
 from ..budget import Budget, Laps, ResourceLimitError, stage
 from ..context import OBSERVER, AnalysisContext, shared
 from ..design.gains import GainError
+from ..noise import MeasurementNoise
 from ..observers import ObserverDesign, build_observer
 from ..observers.lure import LureModel, scaling_text
 from ..results import Check, Step, Verdict, decide
 from ..system import System
 from ..tolerances import Tolerances
-from . import region_messages
+from . import noise_messages, region_messages
 from .constant_attack import constant_attack_outcomes
 from .divergence import divergence_witness
 from .equilibria import nonzero_equilibrium
@@ -716,6 +717,7 @@ def observer_checks(
     tolerances: Tolerances | None = None,
     constant_attacks: Sequence[tuple[str, np.ndarray]] = (),
     timings: dict[str, float] | None = None,
+    noise: MeasurementNoise | None = None,
 ) -> list[Check]:
     """All observer checks of a spec's ``[observer]`` section.
 
@@ -745,13 +747,15 @@ def observer_checks(
     timings : dict, optional
         Filled with the wall-clock seconds of each check (building the observer counted in
         ``observer_gain``), as ``meta.timings`` reports them.
+    noise : MeasurementNoise, optional
+        Bounded measurement noise: a linear observer gets ``observer_noise_bound``.
 
     Returns
     -------
     list of Check
         ``observer_gain``, ``observer_stability`` and, when a gain exists,
-        ``iss_gain`` and (sparse observers) ``thesis_assumptions`` and
-        ``region_of_attraction``.
+        ``iss_gain``, with noise and a linear observer ``observer_noise_bound``, and
+        (sparse observers) ``thesis_assumptions`` and ``region_of_attraction``.
 
     Examples
     --------
@@ -852,8 +856,15 @@ def observer_checks(
                 lambda: thesis_assumptions_check(design, observability, seed=seed, budget=budget),
             )
         )
+    if noise is not None and noise_messages.applies_to(design):
+        steps.append(
+            Step("observer_noise_bound", lambda: noise_messages.observer_noise_check(design, noise))
+        )
     out = decide(steps, clock)
-    order = ("observer_gain", "stability_check", "iss_gain", "thesis_assumptions")
+    order = (
+        "observer_gain", "stability_check", "iss_gain", "observer_noise_bound",
+        "thesis_assumptions",
+    )  # fmt: skip
     checks = [out[name] for name in order if name in out]
     if out["region_of_attraction"] is not None:
         checks.append(out["region_of_attraction"])
