@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from ..numerics.exact import ExactPlant
+from ..numerics.exact import ExactPlant, Observability
 from ..numerics.linalg import EigenAnalysis, SensorSubspaces
 from ..system import System
 from ..tolerances import NONZERO, ZERO, Tolerances
@@ -144,7 +144,9 @@ def _recheck_holds(
         if value is not None:
             margin = value if margin is None else min(margin, value)
         exact_state = (
-            exact.observability(kept, proof=False).state if exact is not None else "unknown"
+            exact.observability(kept, proof=False).state
+            if exact is not None
+            else Observability.UNKNOWN
         )
         records.append(
             {
@@ -155,7 +157,7 @@ def _recheck_holds(
                 "exact": exact_state,
             }
         )
-        if exact_state == "unobservable" and not problem:
+        if exact_state is Observability.UNOBSERVABLE and not problem:
             problem = (
                 f"without sensors outside {list(kept)} the exact data are unobservable "
                 f"(an exact kernel vector), which floating point missed"
@@ -165,7 +167,7 @@ def _recheck_holds(
             checker_ok = stair_ok
         # full Krylov rank of the exact data modulo a prime proves the kept set observable,
         # whatever the floating-point re-check of an ill-conditioned plant says
-        if not checker_ok and exact_state != "observable" and not problem:
+        if not checker_ok and exact_state is not Observability.OBSERVABLE and not problem:
             problem = (
                 f"re-check of kept sensors {list(kept)} does not confirm observability "
                 f"(PBH full rank: {pbh_ok}, staircase full rank: {stair_ok})"

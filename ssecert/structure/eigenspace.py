@@ -20,7 +20,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..base.format import distance as format_distance
-from ..numerics.exact import ExactPlant
+from ..numerics.exact import ExactPlant, Observability
 from ..numerics.linalg import (
     EigenAnalysis,
 )
@@ -172,7 +172,7 @@ def _exactly_breaking(
     p = system.p
     gone = set(support)
     decision = exact.observability(tuple(i for i in range(p) if i not in gone))
-    if decision.state == "observable":
+    if decision.state is Observability.OBSERVABLE:
         kept = tuple(i for i in range(p) if i not in gone)
         distance = _distance(system, kept, eig, tol)
         out.details["distance_to_breaking"] = distance
@@ -184,8 +184,8 @@ def _exactly_breaking(
             f"trust)"
         )
         return None
-    out.details["breaking_set_exact"] = decision.state == "unobservable"
-    if decision.state == "unobservable":
+    out.details["breaking_set_exact"] = decision.state is Observability.UNOBSERVABLE
+    if decision.state is Observability.UNOBSERVABLE:
         if decision.z is None:  # pragma: no cover - an exact unobservable verdict has z
             raise RuntimeError("the exact unobservable verdict carries no direction z")
         return decision.z

@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from ..base.format import distance as format_distance
-from ..numerics.exact import ExactPlant
+from ..numerics.exact import ExactPlant, Observability
 from ..numerics.linalg import (
     EigenAnalysis,
     SensorSubspaces,
@@ -592,10 +592,10 @@ def _resolve_failures(
         gone = set(removed)
         kept = tuple(i for i in range(p) if i not in gone)
         decision = exact.observability(kept)
-        if decision.state == "unobservable":
+        if decision.state is Observability.UNOBSERVABLE:
             out.details["breaking_set_exact"] = True
             return removed, decision.z, within
-        if decision.state == "unknown":
+        if decision.state is Observability.UNKNOWN:
             out.details["breaking_set_exact"] = False
             return removed, failures[removed], within
         if _clearly_observable(system, kept, eig, tol):

@@ -41,7 +41,7 @@ import numpy as np
 
 from ..base.validation import as_choice, as_float_option, as_int_option
 from ..budget import DEFAULT_TIME_BUDGET
-from ..numerics.exact import ExactPlant
+from ..numerics.exact import ExactPlant, Observability
 from ..numerics.linalg import (
     EigenAnalysis,
     SensorSubspaces,
@@ -476,7 +476,7 @@ class _Decision:
         """max_removable = -1 when the exact data are unobservable with every sensor kept,
         whatever the floating-point trouble of the methods."""
         decision = self.exact.observability(tuple(range(self.system.p)))
-        if decision.state != "unobservable" or decision.z is None:
+        if decision.state is not Observability.UNOBSERVABLE or decision.z is None:
             return None
         found = _Outcome("exact arithmetic", "exact", -1, (), decision.z)
         self.evidence["undecided_methods_settled_by"] = (
