@@ -20,7 +20,7 @@ from ..results import Verdict
 from ..system import System
 from ..tolerances import Tolerances
 from .attacks import StealthyAttack, stealthy_attack
-from .enumeration import _Outcome
+from .enumeration import SparseMethod, _Outcome
 
 __all__: list[str] = []
 
@@ -49,7 +49,7 @@ def _failure(
     kept, sc_rank, decision = _confirm_breaking_set(system, work, B, tol, evidence, exact)
     if decision.state is Observability.UNOBSERVABLE and decision.z is not None:
         z = np.asarray(decision.z, dtype=float)  # the exact data's direction, user's units
-    elif outcome.method == "exact arithmetic":
+    elif outcome.method is SparseMethod.EXACT_ARITHMETIC:
         z = np.asarray(outcome.z, dtype=float)
     else:
         z = to_user(outcome.z)

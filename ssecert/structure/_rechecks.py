@@ -19,7 +19,7 @@ from ..numerics.linalg import EigenAnalysis, SensorSubspaces
 from ..system import System
 from ..tolerances import NONZERO, ZERO, Tolerances
 from ._combinatorics import count_subsets
-from .enumeration import _enumeration, _Outcome
+from .enumeration import OutcomeStatus, SparseMethod, _enumeration, _Outcome
 from .observability import pbh_margins
 
 __all__: list[str] = []
@@ -71,7 +71,7 @@ def _cross_check(
     if enum.max_removable is not None and enum.max_removable < mr:
         found = (
             "a breaking set"
-            if enum.status == "exact"
+            if enum.status is OutcomeStatus.EXACT
             else "a set within the rank decision's precision of breaking"
         )
         outcome.problems.append(
@@ -79,13 +79,13 @@ def _cross_check(
             f"{enum.max_removable + 1} sensors, smaller than the eigenspace method's {size} (its "
             f"eigenvalue groups missed it)"
         )
-        outcome.status = "inconclusive"
+        outcome.status = OutcomeStatus.INCONCLUSIVE
         enum.details["cross_check_of_eigenspace"] = {
             "max_removable": mr,
             "breaking_set": list(outcome.breaking_set),
         }
         return enum
-    if enum.status == "exact" and enum.max_removable == mr:
+    if enum.status is OutcomeStatus.EXACT and enum.max_removable == mr:
         record["agrees"] = True
         outcome.breaking_set = enum.breaking_set
         outcome.z = enum.z
@@ -103,7 +103,7 @@ def _cross_check(
             f"{list(outcome.breaking_set)} break the exact data: the enumeration's decisions "
             f"are unreliable on this plant"
         )
-        outcome.status = "inconclusive"
+        outcome.status = OutcomeStatus.INCONCLUSIVE
     outcome.details["cross_check"] = record
     return outcome
 
@@ -162,8 +162,8 @@ def _recheck_holds(
                 f"without sensors outside {list(kept)} the exact data are unobservable "
                 f"(an exact kernel vector), which floating point missed"
             )
-        checker_ok = pbh_ok if outcome.method == "enumeration" else stair_ok
-        if eig.problems and outcome.method == "enumeration":
+        checker_ok = pbh_ok if outcome.method is SparseMethod.ENUMERATION else stair_ok
+        if eig.problems and outcome.method is SparseMethod.ENUMERATION:
             checker_ok = stair_ok
         # full Krylov rank of the exact data modulo a prime proves the kept set observable,
         # whatever the floating-point re-check of an ill-conditioned plant says
