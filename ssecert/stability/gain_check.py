@@ -16,7 +16,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..base.format import one_minus, one_plus, sig
-from ..design.gains import GainError
+from ..design.gains import GainError, GainMethod
 from ..numerics.exact_powers import ExactMatrix
 from ..observers import ObserverDesign
 from ..results import Check, Verdict
@@ -95,7 +95,7 @@ def observer_gain_check(design: ObserverDesign, *, tolerances: Tolerances | None
         "details": gain.details,
         "computed_eigenvalue_radius": computed_radius,
     }
-    if gain.method == "deadbeat":
+    if gain.method is GainMethod.DEADBEAT:
         return _deadbeat_check(design, fields, evidence, title)
     what = error_matrix_name(design)
     if what != "A - L C":
