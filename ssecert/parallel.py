@@ -177,11 +177,12 @@ def map_chunks(
     try:
         for future in as_completed(futures):
             i = index_of[future.key]
-            if future.status == "error":
+            error = future.exception()  # None unless the chunk raised
+            if error is not None:
                 if stop is None:
-                    raise ChunkError(chunks[i], future.exception(), i, len(chunks))
+                    raise ChunkError(chunks[i], error, i, len(chunks))
                 # reported only if no earlier chunk ends the search
-                failed[i], arrived[i] = future.exception(), True
+                failed[i], arrived[i] = error, True
             else:
                 results[i], arrived[i] = future.result(), True
                 if on_result is not None:

@@ -16,7 +16,14 @@ import contextvars
 from collections.abc import Iterator
 from typing import Any
 
-__all__ = ["SDP_SOLVERS", "check_solver", "solve_conic", "solver_name", "using_solver"]
+__all__ = [
+    "SDP_SOLVERS",
+    "check_solver",
+    "solve_conic",
+    "solved",
+    "solver_name",
+    "using_solver",
+]
 
 #: cvxpy's solvers that handle the semidefinite cones of the LMIs
 SDP_SOLVERS = ("CLARABEL", "SCS", "MOSEK", "CVXOPT", "COPT", "SDPA")
@@ -99,3 +106,11 @@ def solve_conic(problem: Any, **options: Any) -> None:
             if mapped is not None:
                 translated[mapped] = value
     problem.solve(solver=name, **translated)
+
+
+def solved(problem: Any) -> bool:
+    """Whether cvxpy reports ``problem`` solved (optimal, or optimal to reduced accuracy): its
+    solution is then a candidate, verified by the caller."""
+    import cvxpy as cp
+
+    return problem.status in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE)

@@ -68,9 +68,51 @@ def _prose_name(node: object) -> bool:
     return isinstance(name, str) and any(word in name.lower() for word in _PROSE)
 
 
+# fields that carry a closed vocabulary (an observability or Schur decision, a method's status,
+# how a certificate or gain was found): enums, compared by identity
+_LABELS = ("state", "status", "method")
+
+
+def _label_name(node: object) -> bool:
+    """``x.state``, ``status``, ``pbh_state``, ``d["method"]``, ``d.get("state")``: a label
+    (or a tuple, list or set holding one)."""
+    import ast
+
+    name: object = None
+    if isinstance(node, (ast.Tuple, ast.List, ast.Set)):
+        return any(_label_name(e) for e in node.elts)
+    if isinstance(node, ast.Name):
+        name = node.id
+    elif isinstance(node, ast.Attribute):
+        name = node.attr
+    elif isinstance(node, ast.Subscript) and isinstance(node.slice, ast.Constant):
+        name = node.slice.value
+    elif (
+        isinstance(node, ast.Call)
+        and isinstance(node.func, ast.Attribute)
+        and node.func.attr == "get"
+        and node.args
+        and isinstance(node.args[0], ast.Constant)
+    ):
+        name = node.args[0].value
+    return isinstance(name, str) and (
+        name in _LABELS or name.endswith(tuple(f"_{label}" for label in _LABELS[:2]))
+    )
+
+
+def _words(node: object) -> bool:
+    """A string constant, or a tuple, list or set of them."""
+    import ast
+
+    if isinstance(node, (ast.Tuple, ast.List, ast.Set)):
+        return bool(node.elts) and all(_words(e) for e in node.elts)
+    return isinstance(node, ast.Constant) and isinstance(node.value, str)
+
+
 def _reads_text(tree: object) -> list[tuple[int, str]]:
-    """Where code decides from a sentence: a verdict compared with its name, or a reason,
-    summary or problem searched for a word."""
+    """Where code decides from a sentence: a verdict compared with its name, a reason,
+    summary or problem searched for a word, or a state, status or method compared with a
+    string (or strings)."""
     import ast
 
     found = []
@@ -86,6 +128,12 @@ def _reads_text(tree: object) -> list[tuple[int, str]]:
                 _prose_name(s) for s in node.comparators
             ):
                 found.append((node.lineno, ast.unparse(node)))
+            if (
+                any(isinstance(op, (ast.Eq, ast.NotEq, ast.In, ast.NotIn)) for op in node.ops)
+                and any(_label_name(s) for s in sides)
+                and any(_words(s) for s in sides)
+            ):
+                found.append((node.lineno, ast.unparse(node)))
         if (
             isinstance(node, ast.Call)
             and isinstance(node.func, ast.Attribute)
@@ -99,7 +147,8 @@ def _reads_text(tree: object) -> list[tuple[int, str]]:
 @pytest.mark.slow
 def test_no_decision_is_read_from_a_sentence():
     """Verdicts and decisions travel as enums, flags and numbers; no code outside the renderers
-    compares a verdict with its name or searches a reason, summary or problem for a word."""
+    compares a verdict with its name, searches a reason, summary or problem for a word, or
+    compares a state, status or method with a string."""
     import ast
 
     package = ROOT / "ssecert"
@@ -122,5 +171,23 @@ def test_the_sentence_reader_finds_what_it_names():
         "c = problem.startswith('budget')\n"
         "d = check.verdict is Verdict.HOLDS\n"
         "e = 'radius' in evidence\n"
+        # a label compared with its word(s)
+        "f = x.state == 'observable'\n"
+        "g = outcome.status != 'exact'\n"
+        "h = cert.method in ('lyapunov', 'exact powers')\n"
+        "i = 'unknown' not in [pbh_state, 'x']\n"
+        "j = stair_state == 'unobservable'\n"
+        "k = proof.get('state') not in {'stable', 'unstable'}\n"
+        "l = proof['method'] == 'exact powers'\n"
+        "m = problem.solver_status == 'optimal'\n"
+        # members, other names and other comparisons are not
+        "n = x.state is Observability.OBSERVABLE\n"
+        "o = x.state in (SchurState.STABLE, SchurState.UNSTABLE)\n"
+        "p = kind == 'iss'\n"
+        "q = x.state == other.state\n"
+        "r = statement == 'x'\n"
+        "s = proof.get('radius') == 'x'\n"
+        "t = x.state < 'b'\n"
+        "u = x.method in ('a', b)\n"
     )
-    assert [line for line, _ in _reads_text(ast.parse(code))] == [1, 2, 3]
+    assert [line for line, _ in _reads_text(ast.parse(code))] == [1, 2, 3, *range(6, 14)]

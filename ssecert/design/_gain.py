@@ -2,16 +2,28 @@
 
 from __future__ import annotations
 
+import enum
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-__all__ = ["Gain", "GainError"]
+__all__ = ["Gain", "GainError", "GainMethod"]
 
 
 class GainError(ValueError):
     """A gain could not be computed to specification (the message says why)."""
+
+
+class GainMethod(enum.StrEnum):
+    """How the package's observer gains are built: the value is the word shown and written."""
+
+    DEADBEAT = "deadbeat"
+    PLACE = "place"
+    OGD = "ogd"
+    PINV = "pinv"
+    MATRIX = "matrix"  # given as a matrix
+    SSO = "sso"  # the SSO's L = step A O_tau^T (or the online-gradient gain)
 
 
 @dataclass(frozen=True)
@@ -21,8 +33,9 @@ class Gain:
     Attributes
     ----------
     L : ndarray, shape (n, p)
-    method : str
-        ``"deadbeat"``, ``"place"``, ``"ogd"``, ``"pinv"`` or ``"matrix"``.
+    method : GainMethod or str
+        A ``GainMethod`` for the package's gains; the observer kind of a plugin may name
+        its own gain with a string.
     error_matrix : ndarray, shape (n, n)
         F = A - L C.
     verified : bool
@@ -32,7 +45,7 @@ class Gain:
     """
 
     L: np.ndarray
-    method: str
+    method: GainMethod | str
     error_matrix: np.ndarray
     verified: bool
     details: dict[str, Any] = field(default_factory=dict)

@@ -31,7 +31,7 @@ from ..base.format import one_plus, sig
 from ..base.validation import as_real_matrix
 from ..system import System
 from ..tolerances import Tolerances
-from ._gain import Gain, GainError
+from ._gain import Gain, GainError, GainMethod
 
 __all__ = [
     "deadbeat_gain",
@@ -418,7 +418,7 @@ def deadbeat_gain(
     verified = test.verified and test.index is not None and test.index >= index
     return Gain(
         L=L,
-        method="deadbeat",
+        method=GainMethod.DEADBEAT,
         error_matrix=F,
         verified=verified,
         details={
@@ -548,7 +548,7 @@ def exact_deadbeat_gain(A: Sequence[Sequence[Any]], C: Sequence[Sequence[Any]]) 
     obs_index = staircase(Af, Cf).index
     return Gain(
         L=L,
-        method="deadbeat",
+        method=GainMethod.DEADBEAT,
         error_matrix=Af - L @ Cf,
         verified=exact_index is not None and exact_index == obs_index,
         details={

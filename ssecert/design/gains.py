@@ -27,7 +27,7 @@ import numpy as np
 from ..base.validation import as_float_option
 from ..system import System
 from ..tolerances import EPS, NONZERO, Tolerances, classify
-from ._gain import Gain, GainError
+from ._gain import Gain, GainError, GainMethod
 from .deadbeat import (
     DEADBEAT_RTOL,
     DeadbeatCheck,
@@ -41,6 +41,7 @@ from .deadbeat import (
 __all__ = [
     "Gain",
     "GainError",
+    "GainMethod",
     "place_gain",
     "deadbeat_gain",
     "exact_deadbeat_gain",
@@ -126,7 +127,7 @@ def place_gain(system: System, poles: Sequence[complex]) -> Gain:
         )
     return Gain(
         L=L,
-        method="place",
+        method=GainMethod.PLACE,
         error_matrix=F,
         verified=True,
         details={
@@ -164,7 +165,7 @@ def ogd_gain(system: System, step: float) -> Gain:
     L = step * system.A @ system.C.T
     return Gain(
         L=L,
-        method="ogd",
+        method=GainMethod.OGD,
         error_matrix=system.A - L @ system.C,
         verified=True,
         details={"step": step},
@@ -197,5 +198,9 @@ def pinv_gain(system: System) -> Gain:
         )
     L = system.A @ np.linalg.pinv(C)
     return Gain(
-        L=L, method="pinv", error_matrix=system.A - L @ C, verified=True, details={"rank_C": rank}
+        L=L,
+        method=GainMethod.PINV,
+        error_matrix=system.A - L @ C,
+        verified=True,
+        details={"rank_C": rank},
     )

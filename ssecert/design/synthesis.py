@@ -32,7 +32,7 @@ import numpy as np
 from ..budget import Budget
 from ..observers.base import ObserverDesign
 from ..observers.lure import LureModel
-from ..solvers import solve_conic
+from ..solvers import solve_conic, solved
 
 __all__ = [
     "GainSynthesis",
@@ -307,7 +307,7 @@ def _solved(
     except (cp.error.SolverError, ArithmeticError, ValueError) as exc:
         return GainSynthesis(None, None, f"solver failed ({type(exc).__name__})", _since(start))
     P1, Y, g = variables["P1"].value, variables["Y"].value, variables["g"].value
-    if Y is None or P1 is None or problem.status not in ("optimal", "optimal_inaccurate"):
+    if Y is None or P1 is None or not solved(problem):
         return GainSynthesis(None, None, str(problem.status), _since(start))
     L = np.linalg.solve(0.5 * (P1 + P1.T), Y)
     if not np.all(np.isfinite(L)):

@@ -390,6 +390,10 @@ class LocalizationResult:
         return tuple(tuple(int(i) for i in np.flatnonzero(row)) for row in self.attacked)
 
 
+# the ``method`` of ``elastic_net_localization``: whether its iterations take Nesterov momentum
+_ACCELERATE = {"fista": True, "ista": False}
+
+
 def elastic_net_localization(
     D: Any,
     y: Any,
@@ -512,7 +516,7 @@ def elastic_net_localization(
     q_a = as_float_option(q_a, "q_a", min_value=0.0, max_value=1.0, min_inclusive=False)
     L2 = as_float_option(L2, "L2", min_value=0.0, min_inclusive=False)
     N = as_int_option(N, "N", min_value=1)
-    method = as_choice(method, "method", ("fista", "ista"))
+    accelerate = _ACCELERATE[as_choice(method, "method", tuple(_ACCELERATE))]
     for flag, name in ((normalize, "normalize"), (common_offset, "common_offset")):
         if not isinstance(flag, (bool, np.bool_)):
             raise TypeError(f"{name} must be True or False, got {describe(flag)}")
@@ -557,7 +561,7 @@ def elastic_net_localization(
 
     thr = np.concatenate([np.full(n, level_x), np.full(q, level_a)])
     shrink = np.concatenate([np.full(n, q_x), np.full(q, q_a)])
-    Z, iterations, converged = _algorithm3(Gt, Yt, t, thr, shrink, N, method == "fista", rtol)
+    Z, iterations, converged = _algorithm3(Gt, Yt, t, thr, shrink, N, accelerate, rtol)
 
     Zs = Z / w
     x_hat, a_hat = Zs[:, :n], Zs[:, n:]

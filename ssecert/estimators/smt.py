@@ -248,14 +248,14 @@ def smt_decoder(
     ladder = list(range(s + 1)) if smallest else [s]
     conflicts: list[tuple[int, ...]] = []
     calls = 0
-    status = "unsat"
+    over_budget = False
     for k in ladder:
         assumptions = [levels[k]] if k < s else []
         while True:
             if solver.check(*assumptions) != z3.sat:
                 break  # no support of at most k sensors is left
             if calls >= max_theory_calls:
-                status = "budget"
+                over_budget = True
                 break
             calls += 1
             model = solver.model()
@@ -275,9 +275,10 @@ def smt_decoder(
             conflict = _conflict(kept, slack, s, null_dim, bounds, base, fit, M, y)
             conflicts.append(conflict)
             solver.add(z3.Or(*[b[i] for i in conflict]))
-        if status == "budget":
+        if over_budget:
             break
     nan = np.full(n, np.nan)
+    status = "budget" if over_budget else "unsat"
     return SMTSolution(
         nan, None, np.full(m, np.nan), status, np.inf, base, False, calls, tuple(conflicts),
         atol, rtol, bounds,

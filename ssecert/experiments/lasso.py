@@ -94,18 +94,18 @@ def decode_runs(
         for _ in range(runs):
             O, sensors, y, x0 = random_run(rng, p, noise, s)
             norm = float(np.linalg.norm(x0))
-            for method in per:
+            for row in per:  # the table's rows: a decoder's name, or Lasso with a swept lambda
                 began = time.perf_counter()
-                if method == "Lasso" or method in swept:
-                    lam = swept.get(method, LAMBDA)
+                if row == "Lasso" or row in swept:
+                    lam = swept.get(row, LAMBDA)
                     x = fista(O, y, lam, iterations=20000, restart=True, orthonormalize=True).x
-                elif method == "ETPG":
+                elif row == "ETPG":
                     x = etpg(O, y, s, sensors_of_row=sensors).x
                 else:
                     x = smt_decoder(O, y, s, sensors_of_row=sensors).x
                 seconds = time.perf_counter() - began
                 error = float(np.linalg.norm(x - x0) / norm)
-                per[method].append((error, seconds))
+                per[row].append((error, seconds))
         out[label] = {
             method: {
                 "error": _mean([e for e, _ in values if math.isfinite(e)]),

@@ -18,11 +18,12 @@ on that:
   the exact data contradicts hinged on digits below the data's precision.
 
 Both are affordable for the plant sizes of this field (tens of states);
-callers pass budgets and get ``None`` or ``"unknown"`` beyond them.
+callers pass budgets and get ``None`` or ``Observability.UNKNOWN`` beyond them.
 """
 
 from __future__ import annotations
 
+import enum
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -45,6 +46,7 @@ __all__ = [
     "shift_by",
     "PowerBound",
     "spectral_radius_bound",
+    "Observability",
     "ExactObservability",
     "exact_observability",
     "pow2_row_scaling",
@@ -89,16 +91,24 @@ def pow2_row_scaling(M: np.ndarray) -> np.ndarray:
     return np.where(usable, np.ldexp(1.0, np.minimum(1 - exponents, 1023)), 1.0)
 
 
+class Observability(enum.StrEnum):
+    """An observability decision: its value is the word written in evidence and JSON."""
+
+    OBSERVABLE = "observable"
+    UNOBSERVABLE = "unobservable"
+    UNKNOWN = "unknown"
+
+
 @dataclass(frozen=True)
 class ExactObservability:
     """The observability of the exact data (A, C).
 
     Attributes
     ----------
-    state : str
-        ``"observable"`` (Krylov rank n modulo a prime: a proof),
-        ``"unobservable"`` (an exact kernel vector, re-checked in integers)
-        or ``"unknown"`` (beyond the budget, or rank deficient modulo the
+    state : Observability
+        ``OBSERVABLE`` (Krylov rank n modulo a prime: a proof),
+        ``UNOBSERVABLE`` (an exact kernel vector, re-checked in integers)
+        or ``UNKNOWN`` (beyond the budget, or rank deficient modulo the
         primes without an exact kernel vector).
     rank_mod_p : int or None
         Krylov rank modulo the prime (a lower bound on the exact rank).
@@ -110,12 +120,15 @@ class ExactObservability:
     reason : str
     """
 
-    state: str
+    state: Observability
     rank_mod_p: int | None = None
     z: np.ndarray | None = None
     z_exact: list[int] | None = None
     prime: int | None = None
     reason: str = ""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "state", Observability(self.state))  # a name is accepted too
 
     def to_dict(self) -> dict:
         out: dict = {"state": self.state, "rank_mod_p": self.rank_mod_p, "prime": self.prime}
@@ -292,24 +305,31 @@ def exact_observability(
     Examples
     --------
     >>> exact_observability(np.eye(2), np.array([[1.0, 0.0]])).state
-    'unobservable'
+    <Observability.UNOBSERVABLE: 'unobservable'>
     >>> exact_observability(np.array([[1.0, 1.0], [0.0, 1.0]]), np.array([[1.0, 0.0]])).state
-    'observable'
+    <Observability.OBSERVABLE: 'observable'>
     """
     A = np.asarray(A, dtype=float)
     C = np.asarray(C, dtype=float).reshape(-1, A.shape[0])
     n = A.shape[0]
     if n > max_n or n > _MAX_MOD_N:
-        return ExactObservability("unknown", reason=f"n = {n} exceeds the exact limit {max_n}")
+        return ExactObservability(
+            Observability.UNKNOWN, reason=f"n = {n} exceeds the exact limit {max_n}"
+        )
     if not (np.all(np.isfinite(A)) and np.all(np.isfinite(C))):
-        return ExactObservability("unknown", reason="non-finite data")
+        return ExactObservability(Observability.UNKNOWN, reason="non-finite data")
     if C.shape[0] == 0 or not np.any(C):
         unit = np.zeros(n)
         unit[0] = 1.0
         zi = [0] * n
         zi[0] = 1
         return ExactObservability(
-            "unobservable", 0, unit, zi, None, "no sensor output: every state is unobservable"
+            Observability.UNOBSERVABLE,
+            0,
+            unit,
+            zi,
+            None,
+            "no sensor output: every state is unobservable",
         )
     Aint, Cint = _integer_data(A, C)
     rank = 0
@@ -317,11 +337,11 @@ def exact_observability(
     for prime in _PRIMES[:2]:
         rank = _rank_mod_p(Aint, Cint, prime)
         if rank == n:
-            return ExactObservability("observable", rank, prime=prime)
+            return ExactObservability(Observability.OBSERVABLE, rank, prime=prime)
     z = _exact_kernel_vector(Aint, Cint, max_bits)
     if z is None:
         return ExactObservability(
-            "unknown",
+            Observability.UNKNOWN,
             rank,
             prime=prime,
             reason="rank deficient modulo two primes, but the exact kernel computation exceeded "
@@ -329,10 +349,13 @@ def exact_observability(
         )
     if not _verify_kernel(Aint, Cint, z):  # pragma: no cover - would be a bug above
         return ExactObservability(
-            "unknown", rank, prime=prime, reason="the exact kernel vector did not verify"
+            Observability.UNKNOWN,
+            rank,
+            prime=prime,
+            reason="the exact kernel vector did not verify",
         )
     zf = _scaled_floats(z)
-    return ExactObservability("unobservable", rank, zf / np.linalg.norm(zf), z, prime)
+    return ExactObservability(Observability.UNOBSERVABLE, rank, zf / np.linalg.norm(zf), z, prime)
 
 
 def _scaled_floats(z: list[int]) -> np.ndarray:
@@ -364,7 +387,7 @@ class ExactPlant:
     A : ndarray, shape (n, n)
     C : ndarray, shape (p, n)
     max_n : int, default 60
-        Larger plants are not decided exactly (every answer is "unknown").
+        Larger plants are not decided exactly (every answer is ``UNKNOWN``).
     """
 
     def __init__(self, A: np.ndarray, C: np.ndarray, *, max_n: int = 60) -> None:
@@ -402,16 +425,23 @@ class ExactPlant:
         key = tuple(int(i) for i in kept)
         cached = self._cache.get(key)
         if cached is not None and (
-            cached.z_exact is not None or not proof or cached.state != "unobservable"
+            cached.z_exact is not None
+            or not proof
+            or cached.state is not Observability.UNOBSERVABLE
         ):
             return cached
         if not self.enabled:
-            result = ExactObservability("unknown", reason="beyond the exact limits")
+            result = ExactObservability(Observability.UNKNOWN, reason="beyond the exact limits")
         elif not key:
             unit = np.zeros(self.n)
             unit[0] = 1.0
             result = ExactObservability(
-                "unobservable", 0, unit, [1] + [0] * (self.n - 1), None, "no sensor kept"
+                Observability.UNOBSERVABLE,
+                0,
+                unit,
+                [1] + [0] * (self.n - 1),
+                None,
+                "no sensor kept",
             )
         else:
             rank = self.n
@@ -420,20 +450,25 @@ class ExactPlant:
                 if rank == self.n:
                     break
             if rank == self.n:
-                result = ExactObservability("observable", rank, prime=q)
+                result = ExactObservability(Observability.OBSERVABLE, rank, prime=q)
             elif not proof:
                 result = ExactObservability(
-                    "unobservable", rank, prime=q, reason="Krylov rank below n modulo two primes"
+                    Observability.UNOBSERVABLE,
+                    rank,
+                    prime=q,
+                    reason="Krylov rank below n modulo two primes",
                 )
             else:
                 Csub = np.array([self._row(i)[0] for i in key], dtype=object)
                 z = _exact_kernel_vector(self.Aint, Csub, 200_000)
                 if z is not None and _verify_kernel(self.Aint, Csub, z):
                     zf = _scaled_floats(z)
-                    result = ExactObservability("unobservable", rank, zf / np.linalg.norm(zf), z, q)
+                    result = ExactObservability(
+                        Observability.UNOBSERVABLE, rank, zf / np.linalg.norm(zf), z, q
+                    )
                 else:
                     result = ExactObservability(
-                        "unknown",
+                        Observability.UNKNOWN,
                         rank,
                         prime=q,
                         reason="rank deficient modulo two primes, but no exact kernel vector "
@@ -469,37 +504,41 @@ def exact_stacked_rank(
         The horizon of O_steps.
     max_n, max_bits : int
         Budgets: larger plants, or rows longer than ``max_bits`` bits, are
-        ``"unknown"``.
+        ``UNKNOWN``.
 
     Returns
     -------
     ExactObservability
-        ``"observable"`` when the rows have rank n modulo a prime (a proof of
-        full column rank); ``"unobservable"`` with an integer z, O_rows z = 0
-        re-checked exactly; ``"unknown"`` beyond the budgets.
+        ``OBSERVABLE`` when the rows have rank n modulo a prime (a proof of
+        full column rank); ``UNOBSERVABLE`` with an integer z, O_rows z = 0
+        re-checked exactly; ``UNKNOWN`` beyond the budgets.
 
     Examples
     --------
     >>> A = np.diag([1.0, 1.0 + 2.0**-52])
     >>> exact_stacked_rank(A, np.ones((3, 2)), range(6), 2).state
-    'observable'
+    <Observability.OBSERVABLE: 'observable'>
     >>> exact_stacked_rank(np.eye(2), np.ones((3, 2)), range(6), 2).state
-    'unobservable'
+    <Observability.UNOBSERVABLE: 'unobservable'>
     """
     A = np.asarray(A, dtype=float)
     C = np.asarray(C, dtype=float)
     n, p = A.shape[0], C.shape[0]
     wanted = sorted({int(r) for r in rows})
     if n > max_n:
-        return ExactObservability("unknown", reason=f"n = {n} exceeds the exact limit {max_n}")
+        return ExactObservability(
+            Observability.UNKNOWN, reason=f"n = {n} exceeds the exact limit {max_n}"
+        )
     if not (np.all(np.isfinite(A)) and np.all(np.isfinite(C))):
-        return ExactObservability("unknown", reason="non-finite data")
+        return ExactObservability(Observability.UNKNOWN, reason="non-finite data")
     if any(r < 0 or r >= p * steps for r in wanted):
         raise ValueError(f"rows must index the {p * steps} rows of O_{steps}")
     last = max((r // p for r in wanted), default=-1)
     exact_A = dyadic(A)
     if last * max(exact_A.bits(), 1) > max_bits:
-        return ExactObservability("unknown", reason="the exact powers of A exceed the bit budget")
+        return ExactObservability(
+            Observability.UNKNOWN, reason="the exact powers of A exceed the bit budget"
+        )
     picked: list[np.ndarray] = []
     by_sensor: dict[int, set[int]] = {}
     for r in wanted:
@@ -514,7 +553,9 @@ def exact_stacked_rank(
     if not picked:
         unit = np.zeros(n)
         unit[0] = 1.0
-        return ExactObservability("unobservable", 0, unit, [1] + [0] * (n - 1), None, "no rows")
+        return ExactObservability(
+            Observability.UNOBSERVABLE, 0, unit, [1] + [0] * (n - 1), None, "no rows"
+        )
     M = np.array(picked, dtype=object).reshape(len(picked), n)
     zero = np.zeros((n, n), dtype=np.int64)
     rank = 0
@@ -522,11 +563,14 @@ def exact_stacked_rank(
     for prime in _PRIMES[:2]:
         rank = _rank_mod_p_residues(zero, _mod(M, prime), prime)
         if rank == n:
-            return ExactObservability("observable", rank, prime=prime)
+            return ExactObservability(Observability.OBSERVABLE, rank, prime=prime)
     z = exact_kernel_vector(Dyadic(M, 0), max_bits=max_bits)  # re-checked in integers
     if z is None:
         return ExactObservability(
-            "unknown", rank, prime=prime, reason="no exact kernel vector within the budget"
+            Observability.UNKNOWN,
+            rank,
+            prime=prime,
+            reason="no exact kernel vector within the budget",
         )
     zf = _scaled_floats(z)
-    return ExactObservability("unobservable", rank, zf / np.linalg.norm(zf), z, prime)
+    return ExactObservability(Observability.UNOBSERVABLE, rank, zf / np.linalg.norm(zf), z, prime)

@@ -95,7 +95,7 @@ def build_observer(
     >>> from ssecert.examples import load_example
     >>> spec = load_example("ugv")
     >>> design = build_observer(spec.system, spec.observer)
-    >>> design.kind, design.gain.method, design.gain.details["nilpotency_index"]
+    >>> design.kind, design.gain.method.value, design.gain.details["nilpotency_index"]
     ('dsso', 'deadbeat', 1)
     """
     kind = get_kind(spec["kind"])

@@ -31,7 +31,15 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from ..budget import Budget
-from ..design.gains import Gain, GainError, deadbeat_gain, ogd_gain, pinv_gain, place_gain
+from ..design.gains import (
+    Gain,
+    GainError,
+    GainMethod,
+    deadbeat_gain,
+    ogd_gain,
+    pinv_gain,
+    place_gain,
+)
 from ..numerics.exact_powers import Dyadic, ExactMatrix, as_dyadic, dyadic, exact_error_matrix
 from ..system import System
 from ..tolerances import Tolerances, product_rounding
@@ -49,7 +57,7 @@ LINEAR_GAINS = ("deadbeat", "place", "pinv")
 # gains the spec defines by a step (L = step A S^T): exact from the step, not from the floats;
 # gain methods (``Gain.method``), whatever kind's design holds them (an SSO's region family is
 # an elastic-net design with the SSO's gain)
-DERIVED_GAINS = ("ogd", "sso")
+DERIVED_GAINS = (GainMethod.OGD, GainMethod.SSO)
 GAIN_CHOICES = ("deadbeat", "place", "ogd", "pinv")
 # the grids ``ssecert design`` searches for the kinds with a step, and a shrink
 # (``ssecert.synthesize.STEPS`` and ``SHRINKS``)
@@ -463,7 +471,11 @@ def gain_from_choice(
     if not isinstance(choice, str):
         L = np.asarray(choice, dtype=float)
         return Gain(
-            L=L, method="matrix", error_matrix=system.A - L @ system.C, verified=True, details={}
+            L=L,
+            method=GainMethod.MATRIX,
+            error_matrix=system.A - L @ system.C,
+            verified=True,
+            details={},
         )
     if choice == "deadbeat":
         return deadbeat_gain(system, tolerances=tolerances)

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from ..budget import Budget, ResourceLimitError
-from ..design.gains import Gain, GainError, ogd_gain
+from ..design.gains import Gain, GainError, GainMethod, ogd_gain
 from ..numerics.exact_powers import (
     Dyadic,
     ExactMatrix,
@@ -95,7 +95,7 @@ class SparseSoftObserverKind(SoftThresholdObserverKind):
             L = step * system.A @ sensing.T
             gain = Gain(
                 L=L,
-                method="sso",
+                method=GainMethod.SSO,
                 error_matrix=system.A - L @ sensing,
                 verified=True,
                 details={"step": step, "window": window},
@@ -105,7 +105,7 @@ class SparseSoftObserverKind(SoftThresholdObserverKind):
             ogd = ogd_gain(system, step)
             gain = Gain(
                 L=ogd.L,
-                method="sso",
+                method=GainMethod.SSO,
                 error_matrix=ogd.error_matrix,
                 verified=True,
                 details=ogd.details,

@@ -180,7 +180,7 @@ def _clarabel(
     )
     solution = solver.solve()
     status = str(solution.status)
-    if status not in ("Solved", "AlmostSolved"):
+    if solution.status not in (clarabel.SolverStatus.Solved, clarabel.SolverStatus.AlmostSolved):
         return None, status, int(solution.iterations)
     return np.asarray(solution.x, dtype=float), status, int(solution.iterations)
 
@@ -212,7 +212,7 @@ def _through_cvxpy(
 
     import cvxpy as cp
 
-    from ..solvers import solve_conic
+    from ..solvers import solve_conic, solved
 
     x = cp.Variable(A.shape[1])
     constraints = []
@@ -235,6 +235,6 @@ def _through_cvxpy(
     stats = problem.solver_stats
     iterations = getattr(stats, "num_iters", None) if stats is not None else None
     status = str(problem.status)
-    if status not in ("optimal", "optimal_inaccurate") or x.value is None:
+    if not solved(problem) or x.value is None:
         return None, status, iterations
     return np.asarray(x.value, dtype=float), status, iterations

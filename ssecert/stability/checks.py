@@ -45,7 +45,7 @@ from .lmi import (
     iss_from_circle,
     lure_model_cost,
 )
-from .lyapunov import LyapunovCertificate, lyapunov_certificate
+from .lyapunov import LyapunovCertificate, LyapunovMethod, lyapunov_certificate
 from .outcomes import LMICode, Region, RegionCode, WitnessKind
 from .periodic import periodic_orbit
 from .roa import region_of_attraction
@@ -298,7 +298,7 @@ def _linear_stability_check(lyap: LyapunovCertificate, tol: Tolerances, title: s
     """observer_stability of a linear observer, from its Lyapunov certificate."""
     verdict = Verdict(lyap.verdict)
     shown = exact_radius(lyap)
-    if verdict is Verdict.HOLDS and lyap.method == "exact powers":
+    if verdict is Verdict.HOLDS and lyap.method is LyapunovMethod.EXACT_POWERS:
         summary = f"The error dynamics are linear and stable: {lyap.reason}."
     elif verdict is Verdict.HOLDS:
         summary = (
@@ -317,11 +317,15 @@ def _linear_stability_check(lyap: LyapunovCertificate, tol: Tolerances, title: s
         summary=summary,
         value=lyap.contraction,
         margin=lyap.margin,
-        method="discrete Lyapunov" if lyap.method == "lyapunov" else "exact powers of A - L C",
+        method="discrete Lyapunov"
+        if lyap.method is LyapunovMethod.LYAPUNOV
+        else "exact powers of A - L C",
         value_name="contraction per step (P-norm)"
-        if lyap.method == "lyapunov"
+        if lyap.method is LyapunovMethod.LYAPUNOV
         else "spectral radius bound of A - L C",
-        margin_name="Lyapunov margin" if lyap.method == "lyapunov" else "1 - spectral radius bound",
+        margin_name="Lyapunov margin"
+        if lyap.method is LyapunovMethod.LYAPUNOV
+        else "1 - spectral radius bound",
         value_text=shown.text if verdict is Verdict.HOLDS and shown is not None else "",
         fields={"decay_rate": None if lyap.contraction is None else 1 - lyap.contraction},
         evidence=_lyapunov_evidence(lyap),

@@ -16,13 +16,14 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..base.format import one_minus, one_plus, sig
-from ..design.gains import GainError
+from ..design.gains import GainError, GainMethod
 from ..numerics.exact_powers import ExactMatrix
 from ..observers import ObserverDesign
 from ..results import Check, Verdict
 from ..system import System
 from ..tolerances import Tolerances
-from .lyapunov import lyapunov_certificate
+from .lyapunov import LyapunovMethod, lyapunov_certificate
+from .spectral import SchurState
 
 __all__ = ["observer_gain_check", "EXACT_LIMIT"]
 
@@ -38,7 +39,7 @@ def _lyapunov_evidence(cert) -> dict[str, Any]:
         "residual": cert.residual,
         "margin_definition": (
             "lambda_min(P - F'PF) / ||P||, recomputed from P"
-            if cert.method == "lyapunov" or cert.verdict is not Verdict.HOLDS
+            if cert.method is LyapunovMethod.LYAPUNOV or cert.verdict is not Verdict.HOLDS
             else "1 - (certified upper bound on the spectral radius of the exact F)"
         ),
         "certificate": cert.method,
@@ -94,7 +95,7 @@ def observer_gain_check(design: ObserverDesign, *, tolerances: Tolerances | None
         "details": gain.details,
         "computed_eigenvalue_radius": computed_radius,
     }
-    if gain.method == "deadbeat":
+    if gain.method is GainMethod.DEADBEAT:
         return _deadbeat_check(design, fields, evidence, title)
     what = error_matrix_name(design)
     if what != "A - L C":
@@ -107,7 +108,7 @@ def observer_gain_check(design: ObserverDesign, *, tolerances: Tolerances | None
     evidence.update(_lyapunov_evidence(cert))
     verdict = Verdict(cert.verdict)
     shown = exact_radius(cert)
-    if verdict is Verdict.HOLDS and cert.method == "exact powers":
+    if verdict is Verdict.HOLDS and cert.method is LyapunovMethod.EXACT_POWERS:
         fields["spectral_radius"] = cert.contraction
         summary = f"The linear error dynamics e+ = ({what}) e are stable: {cert.reason}."
     elif verdict is Verdict.HOLDS:
@@ -135,7 +136,7 @@ def observer_gain_check(design: ObserverDesign, *, tolerances: Tolerances | None
         value=fields["spectral_radius"] if shown is None else shown.value,
         margin=cert.margin,
         method="discrete Lyapunov (dlyap)"
-        if cert.method == "lyapunov"
+        if cert.method is LyapunovMethod.LYAPUNOV
         else f"exact powers of {what}",
         # exact powers bound the spectral radius; their margin is that bound's distance from 1
         value_name=(
@@ -143,7 +144,7 @@ def observer_gain_check(design: ObserverDesign, *, tolerances: Tolerances | None
             if shown is not None
             else ("" if what == "A - L C" else f"spectral radius of {what}")
         ),
-        margin_name="" if cert.method == "lyapunov" else "1 - spectral radius bound",
+        margin_name="" if cert.method is LyapunovMethod.LYAPUNOV else "1 - spectral radius bound",
         value_text="" if shown is None else shown.text,
         fields=fields,
         evidence=evidence,
@@ -167,9 +168,12 @@ def exact_radius(cert: Any) -> ExactRadius | None:
     the lower bound, "1 + 8.67e-19" where the exact traces exceed n by less than a float
     resolves (F = 1 + 2^-60)."""
     proof = cert.proof or {}
-    if cert.method != "exact powers" or proof.get("state") not in ("stable", "unstable"):
+    if cert.method is not LyapunovMethod.EXACT_POWERS or "state" not in proof:
         return None
-    if proof["state"] == "stable":
+    state = SchurState(proof["state"])  # the decision's, as ``SchurDecision.to_dict`` keeps it
+    if state is SchurState.UNKNOWN:
+        return None
+    if state is SchurState.STABLE:
         upper, gap = proof["spectral_radius_upper_bound"], proof.get("spectral_radius_gap", 0.0)
         text = one_minus(gap) if upper >= 1.0 and gap > 0 else ""
         return ExactRadius(upper, "spectral radius bound of A - L C", text)

@@ -189,11 +189,11 @@ def _prechecks(model: LureModel) -> tuple[Verdict | None, str, dict[str, Any]]:
     rho_F = float(np.abs(np.linalg.eigvals(F)).max()) if n else 0.0
     details["spectral_radius_F"] = rho_F
     if rho_F >= 1 - 1e-12:
-        from .spectral import schur_decision
+        from .spectral import SchurState, schur_decision
 
         decision = schur_decision(F, exact=model.exact_A(error_block=True))
         details["exact_decision"] = decision.to_dict()
-        if decision.state != "stable":
+        if decision.state is not SchurState.STABLE:
             witness = instability_witness(F, decision=decision)
             details["witness"] = witness
             where = (
@@ -223,11 +223,11 @@ def _prechecks(model: LureModel) -> tuple[Verdict | None, str, dict[str, Any]]:
         rho_q = float(np.abs(np.linalg.eigvals(model.vertex(model.q))).max())
         details["spectral_radius_at_sector_vertex"] = rho_q
         if rho_q >= 1 - 1e-9:
-            from .spectral import schur_decision
+            from .spectral import SchurState, schur_decision
 
             vertex = schur_decision(model.vertex(model.q), exact=_exact_vertex(model))
             details["sector_vertex_decision"] = vertex.to_dict()
-            if vertex.state != "unstable":
+            if vertex.state is not SchurState.UNSTABLE:
                 return (
                     Verdict.INCONCLUSIVE,
                     (
@@ -316,10 +316,10 @@ def channel_vertex_instability(model: LureModel) -> dict[str, Any] | None:
     if radii[worst] <= 1 + 1e-9:
         return None
     # the corner's loop formed exactly from the spec's data must be unstable too
-    from .spectral import schur_decision
+    from .spectral import SchurState, schur_decision
 
     decision = schur_decision(loops[worst], exact=_exact_corner(model, corners[worst]))
-    if decision.state != "unstable":
+    if decision.state is not SchurState.UNSTABLE:
         return None
     return {
         "gains": corners[worst],

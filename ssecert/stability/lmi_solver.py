@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from ..observers.lure import LureModel
-from ..solvers import solve_conic, solver_name
+from ..solvers import solve_conic, solved, solver_name
 
 __all__ = ["ETA", "lmi_cost"]
 
@@ -159,7 +159,7 @@ def _run_clarabel(
         )
         return False
     info.update(status=str(problem.status), seconds=time.perf_counter() - start)
-    return problem.status in ("optimal", "optimal_inaccurate")
+    return solved(problem)
 
 
 def _solution(

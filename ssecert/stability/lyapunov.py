@@ -9,6 +9,7 @@ definite by Cholesky with a margin above a floating-point error bound.
 
 from __future__ import annotations
 
+import enum
 import math
 import warnings
 from dataclasses import dataclass, field, replace
@@ -23,11 +24,19 @@ from ..results import Verdict
 from ..tolerances import EPS
 
 __all__ = [
+    "LyapunovMethod",
     "LyapunovCertificate",
     "lyapunov_certificate",
     "instability_witness",
     "verified_decrease",
 ]
+
+
+class LyapunovMethod(enum.StrEnum):
+    """What a ``LyapunovCertificate`` rests on: the value is the word written in evidence."""
+
+    LYAPUNOV = "lyapunov"  # a Lyapunov matrix P verified in floating point with a margin
+    EXACT_POWERS = "exact powers"  # the exact decision on F (``schur_decision``)
 
 
 @dataclass(frozen=True)
@@ -60,9 +69,9 @@ class LyapunovCertificate:
         Of F (reported, not used to decide).
     reason : str
     witness : dict or None
-    method : str
-        ``"lyapunov"`` (P verified in floating point with a margin) or
-        ``"exact powers"`` (no verified P, but rho(F) <= ||F^m||^(1/m) < 1 on
+    method : LyapunovMethod
+        ``LYAPUNOV`` (P verified in floating point with a margin) or
+        ``EXACT_POWERS`` (no verified P, but rho(F) <= ||F^m||^(1/m) < 1 on
         the exact F; ``contraction`` is then that bound on the asymptotic
         rate, not a per-step factor).
     proof : dict or None
@@ -80,11 +89,12 @@ class LyapunovCertificate:
     spectral_radius: float
     reason: str = ""
     witness: dict[str, Any] | None = field(default=None)
-    method: str = "lyapunov"
+    method: LyapunovMethod = LyapunovMethod.LYAPUNOV
     proof: dict[str, Any] | None = field(default=None)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "verdict", Verdict(self.verdict))  # a name is accepted too
+        object.__setattr__(self, "method", LyapunovMethod(self.method))
 
 
 def instability_witness(
@@ -118,11 +128,11 @@ def instability_witness(
     exact : ExactMatrix, optional
         Decide on the exact value F stands for (instead of ``parts``).
     """
-    from .spectral import schur_decision
+    from .spectral import SchurState, schur_decision
 
     if decision is None:
         decision = schur_decision(F, parts=parts, exact=exact)
-    if decision.state == "stable":
+    if decision.state is SchurState.STABLE:
         return None
     n = F.shape[0]
     lam, vr = np.linalg.eig(F)
@@ -150,7 +160,7 @@ def instability_witness(
         "initial_error": z,
         "log_norms": log_norms[:: max(1, len(log_norms) // 200)],
         "grows_by_factor_2": bool(max(log_norms) >= np.log(2.0)),
-        "verified": decision.state == "unstable",
+        "verified": decision.state is SchurState.UNSTABLE,
         "proof": decision.to_dict(),
     }
 
@@ -400,11 +410,11 @@ def _exact_fallback(
     unverified: _Unverified | None = None,
 ) -> LyapunovCertificate:
     """The certificate the exact F decides (``schur_decision``) when no P verifies."""
-    from .spectral import schur_decision
+    from .spectral import SchurState, schur_decision
 
     decision = schur_decision(F, exact=exact)
     proof = decision.to_dict()
-    if decision.state == "stable":
+    if decision.state is SchurState.STABLE:
         if decision.radius_upper is None:  # pragma: no cover - set whenever stable
             raise RuntimeError("a stable Schur decision carries its radius bound")
         upper = float(decision.radius_upper)
@@ -420,15 +430,15 @@ def _exact_fallback(
             rho,
             f"{why}; instead, {decision.reason}",
             None,
-            "exact powers",
+            LyapunovMethod.EXACT_POWERS,
             proof,
         )
     witness = instability_witness(F, exact=exact, decision=decision)
-    method = "lyapunov"
-    if decision.state == "unstable":
+    method = LyapunovMethod.LYAPUNOV
+    if decision.state is SchurState.UNSTABLE:
         verdict, reason = Verdict.FAILS, decision.reason
         if decision.rigorous:
-            method = "exact powers"  # instability proved on the exact F, not by P
+            method = LyapunovMethod.EXACT_POWERS  # instability proved on the exact F, not by P
     else:
         verdict, reason = Verdict.INCONCLUSIVE, f"{why}; {decision.reason}"
     u = _Unverified() if unverified is None else unverified

@@ -31,7 +31,7 @@ from ..numerics.rational import fractions, is_positive_definite, product, solve
 from ..observers.lure import LureModel
 from ..results import Verdict
 from ..solvers import solve_conic
-from .lyapunov import lyapunov_certificate, verified_decrease
+from .lyapunov import LyapunovMethod, lyapunov_certificate, verified_decrease
 from .outcomes import Region, RegionCode
 from .piecewise import piecewise_region
 
@@ -130,7 +130,11 @@ def _dead_zone_region(model: LureModel, seed: int, widen: bool = True) -> Region
                 RegionCode.DEAD_ZONE_UNSTABLE, error_block=True, lyapunov=local.reason
             )
     lyap = lyapunov_certificate(model.A, exact=model.exact_A())
-    if lyap.verdict is not Verdict.HOLDS or lyap.P is None or lyap.method != "lyapunov":
+    if (
+        lyap.verdict is not Verdict.HOLDS
+        or lyap.P is None
+        or lyap.method is not LyapunovMethod.LYAPUNOV
+    ):
         code = (
             RegionCode.DEAD_ZONE_UNSTABLE
             if lyap.verdict is Verdict.FAILS

@@ -19,6 +19,7 @@ matrix of the printed gain):
 
 from __future__ import annotations
 
+import enum
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -36,7 +37,7 @@ from ..numerics.exact import (
 from ..numerics.exact_powers import ExactMatrix
 from ..tolerances import EPS
 
-__all__ = ["SchurDecision", "schur_decision", "EXACT_SCHUR_LIMIT"]
+__all__ = ["SchurState", "SchurDecision", "schur_decision", "EXACT_SCHUR_LIMIT"]
 
 
 def _fmt(x: float) -> str:
@@ -54,14 +55,23 @@ def below_one(upper: float, gap: float) -> str:
 EXACT_SCHUR_LIMIT = 80  # largest n whose powers are computed exactly
 
 
+class SchurState(enum.StrEnum):
+    """Whether every eigenvalue of F lies inside the unit circle: its value is the word written
+    in evidence and JSON."""
+
+    STABLE = "stable"
+    UNSTABLE = "unstable"
+    UNKNOWN = "unknown"
+
+
 @dataclass(frozen=True)
 class SchurDecision:
     """Outcome of ``schur_decision``.
 
     Attributes
     ----------
-    state : str
-        ``"stable"``, ``"unstable"`` or ``"unknown"``.
+    state : SchurState
+        ``STABLE``, ``UNSTABLE`` or ``UNKNOWN``.
     radius_upper, radius_lower : float or None
         Certified bounds on the spectral radius of the exact F.
     method : str
@@ -74,7 +84,7 @@ class SchurDecision:
     details : dict
     """
 
-    state: str
+    state: SchurState
     radius_upper: float | None
     radius_lower: float | None
     method: str
@@ -82,6 +92,9 @@ class SchurDecision:
     rigorous: bool
     reason: str
     details: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "state", SchurState(self.state))  # a name is accepted too
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -143,18 +156,24 @@ def schur_decision(
     --------
     >>> import numpy as np
     >>> schur_decision(np.array([[0.5, 100.0], [0.0, 0.5]])).state
-    'stable'
+    <SchurState.STABLE: 'stable'>
     >>> d = schur_decision(np.array([[0.0, 1.0], [-1.0, 0.0]]))  # rho = 1: not Schur
-    >>> d.state, d.method
+    >>> d.state.value, d.method
     ('unstable', 'exact traces: |tr F^2| >= n')
     >>> schur_decision(np.eye(2)).state
-    'unstable'
+    <SchurState.UNSTABLE: 'unstable'>
     """
     F = np.asarray(F, dtype=float)
     n = F.shape[0]
     if not np.all(np.isfinite(F)):
         return SchurDecision(
-            "unknown", None, None, "none", complex(np.nan), False, "F has non-finite entries"
+            SchurState.UNKNOWN,
+            None,
+            None,
+            "none",
+            complex(np.nan),
+            False,
+            "F has non-finite entries",
         )
     if exact is None and parts is not None:
         exact = ExactMatrix.error_matrix(*parts)
@@ -213,7 +232,7 @@ def _decided_by_powers(
         gap = max(1.0 - upper, powers.radius_gap)
         details["spectral_radius_gap"] = gap
         return SchurDecision(
-            "stable",
+            SchurState.STABLE,
             upper,
             lower,
             f"exact powers: rho <= ||F^{m}||^(1/{m})",
@@ -227,7 +246,7 @@ def _decided_by_powers(
         m = powers.excess_power
         details["spectral_radius_excess"] = powers.radius_excess
         return SchurDecision(
-            "unstable",
+            SchurState.UNSTABLE,
             upper,
             max(lower, 1.0),
             f"exact traces: |tr F^{m}| > n",
@@ -242,7 +261,7 @@ def _decided_by_powers(
     if powers.trace_reaches_n and not lower > 1.0:
         m = powers.trace_reaches_n
         return SchurDecision(
-            "unstable",
+            SchurState.UNSTABLE,
             upper,
             max(lower, 1.0),
             f"exact traces: |tr F^{m}| >= n",
@@ -254,7 +273,7 @@ def _decided_by_powers(
         )
     if lower > 1.0:
         return SchurDecision(
-            "unstable",
+            SchurState.UNSTABLE,
             upper,
             lower,
             f"exact traces: rho >= (|tr F^{powers.lower_power}| / n)^(1/{powers.lower_power})",
@@ -288,7 +307,7 @@ def _exact_eigenvalue_on_circle(
         if n <= 40 and exact_kernel_vector(shift_by(exact, value)) is not None:
             shown = sig(value, 6, versus=np.sign(value))  # 1 + 2^-40 is not "1"
             return SchurDecision(
-                "unstable",
+                SchurState.UNSTABLE,
                 upper,
                 max(lower, abs(value)),
                 f"exact eigenvalue {shown}",
@@ -312,7 +331,7 @@ def _decided_to_first_order(
     """Unstable when the dominant eigenvalue clears 1 by its first-order bound, else unknown."""
     if np.isfinite(abs(lam)) and abs(lam) - bound > 1 + 1e-9:
         return SchurDecision(
-            "unstable",
+            SchurState.UNSTABLE,
             upper,
             lower,
             "first-order eigenvalue bound",
@@ -323,7 +342,7 @@ def _decided_to_first_order(
             details,
         )
     return SchurDecision(
-        "unknown",
+        SchurState.UNKNOWN,
         upper,
         lower,
         "none",

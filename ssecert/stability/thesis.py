@@ -35,6 +35,7 @@ import numpy as np
 
 from ..base.format import factor_above, readable, sig
 from ..budget import Budget
+from ..design.gains import GainMethod
 from ..numerics.exact import dyadic, exact_kernel_vector
 from ..numerics.exact_powers import ExactMatrix
 from ..observers import ObserverDesign
@@ -181,7 +182,7 @@ def _instance(design: ObserverDesign) -> _Instance:
         lam=lam,
         eps=eps,
         exact_F=exact_F,
-        deadbeat=design.gain.method == "deadbeat",
+        deadbeat=design.gain.method is GainMethod.DEADBEAT,
     )
 
 

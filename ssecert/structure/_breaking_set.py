@@ -15,12 +15,12 @@ from typing import Any
 
 import numpy as np
 
-from ..numerics.exact import ExactObservability, ExactPlant
+from ..numerics.exact import ExactObservability, ExactPlant, Observability
 from ..results import Verdict
 from ..system import System
 from ..tolerances import Tolerances
 from .attacks import StealthyAttack, stealthy_attack
-from .enumeration import _Outcome
+from .enumeration import SparseMethod, _Outcome
 
 __all__: list[str] = []
 
@@ -47,13 +47,13 @@ def _failure(
     B = outcome.breaking_set
     assert mr is not None and B is not None and outcome.z is not None
     kept, sc_rank, decision = _confirm_breaking_set(system, work, B, tol, evidence, exact)
-    if decision.state == "unobservable" and decision.z is not None:
+    if decision.state is Observability.UNOBSERVABLE and decision.z is not None:
         z = np.asarray(decision.z, dtype=float)  # the exact data's direction, user's units
-    elif outcome.method == "exact arithmetic":
+    elif outcome.method is SparseMethod.EXACT_ARITHMETIC:
         z = np.asarray(outcome.z, dtype=float)
     else:
         z = to_user(outcome.z)
-    if decision.state == "observable":
+    if decision.state is Observability.OBSERVABLE:
         return (
             Verdict.INCONCLUSIVE,
             (
@@ -66,7 +66,7 @@ def _failure(
         )
     witness = stealthy_attack(system, B, z, s, horizon=H, seed=seed, tolerances=tol)
     witness_out = _witness_with_exact_check(witness, decision)
-    if decision.state != "unobservable" and (
+    if decision.state is not Observability.UNOBSERVABLE and (
         not witness.verified or (kept and sc_rank >= system.n)
     ):
         return (
@@ -115,7 +115,7 @@ def _witness_with_exact_check(
 ) -> dict[str, Any]:
     """The stealthy attack's dict, with the exact kernel vector when the exact data break too."""
     witness_out = witness.to_dict()
-    if decision.state == "unobservable":
+    if decision.state is Observability.UNOBSERVABLE:
         witness_out["exact_check"] = (
             "removing the breaking set leaves the exact data "
             "unobservable: z_exact_integers (up to scale) satisfies "

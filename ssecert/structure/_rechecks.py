@@ -14,12 +14,12 @@ from typing import Any
 
 import numpy as np
 
-from ..numerics.exact import ExactPlant
+from ..numerics.exact import ExactPlant, Observability
 from ..numerics.linalg import EigenAnalysis, SensorSubspaces
 from ..system import System
 from ..tolerances import NONZERO, ZERO, Tolerances
 from ._combinatorics import count_subsets
-from .enumeration import _enumeration, _Outcome
+from .enumeration import OutcomeStatus, SparseMethod, _enumeration, _Outcome
 from .observability import pbh_margins
 
 __all__: list[str] = []
@@ -71,7 +71,7 @@ def _cross_check(
     if enum.max_removable is not None and enum.max_removable < mr:
         found = (
             "a breaking set"
-            if enum.status == "exact"
+            if enum.status is OutcomeStatus.EXACT
             else "a set within the rank decision's precision of breaking"
         )
         outcome.problems.append(
@@ -79,13 +79,13 @@ def _cross_check(
             f"{enum.max_removable + 1} sensors, smaller than the eigenspace method's {size} (its "
             f"eigenvalue groups missed it)"
         )
-        outcome.status = "inconclusive"
+        outcome.status = OutcomeStatus.INCONCLUSIVE
         enum.details["cross_check_of_eigenspace"] = {
             "max_removable": mr,
             "breaking_set": list(outcome.breaking_set),
         }
         return enum
-    if enum.status == "exact" and enum.max_removable == mr:
+    if enum.status is OutcomeStatus.EXACT and enum.max_removable == mr:
         record["agrees"] = True
         outcome.breaking_set = enum.breaking_set
         outcome.z = enum.z
@@ -103,7 +103,7 @@ def _cross_check(
             f"{list(outcome.breaking_set)} break the exact data: the enumeration's decisions "
             f"are unreliable on this plant"
         )
-        outcome.status = "inconclusive"
+        outcome.status = OutcomeStatus.INCONCLUSIVE
     outcome.details["cross_check"] = record
     return outcome
 
@@ -144,7 +144,9 @@ def _recheck_holds(
         if value is not None:
             margin = value if margin is None else min(margin, value)
         exact_state = (
-            exact.observability(kept, proof=False).state if exact is not None else "unknown"
+            exact.observability(kept, proof=False).state
+            if exact is not None
+            else Observability.UNKNOWN
         )
         records.append(
             {
@@ -155,17 +157,17 @@ def _recheck_holds(
                 "exact": exact_state,
             }
         )
-        if exact_state == "unobservable" and not problem:
+        if exact_state is Observability.UNOBSERVABLE and not problem:
             problem = (
                 f"without sensors outside {list(kept)} the exact data are unobservable "
                 f"(an exact kernel vector), which floating point missed"
             )
-        checker_ok = pbh_ok if outcome.method == "enumeration" else stair_ok
-        if eig.problems and outcome.method == "enumeration":
+        checker_ok = pbh_ok if outcome.method is SparseMethod.ENUMERATION else stair_ok
+        if eig.problems and outcome.method is SparseMethod.ENUMERATION:
             checker_ok = stair_ok
         # full Krylov rank of the exact data modulo a prime proves the kept set observable,
         # whatever the floating-point re-check of an ill-conditioned plant says
-        if not checker_ok and exact_state != "observable" and not problem:
+        if not checker_ok and exact_state is not Observability.OBSERVABLE and not problem:
             problem = (
                 f"re-check of kept sensors {list(kept)} does not confirm observability "
                 f"(PBH full rank: {pbh_ok}, staircase full rank: {stair_ok})"

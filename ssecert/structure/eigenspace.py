@@ -20,14 +20,14 @@ from typing import NamedTuple
 import numpy as np
 
 from ..base.format import distance as format_distance
-from ..numerics.exact import ExactPlant
+from ..numerics.exact import ExactPlant, Observability
 from ..numerics.linalg import (
     EigenAnalysis,
 )
 from ..system import System
 from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances, classify
 from ._level_scan import _CRITICAL
-from .enumeration import _distance, _Outcome
+from .enumeration import OutcomeStatus, SparseMethod, _distance, _Outcome
 
 __all__: list[str] = []
 
@@ -46,13 +46,14 @@ def _eigenspace(
     ``deadline`` (a ``time.monotonic()`` value) stops the hyperplane search
     of a large eigenspace: the outcome is then ``budget``, with the reason.
     """
-    out = _Outcome(method="eigenspace", status="inconclusive")
+    out = _Outcome(method=SparseMethod.EIGENSPACE, status=OutcomeStatus.INCONCLUSIVE)
     if eig.problems:
         out.problems.extend(eig.problems)
         return out
     best, z, critical = _smallest_support(system.C, s, max_sets, tol, eig, out, deadline)
     if out.problems:
-        out.status = "inconclusive" if out.status != "budget" else "budget"
+        if out.status is not OutcomeStatus.BUDGET:
+            out.status = OutcomeStatus.INCONCLUSIVE
         return out
     assert best is not None and z is not None
     if np.iscomplexobj(z):
@@ -63,7 +64,7 @@ def _eigenspace(
         if confirmed is None:
             return out
         z = confirmed
-    out.status = "exact"
+    out.status = OutcomeStatus.EXACT
     out.max_removable = best[0] - 1
     out.breaking_set = best[1]
     out.z = z
@@ -108,7 +109,7 @@ def _smallest_support(
         if problem:
             out.problems.append(f"eigenvalue {eig.label(cluster.center)}: {problem.text}")
             if problem.budget:
-                out.status = "budget"
+                out.status = OutcomeStatus.BUDGET
             continue
         critical.extend(crit)
         per_cluster.append(
@@ -129,7 +130,7 @@ def _smallest_support(
 @dataclass(frozen=True)
 class _Problem:
     """Why an eigenspace was left undecided: ``text`` for the report, ``budget`` when its
-    search ran out of hyperplanes or time (the method's status is then "budget")."""
+    search ran out of hyperplanes or time (the method's status is then ``BUDGET``)."""
 
     text: str
     budget: bool = False
@@ -172,7 +173,7 @@ def _exactly_breaking(
     p = system.p
     gone = set(support)
     decision = exact.observability(tuple(i for i in range(p) if i not in gone))
-    if decision.state == "observable":
+    if decision.state is Observability.OBSERVABLE:
         kept = tuple(i for i in range(p) if i not in gone)
         distance = _distance(system, kept, eig, tol)
         out.details["distance_to_breaking"] = distance
@@ -184,8 +185,8 @@ def _exactly_breaking(
             f"trust)"
         )
         return None
-    out.details["breaking_set_exact"] = decision.state == "unobservable"
-    if decision.state == "unobservable":
+    out.details["breaking_set_exact"] = decision.state is Observability.UNOBSERVABLE
+    if decision.state is Observability.UNOBSERVABLE:
         if decision.z is None:  # pragma: no cover - an exact unobservable verdict has z
             raise RuntimeError("the exact unobservable verdict carries no direction z")
         return decision.z

@@ -19,6 +19,7 @@ method; ``ssecert.structure.removals`` scans one level of removals alone
 
 from __future__ import annotations
 
+import enum
 import math
 import time
 from collections.abc import Callable
@@ -28,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from ..base.format import distance as format_distance
-from ..numerics.exact import ExactPlant
+from ..numerics.exact import ExactPlant, Observability
 from ..numerics.linalg import (
     EigenAnalysis,
     SensorSubspaces,
@@ -63,12 +64,29 @@ REFUTATION_LIMIT = 5_000  # float failures confirmed exactly per enumeration (ab
 _REFINE_TIMING = 16  # copies of a set refined to time the refinement on a plant
 
 
+class SparseMethod(enum.StrEnum):
+    """Which method found an ``_Outcome``: the value is the name written in evidence."""
+
+    ENUMERATION = "enumeration"
+    EIGENSPACE = "eigenspace"
+    EXACT_ARITHMETIC = "exact arithmetic"  # the exact data are unobservable with every sensor
+
+
+class OutcomeStatus(enum.StrEnum):
+    """How far an ``_Outcome`` got: the value is the word written in evidence."""
+
+    EXACT = "exact"  # max_removable found
+    LOWER_BOUND = "lower_bound"  # max_removable is at least the one found
+    INCONCLUSIVE = "inconclusive"
+    BUDGET = "budget"  # the eigenspace method's search ran out of hyperplanes or time
+
+
 @dataclass
 class _Outcome:
     """What one method found (internal)."""
 
-    method: str
-    status: str  # "exact", "lower_bound", "inconclusive"
+    method: SparseMethod
+    status: OutcomeStatus
     max_removable: int | None = None
     breaking_set: tuple[int, ...] | None = None
     z: np.ndarray | None = None
@@ -82,6 +100,9 @@ class _Outcome:
     # ranges) and those run in-process (not in the evidence: the answer is the same)
     on_workers: dict[int, int] = field(default_factory=dict)
     in_process: list[int] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        self.method, self.status = SparseMethod(self.method), OutcomeStatus(self.status)
 
 
 def _enumeration(
@@ -110,7 +131,7 @@ def _enumeration(
     """
     start = time.monotonic()
     n, p = system.n, system.p
-    out = _Outcome(method="enumeration", status="inconclusive")
+    out = _Outcome(method=SparseMethod.ENUMERATION, status=OutcomeStatus.INCONCLUSIVE)
     sub = (
         subspaces if subspaces is not None else sensor_subspaces(system.A, system.C, tolerances=tol)
     )
@@ -147,7 +168,7 @@ def _enumeration(
         if not going:
             break
     out.refinement_seconds = refining
-    if out.status == "lower_bound" and scan.undecided is not None:
+    if out.status is OutcomeStatus.LOWER_BOUND and scan.undecided is not None:
         out.max_removable = scan.undecided - 1
     out.critical = [kept for _, _, kept in scan.best_critical]
     return out
@@ -155,7 +176,7 @@ def _enumeration(
 
 def _only_all_sensors(out: _Outcome, n: int, p: int, s: int) -> _Outcome:
     """Every sensor alone observes the state: only removing all of them breaks the plant."""
-    out.status = "exact"
+    out.status = OutcomeStatus.EXACT
     out.max_removable = p - 1
     out.breaking_set = tuple(range(p))
     z = np.zeros(n)
@@ -235,7 +256,7 @@ class _Levels:
         if predicted <= time_budget:
             return False
         out.needed = count_subsets(q, range(k, q + 1))
-        out.status = "lower_bound"
+        out.status = OutcomeStatus.LOWER_BOUND
         out.max_removable = self.removed(k) - 1
         out.details["stopped_by_time_budget"] = {
             "time_budget_seconds": time_budget,
@@ -322,7 +343,7 @@ class _Levels:
         if out.checked + math.comb(q, k) <= max_sets:
             return False
         out.needed = count_subsets(q, range(k, max(self.target, k) + 1))
-        out.status = "lower_bound"
+        out.status = OutcomeStatus.LOWER_BOUND
         out.max_removable = self.removed(k) - 1
         removed = self.removed(k)
         out.problems.append(
@@ -360,7 +381,7 @@ class _Levels:
             )
         except ChunkError as exc:
             out = self.out
-            out.status = "lower_bound"
+            out.status = OutcomeStatus.LOWER_BOUND
             out.max_removable = self.removed(k) - 1
             # the level's ranges are colex ranks of the sensors in reverse order: as positions
             # in the lexicographic order of the removed sets, they are counted from the end
@@ -417,7 +438,7 @@ class _Levels:
         if self.undecided is not None and not (level.borderline or within):
             return k < self.target
         if level.borderline or within:
-            out.status = "lower_bound"
+            out.status = OutcomeStatus.LOWER_BOUND
             out.max_removable = self.removed(k) - 1
             if self.undecided is not None:  # reported at the first undecided level
                 if k < self.target:
@@ -436,7 +457,7 @@ class _Levels:
         size of the level before."""
         out, q = self.out, self.rest.size
         count, removed = math.comb(q, k), self.removed(k)
-        out.status = "lower_bound"
+        out.status = OutcomeStatus.LOWER_BOUND
         out.max_removable = removed - 1
         out.needed = count_subsets(q, range(k, q + 1)) - level.checked
         if (level.borderline or within) and self.undecided is None:
@@ -466,7 +487,7 @@ class _Levels:
         """Level k holds the smallest breaking set ``first`` (or, after undecided levels, a
         breaking set that bounds max_removable from above)."""
         out = self.out
-        out.status = "exact"
+        out.status = OutcomeStatus.EXACT
         out.max_removable = self.removed(k) - 1
         out.breaking_set = first
         out.z = z_first
@@ -592,10 +613,10 @@ def _resolve_failures(
         gone = set(removed)
         kept = tuple(i for i in range(p) if i not in gone)
         decision = exact.observability(kept)
-        if decision.state == "unobservable":
+        if decision.state is Observability.UNOBSERVABLE:
             out.details["breaking_set_exact"] = True
             return removed, decision.z, within
-        if decision.state == "unknown":
+        if decision.state is Observability.UNKNOWN:
             out.details["breaking_set_exact"] = False
             return removed, failures[removed], within
         if _clearly_observable(system, kept, eig, tol):

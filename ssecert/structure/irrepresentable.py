@@ -39,7 +39,7 @@ import numpy as np
 from ..base.format import sig
 from ..base.validation import as_choice, as_float_option, as_int_option
 from ..budget import Budget, bounded_comb, format_count, log10_comb
-from ..numerics.exact import exact_stacked_rank
+from ..numerics.exact import Observability, exact_stacked_rank
 from ..numerics.linalg import balanced_units, staircase
 from ..parallel import ChunkError
 from ..results import Check, Verdict
@@ -696,7 +696,7 @@ def _exact_doubt(
     """
     exact = exact_stacked_rank(system.A, system.C, rows, steps)
     evidence["exact_rank_check"] = exact.to_dict()
-    if exact.state != "observable":
+    if exact.state is not Observability.OBSERVABLE:
         return None
     if smallest is None:
         assert O is not None

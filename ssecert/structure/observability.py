@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 import numpy as np
 
 from ..base.format import distance as format_distance
+from ..numerics.exact import Observability
 from ..numerics.linalg import (
     EigenAnalysis,
     Staircase,
@@ -168,13 +169,15 @@ def observability(
 
     pbh = _pbh_test(A, C, eig, tol)
     pbh_state = pbh.state
+    stair_state: Observability
     if sc.problem:
-        stair_state, stair_note = "unknown", sc.problem
+        stair_state, stair_note = Observability.UNKNOWN, sc.problem
     else:
-        stair_state, stair_note = ("observable" if sc.rank == n else "unobservable"), ""
+        stair_state = Observability.OBSERVABLE if sc.rank == n else Observability.UNOBSERVABLE
+        stair_note = ""
     grouping = ""
     if _grouping_cannot_matter(eig, pbh, stair_state, exact.state):
-        pbh_state, grouping = "observable", "; ".join(eig.problems)
+        pbh_state, grouping = Observability.OBSERVABLE, "; ".join(eig.problems)
     out = _Verdicts(
         margin=pbh.margin,
         evidence=_evidence(eig, alpha, pbh, pbh_state, sc, stair_state, exact.to_dict(), units),
@@ -186,15 +189,15 @@ def observability(
         },
     )
 
-    unobservable_in_floats = "unobservable" in (pbh_state, stair_state)
-    if exact.state == "unobservable" and not unobservable_in_floats:
+    unobservable_in_floats = Observability.UNOBSERVABLE in (pbh_state, stair_state)
+    if exact.state is Observability.UNOBSERVABLE and not unobservable_in_floats:
         return _exactly_unobservable(out, system.A, system.C, exact)
-    if exact.state == "observable" and unobservable_in_floats:
+    if exact.state is Observability.OBSERVABLE and unobservable_in_floats:
         return _exactly_observable(out, n)
-    if pbh_state == "observable" and stair_state == "observable":
+    if pbh_state is Observability.OBSERVABLE and stair_state is Observability.OBSERVABLE:
         return _observable(out, sc.index, exact.state, grouping)
     candidates, conservative = _candidate_directions(A, C, eig, alpha, pbh, pbh_state, tol)
-    unobs = n - sc.rank if stair_state == "unobservable" else n - conservative.rank
+    unobs = n - sc.rank if stair_state is Observability.UNOBSERVABLE else n - conservative.rank
     verified = _verified_direction(
         out, A, C, candidates, unobs, stair_state, exact, tol, units.to_user
     )
@@ -211,7 +214,7 @@ class _PBH(NamedTuple):
     codes: np.ndarray  # per group
     raw_codes: np.ndarray  # per computed eigenvalue in the closed upper half plane
     margin: float  # the smallest of all, as reported to users
-    state: str  # observable, unobservable or unknown
+    state: Observability
     note: str  # why unknown
 
 
@@ -256,19 +259,19 @@ def _pbh_test(A: np.ndarray, C: np.ndarray, eig: EigenAnalysis, tol: Tolerances)
     raw_margins, raw_codes = pbh_margins(A, C, raw, tolerances=tol)
     margin = float(min(margins.min(initial=np.inf), raw_margins.min(initial=np.inf)))
     if eig.problems:
-        state, note = "unknown", "; ".join(eig.problems)
+        state, note = Observability.UNKNOWN, "; ".join(eig.problems)
     elif np.any(codes == ZERO):
-        state, note = "unobservable", ""
+        state, note = Observability.UNOBSERVABLE, ""
     elif np.any(codes == BORDERLINE):
-        state = "unknown"
+        state = Observability.UNKNOWN
         note = f"a PBH singular value ({margins[codes == BORDERLINE].min():.2e}) is borderline"
     else:
-        state, note = "observable", ""
+        state, note = Observability.OBSERVABLE, ""
     return _PBH(margins, codes, raw_codes, margin, state, note)
 
 
 def _grouping_cannot_matter(
-    eig: EigenAnalysis, pbh: _PBH, stair_state: str, exact_state: str
+    eig: EigenAnalysis, pbh: _PBH, stair_state: Observability, exact_state: Observability
 ) -> bool:
     """True when only the eigenvalue grouping is in doubt and no grouping changes the answer."""
     # how the eigenvalues group (their multiplicities) is ambiguous, but PBH is clearly of
@@ -276,8 +279,8 @@ def _grouping_cannot_matter(
     # exact data are observable: the grouping cannot change the answer
     return bool(
         eig.problems
-        and stair_state == "observable"
-        and exact_state == "observable"
+        and stair_state is Observability.OBSERVABLE
+        and exact_state is Observability.OBSERVABLE
         and np.all(pbh.codes == NONZERO)
         and np.all(pbh.raw_codes == NONZERO)
     )
@@ -287,9 +290,9 @@ def _evidence(
     eig: EigenAnalysis,
     alpha: float,
     pbh: _PBH,
-    pbh_state: str,
+    pbh_state: Observability,
     sc: Staircase,
-    stair_state: str,
+    stair_state: Observability,
     exact: dict[str, Any],
     units: Units,
 ) -> dict[str, Any]:
@@ -374,9 +377,11 @@ def _exactly_observable(out: _Verdicts, n: int) -> Check:
     )
 
 
-def _observable(out: _Verdicts, index: int, exact_state: str, grouping: str) -> Check:
+def _observable(out: _Verdicts, index: int, exact_state: Observability, grouping: str) -> Check:
     """Holds: PBH and the staircase agree on full rank, with the index and the margin."""
-    confirmed = " (confirmed in exact arithmetic)" if exact_state == "observable" else ""
+    confirmed = (
+        " (confirmed in exact arithmetic)" if exact_state is Observability.OBSERVABLE else ""
+    )
     if grouping:
         out.evidence["eigenvalue_grouping_ambiguous"] = grouping
         confirmed = (
@@ -398,12 +403,12 @@ def _candidate_directions(
     eig: EigenAnalysis,
     alpha: float,
     pbh: _PBH,
-    pbh_state: str,
+    pbh_state: Observability,
     tol: Tolerances,
 ) -> tuple[list[tuple[np.ndarray, str, list]], Staircase]:
     """Candidate unobservable directions (PBH null vectors, then the conservative staircase's)."""
     candidates: list[tuple[np.ndarray, str, list]] = []
-    if pbh_state == "unobservable":
+    if pbh_state is Observability.UNOBSERVABLE:
         unobservable = [
             {"eigenvalue": c.center / alpha, "pbh_margin": float(m)}
             for c, m, code in zip(eig.clusters, pbh.margins, pbh.codes)
@@ -429,7 +434,7 @@ def _verified_direction(
     C: np.ndarray,
     candidates: list[tuple[np.ndarray, str, list]],
     unobs: int,
-    stair_state: str,
+    stair_state: Observability,
     exact: ExactObservability,
     tol: Tolerances,
     to_user: Callable[[np.ndarray], np.ndarray],
@@ -447,11 +452,11 @@ def _verified_direction(
                 "residual": residual,
                 "meaning": "C A^k z = 0 for every k: x0 and x0 + z give identical outputs",
             }
-            if exact.state == "unobservable":
+            if exact.state is Observability.UNOBSERVABLE:
                 witness["z_exact_integers"] = [str(v) for v in exact.z_exact or []]
                 witness["exact_check"] = "an exact unobservable direction, checked in integers"
-            how = [] if stair_state == "unobservable" else ["by simulation"]
-            if exact.state == "unobservable":
+            how = [] if stair_state is Observability.UNOBSERVABLE else ["by simulation"]
+            if exact.state is Observability.UNOBSERVABLE:
                 how.append("in exact arithmetic")
             note = f" (confirmed {' and '.join(how)})" if how else ""
             return out.check(
@@ -469,13 +474,17 @@ def _verified_direction(
 
 
 def _undecided(
-    out: _Verdicts, notes: list[str], pbh_state: str, stair_state: str, directions_tried: bool
+    out: _Verdicts,
+    notes: list[str],
+    pbh_state: Observability,
+    stair_state: Observability,
+    directions_tried: bool,
 ) -> Check:
     """Inconclusive, with why neither method's answer could be trusted."""
     reasons = list(notes)
-    if pbh_state != stair_state and "unknown" not in (pbh_state, stair_state):
+    if pbh_state is not stair_state and Observability.UNKNOWN not in (pbh_state, stair_state):
         reasons.append(f"PBH says {pbh_state} but the staircase says {stair_state}")
-    if stair_state == "observable" and pbh_state == "unknown":
+    if stair_state is Observability.OBSERVABLE and pbh_state is Observability.UNKNOWN:
         reasons.append("the staircase finds full rank but the PBH test cannot confirm it")
     if directions_tried:
         reasons.append("no unobservable direction survived the simulation check")

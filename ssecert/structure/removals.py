@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..base.validation import as_int_option
-from ..numerics.exact import ExactPlant
+from ..numerics.exact import ExactPlant, Observability
 from ..numerics.linalg import balanced_units, eigen_clusters, sensor_subspaces
 from ..system import System
 from ..tolerances import Tolerances
@@ -120,7 +120,7 @@ def scan_removals(
         gone = set(removed)
         kept = tuple(i for i in range(system.p) if i not in gone)
         state = exact.observability(kept, proof=False).state
-        if state != "observable":
+        if state is not Observability.OBSERVABLE:
             confirmed.append(removed)
         elif not _clearly_observable(system, kept, eig, tol):
             borderline += 1

@@ -41,7 +41,7 @@ import numpy as np
 
 from ..base.validation import as_choice, as_float_option, as_int_option
 from ..budget import DEFAULT_TIME_BUDGET
-from ..numerics.exact import ExactPlant
+from ..numerics.exact import ExactPlant, Observability
 from ..numerics.linalg import (
     EigenAnalysis,
     SensorSubspaces,
@@ -58,7 +58,14 @@ from ._rechecks import _cross_check, _recheck_holds
 from .cost import rounded_seconds, verdict_cost
 from .device import resolve_device
 from .eigenspace import _eigenspace, search_seconds
-from .enumeration import Progress, _enumeration, _Outcome, placement_note
+from .enumeration import (
+    OutcomeStatus,
+    Progress,
+    SparseMethod,
+    _enumeration,
+    _Outcome,
+    placement_note,
+)
 from .observability import observability
 from .removals import RemovalScan, scan_removals
 
@@ -74,6 +81,12 @@ __all__ = [
 DEFAULT_MAX_SETS = 50_000_000
 
 METHODS = ("auto", "enumeration", "eigenspace")
+# the method each choice forces (None: the cheaper first, ``_run``)
+_FORCED: dict[str, SparseMethod | None] = {
+    "auto": None,
+    "enumeration": SparseMethod.ENUMERATION,
+    "eigenspace": SparseMethod.EIGENSPACE,
+}
 
 
 def _estimates(
@@ -94,7 +107,7 @@ def _estimates(
         q = p - full
         upto = max(0, 2 * s - full + 1)
         enum_cost = count_subsets(q, range(upto + 1)) * (n**3 / 3 + n * n) + p * n**3
-    return {"eigenspace": float(eigen_cost), "enumeration": float(enum_cost)}
+    return {SparseMethod.EIGENSPACE: float(eigen_cost), SparseMethod.ENUMERATION: float(enum_cost)}
 
 
 # above this many flops for the cheaper method, ``auto`` picks by calibrated seconds
@@ -118,7 +131,7 @@ def _seconds(
 def _run(
     system: System,
     s: int,
-    method: str,
+    forced: SparseMethod | None,
     max_sets: int,
     tol: Tolerances,
     progress: Progress | None,
@@ -131,15 +144,14 @@ def _run(
     n, p = system.n, system.p
     sub: SensorSubspaces | None = None
     estimates: dict[str, float] = {}
-    if method == "enumeration":
-        order = ["enumeration"]
-    elif method == "eigenspace":
-        order = ["eigenspace"]
+    both = [SparseMethod.EIGENSPACE, SparseMethod.ENUMERATION]
+    if forced is not None:
+        order = [forced]
     else:
         estimates = _estimates(system, s, eig, None)
         # the enumeration costs at least the p sensor staircases
-        if estimates["eigenspace"] <= p * n**3:
-            order = ["eigenspace", "enumeration"]
+        if estimates[SparseMethod.EIGENSPACE] <= p * n**3:
+            order = both
         else:
             sub = sensor_subspaces(system.A, system.C, tolerances=tol)
             estimates = _estimates(system, s, eig, sub)
@@ -149,12 +161,12 @@ def _run(
                 # both cost something: compare the seconds each takes here (rates measured on
                 # this machine), not flop counts, whose rates differ by orders of magnitude
                 estimates = {**estimates, **_seconds(system, s, eig, sub, client)}
-                order = sorted(["eigenspace", "enumeration"], key=lambda m: estimates[f"{m}_s"])
+                order = sorted(both, key=lambda m: estimates[f"{m}_s"])
             else:
-                order = sorted(["eigenspace", "enumeration"], key=lambda m: estimates[m])
+                order = sorted(both, key=lambda m: estimates[m])
     tried: list[_Outcome] = []
     for name in order:
-        if name == "enumeration":
+        if name is SparseMethod.ENUMERATION:
             if sub is None:
                 sub = sensor_subspaces(system.A, system.C, tolerances=tol)
             outcome = _enumeration(
@@ -185,11 +197,11 @@ def _run(
             # the verdict itself (a budget of 0 means no refinement, not a weaker verdict)
             deadline = (
                 time.monotonic() + _search_allowance(system.p, eig, time_budget)
-                if time_budget is not None and order == ["eigenspace", "enumeration"] and not tried
+                if time_budget is not None and order == both and not tried
                 else None
             )
             outcome = _eigenspace(system, s, max_sets, tol, eig, exact, deadline=deadline)
-            if outcome.status == "exact":
+            if outcome.status is OutcomeStatus.EXACT:
                 if sub is None:
                     sub = sensor_subspaces(system.A, system.C, tolerances=tol)
                 checked = _cross_check(system, s, outcome, tol, eig, exact, sub)
@@ -197,11 +209,11 @@ def _run(
                     tried.append(outcome)
                     outcome = checked
         tried.append(outcome)
-        if outcome.status == "exact":
+        if outcome.status is OutcomeStatus.EXACT:
             return outcome, tried, estimates
     # no exact answer: prefer a lower bound that decides the verdict
     for outcome in tried:
-        if outcome.status == "lower_bound" and outcome.max_removable is not None:
+        if outcome.status is OutcomeStatus.LOWER_BOUND and outcome.max_removable is not None:
             if outcome.max_removable >= 2 * s:
                 return outcome, tried, estimates
     return tried[0], tried, estimates
@@ -329,7 +341,7 @@ def sparse_observability(
         time_budget = as_float_option(time_budget, "time_budget", min_value=0.0)
     device = resolve_device(device)
     outcome, tried, estimates = _run(
-        work, s, method, max_sets, tol, progress, eig, exact,
+        work, s, _FORCED[method], max_sets, tol, progress, eig, exact,
         time_budget=time_budget, client=client, device=device,
     )  # fmt: skip
     for o in tried:
@@ -341,10 +353,10 @@ def sparse_observability(
     decision = _Decision(
         system, work, s, outcome, tried, H, seed, tol, eig, exact, evidence, units.to_user,
     )  # fmt: skip
-    if outcome.status == "exact":
+    if outcome.status is OutcomeStatus.EXACT:
         check = decision.exact_answer()
     elif (
-        outcome.status == "lower_bound"
+        outcome.status is OutcomeStatus.LOWER_BOUND
         and outcome.max_removable is not None
         and outcome.max_removable >= 2 * s
     ):
@@ -476,9 +488,9 @@ class _Decision:
         """max_removable = -1 when the exact data are unobservable with every sensor kept,
         whatever the floating-point trouble of the methods."""
         decision = self.exact.observability(tuple(range(self.system.p)))
-        if decision.state != "unobservable" or decision.z is None:
+        if decision.state is not Observability.UNOBSERVABLE or decision.z is None:
             return None
-        found = _Outcome("exact arithmetic", "exact", -1, (), decision.z)
+        found = _Outcome(SparseMethod.EXACT_ARITHMETIC, OutcomeStatus.EXACT, -1, (), decision.z)
         self.evidence["undecided_methods_settled_by"] = (
             "the exact data are unobservable with every sensor kept (an exact kernel vector)"
         )
@@ -568,7 +580,7 @@ class _Decision:
                 f"--max-sets (max_sets=...)."
             )
         outcome = self.outcome
-        lower = outcome.max_removable if outcome.status == "lower_bound" else None
+        lower = outcome.max_removable if outcome.status is OutcomeStatus.LOWER_BOUND else None
         return self.make(
             Verdict.INCONCLUSIVE,
             f"Sparse observability could not be decided: {'; '.join(reasons)}.{hint}",
