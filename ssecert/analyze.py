@@ -304,6 +304,13 @@ def analyze(
     if context is not None:  # the final (reconciled) check: its witness is the one reported
         context.put(sparse_key(spec.max_attacked), checks[1])
     notes.extend(_short_horizon_notes(spec, checks[0]))
+    if bounded is not None and spec.observer is not None:
+        if not any(c.id == "observer_noise_bound" for c in checks):
+            notes.append(
+                f"observer_noise_bound: not computed for the {spec.observer['kind']} observer "
+                "(the noise bound is certified for linear observers; the sparse observers' "
+                "soft thresholds are not linear)"
+            )
     notes.extend(f"sparse_observability: {text}" for text in sparse_timing.get("placement", []))
     meta = _meta(spec, seed, budget, notes)
     meta["timings"] = clock.record(sparse_timing, observer_timings)

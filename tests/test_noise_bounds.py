@@ -284,3 +284,79 @@ def test_pushing_attacks_on_many_plants_stay_within_the_bound():
                     worst = max(worst, error / found.bound)
                     assert error <= found.bound, (plant, s, tau, eta, norm)
     assert worst > 0.3  # the search reaches a sizeable part of the bound
+
+
+def test_linear_observer_bounds_in_closed_form():
+    from ssecert.stability.noise_gain import NoiseGainCode, linear_noise_bound
+
+    # a nilpotent shift: e_i = n_i + n_(i+1)(k-1) + ...: exactly 3, 2, 1
+    F = np.zeros((3, 3))
+    F[0, 1] = F[1, 2] = 1.0
+    found = linear_noise_bound(F, np.eye(3), np.ones(3))
+    assert found.code is NoiseGainCode.CERTIFIED
+    assert found.componentwise.tolist() == pytest.approx([3, 2, 1], rel=1e-12)
+    assert found.reached.tolist() == pytest.approx([3, 2, 1], rel=1e-12)
+    # non-normal: F^j = [[2^-j, 100 j 2^(1-j)], [0, 2^-j]]: 2 + 400 and 2
+    found = linear_noise_bound(np.array([[0.5, 100.0], [0.0, 0.5]]), np.eye(2), np.ones(2))
+    assert found.componentwise.tolist() == pytest.approx([402, 2], rel=1e-5)
+    assert np.all(found.componentwise >= [402, 2]) and np.all(found.reached <= [402, 2])
+    assert found.bound_2 >= np.linalg.norm([402, 2])
+    # a rotation by 0.7 rad scaled by 0.95: |F| has spectral radius 1.34, F 0.95
+    th = 0.7
+    F = 0.95 * np.array([[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]])
+    L, eta = np.array([[1.0, 0.5], [0.2, 1.0]]), np.array([0.1, 0.2])
+    found = linear_noise_bound(F, L, eta)
+    series, P = np.zeros(2), np.eye(2)
+    for _ in range(2000):
+        series, P = series + np.abs(P @ L) @ eta, P @ F
+    assert np.all(found.reached <= series) and np.all(series <= found.componentwise)
+    assert np.all(found.componentwise <= series * (1 + 1e-5))
+    # the rounding of F counts: an F at 1 - 1e-12 with rounding 1e-9 is not contractive
+    unsure = linear_noise_bound(np.array([[1 - 1e-12]]), np.eye(1), np.ones(1), rounding_F=1e-9)
+    assert unsure.code is NoiseGainCode.NOT_CONTRACTIVE
+    assert (
+        linear_noise_bound(np.eye(2), np.eye(2), np.ones(2)).code is NoiseGainCode.NOT_CONTRACTIVE
+    )
+
+
+def test_the_worst_noise_reaches_the_linear_bound_and_no_noise_exceeds_it():
+    from ssecert.stability.noise_gain import linear_noise_bound
+
+    rng = np.random.default_rng(4)
+    for _ in range(5):
+        n, p = 3, 4
+        F = rng.standard_normal((n, n))
+        F *= 0.9 / max(abs(np.linalg.eigvals(F)))
+        L = rng.standard_normal((n, p))
+        eta = rng.uniform(0.01, 0.1, p)
+        found = linear_noise_bound(F, L, eta)
+        steps = 400
+        powers = [np.eye(n)]
+        for _ in range(steps):
+            powers.append(powers[-1] @ F)
+        # the worst noise for component 0, replayed: n(k - 1 - j) = eta * sign((F^j L)_0)
+        noise = np.array([eta * np.sign((powers[j] @ L)[0]) for j in range(steps)])[::-1]
+        e = np.zeros(n)
+        for k in range(steps):
+            e = F @ e + L @ noise[k]
+        assert abs(e[0]) <= found.componentwise[0]
+        assert abs(e[0]) >= found.reached[0] * (1 - 1e-9) - 1e-12
+        for _ in range(20):
+            e = np.zeros(n)
+            for _k in range(steps):
+                e = F @ e + L @ (eta * rng.uniform(-1, 1, p))
+            assert np.all(np.abs(e) <= found.componentwise)
+
+
+@pytest.mark.slow
+def test_analyze_bounds_a_linear_observer_and_notes_a_sparse_one():
+    linear = {"kind": "luenberger", "gain": "place", "poles": [0.5, 0.6]}
+    data = {**_spec({"measurement": 1e-3}), "observer": linear}
+    check = analyze(spec_from_dict(data))["observer_noise_bound"]
+    assert check.verdict is Verdict.HOLDS and check.required is False
+    assert 0 < check.fields["lower_bound"] <= check.fields["ultimate_bound_inf"]
+    assert check.fields["ultimate_bound_inf"] <= check.fields["ultimate_bound"]
+    sparse = {"kind": "dsso", "step": 0.5, "threshold": 0.1, "gain": "pinv"}
+    cert = analyze(spec_from_dict({**_spec({"measurement": 1e-3}), "observer": sparse}))
+    assert "observer_noise_bound" not in cert
+    assert any(note.startswith("observer_noise_bound") for note in cert.meta["notes"])
