@@ -22,6 +22,7 @@ from .budget import Budget, ResourceLimitError
 from .context import OBSERVER, AnalysisContext
 from .inputs import as_spec
 from .results import Certificate, Verdict, to_jsonable
+from .simulation.engine import ScenarioResult
 from .spec import SCENARIO_DEFAULTS, Spec
 from .structure.sparse import DEFAULT_TIME_BUDGET
 from .tolerances import Tolerances
@@ -253,6 +254,18 @@ def certify(
             budget=budget,
             context=context,
         )
+        noise_check = cert.get("observer_noise_bound")
+        if noise_check is not None and noise_check.verdict is Verdict.HOLDS and design is not None:
+            simulations = {
+                name: (
+                    res.with_certified_bound(
+                        float(noise_check.value), design.error_matrix, "observer_noise_bound"
+                    )
+                    if isinstance(res, ScenarioResult) and res.attack == "none"
+                    else res
+                )
+                for name, res in simulations.items()
+            }
     elif simulate and spec.observer is None:
         notes.append("no simulations: the spec has no [observer] section")
     elif not simulate:

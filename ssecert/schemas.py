@@ -60,7 +60,14 @@ _SCENARIO: dict[str, dict[str, Any]] = {
         "description": "the range [low, high] of |a_i| (one number: both)",
     },
     "period": {"type": "integer", "minimum": 1},
-    "noise": {"type": "number", "minimum": 0},
+    "noise": {
+        "oneOf": [
+            {"type": "number", "minimum": 0},
+            {"type": "array", "items": {"type": "number", "minimum": 0}, "minItems": 1},
+        ],
+        "description": "bound of the uniform measurement noise, one or one per sensor "
+        "(default: the [noise] section's, else 0)",
+    },
     "steps": {"type": "integer", "minimum": 1},
     "runs": {"type": "integer", "minimum": 1},
     "seed": {"type": "integer", "minimum": 0},

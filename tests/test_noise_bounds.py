@@ -360,3 +360,45 @@ def test_analyze_bounds_a_linear_observer_and_notes_a_sparse_one():
     cert = analyze(spec_from_dict({**_spec({"measurement": 1e-3}), "observer": sparse}))
     assert "observer_noise_bound" not in cert
     assert any(note.startswith("observer_noise_bound") for note in cert.meta["notes"])
+
+
+def test_scenarios_take_the_noise_section_and_bounds_per_sensor():
+    eta = [1e-3, 1e-3, 2e-3, 1e-3, 5e-3]
+    scenarios = [
+        {"name": "quiet", "attack": "none"},
+        {"name": "loud", "attack": "none", "noise": 0.5},
+        {"name": "each", "attack": "none", "noise": [0.1, 0.0, 0.2, 0.0, 0.3]},
+    ]
+    spec = spec_from_dict({**_spec({"measurement": eta}), "scenario": scenarios})
+    by_name = {sc["name"]: sc for sc in spec.scenarios}
+    assert by_name["quiet"]["noise"] == eta and by_name["loud"]["noise"] == 0.5
+    assert spec_from_dict({**_spec(), "scenario": scenarios[:1]}).scenarios[0]["noise"] == 0.0
+    with pytest.raises(SpecError, match=r"scenario\[0\]\.noise"):
+        spec_from_dict({**_spec(), "scenario": [{**scenarios[0], "noise": [0.1, 0.2]}]})
+    from ssecert.simulation.scenarios import generate
+
+    data = generate(spec.system, by_name["each"], range(3), 50, seed=1)
+    bound = np.array([0.1, 0.0, 0.2, 0.0, 0.3])
+    assert np.all(np.abs(data.noise) <= bound) and np.all(data.noise[:, :, 1] == 0)
+    assert np.abs(data.noise[:, :, 4]).max() > 0.2
+
+
+@pytest.mark.slow
+def test_certify_puts_the_noise_bound_beside_the_simulations(tmp_path):
+    from ssecert.certify import certify
+
+    data = {
+        **_spec({"measurement": 1e-3}),
+        "observer": {"kind": "luenberger", "gain": "place", "poles": [0.5, 0.6]},
+        "scenario": [
+            {"name": "none", "attack": "none", "runs": 20, "steps": 200},
+            {"name": "constant", "attack": "constant", "sensors": [1], "runs": 5},
+        ],
+    }
+    result = certify(spec_from_dict(data), seed=0)
+    doc = result.to_dict()
+    beside = doc["simulations"]["none"]["certified_bound"]
+    assert beside["within"] is True and beside["check"] == "observer_noise_bound"
+    assert 0 < beside["observed_max"] <= beside["bound"]
+    assert beside["bound"] == doc["checks"]["observer_noise_bound"]["value"]
+    assert "certified_bound" not in doc["simulations"]["constant"]

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -148,6 +148,9 @@ class ScenarioResult:
         ||x_hat - x||.
     initial_relative_error : ndarray, shape (steps + 1, runs)
         ||x_hat(k) - x(k)|| / ||x_hat(0) - x(0)||: the part of the initial error left.
+    certified_bound : mapping or None
+        Beside a certified error bound (``with_certified_bound``): the bound, the largest
+        error observed once the initial error has had time to fade, and whether it is within.
 
     ``ssecert.simulation.metrics`` defines each; the relative error grows without bound
     when the state decays and the error does not, so designs are compared on the
@@ -168,6 +171,7 @@ class ScenarioResult:
     notes: tuple[str, ...] = field(default=())
     absolute_error: np.ndarray | None = None
     initial_relative_error: np.ndarray | None = None
+    certified_bound: dict[str, Any] | None = None
 
     def final(self) -> dict[str, float | None]:
         """Aggregates at the last step."""
@@ -213,7 +217,33 @@ class ScenarioResult:
             "series": series,
             "seconds": self.seconds,
             "notes": list(self.notes),
+            **({"certified_bound": self.certified_bound} if self.certified_bound else {}),
         }
+
+    def with_certified_bound(self, bound: float, F: np.ndarray, check: str) -> ScenarioResult:
+        """This result beside a certified ultimate bound of ||x_hat - x||_2 (the check
+        ``check``'s): the largest error over every run in the last quarter of the steps, and an
+        allowance for what is left of the initial error there (||F^k0||_2 max ||e(0)||, F the
+        error matrix): the observed error must be within the bound plus that allowance."""
+        if self.absolute_error is None:
+            return self
+        start = self.steps - self.steps // 4
+        observed = float(np.max(self.absolute_error[start:]))
+        with np.errstate(over="ignore", invalid="ignore"):
+            power = np.linalg.matrix_power(np.asarray(F, dtype=float), start)
+            left = float(np.linalg.norm(power, 2) * np.max(self.absolute_error[0]))
+        within = bool(observed <= bound + left)
+        return replace(
+            self,
+            certified_bound={
+                "check": check,
+                "bound": bound,
+                "observed_max": observed,
+                "from_step": start,
+                "initial_error_left": left,
+                "within": within,
+            },
+        )
 
 
 def stealthy_replay(

@@ -66,10 +66,13 @@ def _magnitudes(rng: np.random.Generator, size: int, magnitude: Sequence[float])
     return _uniform(rng, lo, hi, size) * rng.choice([-1.0, 1.0], size)
 
 
-def _uniform(rng: np.random.Generator, lo: float, hi: float, size: Any) -> np.ndarray:
+def _uniform(rng: np.random.Generator, lo: Any, hi: Any, size: Any) -> np.ndarray:
     """``rng.uniform(lo, hi, size)``, also where hi - lo is beyond the float range (a noise
-    bound of 1e308): then drawn in halves of the range, which ``uniform`` can take."""
-    if np.isfinite(float(hi) - float(lo)):
+    bound of 1e308): then drawn in halves of the range, which ``uniform`` can take.  ``lo``
+    and ``hi`` may be arrays (one bound per sensor, broadcast along the last axis)."""
+    with np.errstate(over="ignore"):
+        spread = np.asarray(hi, dtype=float) - np.asarray(lo, dtype=float)
+    if np.all(np.isfinite(spread)):
         return rng.uniform(lo, hi, size)
     middle = 0.5 * lo + 0.5 * hi
     return middle + rng.uniform(-0.5, 0.5, size) * 2.0 * (0.5 * hi - 0.5 * lo)
@@ -127,7 +130,9 @@ def generate(
     n, p = system.n, system.p
     kind = scenario["attack"]
     magnitude = scenario.get("magnitude", (4.0, 5.0))
-    noise_bound = float(scenario.get("noise", 0.0))
+    bounds = np.broadcast_to(np.asarray(scenario.get("noise", 0.0), dtype=float), (p,))
+    # one bound for every sensor is drawn as before (the same numbers, run by run)
+    noise_bound: Any = float(bounds[0]) if np.all(bounds == bounds[0]) else bounds
     run_ids = np.asarray(list(runs), dtype=np.int64)
     x0 = np.empty((run_ids.size, n))
     attack = np.zeros((steps, run_ids.size, p))
@@ -177,6 +182,6 @@ def generate(
             attack[:, j, :] = scale * pattern
         else:  # pragma: no cover - the spec validator refuses other kinds
             raise ValueError(f"unknown attack kind {kind!r}")
-        if noise_bound > 0:
+        if np.any(noise_bound > 0):
             noise[:, j, :] = _uniform(rng, -noise_bound, noise_bound, (steps, p))
     return ScenarioData(run_ids, x0, attack, noise)

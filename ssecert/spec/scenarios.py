@@ -10,7 +10,7 @@ the constants.
 from __future__ import annotations
 
 import numbers
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 from ..base.validation import (
@@ -53,12 +53,17 @@ _SCENARIO_KEYS = (
 
 
 def read_scenarios(
-    source: str, raw: Any, p: int, names: tuple[str, ...] = ()
+    source: str,
+    raw: Any,
+    p: int,
+    names: tuple[str, ...] = (),
+    noise: Sequence[float] | None = None,
 ) -> tuple[dict[str, Any], ...]:
     """The ``[[scenario]]`` tables (one table is taken as a list of one), names unique.
 
     A scenario's ``sensors`` are 0-based indices or the sensors' ``names`` (the system's),
-    kept as indices."""
+    kept as indices.  Its ``noise`` is one bound or one per sensor; without one, the spec's
+    ``[noise]`` bounds (``noise``, one per sensor) when it has them, else 0."""
     if isinstance(raw, Mapping):
         raw = [raw]
     if not isinstance(raw, list):
@@ -71,6 +76,8 @@ def read_scenarios(
     seen: set[str] = set()
     for index, table in enumerate(raw):
         scenario = _scenario(source, f"scenario[{index}]", table, p, names)
+        if noise is not None and isinstance(table, Mapping) and "noise" not in table:
+            scenario["noise"] = [float(v) for v in noise]
         if scenario["name"] in seen:
             raise spec_error(
                 source, f"scenario[{index}].name", f"duplicate scenario name {scenario['name']!r}"
@@ -114,7 +121,7 @@ def _scenario(
             f"only used by switching and sinusoidal attacks, not {attack!r}",
         )
     out["magnitude"] = _attack_magnitude(source, prefix, table, attack)
-    out.update(_run_settings(source, prefix, table))
+    out.update(_run_settings(source, prefix, table, p))
     return out
 
 
@@ -214,18 +221,24 @@ def _attack_magnitude(source: str, prefix: str, table: Any, attack: str) -> tupl
     return (float(arr[0]), float(arr[1]))
 
 
-def _run_settings(source: str, prefix: str, table: Any) -> dict[str, Any]:
+def _run_settings(source: str, prefix: str, table: Any, p: int) -> dict[str, Any]:
     """The scenario's noise, steps, runs and seed, with their defaults."""
-    out: dict[str, Any] = {
-        "noise": convert(
-            source,
-            f"{prefix}.noise",
-            as_float_option,
-            table.get("noise", SCENARIO_DEFAULTS["noise"]),
-            "noise",
-            min_value=0.0,
-        )
-    }
+    raw = table.get("noise", SCENARIO_DEFAULTS["noise"])
+    if isinstance(raw, (list, tuple)):
+        if len(raw) != p:
+            raise spec_error(
+                source,
+                f"{prefix}.noise",
+                f"expected one bound or one per sensor ({p}), got a list of {len(raw)}",
+            )
+        values = [
+            convert(source, f"{prefix}.noise[{i}]", as_float_option, v, "noise", min_value=0.0)
+            for i, v in enumerate(raw)
+        ]
+        noise: float | list[float] = values
+    else:
+        noise = convert(source, f"{prefix}.noise", as_float_option, raw, "noise", min_value=0.0)
+    out: dict[str, Any] = {"noise": noise}
     for key in ("steps", "runs"):
         out[key] = convert(
             source,
