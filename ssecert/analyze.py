@@ -306,11 +306,7 @@ def analyze(
     notes.extend(_short_horizon_notes(spec, checks[0]))
     if bounded is not None and spec.observer is not None:
         if not any(c.id == "observer_noise_bound" for c in checks):
-            notes.append(
-                f"observer_noise_bound: not computed for the {spec.observer['kind']} observer "
-                "(the noise bound is certified for linear observers; the sparse observers' "
-                "soft thresholds are not linear)"
-            )
+            notes.append("observer_noise_bound: not computed: the observer was not built")
     notes.extend(f"sparse_observability: {text}" for text in sparse_timing.get("placement", []))
     meta = _meta(spec, seed, budget, notes)
     meta["timings"] = clock.record(sparse_timing, observer_timings)

@@ -24,6 +24,7 @@ from .inputs import as_spec
 from .results import Certificate, Verdict, to_jsonable
 from .simulation.engine import ScenarioResult
 from .spec import SCENARIO_DEFAULTS, Spec
+from .stability.noise_messages import initial_error_fading
 from .structure.sparse import DEFAULT_TIME_BUDGET
 from .tolerances import Tolerances
 
@@ -259,7 +260,9 @@ def certify(
             simulations = {
                 name: (
                     res.with_certified_bound(
-                        float(noise_check.value), design.error_matrix, "observer_noise_bound"
+                        float(noise_check.value),
+                        initial_error_fading(design, noise_check),
+                        "observer_noise_bound",
                     )
                     if isinstance(res, ScenarioResult) and res.attack == "none"
                     else res

@@ -16,7 +16,7 @@ work exceeds the budget, is refused with the estimate
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -220,18 +220,20 @@ class ScenarioResult:
             **({"certified_bound": self.certified_bound} if self.certified_bound else {}),
         }
 
-    def with_certified_bound(self, bound: float, F: np.ndarray, check: str) -> ScenarioResult:
+    def with_certified_bound(
+        self, bound: float, fading: Callable[[int], float], check: str
+    ) -> ScenarioResult:
         """This result beside a certified ultimate bound of ||x_hat - x||_2 (the check
         ``check``'s): the largest error over every run in the last quarter of the steps, and an
-        allowance for what is left of the initial error there (||F^k0||_2 max ||e(0)||, F the
-        error matrix): the observed error must be within the bound plus that allowance."""
+        allowance for what is left of the initial error there (``fading(k0)`` max ||e(0)||,
+        from the certificate): the observed error must be within the bound plus that
+        allowance."""
         if self.absolute_error is None:
             return self
         start = self.steps - self.steps // 4
         observed = float(np.max(self.absolute_error[start:]))
         with np.errstate(over="ignore", invalid="ignore"):
-            power = np.linalg.matrix_power(np.asarray(F, dtype=float), start)
-            left = float(np.linalg.norm(power, 2) * np.max(self.absolute_error[0]))
+            left = float(fading(start) * np.max(self.absolute_error[0]))
         within = bool(observed <= bound + left)
         return replace(
             self,

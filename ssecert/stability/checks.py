@@ -864,6 +864,14 @@ def observer_checks(
         steps.append(
             Step("observer_noise_bound", lambda: noise_messages.observer_noise_check(design, noise))
         )
+    elif noise is not None:
+        steps.append(
+            Step(
+                "observer_noise_bound",
+                lambda iss: noise_messages.sparse_noise_check(design, iss, noise),
+                needs=("iss_gain",),
+            )
+        )
     out = decide(steps, clock)
     order = (
         "observer_gain", "stability_check", "iss_gain", "observer_noise_bound",

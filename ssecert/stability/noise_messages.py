@@ -8,6 +8,7 @@ linear observer's design and writes what a user reads.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Any
 
 from ..base.format import readable
@@ -16,7 +17,13 @@ from ..observers import ObserverDesign
 from ..results import Check, Verdict
 from .noise_gain import NoiseGain, NoiseGainCode, linear_noise_bound
 
-__all__ = ["observer_noise_check", "reason", "applies_to"]
+__all__ = [
+    "observer_noise_check",
+    "sparse_noise_check",
+    "reason",
+    "applies_to",
+    "initial_error_fading",
+]
 
 TITLE = "Ultimate error of the observer under noise"
 VALUE_NAME = "certified ultimate bound of ||x_hat - x||_2"
@@ -43,6 +50,116 @@ def reason(found: NoiseGain) -> str:
             "F, L or the noise bounds leave the floating-point range, or their rounding is unknown"
         )
     return ""
+
+
+def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoise) -> Check:
+    """The ``observer_noise_bound`` check of an observer certified by a dissipation inequality
+    with decay (``iss``, the iss_gain check): noise enters the error dynamics as an attack on
+    every sensor does, so V+ - V <= -alpha V - |e|^2 + gamma^2 |n|^2 gives, without attack,
+    limsup V <= gamma^2 N^2 / alpha (N >= |n(k)|, each entry of the observer's measurement
+    vector within its sensor's bound) and |e|^2 <= V lambda_max((P^-1)_ee)."""
+    common: dict[str, Any] = {
+        "id": "observer_noise_bound",
+        "title": TITLE,
+        "method": "ISS dissipation inequality with decay (iss_gain's verified certificate)",
+        "required": False,
+        "value_name": VALUE_NAME,
+    }
+    alpha = iss.fields.get("alpha")
+    gamma = iss.fields.get("gamma")
+    P = iss.evidence.get("P")
+    if (
+        iss.verdict is not Verdict.HOLDS
+        or not alpha
+        or gamma is None
+        or P is None
+        or (iss.evidence.get("structure") == "zames-falb")
+    ):
+        why = (
+            "iss_gain certifies no gain"
+            if iss.verdict is not Verdict.HOLDS
+            else "iss_gain's certificate has no decay (alpha = 0), so it bounds the error's "
+            "energy, not its size"
+        )
+        return Check(
+            verdict=Verdict.INCONCLUSIVE,
+            summary=f"No ultimate error bound under noise is certified: {why}.",
+            value=math.inf,
+            fields={"ultimate_bound": math.inf, "noise": noise.to_dict()},
+            evidence={"from": "iss_gain"},
+            **common,
+        )
+    import numpy as np
+
+    rows = design.sensing.shape[0]
+    model = design.observer_kind.lure_model(design)
+    if model.r != rows or model.n_e != design.system.n:
+        return Check(
+            verdict=Verdict.INCONCLUSIVE,
+            summary="No ultimate error bound under noise is certified: the error model's "
+            f"attack input ({model.r} entries) is not the observer's measurement vector "
+            f"({rows} rows).",
+            value=math.inf,
+            fields={"ultimate_bound": math.inf, "noise": noise.to_dict()},
+            evidence={"from": "iss_gain"},
+            **common,
+        )
+    per_row = noise.eta[np.arange(rows) % design.system.p]
+    N2 = float(np.sum(per_row**2)) * (1 + 4 * rows * 2.0**-53)
+    P = np.asarray(P, dtype=float)
+    n = design.system.n
+    inverse = np.linalg.inv(0.5 * (P + P.T))
+    block = inverse[:n, :n]
+    top = float(np.max(np.linalg.eigvalsh(0.5 * (block + block.T))))
+    # the inverse and its eigenvalue to a relative 1e-8 of a well-conditioned P, taken up
+    cond = float(np.linalg.cond(P))
+    if not math.isfinite(cond) or cond > 1e8:
+        return Check(
+            verdict=Verdict.INCONCLUSIVE,
+            summary="No ultimate error bound under noise is certified: iss_gain's P is too "
+            f"ill-conditioned (condition number {readable(cond)}) to invert with a known error.",
+            value=math.inf,
+            fields={"ultimate_bound": math.inf, "noise": noise.to_dict()},
+            evidence={"from": "iss_gain", "condition_P": cond},
+            **common,
+        )
+    top *= 1 + 1e-8 * max(cond, 1.0)
+    bound = math.sqrt(float(gamma) ** 2 * N2 / float(alpha) * top) * (1 + 1e-12)
+    return Check(
+        verdict=Verdict.HOLDS,
+        summary=f"Without attack and with noise within the spec's bounds on every sample, the "
+        f"estimation error eventually stays within {readable(bound)} (2-norm), from iss_gain's "
+        f"certificate: limsup V <= gamma^2 N^2 / alpha with gamma = {readable(float(gamma))}, "
+        f"alpha = {readable(float(alpha))} and N = {readable(math.sqrt(N2))}.",
+        value=bound,
+        fields={"ultimate_bound": bound, "noise": noise.to_dict()},
+        evidence={
+            "from": "iss_gain",
+            "gamma": gamma,
+            "alpha": alpha,
+            "noise_norm_per_step": math.sqrt(N2),
+            "lambda_max_P_inverse_ee": top,
+            "lambda_max_P_ee": float(np.max(np.linalg.eigvalsh(0.5 * (P[:n, :n] + P[:n, :n].T)))),
+            "condition_P": cond,
+        },
+        **common,
+    )
+
+
+def initial_error_fading(design: ObserverDesign, check: Check) -> Callable[[int], float]:
+    """k -> a factor c with ||part of e(k) due to e(0)|| <= c ||e(0)|| (a_hat(0) = 0), as the
+    noise bound's certificate gives it: ||F^k||_2 for a linear observer; from iss_gain's
+    dissipation inequality sqrt(lambda_max((P^-1)_ee) (1 - alpha)^k lambda_max(P_ee))."""
+    import numpy as np
+
+    if applies_to(design):  # the series of F's powers
+        F = np.asarray(design.error_matrix, dtype=float)
+        return lambda k: float(np.linalg.norm(np.linalg.matrix_power(F, k), 2))
+    evidence = check.evidence  # iss_gain's certificate (sparse_noise_check)
+    top = float(evidence["lambda_max_P_inverse_ee"])
+    alpha = float(evidence["alpha"])
+    ee = float(evidence["lambda_max_P_ee"])
+    return lambda k: math.sqrt(top * ee * (1.0 - alpha) ** k)
 
 
 def _tightness(found: NoiseGain) -> str:
