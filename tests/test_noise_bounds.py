@@ -422,3 +422,31 @@ def test_certify_puts_the_noise_bound_beside_the_simulations(tmp_path):
     beside = doc["simulations"]["none"]["certified_bound"]
     assert doc["checks"]["observer_noise_bound"]["verdict"] == "holds"
     assert beside["within"] is True and beside["observed_max"] <= beside["bound"]
+
+
+def test_the_screened_sets_give_the_bound_every_set_gives(monkeypatch):
+    """Beyond DIRECT_SETS sets the enumeration's Cholesky kernel screens them against the
+    sample's bound: the answer is the same as evaluating every set, never below it."""
+    import ssecert.structure.noise as module
+
+    rng = np.random.default_rng(3)
+    compared = 0
+    while compared < 12:
+        n, p = int(rng.integers(1, 5)), int(rng.integers(5, 10))
+        s = int(rng.integers(1, (p - 1) // 2 + 1))
+        tau = int(rng.integers(1, n + 2))
+        scales = 2.0 ** rng.integers(-3, 4, (p, 1))
+        plant = System(rng.standard_normal((n, n)) * 0.7, rng.standard_normal((p, n)) * scales)
+        noise = MeasurementNoise(rng.uniform(0.001, 0.1, p), ("inf", "2")[compared % 2])
+        every = decoder_error_bound(plant, s, noise, horizon=tau)
+        monkeypatch.setattr(module, "DIRECT_SETS", 3)
+        screened = decoder_error_bound(plant, s, noise, horizon=tau)
+        monkeypatch.undo()
+        assert screened.code is every.code
+        if every.code is not BoundCode.CERTIFIED:
+            continue
+        compared += 1
+        assert screened.evaluated <= screened.sets
+        assert screened.bound == pytest.approx(every.bound, rel=1e-12)
+        assert screened.bound >= every.bound and screened.hardened >= every.hardened * (1 - 1e-12)
+        assert screened.smallest_sigma <= every.smallest_sigma * (1 + 1e-12)

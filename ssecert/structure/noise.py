@@ -67,8 +67,12 @@ __all__ = [
     "worst_case_pair",
 ]
 
-DEFAULT_MAX_SETS = 200_000  # sets of p - 2s sensors whose smallest singular value is computed
+DEFAULT_MAX_SETS = 5_000_000  # sets of p - 2s sensors screened
 _REFINED = 64  # sets decided by an SVD, the largest bounds first
+DIRECT_SETS = 20_000  # up to this many sets every one is evaluated; beyond, they are screened
+_SAMPLE = 256  # sets sampled for the screening's first bound
+_FAILURES = 20_000  # sets the screening may leave to evaluate
+_SCREENINGS = 6
 _PAIRS = 8  # sets tried for the lower bound: those with the largest bounds, the smallest sigma
 _U = 2.0**-53
 
@@ -120,13 +124,18 @@ class DecoderErrorBound:
     smallest_sigma : float
         The certified lower bound of min over every K of sigma_min(O_K).
     smallest_kept : tuple of int
-        The set where that minimum is attained.
+        The set with the smallest sigma_min among those evaluated (beyond
+        ``DIRECT_SETS`` sets, the others are screened: their sigma_min is at least
+        ``smallest_sigma``).
     hardened : float
         The bound with the noise of ``worst_kept``'s sensors halved.
     noise : MeasurementNoise
     horizon, max_attacked : int
     sets : int
         Sets of p - 2s sensors.
+    evaluated : int
+        Sets whose sigma_min was computed (every one up to ``DIRECT_SETS``; beyond, those the
+        Cholesky screening left, and a sample).
     refined : int
         Sets decided by an SVD.
     facts : mapping
@@ -145,6 +154,7 @@ class DecoderErrorBound:
     smallest_kept: tuple[int, ...] = ()
     hardened: float = math.inf
     sets: int = 0
+    evaluated: int = 0
     refined: int = 0
     lower_kept: tuple[int, ...] = ()
     facts: dict[str, Any] = field(default_factory=dict)
@@ -237,6 +247,127 @@ def _bound_of(n_K: Any, m_K: Any, sigma: Any) -> Any:
     return np.where(np.asarray(sigma) > 0, value, np.inf)
 
 
+def _evaluate(
+    blocks: np.ndarray, errors: np.ndarray, block: np.ndarray, removed: np.ndarray, s: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
+    """(sigma, bound, n_K, m_K, sets refined) of the sets K left by each row of ``removed``:
+    sigma a lower bound of sigma_min of the exact plant's O_K, from the Gramians, the largest
+    bounds decided again by an SVD (sharper where the Gramian squares the condition number)
+    until the best refined one is above every set left."""
+    p = blocks.shape[0]
+    low, _ = _sigma_lower_from_gramians(blocks, removed)
+    # the exact plant's O_K is within ||errors_K|| of the computed one
+    err_K = np.sqrt(np.maximum((errors**2).sum() - (errors[removed] ** 2).sum(axis=1), 0.0))
+    sigma = np.maximum(low - err_K, 0.0)
+    n_K, m_K = _noise_terms(block, removed, s)
+    bounds = _bound_of(n_K, m_K, sigma)
+    order = np.argsort(-bounds, kind="stable")
+    refined = 0
+    for j in order[:_REFINED]:
+        kept = np.setdiff1d(np.arange(p), removed[j])
+        better = max(_sigma_lower_svd(blocks, kept) - float(err_K[j]), 0.0)
+        refined += 1
+        if better > sigma[j]:
+            sigma[j] = better
+            bounds[j] = _bound_of(n_K[j], m_K[j], better)
+        rest = order[refined:]
+        if rest.size == 0 or bounds[rest].max() <= bounds[order[:refined]].max():
+            break
+    return sigma, bounds, n_K, m_K, refined
+
+
+def _screened_candidates(
+    blocks: np.ndarray, errors: np.ndarray, block: np.ndarray, s: int
+) -> tuple[np.ndarray, float]:
+    """The removed sets (rows, sorted) whose bound may be the largest, with a sample whose
+    largest bound B every other set is proved not to exceed.
+
+    A sample of sets gives B; every set's Gramian minus t^2 I is then screened by the
+    enumeration's Cholesky kernel (``ColexScreen``: LAPACK's decisions), t chosen so that a
+    set that passes has sigma_min of the exact plant's O_K at least num / B, num >= every
+    set's noise term: its bound is at most B.  The sets that fail are returned with the
+    sample; when too many fail, B is raised to the largest bound among them and the screening
+    repeated.  Returns the candidates and t' (every other set has sigma_min >= t'), 0 when
+    every set is a candidate."""
+    p, tau, n = blocks.shape
+    k = 2 * s
+    rng = np.random.default_rng(0)
+    sample = np.sort(
+        np.array([rng.choice(p, k, replace=False) for _ in range(_SAMPLE)], dtype=np.int64),
+        axis=1,
+    )
+    sample = np.unique(sample, axis=0)
+    _, bounds, _, _, _ = _evaluate(blocks, errors, block, sample, s)
+    sq = np.sort(block**2)[::-1]
+    up = 1.0 + _gamma(p + 8)
+    num = (math.sqrt(sq[: p - s].sum() * up) + math.sqrt(sq[: p - k].sum() * up)) * up
+    highest = float(np.max(bounds))
+    for _ in range(_SCREENINGS):
+        if not math.isfinite(highest) or highest <= 0:
+            break
+        floor = num / highest
+        failed = _screen_failures(blocks, errors, k, floor, _FAILURES)
+        if failed.shape[0] < _FAILURES:
+            return np.unique(np.concatenate([sample, failed]), axis=0), floor
+        # too many below: the largest bound among those found, or a quarter more
+        _, more, _, _, _ = _evaluate(blocks, errors, block, failed, s)
+        highest = max(highest * 1.25, float(np.max(more)))
+    # the screening did not narrow the sets down: every set is a candidate
+    return _kept_sets(p, k), 0.0
+
+
+def _screen_failures(
+    blocks: np.ndarray, errors: np.ndarray, k: int, target: float, limit: int
+) -> np.ndarray:
+    """The sets of k removed sensors (rows) whose kept sensors' O_K the screening cannot prove
+    to have sigma_min >= ``target`` for the exact plant: LAPACK's Cholesky factorization of
+    the Gramian minus t^2 I fails, t^2 = (target + the O's rounding)^2 + every rounding of the
+    Gramians, of their sums and LAPACK's backward error.  At most ``limit`` rows (the first
+    ones found) when more fail."""
+    from ..numerics.linalg import single_precision_margin
+    from ._combinatorics import ColexScreen
+
+    p, tau, n = blocks.shape
+    grams = np.einsum("ikn,ikm->inm", blocks, blocks)
+    total = grams.sum(axis=0)
+    frob_items = float(np.linalg.norm(grams, axis=(1, 2)).sum())
+    trace = float(np.abs(np.trace(total)))
+    squares = float(np.sum(blocks**2))
+    rounding = (
+        _gamma(k + 4) * (float(np.linalg.norm(total)) + frob_items)  # the sums of Gramians
+        + _gamma(tau + 2) * squares  # each Gramian from its blocks
+        + 100 * _gamma(4 * n + 4) * (trace + n * (target + 1.0) ** 2)  # LAPACK's backward error
+    )
+    err_O = float(np.sqrt(np.sum(errors**2)))
+    shift = ((target + err_O) ** 2 + 2.0 * rounding) * (1 + 1e-9)
+    base = total - shift * np.eye(n)
+    margin = float(
+        single_precision_margin(
+            n,
+            1.01 * (np.abs(np.diagonal(base)).sum() + n * shift),
+            1.01 * (float(np.linalg.norm(base)) + frob_items),
+            terms=k,
+        )
+    )
+    source = ColexScreen(grams, base, k, margin)
+    size = 4096
+    work = np.empty((n, n, size), dtype=np.float32)
+    diagonal = np.empty((n, size), dtype=np.float32)
+    found: list[np.ndarray] = []
+    count = 0
+    for first, last in source.batches(size):
+        screen = source.screen(first, last, shift, None, work, diagonal)
+        bad = first + np.flatnonzero(~screen.ok)
+        if bad.size:
+            found.append(source.subsets(bad))
+            count += bad.size
+            if count >= limit:
+                break
+    if not found:
+        return np.zeros((0, k), dtype=np.int64)
+    return np.concatenate(found)[:limit]
+
+
 def decoder_error_bound(
     system: System,
     max_attacked: int,
@@ -294,29 +425,21 @@ def decoder_error_bound(
         finite = bool(np.all(np.isfinite(blocks))) and bool(np.isfinite(np.sum(blocks**2)))
     if not finite or not np.isfinite(np.sum(noise.block_bounds(tau) ** 2)):
         return DecoderErrorBound(BoundCode.OUT_OF_RANGE, math.inf, 0.0, sets=sets, **base)
-    removed = _kept_sets(p, removed_size)
     errors = _block_errors(system, tau)
-    low, _ = _sigma_lower_from_gramians(blocks, removed)
-    # the exact plant's O_K is within ||errors_K|| of the computed one
-    err_K = np.sqrt(np.maximum((errors**2).sum() - (errors[removed] ** 2).sum(axis=1), 0.0))
-    sigma = np.maximum(low - err_K, 0.0)
     block = noise.block_bounds(tau)
-    n_K, m_K = _noise_terms(block, removed, s)
-    bounds = _bound_of(n_K, m_K, sigma)
-    # the largest bounds decided again by an SVD of O_K (sharper where the Gramian squares
-    # the condition number), until the best refined one is above every set left
-    order = np.argsort(-bounds, kind="stable")
-    refined = 0
-    for j in order[:_REFINED]:
-        kept = np.setdiff1d(np.arange(p), removed[j])
-        better = max(_sigma_lower_svd(blocks, kept) - float(err_K[j]), 0.0)
-        refined += 1
-        if better > sigma[j]:
-            sigma[j] = better
-            bounds[j] = _bound_of(n_K[j], m_K[j], better)
-        rest = order[refined:]
-        if rest.size == 0 or bounds[rest].max() <= bounds[order[:refined]].max():
-            break
+    floor = 0.0  # sigma_min of every set not evaluated is at least this
+    if sets <= DIRECT_SETS:
+        removed = _kept_sets(p, removed_size)
+    else:
+        removed, floor = _screened_candidates(blocks, errors, block, s)
+    sigma, bounds, n_K, m_K, refined = _evaluate(blocks, errors, block, removed, s)
+    screened = removed.shape[0] < sets
+    # the sets not evaluated: bound(K) <= (the largest noise term) / floor, below the largest
+    # evaluated bound by the screening's construction; kept as a guard all the same
+    sq = np.sort(block**2)[::-1]
+    up = 1.0 + _gamma(p + 8)
+    num_hi = (math.sqrt(sq[: p - s].sum() * up) + math.sqrt(sq[: p - removed_size].sum() * up)) * up
+    guard = _rounded_up(num_hi / floor) if screened and floor > 0 else 0.0
     # ties go to the lexicographically first kept set (the last removed set of the order)
     last = bounds.size - 1
     worst = last - int(np.argmax(bounds[::-1]))
@@ -333,21 +456,29 @@ def decoder_error_bound(
             refined=refined,
             **base,
         )
-    bound = _rounded_up(float(bounds[worst]))
+    bound = max(_rounded_up(float(bounds[worst])), guard)
     softer = block.copy()
     softer[list(kept_of(worst))] *= 0.5
     n_h, m_h = _noise_terms(softer, removed, s)
     hardened = _rounded_up(float(np.max(_bound_of(n_h, m_h, sigma))))
+    if guard > 0:  # the sets not evaluated, with the softer noise
+        sq_h = np.sort(softer**2)[::-1]
+        soft_hi = (
+            math.sqrt(sq_h[: p - s].sum() * up) + math.sqrt(sq_h[: p - removed_size].sum() * up)
+        ) * up
+        hardened = max(hardened, _rounded_up(soft_hi / floor))
+    smallest = float(sigma[weakest]) if not screened else min(float(sigma[weakest]), floor)
     found = DecoderErrorBound(
         BoundCode.CERTIFIED,
         bound,
         0.0,
         worst_kept=kept_of(worst),
         sigma=float(sigma[worst]),
-        smallest_sigma=float(sigma[weakest]),
+        smallest_sigma=smallest,
         smallest_kept=kept_of(weakest),
         hardened=hardened,
         sets=sets,
+        evaluated=int(removed.shape[0]),
         refined=refined,
         **base,
     )
@@ -356,7 +487,8 @@ def decoder_error_bound(
     # the lower bound: the best pair over the sets with the largest bounds and the smallest
     # singular values
     candidates = dict.fromkeys(
-        [int(j) for j in order[:_PAIRS]] + [int(j) for j in np.argsort(sigma)[:_PAIRS]]
+        [int(j) for j in np.argsort(-bounds, kind="stable")[:_PAIRS]]
+        + [int(j) for j in np.argsort(sigma, kind="stable")[:_PAIRS]]
     )
     best = 0.0
     best_kept: tuple[int, ...] = ()
