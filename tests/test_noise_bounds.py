@@ -450,3 +450,25 @@ def test_the_screened_sets_give_the_bound_every_set_gives(monkeypatch):
         assert screened.bound == pytest.approx(every.bound, rel=1e-12)
         assert screened.bound >= every.bound and screened.hardened >= every.hardened * (1 - 1e-12)
         assert screened.smallest_sigma <= every.smallest_sigma * (1 + 1e-12)
+
+
+@pytest.mark.slow
+def test_the_lasso_papers_noisy_setting_is_certified():
+    """Sec. 5.1 of the Lasso paper: n = tau = 20, p = 20 sensors, s = 4, noise uniform within
+    1e-4 on every sample, attacks of magnitude 4-5 on s sensors: the l0 decoder's error on the
+    paper's runs stays within the certified bound (Imhotep-SMT answers the l0 problem)."""
+    from ssecert.experiments.lasso import NOISE_BOUND, random_run
+
+    p, s, n = 20, 4, 20
+    for seed in (7, 8):
+        O, sensors, y, x0 = random_run(np.random.default_rng(seed), p, NOISE_BOUND, s)
+        # the plant behind O, drawn again as random_run draws it (A first, then C)
+        rng = np.random.default_rng(seed)
+        A = rng.standard_normal((n, n))
+        A /= 1.01 * np.abs(np.linalg.eigvals(A)).max()
+        plant = System(A, rng.standard_normal((p, n)))
+        assert np.array_equal(plant.observability_matrix(n), O)
+        found = decoder_error_bound(plant, s, MeasurementNoise.uniform(NOISE_BOUND, p), horizon=n)
+        assert found.code is BoundCode.CERTIFIED and found.bound < 0.1
+        estimate = l0_decoder(O, y, s, sensors_of_row=sensors).x
+        assert np.linalg.norm(estimate - x0) <= found.bound
