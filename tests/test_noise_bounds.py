@@ -472,3 +472,16 @@ def test_the_lasso_papers_noisy_setting_is_certified():
         assert found.code is BoundCode.CERTIFIED and found.bound < 0.1
         estimate = l0_decoder(O, y, s, sensors_of_row=sensors).x
         assert np.linalg.norm(estimate - x0) <= found.bound
+
+
+def test_the_report_shows_the_bounds_and_the_hardening_curve(tmp_path):
+    from ssecert.certify import certify
+    from ssecert.report.html import render_report
+
+    result = certify(spec_from_dict(_spec({"measurement": 1e-3})), simulate=False)
+    html = render_report(result)
+    assert 'id="noise-bounds"' in html and 'id="hardening-bound"' in html
+    curve = result.certificate["decoder_error_bound"].evidence["hardening_curve"]
+    assert curve["scale"][-1] == 1.0
+    assert curve["bound"][-1] == result.certificate["decoder_error_bound"].fields["bound"]
+    assert curve["bound"] == sorted(curve["bound"])

@@ -13,6 +13,7 @@ import numpy as np
 from markupsafe import Markup, escape
 
 from ..base.atomic import atomic_write_text
+from ..base.format import readable
 from ..results import Certificate, Check, Verdict, to_jsonable
 from .cells import margin_text, number, value_text, verdict_class, verdict_label
 
@@ -239,6 +240,9 @@ def _context(result: Any, *, fragment: bool) -> dict[str, Any]:
     if result.stealthy is not None:
         ctx.update(_stealthy_context(spec.system, result.stealthy))
     ctx["simulations"] = _simulation_rows(result.simulations)
+    noise = _noise_context(spec.system, cert, result.simulations)
+    if noise:
+        ctx["noise"] = noise
     if result.region is not None:
         ctx["region_svg"] = _region_svg(result.region, spec.observer)
     comparison = getattr(result, "comparison", None)
@@ -424,6 +428,58 @@ def _headline(cert: Certificate) -> str:
     if undecided:
         return undecided[0].summary
     return "Every required check holds."
+
+
+def _noise_context(
+    system: Any, cert: Certificate, simulations: dict[str, Any]
+) -> dict[str, Any] | None:
+    """The error bounds under noise: the decoder's (bound, lower bound, the set to harden, its
+    curve) and the observer's, beside the attack-free simulations' largest errors."""
+    from .plots import hardening_plot
+
+    decoder, observer = cert.get("decoder_error_bound"), cert.get("observer_noise_bound")
+    if decoder is None and observer is None:
+        return None
+    rows: list[tuple[str, str]] = []
+    svg = None
+    if decoder is not None and decoder.verdict is Verdict.HOLDS:
+        kept = ", ".join(system.sensors[i] for i in decoder.fields["worst_kept_sensors"])
+        rows += [
+            ("l0 decoder: certified bound of ||x_hat - x||", readable(decoder.fields["bound"])),
+            ("no decoder guarantees less than", readable(decoder.fields["lower_bound"])),
+            ("the sensors whose bound is the largest (to harden)", kept),
+            ("their noise halved: the bound", readable(decoder.fields["hardened_bound"])),
+        ]
+        curve = decoder.evidence.get("hardening_curve")
+        if curve:
+            svg = Markup(
+                hardening_plot(
+                    curve["scale"], curve["bound"], float(decoder.fields["lower_bound"]), kept
+                )
+            )
+    elif decoder is not None:
+        rows.append(("l0 decoder", decoder.summary))
+    if observer is not None and observer.verdict is Verdict.HOLDS:
+        rows.append(
+            ("observer: certified ultimate bound of ||x_hat - x||", readable(observer.value))
+        )
+        if observer.fields.get("lower_bound"):
+            rows.append(
+                ("some noise drives a component to", readable(observer.fields["lower_bound"]))
+            )
+    elif observer is not None:
+        rows.append(("observer", observer.summary))
+    for name, res in simulations.items():
+        beside = getattr(res, "certified_bound", None)
+        if beside:
+            rows.append(
+                (
+                    f"simulation {name}: largest error from step {beside['from_step']}",
+                    f"{readable(beside['observed_max'])} "
+                    f"({'within' if beside['within'] else 'ABOVE'} the bound)",
+                )
+            )
+    return {"rows": rows, "svg": svg}
 
 
 def _breaking_set_context(system: Any, s: int, sparse: Check) -> dict[str, Any]:

@@ -22,6 +22,7 @@ __all__ = [
     "region_plot",
     "sensor_plot",
     "tradeoff_plot",
+    "hardening_plot",
 ]
 
 PALETTE = {
@@ -265,6 +266,23 @@ def region_plot(region: Any, design_point: tuple[float, float] | None = None) ->
         fontsize=7,
     )
     return svg_figure(fig, title="certified region")
+
+
+def hardening_plot(scale: Sequence[float], bound: Sequence[float], lower: float, names: str) -> str:
+    """The decoder's certified error bound against the noise of its worst sensor set (a fraction
+    of the spec's bounds), with the lower bound no decoder beats at the spec's noise."""
+    fig, axes = _figure(5.6, 2.6)
+    ax = axes[0, 0]
+    ax.plot(scale, bound, marker="o", color=PALETTE["a"], gid="hardening-bound",
+            label="certified bound of ||x_hat - x||")  # fmt: skip
+    if lower > 0:
+        ax.axhline(lower, color=PALETTE["inconclusive"], linestyle="--", gid="hardening-lower",
+                   label="no decoder does better (spec's noise)")  # fmt: skip
+    ax.set_xlabel(plain(f"noise of sensors {names}, fraction of the spec's", 80))
+    ax.set_ylabel("error bound")
+    ax.set_ylim(bottom=0)
+    ax.legend(loc="upper left", fontsize=8, frameon=False)
+    return svg_figure(fig, title="hardening")
 
 
 def sensor_plot(sensors: Sequence[str], breaking: Sequence[int]) -> str:

@@ -73,7 +73,10 @@ DIRECT_SETS = 20_000  # up to this many sets every one is evaluated; beyond, the
 _SAMPLE = 256  # sets sampled for the screening's first bound
 _FAILURES = 20_000  # sets the screening may leave to evaluate
 _SCREENINGS = 6
-_PAIRS = 8  # sets tried for the lower bound: those with the largest bounds, the smallest sigma
+# sets tried for the lower bound: those with the largest bounds, those with the smallest sigma
+_PAIRS = 8
+#: the scales of the worst set's noise in ``DecoderErrorBound.curve``
+HARDENING = (0.0, 0.25, 0.5, 0.75, 1.0)
 _U = 2.0**-53
 
 
@@ -129,6 +132,9 @@ class DecoderErrorBound:
         ``smallest_sigma``).
     hardened : float
         The bound with the noise of ``worst_kept``'s sensors halved.
+    curve : tuple of (float, float)
+        (f, the bound with the noise of ``worst_kept``'s sensors times f) for f in
+        ``HARDENING``: what hardening that set gives.
     noise : MeasurementNoise
     horizon, max_attacked : int
     sets : int
@@ -153,6 +159,7 @@ class DecoderErrorBound:
     smallest_sigma: float = 0.0
     smallest_kept: tuple[int, ...] = ()
     hardened: float = math.inf
+    curve: tuple[tuple[float, float], ...] = ()
     sets: int = 0
     evaluated: int = 0
     refined: int = 0
@@ -457,17 +464,12 @@ def decoder_error_bound(
             **base,
         )
     bound = max(_rounded_up(float(bounds[worst])), guard)
-    softer = block.copy()
-    softer[list(kept_of(worst))] *= 0.5
-    n_h, m_h = _noise_terms(softer, removed, s)
-    hardened = _rounded_up(float(np.max(_bound_of(n_h, m_h, sigma))))
-    if guard > 0:  # the sets not evaluated, with the softer noise
-        sq_h = np.sort(softer**2)[::-1]
-        soft_hi = (
-            math.sqrt(sq_h[: p - s].sum() * up) + math.sqrt(sq_h[: p - removed_size].sum() * up)
-        ) * up
-        hardened = max(hardened, _rounded_up(soft_hi / floor))
+    hardened = _bound_with(block, list(kept_of(worst)), 0.5, removed, s, sigma, floor, up)
     smallest = float(sigma[weakest]) if not screened else min(float(sigma[weakest]), floor)
+    curve = tuple(
+        (scale, _bound_with(block, list(kept_of(worst)), scale, removed, s, sigma, floor, up))
+        for scale in HARDENING
+    )
     found = DecoderErrorBound(
         BoundCode.CERTIFIED,
         bound,
@@ -477,6 +479,7 @@ def decoder_error_bound(
         smallest_sigma=smallest,
         smallest_kept=kept_of(weakest),
         hardened=hardened,
+        curve=curve,
         sets=sets,
         evaluated=int(removed.shape[0]),
         refined=refined,
@@ -497,6 +500,31 @@ def decoder_error_bound(
         if pair is not None and pair["lower"] > best:
             best, best_kept = float(pair["lower"]), kept_of(j)
     return replace(found, lower=best, lower_kept=best_kept)
+
+
+def _bound_with(
+    block: np.ndarray,
+    sensors: list[int],
+    scale: float,
+    removed: np.ndarray,
+    s: int,
+    sigma: np.ndarray,
+    floor: float,
+    up: float,
+) -> float:
+    """The certified bound with the noise of ``sensors`` times ``scale``: the largest over the
+    evaluated sets, and over the others (sigma_min >= ``floor``, 0 when there are none) the
+    largest noise term over ``floor``."""
+    softer = block.copy()
+    softer[sensors] *= scale
+    n_h, m_h = _noise_terms(softer, removed, s)
+    value = _rounded_up(float(np.max(_bound_of(n_h, m_h, sigma))))
+    if floor > 0:
+        p = block.size
+        sq = np.sort(softer**2)[::-1]
+        num = (math.sqrt(sq[: p - s].sum() * up) + math.sqrt(sq[: p - 2 * s].sum() * up)) * up
+        value = max(value, _rounded_up(num / floor))
+    return value
 
 
 def _rounded_up(x: float) -> float:

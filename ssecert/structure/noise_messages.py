@@ -92,6 +92,11 @@ def decoder_bound_check(system: System, found: DecoderErrorBound) -> Check:
         "noise_block_bounds": found.noise.block_bounds(tau),
         "code": found.code.value,
     }
+    if found.curve:
+        evidence["hardening_curve"] = {
+            "scale": [f for f, _ in found.curve],
+            "bound": [b for _, b in found.curve],
+        }
     common: dict[str, Any] = {
         "id": "decoder_error_bound",
         "title": TITLE,
