@@ -67,30 +67,29 @@ def _local_workers(text: str) -> int:
     return value
 
 
-def _seconds(text: str) -> float:
-    """A finite, non-negative number of seconds."""
+def _nonnegative(text: str, what: str, finite: str) -> float:
+    """A finite, non-negative number (``what`` and ``finite`` name it in the messages)."""
     try:
         if len(text) > 40:
             raise ValueError(text)
         value = float(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected seconds, got {_shown(text)}") from None
+        raise argparse.ArgumentTypeError(f"expected {what}, got {_shown(text)}") from None
     if not math.isfinite(value) or value < 0:
-        raise argparse.ArgumentTypeError(f"expected a finite number of seconds >= 0, got {text}")
+        raise argparse.ArgumentTypeError(
+            f"expected a finite {what.removeprefix('a ')} >= 0, got {text}"
+        )
     return value
+
+
+def _seconds(text: str) -> float:
+    """A finite, non-negative number of seconds."""
+    return _nonnegative(text, "seconds", "number of seconds")
 
 
 def _noise_bound(text: str) -> float:
     """A finite, non-negative noise bound."""
-    try:
-        if len(text) > 40:
-            raise ValueError(text)
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a noise bound, got {_shown(text)}") from None
-    if not math.isfinite(value) or value < 0:
-        raise argparse.ArgumentTypeError(f"expected a finite noise bound >= 0, got {text}")
-    return value
+    return _nonnegative(text, "a noise bound", "noise bound")
 
 
 def _with_noise(spec: Any, args: argparse.Namespace) -> Any:
