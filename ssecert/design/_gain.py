@@ -23,7 +23,6 @@ class GainMethod(enum.StrEnum):
     OGD = "ogd"
     PINV = "pinv"
     MATRIX = "matrix"  # given as a matrix
-    SSO = "sso"  # the SSO's L = step A O_tau^T (or the online-gradient gain)
 
 
 @dataclass(frozen=True)

@@ -57,7 +57,9 @@ LINEAR_GAINS = ("deadbeat", "place", "pinv")
 # gains the spec defines by a step (L = step A S^T): exact from the step, not from the floats;
 # gain methods (``Gain.method``), whatever kind's design holds them (an SSO's region family is
 # an elastic-net design with the SSO's gain)
-DERIVED_GAINS = (GainMethod.OGD, GainMethod.SSO)
+#: the method of the SSO's gain L = step A O_tau^T (its kind names it; not a GainMethod)
+SSO_GAIN = "sso"
+DERIVED_GAINS = (GainMethod.OGD, SSO_GAIN)
 GAIN_CHOICES = ("deadbeat", "place", "ogd", "pinv")
 # the grids ``ssecert design`` searches for the kinds with a step, and a shrink
 # (``ssecert.synthesize.STEPS`` and ``SHRINKS``)

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from ..budget import Budget, ResourceLimitError
-from ..design.gains import Gain, GainError, GainMethod, ogd_gain
+from ..design.gains import Gain, GainError, ogd_gain
 from ..numerics.exact_powers import (
     Dyadic,
     ExactMatrix,
@@ -27,6 +27,7 @@ from ..system import System
 from ..tolerances import Tolerances, product_rounding
 from .base import (
     POSITIVE_SCHEMA,
+    SSO_GAIN,
     UNIT_SHRINK_SCHEMA,
     ObserverDesign,
     check_finite,
@@ -95,7 +96,7 @@ class SparseSoftObserverKind(SoftThresholdObserverKind):
             L = step * system.A @ sensing.T
             gain = Gain(
                 L=L,
-                method=GainMethod.SSO,
+                method=SSO_GAIN,
                 error_matrix=system.A - L @ sensing,
                 verified=True,
                 details={"step": step, "window": window},
@@ -105,7 +106,7 @@ class SparseSoftObserverKind(SoftThresholdObserverKind):
             ogd = ogd_gain(system, step)
             gain = Gain(
                 L=ogd.L,
-                method=GainMethod.SSO,
+                method=SSO_GAIN,
                 error_matrix=ogd.error_matrix,
                 verified=True,
                 details=ogd.details,
