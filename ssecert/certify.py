@@ -257,18 +257,7 @@ def certify(
         )
         noise_check = cert.get("observer_noise_bound")
         if noise_check is not None and noise_check.verdict is Verdict.HOLDS and design is not None:
-            simulations = {
-                name: (
-                    res.with_certified_bound(
-                        float(noise_check.value),
-                        initial_error_fading(design, noise_check),
-                        "observer_noise_bound",
-                    )
-                    if isinstance(res, ScenarioResult) and res.attack == "none"
-                    else res
-                )
-                for name, res in simulations.items()
-            }
+            simulations = _beside_noise_bound(spec, design, noise_check, simulations)
     elif simulate and spec.observer is None:
         notes.append("no simulations: the spec has no [observer] section")
     elif not simulate:
@@ -334,6 +323,28 @@ def _scenarios(
             {**SCENARIO_DEFAULTS, "name": "stealthy (automatic)", "attack": "stealthy"}
         )
     return scenarios
+
+
+def _beside_noise_bound(
+    spec: Spec, design: Any, check: Any, simulations: dict[str, Any]
+) -> dict[str, Any]:
+    """Each attack-free simulation whose noise is within the spec's bounds, beside the
+    certified ultimate bound (``ScenarioResult.with_certified_bound``)."""
+    bounds = spec.noise.eta if spec.noise is not None else None
+    by_name = {sc["name"]: sc for sc in spec.scenarios}
+    fading = initial_error_fading(design, check)
+    out = dict(simulations)
+    for name, res in simulations.items():
+        scenario = by_name.get(name)
+        if not isinstance(res, ScenarioResult) or res.attack != "none" or scenario is None:
+            continue
+        noise = np.broadcast_to(
+            np.asarray(scenario.get("noise", 0.0), dtype=float), (spec.system.p,)
+        )
+        if bounds is None or np.any(noise > bounds):  # not the noise the bound is for
+            continue
+        out[name] = res.with_certified_bound(float(check.value), fading, "observer_noise_bound")
+    return out
 
 
 def _simulations(

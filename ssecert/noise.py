@@ -78,9 +78,15 @@ class MeasurementNoise:
             return cls(eta, norm)
         return cls.uniform(as_float_option(measurement, "measurement", min_value=0.0), p, norm)
 
+    @property
+    def per_sample(self) -> bool:
+        """Whether each sample is bounded (``norm = "inf"``), rather than a window's samples of
+        a sensor together (``"2"``, which bounds each sample by the same number too)."""
+        return self.norm == "inf"
+
     def block_bounds(self, horizon: int) -> np.ndarray:
         """Each sensor's bound on ||N_i||_2 over a window of ``horizon`` steps."""
-        return self.eta * math.sqrt(horizon) if self.norm == "inf" else self.eta.copy()
+        return self.eta * math.sqrt(horizon) if self.per_sample else self.eta.copy()
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, MeasurementNoise):

@@ -25,11 +25,13 @@ from ssecert.structure.noise import (
 
 
 def _decode(system: System, Y: np.ndarray, s: int) -> np.ndarray:
-    """The l0 decoder's state from a window's data Y (p, tau)."""
+    """The l0 decoder's state from a window's data Y (p, tau): the support of s sensors with
+    the least residual (rtol 0: the bound is that decoder's; a tolerance adds rtol ||y|| /
+    sigma, stated beside it)."""
     tau = Y.shape[1]
     O = system.observability_matrix(tau)
     rows = np.tile(np.arange(system.p), tau)
-    return l0_decoder(O, Y.T.reshape(-1), s, sensors_of_row=rows).x
+    return l0_decoder(O, Y.T.reshape(-1), s, sensors_of_row=rows, rtol=0.0).x
 
 
 def _noise(rng, eta, tau, norm):
@@ -143,8 +145,11 @@ def test_codes_of_the_bounds_that_are_not_certified():
     noise = MeasurementNoise.uniform(0.1, 3)
     plant = System(np.eye(2), np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]))
     assert decoder_error_bound(plant, 2, noise).code is BoundCode.TOO_FEW_SENSORS
-    # one step of one sensor cannot determine two states
-    assert decoder_error_bound(plant, 1, noise, horizon=1).code is BoundCode.NO_MARGIN
+    # one step of one sensor cannot determine two states, exactly
+    assert decoder_error_bound(plant, 1, noise, horizon=1).code is BoundCode.WINDOW_TOO_SHORT
+    # sensors 2^-60 apart in direction: full rank exactly, not above rounding
+    close = System(np.eye(2), np.array([[1.0, 0.0], [1.0, 2.0**-60], [1.0, 0.0]]))
+    assert decoder_error_bound(close, 0, noise, horizon=1).code is BoundCode.NO_MARGIN
     many = decoder_error_bound(plant, 1, noise, horizon=1, max_sets=2)
     assert many.code is BoundCode.TOO_MANY_SETS and many.facts["limit"] == 2
     huge = System(np.eye(1), np.full((3, 1), 1e200))
@@ -158,7 +163,8 @@ def test_every_code_has_words_and_a_verdict(code):
     found = DecoderErrorBound(code, math.inf, 0.0, MeasurementNoise.uniform(0.1, 3), 1, 1,
                               sets=3, facts=facts)  # fmt: skip
     check = noise_messages.decoder_bound_check(plant, found)
-    expected = Verdict.FAILS if code is BoundCode.NOT_SPARSE_OBSERVABLE else Verdict.INCONCLUSIVE
+    proved = (BoundCode.NOT_SPARSE_OBSERVABLE, BoundCode.WINDOW_TOO_SHORT)
+    expected = Verdict.FAILS if code in proved else Verdict.INCONCLUSIVE
     assert check.verdict is expected and check.required is False
     assert check.value == math.inf and check.fields["bound"] == math.inf
     if code is not BoundCode.NOT_SPARSE_OBSERVABLE:
@@ -404,6 +410,7 @@ def test_certify_puts_the_noise_bound_beside_the_simulations(tmp_path):
         "scenario": [
             {"name": "none", "attack": "none", "runs": 20, "steps": 200},
             {"name": "constant", "attack": "constant", "sensors": [1], "runs": 5},
+            {"name": "loud", "attack": "none", "noise": 1.0, "runs": 5},
         ],
     }
     result = certify(spec_from_dict(data), seed=0)
@@ -413,6 +420,7 @@ def test_certify_puts_the_noise_bound_beside_the_simulations(tmp_path):
     assert 0 < beside["observed_max"] <= beside["bound"]
     assert beside["bound"] == doc["checks"]["observer_noise_bound"]["value"]
     assert "certified_bound" not in doc["simulations"]["constant"]
+    assert "certified_bound" not in doc["simulations"]["loud"]  # noise beyond the bound's
     # an elastic net, its bound from iss_gain: larger noise, 200 runs, still within
     data["observer"] = {**data["observer"], "kind": "elastic_net", "step": 0.3,
                         "threshold": 0.05, "shrink": 0.5}  # fmt: skip
@@ -470,7 +478,7 @@ def test_the_lasso_papers_noisy_setting_is_certified():
         assert np.array_equal(plant.observability_matrix(n), O)
         found = decoder_error_bound(plant, s, MeasurementNoise.uniform(NOISE_BOUND, p), horizon=n)
         assert found.code is BoundCode.CERTIFIED and found.bound < 0.1
-        estimate = l0_decoder(O, y, s, sensors_of_row=sensors).x
+        estimate = l0_decoder(O, y, s, sensors_of_row=sensors, rtol=0.0).x
         assert np.linalg.norm(estimate - x0) <= found.bound
 
 
@@ -485,3 +493,43 @@ def test_the_report_shows_the_bounds_and_the_hardening_curve(tmp_path):
     assert curve["scale"][-1] == 1.0
     assert curve["bound"][-1] == result.certificate["decoder_error_bound"].fields["bound"]
     assert curve["bound"] == sorted(curve["bound"])
+
+
+def test_tiny_huge_and_no_noise_and_no_attack():
+    plant = System(np.eye(1), np.ones((3, 1)))
+    expected = math.sqrt(2) + 1
+    for eta in (1e-320, 1e-200, 1e-155, 1e200):
+        found = decoder_error_bound(plant, 1, MeasurementNoise.uniform(eta, 3), horizon=1)
+        assert found.code is BoundCode.CERTIFIED and bound_rechecks(found)
+        assert found.bound >= expected * eta and found.bound == pytest.approx(
+            expected * eta, rel=1e-3
+        )
+    none = decoder_error_bound(plant, 1, MeasurementNoise.uniform(0.0, 3), horizon=1)
+    assert none.code is BoundCode.CERTIFIED and none.bound == 0.0 and none.sigma > 0
+    calm = decoder_error_bound(plant, 0, MeasurementNoise.uniform(0.1, 3), horizon=1)
+    assert calm.code is BoundCode.CERTIFIED  # s = 0: the three sensors, none removed
+    assert calm.bound == pytest.approx(2 * 0.1 * math.sqrt(3) / math.sqrt(3), rel=1e-9)
+
+
+def test_a_window_too_short_fails_with_the_sensors():
+    # two states, every sensor sees the first only at one step: no window of 1 step decides
+    C = np.array([[1.0, 0.0], [2.0, 0.0], [3.0, 0.0], [1.0, 0.0], [4.0, 0.0]])
+    plant = System(np.array([[1.0, 1.0], [0.0, 1.0]]), C)
+    found = decoder_error_bound(plant, 1, MeasurementNoise.uniform(1e-3, 5), horizon=1)
+    assert found.code is BoundCode.WINDOW_TOO_SHORT and len(found.worst_kept) == 3
+    check = noise_messages.decoder_bound_check(plant, found)
+    assert check.verdict is Verdict.FAILS and check.witness["horizon"] == 1
+    assert decoder_error_bound(plant, 1, MeasurementNoise.uniform(1e-3, 5), horizon=2).code is (
+        BoundCode.CERTIFIED
+    )
+
+
+def test_nilpotent_and_underflowing_observers_are_bounded():
+    from ssecert.stability.noise_gain import NoiseGainCode, linear_noise_bound
+
+    zero = linear_noise_bound(np.zeros((2, 2)), np.eye(2), np.ones(2), rounding_F=1e-15)
+    assert zero.code is NoiseGainCode.CERTIFIED and zero.bound_inf == pytest.approx(1.0)
+    for eta in (1e-320, 1e-200, 1e200):
+        tiny = linear_noise_bound(np.array([[0.5]]), np.array([[1.0]]), np.array([eta]))
+        assert tiny.code is NoiseGainCode.CERTIFIED
+        assert tiny.lower <= tiny.bound_inf and tiny.bound_inf >= 2 * eta * (1 - 1e-6)

@@ -9,6 +9,7 @@ the format and re-exports the public names.
 from __future__ import annotations
 
 import hashlib
+import math
 import os
 import re
 import stat
@@ -162,7 +163,7 @@ def spec_from_dict(
             data.get("scenario", []),
             system.p,
             system.sensors,
-            None if noise is None else noise.eta.tolist(),
+            None if noise is None else _per_sample(noise, tau),
         ),
         noise=noise,
         source=source,
@@ -276,6 +277,13 @@ def _horizon(source: str, attack_table: Any, horizon: int | None, n: int) -> int
             max_value=MAX_HORIZON,
         )
     return n
+
+
+def _per_sample(noise: MeasurementNoise, horizon: int) -> list[float]:
+    """The bound on each sample that keeps within ``noise``: its own for a per-sample bound, a
+    window's 2-norm bound over the square root of the horizon's samples."""
+    eta = noise.eta if noise.per_sample else noise.eta / math.sqrt(horizon)
+    return [float(v) for v in eta]
 
 
 def _noise(source: str, table: Any, p: int) -> MeasurementNoise:

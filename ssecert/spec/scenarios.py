@@ -62,8 +62,9 @@ def read_scenarios(
     """The ``[[scenario]]`` tables (one table is taken as a list of one), names unique.
 
     A scenario's ``sensors`` are 0-based indices or the sensors' ``names`` (the system's),
-    kept as indices.  Its ``noise`` is one bound or one per sensor; without one, the spec's
-    ``[noise]`` bounds (``noise``, one per sensor) when it has them, else 0."""
+    kept as indices.  Its ``noise`` is one bound or one per sensor on every sample; without
+    one, ``noise`` (the spec's ``[noise]`` as a bound on each sample, one per sensor) when given,
+    else 0."""
     if isinstance(raw, Mapping):
         raw = [raw]
     if not isinstance(raw, list):

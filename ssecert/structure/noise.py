@@ -102,6 +102,9 @@ class BoundCode(enum.Enum):
     #: a set of at most 2s sensors breaks observability (sparse_observability's breaking set,
     #: in ``facts``): two states explain the same data even without noise, no bound exists
     NOT_SPARSE_OBSERVABLE = "not 2s-sparse observable"
+    #: the kept sensors ``worst_kept`` over the window do not determine the state, exactly
+    #: (``facts["rank"]`` < n): the window is too short or the sensors too few, no bound exists
+    WINDOW_TOO_SHORT = "window too short"
 
 
 @dataclass(frozen=True)
@@ -187,9 +190,8 @@ def _kept_sets(p: int, removed: int) -> np.ndarray:
     """Every set of ``removed`` sensors, in lexicographic order, shape (C(p, removed), removed)."""
     import itertools
 
-    return np.array(list(itertools.combinations(range(p), removed)), dtype=np.int64).reshape(
-        -1, removed
-    )
+    sets = list(itertools.combinations(range(p), removed))
+    return np.array(sets, dtype=np.int64).reshape(len(sets), removed)
 
 
 def _sigma_lower_from_gramians(
@@ -418,6 +420,46 @@ def decoder_error_bound(
     p = system.p
     if noise.eta.shape != (p,):
         raise ValueError(f"noise: {noise.eta.size} bounds for {p} sensors")
+    # the bound is linear in the noise: computed for the bounds over a power of two c >= the
+    # largest (exactly), so that no square under- or overflows, and scaled back by c
+    top = float(np.max(noise.eta)) if p else 0.0
+    c = 2.0 ** math.frexp(top)[1] if top > 0 else 1.0
+    unit = MeasurementNoise(noise.eta / c if top > 0 else np.ones(p), noise.norm)
+    found = _bound_of_unit_noise(system, s, unit, tau, max_sets)
+    found = replace(found, noise=noise, facts={**found.facts, "noise_scale": c})
+    if found.code is not BoundCode.CERTIFIED:
+        return found
+    if top == 0:  # no noise: the margins were checked with unit bounds, the error is 0
+        return replace(
+            found, bound=0.0, lower=0.0, hardened=0.0, curve=tuple((f, 0.0) for f, _ in found.curve)
+        )
+    with np.errstate(over="ignore"):
+        scaled = replace(
+            found,
+            bound=_times(found.bound, c),
+            lower=found.lower * c,
+            hardened=_times(found.hardened, c),
+            curve=tuple((f, _times(b, c)) for f, b in found.curve),
+        )
+    if not math.isfinite(scaled.bound):
+        return replace(scaled, code=BoundCode.OUT_OF_RANGE, bound=math.inf)
+    if not bound_rechecks(scaled):
+        return replace(scaled, code=BoundCode.RECHECK_FAILED)
+    return scaled
+
+
+def _times(x: float, c: float) -> float:
+    """x times the power of two c, taken up a unit in the last place where the product is
+    subnormal (and so rounded)."""
+    y = x * c
+    return float(np.nextafter(y, np.inf)) if 0 < abs(y) < 2.0**-1022 else y
+
+
+def _bound_of_unit_noise(
+    system: System, s: int, noise: MeasurementNoise, tau: int, max_sets: int
+) -> DecoderErrorBound:
+    """``decoder_error_bound`` for bounds of at most 1."""
+    p = system.p
     base: dict[str, Any] = {"noise": noise, "horizon": tau, "max_attacked": s}
     removed_size = 2 * s
     if removed_size >= p:
@@ -453,14 +495,21 @@ def decoder_error_bound(
     weakest = last - int(np.argmin(sigma[::-1]))
     kept_of = lambda j: tuple(int(i) for i in np.setdiff1d(np.arange(p), removed[j]))  # noqa: E731
     if not np.isfinite(bounds[worst]):
+        from ..numerics.exact import Observability, exact_stacked_rank
+
+        kept = kept_of(worst)
+        rows = [t * p + i for t in range(tau) for i in kept]
+        decision = exact_stacked_rank(system.A, system.C, rows, tau)
+        deficient = decision.state is Observability.UNOBSERVABLE
         return DecoderErrorBound(
-            BoundCode.NO_MARGIN,
+            BoundCode.WINDOW_TOO_SHORT if deficient else BoundCode.NO_MARGIN,
             math.inf,
             0.0,
-            worst_kept=kept_of(worst),
+            worst_kept=kept,
             smallest_kept=kept_of(weakest),
             sets=sets,
             refined=refined,
+            facts={"rank": decision.rank_mod_p} if deficient else {},
             **base,
         )
     bound = max(_rounded_up(float(bounds[worst])), guard)
@@ -533,11 +582,13 @@ def _rounded_up(x: float) -> float:
 
 
 def _sqrt_upper(q: Fraction) -> Fraction:
-    """A rational r >= sqrt(q)."""
-    r = Fraction(math.sqrt(float(q))) if q > 0 else Fraction(0)
-    while r * r < q:
-        r = Fraction(float(np.nextafter(float(r) * (1 + 1e-15), np.inf)))
-    return r
+    """A rational r >= sqrt(q): sqrt(a / b) = sqrt(a b) / b <= (isqrt(a b) + 1) / b, with
+    the numerator and denominator shifted by an even power of two for 60 digits to spare."""
+    if q <= 0:
+        return Fraction(0)
+    a, b = q.numerator, q.denominator
+    shift = max(0, 200 - (a * b).bit_length() // 2)  # digits to spare, whatever q's size
+    return Fraction(math.isqrt(a * b * 4**shift) + 1, b * 2**shift)
 
 
 def bound_rechecks(found: DecoderErrorBound) -> bool:
@@ -568,9 +619,9 @@ def worst_case_pair(system: System, found: DecoderErrorBound) -> dict[str, Any] 
     _, _, vh = np.linalg.svd(O_K.reshape(-1, system.n))
     v = vh[-1]
     Ov = O_K @ v  # (|K|, tau)
-    size = np.max(np.abs(Ov), axis=1) if found.noise.norm == "inf" else np.linalg.norm(Ov, axis=1)
+    size = np.max(np.abs(Ov), axis=1) if found.noise.per_sample else np.linalg.norm(Ov, axis=1)
     eta = found.noise.eta[kept]
-    with np.errstate(divide="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore"):
         scales = np.where(size > 0, 2.0 * eta / size, np.inf)
     c = float(np.min(scales)) * (1 - 1e-12)
     if not np.isfinite(c) or c <= 0:

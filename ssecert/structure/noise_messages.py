@@ -41,6 +41,13 @@ def reason(found: DecoderErrorBound) -> str:
         )
     if code is BoundCode.OUT_OF_RANGE:
         return "the observability matrix or the noise bounds leave the floating-point range"
+    if code is BoundCode.WINDOW_TOO_SHORT:
+        return (
+            f"sensors {list(found.worst_kept)} over the window of {found.horizon} step"
+            f"{'' if found.horizon == 1 else 's'} do not determine the state (an exact kernel "
+            "vector of their observability matrix), so no decoder over this window has a finite "
+            "worst-case error; a longer horizon may"
+        )
     if code is BoundCode.RECHECK_FAILED:
         return "the bound did not survive its re-check in rational arithmetic (please report it)"
     return ""
@@ -63,7 +70,7 @@ def _noise_words(found: DecoderErrorBound) -> str:
     )
     how = (
         "on every sample"
-        if found.noise.norm == "inf"
+        if found.noise.per_sample
         else f"in 2-norm over the window of {found.horizon} steps"
     )
     return f"noise within {each} ({how})"
@@ -80,6 +87,7 @@ def decoder_bound_check(system: System, found: DecoderErrorBound) -> Check:
         "worst_kept_sensors": list(found.worst_kept),
         "hardened_bound": found.hardened,
         "sigma_min": found.sigma,
+        "smallest_sigma_min": found.smallest_sigma,
         "noise": found.noise.to_dict(),
         "horizon": tau,
         "decoder": "l0",
@@ -118,6 +126,15 @@ def decoder_bound_check(system: System, found: DecoderErrorBound) -> Check:
             witness={"breaking_set": list(breaking_set)},
             **common,
         )
+    if found.code is BoundCode.WINDOW_TOO_SHORT:
+        return Check(
+            verdict=Verdict.FAILS,
+            summary=f"No worst-case error bound exists: {reason(found)}.",
+            value=float("inf"),
+            evidence=evidence,
+            witness={"kept_sensors": list(found.worst_kept), "horizon": tau},
+            **common,
+        )
     if found.code is not BoundCode.CERTIFIED:
         return Check(
             verdict=Verdict.INCONCLUSIVE,
@@ -137,6 +154,13 @@ def decoder_bound_check(system: System, found: DecoderErrorBound) -> Check:
             "measurements": pair["measurements"],
         }
     kept = _names(system, found.worst_kept)
+    tolerance = (
+        f" A decoder that accepts residuals within rtol ||y|| of the least (ssecert's "
+        f"l0_decoder: rtol = 1e-9) may be off by up to rtol ||y|| / "
+        f"{readable(found.smallest_sigma)} more."
+        if found.smallest_sigma > 0
+        else ""
+    )
     lower = (
         f"; no decoder can guarantee less than {readable(found.lower)} (two states explain the "
         f"same data with the noise and attacks allowed)"
@@ -146,10 +170,11 @@ def decoder_bound_check(system: System, found: DecoderErrorBound) -> Check:
     return Check(
         verdict=Verdict.HOLDS,
         summary=f"With {_noise_words(found)} and any attack on at most {_sensors(s)}, the l0 "
-        f"decoder's estimate of the window's first state is within {readable(found.bound)} of "
-        f"the truth (2-norm){lower}. The bound is largest with sensors {kept} kept (smallest "
-        f"singular value of their observability matrix at least {readable(found.sigma)}); "
-        f"halving their noise gives {readable(found.hardened)}.",
+        f"decoder's estimate of the window's first state (the support of {_sensors(s)} whose "
+        f"removal leaves the least residual) is within {readable(found.bound)} of the truth "
+        f"(2-norm){lower}. The bound is largest with sensors {kept} kept (smallest singular "
+        f"value of their observability matrix at least {readable(found.sigma)}); halving their "
+        f"noise gives {readable(found.hardened)}.{tolerance}",
         value=found.bound,
         evidence=evidence,
         **common,
