@@ -995,7 +995,10 @@ def _design_row(label: str, result: Any) -> dict[str, Any]:
         **{k: observer.get(k) for k in ("step", "threshold", "shrink") if k in observer},
         "linear_radius": _linear_radius(result),
     }
-    for check_id in ("observer_gain", "observer_stability", "iss_gain", "region_of_attraction"):
+    for check_id in (
+        "observer_gain", "observer_stability", "iss_gain", "region_of_attraction",
+        "observer_noise_bound",
+    ):  # fmt: skip
         check = cert.get(check_id)
         if check is not None:
             row[check_id] = check.verdict.value

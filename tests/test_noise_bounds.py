@@ -533,3 +533,35 @@ def test_nilpotent_and_underflowing_observers_are_bounded():
         tiny = linear_noise_bound(np.array([[0.5]]), np.array([[1.0]]), np.array([eta]))
         assert tiny.code is NoiseGainCode.CERTIFIED
         assert tiny.lower <= tiny.bound_inf and tiny.bound_inf >= 2 * eta * (1 - 1e-6)
+
+
+@pytest.mark.slow
+def test_design_shows_each_designs_noise_bound(tmp_path, capsys):
+    from ssecert.cli import main
+
+    data = {
+        **_spec({"measurement": 1e-3}),
+        "observer": {
+            "kind": "elastic_net",
+            "gain": "place",
+            "poles": [0.5, 0.6],
+            "step": 0.3,
+            "threshold": 0.05,
+            "shrink": 0.5,
+        },
+    }
+    path = tmp_path / "noisy.json"
+    path.write_text(json.dumps(data))
+    code = main(["design", str(path), "--out", str(tmp_path), "--time-budget", "10"])
+    out = capsys.readouterr().out
+    assert code in (0, 3) and out.count("certified ultimate error under the spec's noise") == 2
+    doc = json.loads((tmp_path / "noisy-design.json").read_text())
+    rows = {d["design"]: d for d in doc["design_comparison"]["designs"]}
+    assert (
+        rows["synthesised"]["observer_noise_bound_value"]
+        == doc["checks"]["observer_noise_bound"]["value"]
+    )
+    assert (
+        "certified ultimate error under the spec's noise"
+        in (tmp_path / "noisy-design.html").read_text()
+    )

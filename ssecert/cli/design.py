@@ -292,6 +292,11 @@ def _print_design(
         words.append(f"certified l2 gain {_num(d.get('iss_gain_value'))}")
         if "region_of_attraction_value" in d:
             words.append(f"region of attraction {_num(d['region_of_attraction_value'])}")
+        if "observer_noise_bound_value" in d:
+            words.append(
+                f"certified ultimate error under the spec's noise "
+                f"{_num(d['observer_noise_bound_value'])}"
+            )
         out.write(f"  {label} ({d['kind']}, {params or 'gain only'}): {', '.join(words)}\n")
     if result.decay is not None and args.objective in ("gain", "rate"):
         out.write(f"  synthesised: certified decay {result.decay:.3g} per step (V(k+1) <= "

@@ -368,6 +368,9 @@ def _comparison_context(comparison: Mapping[str, Any]) -> dict[str, Any]:
                 "radius": _fmt(d.get("region_of_attraction_value"))
                 if "region_of_attraction_value" in d
                 else "-",
+                "noise": _fmt(d.get("observer_noise_bound_value"))
+                if "observer_noise_bound_value" in d
+                else "-",
             }
         )
     rows = []
@@ -387,6 +390,7 @@ def _comparison_context(comparison: Mapping[str, Any]) -> dict[str, Any]:
         rows.append({"name": r["scenario"], "cells": cells, "verdict": r.get("comparison", "-")})
     out: dict[str, Any] = {
         "designs": designs,
+        "noise_column": any("observer_noise_bound" in d for d in comparison["designs"]),
         "labels": ["the spec's design" if x == "spec" else "synthesised" for x in labels],
         "rows": rows,
         "summary": comparison["summary"],
