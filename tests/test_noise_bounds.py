@@ -373,6 +373,7 @@ def test_analyze_bounds_linear_and_sparse_observers():
         * check.evidence["lambda_max_P_inverse_ee"]
     )  # fmt: skip
     assert check.value == pytest.approx(expected, rel=1e-9) and check.value >= expected
+    assert check.fields["energy_gain"] == iss.fields["gamma"]
     search = check.evidence["noise_search"]
     assert 0 < search["largest_error"] <= check.value and search["sequences"] >= 2
     # a D-SSO with shrink 1 has no decay to build on: undecided, with the reason

@@ -862,7 +862,11 @@ def observer_checks(
         )
     if noise is not None and noise_messages.applies_to(design):
         steps.append(
-            Step("observer_noise_bound", lambda: noise_messages.observer_noise_check(design, noise))
+            Step(
+                "observer_noise_bound",
+                lambda iss: noise_messages.observer_noise_check(design, noise, iss),
+                needs=("iss_gain",),
+            )
         )
     elif noise is not None:
         steps.append(

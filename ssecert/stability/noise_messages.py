@@ -156,9 +156,14 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
         f"certificate: limsup V <= gamma^2 N^2 / alpha with gamma = {readable(float(gamma))}, "
         f"alpha = {readable(float(alpha))} and N = {readable(math.sqrt(N2) * c)}. A search "
         f"over {search['sequences']} noise sequences within the bounds (from zero error, "
-        f"{search['steps']} steps) reached {readable(search['largest_error'])}.",
+        f"{search['steps']} steps) reached {readable(search['largest_error'])}."
+        + _energy(iss, design)[1],
         value=bound,
-        fields={"ultimate_bound": bound, "noise": noise.to_dict()},
+        fields={
+            "ultimate_bound": bound,
+            "energy_gain": _energy(iss, design)[0],
+            "noise": noise.to_dict(),
+        },
         evidence={
             "from": "iss_gain",
             "gamma": gamma,
@@ -235,9 +240,25 @@ def _tightness(found: NoiseGain) -> str:
     return f" (the worst case lies between, within {readable(found.bound_inf / found.lower)}x)"
 
 
-def observer_noise_check(design: ObserverDesign, noise: MeasurementNoise) -> Check:
+def _energy(iss: Check | None, design: ObserverDesign) -> tuple[float | None, str]:
+    """The energy gain from noise to error, iss_gain's l2 gain (the noise enters as an attack on
+    every sensor does), and its sentence ('' without one)."""
+    if iss is None or iss.verdict is not Verdict.HOLDS or iss.fields.get("gamma") is None:
+        return None, ""
+    gamma = float(iss.fields["gamma"])
+    stacked = "" if design.window == 1 else " (n the stacked noise of each window)"
+    return gamma, (
+        f" Its energy: sum_k |e(k)|^2 <= gamma^2 sum_k |n(k)|^2 + V(xi(0)) with gamma = "
+        f"{readable(gamma)}{stacked} (iss_gain)."
+    )
+
+
+def observer_noise_check(
+    design: ObserverDesign, noise: MeasurementNoise, iss: Check | None = None
+) -> Check:
     """The ``observer_noise_bound`` check (advisory) of a linear observer: without attack, the
-    error e+ = F e + L n eventually stays within the certified bound."""
+    error e+ = F e + L n eventually stays within the certified bound; with the iss_gain check
+    ``iss``, also the energy gain from noise to error."""
     F = design.error_matrix
     kind = design.observer_kind
     rounding_F = kind.exact_error(design).rounding(F)
@@ -246,11 +267,13 @@ def observer_noise_check(design: ObserverDesign, noise: MeasurementNoise) -> Che
     # a sign pattern of +-eta on every sample reaches the series: within a per-sample bound,
     # not within a window's 2-norm bound (which bounds each sample, so the upper bound holds)
     lower = found.lower if noise.per_sample else 0.0
+    energy, energy_words = _energy(iss, design)
     fields: dict[str, Any] = {
         "ultimate_bound": found.bound_2,
         "ultimate_bound_inf": found.bound_inf,
         "componentwise": found.componentwise,
         "lower_bound": lower,
+        "energy_gain": energy,
         "noise": noise.to_dict(),
     }
     evidence: dict[str, Any] = {
@@ -296,7 +319,8 @@ def observer_noise_check(design: ObserverDesign, noise: MeasurementNoise) -> Che
             f"{_tightness(found)}."
             if lower > 0
             else ""
-        ),
+        )
+        + energy_words,
         value=found.bound_2,
         **common,
     )
