@@ -28,6 +28,8 @@ __all__ = [
     "BORDERLINE",
     "NONZERO",
     "product_rounding",
+    "gamma",
+    "times_up",
 ]
 
 EPS = float(np.finfo(np.float64).eps)
@@ -143,6 +145,20 @@ class Tolerances:
     def to_dict(self) -> dict[str, float | None]:
         """Plain dictionary, for evidence and JSON."""
         return asdict(self)
+
+
+def gamma(m: int) -> float:
+    """Higham's gamma_m = m u / (1 - m u), u = 2^-53: the relative error bound of m roundings
+    (Accuracy and Stability of Numerical Algorithms, Lemma 3.1)."""
+    u = 2.0**-53
+    return m * u / (1 - m * u)
+
+
+def times_up(x: float, c: float) -> float:
+    """``x`` times the power of two ``c``, exact unless the product is subnormal (then rounded):
+    there taken up a unit in the last place, so that it stays an upper bound."""
+    y = x * c
+    return float(np.nextafter(y, np.inf)) if 0 < abs(y) < 2.0**-1022 else y
 
 
 def product_rounding(

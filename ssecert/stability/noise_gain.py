@@ -31,16 +31,13 @@ from typing import Any
 
 import numpy as np
 
+from ..tolerances import gamma, times_up
+
 __all__ = ["NoiseGain", "NoiseGainCode", "linear_noise_bound"]
 
-_U = 2.0**-53
 MAX_TERMS = 20_000
 CONTRACTION_LIMIT = 4096  # powers of F tried for one proved below 1 in norm
 TAIL_SHARE = 1e-6  # the series stops once its tail bound is this part of the sum
-
-
-def _gamma(m: int) -> float:
-    return m * _U / (1 - m * _U)
 
 
 class NoiseGainCode(enum.Enum):
@@ -97,7 +94,7 @@ class NoiseGain:
 
 def _up(x: np.ndarray | float, ops: int) -> Any:
     """``x`` (nonnegative) taken up by the rounding of ``ops`` operations."""
-    return x * (1.0 + _gamma(ops + 2))
+    return x * (1.0 + gamma(ops + 2))
 
 
 def _product(
@@ -108,7 +105,7 @@ def _product(
     k = M1.shape[1]
     mid = M1 @ M2
     A1, A2 = np.abs(M1), np.abs(M2)
-    rad = A1 @ R2 + R1 @ (A2 + R2) + _gamma(k + 2) * (A1 @ A2)
+    rad = A1 @ R2 + R1 @ (A2 + R2) + gamma(k + 2) * (A1 @ A2)
     return mid, _up(rad, 3 * k + 4)
 
 
@@ -159,28 +156,21 @@ def linear_noise_bound(
     if c == 1.0 or found.code is not NoiseGainCode.CERTIFIED:
         return found
     with np.errstate(over="ignore"):
-        up = np.vectorize(lambda x: _times_up(float(x), c))
+        up = np.vectorize(lambda x: times_up(float(x), c))
         componentwise = up(found.componentwise) if found.componentwise.size else found.componentwise
         scaled = replace(
             found,
             componentwise=componentwise,
             reached=found.reached * c,
-            bound_2=_times_up(found.bound_2, c),
-            bound_inf=_times_up(found.bound_inf, c),
+            bound_2=times_up(found.bound_2, c),
+            bound_inf=times_up(found.bound_inf, c),
             lower=found.lower * c,
-            tail=_times_up(found.tail, c),
+            tail=times_up(found.tail, c),
         )
     if not math.isfinite(scaled.bound_2):
         n = found.componentwise.size
         return NoiseGain(NoiseGainCode.OUT_OF_RANGE, np.full(n, math.inf), np.zeros(n))
     return scaled
-
-
-def _times_up(x: float, c: float) -> float:
-    """x times the power of two c, taken up a unit in the last place where the product is
-    subnormal (and so rounded)."""
-    y = x * c
-    return float(np.nextafter(y, np.inf)) if 0 < abs(y) < 2.0**-1022 else y
 
 
 def _unit_noise_bound(
@@ -245,7 +235,7 @@ def _unit_noise_bound(
             facts={"max_terms": max_terms},
         )
     bound = _up(upper + tail, 2 * terms + 4)
-    reached = lower * (1 - _gamma(terms * (n + p + 2) + 4))
+    reached = lower * (1 - gamma(terms * (n + p + 2) + 4))
     return NoiseGain(
         NoiseGainCode.CERTIFIED,
         bound,

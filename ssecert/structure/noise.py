@@ -58,6 +58,7 @@ import numpy as np
 from ..base.validation import as_int_option
 from ..noise import MeasurementNoise
 from ..system import System
+from ..tolerances import gamma, times_up
 from ._combinatorics import count_subsets
 
 __all__ = [
@@ -78,10 +79,6 @@ _PAIRS = 8
 #: the scales of the worst set's noise in ``DecoderErrorBound.curve``
 HARDENING = (0.0, 0.25, 0.5, 0.75, 1.0)
 _U = 2.0**-53
-
-
-def _gamma(m: int) -> float:
-    return m * _U / (1 - m * _U)
 
 
 class BoundCode(enum.Enum):
@@ -177,7 +174,7 @@ def _block_errors(system: System, horizon: int) -> np.ndarray:
     n = system.n
     absA, row = np.abs(system.A), np.abs(system.C)
     out = np.zeros(system.p)
-    growth = 1.0 + _gamma(n + 2)
+    growth = 1.0 + gamma(n + 2)
     for k in range(horizon):
         if k:
             row = row @ absA
@@ -215,7 +212,7 @@ def _sigma_lower_from_gramians(
         # (p + 2s terms) rounds by at most gamma(tau + p + 2 + 2s) times the sum of the terms'
         # absolute values, whose norm is at most the sum of ||O_i||_F^2 over every sensor;
         # LAPACK's eigenvalues are those of a matrix within 64 n u ||G|| of the one given
-        error = (_gamma(tau + p + rows.shape[1] + 2) * frob.sum() + 64 * n * _U * kept_frob) * (
+        error = (gamma(tau + p + rows.shape[1] + 2) * frob.sum() + 64 * n * _U * kept_frob) * (
             1 + 1e-6
         )
         value[start : start + chunk] = np.sqrt(np.maximum(lam, 0.0))
@@ -242,7 +239,7 @@ def _noise_terms(block: np.ndarray, removed: np.ndarray, s: int) -> tuple[np.nda
     sq = block**2
     mask = np.ones((removed.shape[0], p), dtype=bool)
     np.put_along_axis(mask, removed, False, axis=1)
-    up = 1.0 + _gamma(p + 4)  # the squares, their sum and the square root, rounded
+    up = 1.0 + gamma(p + 4)  # the squares, their sum and the square root, rounded
     n_K = np.sqrt(np.where(mask, sq, 0.0).sum(axis=1) * up) * up
     outside = np.sort(sq[removed], axis=1)[:, ::-1][:, :s]
     m_K = np.sqrt(outside.sum(axis=1) * up) * up
@@ -252,7 +249,7 @@ def _noise_terms(block: np.ndarray, removed: np.ndarray, s: int) -> tuple[np.nda
 def _bound_of(n_K: Any, m_K: Any, sigma: Any) -> Any:
     """bound(K), rounded up (each of its few operations by a unit in the last place)."""
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        value = (np.sqrt(n_K**2 + m_K**2) + n_K) / sigma * (1.0 + _gamma(8))
+        value = (np.sqrt(n_K**2 + m_K**2) + n_K) / sigma * (1.0 + gamma(8))
     return np.where(np.asarray(sigma) > 0, value, np.inf)
 
 
@@ -308,7 +305,7 @@ def _screened_candidates(
     sample = np.unique(sample, axis=0)
     _, bounds, _, _, _ = _evaluate(blocks, errors, block, sample, s)
     sq = np.sort(block**2)[::-1]
-    up = 1.0 + _gamma(p + 8)
+    up = 1.0 + gamma(p + 8)
     num = (math.sqrt(sq[: p - s].sum() * up) + math.sqrt(sq[: p - k].sum() * up)) * up
     highest = float(np.max(bounds))
     for _ in range(_SCREENINGS):
@@ -343,9 +340,9 @@ def _screen_failures(
     trace = float(np.abs(np.trace(total)))
     squares = float(np.sum(blocks**2))
     rounding = (
-        _gamma(k + 4) * (float(np.linalg.norm(total)) + frob_items)  # the sums of Gramians
-        + _gamma(tau + 2) * squares  # each Gramian from its blocks
-        + 100 * _gamma(4 * n + 4) * (trace + n * (target + 1.0) ** 2)  # LAPACK's backward error
+        gamma(k + 4) * (float(np.linalg.norm(total)) + frob_items)  # the sums of Gramians
+        + gamma(tau + 2) * squares  # each Gramian from its blocks
+        + 100 * gamma(4 * n + 4) * (trace + n * (target + 1.0) ** 2)  # LAPACK's backward error
     )
     err_O = float(np.sqrt(np.sum(errors**2)))
     shift = ((target + err_O) ** 2 + 2.0 * rounding) * (1 + 1e-9)
@@ -436,23 +433,16 @@ def decoder_error_bound(
     with np.errstate(over="ignore"):
         scaled = replace(
             found,
-            bound=_times(found.bound, c),
+            bound=times_up(found.bound, c),
             lower=found.lower * c,
-            hardened=_times(found.hardened, c),
-            curve=tuple((f, _times(b, c)) for f, b in found.curve),
+            hardened=times_up(found.hardened, c),
+            curve=tuple((f, times_up(b, c)) for f, b in found.curve),
         )
     if not math.isfinite(scaled.bound):
         return replace(scaled, code=BoundCode.OUT_OF_RANGE, bound=math.inf)
     if not bound_rechecks(scaled):
         return replace(scaled, code=BoundCode.RECHECK_FAILED)
     return scaled
-
-
-def _times(x: float, c: float) -> float:
-    """x times the power of two c, taken up a unit in the last place where the product is
-    subnormal (and so rounded)."""
-    y = x * c
-    return float(np.nextafter(y, np.inf)) if 0 < abs(y) < 2.0**-1022 else y
 
 
 def _bound_of_unit_noise(
@@ -486,7 +476,7 @@ def _bound_of_unit_noise(
     # the sets not evaluated: bound(K) <= (the largest noise term) / floor, below the largest
     # evaluated bound by the screening's construction; kept as a guard all the same
     sq = np.sort(block**2)[::-1]
-    up = 1.0 + _gamma(p + 8)
+    up = 1.0 + gamma(p + 8)
     num_hi = (math.sqrt(sq[: p - s].sum() * up) + math.sqrt(sq[: p - removed_size].sum() * up)) * up
     guard = _rounded_up(num_hi / floor) if screened and floor > 0 else 0.0
     # ties go to the lexicographically first kept set (the last removed set of the order)
