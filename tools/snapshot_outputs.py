@@ -28,7 +28,7 @@ _DATE = re.compile(r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d[+\-Z0-9:]*")
 _SECONDS = re.compile(r"\b\d+(\.\d+)? ?(s|ms|seconds)\b")
 # what a time budget cut short: how far the scan got depends on the machine's speed
 _BUDGETED = re.compile(
-    r"(stopped at the time budget after )[\d,]+"
+    r"(budget after )[\d,]+(?= supports)"
     r"|(\"supports_checked\": )\d+"
     r"|(<th>supports_checked</th><td>)\d+"
 )

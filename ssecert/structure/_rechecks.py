@@ -21,6 +21,7 @@ from ..tolerances import NONZERO, ZERO, Tolerances
 from ._combinatorics import count_subsets
 from .enumeration import OutcomeStatus, SparseMethod, _enumeration, _Outcome
 from .observability import pbh_margins
+from .outcomes import Problem, ProblemCode
 
 __all__: list[str] = []
 
@@ -69,15 +70,13 @@ def _cross_check(
     }
     mr = outcome.max_removable
     if enum.max_removable is not None and enum.max_removable < mr:
-        found = (
-            "a breaking set"
-            if enum.status is OutcomeStatus.EXACT
-            else "a set within the rank decision's precision of breaking"
-        )
         outcome.problems.append(
-            f"the enumeration finds {found} of "
-            f"{enum.max_removable + 1} sensors, smaller than the eigenspace method's {size} (its "
-            f"eigenvalue groups missed it)"
+            Problem.of(
+                ProblemCode.SMALLER_BY_ENUMERATION,
+                exact=enum.status is OutcomeStatus.EXACT,
+                size=enum.max_removable + 1,
+                eigenspace_size=size,
+            )
         )
         outcome.status = OutcomeStatus.INCONCLUSIVE
         enum.details["cross_check_of_eigenspace"] = {
@@ -99,9 +98,9 @@ def _cross_check(
     ):
         record["agrees"] = False
         outcome.problems.append(
-            f"the enumeration finds no breaking set of {size} sensors, although sensors "
-            f"{list(outcome.breaking_set)} break the exact data: the enumeration's decisions "
-            f"are unreliable on this plant"
+            Problem.of(
+                ProblemCode.MISSED_BY_ENUMERATION, size=size, sensors=tuple(outcome.breaking_set)
+            )
         )
         outcome.status = OutcomeStatus.INCONCLUSIVE
     outcome.details["cross_check"] = record

@@ -28,6 +28,7 @@ from ..system import System
 from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances, classify
 from ._level_scan import _CRITICAL
 from .enumeration import OutcomeStatus, SparseMethod, _distance, _Outcome
+from .outcomes import Problem, ProblemCode
 
 __all__: list[str] = []
 
@@ -48,7 +49,7 @@ def _eigenspace(
     """
     out = _Outcome(method=SparseMethod.EIGENSPACE, status=OutcomeStatus.INCONCLUSIVE)
     if eig.problems:
-        out.problems.extend(eig.problems)
+        out.problems.extend(Problem.of(ProblemCode.EIGENVALUES, text=t) for t in eig.problems)
         return out
     best, z, critical = _smallest_support(system.C, s, max_sets, tol, eig, out, deadline)
     if out.problems:
@@ -107,7 +108,11 @@ def _smallest_support(
             )
             out.checked += used
         if problem:
-            out.problems.append(f"eigenvalue {eig.label(cluster.center)}: {problem.text}")
+            out.problems.append(
+                Problem.of(
+                    ProblemCode.EIGENSPACE, eigenvalue=eig.label(cluster.center), text=problem.text
+                )
+            )
             if problem.budget:
                 out.status = OutcomeStatus.BUDGET
             continue
@@ -177,12 +182,10 @@ def _exactly_breaking(
         kept = tuple(i for i in range(p) if i not in gone)
         distance = _distance(system, kept, eig, tol)
         out.details["distance_to_breaking"] = distance
-        far = format_distance(distance)
         out.problems.append(
-            f"its smallest support, sensors {list(support)}, does not break the exact data "
-            f"(relative distance {far} to a plant it breaks: within the precision of the "
-            f"floating-point rank decision, or its eigenvectors are too ill-conditioned to "
-            f"trust)"
+            Problem.of(
+                ProblemCode.NOT_EXACT, support=tuple(support), distance=format_distance(distance)
+            )
         )
         return None
     out.details["breaking_set_exact"] = decision.state is Observability.UNOBSERVABLE

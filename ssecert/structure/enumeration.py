@@ -54,6 +54,7 @@ from ._level_scan import (
 )
 from .cost import cost_of_the_rest, rounded_seconds, verdict_cost
 from .observability import pbh_margins
+from .outcomes import Problem, ProblemCode
 
 __all__: list[str] = []
 
@@ -92,7 +93,7 @@ class _Outcome:
     z: np.ndarray | None = None
     checked: int = 0
     needed: int | None = None  # sets needed to finish, when over budget
-    problems: list[str] = field(default_factory=list)
+    problems: list[Problem] = field(default_factory=list)
     critical: list[tuple[int, ...]] = field(default_factory=list)  # kept-sensor sets
     details: dict[str, Any] = field(default_factory=dict)
     refinement_seconds: float = 0.0  # spent past the verdict (not in the evidence: it varies)
@@ -137,9 +138,7 @@ def _enumeration(
     )
     if sub.borderline.any():
         bad = np.flatnonzero(sub.borderline).tolist()
-        out.problems.append(
-            f"the observable subspace of sensor(s) {bad} has a borderline rank decision"
-        )
+        out.problems.append(Problem.of(ProblemCode.BORDERLINE_SUBSPACE, sensors=tuple(bad)))
         return out
     full = np.flatnonzero(sub.ranks == n)  # must all be removed to break the plant
     rest = np.flatnonzero(sub.ranks < n)
@@ -265,9 +264,13 @@ class _Levels:
             "next_level_predicted_seconds": round(predicted - elapsed, 3),
         }
         out.problems.append(
-            f"the refinement stopped at the time budget of {time_budget:g} s before the "
-            f"{count:,} sets of {self.removed(k)} sensors (about "
-            f"{predicted - elapsed:.3g} s more); --exact computes the exact value"
+            Problem.of(
+                ProblemCode.TIME_BEFORE_LEVEL,
+                budget=time_budget,
+                sets=count,
+                removed=self.removed(k),
+                seconds=predicted - elapsed,
+            )
         )
         return True
 
@@ -346,10 +349,9 @@ class _Levels:
         out.status = OutcomeStatus.LOWER_BOUND
         out.max_removable = self.removed(k) - 1
         removed = self.removed(k)
+        rest = cost_of_the_rest(q, self.system.n, k, self.target, self.client, time_budget)
         out.problems.append(
-            f"enumeration budget of {max_sets:,} sets reached before sets of "
-            f"{removed} sensor{'s' if removed != 1 else ''}"
-            + cost_of_the_rest(q, self.system.n, k, self.target, self.client, time_budget)
+            Problem.of(ProblemCode.SET_BUDGET, max_sets=max_sets, removed=removed, rest=rest)
         )
         return True
 
@@ -392,8 +394,13 @@ class _Levels:
                 "lexicographic_positions": [first, last],
             }
             out.problems.append(
-                f"the Dask workers failed twice on the sets of {self.removed(k)} sensors at "
-                f"positions {first:,} to {last:,} in lexicographic order ({exc.cause!r})"
+                Problem.of(
+                    ProblemCode.WORKERS_FAILED,
+                    removed=self.removed(k),
+                    first=first,
+                    last=last,
+                    cause=repr(exc.cause),
+                )
             )
             return None
         if self.client is not None:
@@ -471,9 +478,13 @@ class _Levels:
             "level_removed_sensors": removed,
         }
         out.problems.append(
-            f"the refinement stopped at the time budget of {self.time_budget:g} s after "
-            f"{level.checked:,} of the {count:,} sets of {removed} sensors (the first in "
-            f"lexicographic order; none breaks the plant); --exact computes the exact value"
+            Problem.of(
+                ProblemCode.TIME_WITHIN_LEVEL,
+                budget=self.time_budget,
+                checked=level.checked,
+                sets=count,
+                removed=removed,
+            )
         )
 
     def _breaking(
@@ -517,22 +528,21 @@ class _Levels:
         out = self.out
         if level.borderline:
             out.problems.append(
-                f"{level.borderline} set(s) of {self.removed(k)} sensors have a borderline "
-                f"rank decision"
+                Problem.of(
+                    ProblemCode.BORDERLINE_SETS, count=level.borderline, removed=self.removed(k)
+                )
             )
         if not within:
             return
         out.details["within_precision_of_breaking"] = [list(w) for w in within[:8]]
         distance = out.details.get("distance_to_breaking")
-        others = f" (and {len(within) - 1} other set(s) of that size)" if len(within) > 1 else ""
-        how_far = (
-            f" (relative distance {format_distance(distance)})" if distance is not None else ""
-        )
         out.problems.append(
-            f"removing sensors {list(within[0])}{others} leaves a plant that is observable in "
-            f"exact arithmetic but, within the precision of the floating-point rank decision (the "
-            f"error bound of its computed eigenvalues and singular values), of an unobservable "
-            f"one{how_far}, so the answer depends on digits the data do not have"
+            Problem.of(
+                ProblemCode.WITHIN_PRECISION,
+                sensors=tuple(within[0]),
+                others=len(within) - 1,
+                distance=format_distance(distance) if distance is not None else None,
+            )
         )
 
 

@@ -68,6 +68,7 @@ from .enumeration import (
 )
 from .observability import observability
 from .removals import RemovalScan, scan_removals
+from .sparse_messages import problem_texts
 
 __all__ = [
     "sparse_observability",
@@ -391,7 +392,7 @@ def _evidence(
                 "max_removable": o.max_removable,
                 "breaking_set": list(o.breaking_set) if o.breaking_set is not None else None,
                 "sets_checked": o.checked,
-                "problems": o.problems,
+                "problems": problem_texts(o.problems),
             }
             for o in tried
         ],
@@ -551,7 +552,7 @@ class _Decision:
             summary = (
                 f"Every set of up to {mr} sensors was checked and none breaks observability, "
                 f"so s = {self.s} attacked sensors can be corrected; the exact max_removable was "
-                f"not computed ({'; '.join(outcome.problems)})."
+                f"not computed ({'; '.join(problem_texts(outcome.problems))})."
             )
         return self.make(
             Verdict.INCONCLUSIVE if problem else Verdict.HOLDS,
@@ -567,7 +568,9 @@ class _Decision:
         settled = self.unobservable_plant()
         if settled is not None:
             return settled
-        reasons = [pr for o in self.tried for pr in o.problems] or ["no method could decide"]
+        reasons = [pr for o in self.tried for pr in problem_texts(o.problems)] or [
+            "no method could decide"
+        ]
         if self.s == 0:
             held = self.observability_decides(reasons)
             if held is not None:
