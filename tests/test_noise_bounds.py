@@ -568,3 +568,14 @@ def test_design_shows_each_designs_noise_bound(tmp_path, capsys):
         "certified ultimate error under the spec's noise"
         in (tmp_path / "noisy-design.html").read_text()
     )
+
+
+def test_the_printed_sigma_is_rechecked_on_the_exact_data():
+    from dataclasses import replace
+
+    from ssecert.structure.noise import sigma_rechecks
+
+    plant = System(np.array([[1.0, 0.1], [0.0, 1.0]]), np.array(_spec()["system"]["C"]))
+    found = decoder_error_bound(plant, 1, MeasurementNoise.uniform(1e-3, 5), horizon=2)
+    assert found.facts["sigma_rechecked_exactly"] is True
+    assert sigma_rechecks(plant, replace(found, sigma=found.sigma * 1.01)) is False

@@ -221,13 +221,13 @@ class ScenarioResult:
         }
 
     def with_certified_bound(
-        self, bound: float, fading: Callable[[int], float], check: str
+        self, bound: float, fading: Callable[[int, int], float], check: str
     ) -> ScenarioResult:
         """This result beside a certified ultimate bound of ||x_hat - x||_2 (the check
         ``check``'s): the largest error over every run in the last quarter of the steps, and an
-        allowance for what is left of the initial error there (the largest ``fading(k)`` over
-        those steps times max ||e(0)||, from the certificate): the observed error must be within
-        the bound plus that allowance."""
+        allowance for what is left of the initial error there (``fading(k0, steps)``, the
+        largest factor over those steps, times max ||e(0)||, from the certificate): the observed
+        error must be within the bound plus that allowance."""
         if self.absolute_error is None:
             return self
         start = self.steps - self.steps // 4
@@ -235,7 +235,7 @@ class ScenarioResult:
         with np.errstate(over="ignore", invalid="ignore"):
             # the initial error's part may grow again after ``start`` (a non-normal F): its
             # largest factor over the steps compared
-            factor = max(fading(k) for k in range(start, self.steps + 1))
+            factor = fading(start, self.steps)
             left = float(factor * np.max(self.absolute_error[0]))
         within = bool(observed <= bound + left)
         return replace(

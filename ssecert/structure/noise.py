@@ -524,7 +524,9 @@ def _bound_of_unit_noise(
         refined=refined,
         **base,
     )
-    if not bound_rechecks(found):
+    exact = sigma_rechecks(system, found)
+    found = replace(found, facts={**found.facts, "sigma_rechecked_exactly": exact})
+    if not bound_rechecks(found) or exact is False:
         return replace(found, code=BoundCode.RECHECK_FAILED)
     # the lower bound: the best pair over the sets with the largest bounds and the smallest
     # singular values
@@ -593,6 +595,34 @@ def bound_rechecks(found: DecoderErrorBound) -> bool:
     mK2 = weight * sum(outside[: found.max_attacked], Fraction(0))
     need = _sqrt_upper(nK2 + mK2) + _sqrt_upper(nK2)
     return Fraction(found.bound) * Fraction(found.sigma) >= need
+
+
+EXACT_SIGMA_LIMIT = 12  # largest n and horizon whose printed sigma is re-checked exactly
+
+
+def sigma_rechecks(system: System, found: DecoderErrorBound) -> bool | None:
+    """Whether the printed sigma of ``found.worst_kept`` is a lower bound of sigma_min(O_K) of
+    the exact plant (the floats of A and C as rationals): O_K' O_K - sigma^2 I positive
+    semidefinite, decided in rational arithmetic (positive definite with sigma taken a hair
+    down); None beyond ``EXACT_SIGMA_LIMIT`` states or steps (not run)."""
+    from ..numerics.rational import fractions, is_positive_definite, product
+
+    n, tau = system.n, found.horizon
+    if n > EXACT_SIGMA_LIMIT or tau > EXACT_SIGMA_LIMIT or not found.worst_kept:
+        return None
+    A = fractions(system.A)
+    rows = []
+    for i in found.worst_kept:
+        row = fractions(system.C[i : i + 1])
+        for _ in range(tau):
+            rows.append(row[0])
+            row = product(row, A)
+    gram = product([list(col) for col in zip(*rows)], rows)
+    sigma2 = Fraction(found.sigma) ** 2 * (1 - Fraction(1, 2**40))
+    shifted = [
+        [g - (sigma2 if r == c else 0) for c, g in enumerate(line)] for r, line in enumerate(gram)
+    ]
+    return is_positive_definite(shifted)
 
 
 def worst_case_pair(system: System, found: DecoderErrorBound) -> dict[str, Any] | None:

@@ -99,6 +99,7 @@ def decoder_bound_check(system: System, found: DecoderErrorBound) -> Check:
         "smallest_sigma_kept_sensors": list(found.smallest_kept),
         "noise_block_bounds": found.noise.block_bounds(tau),
         "code": found.code.value,
+        "sigma_rechecked_exactly": found.facts.get("sigma_rechecked_exactly"),
     }
     if found.curve:
         evidence["hardening_curve"] = {
@@ -173,7 +174,13 @@ def decoder_bound_check(system: System, found: DecoderErrorBound) -> Check:
         f"decoder's estimate of the window's first state (the support of {_sensors(s)} whose "
         f"removal leaves the least residual) is within {readable(found.bound)} of the truth "
         f"(2-norm){lower}. The bound is largest with sensors {kept} kept (smallest singular "
-        f"value of their observability matrix at least {readable(found.sigma)}); halving their "
+        f"value of their observability matrix at least {readable(found.sigma)}"
+        + (
+            ", re-checked in rational arithmetic on the exact data"
+            if found.facts.get("sigma_rechecked_exactly")
+            else ""
+        )
+        + f"); halving their "
         f"noise gives {readable(found.hardened)}.{tolerance}",
         value=found.bound,
         evidence=evidence,
