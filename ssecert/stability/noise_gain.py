@@ -195,12 +195,9 @@ def _unit_noise_bound(
     RL = np.full_like(L, _up(rounding_L, 1))
     with np.errstate(over="ignore", invalid="ignore"):
         found = _contraction(F, RF, max_terms)
-        if found is None:
+        if isinstance(found, int):
             return NoiseGain(
-                NoiseGainCode.NOT_CONTRACTIVE,
-                nothing,
-                np.zeros(n),
-                facts={"max_terms": min(max_terms, CONTRACTION_LIMIT)},
+                NoiseGainCode.NOT_CONTRACTIVE, nothing, np.zeros(n), facts={"max_terms": found}
             )
         powers, (G, RG), q = found
         m = len(powers)
@@ -252,10 +249,11 @@ def _unit_noise_bound(
 
 def _contraction(
     F: np.ndarray, RF: np.ndarray, limit: int
-) -> tuple[list[tuple[np.ndarray, np.ndarray]], tuple[np.ndarray, np.ndarray], float] | None:
+) -> tuple[list[tuple[np.ndarray, np.ndarray]], tuple[np.ndarray, np.ndarray], float] | int:
     """The intervals of F^0 .. F^(m-1), of G = F^m, and q >= ||F^m||_inf with q < 1: the first
     power whose bound is at most 1/2, else the one whose bound's m-th root is the smallest below
-    1 (None when no power up to ``limit`` is proved below 1 before the intervals grow wide)."""
+    1; when no power up to ``limit`` is proved below 1 before the intervals grow wide, the number
+    of powers examined."""
     n = F.shape[0]
     M, R = np.eye(n), np.zeros((n, n))
     powers = [(M, R)]
@@ -271,7 +269,7 @@ def _contraction(
             return powers, (M, R), norm
         powers.append((M, R))
     if best is None:
-        return None
+        return len(powers)
     m = best[1]
     q = (
         float(np.max(_up(np.sum(np.abs(powers[m][0]) + powers[m][1], axis=1), n)))
@@ -279,5 +277,5 @@ def _contraction(
         else math.inf
     )
     if not q < 1.0:
-        return None
+        return len(powers)
     return powers[:m], powers[m], q

@@ -42,8 +42,8 @@ def reason(found: NoiseGain) -> str:
     """Why no bound is certified (empty for a certified one)."""
     if found.code is NoiseGainCode.NOT_CONTRACTIVE:
         return (
-            "no power of F = A - L C is proved below 1 in norm within "
-            f"{found.facts.get('max_terms', 0):,} steps (observer_gain decides its stability)"
+            f"no power of F = A - L C up to F^{found.facts.get('max_terms', 0)} is proved below "
+            "1 in norm (observer_gain decides its stability)"
         )
     if found.code is NoiseGainCode.OUT_OF_RANGE:
         return (
