@@ -161,12 +161,13 @@ def test_place_gain_is_control_place_on_the_dual_pair(seed):
 def test_lyapunov_solution_is_control_dlyap(seed):
     """The Lyapunov certificate's P is what control.dlyap returns without Slycot."""
     from ssecert.stability.lyapunov import _lyapunov_solution
+    from ssecert.stability.outcomes import LyapunovCode
 
     rng = np.random.default_rng(seed)
     n = int(rng.integers(1, 7))
     F = rng.standard_normal((n, n))
     F *= 0.9 / max(np.abs(np.linalg.eigvals(F)).max(), 1e-12)
-    P, why = _lyapunov_solution(F, np.eye(n))
-    assert not why
+    P, code, _ = _lyapunov_solution(F, np.eye(n))
+    assert code is LyapunovCode.VERIFIED
     assert np.allclose(P, control.dlyap(F.T, np.eye(n)), rtol=1e-12, atol=1e-12)
     assert np.allclose(F.T @ P @ F - P + np.eye(n), 0, atol=1e-9 * np.abs(P).max())

@@ -261,30 +261,24 @@ def test_the_deadbeat_gain_is_built_with_the_run_tolerances():
 
 
 @pytest.mark.parametrize(
-    ("F", "method"),
+    ("F", "code", "eigenvalue"),
     [
-        (np.diag([1.0 + 2.0**-40, 0.5]), "exact eigenvalue"),  # below the first-order bound
-        (np.diag([-(1.0 + 2.0**-40), 0.5]), "exact eigenvalue"),
-        (np.array([[0.0, 2.0**60], [2.0**-60, 0.0]]), "exact eigenvalue 1"),  # eigenvalues +-1
-        (np.array([[0.0, 1.0], [-1.0, 0.0]]), "exact traces"),  # a rotation: rho = 1
+        # below the first-order bound
+        (np.diag([1.0 + 2.0**-40, 0.5]), "EIGENVALUE_ON_CIRCLE", 1.0 + 2.0**-40),
+        (np.diag([-(1.0 + 2.0**-40), 0.5]), "EIGENVALUE_ON_CIRCLE", -(1.0 + 2.0**-40)),
+        # eigenvalues +-1
+        (np.array([[0.0, 2.0**60], [2.0**-60, 0.0]]), "EIGENVALUE_ON_CIRCLE", 1.0),
+        (np.array([[0.0, 1.0], [-1.0, 0.0]]), "TRACE_REACHES_N", None),  # a rotation: rho = 1
     ],
 )
-def test_a_spectral_radius_of_at_least_one_is_decided_exactly(F, method):
+def test_a_spectral_radius_of_at_least_one_is_decided_exactly(F, code, eigenvalue):
+    from ssecert.stability.outcomes import SchurCode, SchurState
     from ssecert.stability.spectral import schur_decision
 
     decision = schur_decision(F)
-    assert decision.state == "unstable" and decision.rigorous
-    assert decision.method.startswith(method)
-
-
-def test_certified_radius_bounds_print_on_their_side_of_one():
-    from ssecert.stability.spectral import schur_decision
-
-    # eigenvalues 1 - 2^-30 +- (slightly less than 2^-30): rho < 1 by ~1e-21, undecided
-    F = np.array([[1.0 - 2.0**-30, 1.0], [np.nextafter(2.0**-60, 0.0), 1.0 - 2.0**-30]])
-    decision = schur_decision(F)
-    assert decision.state == "unknown"
-    assert "certified 1 <=" not in decision.reason and "certified 0.99999" in decision.reason
+    assert decision.state is SchurState.UNSTABLE and decision.rigorous
+    assert decision.code is SchurCode[code]
+    assert decision.facts.get("eigenvalue") == eigenvalue
 
 
 def test_deadbeat_summary_gives_the_exact_index_of_the_printed_gain():

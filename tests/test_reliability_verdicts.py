@@ -23,6 +23,7 @@ from planted import hidden_jordan, planted
 from ssecert import System, analyze, observability, sparse_observability, spec_from_dict
 from ssecert.design.gains import deadbeat_gain, verify_deadbeat
 from ssecert.stability.lyapunov import instability_witness, lyapunov_certificate
+from ssecert.stability.outcomes import SchurCode
 from ssecert.stability.spectral import schur_decision
 
 CYCLIC = 1e6 * np.roll(np.eye(3), 1, axis=0)
@@ -353,7 +354,8 @@ def test_nearly_nilpotent_large_matrix_is_decided_exactly():
 
 def test_eigenvalue_exactly_on_the_unit_circle_is_not_asymptotically_stable():
     d = schur_decision(np.array([[1.0, 0.5], [0.0, 0.3]]))
-    assert d.state == "unstable" and d.rigorous and "eigenvalue 1" in d.method
+    assert d.state == "unstable" and d.rigorous and d.code is SchurCode.EIGENVALUE_ON_CIRCLE
+    assert d.facts["eigenvalue"] == 1.0
     assert math.isfinite(d.radius_upper)
 
 

@@ -12,8 +12,9 @@ from __future__ import annotations
 import enum
 import math
 import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
@@ -22,8 +23,14 @@ from ..numerics.exact_powers import ExactMatrix
 from ..numerics.linalg import matrix_norm
 from ..results import Verdict
 from ..tolerances import EPS
+from . import lyapunov_messages
+from .outcomes import LyapunovCode, SchurState
+
+if TYPE_CHECKING:
+    from .spectral import SchurDecision
 
 __all__ = [
+    "LyapunovCode",
     "LyapunovMethod",
     "LyapunovCertificate",
     "lyapunov_certificate",
@@ -45,10 +52,6 @@ class LyapunovCertificate:
 
     Attributes
     ----------
-    verdict : Verdict
-        (or its name) ``"holds"`` (F is Schur, proven by P), ``"fails"`` (an eigenvalue of
-        modulus >= 1, with a growing trajectory as witness) or
-        ``"inconclusive"``.
     P : ndarray or None
         Symmetric solution of F^T P F - P + Q = 0.
     decrease : ndarray or None
@@ -67,18 +70,20 @@ class LyapunovCertificate:
         ||F^T P F - P + Q|| / ||Q||.
     spectral_radius : float
         Of F (reported, not used to decide).
-    reason : str
+    code : LyapunovCode
+        What came of the Lyapunov solution; anything but ``VERIFIED`` leaves the verdict
+        to ``decision``.
+    facts : mapping
+        The numbers the words of ``code`` need (the solver's error, the margins); not
+        written to JSON.
     witness : dict or None
-    method : LyapunovMethod
-        ``LYAPUNOV`` (P verified in floating point with a margin) or
-        ``EXACT_POWERS`` (no verified P, but rho(F) <= ||F^m||^(1/m) < 1 on
-        the exact F; ``contraction`` is then that bound on the asymptotic
-        rate, not a per-step factor).
+    decision : SchurDecision or None
+        The exact decision on F when no P verified.
     proof : dict or None
-        The exact decision (``schur_decision``) when one was needed.
+        The exact decision as the JSON writes it (``SchurDecision.to_dict``), or how a P
+        found in balanced coordinates was written back.
     """
 
-    verdict: Verdict
     P: np.ndarray | None
     decrease: np.ndarray | None
     margin: float | None
@@ -87,14 +92,48 @@ class LyapunovCertificate:
     condition: float | None
     residual: float | None
     spectral_radius: float
-    reason: str = ""
+    code: LyapunovCode = LyapunovCode.VERIFIED
+    facts: Mapping[str, Any] = field(default_factory=dict)
     witness: dict[str, Any] | None = field(default=None)
-    method: LyapunovMethod = LyapunovMethod.LYAPUNOV
+    decision: SchurDecision | None = field(default=None)
     proof: dict[str, Any] | None = field(default=None)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "verdict", Verdict(self.verdict))  # a name is accepted too
-        object.__setattr__(self, "method", LyapunovMethod(self.method))
+        if (self.code is LyapunovCode.VERIFIED) != (self.decision is None):
+            raise ValueError("a Lyapunov certificate has a verified P or an exact decision")
+
+    @property
+    def verdict(self) -> Verdict:
+        """``HOLDS`` (F is Schur, proven by P or by exact powers), ``FAILS`` (an eigenvalue of
+        modulus >= 1, with a growing trajectory as witness) or ``INCONCLUSIVE``."""
+        if self.decision is None:
+            return Verdict.HOLDS
+        return {
+            SchurState.STABLE: Verdict.HOLDS,
+            SchurState.UNSTABLE: Verdict.FAILS,
+        }.get(self.decision.state, Verdict.INCONCLUSIVE)
+
+    @property
+    def method(self) -> LyapunovMethod:
+        """``LYAPUNOV`` (P verified in floating point with a margin, or an instability not
+        proved exactly) or ``EXACT_POWERS`` (no verified P, but rho(F) <= ||F^m||^(1/m) < 1 on
+        the exact F, ``contraction`` then that bound on the asymptotic rate, not a per-step
+        factor; or instability proved on the exact F)."""
+        d = self.decision
+        if d is not None and (
+            d.state is SchurState.STABLE or (d.rigorous and d.state is SchurState.UNSTABLE)
+        ):
+            return LyapunovMethod.EXACT_POWERS
+        return LyapunovMethod.LYAPUNOV
+
+    @property
+    def reason(self) -> str:
+        """Why the verdict is what it is, in words (``lyapunov_messages``; empty for a
+        verified P)."""
+        d = self.decision
+        if d is None:
+            return lyapunov_messages.reason(self.code, self.facts, None, "")
+        return lyapunov_messages.reason(self.code, self.facts, d.state, d.reason)
 
 
 def instability_witness(
@@ -128,7 +167,7 @@ def instability_witness(
     exact : ExactMatrix, optional
         Decide on the exact value F stands for (instead of ``parts``).
     """
-    from .spectral import SchurState, schur_decision
+    from .spectral import schur_decision
 
     if decision is None:
         decision = schur_decision(F, parts=parts, exact=exact)
@@ -273,14 +312,13 @@ def _certificate_in_units(
     """``lyapunov_certificate`` in the coordinates F is written in."""
     n = F.shape[0]
     rho = float(np.abs(np.linalg.eigvals(F)).max()) if n else 0.0
-    P, why = _lyapunov_solution(F, Q)
+    P, code, facts = _lyapunov_solution(F, Q)
     if P is None:
-        return _exact_fallback(F, exact, rho, why)
+        return _exact_fallback(F, exact, rho, code, facts)
     c = _check_solution(F, Q, P, 0.0 if exact is None else exact.rounding(F))
     contraction = _verified_contraction(c, clear)
     if contraction is not None:
         return LyapunovCertificate(
-            Verdict.HOLDS,
             c.P,
             c.decrease,
             c.dec_min,
@@ -290,18 +328,18 @@ def _certificate_in_units(
             c.residual,
             rho,
         )
-    why = (
-        f"the Lyapunov solution cannot be verified with a margin (smallest decrease "
-        f"{c.dec_min:.2e}, smallest eigenvalue of P {c.p_min:.2e}, error bound {c.bound:.2e})"
-    )
+    margins = {"decrease": c.dec_min, "p_min": c.p_min, "bound": c.bound}
     margin = min(c.dec_min, c.p_min)  # negative when P or the decrease is indefinite
     unverified = _Unverified(c.P, c.decrease, margin, c.bound, c.condition, c.residual)
-    return _exact_fallback(F, exact, rho, why, unverified)
+    return _exact_fallback(F, exact, rho, LyapunovCode.NOT_VERIFIED, margins, unverified)
 
 
-def _lyapunov_solution(F: np.ndarray, Q: np.ndarray) -> tuple[np.ndarray | None, str]:
+def _lyapunov_solution(
+    F: np.ndarray, Q: np.ndarray
+) -> tuple[np.ndarray | None, LyapunovCode, dict[str, str]]:
     """P solving F^T P F - P + Q = 0 (``scipy.linalg.solve_discrete_lyapunov``, which
-    ``control.dlyap`` calls without Slycot), or None and why there is none."""
+    ``control.dlyap`` calls without Slycot), or None, why there is none and the solver's
+    error."""
     from scipy.linalg import solve_discrete_lyapunov
 
     with warnings.catch_warnings():
@@ -309,10 +347,10 @@ def _lyapunov_solution(F: np.ndarray, Q: np.ndarray) -> tuple[np.ndarray | None,
         try:
             P = np.asarray(solve_discrete_lyapunov(F.T, Q), dtype=float)
         except Exception as exc:  # singular Lyapunov operator (lambda_i lambda_j = 1)
-            return None, f"the Lyapunov equation has no unique solution ({exc})"
+            return None, LyapunovCode.NO_UNIQUE_SOLUTION, {"error": str(exc)}
     if not np.all(np.isfinite(P)):
-        return None, "the Lyapunov solution is not finite"
-    return P, ""
+        return None, LyapunovCode.NOT_FINITE, {}
+    return P, LyapunovCode.VERIFIED, {}
 
 
 class _Checked(NamedTuple):
@@ -406,11 +444,13 @@ def _exact_fallback(
     F: np.ndarray,
     exact: ExactMatrix | None,
     rho: float,
-    why: str,
+    code: LyapunovCode,
+    facts: Mapping[str, Any],
     unverified: _Unverified | None = None,
 ) -> LyapunovCertificate:
-    """The certificate the exact F decides (``schur_decision``) when no P verifies."""
-    from .spectral import SchurState, schur_decision
+    """The certificate the exact F decides (``schur_decision``) when no P verifies (``code``
+    and ``facts`` say why)."""
+    from .spectral import schur_decision
 
     decision = schur_decision(F, exact=exact)
     proof = decision.to_dict()
@@ -419,7 +459,6 @@ def _exact_fallback(
             raise RuntimeError("a stable Schur decision carries its radius bound")
         upper = float(decision.radius_upper)
         return LyapunovCertificate(
-            Verdict.HOLDS,
             None,
             None,
             float(decision.details.get("spectral_radius_gap", 1.0 - upper)),
@@ -428,22 +467,15 @@ def _exact_fallback(
             None,
             None,
             rho,
-            f"{why}; instead, {decision.reason}",
+            code,
+            facts,
             None,
-            LyapunovMethod.EXACT_POWERS,
+            decision,
             proof,
         )
     witness = instability_witness(F, exact=exact, decision=decision)
-    method = LyapunovMethod.LYAPUNOV
-    if decision.state is SchurState.UNSTABLE:
-        verdict, reason = Verdict.FAILS, decision.reason
-        if decision.rigorous:
-            method = LyapunovMethod.EXACT_POWERS  # instability proved on the exact F, not by P
-    else:
-        verdict, reason = Verdict.INCONCLUSIVE, f"{why}; {decision.reason}"
     u = _Unverified() if unverified is None else unverified
     return LyapunovCertificate(
-        verdict,
         u.P,
         u.decrease,
         u.margin,
@@ -452,8 +484,9 @@ def _exact_fallback(
         u.condition,
         u.residual,
         rho,
-        reason,
+        code,
+        facts,
         witness,
-        method,
+        decision,
         proof,
     )

@@ -15,7 +15,76 @@ from typing import Any
 
 from ..results import Verdict
 
-__all__ = ["LMICode", "Region", "RegionCode", "WitnessKind"]
+__all__ = [
+    "LMICause",
+    "LMICode",
+    "LyapunovCode",
+    "Region",
+    "RegionCode",
+    "SchurCode",
+    "SchurState",
+    "WitnessKind",
+]
+
+
+class SchurState(enum.StrEnum):
+    """Whether every eigenvalue of F lies inside the unit circle: its value is the word written
+    in evidence and JSON."""
+
+    STABLE = "stable"
+    UNSTABLE = "unstable"
+    UNKNOWN = "unknown"
+
+
+class SchurCode(enum.Enum):
+    """What decided a ``SchurDecision`` (``ssecert.stability.spectral``; its words:
+    ``ssecert.stability.spectral_messages``)."""
+
+    #: F has a non-finite entry: nothing is decided
+    NON_FINITE = "non-finite"
+    #: stable: rho <= ||F^m||^(1/m) < 1 for an exact power m
+    POWERS_STABLE = "exact powers"
+    #: unstable: |trace F^m| > n exactly, by less than a float resolves
+    TRACE_EXCESS = "exact trace excess"
+    #: unstable: |trace F^m| = n exactly, so rho >= 1
+    TRACE_REACHES_N = "exact trace reaches n"
+    #: unstable: (|trace F^m| / n)^(1/m) > 1, a float lower bound of rho
+    TRACES_BELOW = "exact traces"
+    #: unstable: F - lambda I has an exact kernel vector for a float lambda of modulus >= 1
+    EIGENVALUE_ON_CIRCLE = "exact eigenvalue"
+    #: unstable (not rigorous): the dominant eigenvalue clears 1 by its first-order bound
+    FIRST_ORDER = "first-order eigenvalue bound"
+    #: nothing decides it
+    UNDECIDED = "undecided"
+
+    @property
+    def state(self) -> SchurState:
+        """The state this code decides."""
+        if self is SchurCode.POWERS_STABLE:
+            return SchurState.STABLE
+        if self in (SchurCode.NON_FINITE, SchurCode.UNDECIDED):
+            return SchurState.UNKNOWN
+        return SchurState.UNSTABLE
+
+    @property
+    def rigorous(self) -> bool:
+        """Whether the decision rests on exact arithmetic only."""
+        return self not in (SchurCode.NON_FINITE, SchurCode.FIRST_ORDER, SchurCode.UNDECIDED)
+
+
+class LyapunovCode(enum.Enum):
+    """What came of the Lyapunov solution of a ``LyapunovCertificate``
+    (``ssecert.stability.lyapunov``; its words: ``ssecert.stability.lyapunov_messages``).
+    Every code but ``VERIFIED`` leaves the verdict to the exact decision on F."""
+
+    #: P solves the equation and verifies with a margin: holds
+    VERIFIED = "verified"
+    #: the Lyapunov operator is singular (lambda_i lambda_j = 1): no unique solution
+    NO_UNIQUE_SOLUTION = "no unique solution"
+    #: the solver returned a non-finite P
+    NOT_FINITE = "not finite"
+    #: P was found but P or its decrease is not positive definite by a margin
+    NOT_VERIFIED = "not verified"
 
 
 class LMICode(enum.Enum):
@@ -36,6 +105,56 @@ class LMICode(enum.Enum):
     NO_BASE = "no certificate to build on"
     #: a certificate that floating point cannot write in the coordinates asked
     NOT_REPRESENTABLE = "not representable"
+
+
+class LMICause(enum.Enum):
+    """Why an LMI certificate came out as it did, with the numbers in its ``facts`` (its words:
+    ``ssecert.stability.lmi_messages``).  The checks decide on ``LMICode``; the cause is for
+    the words and for tests."""
+
+    #: holds: nothing to explain
+    CERTIFIED = "certified"
+    #: a budget refused the solve (``facts["refusal"]``)
+    REFUSED = "refused"
+    #: the error dynamics' matrices leave the float range
+    NOT_FINITE = "not finite"
+    #: F = A - L C is proved unstable (``decision``: the exact decision's words, ``channels``)
+    ERROR_MATRIX_UNSTABLE = "error matrix unstable"
+    #: F's spectral radius is within rounding of 1 and undecided (``radius``, ``decision``)
+    ERROR_MATRIX_UNDECIDED = "error matrix undecided"
+    #: the sector's vertex loop has spectral radius within rounding of 1 (``q``, ``radius``,
+    #: ``decision``)
+    VERTEX_WITHIN_ROUNDING = "vertex within rounding of 1"
+    #: shrink = 1: the sector contains the identity (``radius``)
+    IDENTITY_IN_SECTOR = "identity in the sector"
+    #: the sector's vertex loop is unstable (``q``, ``decision``)
+    VERTEX_UNSTABLE = "vertex unstable"
+    #: a corner of the channels' sectors has an unstable loop (``corner``)
+    CORNER_UNSTABLE = "corner unstable"
+    #: the model has no nonlinearity for a multiplier to act on
+    NO_NONLINEARITY = "no nonlinearity"
+    #: the circle criterion's LMIs were solved, none verified (``attempts``)
+    CIRCLE_NOT_VERIFIED = "circle not verified"
+    #: the dissipation (ISS) LMIs were solved, none verified (``attempts``)
+    DISSIPATION_NOT_VERIFIED = "dissipation not verified"
+    #: the Zames-Falb LMIs were solved, none verified (``attempts``)
+    ZAMES_FALB_NOT_VERIFIED = "Zames-Falb not verified"
+    #: the Zames-Falb gain's LMI has no solution (``order``, ``status``)
+    ZAMES_FALB_NO_DISSIPATION = "Zames-Falb no dissipation"
+    #: the Zames-Falb gain was solved and not verified (``problem``)
+    ZAMES_FALB_GAIN_NOT_VERIFIED = "Zames-Falb gain not verified"
+    #: a balanced certificate's P leaves the float range
+    P_OUT_OF_RANGE = "P out of range"
+    #: a balanced certificate does not scale back to the spec's coordinates exactly
+    NOT_SCALED_BACK = "not scaled back"
+    #: an ISS gain without a verified circle certificate to build on
+    NO_BASE = "no base"
+    #: the circle certificate's dissipation matrix leaves the float range
+    DISSIPATION_OUT_OF_RANGE = "dissipation out of range"
+    #: no scaling of the circle certificate gives a finite gain
+    NO_FINITE_GAIN = "no finite gain"
+    #: the gain from the circle certificate was not verified (``problem``)
+    GAIN_NOT_VERIFIED = "gain not verified"
 
 
 class WitnessKind(enum.StrEnum):

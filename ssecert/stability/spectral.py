@@ -19,13 +19,12 @@ matrix of the printed gain):
 
 from __future__ import annotations
 
-import enum
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from ..base.format import one_minus, one_plus, sig
 from ..numerics.exact import (
     Dyadic,
     PowerBound,
@@ -36,32 +35,12 @@ from ..numerics.exact import (
 )
 from ..numerics.exact_powers import ExactMatrix
 from ..tolerances import EPS
+from . import spectral_messages
+from .outcomes import SchurCode, SchurState
 
-__all__ = ["SchurState", "SchurDecision", "schur_decision", "EXACT_SCHUR_LIMIT"]
-
-
-def _fmt(x: float) -> str:
-    """A radius with enough digits to show on which side of 1 it lies."""
-    return sig(x, 6)
-
-
-def below_one(upper: float, gap: float) -> str:
-    """``upper < 1`` in words that show it: ``1 - 1.65e-07`` when six digits would print 1."""
-    if 0 < gap < 1e-3 or upper >= 1.0:
-        return f"{one_minus(gap)} < 1"
-    return f"{_fmt(upper)} < 1"
-
+__all__ = ["SchurCode", "SchurState", "SchurDecision", "schur_decision", "EXACT_SCHUR_LIMIT"]
 
 EXACT_SCHUR_LIMIT = 80  # largest n whose powers are computed exactly
-
-
-class SchurState(enum.StrEnum):
-    """Whether every eigenvalue of F lies inside the unit circle: its value is the word written
-    in evidence and JSON."""
-
-    STABLE = "stable"
-    UNSTABLE = "unstable"
-    UNKNOWN = "unknown"
 
 
 @dataclass(frozen=True)
@@ -70,31 +49,48 @@ class SchurDecision:
 
     Attributes
     ----------
-    state : SchurState
-        ``STABLE``, ``UNSTABLE`` or ``UNKNOWN``.
+    code : SchurCode
+        What decided it; ``state``, ``rigorous``, ``method`` and ``reason``
+        follow from it and from ``facts``.
     radius_upper, radius_lower : float or None
         Certified bounds on the spectral radius of the exact F.
-    method : str
-        How the state was decided.
     eigenvalue : complex
         Dominant computed eigenvalue (floating point, reported only).
-    rigorous : bool
-        True when the decision rests on exact arithmetic only.
-    reason : str
+    facts : mapping
+        The numbers the words need (the power m, the gap below 1, the exact
+        trace's excess, the eigenvalue found, the first-order bound, n, what F
+        stands for); not written to JSON.
     details : dict
     """
 
-    state: SchurState
+    code: SchurCode
     radius_upper: float | None
     radius_lower: float | None
-    method: str
     eigenvalue: complex
-    rigorous: bool
-    reason: str
+    facts: Mapping[str, Any] = field(default_factory=dict)
     details: dict[str, Any] = field(default_factory=dict)
 
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "state", SchurState(self.state))  # a name is accepted too
+    @property
+    def state(self) -> SchurState:
+        """``STABLE``, ``UNSTABLE`` or ``UNKNOWN``."""
+        return self.code.state
+
+    @property
+    def rigorous(self) -> bool:
+        """True when the decision rests on exact arithmetic only."""
+        return self.code.rigorous
+
+    @property
+    def method(self) -> str:
+        """How the state was decided, in words (``spectral_messages``)."""
+        return spectral_messages.method(self.code, self.facts)
+
+    @property
+    def reason(self) -> str:
+        """Why, in words (``spectral_messages``)."""
+        return spectral_messages.reason(
+            self.code, self.facts, self.eigenvalue, self.radius_upper, self.radius_lower
+        )
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -166,15 +162,7 @@ def schur_decision(
     F = np.asarray(F, dtype=float)
     n = F.shape[0]
     if not np.all(np.isfinite(F)):
-        return SchurDecision(
-            SchurState.UNKNOWN,
-            None,
-            None,
-            "none",
-            complex(np.nan),
-            False,
-            "F has non-finite entries",
-        )
+        return SchurDecision(SchurCode.NON_FINITE, None, None, complex(np.nan))
     if exact is None and parts is not None:
         exact = ExactMatrix.error_matrix(*parts)
     rounding = 0.0 if exact is None else exact.rounding(F)
@@ -231,58 +219,26 @@ def _decided_by_powers(
             m, upper = powers.gap_power, min(upper, 1.0 - powers.radius_gap)
         gap = max(1.0 - upper, powers.radius_gap)
         details["spectral_radius_gap"] = gap
-        return SchurDecision(
-            SchurState.STABLE,
-            upper,
-            lower,
-            f"exact powers: rho <= ||F^{m}||^(1/{m})",
-            lam,
-            True,
-            f"the exact powers {source} bound its spectral radius by {below_one(upper, gap)}",
-            details,
-        )
+        facts = {"power": m, "source": source, "upper": upper, "gap": gap}
+        return SchurDecision(SchurCode.POWERS_STABLE, upper, lower, lam, facts, details)
     if powers.radius_excess > 0 and not lower > 1.0:
         # |trace F^m| > n exactly, by less than the float lower bound resolves (1 + 2^-60)
         m = powers.excess_power
         details["spectral_radius_excess"] = powers.radius_excess
-        return SchurDecision(
-            SchurState.UNSTABLE,
-            upper,
-            max(lower, 1.0),
-            f"exact traces: |tr F^{m}| > n",
-            lam,
-            True,
-            f"the exact powers {source} give |trace F^{m}| = "
-            f"{one_plus(powers.trace_excess, n)} > n = {n}, so its spectral radius is at least "
-            f"{one_plus(powers.radius_excess)} > 1: the error does not converge to 0 from every "
-            f"state",
-            details,
-        )
+        facts = {
+            "power": m,
+            "source": source,
+            "n": n,
+            "trace_excess": powers.trace_excess,
+            "radius_excess": powers.radius_excess,
+        }
+        return SchurDecision(SchurCode.TRACE_EXCESS, upper, max(lower, 1.0), lam, facts, details)
     if powers.trace_reaches_n and not lower > 1.0:
-        m = powers.trace_reaches_n
-        return SchurDecision(
-            SchurState.UNSTABLE,
-            upper,
-            max(lower, 1.0),
-            f"exact traces: |tr F^{m}| >= n",
-            lam,
-            True,
-            f"the exact powers {source} give |trace F^{m}| = n = {n} exactly, so its spectral "
-            f"radius is at least 1: the error does not converge to 0 from every state",
-            details,
-        )
+        facts = {"power": powers.trace_reaches_n, "source": source, "n": n}
+        return SchurDecision(SchurCode.TRACE_REACHES_N, upper, max(lower, 1.0), lam, facts, details)
     if lower > 1.0:
-        return SchurDecision(
-            SchurState.UNSTABLE,
-            upper,
-            lower,
-            f"exact traces: rho >= (|tr F^{powers.lower_power}| / n)^(1/{powers.lower_power})",
-            lam,
-            True,
-            f"the exact traces of the powers {source} bound its spectral radius below by "
-            f"{one_plus(lower - 1.0)} > 1",
-            details,
-        )
+        facts = {"power": powers.lower_power, "source": source, "lower": lower}
+        return SchurDecision(SchurCode.TRACES_BELOW, upper, lower, lam, facts, details)
     return None
 
 
@@ -305,17 +261,12 @@ def _exact_eigenvalue_on_circle(
         candidates.append(float(lam.real))
     for value in candidates:
         if n <= 40 and exact_kernel_vector(shift_by(exact, value)) is not None:
-            shown = sig(value, 6, versus=np.sign(value))  # 1 + 2^-40 is not "1"
             return SchurDecision(
-                SchurState.UNSTABLE,
+                SchurCode.EIGENVALUE_ON_CIRCLE,
                 upper,
                 max(lower, abs(value)),
-                f"exact eigenvalue {shown}",
                 lam,
-                True,
-                f"F has the eigenvalue {shown} exactly "
-                f"(F - lambda I has an exact kernel vector), of modulus >= 1: the error along "
-                f"it never decays",
+                {"eigenvalue": value},
                 details,
             )
     return None
@@ -330,29 +281,5 @@ def _decided_to_first_order(
 ) -> SchurDecision:
     """Unstable when the dominant eigenvalue clears 1 by its first-order bound, else unknown."""
     if np.isfinite(abs(lam)) and abs(lam) - bound > 1 + 1e-9:
-        return SchurDecision(
-            SchurState.UNSTABLE,
-            upper,
-            lower,
-            "first-order eigenvalue bound",
-            lam,
-            False,
-            f"the dominant eigenvalue {lam:.6g} exceeds 1 in modulus by more than its first-order "
-            f"error bound {bound:.1e}",
-            details,
-        )
-    return SchurDecision(
-        SchurState.UNKNOWN,
-        upper,
-        lower,
-        "none",
-        lam,
-        False,
-        "neither exact powers nor traces nor a clear eigenvalue decide it"
-        + (
-            f" (certified {_fmt(lower)} <= rho <= {_fmt(upper)})"
-            if upper is not None and lower is not None
-            else ""
-        ),
-        details,
-    )
+        return SchurDecision(SchurCode.FIRST_ORDER, upper, lower, lam, {"bound": bound}, details)
+    return SchurDecision(SchurCode.UNDECIDED, upper, lower, lam, {}, details)

@@ -1,0 +1,185 @@
+"""The exact Schur decision and the Lyapunov certificate: decided on codes, worded apart.
+
+Each ``SchurCode`` is reached by a plant whose answer is known by
+construction; the verdicts are read from the codes, and the words of every
+code are checked once, here (``ssecert.stability.spectral_messages`` and
+``ssecert.stability.lyapunov_messages``).
+"""
+
+import numpy as np
+import pytest
+
+from ssecert.results import Verdict
+from ssecert.stability import lyapunov_messages, spectral_messages
+from ssecert.stability.lyapunov import LyapunovMethod, lyapunov_certificate
+from ssecert.stability.outcomes import LyapunovCode, SchurCode, SchurState
+from ssecert.stability.spectral import EXACT_SCHUR_LIMIT, schur_decision
+
+# (plant, the code that decides it): each answer known by construction
+PLANTS = {
+    "stable diagonal": (np.diag([0.5, 0.2]), SchurCode.POWERS_STABLE),
+    "rotation, rho = 1": (np.array([[0.0, 1.0], [-1.0, 0.0]]), SchurCode.TRACE_REACHES_N),
+    # F^2 = -(1 + 2^-53 - 2^-105) I: rho = 1 + 2^-54, above 1 by less than a float resolves
+    "rho 1 + 2^-54": (
+        np.array([[0.0, 1.0 + 2.0**-52], [-(1.0 - 2.0**-53), 0.0]]),
+        SchurCode.TRACE_EXCESS,
+    ),
+    "eigenvalue 2": (np.diag([2.0, 0.5]), SchurCode.TRACES_BELOW),
+    "identity": (np.eye(2), SchurCode.EIGENVALUE_ON_CIRCLE),
+    "eigenvalue 1 + 2^-40": (np.diag([1.0 + 2.0**-40, 0.5]), SchurCode.EIGENVALUE_ON_CIRCLE),
+    # beyond the exact limit: only the first-order bound speaks
+    "too large for exact powers": (
+        np.diag([1.5] + [0.1] * EXACT_SCHUR_LIMIT),
+        SchurCode.FIRST_ORDER,
+    ),
+    # eigenvalues 1 - 2^-30 +- (slightly less than 2^-30): rho < 1 by ~1e-21
+    "rho 1 - 1e-21": (
+        np.array([[1.0 - 2.0**-30, 1.0], [np.nextafter(2.0**-60, 0.0), 1.0 - 2.0**-30]]),
+        SchurCode.UNDECIDED,
+    ),
+    "not finite": (np.array([[np.nan]]), SchurCode.NON_FINITE),
+}
+
+
+@pytest.mark.parametrize("name", list(PLANTS))
+def test_each_schur_code_is_reached_and_decides_state_and_rigour(name):
+    F, code = PLANTS[name]
+    decision = schur_decision(F)
+    assert decision.code is code
+    assert decision.state is code.state and decision.rigorous is code.rigorous
+    # the JSON record writes the words of this module, in the same places as before
+    record = decision.to_dict()
+    assert record["state"] is decision.state and record["reason"] == decision.reason
+    assert record["method"] == spectral_messages.method(code, decision.facts)
+
+
+def test_the_codes_decide_states_as_documented():
+    assert {c for c in SchurCode if c.state is SchurState.STABLE} == {SchurCode.POWERS_STABLE}
+    assert {c for c in SchurCode if c.state is SchurState.UNKNOWN} == {
+        SchurCode.NON_FINITE,
+        SchurCode.UNDECIDED,
+    }
+    assert {c for c in SchurCode if not c.rigorous} == {
+        SchurCode.NON_FINITE,
+        SchurCode.FIRST_ORDER,
+        SchurCode.UNDECIDED,
+    }
+
+
+def test_the_facts_of_each_code_carry_the_numbers_the_words_print():
+    assert schur_decision(np.diag([1.0 + 2.0**-40, 0.5])).facts["eigenvalue"] == 1.0 + 2.0**-40
+    assert schur_decision(np.eye(2)).facts["eigenvalue"] == 1.0
+    rotation = schur_decision(np.array([[0.0, 1.0], [-1.0, 0.0]]))
+    assert rotation.facts["power"] == 2 and rotation.facts["n"] == 2
+    stable = schur_decision(np.diag([0.5, 0.2]))
+    assert stable.facts["upper"] == stable.radius_upper < 1 and stable.facts["gap"] > 0
+
+
+# ---- the words, checked once -------------------------------------------------------------
+
+
+def test_every_schur_code_has_a_method_and_a_reason():
+    facts = {
+        "power": 3,
+        "source": "of F",
+        "upper": 0.5,
+        "gap": 0.5,
+        "n": 2,
+        "trace_excess": 1e-17,
+        "radius_excess": 1e-18,
+        "lower": 1.25,
+        "eigenvalue": -1.0,
+        "bound": 1e-14,
+    }
+    for code in SchurCode:
+        words = spectral_messages.reason(code, facts, 1.5 + 0j, 1.5, 0.5)
+        assert words and "{" not in words
+        assert spectral_messages.method(code, facts)
+
+
+def test_schur_words_show_which_side_of_one_a_number_is_on():
+    # the exact powers, the excess over n and over 1, the eigenvalue: none prints as "1"
+    assert spectral_messages.below_one(1 - 1.65e-7, 1.65e-7) == "1 - 1.65e-07 < 1"
+    assert spectral_messages.below_one(0.5, 0.5) == "0.5 < 1"
+    excess = spectral_messages.reason(
+        SchurCode.TRACE_EXCESS,
+        {"power": 2, "source": "of F", "n": 2, "trace_excess": 2.2e-16, "radius_excess": 5.5e-17},
+        1.0,
+        1.0,
+        1.0,
+    )
+    assert "|trace F^2| = 2 + 2.2e-16 > n = 2" in excess and "1 + 5.5e-17 > 1" in excess
+    eigen = spectral_messages.method(SchurCode.EIGENVALUE_ON_CIRCLE, {"eigenvalue": 1 + 2**-40})
+    assert eigen != "exact eigenvalue 1" and eigen.startswith("exact eigenvalue 1.0000")
+    # a certified radius interval just below 1 prints on its side of 1
+    undecided = schur_decision(PLANTS["rho 1 - 1e-21"][0]).reason
+    assert "certified 1 <=" not in undecided and "certified 0.99999" in undecided
+
+
+# ---- the Lyapunov certificate --------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("F", "code", "verdict", "method"),
+    [
+        (np.diag([0.5, 0.2]), LyapunovCode.VERIFIED, Verdict.HOLDS, LyapunovMethod.LYAPUNOV),
+        # nilpotent with an entry 2^60: no P verifies in floats, the exact powers prove it
+        (
+            np.array([[0.0, 2.0**60], [0.0, 0.0]]),
+            LyapunovCode.NOT_VERIFIED,
+            Verdict.HOLDS,
+            LyapunovMethod.EXACT_POWERS,
+        ),
+        # lambda_i lambda_j = 1: the Lyapunov operator is singular; exact traces fail it
+        (
+            np.array([[0.0, 1.0], [-1.0, 0.0]]),
+            LyapunovCode.NO_UNIQUE_SOLUTION,
+            Verdict.FAILS,
+            LyapunovMethod.EXACT_POWERS,
+        ),
+        # unstable beyond the exact limit: the first-order bound fails it, not rigorously
+        (
+            np.diag([1.5] + [0.1] * EXACT_SCHUR_LIMIT),
+            LyapunovCode.NOT_VERIFIED,
+            Verdict.FAILS,
+            LyapunovMethod.LYAPUNOV,
+        ),
+        (
+            PLANTS["rho 1 - 1e-21"][0],
+            LyapunovCode.NOT_VERIFIED,
+            Verdict.INCONCLUSIVE,
+            LyapunovMethod.LYAPUNOV,
+        ),
+    ],
+)
+def test_a_lyapunov_certificate_is_decided_by_its_codes(F, code, verdict, method):
+    cert = lyapunov_certificate(F)
+    assert cert.code is code and cert.verdict is verdict and cert.method is method
+    assert (cert.decision is None) == (code is LyapunovCode.VERIFIED)
+    if cert.decision is not None:
+        assert cert.proof == cert.decision.to_dict()
+        if verdict is Verdict.FAILS:
+            assert cert.witness is not None
+
+
+def test_a_certificate_needs_a_verified_p_or_an_exact_decision():
+    cert = lyapunov_certificate(np.diag([0.5, 0.2]))
+    with pytest.raises(ValueError, match="verified P or an exact decision"):
+        type(cert)(cert.P, None, None, 0.0, None, None, None, 0.5, LyapunovCode.NOT_VERIFIED)
+
+
+def test_every_lyapunov_code_has_words_beside_the_decision():
+    facts = {"error": "singular operator", "decrease": -1e-3, "p_min": 2e-3, "bound": 1e-15}
+    for code in LyapunovCode:
+        why = lyapunov_messages.unverified(code, facts)
+        assert bool(why) is (code is not LyapunovCode.VERIFIED)
+        assert lyapunov_messages.reason(code, facts, None, "") == ""
+        # an exact instability is the whole reason; otherwise why no P, then the exact F
+        assert lyapunov_messages.reason(code, facts, SchurState.UNSTABLE, "EXACT") == "EXACT"
+        stable = lyapunov_messages.reason(code, facts, SchurState.STABLE, "EXACT")
+        assert stable == f"{why}; instead, EXACT"
+        assert lyapunov_messages.reason(code, facts, SchurState.UNKNOWN, "EXACT") == f"{why}; EXACT"
+    assert "singular operator" in lyapunov_messages.unverified(
+        LyapunovCode.NO_UNIQUE_SOLUTION, facts
+    )
+    assert "-1.00e-03" in lyapunov_messages.unverified(LyapunovCode.NOT_VERIFIED, facts)
