@@ -19,6 +19,7 @@ from ssecert.stability.lmi import (
     iss_from_circle,
     verify_certificate,
 )
+from ssecert.stability.outcomes import LMICause
 from ssecert.stability.region import region_map
 
 
@@ -64,9 +65,8 @@ def test_sso_and_dsso_on_the_ugv_are_inconclusive_with_the_reason(kind):
     design = build_observer(spec.system, obs)
     model = LureModel.from_design(design)
     cert = circle_certificate(model)
-    assert cert.verdict == "inconclusive"
-    assert "shrink = 1" in cert.reason and "eigenvalue at 1" in cert.reason
-    assert cert.details["spectral_radius_at_sector_vertex"] >= 1 - 1e-9
+    assert cert.verdict == "inconclusive" and cert.cause is LMICause.IDENTITY_IN_SECTOR
+    assert cert.facts["radius"] == cert.details["spectral_radius_at_sector_vertex"] >= 1 - 1e-9
     # the mode e = v, a_hat = -C v (v the eigenvector of A at 1) is an eigenvector at 1
     v = np.array([1.0, 0.0])
     mode = np.concatenate([v, -spec.system.C @ v])
@@ -88,7 +88,7 @@ def test_unstable_linear_error_matrix_is_never_certified(seed):
     )
     model = LureModel.from_design(design)
     cert = circle_certificate(model)
-    assert cert.verdict == "fails"
+    assert cert.verdict == "fails" and cert.cause is LMICause.ERROR_MATRIX_UNSTABLE
     witness = cert.details["witness"]
     # the dead zone keeps a_hat at 0 near the origin, so a small error grows like F^k
     xi0 = np.concatenate([1e-6 * witness["initial_error"], np.zeros(model.m)])
@@ -156,7 +156,8 @@ def test_solver_failure_is_inconclusive(monkeypatch):
 
     monkeypatch.setattr(cvxpy.Problem, "solve", broken)
     cert = circle_certificate(LureModel.from_design(random_design(1)))
-    assert cert.verdict == "inconclusive" and "simulated failure" in cert.reason
+    assert cert.verdict == "inconclusive" and cert.cause is LMICause.CIRCLE_NOT_VERIFIED
+    assert all("simulated failure" in a["status"] for a in cert.facts["attempts"])
 
 
 def test_unverifiable_solution_is_inconclusive(monkeypatch):

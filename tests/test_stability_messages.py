@@ -10,10 +10,12 @@ import numpy as np
 import pytest
 
 from ssecert.results import Verdict
-from ssecert.stability import lyapunov_messages, spectral_messages
+from ssecert.stability import lmi_messages, lyapunov_messages, spectral_messages
+from ssecert.stability.lmi import LMICertificate, LureModel, circle_certificate
 from ssecert.stability.lyapunov import LyapunovMethod, lyapunov_certificate
-from ssecert.stability.outcomes import LyapunovCode, SchurCode, SchurState
+from ssecert.stability.outcomes import LMICause, LMICode, LyapunovCode, SchurCode, SchurState
 from ssecert.stability.spectral import EXACT_SCHUR_LIMIT, schur_decision
+from ssecert.stability.zames_falb import zames_falb_certificate
 
 # (plant, the code that decides it): each answer known by construction
 PLANTS = {
@@ -183,3 +185,65 @@ def test_every_lyapunov_code_has_words_beside_the_decision():
         LyapunovCode.NO_UNIQUE_SOLUTION, facts
     )
     assert "-1.00e-03" in lyapunov_messages.unverified(LyapunovCode.NOT_VERIFIED, facts)
+
+
+# ---- the LMI certificates ------------------------------------------------------------------
+
+
+def test_lmi_causes_decided_before_any_solve():
+    # no nonlinearity: nothing for a multiplier to act on
+    linear = LureModel.linear(np.array([[0.5]]), np.zeros((1, 1)))
+    assert zames_falb_certificate(linear).cause is LMICause.NO_NONLINEARITY
+    # F = A - L C with an eigenvalue 1.2: proved unstable before any LMI
+    unstable = LureModel.linear(np.array([[1.2]]), np.zeros((1, 1)))
+    cert = circle_certificate(unstable)
+    assert cert.code is LMICode.DECIDED_BEFORE and cert.cause is LMICause.ERROR_MATRIX_UNSTABLE
+    assert cert.verdict is Verdict.FAILS and cert.facts["channels"] == 0
+    assert cert.facts["decision"] == cert.details["exact_decision"]["reason"]
+
+
+def test_every_lmi_cause_has_words_and_notes_follow_them():
+    facts = {
+        "refusal": "the full LMI needs about 3 GiB",
+        "decision": "DECISION",
+        "channels": 2,
+        "radius": 1.0 + 1e-13,
+        "q": 0.5,
+        "corner": {
+            "gains": [0.0, 0.5],
+            "spectral_radius": 1.25,
+            "corners": 4,
+            "unstable_corners": 1,
+        },
+        "attempts": [{"structure": "full", "status": "infeasible", "order": 1}],
+        "order": 2,
+        "status": "infeasible",
+        "problem": "PROBLEM",
+    }
+    for cause in LMICause:
+        words = lmi_messages.reason(cause, facts)
+        assert bool(words) is (cause is not LMICause.CERTIFIED), cause
+    assert (
+        lmi_messages.reason(LMICause.REFUSED, facts)
+        == "not attempted: the full LMI needs about 3 GiB"
+    )
+    assert "0, 0.5" in lmi_messages.reason(LMICause.CORNER_UNSTABLE, facts)
+    assert "full: infeasible" in lmi_messages.reason(LMICause.CIRCLE_NOT_VERIFIED, facts)
+    assert "order 1: infeasible" in lmi_messages.reason(LMICause.ZAMES_FALB_NOT_VERIFIED, facts)
+    assert "dead zone" in lmi_messages.reason(LMICause.ERROR_MATRIX_UNSTABLE, facts)
+    assert "dead zone" not in lmi_messages.reason(
+        LMICause.ERROR_MATRIX_UNSTABLE, {**facts, "channels": 0}
+    )
+    # a certificate's notes come after its own words, in the order they were added
+    cert = LMICertificate(
+        Verdict.INCONCLUSIVE,
+        "circle",
+        code=LMICode.NOT_VERIFIED,
+        cause=LMICause.NO_BASE,
+    )
+    noted = cert.noted(lmi_messages.balanced_note("diag(2^3, 1)", "WHY")).noted("; LAST")
+    assert noted.reason == (
+        "no circle certificate to build on; in balanced state coordinates "
+        "(xi = diag(2^3, 1) xi_b): WHY; LAST"
+    )
+    assert cert.reason == "no circle certificate to build on"

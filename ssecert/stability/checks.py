@@ -108,9 +108,7 @@ def observer_stability_check(
         if zf.verdict is Verdict.HOLDS:
             return _zames_falb_stability_check(design, model, zf, tol, title), (model, zf)
         cert = replace(
-            cert,
-            reason=f"{cert.reason}; {zf.reason}",
-            details={**cert.details, "zames_falb": zf.details},
+            cert.noted(f"; {zf.reason}"), details={**cert.details, "zames_falb": zf.details}
         )
     if cert.verdict is Verdict.INCONCLUSIVE:
         with stage("divergent trajectory search"):

@@ -41,20 +41,21 @@ re-verification in ``lmi_verification``; this module decides.
 from __future__ import annotations
 
 import itertools
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from functools import partial
 from typing import Any
 
 import numpy as np
 
-from ..base.format import sig
 from ..budget import Budget
 from ..observers.lure import LureModel, scaling_text
 from ..results import Verdict
+from . import lmi_messages
+from .lmi_messages import corner_reason
 from .lmi_solver import ETA, _solve, lmi_cost  # noqa: F401  (ETA stays importable here)
 from .lmi_verification import circle_matrix, iss_matrix, verify_certificate
-from .outcomes import LMICode
+from .outcomes import LMICause, LMICode
 
 __all__ = [
     "LureModel",
@@ -115,12 +116,16 @@ class LMICertificate:
         l2 gain from attack to estimation error (ISS).
     structure : str
         ``"block-diagonal"`` or ``"full"``.
-    reason : str
     details : dict
         Solver status and times, pre-check results, witness.
     code : LMICode
         How it came out (verified, reused, refused, decided before the LMIs, solved and not
         verified...): decisions read it, never ``details``' keys or ``reason``.
+    cause : LMICause
+        Why, for the words (``reason``, written by ``lmi_messages``) and for tests.
+    facts : mapping
+        The numbers and names the words of ``cause`` need, and the ``notes`` gathered on the
+        way (balanced retries, a second multiplier); not written to JSON.
     """
 
     verdict: Verdict
@@ -132,12 +137,23 @@ class LMICertificate:
     decay: float | None = None
     gamma: float | None = None
     structure: str = ""
-    reason: str = ""
     details: dict[str, Any] = field(default_factory=dict)
     code: LMICode = field(kw_only=True)
+    cause: LMICause = field(kw_only=True, default=LMICause.CERTIFIED)
+    facts: Mapping[str, Any] = field(kw_only=True, default_factory=dict)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "verdict", Verdict(self.verdict))  # a name is accepted too
+
+    @property
+    def reason(self) -> str:
+        """Why it came out as it did, in words (``lmi_messages``; empty when it holds)."""
+        return lmi_messages.reason(self.cause, self.facts)
+
+    def noted(self, note: str) -> LMICertificate:
+        """The same certificate with ``note`` (words from ``lmi_messages`` or another
+        outcome's reason) after its reason."""
+        return replace(self, facts={**self.facts, "notes": (*self.facts.get("notes", ()), note)})
 
     def evidence(self) -> dict[str, Any]:
         """JSON-serialisable evidence for re-verification."""
@@ -171,7 +187,9 @@ def _solve_refusal(model: LureModel, kind: str, structure: str, budget: Budget) 
     )
 
 
-def _prechecks(model: LureModel) -> tuple[Verdict | None, str, dict[str, Any]]:
+def _prechecks(
+    model: LureModel,
+) -> tuple[Verdict | None, LMICause, dict[str, Any], dict[str, Any]]:
     """Structural facts that decide before any LMI is solved."""
     from .lyapunov import instability_witness
 
@@ -179,13 +197,7 @@ def _prechecks(model: LureModel) -> tuple[Verdict | None, str, dict[str, Any]]:
     F = model.A[:n, :n]
     details: dict[str, Any] = {}
     if not model.finite():
-        return (
-            Verdict.INCONCLUSIVE,
-            "the error dynamics' matrices leave the float range (an entry of A - L C, the "
-            "sector's vertex loop or the channels beyond 1.8e308): no certificate can be "
-            "computed or verified in floating point",
-            details,
-        )
+        return Verdict.INCONCLUSIVE, LMICause.NOT_FINITE, {}, details
     rho_F = float(np.abs(np.linalg.eigvals(F)).max()) if n else 0.0
     details["spectral_radius_F"] = rho_F
     if rho_F >= 1 - 1e-12:
@@ -196,29 +208,11 @@ def _prechecks(model: LureModel) -> tuple[Verdict | None, str, dict[str, Any]]:
         if decision.state is not SchurState.STABLE:
             witness = instability_witness(F, decision=decision)
             details["witness"] = witness
-            where = (
-                "near the origin the soft threshold is zero (dead zone), so the error "
-                "follows e+ = F e and "
-                if model.m
-                else ""
-            )
             if witness is not None and witness["verified"]:
-                return (
-                    Verdict.FAILS,
-                    (
-                        f"the linear error matrix F = A - L C is not stable: {decision.reason}; "
-                        f"{where}the origin is not asymptotically stable"
-                    ),
-                    details,
-                )
-            return (
-                Verdict.INCONCLUSIVE,
-                (
-                    f"the computed spectral radius of F = A - L C is {rho_F:.12g}, and its stability "
-                    f"cannot be decided: {decision.reason}; no certificate is attempted"
-                ),
-                details,
-            )
+                facts = {"decision": decision.reason, "channels": model.m}
+                return Verdict.FAILS, LMICause.ERROR_MATRIX_UNSTABLE, facts, details
+            facts = {"radius": rho_F, "decision": decision.reason}
+            return Verdict.INCONCLUSIVE, LMICause.ERROR_MATRIX_UNDECIDED, facts, details
     if model.m:
         rho_q = float(np.abs(np.linalg.eigvals(model.vertex(model.q))).max())
         details["spectral_radius_at_sector_vertex"] = rho_q
@@ -228,37 +222,18 @@ def _prechecks(model: LureModel) -> tuple[Verdict | None, str, dict[str, Any]]:
             vertex = schur_decision(model.vertex(model.q), exact=_exact_vertex(model))
             details["sector_vertex_decision"] = vertex.to_dict()
             if vertex.state is not SchurState.UNSTABLE:
-                return (
-                    Verdict.INCONCLUSIVE,
-                    (
-                        f"the linear loop phi = {model.q:g} w that the sector [0, {model.q:g}] "
-                        f"contains has spectral radius within rounding of 1 (computed "
-                        f"{rho_q:.12g}; {vertex.reason}): a sector certificate would have a "
-                        f"margin below what floating point can verify"
-                    ),
-                    details,
-                )
+                facts = {"q": model.q, "radius": rho_q, "decision": vertex.reason}
+                return Verdict.INCONCLUSIVE, LMICause.VERTEX_WITHIN_ROUNDING, facts, details
             if model.q >= 1 - 1e-12:
-                why = (
-                    f"with shrink = 1 the sector [0, 1] contains the identity, and the linear "
-                    f"loop it then contains has spectral radius {sig(rho_q, 6)}"
-                    f"{' > 1' if rho_q > 1 + 1e-9 else ''} (it has an eigenvalue at 1 whenever A "
-                    f"does: e = v, a_hat = -C v); no sector certificate can "
-                    f"exist, which does not mean the observer is unstable. Shrink < 1 (the "
-                    f"elastic-net observer) is what makes a certificate possible"
-                )
-            else:
-                why = (
-                    f"the sector [0, {model.q:g}] contains the linear map phi = {model.q:g} w, "
-                    f"whose closed loop is not asymptotically stable ({vertex.reason}); no sector "
-                    f"certificate can exist"
-                )
-            return Verdict.INCONCLUSIVE, why, details
+                facts = {"radius": rho_q}
+                return Verdict.INCONCLUSIVE, LMICause.IDENTITY_IN_SECTOR, facts, details
+            facts = {"q": model.q, "decision": vertex.reason}
+            return Verdict.INCONCLUSIVE, LMICause.VERTEX_UNSTABLE, facts, details
         corner = channel_vertex_instability(model)
         if corner is not None:
             details["channel_corner"] = corner
-            return Verdict.INCONCLUSIVE, corner_reason(corner), details
-    return None, "", details
+            return Verdict.INCONCLUSIVE, LMICause.CORNER_UNSTABLE, {"corner": corner}, details
+    return None, LMICause.CERTIFIED, {}, details
 
 
 def _exact_vertex(model: LureModel) -> Any:
@@ -329,17 +304,6 @@ def channel_vertex_instability(model: LureModel) -> dict[str, Any] | None:
     }
 
 
-def corner_reason(corner: dict[str, Any]) -> str:
-    gains = ", ".join(f"{k:g}" for k in corner["gains"])
-    return (
-        f"the linear loop with phi_i = k_i w_i, k = ({gains}), is in the sector channel by "
-        f"channel and has spectral radius {sig(corner['spectral_radius'], 6)} > 1 "
-        f"({corner['unstable_corners']} of the {corner['corners']} corners k in {{0, shrink}}^m "
-        f"are unstable), so no certificate that treats the channels as separate sector or "
-        f"slope-restricted nonlinearities (circle criterion, Zames-Falb multipliers) can exist"
-    )
-
-
 def to_original_coordinates(cert: LMICertificate, s: np.ndarray, N: int) -> LMICertificate | None:
     """A certificate of ``model.scaled(s)`` written for ``model`` (None if not exactly).
 
@@ -390,8 +354,8 @@ def where_verified(
         return LMICertificate(
             Verdict.INCONCLUSIVE,
             cert.kind,
-            reason="the certificate's P leaves the float range in its balanced coordinates",
             code=LMICode.NOT_REPRESENTABLE,
+            cause=LMICause.P_OUT_OF_RANGE,
         )
     inside = replace(
         cert,
@@ -406,8 +370,8 @@ def where_verified(
         return LMICertificate(
             Verdict.INCONCLUSIVE,
             found.kind,
-            reason="the certificate does not scale back exactly",
             code=LMICode.NOT_REPRESENTABLE,
+            cause=LMICause.NOT_SCALED_BACK,
         )
     return back
 
@@ -448,14 +412,10 @@ def balanced_retry(
                 back = replace(back, details={**back.details, "unbalanced_attempts": attempts})
             if back is not None:
                 return back, ""
-            why = (
-                "its P, written for the spec's coordinates (entries scaled by up to "
-                f"2^{2 * int(np.max(np.abs(np.log2(s))))}), would leave the float range or "
-                "lose digits"
-            )
+            why = lmi_messages.not_written_back(2 * int(np.max(np.abs(np.log2(s)))))
         else:
             why = cert.reason
-        notes += f"; in balanced state coordinates (xi = {scaling_text(s)} xi_b): {why}"
+        notes += lmi_messages.balanced_note(scaling_text(s), why)
     return None, notes
 
 
@@ -513,7 +473,7 @@ def circle_certificate(
     retry, note = balanced_retry(model, search, enabled=balance, attempts=cert.details["attempts"])
     if retry is not None:
         return retry
-    return replace(cert, reason=f"{cert.reason}{note}; this does not show the observer is unstable")
+    return cert.noted(note + lmi_messages.UNPROVEN_INSTABILITY)
 
 
 def _circle_search(
@@ -533,14 +493,20 @@ def _circle_search(
         return LMICertificate(
             Verdict.INCONCLUSIVE,
             "circle",
-            reason=f"not attempted: {refusal}",
             details={"budget": budget.to_dict()},
             code=LMICode.NOT_ATTEMPTED,
+            cause=LMICause.REFUSED,
+            facts={"refusal": refusal},
         )
-    verdict, reason, details = _prechecks(model)
+    verdict, cause, facts, details = _prechecks(model)
     if verdict is not None:
         return LMICertificate(
-            verdict, "circle", reason=reason, details=details, code=LMICode.DECIDED_BEFORE
+            verdict,
+            "circle",
+            details=details,
+            code=LMICode.DECIDED_BEFORE,
+            cause=cause,
+            facts=facts,
         )
     for P_old, t_old in reuse:
         ok, margin, bound, _ = verify_certificate(model, P_old, t_old, clear=clear)
@@ -575,13 +541,10 @@ def _circle_search(
     return LMICertificate(
         Verdict.INCONCLUSIVE,
         "circle",
-        reason=(
-            "no circle-criterion certificate was found or verified (LMI "
-            + "; ".join(f"{a['structure']}: {a['status']}" for a in attempts)
-            + ")"
-        ),
         details={**details, "attempts": attempts},
         code=LMICode.NOT_VERIFIED,
+        cause=LMICause.CIRCLE_NOT_VERIFIED,
+        facts={"attempts": attempts},
     )
 
 
@@ -645,14 +608,20 @@ def iss_certificate(
         return LMICertificate(
             Verdict.INCONCLUSIVE,
             "iss",
-            reason=f"not attempted: {refusal}",
             details={"budget": budget.to_dict()},
             code=LMICode.NOT_ATTEMPTED,
+            cause=LMICause.REFUSED,
+            facts={"refusal": refusal},
         )
-    verdict, reason, details = _prechecks(model)
+    verdict, cause, facts, details = _prechecks(model)
     if verdict is not None:
         return LMICertificate(
-            verdict, "iss", reason=reason, details=details, code=LMICode.DECIDED_BEFORE
+            verdict,
+            "iss",
+            details=details,
+            code=LMICode.DECIDED_BEFORE,
+            cause=cause,
+            facts=facts,
         )
     attempts = []
     c, solved = output_scaled(model)  # solved with e in units c, the certificate scaled back
@@ -714,14 +683,10 @@ def iss_certificate(
     return LMICertificate(
         Verdict.INCONCLUSIVE,
         "iss",
-        reason=(
-            "no dissipation certificate was found or verified (LMI "
-            + "; ".join(f"{a['structure']}: {a['status']}" for a in attempts)
-            + ")"
-            + note
-        ),
         details={**details, "attempts": attempts},
         code=LMICode.NOT_VERIFIED,
+        cause=LMICause.DISSIPATION_NOT_VERIFIED,
+        facts={"attempts": attempts, "notes": (note,)},
     )
 
 
@@ -756,8 +721,8 @@ def iss_from_circle(
         return LMICertificate(
             Verdict.INCONCLUSIVE,
             "iss",
-            reason="no circle certificate to build on",
             code=LMICode.NO_BASE,
+            cause=LMICause.NO_BASE,
         )
     elsewhere = where_verified(model, circle, partial(iss_from_circle, clear=clear))
     if elsewhere is not None:
@@ -785,19 +750,16 @@ def _gain_from_circle(model: LureModel, circle: LMICertificate, clear: float) ->
         return LMICertificate(
             Verdict.INCONCLUSIVE,
             "iss",
-            reason="the dissipation matrix of the circle certificate leaves the float range",
             code=LMICode.NOT_REPRESENTABLE,
+            cause=LMICause.DISSIPATION_OUT_OF_RANGE,
         )
     x, g = _smallest_gain(_schur_gain(base, perf, k), _scale_grid(model, base, k))
     if not np.isfinite(g):
         return LMICertificate(
             Verdict.INCONCLUSIVE,
             "iss",
-            reason=(
-                "no finite gain from the circle certificate (the Schur complement in the attack "
-                "is not defined for any scaling tried)"
-            ),
             code=LMICode.NOT_VERIFIED,
+            cause=LMICause.NO_FINITE_GAIN,
         )
     kappa = float(np.exp(x))
     ok, margin, bound, problem, g_cert = _verified_gain(
@@ -807,8 +769,9 @@ def _gain_from_circle(model: LureModel, circle: LMICertificate, clear: float) ->
         return LMICertificate(
             Verdict.INCONCLUSIVE,
             "iss",
-            reason=f"gain not verified: {problem}",
             code=LMICode.NOT_VERIFIED,
+            cause=LMICause.GAIN_NOT_VERIFIED,
+            facts={"problem": problem},
         )
     return LMICertificate(
         Verdict.HOLDS,

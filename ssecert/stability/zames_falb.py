@@ -64,13 +64,12 @@ from .lmi import (
     LMICertificate,
     balanced_retry,
     channel_vertex_instability,
-    corner_reason,
     output_scaled,
     where_verified,
 )
 from .lmi_solver import ETA, _run_clarabel
 from .lmi_verification import decide
-from .outcomes import LMICode
+from .outcomes import LMICause, LMICode
 
 __all__ = [
     "ORDERS",
@@ -303,17 +302,18 @@ def zames_falb_certificate(
         return LMICertificate(
             Verdict.INCONCLUSIVE,
             "zames-falb",
-            reason="no nonlinearity",
             code=LMICode.DECIDED_BEFORE,
+            cause=LMICause.NO_NONLINEARITY,
         )
     corner = channel_vertex_instability(model)
     if corner is not None:
         return LMICertificate(
             Verdict.INCONCLUSIVE,
             "zames-falb",
-            reason=corner_reason(corner),
             details={"channel_corner": corner},
             code=LMICode.DECIDED_BEFORE,
+            cause=LMICause.CORNER_UNSTABLE,
+            facts={"corner": corner},
         )
     # nonnegative coefficients first (the certificate then also proves convergence to the
     # equilibrium of every constant attack), then signed ones (the soft threshold is odd)
@@ -351,18 +351,10 @@ def zames_falb_certificate(
     return LMICertificate(
         Verdict.INCONCLUSIVE,
         "zames-falb",
-        reason=(
-            "no Zames-Falb certificate was found or verified ("
-            + "; ".join(
-                f"order {a['order']}{', ' + a['coefficients'] if 'coefficients' in a else ''}: "
-                f"{a['status']}"
-                for a in attempts
-            )
-            + ")"
-            + note
-        ),
         details={"attempts": attempts},
         code=LMICode.NOT_VERIFIED,
+        cause=LMICause.ZAMES_FALB_NOT_VERIFIED,
+        facts={"attempts": attempts, "notes": (note,)},
     )
 
 
@@ -433,7 +425,11 @@ def zames_falb_gain(
     skip = _refusal(model, nu, True, budget)
     if skip:
         return LMICertificate(
-            Verdict.INCONCLUSIVE, "iss", reason=f"not attempted: {skip}", code=LMICode.NOT_ATTEMPTED
+            Verdict.INCONCLUSIVE,
+            "iss",
+            code=LMICode.NOT_ATTEMPTED,
+            cause=LMICause.REFUSED,
+            facts={"refusal": skip},
         )
     c, solved = output_scaled(model)  # solved with e in units c, the certificate scaled back
     sol, g, info = _solve(solved, nu, True, solver_options or {})
@@ -444,7 +440,8 @@ def zames_falb_gain(
         return _gain_retry(
             model,
             stability,
-            f"no Zames-Falb dissipation certificate (order {nu}: {info['status']})",
+            LMICause.ZAMES_FALB_NO_DISSIPATION,
+            {"order": nu, "status": info["status"]},
             {"attempts": [info]},
             clear,
             budget,
@@ -476,7 +473,8 @@ def zames_falb_gain(
     return _gain_retry(
         model,
         stability,
-        f"the Zames-Falb gain was not verified: {problem}",
+        LMICause.ZAMES_FALB_GAIN_NOT_VERIFIED,
+        {"problem": problem},
         {"attempts": [info]},
         clear,
         budget,
@@ -488,14 +486,16 @@ def zames_falb_gain(
 def _gain_retry(
     model: LureModel,
     stability: LMICertificate,
-    reason: str,
+    cause: LMICause,
+    facts: dict[str, Any],
     details: dict[str, Any],
     clear: float,
     budget: Budget,
     solver_options: dict[str, Any] | None,
     balance: bool,
 ) -> LMICertificate:
-    """The gain solved again in balanced state coordinates, or inconclusive with ``reason``."""
+    """The gain solved again in balanced state coordinates, or inconclusive for ``cause``
+    (with its ``facts``)."""
     retry, note = balanced_retry(
         model,
         partial(
@@ -513,7 +513,8 @@ def _gain_retry(
     return LMICertificate(
         Verdict.INCONCLUSIVE,
         "iss",
-        reason=reason + note,
         details=details,
         code=LMICode.NOT_VERIFIED,
+        cause=cause,
+        facts={**facts, "notes": (note,)},
     )
