@@ -25,11 +25,13 @@ from __future__ import annotations
 
 import enum
 import math
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from . import exact_messages
 from .exact_powers import (
     Dyadic,
     PowerBound,
@@ -38,6 +40,7 @@ from .exact_powers import (
     shift_by,
     spectral_radius_bound,
 )
+from .outcomes import ExactCode
 
 __all__ = [
     "Dyadic",
@@ -117,7 +120,10 @@ class ExactObservability:
     z_exact : list of int or None
         The exact integer direction.
     prime : int or None
-    reason : str
+    code : ExactCode
+        Why the decision is what it is (``DECIDED`` for a plain proof).
+    facts : mapping
+        The numbers the words of ``code`` need; not written to JSON.
     """
 
     state: Observability
@@ -125,10 +131,16 @@ class ExactObservability:
     z: np.ndarray | None = None
     z_exact: list[int] | None = None
     prime: int | None = None
-    reason: str = ""
+    code: ExactCode = ExactCode.DECIDED
+    facts: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "state", Observability(self.state))  # a name is accepted too
+
+    @property
+    def reason(self) -> str:
+        """Why, in words (``exact_messages``; empty for a plain proof)."""
+        return exact_messages.reason(self.code, self.facts)
 
     def to_dict(self) -> dict:
         out: dict = {"state": self.state, "rank_mod_p": self.rank_mod_p, "prime": self.prime}
@@ -314,10 +326,10 @@ def exact_observability(
     n = A.shape[0]
     if n > max_n or n > _MAX_MOD_N:
         return ExactObservability(
-            Observability.UNKNOWN, reason=f"n = {n} exceeds the exact limit {max_n}"
+            Observability.UNKNOWN, code=ExactCode.TOO_LARGE, facts={"n": n, "limit": max_n}
         )
     if not (np.all(np.isfinite(A)) and np.all(np.isfinite(C))):
-        return ExactObservability(Observability.UNKNOWN, reason="non-finite data")
+        return ExactObservability(Observability.UNKNOWN, code=ExactCode.NON_FINITE)
     if C.shape[0] == 0 or not np.any(C):
         unit = np.zeros(n)
         unit[0] = 1.0
@@ -329,7 +341,7 @@ def exact_observability(
             unit,
             zi,
             None,
-            "no sensor output: every state is unobservable",
+            ExactCode.NO_OUTPUT,
         )
     Aint, Cint = _integer_data(A, C)
     rank = 0
@@ -344,15 +356,14 @@ def exact_observability(
             Observability.UNKNOWN,
             rank,
             prime=prime,
-            reason="rank deficient modulo two primes, but the exact kernel computation exceeded "
-            "its budget or found full rank",
+            code=ExactCode.KERNEL_NOT_FOUND,
         )
     if not _verify_kernel(Aint, Cint, z):  # pragma: no cover - would be a bug above
         return ExactObservability(
             Observability.UNKNOWN,
             rank,
             prime=prime,
-            reason="the exact kernel vector did not verify",
+            code=ExactCode.KERNEL_NOT_VERIFIED,
         )
     zf = _scaled_floats(z)
     return ExactObservability(Observability.UNOBSERVABLE, rank, zf / np.linalg.norm(zf), z, prime)
@@ -431,7 +442,7 @@ class ExactPlant:
         ):
             return cached
         if not self.enabled:
-            result = ExactObservability(Observability.UNKNOWN, reason="beyond the exact limits")
+            result = ExactObservability(Observability.UNKNOWN, code=ExactCode.BEYOND_LIMITS)
         elif not key:
             unit = np.zeros(self.n)
             unit[0] = 1.0
@@ -441,7 +452,7 @@ class ExactPlant:
                 unit,
                 [1] + [0] * (self.n - 1),
                 None,
-                "no sensor kept",
+                ExactCode.NO_SENSOR_KEPT,
             )
         else:
             rank = self.n
@@ -456,7 +467,7 @@ class ExactPlant:
                     Observability.UNOBSERVABLE,
                     rank,
                     prime=q,
-                    reason="Krylov rank below n modulo two primes",
+                    code=ExactCode.RANK_MODULO_PRIMES,
                 )
             else:
                 Csub = np.array([self._row(i)[0] for i in key], dtype=object)
@@ -471,8 +482,7 @@ class ExactPlant:
                         Observability.UNKNOWN,
                         rank,
                         prime=q,
-                        reason="rank deficient modulo two primes, but no exact kernel vector "
-                        "within the budget",
+                        code=ExactCode.KERNEL_BUDGET,
                     )
         self._cache[key] = result
         return result
@@ -527,18 +537,16 @@ def exact_stacked_rank(
     wanted = sorted({int(r) for r in rows})
     if n > max_n:
         return ExactObservability(
-            Observability.UNKNOWN, reason=f"n = {n} exceeds the exact limit {max_n}"
+            Observability.UNKNOWN, code=ExactCode.TOO_LARGE, facts={"n": n, "limit": max_n}
         )
     if not (np.all(np.isfinite(A)) and np.all(np.isfinite(C))):
-        return ExactObservability(Observability.UNKNOWN, reason="non-finite data")
+        return ExactObservability(Observability.UNKNOWN, code=ExactCode.NON_FINITE)
     if any(r < 0 or r >= p * steps for r in wanted):
         raise ValueError(f"rows must index the {p * steps} rows of O_{steps}")
     last = max((r // p for r in wanted), default=-1)
     exact_A = dyadic(A)
     if last * max(exact_A.bits(), 1) > max_bits:
-        return ExactObservability(
-            Observability.UNKNOWN, reason="the exact powers of A exceed the bit budget"
-        )
+        return ExactObservability(Observability.UNKNOWN, code=ExactCode.POWERS_BIT_BUDGET)
     picked: list[np.ndarray] = []
     by_sensor: dict[int, set[int]] = {}
     for r in wanted:
@@ -554,7 +562,7 @@ def exact_stacked_rank(
         unit = np.zeros(n)
         unit[0] = 1.0
         return ExactObservability(
-            Observability.UNOBSERVABLE, 0, unit, [1] + [0] * (n - 1), None, "no rows"
+            Observability.UNOBSERVABLE, 0, unit, [1] + [0] * (n - 1), None, ExactCode.NO_ROWS
         )
     M = np.array(picked, dtype=object).reshape(len(picked), n)
     zero = np.zeros((n, n), dtype=np.int64)
@@ -570,7 +578,7 @@ def exact_stacked_rank(
             Observability.UNKNOWN,
             rank,
             prime=prime,
-            reason="no exact kernel vector within the budget",
+            code=ExactCode.NO_KERNEL_VECTOR,
         )
     zf = _scaled_floats(z)
     return ExactObservability(Observability.UNOBSERVABLE, rank, zf / np.linalg.norm(zf), z, prime)
