@@ -161,6 +161,10 @@ class Check:
         spectral radius bound 1 - 2^-60 is the float 1.0, and reads "1 - 8.67e-19".  Reports
         show it instead of the rounded float; the JSON keeps ``value`` (and ``margin``, the
         exact distance).  Empty: the float, rounded.
+    code : Enum or None, default None
+        The reason code the verdict was decided on, where the analysis has one (an
+        ``IrrepresentableCode``, a ``RegionCode``...): for callers and tests that read the
+        decision instead of the summary's words; not written to JSON.
     """
 
     id: str
@@ -179,6 +183,7 @@ class Check:
     margin_name: str = ""
     applies: bool = True
     value_text: str = ""
+    code: enum.Enum | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "verdict", Verdict(self.verdict))

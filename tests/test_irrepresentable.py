@@ -11,6 +11,8 @@ from hypothesis import strategies as st
 
 from ssecert import System, Tolerances, irrepresentable, irrepresentable_constant
 from ssecert.examples import load_example
+from ssecert.structure import irrepresentable_messages
+from ssecert.structure.outcomes import IrrepresentableCode as Code
 
 
 @pytest.mark.parametrize("alpha", [1e-3, -0.7, 1.0, 2.0, 350.0])
@@ -81,8 +83,7 @@ def test_no_attack_is_trivially_fine():
 
 def test_budget():
     check = irrepresentable(System(np.eye(2), np.eye(6, 2) + 1), 3, horizon=1, max_sets=5)
-    assert check.verdict.value == "inconclusive"
-    assert "--max-sets" in check.summary
+    assert check.verdict.value == "inconclusive" and check.code is Code.TOO_MANY_SUPPORTS
 
 
 def test_bad_mode():
@@ -200,7 +201,7 @@ def test_a_sensors_units_change_rho_but_never_make_a_false_rank_claim(name):
             exact = _exact_worst(A, C2, s, horizon)
             assert CLAIM not in check.summary, (i, k, check.summary)
             if check.verdict.value == "inconclusive":
-                assert abs(exact - 1) <= 1e-9 or "cannot be told from 1" in check.summary
+                assert abs(exact - 1) <= 1e-9 or check.code is Code.NOT_TOLD_FROM_ONE
                 continue
             assert check.verdict.value == ("holds" if exact < 1 else "fails"), (i, k)
             if math.isfinite(exact):
@@ -230,8 +231,7 @@ def test_a_constant_that_rests_on_a_cancellation_is_inconclusive_with_its_error(
     # by 100%; the condition number of O_Sbar in the sensors' units says so
     A, C, s, horizon = _plant("notes-example-2")
     check = irrepresentable(System(A, _sensor_units(C, 0, -60)), s, horizon=horizon)
-    assert check.verdict.value == "inconclusive"
-    assert "cannot be told from 1" in check.summary
+    assert check.verdict.value == "inconclusive" and check.code is Code.NOT_TOLD_FROM_ONE
     assert check.evidence["value_relative_error_estimate"] > 1
 
 
@@ -305,6 +305,28 @@ def test_an_exact_constant_of_one_fails_by_rational_arithmetic():
     # A = I, C = [e1; e2; e1 + e2], tau = 2: rho on sensor y1 is exactly 1 (holds needs < 1);
     # the floats give 1 + 4.4e-16, within the tolerance band, and the check said inconclusive
     check = irrepresentable(System(np.eye(2), [[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]), 1)
-    assert check.verdict.value == "fails"
+    assert check.verdict.value == "fails" and check.code is Code.EXACTLY_AT_LEAST_ONE
     assert check.evidence["worst_support_exact_value"] == "1"
-    assert check.witness["exact_value"] == "1" and "exactly 1" in check.summary
+    assert check.witness["exact_value"] == "1"
+
+
+def test_every_irrepresentable_code_has_words_and_a_verdict():
+    facts = {
+        "tau": 3, "rank": 1, "n": 2, "k": 2, "items": 4, "noun": "sensors", "count": 6,
+        "max_sets": 5, "refusal": "REFUSAL", "hint": "", "first": 0, "last": 9, "cause": "X",
+        "problem": "PROBLEM", "doubt": "DOUBT.", "label": "y1, y2", "checked": 6, "total": 6,
+        "worst": 1.5, "direct": 1.4, "estimate": 0.1, "kappa": 1e3, "counted": "sensors",
+        "stopped": None, "exact": None, "band": 1e-9, "accuracy": None,
+    }  # fmt: skip
+    for code in Code:
+        exact = 1 if code is Code.EXACTLY_AT_LEAST_ONE else None
+        words = irrepresentable_messages.summary(code, {**facts, "exact": exact})
+        assert words.endswith(".") and "{" not in words, code
+    assert {c for c in Code if c.verdict.value == "holds"} == {Code.NO_ATTACK, Code.BELOW_ONE}
+    # the accuracy of the worst support is stated beside its names where it is worth it
+    noted = irrepresentable_messages.summary(
+        Code.BELOW_ONE, {**facts, "worst": 0.5, "accuracy": (0.2, 1e9)}
+    )
+    assert "y1, y2; relative error about 0.2" in noted
+    cut = irrepresentable_messages.summary(Code.ABOVE_ONE, {**facts, "stopped": 1234})
+    assert "after 1,234 supports" in cut and "--exact" in cut

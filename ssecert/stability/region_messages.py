@@ -123,6 +123,7 @@ def _check(region: Region, proved: str, method: str, evidence: Mapping[str, Any]
         required=False,
         fields={"radius": region.radius},
         evidence=evidence,
+        code=region.code,
     )
 
 

@@ -36,15 +36,15 @@ from typing import Any
 
 import numpy as np
 
-from ..base.format import sig
 from ..base.validation import as_choice, as_float_option, as_int_option
 from ..budget import Budget, bounded_comb, format_count, log10_comb
 from ..numerics.exact import Observability, exact_stacked_rank
 from ..numerics.linalg import balanced_units, staircase
 from ..parallel import ChunkError
-from ..results import Check, Verdict
+from ..results import Check
 from ..system import System
 from ..tolerances import EPS, Tolerances
+from . import irrepresentable_messages as messages
 from ._irrepresentable_scan import (
     ScanPlan,
     StackedRows,
@@ -54,6 +54,7 @@ from ._irrepresentable_scan import (
     sensor_units_condition,
     support_rho,
 )
+from .outcomes import IrrepresentableCode as Code
 from .sparse import DEFAULT_MAX_SETS, DEFAULT_TIME_BUDGET
 
 __all__ = ["irrepresentable", "irrepresentable_constant", "MODES"]
@@ -141,21 +142,21 @@ class _Verdicts:
 
     def check(
         self,
-        verdict: Verdict,
+        code: Code,
         value: float,
         support: tuple[int, ...] | None,
-        summary: str,
+        facts: dict[str, Any],
         margin: float | None = None,
         witness: dict | None = None,
         extra: dict[str, Any] | None = None,
     ) -> Check:
-        """The irrepresentable Check with this verdict, worst value and support (and
-        ``extra`` fields)."""
+        """The irrepresentable Check of ``code`` (its verdict; its summary from ``facts``), with
+        this worst value and support (and ``extra`` fields)."""
         return Check(
             id="irrepresentable",
             title="Irrepresentable condition (Lasso support recovery)",
-            verdict=verdict,
-            summary=summary,
+            verdict=code.verdict,
+            summary=messages.summary(code, facts),
             value=value,
             margin=margin,
             method="enumeration",
@@ -172,6 +173,7 @@ class _Verdicts:
             evidence=self.evidence,
             witness=witness,
             tolerances=self.tolerances,
+            code=code,
         )
 
 
@@ -259,12 +261,7 @@ def irrepresentable(
         O = system.observability_matrix(tau)  # row t * p + i: sensor i at step t
     rows_of = _rows_of_items(system.p, tau, mode)
     if not np.all(np.isfinite(O)):
-        return out.check(
-            Verdict.INCONCLUSIVE,
-            math.nan,
-            None,
-            f"The stacked observability matrix overflows over {tau} steps.",
-        )
+        return out.check(Code.OVERFLOW, math.nan, None, {"tau": tau})
     rows = StackedRows.of(O)
     deficient = _rank_deficient(out, rows, tol)
     if deficient is not None:
@@ -280,13 +277,8 @@ def irrepresentable(
         )  # fmt: skip
     except ChunkError as exc:
         lo, hi = exc.chunk
-        return out.check(
-            Verdict.INCONCLUSIVE,
-            math.nan,
-            None,
-            f"The Dask workers failed twice on the supports with colex ranks {lo:,} to "
-            f"{hi - 1:,} ({exc.cause!r}).",
-        )
+        facts = {"first": lo, "last": hi - 1, "cause": exc.cause}
+        return out.check(Code.WORKERS_FAILED, math.nan, None, facts)
     return _scan_verdict(out, scan, rows, rows_of, tol, total, time_budget)
 
 
@@ -330,12 +322,7 @@ def _scan_verdict(
     if scan.infinite is not None:
         return _infinite_verdict(out, scan, rows_of, total, tol)
     if scan.borderline:
-        return out.check(
-            Verdict.INCONCLUSIVE,
-            math.nan,
-            None,
-            f"{scan.borderline} support(s) have a borderline rank decision for O_Sbar.",
-        )
+        return out.check(Code.BORDERLINE, math.nan, None, {"count": scan.borderline})
     return _worst_verdict(out, scan, rows, rows_of, tol)
 
 
@@ -378,34 +365,16 @@ def _decided_by_size(
         return _without_attack(out, tol)
     if k > items:
         every = tuple(range(items)) if items <= _LISTED else None
-        return out.check(
-            Verdict.FAILS,
-            math.inf,
-            every,
-            f"The support size {k:,} exceeds the {items:,} available "
-            f"{out.noun}: an attack on all of them "
-            f"leaves nothing to estimate the state from.",
-        )
+        facts: dict[str, Any] = {"k": k, "items": items, "noun": out.noun}
+        return out.check(Code.SUPPORT_TOO_LARGE, math.inf, every, facts)
     if total is None:
-        return out.check(
-            Verdict.INCONCLUSIVE,
-            math.nan,
-            None,
-            f"C({items:,}, {k:,}) = {format_count(10 ** min(log10_comb(items, k), 308))} "
-            f"supports exceed the budget of {max_sets:,}; raise it with --max-sets "
-            f"(max_sets=...).",
-        )
+        count = 10 ** min(log10_comb(items, k), 308)
+        facts = {"items": items, "k": k, "count": count, "max_sets": max_sets}
+        return out.check(Code.TOO_MANY_SUPPORTS, math.nan, None, facts)
     if k == items:
         every = tuple(range(items))
-        return out.check(
-            Verdict.FAILS,
-            math.inf,
-            every,
-            f"With all {items} {out.noun} attacked, "
-            f"O_Sbar is empty and lacks full column rank (Theorem 1's assumption), so "
-            f"rho is inf.",
-            witness=out.rank_witness(every),
-        )
+        facts = {"items": items, "noun": out.noun}
+        return out.check(Code.ALL_ATTACKED, math.inf, every, facts, witness=out.rank_witness(every))
     return None
 
 
@@ -418,22 +387,12 @@ def _without_attack(out: _Verdicts, tol: Tolerances) -> Check:
         O = system.observability_matrix(steps)
         doubt = _exact_doubt(system, range(system.p * steps), steps, out.evidence, O, tol)
         if doubt is None:
-            return out.check(
-                Verdict.FAILS,
-                math.inf,
-                (),
-                f"O_tau (horizon {tau}) has rank {sc0.rank} < n = {n}: even without "
-                f"attack the state is not determined, so rho is inf.",
-            )
+            facts: dict[str, Any] = {"tau": tau, "rank": sc0.rank, "n": n}
+            return out.check(Code.NO_ATTACK_RANK_DEFICIENT, math.inf, (), facts)
         if doubt:
-            return out.check(Verdict.INCONCLUSIVE, math.nan, None, f"O_tau (horizon {tau}) {doubt}")
-    return out.check(
-        Verdict.HOLDS,
-        0.0,
-        (),
-        "With no attacked entries there is nothing to misidentify.",
-        margin=1.0,
-    )
+            facts = {"tau": tau, "doubt": messages.doubt(doubt)}
+            return out.check(Code.O_TAU_DOUBT, math.nan, None, facts)
+    return out.check(Code.NO_ATTACK, 0.0, (), {}, margin=1.0)
 
 
 def _over_budget(out: _Verdicts, plan: ScanPlan, budget: Budget, total: int) -> Check | None:
@@ -453,7 +412,7 @@ def _over_budget(out: _Verdicts, plan: ScanPlan, budget: Budget, total: int) -> 
     if not refusal:
         return None
     hint = "; a shorter horizon (--horizon) makes it smaller" if tau > n else ""
-    return out.check(Verdict.INCONCLUSIVE, math.nan, None, f"Not attempted: {refusal}{hint}.")
+    return out.check(Code.OVER_BUDGET, math.nan, None, {"refusal": refusal, "hint": hint})
 
 
 def _rows_of_items(p: int, tau: int, mode: str) -> np.ndarray:
@@ -472,29 +431,20 @@ def _rank_deficient(out: _Verdicts, rows: StackedRows, tol: Tolerances) -> Check
     if sc.rank >= n and not sc.problem:
         return None
     if sc.problem:
-        return out.check(
-            Verdict.INCONCLUSIVE,
-            math.nan,
-            None,
-            f"The rank of O_tau cannot be decided: {sc.problem}.",
-        )
+        return out.check(Code.RANK_UNDECIDED, math.nan, None, {"problem": sc.problem})
     steps = min(tau, n)
     kept = range(system.p * steps)
     doubt = _exact_doubt(system, kept, steps, out.evidence, rows.O[: system.p * steps], tol)
     if doubt:
-        return out.check(Verdict.INCONCLUSIVE, math.nan, None, f"O_tau (horizon {tau}) {doubt}")
+        facts: dict[str, Any] = {"tau": tau, "doubt": messages.doubt(doubt)}
+        return out.check(Code.O_TAU_DOUBT, math.nan, None, facts)
     if doubt is not None:  # full rank exactly, and clearly so in floating point
         out.evidence["rank_O_tau"] = n
         return None
     first = tuple(range(out.k))
+    facts = {"tau": tau, "rank": sc.rank, "n": n, "label": out.label(first)}
     return out.check(
-        Verdict.FAILS,
-        math.inf,
-        first,
-        f"O_tau (horizon {tau}) has rank {sc.rank} < n = {n}, so no O_Sbar has full column "
-        f"rank as Theorem 1 requires; the first support {out.label(first)} "
-        f"is a witness.",
-        witness=out.rank_witness(first),
+        Code.O_TAU_RANK_DEFICIENT, math.inf, first, facts, witness=out.rank_witness(first)
     )
 
 
@@ -510,22 +460,12 @@ def _infinite_verdict(
     )
     label = out.label(infinite)
     if doubt:
-        return out.check(
-            Verdict.INCONCLUSIVE,
-            math.nan,
-            None,
-            f"O_Sbar for the support {label} {doubt}",
-        )
+        facts: dict[str, Any] = {"label": label, "doubt": messages.doubt(doubt)}
+        return out.check(Code.SUPPORT_DOUBT, math.nan, None, facts)
     checked = total if scan.stopped_after is None else scan.stopped_after
-    of = f"{checked}" if checked == total else f"the {checked} checked (of {total})"
+    facts = {"count": scan.n_inf, "checked": checked, "total": total, "label": label}
     return out.check(
-        Verdict.FAILS,
-        math.inf,
-        infinite,
-        f"For {scan.n_inf} of {of} supports O_Sbar lacks full column rank (Theorem 1's "
-        f"assumption); the first is {label}, so rho is inf "
-        f"there.",
-        witness=out.rank_witness(infinite),
+        Code.SUPPORT_RANK_DEFICIENT, math.inf, infinite, facts, witness=out.rank_witness(infinite)
     )
 
 
@@ -549,51 +489,24 @@ def _worst_verdict(
     out.evidence["value_relative_error_estimate"] = estimate
     label = out.label(support)
     if not math.isfinite(direct) or rel > 1e-6:
-        return out.check(
-            Verdict.INCONCLUSIVE,
-            worst,
-            support,
-            f"The worst constant {worst:.6g} on {label} does not match its direct "
-            f"recomputation {direct:.6g}.",
-        )
+        facts: dict[str, Any] = {"worst": worst, "label": label, "direct": direct}
+        return out.check(Code.RECOMPUTE_MISMATCH, worst, support, facts)
     margin = 1.0 - worst
     band = tol.irrepresentable_rtol
     if abs(margin) > band and estimate * abs(worst) >= abs(margin):
-        return out.check(
-            Verdict.INCONCLUSIVE,
-            worst,
-            support,
-            f"The worst constant {worst:.6g} on {label} cannot be told from 1: its relative "
-            f"error may reach {estimate:.2g} (O_Sbar's condition number in the sensors' units "
-            f"is {kappa:.2g}).",
-            margin=margin,
-        )
-    if estimate > band:
-        label += f"; relative error about {estimate:.1g}: O_Sbar's condition number is {kappa:.2g}"
+        facts = {"worst": worst, "label": label, "estimate": estimate, "kappa": kappa}
+        return out.check(Code.NOT_TOLD_FROM_ONE, worst, support, facts, margin=margin)
+    named = {"label": label, "accuracy": (estimate, kappa) if estimate > band else None}
     if worst < 1.0 - band:
-        return out.check(
-            Verdict.HOLDS,
-            worst,
-            support,
-            f"The worst irrepresentable constant is {sig(worst)} < 1 (support {label}): "
-            f"Lasso identifies every attack on {out.k} {out.counted(out.k)}"
-            f" for small enough lambda.",
-            margin=margin,
-        )
+        facts = {**named, "worst": worst, "k": out.k, "counted": out.counted(out.k)}
+        return out.check(Code.BELOW_ONE, worst, support, facts, margin=margin)
     if worst > 1.0 + band:
         stopped = scan.stopped_after
-        cut = ""
-        if stopped is not None:
-            cut = (
-                f" (the scan stopped at the time budget after {stopped:,} supports: the worst "
-                f"value over all of them may be larger; --exact scans every support)"
-            )
         return out.check(
-            Verdict.FAILS,
+            Code.ABOVE_ONE,
             worst,
             support,
-            f"The irrepresentable constant reaches {sig(worst)} >= 1 on support {label}: "
-            f"Lasso's support recovery is not guaranteed there{cut}.",
+            {**named, "worst": worst, "stopped": stopped},
             margin=margin,
             witness={"support": list(support), "support_names": out.names(support), "value": worst},
             extra={"value_is_lower_bound": True} if stopped is not None else None,
@@ -603,13 +516,10 @@ def _worst_verdict(
         out.evidence["worst_support_exact_value"] = str(exact)
     if exact is not None and exact >= 1:
         return out.check(
-            Verdict.FAILS,
+            Code.EXACTLY_AT_LEAST_ONE,
             worst,
             support,
-            f"The irrepresentable constant on support {label} is "
-            f"{'exactly 1' if exact == 1 else f'{float(exact):.17g} >= 1 exactly'} (computed in "
-            f"rational arithmetic from the floats of A and C): Lasso's support recovery is "
-            "not guaranteed there.",
+            {**named, "exact": exact},
             margin=margin,
             witness={
                 "support": list(support),
@@ -618,19 +528,8 @@ def _worst_verdict(
                 "exact_value": str(exact),
             },
         )
-    return out.check(
-        Verdict.INCONCLUSIVE,
-        worst,
-        support,
-        f"The worst constant {worst:.12g} is within {band:g} of 1"
-        + (
-            f" (its exact value on {label} is {float(exact):.17g} < 1; another support may "
-            "be as close)."
-            if exact is not None
-            else "."
-        ),
-        margin=margin,
-    )
+    facts = {**named, "worst": worst, "band": band, "exact": exact}
+    return out.check(Code.WITHIN_BAND, worst, support, facts, margin=margin)
 
 
 def _exact_rho(system: System, tau: int, inside: np.ndarray) -> Fraction | None:
@@ -674,7 +573,7 @@ def _exact_doubt(
     tol: Tolerances,
     *,
     smallest: float | None = None,
-) -> str | None:
+) -> dict[str, Any] | None:
     """Why a floating-point rank deficiency of some rows of O_steps is not trusted.
 
     The rows are taken with the data as exact rationals: full column rank
@@ -689,10 +588,11 @@ def _exact_doubt(
 
     Returns
     -------
-    str or None
+    dict or None
         None where the deficiency stands (confirmed exactly or beyond the
-        budgets), "" where the rows have full rank (exactly, and clearly in
-        floating point), else the reason the rank is in doubt.
+        budgets), an empty dict where the rows have full rank (exactly, and
+        clearly in floating point), else the facts of the doubt (its words:
+        ``irrepresentable_messages.doubt``).
     """
     exact = exact_stacked_rank(system.A, system.C, rows, steps)
     evidence["exact_rank_check"] = exact.to_dict()
@@ -703,24 +603,13 @@ def _exact_doubt(
         smallest = _scaled_smallest(O[np.asarray(list(rows), dtype=np.int64)])
     m, n = len(rows), system.n
     if not math.isfinite(smallest):
-        return (
-            "looks rank deficient in floating point, where its rows overflow; with the data "
-            f"taken exactly it has full column rank (rank {n} modulo a prime), so rho depends "
-            "on digits the floating-point rows do not have."
-        )
+        return {"n": n, "overflow": True}
     rtol = tol.rtol(m, n)
     band = tol.borderline_factor * rtol
     evidence["exact_rank_check"]["scaled_smallest_singular_value"] = smallest
     if smallest > band:
-        return ""
-    return (
-        f"looks rank deficient in floating point: with its rows and columns scaled by powers "
-        f"of two to unit size, its smallest singular value is {smallest:.2g} times its largest "
-        f"({smallest / EPS:.2g} ulp of 1; rank tolerance {rtol / EPS:.3g} ulps, borderline "
-        f"band up to {band / EPS:.3g}). With the data taken exactly it has full column rank (rank "
-        f"{n} modulo a prime): the plant is within the precision of its data of one where "
-        "Theorem 1's assumption fails, so rho depends on digits the data do not have."
-    )
+        return {}
+    return {"n": n, "smallest": smallest, "rtol": rtol, "band": band}
 
 
 def _scaled_smallest(rows: np.ndarray) -> float:

@@ -12,7 +12,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-__all__ = ["Problem", "ProblemCode"]
+from ..results import Verdict
+
+__all__ = ["IrrepresentableCode", "Problem", "ProblemCode"]
 
 
 class ProblemCode(enum.Enum):
@@ -60,3 +62,78 @@ class Problem:
     @classmethod
     def of(cls, code: ProblemCode, **facts: Any) -> Problem:
         return cls(code, facts)
+
+
+class IrrepresentableCode(enum.Enum):
+    """Why the irrepresentable check (``ssecert.structure.irrepresentable``) has its verdict; the
+    numbers are in the facts its words need (``ssecert.structure.irrepresentable_messages``)."""
+
+    #: holds: no attacked entry, nothing to misidentify
+    NO_ATTACK = "no attack"
+    #: fails: O_tau is rank deficient even without attack (``tau``, ``rank``, ``n``)
+    NO_ATTACK_RANK_DEFICIENT = "no attack, rank deficient"
+    #: fails: more attacked items than items (``k``, ``items``, ``noun``)
+    SUPPORT_TOO_LARGE = "support too large"
+    #: fails: every item attacked (``items``, ``noun``)
+    ALL_ATTACKED = "all attacked"
+    #: inconclusive: more supports than the budget (``items``, ``k``, ``count``, ``max_sets``)
+    TOO_MANY_SUPPORTS = "too many supports"
+    #: inconclusive: the memory or work budget refused the scan (``refusal``, ``hint``)
+    OVER_BUDGET = "over budget"
+    #: inconclusive: the stacked observability matrix overflows (``tau``)
+    OVERFLOW = "overflow"
+    #: inconclusive: the Dask workers failed twice on a range (``first``, ``last``, ``cause``)
+    WORKERS_FAILED = "workers failed"
+    #: inconclusive: O_tau's rank cannot be decided (``problem``: the staircase's words)
+    RANK_UNDECIDED = "rank undecided"
+    #: inconclusive: O_tau looks rank deficient but the exact data say otherwise (``tau``,
+    #: ``doubt``)
+    O_TAU_DOUBT = "O_tau in doubt"
+    #: fails: O_tau is rank deficient, so every O_Sbar is (``tau``, ``rank``, ``n``, ``label``)
+    O_TAU_RANK_DEFICIENT = "O_tau rank deficient"
+    #: inconclusive: supports with a borderline rank decision (``count``)
+    BORDERLINE = "borderline"
+    #: inconclusive: a support's O_Sbar looks rank deficient, the exact data doubt it
+    #: (``label``, ``doubt``)
+    SUPPORT_DOUBT = "support in doubt"
+    #: fails: a support's O_Sbar lacks full column rank (``count``, ``checked``, ``total``,
+    #: ``label``)
+    SUPPORT_RANK_DEFICIENT = "support rank deficient"
+    #: inconclusive: the worst value does not match its recomputation (``worst``, ``label``,
+    #: ``direct``)
+    RECOMPUTE_MISMATCH = "recompute mismatch"
+    #: inconclusive: the worst value cannot be told from 1 (``worst``, ``label``,
+    #: ``estimate``, ``kappa``)
+    NOT_TOLD_FROM_ONE = "not told from 1"
+    #: holds: the worst value is below 1 (``worst``, ``label``, ``k``, ``counted``)
+    BELOW_ONE = "below 1"
+    #: fails: the worst value is above 1 (``worst``, ``label``, ``stopped``: supports checked
+    #: when the time budget cut the scan short, else None)
+    ABOVE_ONE = "above 1"
+    #: fails: the exact value on the worst support is at least 1 (``label``, ``exact``)
+    EXACTLY_AT_LEAST_ONE = "exactly at least 1"
+    #: inconclusive: the worst value is within the band of 1 (``worst``, ``band``, ``label``,
+    #: ``exact``: its exact value below 1, or None)
+    WITHIN_BAND = "within the band of 1"
+
+    @property
+    def verdict(self) -> Verdict:
+        """The verdict this code gives."""
+        if self in (IrrepresentableCode.NO_ATTACK, IrrepresentableCode.BELOW_ONE):
+            return Verdict.HOLDS
+        if self in _IRREPRESENTABLE_FAILS:
+            return Verdict.FAILS
+        return Verdict.INCONCLUSIVE
+
+
+_IRREPRESENTABLE_FAILS = frozenset(
+    {
+        IrrepresentableCode.NO_ATTACK_RANK_DEFICIENT,
+        IrrepresentableCode.SUPPORT_TOO_LARGE,
+        IrrepresentableCode.ALL_ATTACKED,
+        IrrepresentableCode.O_TAU_RANK_DEFICIENT,
+        IrrepresentableCode.SUPPORT_RANK_DEFICIENT,
+        IrrepresentableCode.ABOVE_ONE,
+        IrrepresentableCode.EXACTLY_AT_LEAST_ONE,
+    }
+)
