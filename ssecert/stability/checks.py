@@ -417,6 +417,7 @@ def _circle_stability_check(
         evidence=_circle_evidence(model, cert),
         witness=cert.details.get("witness") if verdict is Verdict.FAILS else None,
         tolerances=_decided_by(tol, error_bound=cert.error_bound, lmi_eta=ETA),
+        code=cert.cause,
     )
 
 
