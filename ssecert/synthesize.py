@@ -79,9 +79,13 @@ __all__ = [
 
 SHRINKS = DESIGN_SHRINKS
 STEPS = DESIGN_STEPS
-OBJECTIVES = ("gain", "rate", "roa")
+OBJECTIVES = ("gain", "rate", "roa", "noise")
 # why an objective that only some kinds take is refused to the others
-ONLY_FOR = {"roa": "the other kinds are certified globally or not at all"}
+ONLY_FOR = {
+    "roa": "the other kinds are certified globally or not at all",
+    "noise": "an ultimate error bound under noise needs a certificate with decay, which the "
+    "other kinds' designs do not have",
+}
 
 
 def default_kind(objective: str) -> str:
@@ -177,6 +181,10 @@ class DesignResult:
     choice : str
         Why this decay was imposed and, for a design no faster than the plant, that it is
         one.
+    noise_bound : float or None
+        The chosen design's certified ultimate error bound under the noise the search was
+        given (``observer_noise_bound``, as ``ssecert certify`` reports it; the ``noise``
+        objective).
     """
 
     observer: dict[str, Any] | None
@@ -192,6 +200,7 @@ class DesignResult:
     plant_radius: float | None = None
     linear_radius: float | None = None
     choice: str = ""
+    noise_bound: float | None = None
 
 
 def design(
@@ -202,6 +211,7 @@ def design(
     threshold: float = 0.1,
     time_budget: float = 60.0,
     min_decay: float | None = None,
+    noise: Any = None,
 ) -> DesignResult:
     """Search the best certified design of ``kind`` for a plant (``ssecert.design``).
 
@@ -212,8 +222,8 @@ def design(
     plant : System, Spec, control.StateSpace, scipy.signal.dlti, str or path
         A plant, a spec (its plant), a discrete-time python-control or SciPy
         system, a spec file or a packaged example's name.
-    kind, objective, threshold, time_budget, min_decay
-        As for ``design_observer``.
+    kind, objective, threshold, time_budget, min_decay, noise
+        As for ``design_observer``; a spec's ``[noise]`` is the default noise.
 
     Returns
     -------
@@ -226,8 +236,13 @@ def design(
     >>> result.observer["kind"], result.linear_radius < result.plant_radius
     ('elastic_net', True)
     """
-    from .inputs import as_system
+    from .inputs import as_spec, as_system
 
+    if noise is None and not isinstance(plant, System):
+        try:
+            noise = getattr(as_spec(plant), "noise", None)
+        except (TypeError, ValueError):  # a plant that is not a spec: no [noise] to take
+            noise = None
     return design_observer(
         as_system(plant),
         kind,
@@ -235,6 +250,7 @@ def design(
         threshold=threshold,
         time_budget=time_budget,
         min_decay=min_decay,
+        noise=noise,
     )
 
 
@@ -246,6 +262,7 @@ def design_observer(
     threshold: float = 0.1,
     time_budget: float = 60.0,
     min_decay: float | None = None,
+    noise: Any = None,
 ) -> DesignResult:
     """Search the best certified design of ``kind`` for ``system``.
 
@@ -255,8 +272,11 @@ def design_observer(
     kind : str, default "elastic_net"
         One of ``design_kinds()``: "elastic_net", "dsso" or "luenberger" of the built-in
         kinds (the SSO is not offered: its gain is fixed by its step, L = step A C^T).
-    objective : {"gain", "rate", "roa"}
-        One of the kind's ``design_objectives``: ``roa`` for the D-SSO only.
+    objective : {"gain", "rate", "roa", "noise"}
+        One of the kind's ``design_objectives``: ``roa`` for the D-SSO only; ``noise`` (the
+        smallest certified ultimate error bound under ``noise``, with the decay the
+        trade-off front's noise axis gives or ``min_decay``) for the elastic-net and
+        Luenberger observers.
     threshold : float, default 0.1
         The soft threshold (kept fixed: the certificates of ``gain`` and ``rate`` do not
         depend on it; the region of attraction scales with it).
@@ -270,7 +290,11 @@ def design_observer(
         V(xi) without attack).  By default the decay ``choose_decay`` reads off the
         trade-off front (clearly faster than the plant's own); a given alpha is imposed as
         it is, even when the design it gives is no faster than the plant (the result's
-        ``choice`` then says so).
+        ``choice`` then says so).  The ``noise`` objective imposes it too.
+    noise : MeasurementNoise or float, optional
+        The measurement noise bound (a float: that bound on every sample of every sensor),
+        required by the ``noise`` objective; with it the trade-off front's points also
+        carry their certified ultimate error bound under that noise (``noise_bound``).
 
     Examples
     --------
@@ -287,6 +311,12 @@ def design_observer(
     refusal = objective_refusal(objective, kind)
     if refusal:
         raise ValueError(refusal)
+    noise = _as_noise(noise, system)
+    if objective == "noise" and noise is None:
+        raise ValueError(
+            "objective 'noise' needs the measurement noise bound: noise=ETA (or a spec's "
+            "[noise] section, or --noise ETA)"
+        )
     start = time.perf_counter()
     rows, cols = get_kind(kind).design_axes(objective)
     plant_radius = _radius(system.A)
@@ -296,12 +326,16 @@ def design_observer(
     # the linear loop is asked to be clearly faster than a stable plant, unless the user
     # imposes a decay of their own
     linear = linear_target(plant_radius) if min_decay is None else None
-    if objective in ("gain", "rate"):
+    if objective in ("gain", "rate", "noise"):
         middle = _template(system, kind, rows[(len(rows) - 1) // 2],
                            cols[(len(cols) - 1) // 2], threshold)  # fmt: skip
-        front = tradeoff_front(middle, time_limit=FRONT_SHARE * time_budget, linear=linear)
+        front = tradeoff_front(
+            middle, time_limit=FRONT_SHARE * time_budget, linear=linear, noise=noise
+        )
         if objective == "gain" and min_decay is None:
             alpha, choice = choose_decay(front, plant_radius)
+        elif objective == "noise" and min_decay is None:
+            alpha, choice = choose_noise_decay(front, plant_radius)
     if linear is not None:
         choice += (
             f"; the linear loop is required to contract by {linear:.4g} per step, rho(A)^2 "
@@ -316,6 +350,7 @@ def design_observer(
         alpha,
         faster_than=plant_radius if min_decay is None else None,
         linear=linear,
+        noise=noise,
     )
     tried: dict[tuple[int, int], dict[str, Any]] = {}
     kept: dict[tuple[int, int], Found] = {}
@@ -347,7 +382,11 @@ def design_observer(
         )  # fmt: skip
     best = min(kept, key=lambda c: kept[c][0])
     record = tried[best]
-    if objective == "gain" and record.get("decay") is None and record["gain"] == "synthesised":
+    if (
+        objective in ("gain", "noise")
+        and record.get("decay") is None
+        and record["gain"] == "synthesised"
+    ):
         choice += (
             "; the synthesis's own certificate of that decay did not verify in numpy for "
             "this design (no candidate's did): its stability and l2 gain are certified by the "
@@ -372,7 +411,26 @@ def design_observer(
         plant_radius=plant_radius,
         linear_radius=linear,
         choice=choice.lstrip("; "),
+        noise_bound=record.get("noise_bound"),
     )
+
+
+def _as_noise(noise: Any, system: System) -> Any:
+    """A ``MeasurementNoise`` (None stays None; a number is that bound on every sample of
+    every sensor)."""
+    from .noise import MeasurementNoise
+
+    if noise is None or isinstance(noise, MeasurementNoise):
+        return noise
+    try:
+        eta = float(noise)
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"noise: expected a MeasurementNoise or a bound >= 0, got {noise!r}"
+        ) from None
+    if not (math.isfinite(eta) and eta >= 0):
+        raise ValueError(f"noise: expected a finite bound >= 0, got {noise!r}")
+    return MeasurementNoise.uniform(eta, system.p)
 
 
 DEFAULT_DECAY = 1e-3  # imposed when the front gives nothing to choose from
@@ -463,6 +521,7 @@ def tradeoff_front(
     points: int = FRONT_POINTS,
     time_limit: float | None = None,
     linear: float | None = None,
+    noise: Any = None,
 ) -> list[dict[str, Any]]:
     """The trade-off between certified decay and certified l2 gain of ``template``'s kind,
     step and shrink: the smallest gain at almost no decay (alpha = 1e-3), the fastest decay
@@ -478,8 +537,10 @@ def tradeoff_front(
     the error's certified factor per step, in the certificate's norm), ``gamma`` (the l2
     gain from attack to error its certificate proves), ``linear_radius`` (rho(A - L S) of
     its gain), ``verified`` (the synthesis's certificate re-checked in numpy,
-    ``verify_synthesis``; alpha and gamma are None when it is not).  Sorted fastest first;
-    empty when the synthesis gives no gain.
+    ``verify_synthesis``; alpha and gamma are None when it is not).  With a ``noise``
+    (``MeasurementNoise``), also ``noise_bound``: the ultimate error bound under that noise
+    the same certificate proves (``noise_messages.dissipation_bound``; None where it proves
+    none).  Sorted fastest first; empty when the synthesis gives no gain.
     """
     from .design.synthesis import synthesize_gain
 
@@ -489,7 +550,7 @@ def tradeoff_front(
         return None if time_limit is None else max(time_limit - (time.perf_counter() - start), 0.5)
 
     slowest = synthesize_gain(template, alpha=DEFAULT_DECAY, time_limit=left(), linear=linear)
-    out = [_front_point(template, slowest)] if slowest.L is not None else []
+    out = [_front_point(template, slowest, noise)] if slowest.L is not None else []
     solve = time.perf_counter() - start
     room = points + RATE_BISECTIONS_FRONT
     if time_limit is not None:
@@ -498,7 +559,7 @@ def tradeoff_front(
     fastest, _ = _rate_gain(template, time_limit=left(), bisections=bisections, linear=linear)
     if fastest.L is None or fastest.alpha is None:
         return out
-    out.append(_front_point(template, fastest))
+    out.append(_front_point(template, fastest, noise))
     solve = (time.perf_counter() - start) / (bisections + 2)  # the solves so far, about
     fast, slow = math.sqrt(1 - float(fastest.alpha)), math.sqrt(1 - DEFAULT_DECAY)
     if fast < slow:
@@ -509,26 +570,45 @@ def tradeoff_front(
                 template, alpha=1 - float(c) ** 2, time_limit=left(), linear=linear
             )
             if found.L is not None:
-                out.append(_front_point(template, found))
+                out.append(_front_point(template, found, noise))
     return sorted(out, key=lambda p: p["contraction"])
 
 
 RATE_BISECTIONS_FRONT = 6  # alpha of the fastest point to within 2^-6
 
 
-def _front_point(template: Any, proposal: Any) -> dict[str, Any]:
+def _front_point(template: Any, proposal: Any, noise: Any = None) -> dict[str, Any]:
     from .design.synthesis import with_gain
 
     own = _verified_proposal(template, proposal)
     alpha = float(proposal.alpha)
     design = with_gain(template, proposal.L)
-    return {
+    point = {
         "alpha": own.get("alpha") if own["verified"] else None,
         "contraction": math.sqrt(max(1 - alpha, 0.0)),
         "gamma": own.get("gamma") if own["verified"] else None,
         "linear_radius": _radius(design.error_matrix),
         "verified": bool(own["verified"]),
     }
+    if noise is not None:
+        point["noise_bound"] = _front_noise_bound(design, proposal, own, noise)
+    return point
+
+
+def _front_noise_bound(design: Any, proposal: Any, own: dict[str, Any], noise: Any) -> float | None:
+    """The ultimate error bound under ``noise`` the synthesis's verified certificate proves
+    (V = xi' P xi, its alpha and gamma: ``noise_messages.dissipation_bound``), None where it
+    proves none (not verified, verified only in balanced coordinates, no decay, an
+    ill-conditioned P)."""
+    from .stability.noise_messages import dissipation_bound
+
+    if not own.get("verified") or "state_scaling" in own or not own.get("alpha"):
+        return None
+    rows = design.sensing.shape[0]
+    per_row = noise.eta[np.arange(rows) % design.system.p]
+    P = np.asarray(proposal.P, dtype=float)
+    found = dissipation_bound(P, float(own["alpha"]), float(own["gamma"]), per_row, design.system.n)
+    return found.bound if math.isfinite(found.bound) else None
 
 
 def choose_decay(front: list[dict[str, Any]], plant_radius: float) -> tuple[float, str]:
@@ -595,6 +675,52 @@ def choose_decay(front: list[dict[str, Any]], plant_radius: float) -> tuple[floa
     )
 
 
+def choose_noise_decay(front: list[dict[str, Any]], plant_radius: float) -> tuple[float, str]:
+    """The decay the ``noise`` objective imposes, read off the trade-off front's noise axis,
+    and why.
+
+    The ultimate error bound under noise is not monotone in the decay (a slow decay lets the
+    noise pile up, 1 / alpha; a fast one needs a large gain): the verified point with the
+    smallest certified bound among those faster than the plant (every point when rho(A) >=
+    1, the fastest when none is), alpha = 1e-3 without one.
+
+    Examples
+    --------
+    >>> front = [{"alpha": 0.5, "contraction": 0.71, "noise_bound": 0.04, "verified": True},
+    ...          {"alpha": 0.2, "contraction": 0.89, "noise_bound": 0.01, "verified": True},
+    ...          {"alpha": 0.01, "contraction": 0.995, "noise_bound": 0.3, "verified": True}]
+    >>> choose_noise_decay(front, 0.985)[0]
+    0.2
+    """
+    good = [p for p in front if p.get("verified") and p.get("noise_bound") is not None]
+    if not good:
+        return DEFAULT_DECAY, (
+            f"decay {DEFAULT_DECAY:g} per step imposed: no point of the trade-off front has a "
+            "certified ultimate error bound under the noise (its solves failed, did not verify, "
+            "or ran past its share of the time budget)"
+        )
+    faster = [p for p in good if p["contraction"] < plant_radius]
+    if faster:
+        pick = min(faster, key=lambda p: p["noise_bound"])
+        among = (
+            f"the {len(faster)} verified point{'' if len(faster) == 1 else 's'} of the front "
+            "faster than the plant"
+            if len(faster) < len(good)
+            else f"the {len(good)} verified point{'' if len(good) == 1 else 's'} of the front"
+        )
+    else:
+        pick = min(good, key=lambda p: p["contraction"])
+        among = (
+            f"the fastest of the front, none being faster than the plant (rho(A) = "
+            f"{plant_radius:.4g})"
+        )
+    return float(pick["alpha"]), (
+        f"decay {pick['alpha']:.3g} per step imposed, the smallest certified ultimate error "
+        f"bound under noise ({pick['noise_bound']:.3g}, by the synthesis's own certificate at "
+        f"the grid's middle) of {among} (error contraction {pick['contraction']:.4g} per step)"
+    )
+
+
 def _knee(points: list[dict[str, Any]]) -> dict[str, Any]:
     """The point farthest below the chord between the front's ends (contraction, log
     gain), each axis scaled to [0, 1]; with fewer than three points the smallest gain."""
@@ -654,11 +780,13 @@ def _evaluator(
     min_decay: float,
     faster_than: float | None = None,
     linear: float | None = None,
+    noise: Any = None,
 ) -> Callable[[Any, Any], tuple[dict[str, Any], Found | None]]:
     """The function certifying one grid cell: a record with its parameters, verdicts and
     numbers, and, when it is certified, its rank (lower is better: the objective, then a
     tie-break) and its ``[observer]`` section.  With ``faster_than`` (rho(A)), a design
-    whose linear loop is no faster than that is rejected."""
+    whose linear loop is no faster than that is rejected.  The ``noise`` objective ranks by
+    the ``observer_noise_bound`` check under ``noise`` (as ``ssecert certify`` builds it)."""
     from .design.synthesis import synthesize_gain, with_gain
     from .observers import build_observer
 
@@ -733,6 +861,16 @@ def _evaluator(
                 )
                 return record, None
             return record, ((-decay, float(iss.value)), observer)
+        if objective == "noise":
+            from .stability.noise_messages import noise_check
+
+            bounded = noise_check(design, noise, iss)
+            if bounded.verdict is not Verdict.HOLDS:
+                record["rejected"] = f"observer_noise_bound {bounded.verdict.value}"
+                return record, None
+            record["noise_bound"] = float(bounded.value)
+            rank = (float(decay is None), float(bounded.value), float(iss.value))
+            return record, (rank, observer)
         # a design whose synthesis certificate verified (its decay is certified) first
         return record, ((float(decay is None), float(iss.value), -(decay or 0.0)), observer)
 
@@ -917,6 +1055,9 @@ def _tradeoff_summary(search: DesignResult, comparison: dict[str, Any]) -> dict[
         "gamma": search.gamma,
         "linear_radius": search.linear_radius,
     }
+    bound = rows.get("synthesised", {}).get("observer_noise_bound_value")
+    if bound is not None:  # with a noise: the design's certified ultimate error
+        chosen["noise_bound"] = bound
     out: dict[str, Any] = {
         "front": search.front,
         "plant_radius": search.plant_radius,
@@ -928,6 +1069,8 @@ def _tradeoff_summary(search: DesignResult, comparison: dict[str, Any]) -> dict[
             "linear_radius": rows["spec"].get("linear_radius"),
             "gamma": rows["spec"].get("iss_gain_value"),
         }
+        if rows["spec"].get("observer_noise_bound_value") is not None:
+            out["spec"]["noise_bound"] = rows["spec"]["observer_noise_bound_value"]
     return out
 
 

@@ -46,7 +46,7 @@ def _kinds_help() -> str:
 
 
 def add_design_parser(sub: Any) -> None:
-    from .options import _nonnegative_int, _positive_int, _seconds
+    from .options import _noise_bound, _nonnegative_int, _positive_int, _seconds
 
     design = sub.add_parser(
         "design",
@@ -72,10 +72,20 @@ def add_design_parser(sub: Any) -> None:
     )
     design.add_argument(
         "--objective",
-        choices=("gain", "rate", "roa"),
+        choices=("gain", "rate", "roa", "noise"),
         default="gain",
         help="smallest certified l2 gain from attack to error (default), fastest certified "
-        "decay, or (D-SSO) largest certified region of attraction",
+        "decay, (D-SSO) largest certified region of attraction, or smallest certified "
+        "ultimate error under the measurement noise (the spec's [noise] or --noise)",
+    )
+    design.add_argument(
+        "--noise",
+        type=_noise_bound,
+        metavar="ETA",
+        default=None,
+        help="measurement noise within ETA on every sample of every sensor, replacing the "
+        "spec's [noise] (written into NAME-design.toml): the trade-off front gains a noise "
+        "axis and both designs their certified ultimate error; --objective noise minimises it",
     )
     design.add_argument(
         "--out",
@@ -136,6 +146,7 @@ def cmd_design(args: argparse.Namespace, argv: Sequence[str] | None = None) -> i
         objective_refusal,
     )
     from .files import UsageError, load_argument, output_file, output_folder, write_outputs
+    from .options import _with_noise
     from .progress import stage_display
 
     folder = output_folder("--out", args.out)
@@ -145,6 +156,12 @@ def cmd_design(args: argparse.Namespace, argv: Sequence[str] | None = None) -> i
         spec = load_argument(args.spec, max_attacked=args.max_attacked)
     for warning in caught:
         sys.stderr.write(f"note: {str(warning.message).splitlines()[0]}\n")
+    spec = _with_noise(spec, args)
+    if args.objective == "noise" and getattr(spec, "noise", None) is None:
+        raise UsageError(
+            "--objective noise needs the measurement noise bound: --noise ETA or a [noise] "
+            "section in the spec"
+        )
     own = spec.observer or {}
     if args.observer:
         kind = _kind_names()[args.observer]
@@ -174,6 +191,7 @@ def cmd_design(args: argparse.Namespace, argv: Sequence[str] | None = None) -> i
             threshold=threshold,
             time_budget=args.time_budget,
             min_decay=args.min_decay,
+            noise=getattr(spec, "noise", None),
         )
         document: dict[str, Any] = {
             "spec": spec.source,
@@ -183,6 +201,7 @@ def cmd_design(args: argparse.Namespace, argv: Sequence[str] | None = None) -> i
             "gamma": result.gamma,
             "decay": result.decay,
             "radius": result.radius,
+            "noise_bound": result.noise_bound,
             "plant_radius": result.plant_radius,
             "linear_radius": result.linear_radius,
             "choice": result.choice,
@@ -294,11 +313,11 @@ def _print_design(
             words.append(f"region of attraction {_num(d['region_of_attraction_value'])}")
         if "observer_noise_bound_value" in d:
             words.append(
-                f"certified ultimate error under the spec's noise "
+                f"certified ultimate error under the measurement noise "
                 f"{_num(d['observer_noise_bound_value'])}"
             )
         out.write(f"  {label} ({d['kind']}, {params or 'gain only'}): {', '.join(words)}\n")
-    if result.decay is not None and args.objective in ("gain", "rate"):
+    if result.decay is not None and args.objective in ("gain", "rate", "noise"):
         out.write(f"  synthesised: certified decay {result.decay:.3g} per step (V(k+1) <= "
                   f"{one_minus(result.decay)} V(k))\n")  # fmt: skip
     if result.linear_radius is not None and result.plant_radius is not None:
@@ -319,11 +338,11 @@ def _print_design(
     if result.choice:
         out.write(f"  chosen: {result.choice}\n")
     verified = sum(1 for p in result.front if p.get("verified"))
+    noisy = sum(1 for p in result.front if p.get("noise_bound") is not None)
     if verified >= 2:
-        out.write(
-            f"  trade-off front: {verified} verified (decay, gain) points, plotted in the report\n"
-        )
-    elif args.objective in ("gain", "rate"):
+        axes = "(decay, gain, noise bound)" if noisy else "(decay, gain)"
+        out.write(f"  trade-off front: {verified} verified {axes} points, plotted in the report\n")
+    elif args.objective in ("gain", "rate", "noise"):
         out.write(
             f"  trade-off front: {verified} verified point{'' if verified == 1 else 's'} (its "
             "synthesis solves failed, did not verify, or ran past their 30% of the time "

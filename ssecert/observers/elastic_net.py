@@ -48,8 +48,8 @@ class ElasticNet(SoftThresholdObserverKind):
     required_keys = ("step", "threshold", "shrink")
     aliases = ("elastic-net",)
     label = "the elastic-net observer"
-    design_objectives = ("gain", "rate")
-    design_default_for = ("gain", "rate")
+    design_objectives = ("gain", "rate", "noise")
+    design_default_for = ("gain", "rate", "noise")
 
     def parse(self, table: SpecTable, n: int, p: int) -> dict[str, Any]:
         out = parse_gain(table, n, p, GAIN_CHOICES)

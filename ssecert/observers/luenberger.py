@@ -41,7 +41,7 @@ class Luenberger(ObserverKind):
         "poles": POLES_SCHEMA,
     }
     label = "the Luenberger observer"
-    design_objectives = ("gain", "rate")
+    design_objectives = ("gain", "rate", "noise")
 
     def parse(self, table: SpecTable, n: int, p: int) -> dict[str, Any]:
         return parse_gain(table, n, p, ("deadbeat", "place", "pinv"))

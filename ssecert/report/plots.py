@@ -123,8 +123,14 @@ def tradeoff_plot(tradeoff: dict[str, Any], *, gid: str = "tradeoff") -> str:
     """The certified trade-off of ``ssecert design``: certified l2 gain from attack to error
     against the certified error contraction per step, the plant's own rho(A) (and rho(A)^2,
     "clearly faster"), the chosen design and the spec's design (at its linear loop's
-    spectral radius: it has no decay certificate)."""
-    fig, axes = _figure(8.0, 3.2)
+    spectral radius: it has no decay certificate); where the front's points have a certified
+    ultimate error bound under noise, a second panel with that bound on the same axis."""
+    noisy = [
+        p
+        for p in tradeoff.get("front", [])
+        if p.get("verified") and p.get("noise_bound") is not None
+    ]
+    fig, axes = _figure(8.0, 5.6 if noisy else 3.2, 2 if noisy else 1, 1)
     ax = axes[0][0]
     points = [
         p for p in tradeoff.get("front", []) if p.get("verified") and p.get("gamma") is not None
@@ -163,7 +169,33 @@ def tradeoff_plot(tradeoff: dict[str, Any], *, gid: str = "tradeoff") -> str:
     ax.set_ylabel("certified l2 gain, attack to error")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0)
-    return svg_figure(fig, title="certified trade-off between decay and gain")
+    if not noisy:
+        return svg_figure(fig, title="certified trade-off between decay and gain")
+    ax = axes[1][0]
+    (line,) = ax.plot(
+        [p["contraction"] for p in noisy], [p["noise_bound"] for p in noisy], "o-",
+        color=PALETTE["b"], linewidth=1.2, markersize=4,
+        label="certified ultimate error under noise (synthesis)",
+    )  # fmt: skip
+    line.set_gid(f"{gid}-noise-front")
+    if chosen.get("contraction") is not None and chosen.get("noise_bound") is not None:
+        (mark,) = ax.plot(
+            [chosen["contraction"]], [chosen["noise_bound"]], "*", color=PALETTE["holds"],
+            markersize=12, label="chosen design (its certificate)",
+        )  # fmt: skip
+        mark.set_gid(f"{gid}-noise-chosen")
+    if spec.get("linear_radius") is not None and spec.get("noise_bound") is not None:
+        (mark,) = ax.plot(
+            [spec["linear_radius"]], [spec["noise_bound"]], "D", color=PALETTE["b"],
+            markerfacecolor="none", label="the spec's design (x: rho(A - L S))",
+        )  # fmt: skip
+        mark.set_gid(f"{gid}-noise-spec")
+    ax.set_yscale("log")
+    ax.set_xlabel("error contraction per step, sqrt(1 - alpha) (smaller is faster)")
+    ax.set_ylabel("certified ultimate error bound under noise")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0)
+    return svg_figure(fig, title="certified trade-off between decay, gain and noise")
 
 
 def stealthy_plot(system: Any, demo: dict[str, Any], *, gid: str = "stealthy") -> str:

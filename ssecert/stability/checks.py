@@ -859,19 +859,11 @@ def observer_checks(
                 lambda: thesis_assumptions_check(design, observability, seed=seed, budget=budget),
             )
         )
-    if noise is not None and noise_messages.applies_to(design):
+    if noise is not None:
         steps.append(
             Step(
                 "observer_noise_bound",
-                lambda iss: noise_messages.observer_noise_check(design, noise, iss),
-                needs=("iss_gain",),
-            )
-        )
-    elif noise is not None:
-        steps.append(
-            Step(
-                "observer_noise_bound",
-                lambda iss: noise_messages.sparse_noise_check(design, iss, noise),
+                lambda iss: noise_messages.noise_check(design, noise, iss),
                 needs=("iss_gain",),
             )
         )

@@ -9,7 +9,9 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any
+from typing import Any, NamedTuple
+
+import numpy as np
 
 from ..base.format import readable
 from ..noise import MeasurementNoise
@@ -18,6 +20,7 @@ from ..results import Check, Verdict
 from .noise_gain import NoiseGain, NoiseGainCode, linear_noise_bound
 
 __all__ = [
+    "noise_check",
     "observer_noise_check",
     "sparse_noise_check",
     "reason",
@@ -36,6 +39,15 @@ METHOD = (
 def applies_to(design: ObserverDesign) -> bool:
     """Whether the observer is linear (no attack estimate, one sample at a time)."""
     return not design.sparse and design.window == 1
+
+
+def noise_check(design: ObserverDesign, noise: MeasurementNoise, iss: Check) -> Check:
+    """The ``observer_noise_bound`` check of any observer: the worst-case series of a linear
+    one (``observer_noise_check``), the dissipation inequality of iss_gain's certificate for
+    the others (``sparse_noise_check``)."""
+    if applies_to(design):
+        return observer_noise_check(design, noise, iss)
+    return sparse_noise_check(design, iss, noise)
 
 
 def reason(found: NoiseGain) -> str:
@@ -84,8 +96,6 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
             evidence={"from": "iss_gain"},
             **common,
         )
-    import numpy as np
-
     rows = design.sensing.shape[0]
     model = design.observer_kind.lure_model(design)
     if model.r != rows or model.n_e != design.system.n:
@@ -100,18 +110,11 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
             **common,
         )
     per_row = noise.eta[np.arange(rows) % design.system.p]
-    # linear in the noise: N over a power of two c >= the largest bound, scaled back at the end
-    top_eta = float(np.max(per_row)) if rows else 0.0
-    c = 2.0 ** math.frexp(top_eta)[1] if top_eta > 0 else 1.0
-    N2 = float(np.sum((per_row / c) ** 2)) * (1 + 4 * rows * 2.0**-53)
     P = np.asarray(P, dtype=float)
     n = design.system.n
-    inverse = np.linalg.inv(0.5 * (P + P.T))
-    block = inverse[:n, :n]
-    top = float(np.max(np.linalg.eigvalsh(0.5 * (block + block.T))))
-    # the inverse and its eigenvalue to a relative 1e-8 of a well-conditioned P, taken up
-    cond = float(np.linalg.cond(P))
-    if not math.isfinite(cond) or cond > 1e8:
+    found = dissipation_bound(P, float(alpha), float(gamma), per_row, n)
+    cond, top, bound = found.condition, found.top, found.bound
+    if found.ill_conditioned:
         return Check(
             verdict=Verdict.INCONCLUSIVE,
             summary="No ultimate error bound under noise is certified: iss_gain's P is too "
@@ -121,9 +124,6 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
             evidence={"from": "iss_gain", "condition_P": cond},
             **common,
         )
-    top *= 1 + 1e-8 * max(cond, 1.0)
-    unit = math.sqrt(float(gamma) ** 2 * N2 / float(alpha) * top) * (1 + 1e-12)
-    bound = unit * c
     search = noise_search(design, noise)
     energy, energy_words = _energy(iss, design)
     if math.isfinite(bound) and not search["largest_error"] <= bound:
@@ -155,7 +155,7 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
         summary=f"Without attack and with noise within the spec's bounds on every sample, the "
         f"estimation error eventually stays within {readable(bound)} (2-norm), from iss_gain's "
         f"certificate: limsup V <= gamma^2 N^2 / alpha with gamma = {readable(float(gamma))}, "
-        f"alpha = {readable(float(alpha))} and N = {readable(math.sqrt(N2) * c)}. A search "
+        f"alpha = {readable(float(alpha))} and N = {readable(found.noise_norm)}. A search "
         f"over {search['sequences']} noise sequences within the bounds (from zero error, "
         f"{search['steps']} steps) reached {readable(search['largest_error'])}." + energy_words,
         value=bound,
@@ -168,7 +168,7 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
             "from": "iss_gain",
             "gamma": gamma,
             "alpha": alpha,
-            "noise_norm_per_step": math.sqrt(N2) * c,
+            "noise_norm_per_step": found.noise_norm,
             "lambda_max_P_inverse_ee": top,
             "lambda_max_P_ee": float(np.max(np.linalg.eigvalsh(0.5 * (P[:n, :n] + P[:n, :n].T)))),
             "condition_P": cond,
@@ -176,6 +176,41 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
         },
         **common,
     )
+
+
+class DissipationBound(NamedTuple):
+    """The ultimate error bound a dissipation inequality with decay gives under noise
+    (``dissipation_bound``)."""
+
+    bound: float  # inf when none is certified
+    noise_norm: float  # N, a bound of |n(k)| on every sample
+    top: float  # lambda_max((P^-1)_ee), taken up by its rounding
+    condition: float  # of P
+    ill_conditioned: bool  # P too ill-conditioned to invert with a known error
+
+
+def dissipation_bound(
+    P: np.ndarray, alpha: float, gamma: float, per_row: np.ndarray, n: int
+) -> DissipationBound:
+    """limsup |e| <= sqrt(gamma^2 N^2 / alpha * lambda_max((P^-1)_ee)) for a verified
+    V+ - V <= -alpha V - |e|^2 + gamma^2 |n|^2 (V = xi' P xi, e the first ``n`` entries of
+    xi) and noise within ``per_row`` on each entry of n: computed for the noise over a power
+    of two and scaled back, every rounding taken up (the inverse and its eigenvalue to a
+    relative 1e-8 of a P with condition number up to 1e8; beyond, none)."""
+    rows = per_row.size
+    # linear in the noise: N over a power of two c >= the largest bound, scaled back at the end
+    top_eta = float(np.max(per_row)) if rows else 0.0
+    c = 2.0 ** math.frexp(top_eta)[1] if top_eta > 0 else 1.0
+    N2 = float(np.sum((per_row / c) ** 2)) * (1 + 4 * rows * 2.0**-53)
+    cond = float(np.linalg.cond(P))
+    if not math.isfinite(cond) or cond > 1e8:
+        return DissipationBound(math.inf, math.sqrt(N2) * c, math.nan, cond, True)
+    inverse = np.linalg.inv(0.5 * (P + P.T))
+    block = inverse[:n, :n]
+    top = float(np.max(np.linalg.eigvalsh(0.5 * (block + block.T))))
+    top *= 1 + 1e-8 * max(cond, 1.0)
+    unit = math.sqrt(gamma**2 * N2 / alpha * top) * (1 + 1e-12)
+    return DissipationBound(unit * c, math.sqrt(N2) * c, top, cond, False)
 
 
 SEARCH_STEPS = 300
@@ -188,8 +223,6 @@ def noise_search(design: ObserverDesign, noise: MeasurementNoise, seed: int = 0)
     noise): for each state component, the signs that make the linear part's series
     sum_j |F^j L| eta add up at the last step, and random sign and uniform sequences; run
     through the observer's own simulator."""
-    import numpy as np
-
     from ..observers import observer_from_design
 
     p, n = design.system.p, design.system.n
@@ -221,8 +254,6 @@ def initial_error_fading(design: ObserverDesign, check: Check) -> Callable[[int,
     ||F^k||_2 for a linear observer (the powers taken one after the other); from iss_gain's
     dissipation inequality sqrt(lambda_max((P^-1)_ee) (1 - alpha)^k lambda_max(P_ee)), largest
     at the start."""
-    import numpy as np
-
     if applies_to(design):  # the series of F's powers
 
         def powers(start: int, stop: int) -> float:

@@ -1,0 +1,103 @@
+"""ssecert design under noise: the trade-off front's noise axis and the ``noise`` objective."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+
+from ssecert.examples import load_example
+from ssecert.noise import MeasurementNoise
+from ssecert.synthesize import (
+    DEFAULT_DECAY,
+    choose_noise_decay,
+    design_observer,
+    objective_refusal,
+    tradeoff_front,
+)
+
+
+def _point(alpha, bound, verified=True):
+    return {
+        "alpha": alpha,
+        "contraction": math.sqrt(1 - alpha),
+        "noise_bound": bound,
+        "verified": verified,
+    }
+
+
+def test_the_noise_decay_is_the_fronts_smallest_bound_faster_than_the_plant():
+    # the bound is not monotone in the decay: the middle point is the smallest
+    front = [_point(0.5, 0.04), _point(0.2, 0.01), _point(0.01, 0.3)]
+    assert choose_noise_decay(front, 0.985)[0] == 0.2
+    # a point no faster than the plant is not chosen, however small its bound
+    slow = [_point(0.5, 0.04), _point(0.001, 0.001)]
+    alpha, why = choose_noise_decay(slow, 0.99)
+    assert alpha == 0.5 and "faster than the plant" in why
+    # unverified points and points without a bound do not count
+    assert choose_noise_decay([_point(0.2, None), _point(0.3, 0.1, False)], 0.9)[0] == (
+        DEFAULT_DECAY
+    )
+    # none faster than the plant: the fastest
+    assert choose_noise_decay([_point(0.01, 0.2), _point(0.02, 0.5)], 0.5)[0] == 0.02
+
+
+def test_the_noise_objective_needs_a_noise_and_a_kind_with_decay():
+    system = load_example("ugv").system
+    with pytest.raises(ValueError, match="needs the measurement noise bound"):
+        design_observer(system, "elastic_net", objective="noise", time_budget=1)
+    with pytest.raises(ValueError, match="noise: expected a finite bound"):
+        design_observer(system, "elastic_net", objective="noise", noise=-1.0, time_budget=1)
+    refusal = objective_refusal("noise", "dsso")
+    assert "elastic-net observer" in refusal and "Luenberger observer" in refusal
+
+
+@pytest.mark.slow
+def test_every_front_bound_holds_along_the_noise_search_of_its_design():
+    from ssecert.design.synthesis import with_gain
+    from ssecert.stability.noise_messages import noise_search
+    from ssecert.synthesize import _template
+
+    system = load_example("ugv").system
+    noise = MeasurementNoise.uniform(1e-3, system.p)
+    template = _template(system, "elastic_net", 0.3, 0.3, 0.1)
+    front = tradeoff_front(template, noise=noise, points=5)
+    bounded = [p for p in front if p.get("noise_bound") is not None]
+    assert len(bounded) >= 3
+    for point in bounded:
+        assert point["verified"] and point["alpha"] > 0
+    # the front's designs, run under the search's noise sequences, stay within their bounds
+    from ssecert.design.synthesis import synthesize_gain
+
+    for point in bounded:
+        proposal = synthesize_gain(template, alpha=point["alpha"])
+        design = with_gain(template, proposal.L)
+        found = noise_search(design, noise)
+        assert found["largest_error"] <= point["noise_bound"] * (1 + 1e-9), point
+
+
+@pytest.mark.slow
+def test_design_minimises_the_certified_noise_bound(tmp_path, capsys):
+    from ssecert.cli import main
+
+    code = main(["design", "ugv", "--objective", "noise", "--out", str(tmp_path)])
+    captured = capsys.readouterr()
+    assert code == 2 and "--objective noise needs the measurement noise bound" in captured.err
+    code = main(
+        ["design", "ugv", "--objective", "noise", "--noise", "1e-3", "--out", str(tmp_path),
+         "--time-budget", "20", "--json", str(tmp_path / "result.json")]
+    )  # fmt: skip
+    assert code in (0, 1, 3)
+    result = json.loads((tmp_path / "result.json").read_text())
+    certified = [c for c in result["candidates"] if c["certified"] and c.get("decay") is not None]
+    # the chosen design has the smallest certified bound among the candidates whose decay
+    # is certified, and it is the bound its own certificate reports
+    assert result["noise_bound"] == min(c["noise_bound"] for c in certified)
+    doc = json.loads((tmp_path / "ugv-design.json").read_text())
+    assert doc["checks"]["observer_noise_bound"]["value"] == result["noise_bound"]
+    assert "measurement = 0.001" in (tmp_path / "ugv-design.toml").read_text()
+    chosen = result["comparison"]["tradeoff"]["chosen"]
+    assert chosen["noise_bound"] == result["noise_bound"]
+    assert any(p.get("noise_bound") is not None for p in result["front"])
+    assert "tradeoff-noise-front" in (tmp_path / "ugv-design.html").read_text()
