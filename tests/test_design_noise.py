@@ -101,3 +101,21 @@ def test_design_minimises_the_certified_noise_bound(tmp_path, capsys):
     assert chosen["noise_bound"] == result["noise_bound"]
     assert any(p.get("noise_bound") is not None for p in result["front"])
     assert "tradeoff-noise-front" in (tmp_path / "ugv-design.html").read_text()
+
+
+def test_the_trade_off_plot_has_a_noise_panel_only_for_positive_bounds():
+    import warnings
+
+    from ssecert.report.plots import tradeoff_plot
+
+    front = [
+        {"verified": True, "contraction": 0.8, "gamma": 1.0, "noise_bound": 0.0},
+        {"verified": True, "contraction": 0.9, "gamma": 0.8, "noise_bound": 0.0},
+    ]
+    tradeoff = {"front": front, "chosen": {"contraction": 0.8, "gamma": 1.0}, "plant_radius": 1.0}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a log axis of zeros warns
+        assert "tradeoff-noise-front" not in tradeoff_plot(tradeoff)
+        front[0]["noise_bound"], front[1]["noise_bound"] = 0.1, 0.2
+        assert "tradeoff-noise-front" in tradeoff_plot(tradeoff)
+    assert "tradeoff-noise-front" not in tradeoff_plot({**tradeoff, "front": front[:0]})

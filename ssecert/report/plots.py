@@ -125,10 +125,11 @@ def tradeoff_plot(tradeoff: dict[str, Any], *, gid: str = "tradeoff") -> str:
     "clearly faster"), the chosen design and the spec's design (at its linear loop's
     spectral radius: it has no decay certificate); where the front's points have a certified
     ultimate error bound under noise, a second panel with that bound on the same axis."""
+    # (a noise of 0 bounds the error by 0: nothing to plot on a log axis)
     noisy = [
         p
         for p in tradeoff.get("front", [])
-        if p.get("verified") and p.get("noise_bound") is not None
+        if p.get("verified") and (p.get("noise_bound") or 0) > 0
     ]
     fig, axes = _figure(8.0, 5.6 if noisy else 3.2, 2 if noisy else 1, 1)
     ax = axes[0][0]
