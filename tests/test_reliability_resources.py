@@ -25,7 +25,7 @@ from ssecert.observers import build_observer
 from ssecert.simulation.engine import simulate_scenario, simulate_spec
 from ssecert.stability import lmi, region
 from ssecert.stability.checks import observer_checks
-from ssecert.stability.outcomes import LMICause, LMICode
+from ssecert.stability.outcomes import AssumptionCode, LMICause, LMICode
 from ssecert.stability.thesis import SeriesError, pi_map, thesis_assumptions
 from ssecert.structure.attacks import WITNESS_MAX_STEPS
 from ssecert.structure.outcomes import IrrepresentableCode
@@ -521,11 +521,10 @@ def test_thesis_checks_refuse_huge_attack_estimates():
     spec = _window_spec(10)
     design = build_observer(spec.system, spec.observer)
     verdict, items = thesis_assumptions(design, budget=Budget(memory=2**20))
-    reasons = {i.name: i.reason for i in items}
-    assert verdict == "inconclusive"
-    assert (
-        "not attempted" in reasons["lemma_1"] and "30 attack-estimate entries" in reasons["lemma_1"]
-    )
+    codes = {i.name: i.code for i in items}
+    assert verdict == "inconclusive" and codes["lemma_1"] is AssumptionCode.NOT_ATTEMPTED
+    lemma = next(i for i in items if i.name == "lemma_1")
+    assert "30 attack-estimate entries" in lemma.facts["refusal"]
 
 
 SCENARIO_SPEC = """name = "sim"

@@ -5,6 +5,8 @@ import pytest
 
 from ssecert.examples import load_example
 from ssecert.observers import build_observer
+from ssecert.stability import thesis_messages
+from ssecert.stability.outcomes import AssumptionCode
 from ssecert.stability.thesis import pi_map, thesis_assumptions
 
 
@@ -17,7 +19,7 @@ def test_deadbeat_gain_breaks_lemma_1():
     spec = load_example("ugv")
     verdict, items = items_of(build_observer(spec.system, spec.observer))
     assert verdict == "fails"
-    assert items["lemma_1"].verdict == "fails" and "singular" in items["lemma_1"].reason
+    assert items["lemma_1"].code in (AssumptionCode.F_DEADBEAT, AssumptionCode.F_SINGULAR)
     assert items["assumption_2"].verdict == "holds"
     assert items["assumption_3"].verdict == "inconclusive"
     assert items["epsilon_bound"].verdict == "inconclusive"
@@ -125,3 +127,20 @@ def test_a_subnormal_plant_leaves_lemma_1_unchecked_instead_of_crashing():
     check = analyze(spec)["thesis_assumptions"]
     lemma = check.evidence["lemma_1"]
     assert lemma["verdict"].value == "inconclusive" and "floating-point range" in lemma["reason"]
+
+
+def test_every_assumption_code_has_words_and_only_failures_a_finding():
+    facts = {
+        "refusal": "REFUSAL", "q": 0.5, "lam": 0.1, "smallest": 1e-300, "claimed": 2.0,
+        "factor": "3.5", "ratio": 7.0, "correct": float("inf"), "search": "SEARCH",
+        "lemma_fails": True, "worst": 1e5, "rho": 0.81, "why": "WHY", "step": 0.1,
+        "star": 0.05,
+    }  # fmt: skip
+    for code in AssumptionCode:
+        assert thesis_messages.reason(code, facts), code
+        finding = thesis_messages.finding(code, facts)
+        assert bool(finding) is (code.verdict.value == "fails"), code
+    exceeded = thesis_messages.finding(AssumptionCode.LIPSCHITZ_EXCEEDED, facts)
+    assert "infinite here" in exceeded and "factor 3.5" in exceeded
+    assert "by a factor" in thesis_messages.reason(AssumptionCode.NOT_CONTRACTING, facts)
+    assert "0.5 times" in thesis_messages.reason(AssumptionCode.NOT_CONTRACTING, {"worst": 0.5})

@@ -16,6 +16,7 @@ from typing import Any
 from ..results import Verdict
 
 __all__ = [
+    "AssumptionCode",
     "LMICause",
     "LMICode",
     "LyapunovCode",
@@ -270,3 +271,84 @@ class Region:
     ) -> Region:
         """Radius 0 for the reason ``code``, with the facts its words need."""
         return cls(0.0, code, facts, dict(evidence or {}))
+
+
+class AssumptionCode(enum.Enum):
+    """Why an item of the thesis's chain of assumptions (``ssecert.stability.thesis``) has its
+    verdict, with the numbers in the item's facts (its words:
+    ``ssecert.stability.thesis_messages``)."""
+
+    #: a budget refused the p x p work (``refusal``)
+    NOT_ATTEMPTED = "not attempted"
+    #: Assumption 1: the observability check did not run
+    NOT_CHECKED = "not checked"
+    #: Assumption 1 holds: (A, C) is observable
+    OBSERVABLE = "observable"
+    #: Assumption 1 fails: (A, C) is not observable
+    NOT_OBSERVABLE = "not observable"
+    #: Assumption 2 holds for the shrinkage with Q = I (``q``, ``lam``)
+    SHRINKAGE = "shrinkage"
+    #: Lemma 1: F's smallest singular value at the bottom of the float range (``smallest``)
+    F_AT_FLOAT_FLOOR = "F at the float floor"
+    #: Lemma 1 fails: a deadbeat gain makes F nilpotent, hence singular (``smallest``)
+    F_DEADBEAT = "F nilpotent"
+    #: Lemma 1: F singular to rounding, not shown singular exactly (``smallest``)
+    F_SINGULAR_TO_ROUNDING = "F singular to rounding"
+    #: Lemma 1 fails: F singular exactly (``smallest``)
+    F_SINGULAR = "F singular"
+    #: Lemma 1 fails: the claimed Lipschitz constant is exceeded (``claimed``, ``factor``,
+    #: ``ratio``, ``correct``)
+    LIPSCHITZ_EXCEEDED = "Lipschitz constant exceeded"
+    #: Lemma 1 holds: the series' bound is at most the claimed constant (``correct``,
+    #: ``claimed``)
+    LIPSCHITZ_PROVEN = "Lipschitz constant proven"
+    #: Lemma 1: Pi exists, the claimed constant is not proven (``claimed``, ``correct``,
+    #: ``ratio`` or ``search``: why none was sampled)
+    LIPSCHITZ_NOT_PROVEN = "Lipschitz constant not proven"
+    #: Assumption 3: Pi is not available (``lemma_fails``: Lemma 1 failed)
+    NO_PI = "no Pi"
+    #: Assumption 3 fails: a sampled a_hat with ratio >= 1 (``worst``)
+    NOT_CONTRACTING = "not contracting"
+    #: Assumption 3 holds with rho'' < 1 (``rho``)
+    CONTRACTING = "contracting"
+    #: Assumption 3: no proof and no sample evaluated (``why``)
+    NOT_EVALUATED = "not evaluated"
+    #: Assumption 3: no counterexample and no proof (``worst``)
+    NO_PROOF = "no proof"
+    #: the epsilon bound needs Lemma 1 and Assumption 3
+    NEEDS_LEMMA = "needs Lemma 1"
+    #: the epsilon bound: F is not certified stable
+    F_NOT_CERTIFIED = "F not certified"
+    #: the epsilon bound holds: step <= epsilon* (``step``, ``star``)
+    STEP_WITHIN = "step within epsilon*"
+    #: the epsilon bound is not met (sufficient, not necessary) (``step``, ``star``)
+    STEP_ABOVE = "step above epsilon*"
+
+    @property
+    def verdict(self) -> Verdict:
+        """The verdict this code gives."""
+        if self in _ASSUMPTION_HOLDS:
+            return Verdict.HOLDS
+        if self in _ASSUMPTION_FAILS:
+            return Verdict.FAILS
+        return Verdict.INCONCLUSIVE
+
+
+_ASSUMPTION_HOLDS = frozenset(
+    {
+        AssumptionCode.OBSERVABLE,
+        AssumptionCode.SHRINKAGE,
+        AssumptionCode.LIPSCHITZ_PROVEN,
+        AssumptionCode.CONTRACTING,
+        AssumptionCode.STEP_WITHIN,
+    }
+)
+_ASSUMPTION_FAILS = frozenset(
+    {
+        AssumptionCode.NOT_OBSERVABLE,
+        AssumptionCode.F_DEADBEAT,
+        AssumptionCode.F_SINGULAR,
+        AssumptionCode.LIPSCHITZ_EXCEEDED,
+        AssumptionCode.NOT_CONTRACTING,
+    }
+)

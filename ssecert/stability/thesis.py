@@ -28,12 +28,13 @@ counterexample or the reason) or inconclusive.  Findings on the text:
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
 import numpy as np
 
-from ..base.format import factor_above, readable, sig
+from ..base.format import factor_above
 from ..budget import Budget
 from ..design.gains import GainMethod
 from ..numerics.exact import dyadic, exact_kernel_vector
@@ -41,6 +42,7 @@ from ..numerics.exact_powers import ExactMatrix
 from ..observers import ObserverDesign
 from ..results import Verdict, combine_verdicts
 from ..tolerances import EPS
+from . import thesis_messages
 from .counterexample_search import (  # noqa: F401  (the search limits stay importable here)
     LOCAL_SEARCH_DIM,
     SEARCH_EVALUATIONS,
@@ -54,6 +56,7 @@ from .counterexample_search import (  # noqa: F401  (the search limits stay impo
     _SearchExhausted,
 )
 from .lyapunov import lyapunov_certificate
+from .outcomes import AssumptionCode as Code
 from .pi_series import (  # noqa: F401  (the series stays importable here)
     MAX_SERIES_TERMS,
     SeriesError,
@@ -69,19 +72,29 @@ __all__ = ["AssumptionResult", "thesis_assumptions", "pi_map"]
 class AssumptionResult:
     """One item of the thesis's chain of assumptions.
 
-    ``finding`` says in one clause what a failing item means for the thesis's
-    theorem (which of its sufficient conditions the design does not meet, or
-    which printed statement is wrong); ``reason`` gives the numbers.
+    ``code`` decides the verdict; ``facts`` hold the numbers its words need
+    (``thesis_messages``).  ``finding`` says in one clause what a failing item
+    means for the thesis's theorem (which of its sufficient conditions the
+    design does not meet, or which printed statement is wrong); ``reason``
+    gives the numbers.
     """
 
     name: str
-    verdict: Verdict  # or its name
-    reason: str
+    code: Code
+    facts: Mapping[str, Any] = field(default_factory=dict)
     details: dict[str, Any] = field(default_factory=dict)
-    finding: str = ""
 
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "verdict", Verdict(self.verdict))  # a name is accepted too
+    @property
+    def verdict(self) -> Verdict:
+        return self.code.verdict
+
+    @property
+    def reason(self) -> str:
+        return thesis_messages.reason(self.code, self.facts)
+
+    @property
+    def finding(self) -> str:
+        return thesis_messages.finding(self.code, self.facts)
 
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {"verdict": self.verdict, "reason": self.reason}
@@ -128,7 +141,7 @@ def thesis_assumptions(
     refusal = _refusal(inst, budget)
     if refusal:
         for name in ("lemma_1", "assumption_3", "epsilon_bound"):
-            items.append(AssumptionResult(name, Verdict.INCONCLUSIVE, f"not attempted: {refusal}"))
+            items.append(AssumptionResult(name, Code.NOT_ATTEMPTED, {"refusal": refusal}))
         return combine_verdicts([i.verdict for i in items]).value, items
     lemma = _lemma_1(inst, rng)
     assumption_3, rho_a = _assumption_3(inst, lemma, rng)
@@ -189,14 +202,9 @@ def _instance(design: ObserverDesign) -> _Instance:
 def _assumption_1(observability_holds: bool | None) -> AssumptionResult:
     """Assumption 1 (observability), taken from the observability check's verdict."""
     if observability_holds is None:
-        return AssumptionResult("assumption_1", Verdict.INCONCLUSIVE, "observability not checked")
+        return AssumptionResult("assumption_1", Code.NOT_CHECKED)
     return AssumptionResult(
-        "assumption_1",
-        Verdict.HOLDS if observability_holds else Verdict.FAILS,
-        "(A, C) is observable (see the observability check)"
-        if observability_holds
-        else "(A, C) is not observable (see the observability check)",
-        finding="" if observability_holds else "Assumption 1, observability of (A, C), is not met",
+        "assumption_1", Code.OBSERVABLE if observability_holds else Code.NOT_OBSERVABLE
     )
 
 
@@ -205,13 +213,8 @@ def _assumption_2(inst: _Instance) -> AssumptionResult:
     q, lam = inst.q, inst.lam
     return AssumptionResult(
         "assumption_2",
-        Verdict.HOLDS,
-        "With Q = I (p x p; the thesis's n x n is a typo): Psi_q(0) = 0; |Psi_q(s)_i| = "
-        f"q max(|s_i| - lambda, 0) < |s_i| for s_i != 0 (q = {q:g}, lambda = {lam:g}), so "
-        "Psi_q(s)' Q Psi_q(s) < s' Q s for s != 0; and Psi_q is Lipschitz with constant q "
-        "because soft thresholding is 1-Lipschitz. The property (5.21) "
-        "Psi_q(s)' Q Psi_q(s) <= q^2 s' Q s also holds for this diagonal Q (it can fail for a "
-        "non-diagonal Q).",
+        Code.SHRINKAGE,
+        {"q": q, "lam": lam},
         {"Q": "identity", "lipschitz_psi": q},
     )
 
@@ -256,10 +259,8 @@ def _lemma_1(inst: _Instance, rng: np.random.Generator) -> _Lemma1:
     if s_F[-1] < SUBNORMAL_FLOOR:
         item = AssumptionResult(
             "lemma_1",
-            Verdict.INCONCLUSIVE,
-            f"F = A + L1 C has smallest singular value {readable(s_F[-1])}, not small against its own "
-            f"scale but at the bottom of the floating-point range: its inverse (the series of "
-            f"Pi) cannot be formed in floating point, so Lemma 1 is not checked.",
+            Code.F_AT_FLOAT_FLOOR,
+            {"smallest": float(s_F[-1])},
             {"smallest_singular_value_F": float(s_F[-1]), "claimed_lipschitz": claimed},
         )
         return _Lemma1(item, False, None, None)
@@ -276,44 +277,11 @@ def _singular_F(inst: _Instance, smallest: float, claimed: float) -> AssumptionR
     details = {"smallest_singular_value_F": smallest, "claimed_lipschitz": claimed}
     exact = inst.exact_F.value if inst.exact_F is not None else dyadic(inst.F)
     if inst.deadbeat and (exact is None or exact_kernel_vector(exact) is None):
-        return AssumptionResult(
-            "lemma_1",
-            Verdict.FAILS,
-            f"a deadbeat gain makes F = A + L1 C nilpotent, hence singular, so Pi(a) = -sum "
-            f"F^(-l-1) L1 Psi_q^l(a) does not exist and the change of variable "
-            f"eta = e - Pi(a_hat) of the proof is unavailable (the printed gain is the rounding "
-            f"of a deadbeat gain: its F is singular to rounding, smallest singular value "
-            f"{readable(smallest)}).",
-            details,
-            finding=_singular_f(" (a deadbeat gain makes it nilpotent)"),
-        )
+        return AssumptionResult("lemma_1", Code.F_DEADBEAT, {"smallest": smallest}, details)
     if exact is None or exact_kernel_vector(exact) is None:
-        return AssumptionResult(
-            "lemma_1",
-            Verdict.INCONCLUSIVE,
-            f"F = A + L1 C is singular to rounding (smallest singular value {readable(smallest)}) "
-            f"but not shown singular in exact arithmetic, so whether Pi exists (and its "
-            f"Lipschitz constant) cannot be decided in floating point.",
-            details,
-        )
-    return AssumptionResult(
-        "lemma_1",
-        Verdict.FAILS,
-        f"F = A + L1 C is singular (an exact kernel vector of F formed from the spec's data; "
-        f"smallest computed singular value {readable(smallest)}; every nilpotent F, as a deadbeat "
-        f"gain makes it, is singular), so Pi(a) = -sum F^(-l-1) L1 Psi_q^l(a) does not exist "
-        f"and the change of variable eta = e - Pi(a_hat) of the proof is unavailable.",
-        details,
-        finding=_singular_f(),
-    )
-
-
-def _singular_f(why: str = "") -> str:
-    """What a singular F means for the thesis's proof, in one clause."""
-    return (
-        f"Lemma 1 needs F = A + L1 C (= A - L C) invertible, and this gain makes it "
-        f"singular{why}, so the map Pi its proof rests on does not exist"
-    )
+        facts = {"smallest": smallest}
+        return AssumptionResult("lemma_1", Code.F_SINGULAR_TO_ROUNDING, facts, details)
+    return AssumptionResult("lemma_1", Code.F_SINGULAR, {"smallest": smallest}, details)
 
 
 def _lemma_1_on_pi(
@@ -346,45 +314,22 @@ def _lemma_1_on_pi(
     if ratio is not None and ratio > claimed * (1 + 1e-9):
         # the claimed constant is wrong, but Pi exists and the corrected bound is valid
         factor = factor_above(ratio / claimed) if claimed > 0 else "without bound"
-        corrected = (
-            f"; the bound its proof supports, ||L1|| ||F^-1|| / (1 - q ||F^-1||), is "
-            f"{readable(correct)}"
-            if np.isfinite(correct)
-            else "; the bound its proof supports is infinite here (q ||F^-1|| >= 1)"
-        )
         item = AssumptionResult(
             "lemma_1",
-            Verdict.FAILS,
-            f"the claimed Lipschitz constant ||L1|| / |lambda_max(F) - q| = {readable(claimed)} "
-            f"is exceeded by a factor {factor}: |Pi(a1) - Pi(a2)| / |a1 - a2| = "
-            f"{readable(ratio)} for the pair in the counterexample",
+            Code.LIPSCHITZ_EXCEEDED,
+            {"claimed": claimed, "factor": factor, "ratio": ratio, "correct": correct},
             {**details, "counterexample": {"a1": a1, "a2": a2}},
-            finding=f"Lemma 1's printed Lipschitz constant of Pi, {readable(claimed)}, is "
-            f"exceeded by a factor {factor} on this design{corrected}",
         )
         finite = bool(np.isfinite(correct))
         return _Lemma1(item, finite, correct if finite else None, series)
     if correct <= claimed:
-        item = AssumptionResult(
-            "lemma_1",
-            Verdict.HOLDS,
-            f"Pi exists (the series is finite) and is Lipschitz with constant <= {readable(correct)} "
-            f"(= ||L1|| ||F^-1|| / (1 - q ||F^-1||)) <= the claimed {readable(claimed)}",
-            details,
-        )
+        proven = {"correct": correct, "claimed": claimed}
+        item = AssumptionResult("lemma_1", Code.LIPSCHITZ_PROVEN, proven, details)
         return _Lemma1(item, True, correct, series)
-    found = (
-        f"sampling found ratios up to {readable(ratio)}"
-        if ratio is not None
-        else f"no ratio could be sampled: {search['reason']}"
-    )
-    item = AssumptionResult(
-        "lemma_1",
-        Verdict.INCONCLUSIVE,
-        f"Pi exists, but the claimed constant {readable(claimed)} is not proven: the series "
-        f"gives {readable(correct)}; {found}",
-        details,
-    )
+    facts: dict[str, Any] = {"claimed": claimed, "correct": correct, "ratio": ratio}
+    if ratio is None:
+        facts["search"] = search["reason"]
+    item = AssumptionResult("lemma_1", Code.LIPSCHITZ_NOT_PROVEN, facts, details)
     return _Lemma1(item, True, correct if np.isfinite(correct) else None, series)
 
 
@@ -415,13 +360,8 @@ def _assumption_3(
 ) -> tuple[AssumptionResult, float | None]:
     """Assumption 3 with Q = I, and rho'' when it is proven."""
     if lemma.series is None:
-        return AssumptionResult(
-            "assumption_3",
-            Verdict.INCONCLUSIVE,
-            "it is stated in terms of Pi from Lemma 1, which does not exist for this gain"
-            if lemma.item.verdict is Verdict.FAILS
-            else "it is stated in terms of Pi from Lemma 1, which could not be formed here",
-        ), None
+        fails = lemma.item.verdict is Verdict.FAILS
+        return AssumptionResult("assumption_3", Code.NO_PI, {"lemma_fails": fails}), None
     search = _Search(_Meter(SEARCH_FLOPS / 2, SEARCH_EVALUATIONS / 2))
     ratio_of = _attack_ratio(inst, lemma.series, search.meter)
     rows = _sample_rows(inst.p)
@@ -444,42 +384,19 @@ def _assumption_3(
         bound = _attack_contraction_bound(inst, lemma.lipschitz)
         details["proven_bound_sqrt_rho"] = bound
     if worst_value is not None and worst_value >= 1.0:
-        times = (
-            f"exceeds a_hat' Q a_hat by a factor {factor_above(worst_value)}"
-            if worst_value >= 1e4
-            else f"is {readable(worst_value, versus=1.0)} times a_hat' Q a_hat"
-        )
         return AssumptionResult(
             "assumption_3",
-            Verdict.FAILS,
-            f"for the a_hat in the counterexample the left side {times}, so no rho'' < 1 works",
+            Code.NOT_CONTRACTING,
+            {"worst": worst_value},
             {**details, "counterexample": worst_point},
-            finding="Assumption 3 (the attack estimate's map contracts, with a rho'' < 1) is "
-            f"not met: for the a_hat in the evidence its left side {times}",
         ), None
     if bound is not None and bound < 1.0:
         rho_a = bound**2
-        return AssumptionResult(
-            "assumption_3",
-            Verdict.HOLDS,
-            f"proven with rho'' = {readable(rho_a, versus=1.0)} < 1 from |Psi_q(v)| <= q |v| and the Lipschitz "
-            f"bound of Pi",
-            details,
-        ), rho_a
+        return AssumptionResult("assumption_3", Code.CONTRACTING, {"rho": rho_a}, details), rho_a
     if worst_value is None:
         why = search.reason or stopped or "the ratio is not finite"
-        return AssumptionResult(
-            "assumption_3",
-            Verdict.INCONCLUSIVE,
-            f"no proof, and no sample could be evaluated: {why}",
-            details,
-        ), None
-    return AssumptionResult(
-        "assumption_3",
-        Verdict.INCONCLUSIVE,
-        f"no counterexample found (largest ratio found {readable(worst_value)}) but no proof either",
-        details,
-    ), None
+        return AssumptionResult("assumption_3", Code.NOT_EVALUATED, {"why": why}, details), None
+    return AssumptionResult("assumption_3", Code.NO_PROOF, {"worst": worst_value}, details), None
 
 
 def _attack_ratio(inst: _Instance, series: _PiSeries, meter: _Meter) -> Any:
@@ -555,18 +472,10 @@ def _attack_contraction_bound(inst: _Instance, ell_pi: float) -> float:
 def _epsilon_bound(inst: _Instance, lemma: _Lemma1, rho_a: float | None) -> AssumptionResult:
     """The epsilon bound (5.20), with the eigenvalues the inequalities need."""
     if not (lemma.holds and rho_a is not None and lemma.lipschitz is not None):
-        return AssumptionResult(
-            "epsilon_bound",
-            Verdict.INCONCLUSIVE,
-            "the bound (5.20) needs Lemma 1 and Assumption 3, which are not established here",
-        )
+        return AssumptionResult("epsilon_bound", Code.NEEDS_LEMMA)
     lyap = lyapunov_certificate(inst.F, exact=inst.exact_F)
     if lyap.verdict != Verdict.HOLDS or lyap.P is None:
-        return AssumptionResult(
-            "epsilon_bound",
-            Verdict.INCONCLUSIVE,
-            "F is not certified stable, so no P exists",
-        )
+        return AssumptionResult("epsilon_bound", Code.F_NOT_CERTIFIED)
     p_eigs = np.linalg.eigvalsh(lyap.P)
     rho = 1.0 - 1.0 / float(p_eigs[-1])  # F'PF - P = -I  =>  F'PF <= rho P
     best_eps, best_par = _epsilon_star(inst, p_eigs, rho, lemma.lipschitz, rho_a)
@@ -577,20 +486,10 @@ def _epsilon_bound(inst: _Instance, lemma: _Lemma1, rho_a: float | None) -> Assu
         "rho_P": rho,
         "parameters_gamma_eta_gamma_a_mu": best_par,
     }
-    star = sig(best_eps, versus=eps)
+    facts = {"step": eps, "star": best_eps}
     if best_par is not None and eps <= best_eps:
-        return AssumptionResult(
-            "epsilon_bound",
-            Verdict.HOLDS,
-            f"step = {eps:g} <= epsilon* = {star} (corrected constants)",
-            details,
-        )
-    return AssumptionResult(
-        "epsilon_bound",
-        Verdict.INCONCLUSIVE,
-        f"step = {eps:g} exceeds epsilon* = {star}; the bound is sufficient, not necessary",
-        details,
-    )
+        return AssumptionResult("epsilon_bound", Code.STEP_WITHIN, facts, details)
+    return AssumptionResult("epsilon_bound", Code.STEP_ABOVE, facts, details)
 
 
 def _epsilon_star(
