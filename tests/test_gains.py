@@ -171,3 +171,32 @@ def test_lyapunov_solution_is_control_dlyap(seed):
     assert code is LyapunovCode.VERIFIED
     assert np.allclose(P, control.dlyap(F.T, np.eye(n)), rtol=1e-12, atol=1e-12)
     assert np.allclose(F.T @ P @ F - P + np.eye(n), 0, atol=1e-9 * np.abs(P).max())
+
+
+def test_the_deadbeat_tests_say_why_from_their_numbers():
+    from ssecert.design import deadbeat_messages
+    from ssecert.design.deadbeat import verify_deadbeat
+
+    # a nilpotent shift is verified and says nothing; F = 2 is proved unstable
+    shift = verify_deadbeat(np.array([[0.0, 1.0], [0.0, 0.0]]), np.zeros((2, 1)), np.ones((1, 2)))
+    assert shift.verified and shift.reason == ""
+    unstable = verify_deadbeat(np.array([[2.0]]), np.zeros((1, 1)), np.ones((1, 1)))
+    assert not unstable.verified and unstable.index is None
+    assert unstable.radius_lower > 1 or unstable.radius_excess > 0
+    assert "the printed gain is unstable" in unstable.reason
+    words = deadbeat_messages.deadbeat_reason(
+        index=None, conclusive=False, relative=(0.5, 0.25), rtol=1e-8, complete=False,
+        radius_upper=1.0, radius_lower=0.5, radius_excess=0.0,
+    )  # fmt: skip
+    assert "up to k = 2 (smallest 2.50e-01); the exact powers stopped" in words
+    assert "not certified below 1" in words
+    unclear = deadbeat_messages.deadbeat_reason(
+        index=2, conclusive=False, relative=(3e-8, 1e-9), rtol=1e-8, complete=True,
+        radius_upper=0.5, radius_lower=0.0, radius_excess=0.0,
+    )  # fmt: skip
+    assert unclear == "||F^1|| / ||A||^1 = 3.00e-08 is not clearly above 1e-08"
+    assert deadbeat_messages.nilpotency_reason(2, (1e-6, 1e-9), 1e-8, 1.0, True) == ""
+    assert "exceeds 1e-08" in deadbeat_messages.nilpotency_reason(None, (1.0,), 1e-8, 1.0, True)
+    assert "1.00e-06 is not clearly" in deadbeat_messages.nilpotency_reason(
+        2, (1e-6, 1e-9), 1e-8, 1.0, False
+    )

@@ -27,10 +27,10 @@ from typing import Any
 
 import numpy as np
 
-from ..base.format import one_plus, sig
 from ..base.validation import as_real_matrix
 from ..system import System
 from ..tolerances import Tolerances
+from . import deadbeat_messages
 from ._gain import Gain, GainError, GainMethod
 
 __all__ = [
@@ -62,7 +62,13 @@ class Nilpotency:
     rtol: float
     scale: float
     conclusive: bool
-    reason: str = ""
+
+    @property
+    def reason(self) -> str:
+        """Why no index, or no clear one, was found (empty when one was: ``deadbeat_messages``)."""
+        return deadbeat_messages.nilpotency_reason(
+            self.index, self.norms, self.rtol, self.scale, self.conclusive
+        )
 
 
 def nilpotency(
@@ -110,24 +116,8 @@ def nilpotency(
         norms.append(float(np.linalg.norm(power, 2)))
         if norms[-1] <= rtol:
             previous = norms[-2] if k > 1 else 1.0
-            ok = previous > clear * rtol
-            reason = (
-                ""
-                if ok
-                else (
-                    f"||(F/s)^{k - 1}|| = {previous:.2e} is not clearly above {rtol:.0e} "
-                    f"(s = {s:.3g})"
-                )
-            )
-            return Nilpotency(k, tuple(norms), rtol, s, ok, reason)
-    return Nilpotency(
-        None,
-        tuple(norms),
-        rtol,
-        s,
-        True,
-        f"||(F/s)^{n}|| = {norms[-1]:.2e} exceeds {rtol:.0e} (s = {s:.3g})",
-    )
+            return Nilpotency(k, tuple(norms), rtol, s, previous > clear * rtol)
+    return Nilpotency(None, tuple(norms), rtol, s, True)
 
 
 @dataclass(frozen=True)
@@ -161,8 +151,10 @@ class DeadbeatCheck:
         ``index`` found, conclusive, and ``radius_upper < 1``: the printed
         gain is stable and its error shrinks by ``rtol`` (relative to the
         plant's scale) in ``index`` steps.
-    reason : str
-        Why it is not verified (empty when it is).
+    complete : bool
+        The exact powers ran to the end (not stopped at their budget).
+    radius_excess : float
+        How far exact traces put the spectral radius above 1 (0 when they do not).
     """
 
     index: int | None
@@ -173,10 +165,25 @@ class DeadbeatCheck:
     radius_lower: float
     rtol: float
     verified: bool
-    reason: str = ""
     radius_power: int = 0
     relative_lower: tuple[float, ...] = ()
     exact_index: int | None = None
+    complete: bool = True
+    radius_excess: float = 0.0
+
+    @property
+    def reason(self) -> str:
+        """Why it is not verified (empty when it is: ``deadbeat_messages``)."""
+        return deadbeat_messages.deadbeat_reason(
+            index=self.index,
+            conclusive=self.conclusive,
+            relative=self.relative_norms,
+            rtol=self.rtol,
+            complete=self.complete,
+            radius_upper=self.radius_upper,
+            radius_lower=self.radius_lower,
+            radius_excess=self.radius_excess,
+        )
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -268,30 +275,6 @@ def verify_deadbeat(
     conclusive = index is not None and (
         index == 1 or lower[index - 2] > threshold + math.log2(clear)
     )
-    reasons = []
-    if index is None:
-        reasons.append(
-            f"||F^k|| / ||A||^k stays above {rtol:.0e} up to k = {len(upper)}"
-            + (f" (smallest {min(relative):.2e})" if relative else "")
-            + ("" if powers.complete else "; the exact powers stopped at their budget")
-        )
-    elif not conclusive:
-        reasons.append(
-            f"||F^{index - 1}|| / ||A||^{index - 1} = {relative[index - 2]:.2e} is "
-            f"not clearly above {rtol:.0e}"
-        )
-    if powers.radius_bound >= 1:
-        if powers.radius_lower > 1 or powers.radius_excess > 0:
-            excess = max(powers.radius_lower - 1.0, powers.radius_excess)
-            reasons.append(
-                f"the printed gain is unstable: exact traces of powers of "
-                f"A - L C prove spectral radius >= {one_plus(excess)}"
-            )
-        else:
-            reasons.append(
-                f"the spectral radius of the printed A - L C is not certified below 1 "
-                f"(exact bound {sig(powers.radius_bound, 6)})"
-            )
     return DeadbeatCheck(
         index=index,
         relative_norms=relative,
@@ -301,10 +284,11 @@ def verify_deadbeat(
         radius_lower=float(powers.radius_lower),
         rtol=rtol,
         verified=bool(index is not None and conclusive and powers.radius_bound < 1),
-        reason="; ".join(reasons),
         radius_power=powers.radius_power,
         relative_lower=tuple(0.0 if r == -math.inf else 2.0 ** min(r, 1e4) for r in lower),
         exact_index=powers.nilpotent_index,
+        complete=bool(powers.complete),
+        radius_excess=float(powers.radius_excess),
     )
 
 
