@@ -88,6 +88,20 @@ class MeasurementNoise:
         """Each sensor's bound on ||N_i||_2 over a window of ``horizon`` steps."""
         return self.eta * math.sqrt(horizon) if self.per_sample else self.eta.copy()
 
+    @staticmethod
+    def scale(top: float) -> float:
+        """A power of two c >= ``top`` / 2 to divide the bounds by (exactly), so that their
+        squares neither under- nor overflow (1 for no noise; at most 2^1023, so a bound at the
+        top of the float range is divided into [1, 2))."""
+        if not top > 0:
+            return 1.0
+        return math.ldexp(1.0, min(math.frexp(top)[1], 1023))
+
+    def rows(self, count: int) -> np.ndarray:
+        """The bound on each of ``count`` stacked measurement rows, the rows of one sample after
+        the other (row r is sensor r mod p): an observer's measurement vector over a window."""
+        return self.eta[np.arange(count) % self.eta.size]
+
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, MeasurementNoise):
             return NotImplemented

@@ -162,9 +162,11 @@ class Check:
         show it instead of the rounded float; the JSON keeps ``value`` (and ``margin``, the
         exact distance).  Empty: the float, rounded.
     code : Enum or None, default None
-        The reason code the verdict was decided on, where the analysis has one (an
-        ``IrrepresentableCode``, a ``RegionCode``...): for callers and tests that read the
-        decision instead of the summary's words; not written to JSON.
+        The reason code that says why the check has its verdict, where its analysis has one
+        (the irrepresentable check's ``IrrepresentableCode``, the region of attraction's
+        ``RegionCode``, the ``LMICause`` of an observer_stability from a circle certificate):
+        for callers and tests that read the decision instead of the summary's words; not
+        written to JSON.
     """
 
     id: str

@@ -49,10 +49,11 @@ as such.
 from __future__ import annotations
 
 import math
+import os
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -60,6 +61,9 @@ from .observers import get_kind, observer_kinds
 from .observers.base import DESIGN_SHRINKS, DESIGN_STEPS
 from .results import Verdict
 from .system import System
+
+if TYPE_CHECKING:
+    from .noise import MeasurementNoise
 
 __all__ = [
     "DesignResult",
@@ -83,8 +87,8 @@ OBJECTIVES = ("gain", "rate", "roa", "noise")
 # why an objective that only some kinds take is refused to the others
 ONLY_FOR = {
     "roa": "the other kinds are certified globally or not at all",
-    "noise": "an ultimate error bound under noise needs a certificate with decay, which the "
-    "other kinds' designs do not have",
+    "noise": "the D-SSO's certificates (shrink 1) have no decay, which a sparse observer's "
+    "ultimate error bound under noise needs",
 }
 
 
@@ -183,8 +187,8 @@ class DesignResult:
         one.
     noise_bound : float or None
         The chosen design's certified ultimate error bound under the noise the search was
-        given (``observer_noise_bound``, as ``ssecert certify`` reports it; the ``noise``
-        objective).
+        given (``observer_noise_bound``, as ``ssecert certify`` reports it), with the
+        ``noise`` objective; None for the others (the written design's certificate has it).
     """
 
     observer: dict[str, Any] | None
@@ -211,7 +215,7 @@ def design(
     threshold: float = 0.1,
     time_budget: float = 60.0,
     min_decay: float | None = None,
-    noise: Any = None,
+    noise: MeasurementNoise | float | None = None,
 ) -> DesignResult:
     """Search the best certified design of ``kind`` for a plant (``ssecert.design``).
 
@@ -237,12 +241,12 @@ def design(
     ('elastic_net', True)
     """
     from .inputs import as_spec, as_system
+    from .spec import Spec
 
-    if noise is None and not isinstance(plant, System):
-        try:
-            noise = getattr(as_spec(plant), "noise", None)
-        except (TypeError, ValueError):  # a plant that is not a spec: no [noise] to take
-            noise = None
+    if isinstance(plant, (str, os.PathLike)):  # a spec file or example: read once
+        plant = as_spec(plant)
+    if noise is None and isinstance(plant, Spec):
+        noise = plant.noise
     return design_observer(
         as_system(plant),
         kind,
@@ -262,7 +266,7 @@ def design_observer(
     threshold: float = 0.1,
     time_budget: float = 60.0,
     min_decay: float | None = None,
-    noise: Any = None,
+    noise: MeasurementNoise | float | None = None,
 ) -> DesignResult:
     """Search the best certified design of ``kind`` for ``system``.
 
@@ -382,15 +386,17 @@ def design_observer(
         )  # fmt: skip
     best = min(kept, key=lambda c: kept[c][0])
     record = tried[best]
-    if (
-        objective in ("gain", "noise")
-        and record.get("decay") is None
-        and record["gain"] == "synthesised"
-    ):
+    if objective == "gain" and record.get("decay") is None and record["gain"] == "synthesised":
         choice += (
             "; the synthesis's own certificate of that decay did not verify in numpy for "
             "this design (no candidate's did): its stability and l2 gain are certified by the "
             "analysis, its decay is not"
+        )
+    elif objective == "noise" and record.get("decay") is None and record["gain"] == "synthesised":
+        choice += (
+            "; the synthesis's own certificate of that decay did not verify in numpy for "
+            "this design: its stability, l2 gain and noise bound are certified by the analysis, "
+            "its decay is not"
         )
     linear = record.get("linear_radius")
     if linear is not None and no_faster(linear, plant_radius) and system.n:
@@ -415,22 +421,27 @@ def design_observer(
     )
 
 
-def _as_noise(noise: Any, system: System) -> Any:
-    """A ``MeasurementNoise`` (None stays None; a number is that bound on every sample of
-    every sensor)."""
+def _as_noise(noise: Any, system: System) -> MeasurementNoise | None:
+    """A ``MeasurementNoise`` for ``system``'s sensors: None stays None; a number is that
+    bound on every sample of every sensor, a list one bound per sensor (``[noise]``'s
+    ``measurement``)."""
     from .noise import MeasurementNoise
 
-    if noise is None or isinstance(noise, MeasurementNoise):
+    if noise is None:
+        return None
+    if isinstance(noise, MeasurementNoise):
+        if noise.eta.size != system.p:
+            raise ValueError(
+                f"noise: expected a bound for each of the plant's {system.p} sensors, got "
+                f"{noise.eta.size}"
+            )
         return noise
+    if isinstance(noise, bool):
+        raise ValueError(f"noise: expected a bound >= 0 or one per sensor, got {noise!r}")
     try:
-        eta = float(noise)
-    except (TypeError, ValueError):
-        raise ValueError(
-            f"noise: expected a MeasurementNoise or a bound >= 0, got {noise!r}"
-        ) from None
-    if not (math.isfinite(eta) and eta >= 0):
-        raise ValueError(f"noise: expected a finite bound >= 0, got {noise!r}")
-    return MeasurementNoise.uniform(eta, system.p)
+        return MeasurementNoise.read(noise, system.p)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"noise: {exc}") from None
 
 
 DEFAULT_DECAY = 1e-3  # imposed when the front gives nothing to choose from
@@ -521,7 +532,7 @@ def tradeoff_front(
     points: int = FRONT_POINTS,
     time_limit: float | None = None,
     linear: float | None = None,
-    noise: Any = None,
+    noise: MeasurementNoise | None = None,
 ) -> list[dict[str, Any]]:
     """The trade-off between certified decay and certified l2 gain of ``template``'s kind,
     step and shrink: the smallest gain at almost no decay (alpha = 1e-3), the fastest decay
@@ -538,9 +549,11 @@ def tradeoff_front(
     gain from attack to error its certificate proves), ``linear_radius`` (rho(A - L S) of
     its gain), ``verified`` (the synthesis's certificate re-checked in numpy,
     ``verify_synthesis``; alpha and gamma are None when it is not).  With a ``noise``
-    (``MeasurementNoise``), also ``noise_bound``: the ultimate error bound under that noise
-    the same certificate proves (``noise_messages.dissipation_bound``; None where it proves
-    none).  Sorted fastest first; empty when the synthesis gives no gain.
+    (``MeasurementNoise``), also ``noise_bound``: the certified ultimate error bound under
+    that noise of the point's design (``_front_noise_bound``: the series certify reports for a
+    linear observer, the synthesis certificate's dissipation inequality for a sparse one;
+    None where none is proved).  Sorted fastest first; empty when the synthesis gives no
+    gain.
     """
     from .design.synthesis import synthesize_gain
 
@@ -577,7 +590,9 @@ def tradeoff_front(
 RATE_BISECTIONS_FRONT = 6  # alpha of the fastest point to within 2^-6
 
 
-def _front_point(template: Any, proposal: Any, noise: Any = None) -> dict[str, Any]:
+def _front_point(
+    template: Any, proposal: Any, noise: MeasurementNoise | None = None
+) -> dict[str, Any]:
     from .design.synthesis import with_gain
 
     own = _verified_proposal(template, proposal)
@@ -595,19 +610,35 @@ def _front_point(template: Any, proposal: Any, noise: Any = None) -> dict[str, A
     return point
 
 
-def _front_noise_bound(design: Any, proposal: Any, own: dict[str, Any], noise: Any) -> float | None:
-    """The ultimate error bound under ``noise`` the synthesis's verified certificate proves
-    (V = xi' P xi, its alpha and gamma: ``noise_messages.dissipation_bound``), None where it
-    proves none (not verified, verified only in balanced coordinates, no decay, an
-    ill-conditioned P)."""
-    from .stability.noise_messages import dissipation_bound
+def _front_noise_bound(
+    design: Any, proposal: Any, own: dict[str, Any], noise: MeasurementNoise
+) -> float | None:
+    """The certified ultimate error bound under ``noise`` of a front point's design: for a
+    linear observer the worst-case series ``ssecert certify`` reports
+    (``noise_messages.observer_noise_check``); for a sparse one the dissipation inequality of
+    the synthesis's own verified certificate (V = xi' P xi, its alpha and gamma:
+    ``noise_gain.dissipation_bound``), which certify replaces by iss_gain's certificate of the
+    chosen design.  None where none is proved (a certificate not verified, verified only in
+    balanced coordinates, without decay, an ill-conditioned P, an error model whose attack
+    input is not the measurement vector)."""
+    from .stability.noise_gain import dissipation_bound
+    from .stability.noise_messages import applies_to, observer_noise_check
 
+    if applies_to(design):
+        check = observer_noise_check(design, noise)
+        return float(check.value) if check.verdict is Verdict.HOLDS else None
     if not own.get("verified") or "state_scaling" in own or not own.get("alpha"):
         return None
+    from .observers.lure import LureModel
+
     rows = design.sensing.shape[0]
-    per_row = noise.eta[np.arange(rows) % design.system.p]
+    model = LureModel.from_design(design)
+    if model.r != rows or model.n_e != design.system.n:
+        return None
     P = np.asarray(proposal.P, dtype=float)
-    found = dissipation_bound(P, float(own["alpha"]), float(own["gamma"]), per_row, design.system.n)
+    found = dissipation_bound(
+        P, float(own["alpha"]), float(own["gamma"]), noise.rows(rows), design.system.n
+    )
     return found.bound if math.isfinite(found.bound) else None
 
 
@@ -693,6 +724,9 @@ def choose_noise_decay(front: list[dict[str, Any]], plant_radius: float) -> tupl
     0.2
     """
     good = [p for p in front if p.get("verified") and p.get("noise_bound") is not None]
+    if good and max(p["noise_bound"] for p in good) == 0:  # no noise: nothing to minimise
+        alpha, why = choose_decay(front, plant_radius)
+        return alpha, f"{why}; the noise bound is 0 at every point of the front (no noise)"
     if not good:
         return DEFAULT_DECAY, (
             f"decay {DEFAULT_DECAY:g} per step imposed: no point of the trade-off front has a "
@@ -716,8 +750,8 @@ def choose_noise_decay(front: list[dict[str, Any]], plant_radius: float) -> tupl
         )
     return float(pick["alpha"]), (
         f"decay {pick['alpha']:.3g} per step imposed, the smallest certified ultimate error "
-        f"bound under noise ({pick['noise_bound']:.3g}, by the synthesis's own certificate at "
-        f"the grid's middle) of {among} (error contraction {pick['contraction']:.4g} per step)"
+        f"bound under noise ({pick['noise_bound']:.3g} for the grid's middle design at that "
+        f"decay) of {among} (error contraction {pick['contraction']:.4g} per step)"
     )
 
 
@@ -780,7 +814,7 @@ def _evaluator(
     min_decay: float,
     faster_than: float | None = None,
     linear: float | None = None,
-    noise: Any = None,
+    noise: MeasurementNoise | None = None,
 ) -> Callable[[Any, Any], tuple[dict[str, Any], Found | None]]:
     """The function certifying one grid cell: a record with its parameters, verdicts and
     numbers, and, when it is certified, its rank (lower is better: the objective, then a
@@ -864,12 +898,15 @@ def _evaluator(
         if objective == "noise":
             from .stability.noise_messages import noise_check
 
+            assert noise is not None  # design_observer requires it for this objective
             bounded = noise_check(design, noise, iss)
             if bounded.verdict is not Verdict.HOLDS:
                 record["rejected"] = f"observer_noise_bound {bounded.verdict.value}"
                 return record, None
             record["noise_bound"] = float(bounded.value)
-            rank = (float(decay is None), float(bounded.value), float(iss.value))
+            # the bound certify reports first: the synthesis's own decay certificate is not
+            # what it rests on (iss_gain's is)
+            rank = (float(bounded.value), float(decay is None), float(iss.value))
             return record, (rank, observer)
         # a design whose synthesis certificate verified (its decay is certified) first
         return record, ((float(decay is None), float(iss.value), -(decay or 0.0)), observer)
@@ -1117,6 +1154,9 @@ def compare_designs(own: Any | None, designed: Any) -> dict[str, Any]:
             f" Not compared ({', '.join(apart)}): a scenario skipped, or a simulation that "
             "overflowed, for at least one of the designs."
         )
+    noise_words = _noise_comparison(designs)
+    if noise_words:
+        summary += noise_words
     return {
         "designs": designs,
         "scenarios": rows,
@@ -1125,6 +1165,20 @@ def compare_designs(own: Any | None, designed: Any) -> dict[str, Any]:
         "worse_rtol": WORSE_RTOL,
         "metric": "mean absolute error ||x_hat - x|| over the runs and the horizon",
     }
+
+
+def _noise_comparison(designs: list[dict[str, Any]]) -> str:
+    """A sentence when the spec's own design has the smaller certified ultimate error under
+    the noise ('' otherwise)."""
+    rows = {d["design"]: d for d in designs}
+    ours = rows.get("synthesised", {}).get("observer_noise_bound_value")
+    theirs = rows.get("spec", {}).get("observer_noise_bound_value")
+    if ours is None or theirs is None or not (math.isfinite(theirs) and theirs < ours):
+        return ""
+    return (
+        f" The spec's own design has the smaller certified ultimate error under the noise "
+        f"({theirs:.4g} against {ours:.4g})."
+    )
 
 
 def _design_row(label: str, result: Any) -> dict[str, Any]:

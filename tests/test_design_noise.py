@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 
+import numpy as np
 import pytest
 
 from ssecert.examples import load_example
@@ -41,14 +42,26 @@ def test_the_noise_decay_is_the_fronts_smallest_bound_faster_than_the_plant():
     )
     # none faster than the plant: the fastest
     assert choose_noise_decay([_point(0.01, 0.2), _point(0.02, 0.5)], 0.5)[0] == 0.02
+    # no noise: every bound 0, nothing to minimise; the gain objective's rule decides
+    flat = [{**_point(a, 0.0), "gamma": g} for a, g in ((0.5, 3.0), (0.2, 0.5), (0.01, 0.1))]
+    alpha, why = choose_noise_decay(flat, 0.985)
+    assert alpha == 0.2 and why.endswith(
+        "the noise bound is 0 at every point of the front (no noise)"
+    )
 
 
 def test_the_noise_objective_needs_a_noise_and_a_kind_with_decay():
     system = load_example("ugv").system
     with pytest.raises(ValueError, match="needs the measurement noise bound"):
         design_observer(system, "elastic_net", objective="noise", time_budget=1)
-    with pytest.raises(ValueError, match="noise: expected a finite bound"):
-        design_observer(system, "elastic_net", objective="noise", noise=-1.0, time_budget=1)
+    for bad, words in [
+        (-1.0, "noise: measurement must be >= 0"),
+        (True, "noise: expected a bound >= 0 or one per sensor"),
+        ([0.1, 0.2], "one bound per sensor"),
+        (MeasurementNoise.uniform(0.1, 5), "each of the plant's 3 sensors, got 5"),
+    ]:
+        with pytest.raises(ValueError, match=words):
+            design_observer(system, "elastic_net", objective="noise", noise=bad, time_budget=1)
     refusal = objective_refusal("noise", "dsso")
     assert "elastic-net observer" in refusal and "Luenberger observer" in refusal
 
@@ -119,3 +132,44 @@ def test_the_trade_off_plot_has_a_noise_panel_only_for_positive_bounds():
         front[0]["noise_bound"], front[1]["noise_bound"] = 0.1, 0.2
         assert "tradeoff-noise-front" in tradeoff_plot(tradeoff)
     assert "tradeoff-noise-front" not in tradeoff_plot({**tradeoff, "front": front[:0]})
+
+
+def test_noise_at_the_top_of_the_float_range_is_inconclusive_not_an_error():
+    from ssecert.observers import build_observer
+    from ssecert.stability.noise_gain import NoiseGainCode, dissipation_bound, linear_noise_bound
+
+    assert MeasurementNoise.scale(1e308) == 2.0**1023 and MeasurementNoise.scale(0.0) == 1.0
+    assert MeasurementNoise.scale(0.75) == 1.0 and MeasurementNoise.scale(3.0) == 4.0
+    # 2e308 and about 8e308: beyond the floats, said so (they raised OverflowError)
+    found = linear_noise_bound(np.array([[0.5]]), np.array([[1.0]]), np.array([1e308]))
+    assert found.code is NoiseGainCode.OUT_OF_RANGE
+    huge = dissipation_bound(np.eye(2), 0.5, 2.0, np.array([1e308, 1e308]), 1)
+    assert huge.bound == math.inf and not huge.ill_conditioned
+    # 1e307 stays in range: 2e307 exactly, taken up by its rounding
+    near = linear_noise_bound(np.array([[0.5]]), np.array([[1.0]]), np.array([1e307]))
+    assert near.code is NoiseGainCode.CERTIFIED and 2e307 <= near.bound_inf <= 2e307 * (1 + 1e-12)
+    system = load_example("ugv").system
+    design = build_observer(system, {"kind": "luenberger", "gain": "pinv"})
+    from ssecert.stability.noise_messages import observer_noise_check
+
+    # (it raised OverflowError): the pinv gain's F is 0 here, so the bound |L| eta fits
+    check = observer_noise_check(design, MeasurementNoise.uniform(1e308, system.p))
+    assert check.verdict.value == "holds" and 1e308 <= check.value < math.inf
+
+
+@pytest.mark.slow
+def test_a_noise_search_near_1e200_does_not_overflow_into_a_false_excess():
+    from ssecert.observers import build_observer
+    from ssecert.stability.checks import iss_gain_check, observer_stability_check
+    from ssecert.stability.noise_messages import sparse_noise_check
+
+    system = load_example("ugv").system
+    design = build_observer(
+        system,
+        {"kind": "elastic_net", "gain": "deadbeat", "step": 0.1, "threshold": 0.1, "shrink": 0.3},
+    )
+    _, cert = observer_stability_check(design)
+    iss = iss_gain_check(design, cert)
+    check = sparse_noise_check(design, iss, MeasurementNoise.uniform(1e200, system.p))
+    assert check.verdict.value == "holds", check.summary
+    assert check.evidence["noise_search"]["largest_error"] <= check.value

@@ -313,7 +313,7 @@ def test_an_exact_constant_of_one_fails_by_rational_arithmetic():
 def test_every_irrepresentable_code_has_words_and_a_verdict():
     facts = {
         "tau": 3, "rank": 1, "n": 2, "k": 2, "items": 4, "noun": "sensors", "count": 6,
-        "max_sets": 5, "refusal": "REFUSAL", "hint": "", "first": 0, "last": 9, "cause": "X",
+        "max_sets": 5, "refusal": "REFUSAL", "longer_than_n": True, "first": 0, "last": 9, "cause": "X",
         "problem": "PROBLEM", "doubt": "DOUBT.", "label": "y1, y2", "checked": 6, "total": 6,
         "worst": 1.5, "direct": 1.4, "estimate": 0.1, "kappa": 1e3, "counted": "sensors",
         "stopped": None, "exact": None, "band": 1e-9, "accuracy": None,

@@ -579,3 +579,32 @@ def test_the_printed_sigma_is_rechecked_on_the_exact_data():
     found = decoder_error_bound(plant, 1, MeasurementNoise.uniform(1e-3, 5), horizon=2)
     assert found.facts["sigma_rechecked_exactly"] is True
     assert sigma_rechecks(plant, replace(found, sigma=found.sigma * 1.01)) is False
+
+
+def test_noise_given_on_loading_reaches_the_scenarios_without_their_own():
+    data = {**_spec({"measurement": 0.5})}
+    data["scenario"] = [
+        {"name": "default", "attack": "none", "steps": 5, "runs": 1},
+        {"name": "own", "attack": "none", "steps": 5, "runs": 1, "noise": 0.0},
+    ]
+    spec = spec_from_dict(data, noise=0.01)
+    assert spec.noise == MeasurementNoise.uniform(0.01, spec.system.p)
+    noises = {sc["name"]: sc["noise"] for sc in spec.scenarios}
+    assert noises["default"] == [0.01] * spec.system.p and noises["own"] == 0.0
+
+
+def test_a_simulation_beside_a_bound_it_cannot_resolve_says_so():
+    from ssecert.simulation.engine import ScenarioResult
+
+    steps, runs = 8, 1
+    absolute = np.full((steps + 1, runs), 4.0)
+    relative = absolute / 6e15  # a state of 6e15: rounding about 5e3
+    result = ScenarioResult(
+        "s", "none", "luenberger", runs, steps, 0, relative, absolute**2, None, None,
+        absolute_error=absolute,
+    )  # fmt: skip
+    beside = result.with_certified_bound(0.2, lambda a, b: 0.0, "observer_noise_bound")
+    assert beside.certified_bound["within"] is None
+    assert beside.certified_bound["state_rounding"] == pytest.approx(6e15 * 2.0**-40)
+    clear = result.with_certified_bound(10.0, lambda a, b: 0.0, "observer_noise_bound")
+    assert clear.certified_bound["within"] is True and "state_rounding" not in clear.certified_bound

@@ -132,8 +132,9 @@ def test_a_subnormal_plant_leaves_lemma_1_unchecked_instead_of_crashing():
 def test_every_assumption_code_has_words_and_only_failures_a_finding():
     facts = {
         "refusal": "REFUSAL", "q": 0.5, "lam": 0.1, "smallest": 1e-300, "claimed": 2.0,
-        "factor": "3.5", "ratio": 7.0, "correct": float("inf"), "search": "SEARCH",
-        "lemma_fails": True, "worst": 1e5, "rho": 0.81, "why": "WHY", "step": 0.1,
+        "ratio": 7.0, "correct": float("inf"), "search": "SEARCH",
+        "lemma_fails": True, "worst": 1e5, "rho": 0.81, "failure": "", "stopped": "WHY",
+        "step": 0.1,
         "star": 0.05,
     }  # fmt: skip
     for code in AssumptionCode:
@@ -141,6 +142,10 @@ def test_every_assumption_code_has_words_and_only_failures_a_finding():
         finding = thesis_messages.finding(code, facts)
         assert bool(finding) is (code.verdict.value == "fails"), code
     exceeded = thesis_messages.finding(AssumptionCode.LIPSCHITZ_EXCEEDED, facts)
-    assert "infinite here" in exceeded and "factor 3.5" in exceeded
+    assert "infinite here" in exceeded and "factor 3.5" in exceeded  # 7 / 2
+    assert "WHY" in thesis_messages.reason(AssumptionCode.NOT_EVALUATED, facts)
+    assert "not finite" in thesis_messages.reason(
+        AssumptionCode.NOT_EVALUATED, {"failure": "", "stopped": ""}
+    )
     assert "by a factor" in thesis_messages.reason(AssumptionCode.NOT_CONTRACTING, facts)
     assert "0.5 times" in thesis_messages.reason(AssumptionCode.NOT_CONTRACTING, {"worst": 0.5})

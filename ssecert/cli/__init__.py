@@ -47,7 +47,6 @@ from .options import (
     _positive_int,
     _solver,
     _steps,
-    _with_noise,
 )
 from .progress import stage_display
 from .reproduce import add_reproduce_parser, cmd_reproduce
@@ -293,8 +292,9 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     if args.mat_path == "-":
         raise UsageError("--mat -: a .mat file is binary; give a file path")
     mat_target = output_file("--mat", args.mat_path)
-    spec, load_notes = _load(args.spec, max_attacked=args.max_attacked, horizon=args.horizon)
-    spec = _with_noise(spec, args)
+    spec, load_notes = _load(
+        args.spec, max_attacked=args.max_attacked, horizon=args.horizon, noise=args.noise
+    )
     to_stdout_json = args.json_path == "-"
     human = _Silent() if args.quiet else sys.stderr if to_stdout_json else sys.stdout
     device = _device(args)  # before any work: an unusable device is refused at once
@@ -354,8 +354,9 @@ def _cmd_certify(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
 
     out_dir = output_folder("--out", args.out)
     target = output_file("--json", args.json_path)
-    spec, load_notes = _load(args.spec, max_attacked=args.max_attacked, horizon=args.horizon)
-    spec = _with_noise(spec, args)
+    spec, load_notes = _load(
+        args.spec, max_attacked=args.max_attacked, horizon=args.horizon, noise=args.noise
+    )
     html_path, json_path = out_dir / f"{spec.name}.html", out_dir / f"{spec.name}.json"
     for path in (html_path, json_path):
         if path.is_dir():

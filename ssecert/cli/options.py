@@ -92,18 +92,6 @@ def _noise_bound(text: str) -> float:
     return _nonnegative(text, "a noise bound", "noise bound")
 
 
-def _with_noise(spec: Any, args: argparse.Namespace) -> Any:
-    """The spec with ``--noise ETA`` in place of its ``[noise]`` (every sample of every
-    sensor within ETA), when given."""
-    if getattr(args, "noise", None) is None:
-        return spec
-    import dataclasses
-
-    from ..noise import MeasurementNoise
-
-    return dataclasses.replace(spec, noise=MeasurementNoise.uniform(args.noise, spec.system.p))
-
-
 def _add_budget_options(parser: argparse.ArgumentParser) -> None:
     from ..budget import parse_bytes, parse_operations
 

@@ -476,11 +476,17 @@ def _noise_context(
     for name, res in simulations.items():
         beside = getattr(res, "certified_bound", None)
         if beside:
+            if beside["within"] is None:
+                verdict = (
+                    f"not resolved: the simulated state's own rounding, about "
+                    f"{readable(beside['state_rounding'])}, exceeds the bound"
+                )
+            else:
+                verdict = "within the bound" if beside["within"] else "ABOVE the bound"
             rows.append(
                 (
                     f"simulation {name}: largest error from step {beside['from_step']}",
-                    f"{readable(beside['observed_max'])} "
-                    f"({'within' if beside['within'] else 'ABOVE'} the bound)",
+                    f"{readable(beside['observed_max'])} ({verdict})",
                 )
             )
     return {"rows": rows, "svg": svg}

@@ -96,7 +96,9 @@ def simulation_plot(name: str, result: Any, *, gid: str) -> str:
     fig, axes = _figure(2.6 * len(panels) + 0.4, 2.8, 1, len(panels))
     k = np.arange(result.relative_error.shape[0])
     for ax, (label, key, data, log) in zip(axes[0], panels):
-        with warnings.catch_warnings():  # steps where every run diverged: NaN, drawn as a gap
+        with warnings.catch_warnings(), np.errstate(invalid="ignore", over="ignore"):
+            # steps where every run diverged: NaN, drawn as a gap; runs at inf (a noise of 1e200)
+            # make the quantiles' interpolation inf - inf
             warnings.filterwarnings("ignore", "Mean of empty slice", RuntimeWarning)
             warnings.filterwarnings("ignore", "All-NaN slice encountered", RuntimeWarning)
             mean = np.nanmean(data, axis=1)
@@ -173,6 +175,7 @@ def tradeoff_plot(tradeoff: dict[str, Any], *, gid: str = "tradeoff") -> str:
     if not noisy:
         return svg_figure(fig, title="certified trade-off between decay and gain")
     ax = axes[1][0]
+    ax.sharex(axes[0][0])
     (line,) = ax.plot(
         [p["contraction"] for p in noisy], [p["noise_bound"] for p in noisy], "o-",
         color=PALETTE["b"], linewidth=1.2, markersize=4,

@@ -107,6 +107,7 @@ def spec_from_dict(
     horizon: int | None = None,
     sha256: str | None = None,
     default_name: str | None = None,
+    noise: float | None = None,
 ) -> Spec:
     """Validate a spec given as a dictionary (the parsed TOML/JSON document).
 
@@ -119,6 +120,9 @@ def spec_from_dict(
         Name used in error messages.
     max_attacked, horizon : int, optional
         Override ``attack.max_attacked`` and ``attack.horizon``.
+    noise : float, optional
+        Replaces the ``[noise]`` section by this bound on every sample of every sensor, before
+        the scenarios without a noise of their own take it (``--noise``).
     sha256 : str, optional
         Hash recorded in the Spec.
     default_name : str, optional
@@ -142,6 +146,8 @@ def spec_from_dict(
     """
     check_keys(source, "", data, _TOP_KEYS)
     _check_document(source, data)
+    if noise is not None:
+        data = {**data, "noise": {"measurement": noise}}
     name = _spec_name(source, data.get("name", default_name))
     system = _system(source, require(source, data, "system", ""), name)
     attack_table = data.get("attack", {})
@@ -151,7 +157,7 @@ def spec_from_dict(
     observer = None
     if "observer" in data:
         observer = _observer(source, data["observer"], system.n, system.p)
-    noise = _noise(source, data["noise"], system.p) if "noise" in data else None
+    bounds = _noise(source, data["noise"], system.p) if "noise" in data else None
     return Spec(
         name=name,
         system=system,
@@ -163,9 +169,9 @@ def spec_from_dict(
             data.get("scenario", []),
             system.p,
             system.sensors,
-            None if noise is None else _per_sample(noise, tau),
+            None if bounds is None else _per_sample(bounds, tau),
         ),
-        noise=noise,
+        noise=bounds,
         source=source,
         sha256=sha256,
     )
@@ -320,6 +326,7 @@ def load_spec(
     max_attacked: int | None = None,
     horizon: int | None = None,
     source: str | None = None,
+    noise: float | None = None,
 ) -> Spec:
     """Load and validate a spec file (.toml, .json, .npz or .mat).
 
@@ -330,6 +337,8 @@ def load_spec(
         s; required for .npz and .mat files, overrides the spec otherwise.
     horizon : int, optional
         tau; overrides the spec (default n).
+    noise : float, optional
+        Replaces the spec's ``[noise]`` (``spec_from_dict``).
     source : str, optional
         How messages and reports name the file; default ``path`` exactly as
         given (a relative path stays relative).
@@ -388,6 +397,7 @@ def load_spec(
         horizon=horizon,
         sha256=digest,
         default_name=stem,
+        noise=noise,
     )
 
 

@@ -544,7 +544,7 @@ def _circle_search(
         details={**details, "attempts": attempts},
         code=LMICode.NOT_VERIFIED,
         cause=LMICause.CIRCLE_NOT_VERIFIED,
-        facts={"attempts": attempts},
+        facts={"attempts": tuple(dict(a) for a in attempts)},  # as they were
     )
 
 
@@ -686,7 +686,7 @@ def iss_certificate(
         details={**details, "attempts": attempts},
         code=LMICode.NOT_VERIFIED,
         cause=LMICause.DISSIPATION_NOT_VERIFIED,
-        facts={"attempts": attempts, "notes": (note,)},
+        facts={"attempts": tuple(dict(a) for a in attempts), "notes": (note,)},
     )
 
 

@@ -115,8 +115,8 @@ class LyapunovCertificate:
 
     @property
     def method(self) -> LyapunovMethod:
-        """``LYAPUNOV`` (P verified in floating point with a margin, or an instability not
-        proved exactly) or ``EXACT_POWERS`` (no verified P, but rho(F) <= ||F^m||^(1/m) < 1 on
+        """``LYAPUNOV`` (P verified in floating point with a margin, an instability not proved
+        exactly, or nothing decided) or ``EXACT_POWERS`` (no verified P, but rho(F) <= ||F^m||^(1/m) < 1 on
         the exact F, ``contraction`` then that bound on the asymptotic rate, not a per-step
         factor; or instability proved on the exact F)."""
         d = self.decision

@@ -27,13 +27,20 @@ from __future__ import annotations
 import enum
 import math
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
+from ..noise import MeasurementNoise
 from ..tolerances import gamma, times_up
 
-__all__ = ["NoiseGain", "NoiseGainCode", "linear_noise_bound"]
+__all__ = [
+    "DissipationBound",
+    "NoiseGain",
+    "NoiseGainCode",
+    "dissipation_bound",
+    "linear_noise_bound",
+]
 
 MAX_TERMS = 20_000
 CONTRACTION_LIMIT = 4096  # powers of F tried for one proved below 1 in norm
@@ -149,7 +156,7 @@ def linear_noise_bound(
     # linear in the noise: computed for the bounds over a power of two c >= the largest (exact)
     # so that nothing under- or overflows, and scaled back by c
     top = float(np.max(eta)) if eta.size and np.all(np.isfinite(eta)) else 0.0
-    c = 2.0 ** math.frexp(top)[1] if top > 0 else 1.0
+    c = MeasurementNoise.scale(top)
     found = _unit_noise_bound(
         F, L, eta / c, rounding_F=rounding_F, rounding_L=rounding_L, max_terms=max_terms
     )
@@ -279,3 +286,38 @@ def _contraction(
     if not q < 1.0:
         return len(powers)
     return powers[:m], powers[m], q
+
+
+class DissipationBound(NamedTuple):
+    """The ultimate error bound a dissipation inequality with decay gives under noise
+    (``dissipation_bound``)."""
+
+    bound: float  # inf when none is certified
+    noise_norm: float  # N, a bound of |n(k)| on every sample
+    top: float  # lambda_max((P^-1)_ee), taken up by its rounding
+    condition: float  # of P
+    ill_conditioned: bool  # P too ill-conditioned to invert with a known error
+
+
+def dissipation_bound(
+    P: np.ndarray, alpha: float, gamma: float, per_row: np.ndarray, n: int
+) -> DissipationBound:
+    """limsup |e| <= sqrt(gamma^2 N^2 / alpha * lambda_max((P^-1)_ee)) for a verified
+    V+ - V <= -alpha V - |e|^2 + gamma^2 |n|^2 (V = xi' P xi, e the first ``n`` entries of
+    xi) and noise within ``per_row`` on each entry of n: computed for the noise over a power
+    of two and scaled back, every rounding taken up (the inverse and its eigenvalue to a
+    relative 1e-8 of a P with condition number up to 1e8; beyond, none)."""
+    rows = per_row.size
+    # linear in the noise: N over a power of two c >= the largest bound, scaled back at the end
+    top_eta = float(np.max(per_row)) if rows else 0.0
+    c = MeasurementNoise.scale(top_eta)
+    N2 = float(np.sum((per_row / c) ** 2)) * (1 + 4 * rows * 2.0**-53)
+    cond = float(np.linalg.cond(P))
+    if not math.isfinite(cond) or cond > 1e8:
+        return DissipationBound(math.inf, math.sqrt(N2) * c, math.nan, cond, True)
+    inverse = np.linalg.inv(0.5 * (P + P.T))
+    block = inverse[:n, :n]
+    top = float(np.max(np.linalg.eigvalsh(0.5 * (block + block.T))))
+    top *= 1 + 1e-8 * max(cond, 1.0)
+    unit = math.sqrt(gamma**2 * N2 / alpha * top) * (1 + 1e-12)
+    return DissipationBound(unit * c, math.sqrt(N2) * c, top, cond, False)

@@ -1,15 +1,17 @@
 """The words of the observer's noise bound: the ``observer_noise_bound`` check.
 
-``ssecert.stability.noise_gain.linear_noise_bound`` returns a ``NoiseGain``
-(numbers and a ``NoiseGainCode``); this module builds the check from a
-linear observer's design and writes what a user reads.
+``ssecert.stability.noise_gain`` computes the bounds (``linear_noise_bound``: a
+``NoiseGain`` with its ``NoiseGainCode`` for a linear observer;
+``dissipation_bound`` from iss_gain's certificate for a sparse one); this
+module builds the check of either (``noise_check``), with the noise search
+beside it, and writes what a user reads.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
@@ -17,7 +19,8 @@ from ..base.format import readable
 from ..noise import MeasurementNoise
 from ..observers import ObserverDesign
 from ..results import Check, Verdict
-from .noise_gain import NoiseGain, NoiseGainCode, linear_noise_bound
+from .divergence import safe_norms
+from .noise_gain import NoiseGain, NoiseGainCode, dissipation_bound, linear_noise_bound
 
 __all__ = [
     "noise_check",
@@ -109,7 +112,7 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
             evidence={"from": "iss_gain"},
             **common,
         )
-    per_row = noise.eta[np.arange(rows) % design.system.p]
+    per_row = noise.rows(rows)
     P = np.asarray(P, dtype=float)
     n = design.system.n
     found = dissipation_bound(P, float(alpha), float(gamma), per_row, n)
@@ -178,41 +181,6 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
     )
 
 
-class DissipationBound(NamedTuple):
-    """The ultimate error bound a dissipation inequality with decay gives under noise
-    (``dissipation_bound``)."""
-
-    bound: float  # inf when none is certified
-    noise_norm: float  # N, a bound of |n(k)| on every sample
-    top: float  # lambda_max((P^-1)_ee), taken up by its rounding
-    condition: float  # of P
-    ill_conditioned: bool  # P too ill-conditioned to invert with a known error
-
-
-def dissipation_bound(
-    P: np.ndarray, alpha: float, gamma: float, per_row: np.ndarray, n: int
-) -> DissipationBound:
-    """limsup |e| <= sqrt(gamma^2 N^2 / alpha * lambda_max((P^-1)_ee)) for a verified
-    V+ - V <= -alpha V - |e|^2 + gamma^2 |n|^2 (V = xi' P xi, e the first ``n`` entries of
-    xi) and noise within ``per_row`` on each entry of n: computed for the noise over a power
-    of two and scaled back, every rounding taken up (the inverse and its eigenvalue to a
-    relative 1e-8 of a P with condition number up to 1e8; beyond, none)."""
-    rows = per_row.size
-    # linear in the noise: N over a power of two c >= the largest bound, scaled back at the end
-    top_eta = float(np.max(per_row)) if rows else 0.0
-    c = 2.0 ** math.frexp(top_eta)[1] if top_eta > 0 else 1.0
-    N2 = float(np.sum((per_row / c) ** 2)) * (1 + 4 * rows * 2.0**-53)
-    cond = float(np.linalg.cond(P))
-    if not math.isfinite(cond) or cond > 1e8:
-        return DissipationBound(math.inf, math.sqrt(N2) * c, math.nan, cond, True)
-    inverse = np.linalg.inv(0.5 * (P + P.T))
-    block = inverse[:n, :n]
-    top = float(np.max(np.linalg.eigvalsh(0.5 * (block + block.T))))
-    top *= 1 + 1e-8 * max(cond, 1.0)
-    unit = math.sqrt(gamma**2 * N2 / alpha * top) * (1 + 1e-12)
-    return DissipationBound(unit * c, math.sqrt(N2) * c, top, cond, False)
-
-
 SEARCH_STEPS = 300
 SEARCH_RANDOM = 24
 
@@ -243,7 +211,7 @@ def noise_search(design: ObserverDesign, noise: MeasurementNoise, seed: int = 0)
     y = np.stack(sequences, axis=1)  # (steps, runs, p)
     with np.errstate(all="ignore"):
         trajectory = observer_from_design(design).run(y)
-        errors = np.linalg.norm(trajectory.x_hat, axis=-1)
+        errors = safe_norms(trajectory.x_hat)  # an estimate of 1e200 has a finite norm
     largest = float(np.max(errors)) if errors.size else 0.0
     return {"largest_error": largest, "sequences": len(sequences), "steps": SEARCH_STEPS}
 

@@ -34,7 +34,6 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ..base.format import factor_above
 from ..budget import Budget
 from ..design.gains import GainMethod
 from ..numerics.exact import dyadic, exact_kernel_vector
@@ -313,11 +312,10 @@ def _lemma_1_on_pi(
     }
     if ratio is not None and ratio > claimed * (1 + 1e-9):
         # the claimed constant is wrong, but Pi exists and the corrected bound is valid
-        factor = factor_above(ratio / claimed) if claimed > 0 else "without bound"
         item = AssumptionResult(
             "lemma_1",
             Code.LIPSCHITZ_EXCEEDED,
-            {"claimed": claimed, "factor": factor, "ratio": ratio, "correct": correct},
+            {"claimed": claimed, "ratio": ratio, "correct": correct},
             {**details, "counterexample": {"a1": a1, "a2": a2}},
         )
         finite = bool(np.isfinite(correct))
@@ -394,8 +392,8 @@ def _assumption_3(
         rho_a = bound**2
         return AssumptionResult("assumption_3", Code.CONTRACTING, {"rho": rho_a}, details), rho_a
     if worst_value is None:
-        why = search.reason or stopped or "the ratio is not finite"
-        return AssumptionResult("assumption_3", Code.NOT_EVALUATED, {"why": why}, details), None
+        why = {"failure": search.reason, "stopped": stopped}
+        return AssumptionResult("assumption_3", Code.NOT_EVALUATED, why, details), None
     return AssumptionResult("assumption_3", Code.NO_PROOF, {"worst": worst_value}, details), None
 
 

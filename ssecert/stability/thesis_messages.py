@@ -35,6 +35,12 @@ def _times(worst: float) -> str:
     return f"is {readable(worst, versus=1.0)} times a_hat' Q a_hat"
 
 
+def _factor(facts: Mapping[str, Any]) -> str:
+    """By how much the sampled ratio exceeds the claimed Lipschitz constant."""
+    claimed = facts["claimed"]
+    return factor_above(facts["ratio"] / claimed) if claimed > 0 else "without bound"
+
+
 def reason(code: Code, facts: Mapping[str, Any]) -> str:
     """The numbers behind an item of ``code``."""
     f = facts
@@ -84,7 +90,7 @@ def reason(code: Code, facts: Mapping[str, Any]) -> str:
     if code is Code.LIPSCHITZ_EXCEEDED:
         return (
             f"the claimed Lipschitz constant ||L1|| / |lambda_max(F) - q| = "
-            f"{readable(f['claimed'])} is exceeded by a factor {f['factor']}: |Pi(a1) - Pi(a2)| "
+            f"{readable(f['claimed'])} is exceeded by a factor {_factor(f)}: |Pi(a1) - Pi(a2)| "
             f"/ |a1 - a2| = {readable(f['ratio'])} for the pair in the counterexample"
         )
     if code is Code.LIPSCHITZ_PROVEN:
@@ -118,7 +124,8 @@ def reason(code: Code, facts: Mapping[str, Any]) -> str:
             f"and the Lipschitz bound of Pi"
         )
     if code is Code.NOT_EVALUATED:
-        return f"no proof, and no sample could be evaluated: {f['why']}"
+        why = f["failure"] or f["stopped"] or "the ratio is not finite"
+        return f"no proof, and no sample could be evaluated: {why}"
     if code is Code.NO_PROOF:
         return (
             f"no counterexample found (largest ratio found {readable(f['worst'])}) but no proof "
@@ -154,7 +161,7 @@ def finding(code: Code, facts: Mapping[str, Any]) -> str:
         )
         return (
             f"Lemma 1's printed Lipschitz constant of Pi, {readable(f['claimed'])}, is exceeded "
-            f"by a factor {f['factor']} on this design{corrected}"
+            f"by a factor {_factor(f)} on this design{corrected}"
         )
     if code is Code.NOT_CONTRACTING:
         return (

@@ -354,7 +354,7 @@ def zames_falb_certificate(
         details={"attempts": attempts},
         code=LMICode.NOT_VERIFIED,
         cause=LMICause.ZAMES_FALB_NOT_VERIFIED,
-        facts={"attempts": attempts, "notes": (note,)},
+        facts={"attempts": tuple(dict(a) for a in attempts), "notes": (note,)},
     )
 
 

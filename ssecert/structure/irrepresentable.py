@@ -411,8 +411,8 @@ def _over_budget(out: _Verdicts, plan: ScanPlan, budget: Budget, total: int) -> 
     )
     if not refusal:
         return None
-    hint = "; a shorter horizon (--horizon) makes it smaller" if tau > n else ""
-    return out.check(Code.OVER_BUDGET, math.nan, None, {"refusal": refusal, "hint": hint})
+    facts = {"refusal": refusal, "longer_than_n": tau > n}
+    return out.check(Code.OVER_BUDGET, math.nan, None, facts)
 
 
 def _rows_of_items(p: int, tau: int, mode: str) -> np.ndarray:

@@ -80,7 +80,8 @@ def summary(code: Code, facts: Mapping[str, Any]) -> str:
             f"budget of {f['max_sets']:,}; raise it with --max-sets (max_sets=...)."
         )
     if code is Code.OVER_BUDGET:
-        return f"Not attempted: {f['refusal']}{f['hint']}."
+        hint = "; a shorter horizon (--horizon) makes it smaller" if f["longer_than_n"] else ""
+        return f"Not attempted: {f['refusal']}{hint}."
     if code is Code.OVERFLOW:
         return f"The stacked observability matrix overflows over {f['tau']} steps."
     if code is Code.WORKERS_FAILED:

@@ -420,7 +420,7 @@ def decoder_error_bound(
     # the bound is linear in the noise: computed for the bounds over a power of two c >= the
     # largest (exactly), so that no square under- or overflows, and scaled back by c
     top = float(np.max(noise.eta)) if p else 0.0
-    c = 2.0 ** math.frexp(top)[1] if top > 0 else 1.0
+    c = MeasurementNoise.scale(top)
     unit = MeasurementNoise(noise.eta / c if top > 0 else np.ones(p), noise.norm)
     found = _bound_of_unit_noise(system, s, unit, tau, max_sets)
     found = replace(found, noise=noise, facts={**found.facts, "noise_scale": c})
