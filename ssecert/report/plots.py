@@ -127,79 +127,75 @@ def tradeoff_plot(tradeoff: dict[str, Any], *, gid: str = "tradeoff") -> str:
     "clearly faster"), the chosen design and the spec's design (at its linear loop's
     spectral radius: it has no decay certificate); where the front's points have a certified
     ultimate error bound under noise, a second panel with that bound on the same axis."""
+    front = tradeoff.get("front", [])
     # (a noise of 0 bounds the error by 0: nothing to plot on a log axis)
-    noisy = [
-        p
-        for p in tradeoff.get("front", [])
-        if p.get("verified") and (p.get("noise_bound") or 0) > 0
-    ]
+    noisy = [p for p in front if p.get("verified") and (p.get("noise_bound") or 0) > 0]
     fig, axes = _figure(8.0, 5.6 if noisy else 3.2, 2 if noisy else 1, 1)
-    ax = axes[0][0]
-    points = [
-        p for p in tradeoff.get("front", []) if p.get("verified") and p.get("gamma") is not None
-    ]
+    chosen, spec = tradeoff.get("chosen") or {}, tradeoff.get("spec") or {}
+    gains = [p for p in front if p.get("verified") and p.get("gamma") is not None]
+    _front_panel(
+        axes[0][0], gains, "gamma", chosen, spec, gid,
+        front_label="certified trade-off (synthesis)", chosen_label="chosen design",
+        color=PALETTE["a"], ylabel="certified l2 gain, attack to error",
+        plant=tradeoff.get("plant_radius"),
+    )  # fmt: skip
+    if not noisy:
+        return svg_figure(fig, title="certified trade-off between decay and gain")
+    axes[1][0].sharex(axes[0][0])
+    _front_panel(
+        axes[1][0], noisy, "noise_bound", chosen, spec, f"{gid}-noise",
+        front_label="certified ultimate error under noise (front)",
+        chosen_label="chosen design (its certificate)", color=PALETTE["b"],
+        ylabel="certified ultimate error bound under noise",
+    )  # fmt: skip
+    return svg_figure(fig, title="certified trade-off between decay, gain and noise")
+
+
+def _front_panel(
+    ax: Any,
+    points: list[dict[str, Any]],
+    key: str,
+    chosen: dict[str, Any],
+    spec: dict[str, Any],
+    gid: str,
+    *,
+    front_label: str,
+    chosen_label: str,
+    color: str,
+    ylabel: str,
+    plant: float | None = None,
+) -> None:
+    """One panel of ``tradeoff_plot``: ``key`` of the front's points, the chosen design's and
+    the spec's design's against the contraction (and the plant's own rho(A) where given)."""
     if points:
-        x = [p["contraction"] for p in points]
-        y = [p["gamma"] for p in points]
         (line,) = ax.plot(
-            x, y, "o-", color=PALETTE["a"], linewidth=1.2, markersize=4,
-            label="certified trade-off (synthesis)",
+            [p["contraction"] for p in points], [p[key] for p in points], "o-", color=color,
+            linewidth=1.2, markersize=4, label=front_label,
         )  # fmt: skip
         line.set_gid(f"{gid}-front")
-    rho = tradeoff.get("plant_radius")
-    if rho is not None and rho < 1.5:
-        ax.axvline(rho, color=PALETTE["output"], linestyle="--", linewidth=1,
-                   label=f"plant's own, rho(A) = {rho:.3g}").set_gid(f"{gid}-plant")  # fmt: skip
-        if rho < 1:
-            ax.axvline(rho**2, color=PALETTE["output"], linestyle=":", linewidth=1,
-                       label=f"twice as fast, rho(A)^2 = {rho**2:.3g}")  # fmt: skip
-    chosen = tradeoff.get("chosen") or {}
-    if chosen.get("contraction") is not None and chosen.get("gamma") is not None:
+    if plant is not None and plant < 1.5:
+        ax.axvline(plant, color=PALETTE["output"], linestyle="--", linewidth=1,
+                   label=f"plant's own, rho(A) = {plant:.3g}").set_gid(f"{gid}-plant")  # fmt: skip
+        if plant < 1:
+            ax.axvline(plant**2, color=PALETTE["output"], linestyle=":", linewidth=1,
+                       label=f"twice as fast, rho(A)^2 = {plant**2:.3g}")  # fmt: skip
+    if chosen.get("contraction") is not None and chosen.get(key) is not None:
         (mark,) = ax.plot(
-            [chosen["contraction"]], [chosen["gamma"]], "*", color=PALETTE["holds"],
-            markersize=12, label="chosen design",
+            [chosen["contraction"]], [chosen[key]], "*", color=PALETTE["holds"],
+            markersize=12, label=chosen_label,
         )  # fmt: skip
         mark.set_gid(f"{gid}-chosen")
-    spec = tradeoff.get("spec") or {}
-    if spec.get("linear_radius") is not None and spec.get("gamma") is not None:
+    if spec.get("linear_radius") is not None and spec.get(key) is not None:
         (mark,) = ax.plot(
-            [spec["linear_radius"]], [spec["gamma"]], "D", color=PALETTE["b"],
+            [spec["linear_radius"]], [spec[key]], "D", color=PALETTE["b"],
             markerfacecolor="none", label="the spec's design (x: rho(A - L S))",
         )  # fmt: skip
         mark.set_gid(f"{gid}-spec")
     ax.set_yscale("log")
     ax.set_xlabel("error contraction per step, sqrt(1 - alpha) (smaller is faster)")
-    ax.set_ylabel("certified l2 gain, attack to error")
+    ax.set_ylabel(ylabel)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0)
-    if not noisy:
-        return svg_figure(fig, title="certified trade-off between decay and gain")
-    ax = axes[1][0]
-    ax.sharex(axes[0][0])
-    (line,) = ax.plot(
-        [p["contraction"] for p in noisy], [p["noise_bound"] for p in noisy], "o-",
-        color=PALETTE["b"], linewidth=1.2, markersize=4,
-        label="certified ultimate error under noise (synthesis)",
-    )  # fmt: skip
-    line.set_gid(f"{gid}-noise-front")
-    if chosen.get("contraction") is not None and chosen.get("noise_bound") is not None:
-        (mark,) = ax.plot(
-            [chosen["contraction"]], [chosen["noise_bound"]], "*", color=PALETTE["holds"],
-            markersize=12, label="chosen design (its certificate)",
-        )  # fmt: skip
-        mark.set_gid(f"{gid}-noise-chosen")
-    if spec.get("linear_radius") is not None and spec.get("noise_bound") is not None:
-        (mark,) = ax.plot(
-            [spec["linear_radius"]], [spec["noise_bound"]], "D", color=PALETTE["b"],
-            markerfacecolor="none", label="the spec's design (x: rho(A - L S))",
-        )  # fmt: skip
-        mark.set_gid(f"{gid}-noise-spec")
-    ax.set_yscale("log")
-    ax.set_xlabel("error contraction per step, sqrt(1 - alpha) (smaller is faster)")
-    ax.set_ylabel("certified ultimate error bound under noise")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0)
-    return svg_figure(fig, title="certified trade-off between decay, gain and noise")
 
 
 def stealthy_plot(system: Any, demo: dict[str, Any], *, gid: str = "stealthy") -> str:
