@@ -622,7 +622,11 @@ def _front_noise_bound(
     balanced coordinates, without decay, an ill-conditioned P, an error model whose attack
     input is not the measurement vector)."""
     from .stability.noise_gain import dissipation_bound
-    from .stability.noise_messages import applies_to, observer_noise_check
+    from .stability.noise_messages import (
+        applies_to,
+        noise_enters_as_attack,
+        observer_noise_check,
+    )
 
     if applies_to(design):
         check = observer_noise_check(design, noise)
@@ -632,8 +636,7 @@ def _front_noise_bound(
     from .observers.lure import LureModel
 
     rows = design.sensing.shape[0]
-    model = LureModel.from_design(design)
-    if model.r != rows or model.n_e != design.system.n:
+    if not noise_enters_as_attack(design, LureModel.from_design(design)):
         return None
     P = np.asarray(proposal.P, dtype=float)
     found = dissipation_bound(

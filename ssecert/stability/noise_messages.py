@@ -44,6 +44,13 @@ def applies_to(design: ObserverDesign) -> bool:
     return not design.sparse and design.window == 1
 
 
+def noise_enters_as_attack(design: ObserverDesign, model: Any) -> bool:
+    """Whether the error model's attack input is the observer's measurement vector (its rows
+    one for one) and its first block the estimation error: then noise enters as an attack on
+    every row does, and a dissipation inequality in the attack bounds the error under it."""
+    return bool(model.r == design.sensing.shape[0] and model.n_e == design.system.n)
+
+
 def noise_check(design: ObserverDesign, noise: MeasurementNoise, iss: Check) -> Check:
     """The ``observer_noise_bound`` check of any observer: the worst-case series of a linear
     one (``observer_noise_check``), the dissipation inequality of iss_gain's certificate for
@@ -101,7 +108,7 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
         )
     rows = design.sensing.shape[0]
     model = design.observer_kind.lure_model(design)
-    if model.r != rows or model.n_e != design.system.n:
+    if not noise_enters_as_attack(design, model):
         return Check(
             verdict=Verdict.INCONCLUSIVE,
             summary="No ultimate error bound under noise is certified: the error model's "
@@ -224,22 +231,23 @@ def noise_search(design: ObserverDesign, noise: MeasurementNoise, seed: int = 0)
         # Lur'e model (its attack input is the measurement vector: the noise), each result
         # run through the observer's own simulator as the others are
         starts = y[:, np.argsort(np.max(errors, axis=0))[-GRADIENT_STARTS:], :]
-        ascended = _gradient_ascent(design, starts, eta)
-        if ascended is not None:
+        ascent = _gradient_ascent(design, starts, eta)
+        if ascent is not None:
+            ascended, iterations = ascent
             with np.errstate(all="ignore"):
                 found = safe_norms(simulator.run(ascended).x_hat)
             out["largest_error"] = max(largest, float(np.max(found)))
             out["sequences"] += ascended.shape[1]
             out["gradient_ascent"] = {
                 "starts": int(ascended.shape[1]),
-                "iterations": GRADIENT_ITERATIONS,
+                "iterations": iterations,
                 "largest_error": float(np.max(found)),
             }
     return out
 
 
 GRADIENT_STARTS = 8
-GRADIENT_ITERATIONS = 6
+GRADIENT_ITERATIONS = 6  # at most: the ascent stops at a vertex its linearisation keeps
 
 
 def _ascent_words(search: dict[str, Any]) -> str:
@@ -247,39 +255,46 @@ def _ascent_words(search: dict[str, Any]) -> str:
     ascent = search.get("gradient_ascent")
     if not ascent:
         return ""
+    steps = ascent["iterations"]
     return (
-        f"; the {ascent['starts']} that went furthest then moved by {ascent['iterations']} "
-        "steps of projected gradient ascent"
+        f"; the {ascent['starts']} that went furthest then moved by {steps} "
+        f"step{'' if steps == 1 else 's'} of projected gradient ascent"
     )
 
 
-def _gradient_ascent(design: ObserverDesign, starts: np.ndarray, eta: np.ndarray) -> Any:
+def _gradient_ascent(
+    design: ObserverDesign, starts: np.ndarray, eta: np.ndarray
+) -> tuple[np.ndarray, int] | None:
     """Noise sequences (steps, runs, p) within +-eta that drive the error of a one-sample
     sparse observer far, from ``starts``: each iteration simulates its Lur'e model xi+ = A xi
     + B phi(Cw xi + Dw n) + E n from zero, takes the gradient of u' Ce xi at the step where
     the error is largest (u its direction; the adjoint through phi's slopes, 0 or q), and
     moves every sample to the bound in the gradient's direction (the box's vertex that
-    maximises the linearised error).  None when the model's attack input is not the
+    maximises the linearised error), until it stays there or ``GRADIENT_ITERATIONS``; the
+    best sequences and the gradients taken.  None when the model's attack input is not the
     measurement vector."""
     from ..observers.lure import LureModel
 
     model = LureModel.from_design(design)
-    steps, runs, p = starts.shape
-    if model.r != p or model.n_e != design.system.n or not model.finite():
+    runs = starts.shape[1]
+    if not (noise_enters_as_attack(design, model) and model.finite()):
         return None
     noise = starts.copy()
     best = noise.copy()
     best_value = np.full(runs, -np.inf)
+    taken = 0
     with np.errstate(all="ignore"):
-        for _ in range(GRADIENT_ITERATIONS):
+        while taken < GRADIENT_ITERATIONS:
             value, grad = error_gradient(model, noise)
+            taken += 1
             better = value > best_value
             best[:, better], best_value[better] = noise[:, better], value[better]
             step = np.sign(grad) * eta
-            noise = np.where(step != 0, step, noise)
-            if not np.all(np.isfinite(noise)):
-                return best
-    return best
+            moved = np.where(step != 0, step, noise)
+            if not np.all(np.isfinite(moved)) or np.array_equal(moved, noise):
+                break  # at a vertex the linearisation keeps: the next steps would repeat it
+            noise = moved
+    return best, taken
 
 
 def error_gradient(model: Any, noise: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -294,15 +309,20 @@ def error_gradient(model: Any, noise: np.ndarray) -> tuple[np.ndarray, np.ndarra
     top = np.argmax(size, axis=0)  # the step of each run's largest error
     value = size[top, np.arange(runs)]
     direction = e[top, np.arange(runs)] / np.where(value > 0, value, 1.0)[:, None]
-    adjoint = np.zeros((runs, model.N))
+    N, m = model.N, model.m
+    measured = direction @ model.Ce  # the objective's term, entering at its run's step
+    slopes = model.q * (np.abs(xi[:-1] @ model.Cw.T + noise @ model.Dw.T) > model.threshold)
+    ABE = np.hstack([model.A, model.B, model.E])  # one product per step for the three
+    CD = np.hstack([model.Cw, model.Dw])
+    adjoint = np.zeros((runs, N))
     grad = np.zeros_like(noise)
     for k in range(steps - 1, -1, -1):
-        # the objective's own term enters at the step it is measured
-        adjoint = adjoint + np.where((top == k + 1)[:, None], direction @ model.Ce, 0.0)
-        w = xi[k] @ model.Cw.T + noise[k] @ model.Dw.T
-        through = model.q * (np.abs(w) > model.threshold) * (adjoint @ model.B)  # (runs, m)
-        grad[k] = adjoint @ model.E + through @ model.Dw
-        adjoint = adjoint @ model.A + through @ model.Cw
+        adjoint = adjoint + np.where((top == k + 1)[:, None], measured, 0.0)
+        products = adjoint @ ABE
+        through = slopes[k] * products[:, N : N + m]  # (runs, m)
+        back = through @ CD
+        grad[k] = products[:, N + m :] + back[:, N:]
+        adjoint = products[:, :N] + back[:, :N]
     return value, grad
 
 
