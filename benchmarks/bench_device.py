@@ -8,7 +8,12 @@ the same JSON.  The figure is sets per second of the whole level: the device's s
 plus the CPU's share (the LAPACK decisions of the sets it does not prove, the proxies of the
 closest sets, the transfers).  Without a usable device the script says why and gives no row.
 
-    python benchmarks/bench_device.py [--device cuda|numpy] [--repeats N]
+    python benchmarks/bench_device.py [--device cuda|numpy] [--repeats N] [--kernel]
+                                      [--profile FILE]
+
+``--kernel`` also times the device's screening alone (``DeviceKernel.screen`` on batches of
+2^20 matrices with their tops, as the enumeration sends them, the results back on the host);
+``--profile FILE`` writes where the time of one level of 6 on the device goes (cProfile).
 
 ``--device numpy`` runs the accelerator's code on the CPU (to check the script without a GPU;
 it is slower than the CPU path).
@@ -112,6 +117,76 @@ def measure(device: str, repeats: int, levels: int = 7) -> Results:
     return Results(device, _machine(device), best, faster, same)
 
 
+def kernel_rate(device: str, n: int = 10, repeats: int = 20) -> tuple[float, float]:
+    """(sets per second, seconds) of the device's screening alone: batches of 2^20 random
+    positive definite single-precision matrices (a level of 2^16 partial sums and 16 tops, as
+    ``ColexScreen`` sends them), the median of ``repeats`` screens after one not timed."""
+    from ssecert.structure.device import DEVICE_BATCH_SETS, device_kernel
+
+    kernel = device_kernel(device)
+    rng = np.random.default_rng(1)
+    M, N = 1 << 16, DEVICE_BATCH_SETS
+    G = rng.standard_normal((M, n, n + 2)).astype(np.float32)
+    level = kernel.load(np.ascontiguousarray((G @ G.transpose(0, 2, 1)).transpose(1, 2, 0)))
+    tops = np.float32(0.1) * np.eye(n, dtype=np.float32)[:, :, None] * np.arange(1, N // M + 1)
+    rows = np.arange(0, N, M)
+    offsets = -rows  # each piece the whole level, plus its top
+    passed, _ = kernel.screen(level, rows, offsets, tops.astype(np.float32), N)
+    assert passed.all(), "positive definite matrices refused"
+    seconds = []
+    for _ in range(repeats):
+        began = time.perf_counter()
+        kernel.screen(level, rows, offsets, tops.astype(np.float32), N)
+        seconds.append(time.perf_counter() - began)
+    median = float(np.median(seconds))
+    return N / median, median
+
+
+def library_rate(n: int = 10, repeats: int = 20) -> float | None:
+    """Sets per second of PyTorch's own batched Cholesky (``torch.linalg.cholesky_ex``) on
+    2^20 single-precision matrices already on the GPU (a reference for the screening alone:
+    the matrices not assembled, nothing sent back), None without PyTorch and CUDA."""
+    try:
+        import torch
+    except ImportError:
+        return None
+    if not torch.cuda.is_available():
+        return None
+    from ssecert.structure.device import DEVICE_BATCH_SETS
+
+    g = torch.Generator(device="cuda").manual_seed(2)
+    G = torch.randn((DEVICE_BATCH_SETS, n, n + 2), device="cuda", generator=g)
+    A = G @ G.transpose(1, 2)
+    torch.linalg.cholesky_ex(A)
+    torch.cuda.synchronize()
+    seconds = []
+    for _ in range(repeats):
+        began = time.perf_counter()
+        torch.linalg.cholesky_ex(A)
+        torch.cuda.synchronize()
+        seconds.append(time.perf_counter() - began)
+    return DEVICE_BATCH_SETS / float(np.median(seconds))
+
+
+def profile(device: str, path: str) -> None:
+    """cProfile of the enumeration up to level 6 on ``device``, the 40 largest cumulative
+    times written to ``path``."""
+    import cProfile
+    import io
+    import pstats
+
+    _run(device, 5)
+    profiler = cProfile.Profile()
+    profiler.enable()
+    _run(device, 6)
+    profiler.disable()
+    out = io.StringIO()
+    pstats.Stats(profiler, stream=out).sort_stats("cumulative").print_stats(40)
+    pstats.Stats(profiler, stream=out).sort_stats("tottime").print_stats(25)
+    with open(path, "w") as f:
+        f.write(out.getvalue())
+
+
 def _level_note(r: Results, k: int) -> str:
     sets = math.comb(40, k)
     rate, cpu_rate = sets / r.accelerated[k], sets / r.cpu[k]
@@ -155,11 +230,22 @@ def main() -> None:
     parser.add_argument("--device", default="cuda", choices=("cuda", "numpy"))
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--levels", type=int, default=7, choices=(6, 7))
+    parser.add_argument("--kernel", action="store_true", help="time the screening alone")
+    parser.add_argument("--profile", metavar="FILE", help="where a level's time goes")
     args = parser.parse_args()
     try:
         resolve_device(args.device)
     except DeviceUnavailable as exc:
         raise SystemExit(f"bench_device: {exc}") from None
+    print(f"device: {_machine(args.device)}")
+    if args.kernel:
+        rate, seconds = kernel_rate(args.device)
+        print(f"screening alone: {rate:,.0f} sets/s (2^20 sets of n = 10 in {seconds:.4f} s)")
+        library = library_rate() if args.device == "cuda" else None
+        if library is not None:
+            print(f"torch.linalg.cholesky_ex on 2^20 matrices on the GPU: {library:,.0f} sets/s")
+    if args.profile:
+        profile(args.device, args.profile)
     r = measure(args.device, args.repeats, args.levels)
     for k in sorted(r.accelerated):
         if k >= 6:

@@ -326,6 +326,14 @@ def machine() -> dict[str, Any]:
     }
 
 
+def _where(m: dict[str, Any]) -> str:
+    """A machine in a few words (its CPUs and numerical libraries)."""
+    return (
+        f"{m['cpus']} CPUs ({m['cpu_model']}), Python {m['python']}, numpy {m['numpy']}, "
+        f"scipy {m['scipy']}"
+    )
+
+
 def _all_rows(results: dict[str, Any]) -> list[dict[str, Any]]:
     return [r for name in BENCHMARKS for r in results["benchmarks"].get(name, {}).get("rows", [])]
 
@@ -454,6 +462,9 @@ def benchmarks_readme(results: dict[str, Any], experiments: dict[str, Any] | Non
         else:
             mode = "quick" if entry["quick"] else "full"
             ran = f"{mode} run on {entry['date'][:10]}, {format_seconds(entry['seconds'])}"
+            other = entry.get("machine")
+            if other is not None and _where(other) != _where(m):
+                ran += f", on another machine: {_where(other)}"
             if not entry["rows"]:
                 ran += ", no row: it found nothing to measure on this machine"
         items.append(f"- **{name}** (`{script}`; {ran}): {what}\n")
@@ -502,7 +513,7 @@ def run_benchmark(name: str, *, quick: bool) -> dict[str, Any]:
         subprocess.run(command, cwd=ROOT, env=env, check=True)
         seconds = time.perf_counter() - start
         rows = json.loads(out.read_text(encoding="utf-8"))
-    return {"rows": rows, "seconds": seconds, "date": date, "quick": quick}
+    return {"rows": rows, "seconds": seconds, "date": date, "quick": quick, "machine": machine()}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -519,9 +530,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     results: dict[str, Any] = {"machine": machine(), "benchmarks": {}}
     if (args.only or args.no_run) and RESULTS.is_file():
+        # the table's machine stays: a benchmark rerun elsewhere (a GPU machine) says where
         results = json.loads(RESULTS.read_text(encoding="utf-8"))
-        if not args.no_run:
-            results["machine"] = machine()
     failed = []
     for name in [] if args.no_run else args.only or list(BENCHMARKS):
         print(f"{name}: running {BENCHMARKS[name][0]}", file=sys.stderr, flush=True)

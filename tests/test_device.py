@@ -32,6 +32,18 @@ def _namespaces():
     return [*out, pytest.param(array_api_strict, id="array-api-strict")]
 
 
+def _cuda_kernel():
+    """The kernel on a CUDA device where this machine has one (the tests marked ``cuda`` run
+    there only: CI has none, a GPU machine checks the accelerator's own arithmetic)."""
+    try:
+        return accelerator.device_kernel("cuda")
+    except DeviceUnavailable:
+        return None
+
+
+cuda = pytest.mark.skipif(_cuda_kernel() is None, reason="no CUDA device")
+
+
 def _batch(rng, n, N):
     """Batch-last float32 matrices: positive definite, indefinite and nearly singular."""
     G = rng.standard_normal((N, n, n + 2)).astype(np.float32)
@@ -58,6 +70,25 @@ def test_the_array_api_factorization_decides_as_the_cpu_one(xp):
         assert np.array_equal(ours_passed, passed)
         assert np.allclose(ours[:, passed], cpu[:, passed], rtol=1e-4, atol=1e-6)
         assert 0 < passed.sum() < passed.size
+
+
+@cuda
+def test_the_gpu_factorization_decides_as_the_cpu_one():
+    kernel = _cuda_kernel()
+    rng = np.random.default_rng(4)
+    for n in (1, 2, 5, 10, 20):
+        work = _batch(rng, n, 3000)
+        ours = accelerator._to_numpy(cholesky_diagonal(kernel.xp, kernel._put(work)))
+        cpu = np.empty((n, work.shape[2]), dtype=np.float32)
+        cholesky_batch_last(work.copy(), cpu)
+        passed, _ = single_passed(cpu)
+        with np.errstate(invalid="ignore"):
+            ours_passed = (ours.min(axis=0) > 0) & np.isfinite(ours.sum(axis=0))
+        assert np.array_equal(ours_passed, passed)
+        # the squared pivots agree to the rounding of a factorization (n u times the matrix's
+        # scale, taken generously): a small pivot's square root magnifies its rounding
+        gap = np.abs(ours[:, passed].astype(float) ** 2 - cpu[:, passed].astype(float) ** 2)
+        assert gap.max() <= 1e-4 * n * np.abs(work).max()
 
 
 def test_numpy_and_the_standard_alone_factor_bit_for_bit_alike():
@@ -108,6 +139,14 @@ def test_a_level_screened_through_the_kernel_is_decided_as_on_the_cpu(xp):
     assert np.array_equal(dev_ok, cpu_ok)
 
 
+@cuda
+def test_a_level_screened_on_the_gpu_is_decided_as_on_the_cpu():
+    (cpu_ok, cpu_proxy), (dev_ok, dev_proxy) = _screens(_cuda_kernel())
+    assert np.array_equal(dev_ok, cpu_ok)
+    assert np.array_equal(dev_proxy, cpu_proxy)
+    assert 0 < cpu_ok.sum() < cpu_ok.size
+
+
 def _answer(check):
     evidence = dict(check.evidence)
     evidence.pop("cost_estimate", None)  # measured times
@@ -138,9 +177,10 @@ def _planted(p=12, seed=0):
         (System(np.eye(3), np.random.default_rng(2).standard_normal((12, 3))), 3),
     ],
 )
-def test_device_numpy_gives_the_cpu_answer_bit_for_bit(system, s, small_device_batches):
+@pytest.mark.parametrize("device", ["numpy", pytest.param("cuda", marks=cuda)])
+def test_a_device_gives_the_cpu_answer_bit_for_bit(system, s, device, small_device_batches):
     cpu = sparse_observability(system, s, method="enumeration", time_budget=None)
-    dev = sparse_observability(system, s, method="enumeration", time_budget=None, device="numpy")
+    dev = sparse_observability(system, s, method="enumeration", time_budget=None, device=device)
     assert _answer(dev) == _answer(cpu)
 
 
@@ -202,3 +242,28 @@ def test_no_level_is_taken_for_another_when_the_device_copies(monkeypatch, small
             unseen, 0, method="enumeration", time_budget=None, device="numpy"
         )
         assert _answer(again) == cpu, trial
+
+
+@pytest.mark.parametrize(
+    ("q", "k", "single_memory"), [(14, 4, 4096), (12, 5, 2000), (9, 3, 1 << 20)]
+)
+def test_the_pieces_as_arrays_are_those_of_the_walk_through_the_tops(q, k, single_memory):
+    # the device takes a batch's pieces as arrays: the same rows, level rows and tops' sums,
+    # bit for bit, as the walk the CPU tier takes, for ranges in either order
+    rng = np.random.default_rng(5)
+    n = 3
+    factors = rng.standard_normal((q, 1, n))
+    items = np.einsum("qrn,qrm->qnm", factors, factors)
+    total = math.comb(q, k)
+    source = ColexScreen(items, items.sum(axis=0), k, 1e-6, single_memory=single_memory)
+    ranges = [(a, min(a + 37, total)) for a in range(0, total, 37)]
+    for start, stop in [*ranges, *reversed(ranges), (0, total), (5, total - 3)]:
+        pieces = source._pieces(start, stop)
+        rows, offsets, totals = source.piece_arrays(start, stop)
+        assert rows.tolist() == [row for row, *_ in pieces]
+        assert (rows + offsets).tolist() == [first for _, first, _, _ in pieces]
+        tops = [source._top_total(top) for *_, top in pieces]
+        if tops[0] is None:
+            assert totals is None
+        else:
+            assert np.array_equal(totals, np.stack(tops, axis=2))

@@ -354,6 +354,12 @@ class ColexScreen:
     device : DeviceKernel, optional
         Tier 2 on an accelerator (``ssecert.structure.device``), for every
         batch and without tier 1; the decisions stay LAPACK's.
+    shared : dict, optional
+        Kept by the caller across the screens of ranges of one level (the
+        same items, base, k, sign and margin): the levels of partial sums
+        (and their copies on the device) and tier 1's bounds are computed
+        once for all of them rather than once per range.  They do not
+        depend on the range, so the screens are the same, bit for bit.
     """
 
     def __init__(
@@ -371,6 +377,7 @@ class ColexScreen:
         factors: np.ndarray | None = None,
         single_memory: int = DEFAULT_SINGLE_MEMORY,
         device: DeviceKernel | None = None,
+        shared: dict[tuple[Any, ...], Any] | None = None,
     ) -> None:
         q, n = items.shape[0], base.shape[-1]
         if not 0 <= k <= q:
@@ -414,6 +421,7 @@ class ColexScreen:
         self._slack = 0.0 if self.factors is None else _bound_slack(items, base, self.factors, k)
         self.device = device
         self._single_device: Any = None  # the single-precision level on the device
+        self._shared = {} if shared is None else shared
 
     def batches(self, size: int) -> Iterator[tuple[int, int]]:
         """Consecutive ranges of ``size`` ranks covering the range."""
@@ -422,9 +430,13 @@ class ColexScreen:
 
     def subsets(self, ranks: np.ndarray) -> np.ndarray:
         """Sorted subsets of the given colex ranks, shape (len(ranks), k) (``colex_unrank``)."""
+        return self._unrank(ranks, self.k)
+
+    def _unrank(self, ranks: np.ndarray, k: int) -> np.ndarray:
+        """Sorted k-subsets of the given colex ranks (k <= ``self.k``), shape (len(ranks), k)."""
         rest = np.array(ranks, dtype=np.int64)
-        out = np.empty((rest.size, self.k), dtype=np.int64)
-        for i in range(self.k, 0, -1):
+        out = np.empty((rest.size, k), dtype=np.int64)
+        for i in range(k, 0, -1):
             c = np.searchsorted(self._comb[i], rest, side="right") - 1
             out[:, i - 1] = c
             rest = rest - self._comb[i][c]
@@ -455,7 +467,10 @@ class ColexScreen:
         """The float64 matrices of the given ranks (ascending), bit for bit those of the
         blocks of ``colex_blocks``."""
         if self._sums is None:
-            self._sums = _level(self.items, self.base, self.sign, self.m)
+            key = ("float64", self.m)
+            if key not in self._shared:
+                self._shared[key] = _level(self.items, self.base, self.sign, self.m)
+            self._sums = self._shared[key]
         sums = self._sums[0]
         ranks = np.asarray(ranks, dtype=np.int64)
         subsets = self.subsets(ranks)
@@ -491,12 +506,48 @@ class ColexScreen:
             cursor[2] = next(cursor[1], None)
         return pieces
 
+    def piece_arrays(
+        self, start: int, stop: int
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """The pieces of ``_pieces`` as arrays, found without walking the tops one by one:
+        (first row of each piece in the range, the piece's first row of the single-precision
+        level minus its first row in the range, the single-precision sums of the pieces' tops
+        as ``_top_total`` makes them, batch last, or None when the level is the whole sum).
+
+        The tops of the level are the (k - m32)-subsets of the items from m32 up, in colex
+        order: those of the range are the consecutive ranks between the tops of its first
+        and last subsets, unranked together."""
+        k, m = self.k, self.m32
+        if m == k:
+            return np.zeros(1, dtype=np.int64), np.array([start], dtype=np.int64), None
+        r = k - m
+        ends = self.subsets(np.array([start, stop - 1]))[:, m:] - m
+        first_top, last_top = (sum(self._comb[j + 1][ends[e, j]] for j in range(r)) for e in (0, 1))
+        tops = self._unrank(np.arange(first_top, last_top + 1), r) + m
+        offset = sum(self._comb[m + j + 1][tops[:, j]] for j in range(r))
+        first = np.maximum(start - offset, 0)
+        last = np.minimum(self._comb[m][tops[:, 0]], stop - offset)
+        keep = first < last  # (a top holding no subset of the range: none, as ranks go)
+        tops, offset, first = tops[keep], offset[keep], first[keep]
+        rows = offset + first - start
+        signed = self._signed32
+        total = signed[tops[:, 0]]
+        if r > 1:
+            upper = signed[tops[:, 1]]
+            for j in range(2, r):
+                upper = upper + signed[tops[:, j]]
+            total = total + upper
+        return rows, first - rows, np.ascontiguousarray(total.transpose(1, 2, 0))
+
     def _single(self) -> np.ndarray:
         """The single-precision level of partial sums minus the margin, batch last."""
         if self._sums32 is None:
-            n = self.base.shape[-1]
-            shifted = np.asarray(self.base - self.margin * np.eye(n), dtype=np.float32)
-            self._sums32 = _single_level(self._signed32, shifted, self.m32)
+            key = ("float32", self.m32)
+            if key not in self._shared:
+                n = self.base.shape[-1]
+                shifted = np.asarray(self.base - self.margin * np.eye(n), dtype=np.float32)
+                self._shared[key] = _single_level(self._signed32, shifted, self.m32)
+            self._sums32 = self._shared[key]
         return self._sums32
 
     def _top_total(self, top: tuple[int, ...]) -> np.ndarray | None:
@@ -524,18 +575,24 @@ class ColexScreen:
 
     def _single_tier(
         self,
-        pieces: list[tuple[int, int, int, tuple[int, ...]]],
+        start: int,
+        pieces: list[tuple[int, int, int, tuple[int, ...]]] | None,
         N: int,
         work: np.ndarray,
         diagonal: np.ndarray,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Tier 2 on the whole batch: (passed, smallest pivot) of each single-precision
-        factorization, on the device when there is one."""
+        """Tier 2 on the whole batch of ranks [start, start + N): (passed, smallest pivot) of
+        each single-precision factorization, on the device when there is one (which takes
+        the pieces as arrays: ``pieces`` is not used)."""
         if self.device is not None:
-            if self._single_device is None:  # this range's level, on the device once
-                self._single_device = self.device.load(self._single())
-            tops = [(row, first, last, self._top_total(top)) for row, first, last, top in pieces]
-            return self.device.screen(self._single_device, tops, N)
+            if self._single_device is None:  # the level on the device, once for its ranges
+                key = ("device", self.device.name, self.m32)
+                if key not in self._shared:
+                    self._shared[key] = self.device.load(self._single())
+                self._single_device = self._shared[key]
+            rows, offsets, totals = self.piece_arrays(start, start + N)
+            return self.device.screen(self._single_device, rows, offsets, totals, N)
+        assert pieces is not None
         mats, diag = work[:, :, :N], diagonal[:, :N]
         self.fill(pieces, mats)
         cholesky_batch_last(mats, diag)
@@ -604,11 +661,14 @@ class ColexScreen:
         ScreenedBatch
         """
         N = stop - start
-        pieces = self._pieces(start, stop)
-        # on a device, tier 2 screens the whole batch: tier 1 would keep the CPU busy meanwhile
-        tried = self._skip == 0 and self.device is None
+        # on a device, tier 2 screens the whole batch (its pieces as arrays): tier 1 would keep
+        # the CPU busy meanwhile
+        pieces = self._pieces(start, stop) if self.device is None else None
+        tried = self._skip == 0 and pieces is not None
         self._skip = max(self._skip - 1, 0)
-        bound = self.lower_bounds(pieces, N) if tried else np.full(N, -np.inf)
+        bound = (
+            self.lower_bounds(pieces, N) if pieces is not None and tried else np.full(N, -np.inf)
+        )
         ok = bound > 0
         screen = ScreenedBatch(self, start, ok)
         if threshold is not None:
@@ -622,7 +682,7 @@ class ColexScreen:
                 self._skip = 8
             # many subsets left open: tier 2 for the whole batch (a few calls), then LAPACK for
             # those it leaves open
-            passed, smallest = self._single_tier(pieces, N, work, diagonal)
+            passed, smallest = self._single_tier(start, pieces, N, work, diagonal)
             ok |= passed
             if screen.low is not None:
                 low = smallest.astype(np.float64)

@@ -23,6 +23,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -123,6 +124,7 @@ def _scan_range(
     *,
     stop: Callable[[_Level], bool] | None = None,
     deadline: float | None = None,
+    shared: dict[tuple[Any, ...], Any] | None = None,
 ) -> _Level:
     """Check the removals whose colex ranks lie in ``ranks`` (one chunk of a level; the
     sensors in ``task`` in reverse order, so a set of colex rank r is at position
@@ -138,7 +140,8 @@ def _scan_range(
     returns True the later sets are not checked (``ended``).  Once ``deadline`` (a
     ``time.monotonic()`` value) has passed, checked between batches and between groups, the
     scan ends (``cut_short``) and ``checked`` counts the sets decided, the first ones in
-    lexicographic order."""
+    lexicographic order.  ``shared``: a dict the caller keeps across the ranges of one level
+    run in one process (``ColexScreen``'s levels of partial sums, computed once for them)."""
     n = task.proj.shape[-1]
     level = _Level()
     candidates: list[tuple[float, int, tuple[int, ...]]] = []
@@ -157,6 +160,7 @@ def _scan_range(
         stop=hi,
         factors=task.P,
         device=kernel,
+        shared=shared,
     )
     size = min(_BATCH_SETS if kernel is None else accelerator.DEVICE_BATCH_SETS, hi - lo)
     room = 0 if kernel is not None else size  # the CPU's single-precision tier's buffers

@@ -35,7 +35,7 @@ DEVICES = ("cpu", "cuda", "numpy")
 # single-precision 10 x 10 matrices), ...
 DEVICE_BATCH_SETS = 1 << 20
 # ... and a range of fewer sets stays on the CPU, whose bound and batches are faster there
-DEVICE_MIN_SETS = 1 << 16
+DEVICE_MIN_SETS = 1 << 14
 
 
 class DeviceUnavailable(RuntimeError):
@@ -120,10 +120,11 @@ def cholesky_diagonal(xp: Any, A: Any) -> Any:
     The algorithm of ``ssecert.numerics.linalg.cholesky_batch_last`` (left-looking,
     column by column, each column scaled by the reciprocal of its pivot), in
     the array API standard only and without writing into views; the
-    products of the earlier columns are taken off one by one rather than
-    summed first (the margin's error bound holds for any order of the sums,
-    so the proof is the same, though the last bits may differ).  A matrix
-    that is not positive definite gets a NaN or a non-positive entry.
+    products of the earlier columns are summed by one reduction per column
+    (a few launches per column on a device, whatever n; the margin's error
+    bound holds for any order of the sums, so the proof is the same, though
+    the last bits may differ from the CPU's).  A matrix that is not positive
+    definite gets a NaN or a non-positive entry.
 
     Parameters
     ----------
@@ -140,9 +141,10 @@ def cholesky_diagonal(xp: Any, A: Any) -> Any:
     diagonal = []
     for j in range(n):
         column = A[j:, j, :]
-        for k in range(j):
-            below = columns[k][j - k :, :]
-            column = column - below * below[0:1, :]
+        if j:
+            # rows j..n-1 of the earlier columns, side by side: (n - j, j, N)
+            below = xp.stack([c[j - k :, :] for k, c in enumerate(columns)], axis=1)
+            column = column - xp.sum(below * below[0:1, :, :], axis=1)
         root = xp.sqrt(column[0, :])
         diagonal.append(root)
         if j + 1 < n:
@@ -175,18 +177,27 @@ class DeviceKernel:
         return self._put(np.ascontiguousarray(level))
 
     def screen(
-        self, level: Any, pieces: list[tuple[int, int, int, Any]], size: int
+        self,
+        level: Any,
+        rows: np.ndarray,
+        offsets: np.ndarray,
+        totals: np.ndarray | None,
+        size: int,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Factor the ``size`` single-precision matrices of the pieces on the device.
+        """Factor the ``size`` single-precision matrices of a batch's pieces on the device.
 
         Parameters
         ----------
         level : device array of float32, shape (n, n, M)
             The single-precision level of partial sums (the screening margin taken off), as
             ``load`` put it on the device.
-        pieces : list of (row, first, last, top)
-            Rows ``row .. row + last - first`` of the batch are the level's matrices
-            ``first .. last - 1`` plus ``top`` (an (n, n) float32 array, or None).
+        rows : ndarray of int, shape (P,)
+            The first row of each piece in the batch, ascending (the first is 0).
+        offsets : ndarray of int, shape (P,)
+            Row r of piece i is the level's matrix ``r + offsets[i]`` ...
+        totals : ndarray of float32, shape (n, n, P), or None
+            ... plus ``totals[:, :, i]``, the single-precision sum of the piece's top (None:
+            no tops, the level is the whole sum).
         size : int
 
         Returns
@@ -196,27 +207,14 @@ class DeviceKernel:
         smallest : ndarray of float32, shape (size,)
             The smallest pivot (meaningful where passed).
         """
-        xp, sums = self.xp, level
-        n = level.shape[0]
-        # each row's piece, its row in the level and its top, found on the device from the
-        # pieces alone (a few hundred numbers sent, not one index per set)
-        tops = [np.zeros((n, n), dtype=np.float32)]
-        starts, offsets, which = [], [], []
-        for row, first, _, top in pieces:
-            starts.append(row)
-            offsets.append(first - row)
-            which.append(0 if top is None else len(tops))
-            if top is not None:
-                tops.append(top)
+        xp = self.xp
+        # each row's piece found on the device from the pieces alone (a few numbers per piece
+        # sent, not one index per set)
         positions = xp.arange(size, device=self.device)
-        piece = xp.searchsorted(self._put(np.array(starts)), positions, side="right") - 1
-        rows = positions + xp.take(self._put(np.array(offsets)), piece)
-        matrices = xp.take(sums, rows, axis=2)
-        if len(tops) > 1:
-            totals = self._put(np.stack(tops, axis=2))
-            matrices = matrices + xp.take(
-                totals, xp.take(self._put(np.array(which)), piece), axis=2
-            )
+        piece = xp.searchsorted(self._put(rows), positions, side="right") - 1
+        matrices = xp.take(level, positions + xp.take(self._put(offsets), piece), axis=2)
+        if totals is not None:
+            matrices = matrices + xp.take(self._put(totals), piece, axis=2)
         with np.errstate(all="ignore"):  # NaN pivots of the failures (numpy underneath)
             diagonal = cholesky_diagonal(xp, matrices)
             smallest = xp.min(diagonal, axis=0)

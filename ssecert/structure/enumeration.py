@@ -714,9 +714,15 @@ def _scan_level(
     if client is None:
         level = _Level()
         total, done = sum(hi - lo for lo, hi in chunks), 0
+        shared: dict[tuple[Any, ...], Any] = {}  # the partial sums, once for every range
         for chunk in chunks:
             part = _scan_range(
-                task, chunk, _from(progress, done, total), stop=stop, deadline=deadline
+                task,
+                chunk,
+                _from(progress, done, total),
+                stop=stop,
+                deadline=deadline,
+                shared=shared,
             )
             level.merge(part)
             done += chunk[1] - chunk[0]
