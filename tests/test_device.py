@@ -267,3 +267,52 @@ def test_the_pieces_as_arrays_are_those_of_the_walk_through_the_tops(q, k, singl
             assert totals is None
         else:
             assert np.array_equal(totals, np.stack(tops, axis=2))
+
+
+def test_a_range_of_segments_has_the_blocks_of_each_segment_alone():
+    # an accelerator screens a few of the CPU's ranges at once: each rank's block (which sets
+    # are refined together) must be the one its own range gives it
+    rng = np.random.default_rng(6)
+    q, k, n = 13, 4, 3
+    factors = rng.standard_normal((q, 1, n))
+    items = np.einsum("qrn,qrm->qnm", factors, factors)
+    total = math.comb(q, k)
+    for segment in (7, 64, 100):
+        for start in (0, 2 * segment):
+            joined = ColexScreen(
+                items, items.sum(axis=0), k, 1e-6, start=start, segment=segment, chunk_bytes=1
+            )
+            ranks = np.arange(start, total)
+            begins, ends = joined.spans(ranks)
+            for rank, begin, end in zip(ranks.tolist(), begins, ends):
+                lo = start + (rank - start) // segment * segment
+                alone = ColexScreen(
+                    items, items.sum(axis=0), k, 1e-6, start=lo, stop=lo + segment, chunk_bytes=1
+                )
+                b, e = alone.spans(np.array([rank]))
+                assert (begin, end) == (b[0], e[0]), (segment, rank)
+
+
+@pytest.mark.parametrize("device", ["numpy", pytest.param("cuda", marks=cuda)])
+def test_a_level_in_many_ranges_gets_the_cpu_answer_on_a_device(monkeypatch, device):
+    # the CPU's ranges of a level small enough to be many (each refined in its own blocks),
+    # joined on the device: a plant with a planted breaking set (its sensors scaled apart),
+    # read in both orders, and one that holds
+    from ssecert.structure import enumeration
+
+    monkeypatch.setattr(enumeration, "MIN_CHUNK_SETS", 23)
+    monkeypatch.setattr(enumeration, "_CHUNK_OVER_LEVEL", 0)
+    monkeypatch.setattr(accelerator, "DEVICE_MIN_SETS", 0)
+    monkeypatch.setattr(accelerator, "DEVICE_BATCH_SETS", 100)
+    rng = np.random.default_rng(7)
+    C = rng.standard_normal((14, 4))
+    C[:9, 3] = 0.0  # 9 sensors blind to x4: removing the other 5 breaks
+    C[9:, :] *= rng.uniform(0.5, 2.0, (5, 1))
+    for system, s in ((System(np.eye(4), C), 3), (System(np.eye(4), C[::-1].copy()), 2)):
+        cpu = sparse_observability(system, s, method="enumeration", time_budget=None)
+        dev = sparse_observability(system, s, method="enumeration", time_budget=None, device=device)
+        assert _answer(dev) == _answer(cpu)
+    holds = System(np.eye(3), rng.standard_normal((13, 3)))
+    cpu = sparse_observability(holds, 3, method="enumeration", time_budget=None)
+    dev = sparse_observability(holds, 3, method="enumeration", time_budget=None, device=device)
+    assert _answer(dev) == _answer(cpu)

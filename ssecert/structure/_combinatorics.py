@@ -354,6 +354,11 @@ class ColexScreen:
     device : DeviceKernel, optional
         Tier 2 on an accelerator (``ssecert.structure.device``), for every
         batch and without tier 1; the decisions stay LAPACK's.
+    segment : int, optional
+        The range is made of consecutive segments of this many ranks from
+        ``start`` (the last may be shorter), and ``spans`` gives the blocks
+        each segment alone would have as a range of its own (an accelerator
+        screens a few of the CPU's ranges at once, with their blocks).
     shared : dict, optional
         Kept by the caller across the screens of ranges of one level (the
         same items, base, k, sign and margin): the levels of partial sums
@@ -377,6 +382,7 @@ class ColexScreen:
         factors: np.ndarray | None = None,
         single_memory: int = DEFAULT_SINGLE_MEMORY,
         device: DeviceKernel | None = None,
+        segment: int | None = None,
         shared: dict[tuple[Any, ...], Any] | None = None,
     ) -> None:
         q, n = items.shape[0], base.shape[-1]
@@ -422,6 +428,7 @@ class ColexScreen:
         self.device = device
         self._single_device: Any = None  # the single-precision level on the device
         self._shared = {} if shared is None else shared
+        self.segment = segment
 
     def batches(self, size: int) -> Iterator[tuple[int, int]]:
         """Consecutive ranges of ``size`` ranks covering the range."""
@@ -458,9 +465,14 @@ class ColexScreen:
         holds each rank."""
         ranks = np.asarray(ranks, dtype=np.int64)
         offset, count = self._tops(self.subsets(ranks))
-        first = np.maximum(self.start - offset, 0)
+        start: int | np.ndarray = self.start
+        stop: int | np.ndarray = self.stop
+        if self.segment is not None:  # the segment of each rank, as a range of its own
+            start = self.start + (ranks - self.start) // self.segment * self.segment
+            stop = np.minimum(start + self.segment, self.stop)
+        first = np.maximum(start - offset, 0)
         lo = first + (ranks - offset - first) // self.chunk * self.chunk
-        hi = np.minimum(np.minimum(lo + self.chunk, count), self.stop - offset)
+        hi = np.minimum(np.minimum(lo + self.chunk, count), stop - offset)
         return offset + lo, offset + hi
 
     def matrices(self, ranks: np.ndarray) -> np.ndarray:

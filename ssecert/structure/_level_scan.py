@@ -125,6 +125,7 @@ def _scan_range(
     stop: Callable[[_Level], bool] | None = None,
     deadline: float | None = None,
     shared: dict[tuple[Any, ...], Any] | None = None,
+    segment: int | None = None,
 ) -> _Level:
     """Check the removals whose colex ranks lie in ``ranks`` (one chunk of a level; the
     sensors in ``task`` in reverse order, so a set of colex rank r is at position
@@ -141,7 +142,9 @@ def _scan_range(
     ``time.monotonic()`` value) has passed, checked between batches and between groups, the
     scan ends (``cut_short``) and ``checked`` counts the sets decided, the first ones in
     lexicographic order.  ``shared``: a dict the caller keeps across the ranges of one level
-    run in one process (``ColexScreen``'s levels of partial sums, computed once for them)."""
+    run in one process (``ColexScreen``'s levels of partial sums, computed once for them).
+    ``segment``: the range is consecutive segments of this many ranks, each refined in the
+    blocks it would have as a range of its own (``ColexScreen``)."""
     n = task.proj.shape[-1]
     level = _Level()
     candidates: list[tuple[float, int, tuple[int, ...]]] = []
@@ -160,6 +163,7 @@ def _scan_range(
         stop=hi,
         factors=task.P,
         device=kernel,
+        segment=segment,
         shared=shared,
     )
     size = min(_BATCH_SETS if kernel is None else accelerator.DEVICE_BATCH_SETS, hi - lo)

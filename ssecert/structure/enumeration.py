@@ -38,6 +38,7 @@ from ..numerics.linalg import (
 from ..parallel import ChunkError, map_ranges, rank_ranges
 from ..system import System
 from ..tolerances import NONZERO, Tolerances
+from . import device as accelerator
 from ._combinatorics import (
     colex_rank,
     count_subsets,
@@ -710,7 +711,13 @@ def _scan_level(
         P[back], ranks[back], proj[back], base - shift * np.eye(n), shift, k, rest[back], full,
         tol, critical, errors[back], device,
     )  # fmt: skip
-    chunks = _chunks(task, client, segments=stop is not None)[::-1]
+    chunks = _chunks(task, client, segments=stop is not None)
+    segment = None
+    if client is None and task.device is not None and len(chunks) > 1:
+        # an accelerator screens a few of these ranges at once, each refined in its own blocks
+        segment = chunks[0][1] - chunks[0][0]
+        chunks = _joined(chunks, max(1, accelerator.DEVICE_BATCH_SETS // segment))
+    chunks = chunks[::-1]
     if client is None:
         level = _Level()
         total, done = sum(hi - lo for lo, hi in chunks), 0
@@ -723,6 +730,7 @@ def _scan_level(
                 stop=stop,
                 deadline=deadline,
                 shared=shared,
+                segment=segment,
             )
             level.merge(part)
             done += chunk[1] - chunk[0]
@@ -749,6 +757,14 @@ def _scan_level(
     for part in map_ranges(_scan_range, task, chunks, client, progress, stop=ends):
         level.merge(part)
     return level
+
+
+def _joined(chunks: list[tuple[int, int]], count: int) -> list[tuple[int, int]]:
+    """Ascending ranges joined ``count`` at a time."""
+    return [
+        (chunks[i][0], chunks[min(i + count, len(chunks)) - 1][1])
+        for i in range(0, len(chunks), count)
+    ]
 
 
 def placement_note(outcome: _Outcome) -> str | None:
