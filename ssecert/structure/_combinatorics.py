@@ -673,14 +673,12 @@ class ColexScreen:
         ScreenedBatch
         """
         N = stop - start
-        # on a device, tier 2 screens the whole batch (its pieces as arrays): tier 1 would keep
-        # the CPU busy meanwhile
-        pieces = self._pieces(start, stop) if self.device is None else None
-        tried = self._skip == 0 and pieces is not None
+        if self.device is not None:
+            return self._device_screen(start, N, shift, threshold)
+        pieces = self._pieces(start, stop)
+        tried = self._skip == 0
         self._skip = max(self._skip - 1, 0)
-        bound = (
-            self.lower_bounds(pieces, N) if pieces is not None and tried else np.full(N, -np.inf)
-        )
+        bound = self.lower_bounds(pieces, N) if tried else np.full(N, -np.inf)
         ok = bound > 0
         screen = ScreenedBatch(self, start, ok)
         if threshold is not None:
@@ -689,7 +687,7 @@ class ColexScreen:
             rows = np.flatnonzero(~ok | (screen.low <= threshold))
         else:
             rows = np.flatnonzero(~ok)
-        if rows.size > max(64, N // 50) or (self.device is not None and rows.size):
+        if rows.size > max(64, N // 50):
             if tried and self.factors is not None and rows.size > N // 2:
                 self._skip = 8
             # many subsets left open: tier 2 for the whole batch (a few calls), then LAPACK for
@@ -701,13 +699,32 @@ class ColexScreen:
                 screen.low = np.where(passed, np.maximum(screen.low, low**2 + shift), screen.low)
             # LAPACK decides the rest; the proxies under the threshold are asked for later
             rows = np.flatnonzero(~ok)
+        self._lapack(screen, rows, shift)
+        return screen
+
+    def _device_screen(
+        self, start: int, N: int, shift: float, threshold: float | None
+    ) -> ScreenedBatch:
+        """``screen`` on the device: tier 2 for the whole batch (tier 1 would keep the CPU busy
+        meanwhile), LAPACK for the subsets it leaves open."""
+        passed, smallest = self._single_tier(start, None, N, np.empty(0), np.empty(0))
+        screen = ScreenedBatch(self, start, passed.copy())
+        if threshold is not None:
+            low = smallest.astype(np.float64)
+            screen.low = np.where(passed, low * low + shift, -np.inf)
+            screen.exact = np.zeros(N, dtype=bool)
+        self._lapack(screen, np.flatnonzero(~passed), shift)
+        return screen
+
+    def _lapack(self, screen: ScreenedBatch, rows: np.ndarray, shift: float) -> None:
+        """LAPACK decides the selected rows of a screened batch (their proxies known)."""
         if rows.size:
-            decided, proxies = _proxies(cholesky_or_nan(self.matrices(start + rows)), shift)
-            ok[rows] = decided
+            matrices = self.matrices(screen.offset + rows)
+            decided, proxies = _proxies(cholesky_or_nan(matrices), shift)
+            screen.ok[rows] = decided
             if screen.low is not None and screen.exact is not None:
                 screen.low[rows] = proxies
                 screen.exact[rows] = True
-        return screen
 
 
 def _level_sums(values: np.ndarray, m: int) -> np.ndarray:
