@@ -120,7 +120,8 @@ def measure(device: str, repeats: int, levels: int = 7) -> Results:
 def kernel_rate(device: str, n: int = 10, repeats: int = 20) -> tuple[float, float]:
     """(sets per second, seconds) of the device's screening alone: batches of 2^20 random
     positive definite single-precision matrices (a level of 2^16 partial sums and 16 tops, as
-    ``ColexScreen`` sends them), the median of ``repeats`` screens after one not timed."""
+    ``ColexScreen`` sends them), the failures sent back, the median of ``repeats`` screens
+    after one not timed."""
     from ssecert.structure.device import DEVICE_BATCH_SETS, device_kernel
 
     kernel = device_kernel(device)
@@ -131,12 +132,12 @@ def kernel_rate(device: str, n: int = 10, repeats: int = 20) -> tuple[float, flo
     tops = np.float32(0.1) * np.eye(n, dtype=np.float32)[:, :, None] * np.arange(1, N // M + 1)
     rows = np.arange(0, N, M)
     offsets = -rows  # each piece the whole level, plus its top
-    passed, _ = kernel.screen(level, rows, offsets, tops.astype(np.float32), N)
-    assert passed.all(), "positive definite matrices refused"
+    failed = kernel.screen(level, rows, offsets, tops.astype(np.float32), N).failed()
+    assert failed.size == 0, "positive definite matrices refused"
     seconds = []
     for _ in range(repeats):
         began = time.perf_counter()
-        kernel.screen(level, rows, offsets, tops.astype(np.float32), N)
+        kernel.screen(level, rows, offsets, tops.astype(np.float32), N).failed()
         seconds.append(time.perf_counter() - began)
     median = float(np.median(seconds))
     return N / median, median

@@ -121,7 +121,9 @@ def _screens(kernel, k=4, q=14, n=4, critical=True):
         oks, proxies = [], []
         for first, last in source.batches(97):  # many pieces and batches
             screen = source.screen(first, last, shift, np.inf if critical else None, work, diagonal)
-            oks.append(screen.ok)
+            ok = np.ones(last - first, dtype=bool)
+            ok[screen.failed()] = False
+            oks.append(ok)
             if critical:
                 proxies.append(screen.proxies(np.arange(last - first), shift))
         out.append((np.concatenate(oks), np.concatenate(proxies) if critical else None))

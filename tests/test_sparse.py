@@ -330,6 +330,11 @@ class _Screen:
     def subsets(self, rows: np.ndarray) -> np.ndarray:
         return self._subsets[rows]
 
+    def below(self, threshold: float, most: int | None = None) -> tuple[np.ndarray, bool]:
+        from ssecert.structure._combinatorics import ScreenedBatch
+
+        return ScreenedBatch.below(self, threshold, most)  # type: ignore[arg-type]
+
     def proxies(self, rows: np.ndarray, shift: float) -> np.ndarray:
         self.asked[rows[~self.exact[rows]]] = True
         self.low[rows] = self._proxy[rows]

@@ -22,7 +22,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -33,7 +33,7 @@ from ..numerics.linalg import (
     single_passed,
     single_screen,
 )
-from .device import DeviceKernel
+from .device import DeviceBatch, DeviceKernel
 
 __all__ = [
     "ColexScreen",
@@ -587,28 +587,29 @@ class ColexScreen:
 
     def _single_tier(
         self,
-        start: int,
-        pieces: list[tuple[int, int, int, tuple[int, ...]]] | None,
+        pieces: list[tuple[int, int, int, tuple[int, ...]]],
         N: int,
         work: np.ndarray,
         diagonal: np.ndarray,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Tier 2 on the whole batch of ranks [start, start + N): (passed, smallest pivot) of
-        each single-precision factorization, on the device when there is one (which takes
-        the pieces as arrays: ``pieces`` is not used)."""
-        if self.device is not None:
-            if self._single_device is None:  # the level on the device, once for its ranges
-                key = ("device", self.device.name, self.m32)
-                if key not in self._shared:
-                    self._shared[key] = self.device.load(self._single())
-                self._single_device = self._shared[key]
-            rows, offsets, totals = self.piece_arrays(start, start + N)
-            return self.device.screen(self._single_device, rows, offsets, totals, N)
-        assert pieces is not None
+        """Tier 2 on the whole batch: (passed, smallest pivot) of each single-precision
+        factorization."""
         mats, diag = work[:, :, :N], diagonal[:, :N]
         self.fill(pieces, mats)
         cholesky_batch_last(mats, diag)
         return single_passed(diag)
+
+    def _device_batch(self, start: int, N: int) -> DeviceBatch:
+        """Tier 2 on the device for the batch of ranks [start, start + N) (its pieces sent as
+        arrays, the level of partial sums on the device once for every range of the level)."""
+        assert self.device is not None
+        if self._single_device is None:
+            key = ("device", self.device.name, self.m32)
+            if key not in self._shared:
+                self._shared[key] = self.device.load(self._single())
+            self._single_device = self._shared[key]
+        rows, offsets, totals = self.piece_arrays(start, start + N)
+        return self.device.screen(self._single_device, rows, offsets, totals, N)
 
     def _bound(self, t: int) -> tuple[float, np.ndarray, np.ndarray] | None:
         """(lambda, c, sums) of tier 1 for the subsets whose largest item is t: a lower bound
@@ -653,7 +654,7 @@ class ColexScreen:
         threshold: float | None,
         work: np.ndarray,
         diagonal: np.ndarray,
-    ) -> ScreenedBatch:
+    ) -> ScreenedBatch | DeviceScreenedBatch:
         """Screen the subsets of the ranks [start, stop) (a range of ``batches``).
 
         Parameters
@@ -670,11 +671,11 @@ class ColexScreen:
 
         Returns
         -------
-        ScreenedBatch
+        ScreenedBatch or DeviceScreenedBatch
         """
         N = stop - start
         if self.device is not None:
-            return self._device_screen(start, N, shift, threshold)
+            return self._device_screen(start, N, shift)
         pieces = self._pieces(start, stop)
         tried = self._skip == 0
         self._skip = max(self._skip - 1, 0)
@@ -692,7 +693,7 @@ class ColexScreen:
                 self._skip = 8
             # many subsets left open: tier 2 for the whole batch (a few calls), then LAPACK for
             # those it leaves open
-            passed, smallest = self._single_tier(start, pieces, N, work, diagonal)
+            passed, smallest = self._single_tier(pieces, N, work, diagonal)
             ok |= passed
             if screen.low is not None:
                 low = smallest.astype(np.float64)
@@ -702,19 +703,10 @@ class ColexScreen:
         self._lapack(screen, rows, shift)
         return screen
 
-    def _device_screen(
-        self, start: int, N: int, shift: float, threshold: float | None
-    ) -> ScreenedBatch:
+    def _device_screen(self, start: int, N: int, shift: float) -> DeviceScreenedBatch:
         """``screen`` on the device: tier 2 for the whole batch (tier 1 would keep the CPU busy
         meanwhile), LAPACK for the subsets it leaves open."""
-        passed, smallest = self._single_tier(start, None, N, np.empty(0), np.empty(0))
-        screen = ScreenedBatch(self, start, passed.copy())
-        if threshold is not None:
-            low = smallest.astype(np.float64)
-            screen.low = np.where(passed, low * low + shift, -np.inf)
-            screen.exact = np.zeros(N, dtype=bool)
-        self._lapack(screen, np.flatnonzero(~passed), shift)
-        return screen
+        return DeviceScreenedBatch(self, start, self._device_batch(start, N), shift)
 
     def _lapack(self, screen: ScreenedBatch, rows: np.ndarray, shift: float) -> None:
         """LAPACK decides the selected rows of a screened batch (their proxies known)."""
@@ -814,6 +806,20 @@ class ScreenedBatch:
         """Sorted subsets of the selected rows, shape (len(rows), k)."""
         return self.source.subsets(self.offset + rows)
 
+    def failed(self) -> np.ndarray:
+        """The rows whose factorization fails (LAPACK's decision), ascending."""
+        return np.flatnonzero(~self.ok)
+
+    def below(self, threshold: float, most: int | None = None) -> tuple[np.ndarray, bool]:
+        """The rows whose lower bound (``low``) is at most ``threshold``, ascending, and
+        False; when there are more than ``most``, those of the ``most`` smallest bounds
+        (ascending) and True."""
+        assert self.low is not None
+        rows = np.flatnonzero(self.low <= threshold)
+        if most is not None and rows.size > most:
+            return np.sort(rows[np.argpartition(self.low[rows], most - 1)[:most]]), True
+        return rows, False
+
     def proxies(self, rows: np.ndarray, shift: float) -> np.ndarray:
         """The proxies of the selected rows (ascending), bit for bit those of
         ``cholesky_screen`` (LAPACK factors the rows whose proxy is not known yet, and they
@@ -825,3 +831,77 @@ class ScreenedBatch:
             self.low[todo] = _proxies(cholesky_or_nan(mats), shift)[1]
             self.exact[todo] = True
         return self.low[rows]
+
+
+@dataclass
+class DeviceScreenedBatch:
+    """Consecutive subsets screened on a device (``ColexScreen.screen``), answering the
+    questions of ``ScreenedBatch`` (``failed``, ``below``, ``proxies``) with the same
+    answers: the bounds stay on the device, which sends the host the few rows it asks for;
+    the rows the device leaves open are decided by LAPACK, as on the CPU.
+
+    Attributes
+    ----------
+    source : ColexScreen
+    offset : int
+        Colex rank of the first row.
+    batch : DeviceBatch
+        The device's factorizations (``ssecert.structure.device``).
+    shift : float
+        The screening shift already in the matrices.
+    decided, decided_ok : ndarray
+        The rows the device leaves open (ascending) and LAPACK's decision on each.
+    known : dict
+        LAPACK's proxy of each row it factored (-inf where the factorization fails).
+    """
+
+    source: ColexScreen
+    offset: int
+    batch: DeviceBatch
+    shift: float
+    decided: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    decided_ok: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    known: dict[int, float] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.decided = self.batch.failed()
+        if self.decided.size:
+            self.decided_ok = self._lapack(self.decided)
+
+    def _lapack(self, rows: np.ndarray) -> np.ndarray:
+        """LAPACK's decisions on the rows, their proxies kept."""
+        ok, proxies = _proxies(
+            cholesky_or_nan(self.source.matrices(self.offset + rows)), self.shift
+        )
+        self.known.update(zip(rows.tolist(), proxies.tolist()))
+        return ok
+
+    def subsets(self, rows: np.ndarray) -> np.ndarray:
+        """Sorted subsets of the selected rows, shape (len(rows), k)."""
+        return self.source.subsets(self.offset + rows)
+
+    def failed(self) -> np.ndarray:
+        """The rows whose factorization fails (LAPACK's decision), ascending."""
+        return self.decided[~self.decided_ok]
+
+    def below(self, threshold: float, most: int | None = None) -> tuple[np.ndarray, bool]:
+        """As ``ScreenedBatch.below``: the device's bounds of the rows it proves, LAPACK's
+        proxies where known."""
+        rows, lows, truncated = self.batch.below(threshold, self.shift, most)
+        merged = dict(zip(rows.tolist(), lows.tolist()))
+        merged.update(self.known)
+        chosen = sorted(r for r, value in merged.items() if value <= threshold)
+        rows = np.array(chosen, dtype=np.int64)
+        if most is None or (not truncated and rows.size <= most):
+            return rows, False
+        if rows.size < most:  # (LAPACK's proxies took some above: every row, then)
+            return self.below(threshold)
+        values = np.array([merged[r] for r in chosen])
+        return np.sort(rows[np.argpartition(values, most - 1)[:most]]), True
+
+    def proxies(self, rows: np.ndarray, shift: float) -> np.ndarray:
+        """The proxies of the selected rows, bit for bit those of ``cholesky_screen``."""
+        todo = np.array([r for r in rows.tolist() if r not in self.known], dtype=np.int64)
+        if todo.size:
+            self._lapack(todo)
+        return np.array([self.known[r] for r in rows.tolist()], dtype=np.float64)

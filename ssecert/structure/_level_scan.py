@@ -30,7 +30,7 @@ import numpy as np
 from ..numerics.linalg import single_precision_margin, stacked_rank
 from ..tolerances import BORDERLINE, ZERO, Tolerances
 from . import device as accelerator
-from ._combinatorics import ColexScreen, ScreenedBatch
+from ._combinatorics import ColexScreen, DeviceScreenedBatch, ScreenedBatch
 
 __all__: list[str] = []
 
@@ -184,7 +184,7 @@ def _scan_range(
             _keep_closest(
                 candidates, screen, task.shift, task.rest, math.comb(task.rest.size, task.k)
             )
-        failed = np.concatenate([first + np.flatnonzero(~screen.ok), pending])
+        failed = np.concatenate([first + screen.failed(), pending])
         level.checked += last - first
         pending = _refine_blocks(task, source, failed, first, level, stop, deadline)
         if level.ended or level.cut_short:
@@ -259,7 +259,7 @@ def _refine_group(
 
 def _keep_closest(
     candidates: list[tuple[float, int, tuple[int, ...]]],
-    screen: ScreenedBatch,
+    screen: ScreenedBatch | DeviceScreenedBatch,
     shift: float,
     rest: np.ndarray,
     total: int,
@@ -273,16 +273,13 @@ def _keep_closest(
     screening (the closest sets are at most that).  The proxies are computed (by LAPACK)
     only where the lower bound is at most the threshold: most batches add nothing and
     compute none."""
-    low = screen.low
-    assert low is not None
     threshold = candidates[-1][0] if len(candidates) >= _CRITICAL else np.inf
-    rows = np.flatnonzero(low <= threshold)
+    rows, many = screen.below(threshold, _CRITICAL)
+    if many:  # the proxies of the sets of the smallest bounds first: a lower threshold
+        threshold = min(threshold, float(screen.proxies(rows, shift).max()))
+        rows, _ = screen.below(threshold)
     if rows.size == 0:
         return
-    if rows.size > _CRITICAL:
-        first = np.sort(rows[np.argpartition(low[rows], _CRITICAL - 1)[:_CRITICAL]])
-        threshold = min(threshold, float(screen.proxies(first, shift).max()))
-        rows = rows[low[rows] <= threshold]
     proxy = screen.proxies(rows, shift)
     rows, proxy = rows[proxy <= threshold], proxy[proxy <= threshold]
     position = total - 1 - (screen.offset + rows)

@@ -183,7 +183,7 @@ class DeviceKernel:
         offsets: np.ndarray,
         totals: np.ndarray | None,
         size: int,
-    ) -> tuple[np.ndarray, np.ndarray]:
+    ) -> DeviceBatch:
         """Factor the ``size`` single-precision matrices of a batch's pieces on the device.
 
         Parameters
@@ -202,10 +202,8 @@ class DeviceKernel:
 
         Returns
         -------
-        passed : ndarray of bool, shape (size,)
-            Every pivot positive and finite.
-        smallest : ndarray of float32, shape (size,)
-            The smallest pivot (meaningful where passed).
+        DeviceBatch
+            The results, kept on the device.
         """
         xp = self.xp
         # each row's piece found on the device from the pieces alone (a few numbers per piece
@@ -219,7 +217,61 @@ class DeviceKernel:
             diagonal = cholesky_diagonal(xp, matrices)
             smallest = xp.min(diagonal, axis=0)
             passed = (smallest > 0) & xp.isfinite(xp.sum(diagonal, axis=0))
-        return _to_numpy(passed), _to_numpy(smallest)
+        return DeviceBatch(xp, passed, smallest)
+
+
+class DeviceBatch:
+    """A batch factored on the device, its results kept there: the host asks for the few
+    rows it needs (the failures, the sets closest to breaking), not for a number per set.
+
+    Parameters
+    ----------
+    xp : array namespace
+    passed : device array of bool, shape (N,)
+        Every pivot positive and finite.
+    smallest : device array of float32, shape (N,)
+        The smallest pivot (meaningful where passed).
+    """
+
+    def __init__(self, xp: Any, passed: Any, smallest: Any) -> None:
+        self.xp, self.passed, self.smallest = xp, passed, smallest
+        self._low: tuple[float, Any] | None = None
+
+    def failed(self) -> np.ndarray:
+        """The rows that did not pass, ascending."""
+        xp = self.xp
+        return _to_numpy(xp.nonzero(xp.logical_not(self.passed))[0]).astype(np.int64)
+
+    def _bounds(self, shift: float) -> Any:
+        """Each passed row's lower bound of its proxy, ``fl(fl(s^2) + shift)`` for its
+        smallest single-precision pivot s (at most LAPACK's pivot, so at most its proxy),
+        +inf for the others."""
+        if self._low is None or self._low[0] != shift:
+            xp = self.xp
+            with np.errstate(all="ignore"):
+                s = xp.astype(self.smallest, xp.float64)
+                low = xp.where(self.passed, s * s + shift, xp.full_like(s, xp.inf))
+            self._low = (shift, low)
+        return self._low[1]
+
+    def below(
+        self, threshold: float, shift: float, most: int | None = None
+    ) -> tuple[np.ndarray, np.ndarray, bool]:
+        """(rows, their bounds, False): the passed rows whose bound is at most ``threshold``,
+        ascending; when there are more than ``most``, the ``most`` of the smallest bounds
+        and True."""
+        xp = self.xp
+        low = self._bounds(shift)
+        rows = xp.nonzero(low <= threshold)[0]
+        values = xp.take(low, rows)
+        truncated = most is not None and rows.shape[0] > most
+        if truncated:
+            smallest = xp.argsort(values, stable=True)[:most]
+            rows, values = xp.take(rows, smallest), xp.take(values, smallest)
+        values = _to_numpy(values)
+        rows = _to_numpy(rows).astype(np.int64)
+        order = np.argsort(rows)
+        return rows[order], values[order], truncated
 
 
 def _to_numpy(x: Any) -> np.ndarray:

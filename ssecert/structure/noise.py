@@ -363,7 +363,7 @@ def _screen_failures(
     count = 0
     for first, last in source.batches(size):
         screen = source.screen(first, last, shift, None, work, diagonal)
-        bad = first + np.flatnonzero(~screen.ok)
+        bad = first + screen.failed()
         if bad.size:
             found.append(source.subsets(bad))
             count += bad.size
