@@ -2,7 +2,7 @@
 
 The plant: A = I, n = 10, 40 generic sensors, s = 3; its verdict is decided by the
 3,838,380 sets of 6 removed sensors (the sets closest to breaking ranked), and the level of 7
-(15,380,937 sets) refines it.  Each level is timed around the enumeration's function for one
+(18,643,560 sets) refines it.  Each level is timed around the enumeration's function for one
 level (``_scan_level``), on the device and on the CPU, in the same run; the answer must be
 the same JSON.  The figure is sets per second of the whole level: the device's screening
 plus the CPU's share (the LAPACK decisions of the sets it does not prove, the proxies of the
