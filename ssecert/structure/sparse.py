@@ -299,7 +299,7 @@ def sparse_observability(
         same from one run to the next and with or without Dask.
     device : {"cpu", "cuda", "numpy"}, optional
         Where the enumeration screens its sets (None or ``"cpu"``: numpy
-        and LAPACK).  ``"cuda"`` screens each range of 65,536 sets or more
+        and LAPACK).  ``"cuda"`` screens each range of 16,384 sets or more
         on a GPU (PyTorch with CUDA, else CuPy, with array-api-compat: the
         ``gpu`` extra); ``"numpy"`` runs that code on the CPU (slower, for
         testing it).  The accelerator only proves sets observable; every
