@@ -22,10 +22,13 @@ import re
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from enum import StrEnum
 from typing import Protocol, TypeVar
 
 __all__ = [
     "Budget",
+    "Refusal",
+    "Resource",
     "ResourceLimitError",
     "DEFAULT_MEMORY",
     "DEFAULT_WORK",
@@ -166,6 +169,49 @@ def log10_comb(n: int, k: int) -> float:
     return (math.lgamma(n + 1) - math.lgamma(k + 1) - math.lgamma(n - k + 1)) / math.log(10)
 
 
+class Resource(StrEnum):
+    """What a refused analysis step would need too much of."""
+
+    MEMORY = "memory"  # bytes, over ``Budget.memory``
+    WORK = "work"  # floating-point operations, over ``Budget.work``
+    ROWS = "rows"  # rows of an LMI, over a fixed limit of its own
+
+
+@dataclass(frozen=True)
+class Refusal:
+    """An analysis step not attempted: what it is, what it would need and what it may have.
+
+    ``str()`` is the sentence a report shows; code reads the fields.
+
+    Examples
+    --------
+    >>> r = Budget(memory=2**30).check("a matrix", nbytes=3 * 2**30)
+    >>> r.resource, r.need / r.limit
+    (<Resource.MEMORY: 'memory'>, 3.0)
+    >>> str(r)
+    'a matrix needs about 3 GiB of memory, over the memory budget of 1 GiB (--memory-budget)'
+    """
+
+    what: str
+    resource: Resource
+    need: float
+    limit: float
+
+    def __str__(self) -> str:
+        if self.resource is Resource.MEMORY:
+            return (
+                f"{self.what} needs about {format_bytes(self.need)} of memory, over the memory "
+                f"budget of {format_bytes(self.limit)} (--memory-budget)"
+            )
+        if self.resource is Resource.WORK:
+            need, have = _apart(self.need, self.limit)
+            return (
+                f"{self.what} needs about {need} floating-point operations, over the work "
+                f"budget of {have} (--work-budget)"
+            )
+        return f"{self.what} has {self.need:.0f} rows, more than {self.limit:.0f}"
+
+
 @dataclass(frozen=True)
 class Budget:
     """Largest memory and work an analysis step may use.
@@ -196,26 +242,25 @@ class Budget:
         if not (isinstance(self.work, (int, float)) and self.work > 0):
             raise ValueError(f"work must be a positive number of operations, got {self.work!r}")
 
-    def refusal(self, what: str, *, nbytes: float = 0.0, flops: float = 0.0) -> str:
-        """Empty when ``what`` fits; otherwise the reason, with estimate and budget."""
+    def check(self, what: str, *, nbytes: float = 0.0, flops: float = 0.0) -> Refusal | None:
+        """None when ``what`` fits; otherwise the ``Refusal`` (memory first)."""
         if nbytes > self.memory:
-            return (
-                f"{what} needs about {format_bytes(nbytes)} of memory, over the memory "
-                f"budget of {format_bytes(self.memory)} (--memory-budget)"
-            )
+            return Refusal(what, Resource.MEMORY, nbytes, self.memory)
         if flops > self.work:
-            need, have = _apart(flops, self.work)
-            return (
-                f"{what} needs about {need} floating-point operations, over the work "
-                f"budget of {have} (--work-budget)"
-            )
-        return ""
+            return Refusal(what, Resource.WORK, flops, self.work)
+        return None
+
+    def refusal(self, what: str, *, nbytes: float = 0.0, flops: float = 0.0) -> str:
+        """Empty when ``what`` fits; otherwise the reason, with estimate and budget (the
+        words of ``check``)."""
+        refused = self.check(what, nbytes=nbytes, flops=flops)
+        return "" if refused is None else str(refused)
 
     def require(self, what: str, *, nbytes: float = 0.0, flops: float = 0.0) -> None:
         """Raise ``ResourceLimitError`` with the reason when ``what`` does not fit."""
-        reason = self.refusal(what, nbytes=nbytes, flops=flops)
-        if reason:
-            raise ResourceLimitError(reason)
+        refused = self.check(what, nbytes=nbytes, flops=flops)
+        if refused is not None:
+            raise ResourceLimitError(str(refused))
 
     def to_dict(self) -> dict[str, float]:
         return {"memory_bytes": self.memory, "work_flops": self.work}

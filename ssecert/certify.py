@@ -422,12 +422,12 @@ def _region(
     # every grid point may need a block-diagonal and a cross-term solve
     model = design.observer_kind.lure_model(design)
     costs = [lmi_cost(model, "circle", st) for st in ("block-diagonal", "cross")]
-    refusal = budget.refusal(
+    refusal = budget.check(
         f"the {shrinks.size} x {steps.size} region map ({n + 2 * m} LMI rows per point)",
         nbytes=max(c[0] for c in costs),
         flops=shrinks.size * steps.size * sum(c[1] for c in costs),
     )
-    if refusal:
+    if refusal is not None:
         notes.append(f"certified region not mapped: {refusal}")
         return None
     found = region_map(design, shrinks, steps, budget=budget, time_limit=time_limit)

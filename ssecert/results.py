@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from .base.display import html_display
+from .budget import Refusal
 
 __all__ = [
     "Verdict",
@@ -86,6 +87,8 @@ def to_jsonable(value: Any) -> Any:
         return {"re": to_jsonable(value.real), "im": to_jsonable(value.imag)}
     if value is None or isinstance(value, str):
         return value
+    if isinstance(value, Refusal):  # a step not attempted: its sentence
+        return str(value)
     raise TypeError(f"cannot convert {type(value).__name__} to JSON")
 
 

@@ -17,11 +17,19 @@ import numpy as np
 import pytest
 
 from ssecert import System, analyze, irrepresentable, sparse_observability, spec_from_dict
-from ssecert.budget import Budget, ResourceLimitError, bounded_comb, parse_bytes
+from ssecert.budget import (
+    Budget,
+    Refusal,
+    Resource,
+    ResourceLimitError,
+    bounded_comb,
+    parse_bytes,
+)
 from ssecert.certify import certify
 from ssecert.cli import main
 from ssecert.examples import load_example
 from ssecert.observers import build_observer
+from ssecert.results import to_jsonable
 from ssecert.simulation.engine import simulate_scenario, simulate_spec
 from ssecert.stability import lmi, region
 from ssecert.stability.checks import observer_checks
@@ -524,7 +532,9 @@ def test_thesis_checks_refuse_huge_attack_estimates():
     codes = {i.name: i.code for i in items}
     assert verdict == "inconclusive" and codes["lemma_1"] is AssumptionCode.NOT_ATTEMPTED
     lemma = next(i for i in items if i.name == "lemma_1")
-    assert "30 attack-estimate entries" in lemma.facts["refusal"]
+    refusal = lemma.facts["refusal"]  # what was refused, and the numbers
+    assert refusal.resource is Resource.MEMORY and refusal.limit == 2**20 < refusal.need
+    assert refusal.what == "checking Lemma 1 and Assumption 3 with 30 attack-estimate entries"
 
 
 SCENARIO_SPEC = """name = "sim"
@@ -647,3 +657,24 @@ def test_an_sso_with_a_billion_inner_steps_is_refused_by_simulate_naming_the_fie
     )  # fmt: skip
     assert done.returncode == 2, done.stderr
     assert "observer.inner_steps" in done.stderr and "work budget" in done.stderr
+
+
+def test_a_refusal_carries_what_it_refused_and_its_numbers():
+    # code reads the resource and the numbers; the words are written once, from them
+    budget = Budget(memory=2**30, work=1e9)
+    assert budget.check("a small step", nbytes=2**20, flops=1e6) is None
+    memory = budget.check("a big matrix", nbytes=3 * 2**30, flops=1e15)  # memory first
+    assert (memory.resource, memory.need, memory.limit) == (Resource.MEMORY, 3 * 2**30, 2**30)
+    assert str(memory) == (
+        "a big matrix needs about 3 GiB of memory, over the memory budget of 1 GiB "
+        "(--memory-budget)"
+    )
+    work = budget.check("a long loop", flops=2.5e9)
+    assert (work.resource, work.need, work.limit) == (Resource.WORK, 2.5e9, 1e9)
+    assert str(work) == budget.refusal("a long loop", flops=2.5e9)
+    with pytest.raises(ResourceLimitError) as raised:
+        budget.require("a long loop", flops=2.5e9)
+    assert str(raised.value) == str(work)
+    rows = Refusal("the order-2 LMI", Resource.ROWS, 900, 600)
+    assert str(rows) == "the order-2 LMI has 900 rows, more than 600"
+    assert to_jsonable({"refusal": rows}) == {"refusal": str(rows)}  # JSON keeps the sentence

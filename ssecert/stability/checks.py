@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from ..base.format import one_minus, sig
-from ..budget import Budget, Laps, ResourceLimitError, stage
+from ..budget import Budget, Laps, Refusal, ResourceLimitError, stage
 from ..context import OBSERVER, AnalysisContext, shared
 from ..design.gains import GainError
 from ..noise import MeasurementNoise
@@ -88,7 +88,7 @@ def observer_stability_check(
     if gap:
         return _without_lure_model(design, gap, tol, title), None
     refusal = _lure_model_refusal(design, budget)
-    if refusal:
+    if refusal is not None:
         summary = f"No stability certificate: not attempted: {refusal}."
         return _no_certificate(title, summary, "circle criterion (LMI, Clarabel)"), None
     model = design.observer_kind.lure_model(design)
@@ -372,10 +372,10 @@ def _no_certificate(title: str, summary: str, method: str) -> Check:
     )
 
 
-def _lure_model_refusal(design: ObserverDesign, budget: Budget | None) -> str:
-    """Why the budget refuses the memory of the design's Lur'e model ('' when it fits)."""
+def _lure_model_refusal(design: ObserverDesign, budget: Budget | None) -> Refusal | None:
+    """Why the budget refuses the memory of the design's Lur'e model (None when it fits)."""
     m = design.sensing.shape[0]
-    return (budget or Budget()).refusal(
+    return (budget or Budget()).check(
         f"the Lur'e model of the {design.kind} observer",
         nbytes=lure_model_cost(design.system.n, m, m)[0],
     )
@@ -925,15 +925,15 @@ def _region_alone(
     alone, with the region it rests on."""
     if design.observer_kind.lure_gap(design) is None:
         refusal = _lure_model_refusal(design, budget)
-        if refusal:
+        if refusal is not None:
             region = Region.none(RegionCode.NOT_ATTEMPTED, refusal=refusal)
             return region_messages.refused_region_check(region), region
     try:
         model = design.observer_kind.lure_model(design)
     except NotImplementedError:
-        refusal = design.observer_kind.dead_zone_refusal(design)
-        if refusal:
-            region = Region.none(RegionCode.NOT_ATTEMPTED, refusal=refusal, as_given=True)
+        reason = design.observer_kind.dead_zone_refusal(design)
+        if reason:
+            region = Region.none(RegionCode.NOT_ATTEMPTED, refusal=reason, as_given=True)
             return region_messages.refused_region_check(region), region
         dead_zone = design.observer_kind.dead_zone_model(design)
         if dead_zone is None:

@@ -77,7 +77,7 @@ def constant_attack_outcomes(
         return []
     N, m = model.N, model.m
     flops = 2.0 * STEPS * len(kept) * (N * N + 2 * N * m + N * model.r)
-    if (budget or Budget()).refusal("constant attacks", flops=flops):
+    if (budget or Budget()).check("constant attacks", flops=flops) is not None:
         return []
     runs = _simulate(model, np.array([a for _, a in kept]))
     records = []

@@ -64,12 +64,12 @@ def nonzero_equilibrium(
         return None, "no nonlinearity: the only equilibrium of a stable linear map is 0"
     if milp and 3**model.m > MAX_PATTERNS and model.threshold > 0:
         nbytes, flops = milp_cost(model)
-        refusal = (budget or Budget()).refusal(
+        refusal = (budget or Budget()).check(
             f"the mixed-integer program over the {model.m:,} soft-threshold channels",
             nbytes=nbytes,
             flops=flops,
         )
-        if refusal:
+        if refusal is not None:
             return None, f"not searched: {refusal}"
         return _milp_search(model)
     found, note, _ = _search(model, None, first=True)

@@ -48,7 +48,7 @@ from typing import Any
 
 import numpy as np
 
-from ..budget import Budget
+from ..budget import Budget, Refusal
 from ..observers.lure import LureModel, scaling_text
 from ..results import Verdict
 from . import lmi_messages
@@ -169,20 +169,20 @@ class LMICertificate:
         }
 
 
-def _model_refusal(model: LureModel, budget: Budget) -> str:
+def _model_refusal(model: LureModel, budget: Budget) -> Refusal | None:
     """Why the structural pre-checks (eigenvalues of N x N closed loops) are not affordable."""
     nbytes, flops = lure_model_cost(model.n_e, model.m, model.r)
-    return budget.refusal(
+    return budget.check(
         f"the Lur'e model with {model.N} states and {model.m} nonlinearities",
         nbytes=nbytes,
         flops=flops,
     )
 
 
-def _solve_refusal(model: LureModel, kind: str, structure: str, budget: Budget) -> str:
+def _solve_refusal(model: LureModel, kind: str, structure: str, budget: Budget) -> Refusal | None:
     nbytes, flops = lmi_cost(model, kind, structure)
     size = model.N + model.m + (model.r if kind == "iss" else 0)
-    return budget.refusal(
+    return budget.check(
         f"the {structure} LMI with {size} rows (cvxpy and Clarabel)", nbytes=nbytes, flops=flops
     )
 
@@ -489,7 +489,7 @@ def _circle_search(
     pre-checks' verdict, a refusal, or inconclusive with what the LMIs (``details["attempts"]``)
     gave."""
     refusal = _model_refusal(model, budget)
-    if refusal:
+    if refusal is not None:
         return LMICertificate(
             Verdict.INCONCLUSIVE,
             "circle",
@@ -524,7 +524,7 @@ def _circle_search(
             )
             continue
         skip = _solve_refusal(model, "circle", st, budget)
-        if skip:
+        if skip is not None:
             attempts.append({"structure": st, "status": f"skipped: {skip}"})
             continue
         P, t, _, info = _solve(model, "circle", st, 0.0, solver_options or {})
@@ -604,7 +604,7 @@ def iss_certificate(
     """
     budget = budget or Budget()
     refusal = _model_refusal(model, budget)
-    if refusal:
+    if refusal is not None:
         return LMICertificate(
             Verdict.INCONCLUSIVE,
             "iss",
@@ -633,7 +633,7 @@ def iss_certificate(
             )
             continue
         skip = _solve_refusal(model, "iss", st, budget)
-        if skip:
+        if skip is not None:
             attempts.append({"structure": st, "status": f"skipped: {skip}"})
             continue
         P, t, g, info = _solve(solved, "iss", st, alpha, solver_options or {})

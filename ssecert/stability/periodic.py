@@ -48,13 +48,13 @@ def periodic_orbit(
     if model.m == 0 or model.q <= 0 or model.threshold <= 0:
         return None, "no soft threshold: nothing to cycle"
     nbytes, flops = periodic_orbit_cost(model)
-    refusal = (budget or Budget()).refusal(
+    refusal = (budget or Budget()).check(
         f"simulating {SAMPLES} initial errors for {STEPS:,} steps of the {model.N:,}-state "
         f"error dynamics",
         nbytes=nbytes,
         flops=flops,
     )
-    if refusal:
+    if refusal is not None:
         return None, f"not searched: {refusal}"
     rng = np.random.default_rng(seed)
     start = rng.standard_normal((SAMPLES, model.N))

@@ -81,12 +81,12 @@ def region_of_attraction(
     do not fit ``budget`` (default ``Budget()``).
     """
     nbytes, flops = region_cost(model)
-    refusal = (budget or Budget()).refusal(
+    refusal = (budget or Budget()).check(
         f"the dead zone's Lyapunov function of the {model.N:,}-state error dynamics",
         nbytes=nbytes,
         flops=flops,
     )
-    if refusal:
+    if refusal is not None:
         return Region.none(RegionCode.NOT_ATTEMPTED, refusal=refusal)
     found = _region_in_units(model, seed, piecewise, widen)
     if found.radius > 0:

@@ -34,7 +34,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ..budget import Budget
+from ..budget import Budget, Refusal
 from ..design.gains import GainMethod
 from ..numerics.exact import dyadic, exact_kernel_vector
 from ..numerics.exact_powers import ExactMatrix
@@ -138,7 +138,7 @@ def thesis_assumptions(
     inst = _instance(design)
     items = [_assumption_1(observability_holds), _assumption_2(inst)]
     refusal = _refusal(inst, budget)
-    if refusal:
+    if refusal is not None:
         for name in ("lemma_1", "assumption_3", "epsilon_bound"):
             items.append(AssumptionResult(name, Code.NOT_ATTEMPTED, {"refusal": refusal}))
         return combine_verdicts([i.verdict for i in items]).value, items
@@ -218,11 +218,12 @@ def _assumption_2(inst: _Instance) -> AssumptionResult:
     )
 
 
-def _refusal(inst: _Instance, budget: Budget | None) -> str:
-    """Why the budget refuses the p x p work of Lemma 1 and Assumption 3 ('' when it allows it)."""
+def _refusal(inst: _Instance, budget: Budget | None) -> Refusal | None:
+    """Why the budget refuses the p x p work of Lemma 1 and Assumption 3 (None when it allows
+    it)."""
     p = inst.p
     # the bounds below take 2-norms of p x p matrices (p = attack-estimate entries)
-    return (budget or Budget()).refusal(
+    return (budget or Budget()).check(
         f"checking Lemma 1 and Assumption 3 with {p} attack-estimate entries",
         nbytes=8.0 * (4 * p * p + _sample_rows(p) * p * 6),
         flops=30.0 * p**3,

@@ -55,7 +55,7 @@ from typing import Any
 
 import numpy as np
 
-from ..budget import Budget
+from ..budget import Budget, Refusal, Resource
 from ..observers.lure import LureModel
 from ..results import Verdict
 from ..solvers import solver_name
@@ -265,11 +265,11 @@ def _solve(
     return sol, (float(g.value) if g is not None and g.value is not None else None), info
 
 
-def _refusal(model: LureModel, nu: int, attack: bool, budget: Budget) -> str:
+def _refusal(model: LureModel, nu: int, attack: bool, budget: Budget) -> Refusal | None:
     size, nbytes, flops = zf_cost(model, nu, attack)
     if size > ZF_LIMIT:
-        return f"the order-{nu} LMI has {size} rows, more than {ZF_LIMIT}"
-    return budget.refusal(
+        return Refusal(f"the order-{nu} LMI", Resource.ROWS, size, ZF_LIMIT)
+    return budget.check(
         f"the order-{nu} Zames-Falb LMI with {size} rows (cvxpy and Clarabel)",
         nbytes=nbytes,
         flops=flops,
@@ -319,7 +319,7 @@ def zames_falb_certificate(
     # equilibrium of every constant attack), then signed ones (the soft threshold is odd)
     for signed, nu in [(False, nu) for nu in orders] + [(True, nu) for nu in orders]:
         skip = _refusal(model, nu, False, budget)
-        if skip:
+        if skip is not None:
             if not signed:
                 attempts.append({"order": nu, "status": f"skipped: {skip}"})
             continue
@@ -423,7 +423,7 @@ def zames_falb_gain(
     budget = budget or Budget()
     nu = int(stability.details.get("order", ORDERS[0]))
     skip = _refusal(model, nu, True, budget)
-    if skip:
+    if skip is not None:
         return LMICertificate(
             Verdict.INCONCLUSIVE,
             "iss",

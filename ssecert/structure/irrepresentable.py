@@ -403,13 +403,13 @@ def _over_budget(out: _Verdicts, plan: ScanPlan, budget: Budget, total: int) -> 
         "flops": plan.flops,
         "bytes_per_support": plan.per_support,
     }
-    refusal = budget.refusal(
+    refusal = budget.check(
         f"the irrepresentable enumeration ({format_count(total)} supports of {plan.rows:,} rows "
         f"of the {p * tau:,} x {n} matrix O_tau, horizon {tau:,})",
         nbytes=plan.nbytes,
         flops=plan.flops,
     )
-    if not refusal:
+    if refusal is None:
         return None
     facts = {"refusal": refusal, "longer_than_n": tau > n}
     return out.check(Code.OVER_BUDGET, math.nan, None, facts)
