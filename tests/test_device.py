@@ -247,13 +247,14 @@ def test_no_level_is_taken_for_another_when_the_device_copies(monkeypatch, small
 
 
 @pytest.mark.parametrize(
-    ("q", "k", "single_memory"), [(14, 4, 4096), (12, 5, 2000), (9, 3, 1 << 20)]
+    ("q", "k", "single_memory", "n"),
+    [(14, 4, 4096, 3), (12, 5, 2000, 3), (9, 3, 1 << 20, 3), (25, 24, 16, 1), (14, 12, 16, 2)],
 )
-def test_the_pieces_as_arrays_are_those_of_the_walk_through_the_tops(q, k, single_memory):
+def test_the_pieces_as_arrays_are_those_of_the_walk_through_the_tops(q, k, single_memory, n):
     # the device takes a batch's pieces as arrays: the same rows, level rows and tops' sums,
-    # bit for bit, as the walk the CPU tier takes, for ranges in either order
+    # bit for bit, as the walk the CPU tier takes, for ranges in either order (tops of many
+    # items too: one addition at a time, in both)
     rng = np.random.default_rng(5)
-    n = 3
     factors = rng.standard_normal((q, 1, n))
     items = np.einsum("qrn,qrm->qnm", factors, factors)
     total = math.comb(q, k)
@@ -268,7 +269,7 @@ def test_the_pieces_as_arrays_are_those_of_the_walk_through_the_tops(q, k, singl
         if tops[0] is None:
             assert totals is None
         else:
-            assert np.array_equal(totals, np.stack(tops, axis=2))
+            assert np.array_equal(totals.view(np.uint32), np.stack(tops, axis=2).view(np.uint32))
 
 
 def test_a_range_of_segments_has_the_blocks_of_each_segment_alone():

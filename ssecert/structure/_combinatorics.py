@@ -569,7 +569,10 @@ class ColexScreen:
             return None
         rest = top[1:]
         if rest != self._upper[0]:
-            self._upper = (rest, self._signed32[list(rest)].sum(axis=0) if rest else None)
+            upper = None
+            for item in rest:  # one addition at a time, as ``piece_arrays`` adds them
+                upper = self._signed32[item] if upper is None else upper + self._signed32[item]
+            self._upper = (rest, upper)
         upper = self._upper[1]
         return self._signed32[top[0]] if upper is None else self._signed32[top[0]] + upper
 
@@ -851,8 +854,9 @@ class DeviceScreenedBatch:
         The screening shift already in the matrices.
     decided, decided_ok : ndarray
         The rows the device leaves open (ascending) and LAPACK's decision on each.
-    known : dict
-        LAPACK's proxy of each row it factored (-inf where the factorization fails).
+    rows, values : ndarray
+        The rows LAPACK factored (ascending) and their proxies (-inf where the factorization
+        fails).
     """
 
     source: ColexScreen
@@ -861,20 +865,29 @@ class DeviceScreenedBatch:
     shift: float
     decided: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     decided_ok: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
-    known: dict[int, float] = field(default_factory=dict)
+    rows: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    values: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def __post_init__(self) -> None:
         self.decided = self.batch.failed()
-        if self.decided.size:
-            self.decided_ok = self._lapack(self.decided)
+        self.decided_ok = self._lapack(self.decided)
 
     def _lapack(self, rows: np.ndarray) -> np.ndarray:
-        """LAPACK's decisions on the rows, their proxies kept."""
+        """LAPACK's decisions on rows not factored yet (ascending), their proxies kept."""
+        if rows.size == 0:
+            return np.zeros(0, dtype=bool)
         ok, proxies = _proxies(
             cholesky_or_nan(self.source.matrices(self.offset + rows)), self.shift
         )
-        self.known.update(zip(rows.tolist(), proxies.tolist()))
+        merged = np.concatenate([self.rows, rows])
+        order = np.argsort(merged, kind="stable")
+        self.rows, self.values = merged[order], np.concatenate([self.values, proxies])[order]
         return ok
+
+    def _known(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Where each row is among those LAPACK factored, and whether it is."""
+        where = np.minimum(np.searchsorted(self.rows, rows), max(self.rows.size - 1, 0))
+        return where, (self.rows[where] == rows) if self.rows.size else np.zeros(rows.size, bool)
 
     def subsets(self, rows: np.ndarray) -> np.ndarray:
         """Sorted subsets of the selected rows, shape (len(rows), k)."""
@@ -886,22 +899,27 @@ class DeviceScreenedBatch:
 
     def below(self, threshold: float, most: int | None = None) -> tuple[np.ndarray, bool]:
         """As ``ScreenedBatch.below``: the device's bounds of the rows it proves, LAPACK's
-        proxies where known."""
+        proxies where it factored."""
         rows, lows, truncated = self.batch.below(threshold, self.shift, most)
-        merged = dict(zip(rows.tolist(), lows.tolist()))
-        merged.update(self.known)
-        chosen = sorted(r for r, value in merged.items() if value <= threshold)
-        rows = np.array(chosen, dtype=np.int64)
+        lows = np.array(lows, dtype=np.float64)
+        where, known = self._known(rows)
+        lows[known] = self.values[where[known]]  # the proxy itself where it is known
+        # the rows the device did not prove are LAPACK's alone (the others are among the
+        # device's rows whenever their proxy is at most the threshold)
+        extra = (self.values <= threshold) & ~np.isin(self.rows, rows)
+        rows = np.concatenate([rows[lows <= threshold], self.rows[extra]])
+        lows = np.concatenate([lows[lows <= threshold], self.values[extra]])
+        order = np.argsort(rows, kind="stable")
+        rows, lows = rows[order], lows[order]
         if most is None or (not truncated and rows.size <= most):
             return rows, False
         if rows.size < most:  # (LAPACK's proxies took some above: every row, then)
             return self.below(threshold)
-        values = np.array([merged[r] for r in chosen])
-        return np.sort(rows[np.argpartition(values, most - 1)[:most]]), True
+        return np.sort(rows[np.argpartition(lows, most - 1)[:most]]), True
 
     def proxies(self, rows: np.ndarray, shift: float) -> np.ndarray:
         """The proxies of the selected rows, bit for bit those of ``cholesky_screen``."""
-        todo = np.array([r for r in rows.tolist() if r not in self.known], dtype=np.int64)
-        if todo.size:
-            self._lapack(todo)
-        return np.array([self.known[r] for r in rows.tolist()], dtype=np.float64)
+        _, known = self._known(rows)
+        self._lapack(np.unique(rows[~known]))
+        where, _ = self._known(rows)
+        return self.values[where]
