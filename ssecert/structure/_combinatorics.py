@@ -362,9 +362,9 @@ class ColexScreen:
     shared : dict, optional
         Kept by the caller across the screens of ranges of one level (the
         same items, base, k, sign and margin): the levels of partial sums
-        (and their copies on the device) and tier 1's bounds are computed
-        once for all of them rather than once per range.  They do not
-        depend on the range, so the screens are the same, bit for bit.
+        (and their copies on the device) are computed once for all of them
+        rather than once per range.  They do not depend on the range, so
+        the screens are the same, bit for bit.
     """
 
     def __init__(
