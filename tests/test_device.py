@@ -54,6 +54,17 @@ def _batch(rng, n, N):
     return np.ascontiguousarray(A.transpose(1, 2, 0))
 
 
+def _against_the_cpu(ours, work):
+    """(which of ``ours`` passed, which the CPU tier's factorization of ``work`` passed, its
+    pivots)."""
+    cpu = np.empty((work.shape[0], work.shape[2]), dtype=np.float32)
+    cholesky_batch_last(work.copy(), cpu)
+    passed, _ = single_passed(cpu)
+    with np.errstate(invalid="ignore"):
+        ours_passed = (ours.min(axis=0) > 0) & np.isfinite(ours.sum(axis=0))
+    return ours_passed, passed, cpu
+
+
 @pytest.mark.parametrize("xp", _namespaces())
 def test_the_array_api_factorization_decides_as_the_cpu_one(xp):
     rng = np.random.default_rng(0)
@@ -61,11 +72,7 @@ def test_the_array_api_factorization_decides_as_the_cpu_one(xp):
         work = _batch(rng, n, 300)
         with np.errstate(all="ignore"):
             ours = accelerator._to_numpy(cholesky_diagonal(xp, xp.asarray(work)))
-        cpu = np.empty((n, work.shape[2]), dtype=np.float32)
-        cholesky_batch_last(work.copy(), cpu)
-        passed, smallest = single_passed(cpu)
-        with np.errstate(invalid="ignore"):
-            ours_passed = (ours.min(axis=0) > 0) & np.isfinite(ours.sum(axis=0))
+        ours_passed, passed, cpu = _against_the_cpu(ours, work)
         # far from the edge, both decide alike and agree to single-precision rounding
         assert np.array_equal(ours_passed, passed)
         assert np.allclose(ours[:, passed], cpu[:, passed], rtol=1e-4, atol=1e-6)
@@ -79,11 +86,7 @@ def test_the_gpu_factorization_decides_as_the_cpu_one():
     for n in (1, 2, 5, 10, 20):
         work = _batch(rng, n, 3000)
         ours = accelerator._to_numpy(cholesky_diagonal(kernel.xp, kernel._put(work)))
-        cpu = np.empty((n, work.shape[2]), dtype=np.float32)
-        cholesky_batch_last(work.copy(), cpu)
-        passed, _ = single_passed(cpu)
-        with np.errstate(invalid="ignore"):
-            ours_passed = (ours.min(axis=0) > 0) & np.isfinite(ours.sum(axis=0))
+        ours_passed, passed, cpu = _against_the_cpu(ours, work)
         assert np.array_equal(ours_passed, passed)
         # the squared pivots agree to the rounding of a factorization (n u times the matrix's
         # scale, taken generously): a small pivot's square root magnifies its rounding
