@@ -129,15 +129,16 @@ def kernel_rate(device: str, n: int = 10, repeats: int = 20) -> tuple[float, flo
     M, N = 1 << 16, DEVICE_BATCH_SETS
     G = rng.standard_normal((M, n, n + 2)).astype(np.float32)
     level = kernel.load(np.ascontiguousarray((G @ G.transpose(0, 2, 1)).transpose(1, 2, 0)))
-    tops = np.float32(0.1) * np.eye(n, dtype=np.float32)[:, :, None] * np.arange(1, N // M + 1)
+    steps = np.arange(1, N // M + 1, dtype=np.float32)
+    tops = np.float32(0.1) * np.eye(n, dtype=np.float32)[:, :, None] * steps  # float32
     rows = np.arange(0, N, M)
     offsets = -rows  # each piece the whole level, plus its top
-    failed = kernel.screen(level, rows, offsets, tops.astype(np.float32), N).failed()
+    failed = kernel.screen(level, rows, offsets, tops, N).failed()
     assert failed.size == 0, "positive definite matrices refused"
     seconds = []
     for _ in range(repeats):
         began = time.perf_counter()
-        kernel.screen(level, rows, offsets, tops.astype(np.float32), N).failed()
+        kernel.screen(level, rows, offsets, tops, N).failed()
         seconds.append(time.perf_counter() - began)
     median = float(np.median(seconds))
     return N / median, median

@@ -53,6 +53,14 @@ class Verdict(str, enum.Enum):
     def __str__(self) -> str:
         return self.value
 
+    @classmethod
+    def of(cls, *, holds: bool, fails: bool = False) -> Verdict:
+        """HOLDS where ``holds``, else FAILS where ``fails``, else INCONCLUSIVE (the verdict
+        an outcome's code gives)."""
+        if holds:
+            return cls.HOLDS
+        return cls.FAILS if fails else cls.INCONCLUSIVE
+
 
 def to_jsonable(value: Any) -> Any:
     """Convert results to JSON-compatible Python objects.

@@ -249,11 +249,7 @@ class Region:
     def verdict(self) -> Verdict:
         """Holds with a positive radius, fails when the dead zone is proved unstable,
         inconclusive otherwise."""
-        if self.radius > 0:
-            return Verdict.HOLDS
-        if self.code is RegionCode.DEAD_ZONE_UNSTABLE:
-            return Verdict.FAILS
-        return Verdict.INCONCLUSIVE
+        return Verdict.of(holds=self.radius > 0, fails=self.code is RegionCode.DEAD_ZONE_UNSTABLE)
 
     @property
     def unstable(self) -> bool | None:
@@ -327,11 +323,7 @@ class AssumptionCode(enum.Enum):
     @property
     def verdict(self) -> Verdict:
         """The verdict this code gives."""
-        if self in _ASSUMPTION_HOLDS:
-            return Verdict.HOLDS
-        if self in _ASSUMPTION_FAILS:
-            return Verdict.FAILS
-        return Verdict.INCONCLUSIVE
+        return Verdict.of(holds=self in _ASSUMPTION_HOLDS, fails=self in _ASSUMPTION_FAILS)
 
 
 _ASSUMPTION_HOLDS = frozenset(

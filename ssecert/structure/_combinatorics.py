@@ -711,11 +711,15 @@ class ColexScreen:
         meanwhile), LAPACK for the subsets it leaves open."""
         return DeviceScreenedBatch(self, start, self._device_batch(start, N), shift)
 
+    def lapack(self, ranks: np.ndarray, shift: float) -> tuple[np.ndarray, np.ndarray]:
+        """LAPACK's decisions and proxies (``cholesky_screen``) of the given ranks' float64
+        matrices (ascending ranks)."""
+        return _proxies(cholesky_or_nan(self.matrices(ranks)), shift)
+
     def _lapack(self, screen: ScreenedBatch, rows: np.ndarray, shift: float) -> None:
         """LAPACK decides the selected rows of a screened batch (their proxies known)."""
         if rows.size:
-            matrices = self.matrices(screen.offset + rows)
-            decided, proxies = _proxies(cholesky_or_nan(matrices), shift)
+            decided, proxies = self.lapack(screen.offset + rows, shift)
             screen.ok[rows] = decided
             if screen.low is not None and screen.exact is not None:
                 screen.low[rows] = proxies
@@ -830,8 +834,7 @@ class ScreenedBatch:
         assert self.low is not None and self.exact is not None
         todo = rows[~self.exact[rows]]
         if todo.size:
-            mats = self.source.matrices(self.offset + todo)
-            self.low[todo] = _proxies(cholesky_or_nan(mats), shift)[1]
+            self.low[todo] = self.source.lapack(self.offset + todo, shift)[1]
             self.exact[todo] = True
         return self.low[rows]
 
@@ -876,9 +879,7 @@ class DeviceScreenedBatch:
         """LAPACK's decisions on rows not factored yet (ascending), their proxies kept."""
         if rows.size == 0:
             return np.zeros(0, dtype=bool)
-        ok, proxies = _proxies(
-            cholesky_or_nan(self.source.matrices(self.offset + rows)), self.shift
-        )
+        ok, proxies = self.source.lapack(self.offset + rows, self.shift)
         merged = np.concatenate([self.rows, rows])
         order = np.argsort(merged, kind="stable")
         self.rows, self.values = merged[order], np.concatenate([self.values, proxies])[order]

@@ -119,11 +119,8 @@ class IrrepresentableCode(enum.Enum):
     @property
     def verdict(self) -> Verdict:
         """The verdict this code gives."""
-        if self in (IrrepresentableCode.NO_ATTACK, IrrepresentableCode.BELOW_ONE):
-            return Verdict.HOLDS
-        if self in _IRREPRESENTABLE_FAILS:
-            return Verdict.FAILS
-        return Verdict.INCONCLUSIVE
+        holds = self in (IrrepresentableCode.NO_ATTACK, IrrepresentableCode.BELOW_ONE)
+        return Verdict.of(holds=holds, fails=self in _IRREPRESENTABLE_FAILS)
 
 
 _IRREPRESENTABLE_FAILS = frozenset(
