@@ -24,6 +24,7 @@ from ssecert.numerics.linalg import (
 )
 from ssecert.structure._combinatorics import (
     ColexScreen,
+    _clip,
     _proxies,
     cholesky_screen,
     colex_blocks,
@@ -31,6 +32,7 @@ from ssecert.structure._combinatorics import (
 )
 from ssecert.structure._level_scan import (
     _CRITICAL,
+    _batches,
     _Level,
     _LevelTask,
     _refine,
@@ -224,9 +226,13 @@ def test_the_verdict_level_ranks_the_closest_sets_as_lapack(plant, monkeypatch):
     """The verdict's level (the closest sets ranked, in many batches, so that the bounds meet
     a finite threshold) finds LAPACK's closest sets and failures, on plants far from breaking
     and on one with repeated sensors (tied proxies)."""
-    from ssecert.structure import _level_scan
+    from ssecert.structure import _combinatorics, _level_scan
 
-    monkeypatch.setattr(_level_scan, "_BATCH_SETS", 256)  # many batches: finite thresholds
+    # many batches: finite thresholds; tier 2 factors a few sets at a time
+    monkeypatch.setattr(_level_scan, "_BATCH_SETS", 256)
+    monkeypatch.setattr(_level_scan, "_RANKED_BATCH_SETS", 512)
+    monkeypatch.setattr(_combinatorics, "TIER2_MIN_SETS", 96)
+    monkeypatch.setattr(_combinatorics, "TIER2_BYTES", 0)
     q = _plant_task(plant, 0, True).rest.size
     k = max(j for j in range(q) if math.comb(q, j) <= 12000 and j <= q // 2)
     task = _plant_task(plant, k, True)
@@ -260,3 +266,40 @@ def test_the_shared_bound_is_below_the_smallest_eigenvalue():
     exact = np.linalg.eigvalsh(source.matrices(np.arange(total)))[:, 0]
     assert np.all(bound <= exact)
     assert np.mean(bound > 0) > 0.5
+    # at a shift (the ranking's threshold): still below, and more sets proved above it
+    gains = []
+    for mu in np.quantile(exact, [0.01, 0.1, 0.3, 0.6]):
+        shifted_bound = source.lower_bounds(source._pieces(0, total), total, float(mu))
+        assert np.all(shifted_bound <= exact)
+        gains.append(np.mean(shifted_bound > mu) - np.mean(bound > mu))
+    assert min(gains) >= 0 and max(gains) > 0.1
+
+
+def test_tier_two_fills_the_selected_rows_as_the_whole_batch():
+    """The matrices tier 2 gathers for the sets tier 1 leaves open are those of the whole
+    batch, bit for bit, across the tops of the single-precision level."""
+    rng = np.random.default_rng(3)
+    q, n, k = 12, 4, 4
+    F = rng.standard_normal((q, 2, n))
+    items = np.einsum("qrn,qrm->qnm", F, F)
+    source = ColexScreen(items, items.sum(axis=0), k, 1e-3, single_memory=4 * n * n * 40)
+    assert 0 < source.m32 < k
+    start, stop = 17, math.comb(q, k) - 5
+    N = stop - start
+    pieces = source._pieces(start, stop)
+    whole = np.empty((n, n, N), dtype=np.float32)
+    source.fill(pieces, whole)
+    rows = np.flatnonzero(rng.random(N) < 0.3)
+    assert np.array_equal(source.fill_rows(pieces, rows), whole[:, :, rows])
+    for a, b in [(0, N), (5, 40), (N - 9, N)]:
+        part = np.empty((n, n, b - a), dtype=np.float32)
+        source.fill(_clip(pieces, a, b), part)
+        assert np.array_equal(part, whole[:, :, a:b])
+
+
+@pytest.mark.parametrize("lo, hi, size, first", [(0, 10, 3, None), (4, 50, 8, 3), (5, 6, 4, 2)])
+def test_the_batches_cover_the_range_from_the_last_down(lo, hi, size, first):
+    batches = _batches(lo, hi, size, first)
+    assert [r for a, b in reversed(batches) for r in range(a, b)] == list(range(lo, hi))
+    assert all(b - a <= size for a, b in batches[1:])
+    assert batches[0][1] - batches[0][0] <= (size if first is None else first)

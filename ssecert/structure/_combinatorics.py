@@ -291,6 +291,16 @@ def cholesky_screen(
 # the float64 level, so that most screened batches are a few broadcast additions
 DEFAULT_SINGLE_MEMORY = 16 * 2**20
 
+# tier 2 factors the whole batch when more than this share of it is left open by tier 1 (a
+# few contiguous calls), else only the sets left open (gathered)
+_GATHER_FRACTION = 0.5
+
+# matrices tier 2 factors together: about 4 MiB of them, at least 4,096 (a factorization of
+# 10 x 10 matrices measured at 60-70 ns a set 16,384 at once against 110 ns 4,096 at once:
+# each numpy call's own cost is shared by more sets)
+TIER2_BYTES = 4 * 2**20
+TIER2_MIN_SETS = 4096
+
 
 def _single_level(signed: np.ndarray, base: np.ndarray, m: int) -> np.ndarray:
     """All m-subsets' sums of ``_level`` with the batch last, shape (n, n, C(q, m)), from the
@@ -324,6 +334,12 @@ class ColexScreen:
        items)``.  A positive bound (less every rounding of the sums and
        LAPACK's backward error) proves LAPACK's factorization succeeds and
        bounds its smallest pivot, at the cost of a few additions per subset.
+       Where the sets closest to breaking are ranked, H is taken at a shift mu
+       just under the ranking's threshold (``H = base - items[t] - mu I``, the
+       bound ``mu + lambda_min(H) (1 - sum of c)`` where the sum is below 1):
+       most sets are proved above the threshold, where at mu = 0 most would
+       be proved only positive definite, and tier 2 factors only the others
+       (gathered).
     2. The matrices minus ``margin`` I factored in single precision with the
        batch last (``cholesky_batch_last``): where that succeeds LAPACK's
        float64 factorization provably succeeds too, and its smallest pivot
@@ -421,10 +437,13 @@ class ColexScreen:
         self._upper: tuple[tuple[int, ...], np.ndarray | None] = ((), None)
         self.factors = factors if sign == -1.0 and (m32 > 0 or k == 1) and m32 < k else None
         # the bounds of the last few largest items asked (ranges ascending or descending)
-        self._bounds: dict[int, tuple[float, np.ndarray, np.ndarray] | None] = {}
+        self._bounds: dict[
+            int, tuple[float, tuple[float, np.ndarray, np.ndarray, float] | None]
+        ] = {}
         # tier 1 is skipped for this many batches after one where it left most subsets open
         self._skip = 0
         self._slack = 0.0 if self.factors is None else _bound_slack(items, base, self.factors, k)
+        self.tier2_sets = max(TIER2_MIN_SETS, TIER2_BYTES // (4 * n * n))
         self.device = device
         self._single_device: Any = None  # the single-precision level on the device
         self._shared = {} if shared is None else shared
@@ -588,19 +607,48 @@ class ColexScreen:
             else:
                 np.add(sums[:, :, first:last], total[:, :, None], out=where)
 
+    def fill_rows(
+        self, pieces: list[tuple[int, int, int, tuple[int, ...]]], rows: np.ndarray
+    ) -> np.ndarray:
+        """The matrices of ``fill`` for the selected rows of the batch only (ascending), bit
+        for bit the same, batch last, shape (n, n, len(rows))."""
+        starts = np.array([piece[0] for piece in pieces], dtype=np.int64)
+        firsts = np.array([piece[1] for piece in pieces], dtype=np.int64)
+        which = np.searchsorted(starts, rows, side="right") - 1
+        # (``take``: the result batch last and contiguous, as the factorization wants it)
+        out = np.take(self._single(), firsts[which] + rows - starts[which], axis=2, mode="clip")
+        edges = np.flatnonzero(np.diff(which)) + 1
+        for a, b in itertools.pairwise([0, *edges.tolist(), rows.size]):
+            total = self._top_total(pieces[which[a]][3])
+            if total is not None:
+                out[:, :, a:b] += total[:, :, None]
+        return out
+
     def _single_tier(
         self,
         pieces: list[tuple[int, int, int, tuple[int, ...]]],
         N: int,
         work: np.ndarray,
         diagonal: np.ndarray,
+        rows: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Tier 2 on the whole batch: (passed, smallest pivot) of each single-precision
-        factorization."""
-        mats, diag = work[:, :, :N], diagonal[:, :N]
-        self.fill(pieces, mats)
-        cholesky_batch_last(mats, diag)
-        return single_passed(diag)
+        """Tier 2 on the whole batch (or on the selected rows, gathered), at most
+        ``tier2_sets`` matrices (and the buffers' room) at a time: (passed, smallest pivot) of
+        each single-precision factorization."""
+        size = N if rows is None else rows.size
+        step = max(min(self.tier2_sets, work.shape[2]), 1)
+        passed, smallest = np.empty(size, dtype=bool), np.empty(size, dtype=np.float32)
+        for a in range(0, size, step):
+            b = min(a + step, size)
+            if rows is None:
+                mats = work[:, :, : b - a]
+                self.fill(_clip(pieces, a, b), mats)
+            else:
+                mats = self.fill_rows(pieces, rows[a:b])
+            diag = diagonal[:, : b - a]
+            cholesky_batch_last(mats, diag)
+            passed[a:b], smallest[a:b] = single_passed(diag)
+        return passed, smallest
 
     def _device_batch(self, start: int, N: int) -> DeviceBatch:
         """Tier 2 on the device for the batch of ranks [start, start + N) (its pieces sent as
@@ -614,39 +662,57 @@ class ColexScreen:
         rows, offsets, totals = self.piece_arrays(start, start + N)
         return self.device.screen(self._single_device, rows, offsets, totals, N)
 
-    def _bound(self, t: int) -> tuple[float, np.ndarray, np.ndarray] | None:
-        """(lambda, c, sums) of tier 1 for the subsets whose largest item is t: a lower bound
-        of the smallest eigenvalue of ``H = base - items[t]``, upper bounds c[b] of
-        ``||H^(-1/2) factors[b].T||^2`` for b < t, and the sums of c over the rows of the
-        single-precision level below t (None when H is too ill-conditioned).  The last
-        three items' are kept: consecutive ranks share their largest item, and batches
-        asked in descending order each ask theirs in ascending order."""
-        if t in self._bounds:
-            bound = self._bounds.pop(t)
-        else:
+    def _bound(
+        self, t: int, mu: float
+    ) -> tuple[float, float, np.ndarray, np.ndarray, float] | None:
+        """(mu', lambda, c, sums, rounding) of tier 1 for the subsets whose largest item is t,
+        at a shift mu' near ``mu``: a lower bound lambda of the smallest eigenvalue of the
+        rounded ``K = base - items[t] - mu' I``, upper bounds c[b] of ``||K^(-1/2)
+        factors[b].T||^2`` for b < t, the sums of c over the rows of the single-precision
+        level below t, and a bound of ``||K - (base - items[t] - mu' I)||`` (None when K is
+        not positive definite or too ill-conditioned).  The last three
+        items' are kept (consecutive ranks share their largest item, and batches asked in
+        descending order each ask theirs in ascending order), and reused while their shift
+        is at least ``mu`` and at most 5% above it (the threshold of the ranking only falls
+        within a range)."""
+        kept = self._bounds.pop(t, None)
+        if kept is None or not (mu <= kept[0] <= mu * 1.05):
             assert self.factors is not None
-            shared = _shared_bound(self.base - self.items[t], self.factors, t)
-            bound = None if shared is None else (*shared, _level_sums(shared[1], self.m32))
+            H = self.base - self.items[t]
+            shared = _shared_bound(H, self.factors, t, mu)
+            bound = None
+            if shared is not None:
+                bound = (*shared, _level_sums(shared[1], self.m32), _shift_rounding(H, mu))
+            kept = (mu, bound)
             if len(self._bounds) >= 3:
                 del self._bounds[next(iter(self._bounds))]
-        self._bounds[t] = bound  # the most recent last
-        return bound
+        self._bounds[t] = kept  # the most recent last
+        return None if kept[1] is None else (kept[0], *kept[1])
 
     def lower_bounds(
-        self, pieces: list[tuple[int, int, int, tuple[int, ...]]], size: int
+        self, pieces: list[tuple[int, int, int, tuple[int, ...]]], size: int, mu: float = 0.0
     ) -> np.ndarray:
         """Tier 1: a lower bound of the smallest eigenvalue of each matrix minus LAPACK's
-        backward error (-inf where there is none)."""
+        backward error (-inf where there is none).
+
+        For the subsets whose largest item is t, with ``H = base - items[t] - mu I``
+        positive definite and ``E`` the sum of the other items, ``G - mu I = H - E =
+        H^(1/2) (I - H^(-1/2) E H^(-1/2)) H^(1/2)``, so where the sum s of the c of the
+        other items is below 1, ``lambda_min(G) >= mu + lambda_min(H) (1 - s)``.  A shift
+        ``mu`` near the threshold of the ranking (``screen``) proves most sets above it
+        where ``mu = 0`` proves them only positive definite."""
         low = np.full(size, -np.inf)
         if self.factors is None:
             return low
         for row, first, last, top in pieces:
-            bound = self._bound(top[-1])
+            bound = self._bound(top[-1], mu)
             if bound is None:
                 continue
-            lam, c, sums = bound
+            shift, lam, c, sums, rounding = bound
             s = sums[first:last] + c[list(top[:-1])].sum()
-            low[row : row + last - first] = lam * (1.0 - s) - self._slack
+            low[row : row + last - first] = np.where(
+                s < 1.0, shift + lam * (1.0 - s) - (self._slack + rounding), -np.inf
+            )
         return low
 
     def screen(
@@ -682,7 +748,10 @@ class ColexScreen:
         pieces = self._pieces(start, stop)
         tried = self._skip == 0
         self._skip = max(self._skip - 1, 0)
-        bound = self.lower_bounds(pieces, N) if tried else np.full(N, -np.inf)
+        # the ranking asks for sets proved above its threshold: tier 1 at a shift just under it
+        mu = 0.0 if threshold is None or not np.isfinite(threshold) else threshold - shift
+        mu = max(mu * (1.0 - 2.0**-20), 0.0)
+        bound = self.lower_bounds(pieces, N, mu) if tried else np.full(N, -np.inf)
         ok = bound > 0
         screen = ScreenedBatch(self, start, ok)
         if threshold is not None:
@@ -692,15 +761,19 @@ class ColexScreen:
         else:
             rows = np.flatnonzero(~ok)
         if rows.size > max(64, N // 50):
-            if tried and self.factors is not None and rows.size > N // 2:
-                self._skip = 8
-            # many subsets left open: tier 2 for the whole batch (a few calls), then LAPACK for
-            # those it leaves open
-            passed, smallest = self._single_tier(pieces, N, work, diagonal)
-            ok |= passed
+            if tried and threshold is None and self.factors is not None and rows.size > N // 2:
+                self._skip = 8  # (the ranking's threshold falls: its tier 1 is kept)
+            # many subsets left open: tier 2 for them (for the whole batch, a few calls, when
+            # they are most of it), then LAPACK for those it leaves open
+            every = rows.size > N * _GATHER_FRACTION
+            passed, smallest = self._single_tier(pieces, N, work, diagonal, None if every else rows)
+            low = smallest.astype(np.float64) ** 2 + shift
+            ok_rows = slice(None) if every else rows
+            ok[ok_rows] |= passed
             if screen.low is not None:
-                low = smallest.astype(np.float64)
-                screen.low = np.where(passed, np.maximum(screen.low, low**2 + shift), screen.low)
+                screen.low[ok_rows] = np.where(
+                    passed, np.maximum(screen.low[ok_rows], low), screen.low[ok_rows]
+                )
             # LAPACK decides the rest; the proxies under the threshold are asked for later
             rows = np.flatnonzero(~ok)
         self._lapack(screen, rows, shift)
@@ -724,6 +797,19 @@ class ColexScreen:
             if screen.low is not None and screen.exact is not None:
                 screen.low[rows] = proxies
                 screen.exact[rows] = True
+
+
+def _clip(
+    pieces: list[tuple[int, int, int, tuple[int, ...]]], a: int, b: int
+) -> list[tuple[int, int, int, tuple[int, ...]]]:
+    """The pieces (``ColexScreen._pieces``) of the rows [a, b) of their batch, as pieces of
+    a batch of their own."""
+    out = []
+    for row, first, last, top in pieces:
+        lo, hi = max(row, a), min(row + last - first, b)
+        if lo < hi:
+            out.append((lo - a, first + lo - row, first + hi - row, top))
+    return out
 
 
 def _level_sums(values: np.ndarray, m: int) -> np.ndarray:
@@ -756,23 +842,30 @@ def _bound_slack(items: np.ndarray, base: np.ndarray, factors: np.ndarray, k: in
     return float(2.0 * (rounding + 100 * _gamma(4 * n + 4) * trace)) + 1e-300
 
 
-def _shared_bound(H: np.ndarray, factors: np.ndarray, t: int) -> tuple[float, np.ndarray] | None:
-    """(lambda, c) of ``ColexScreen._bound`` for ``H = base - items[t]``.
+def _shared_bound(
+    H: np.ndarray, factors: np.ndarray, t: int, mu: float = 0.0
+) -> tuple[float, np.ndarray] | None:
+    """(lambda, c) of ``ColexScreen._bound`` for the rounded ``K = H - mu I``, ``H = base -
+    items[t]`` (K differs from ``H - mu I`` by ``_shift_rounding``).
 
-    The eigendecomposition of H is backward stable: its eigenvalues are
-    within ``64 n u ||H||`` of H's (a generous multiple of LAPACK's bound).
-    When H's condition number is below 1e6, the computed c are within a
-    relative 1e-8 of the exact ones; they are taken 1e-5 relatively (and
-    1e-12 absolutely) above.
+    The eigendecomposition of K is backward stable: its eigenvalues are within ``64 n u
+    ||K||`` of K's (a generous multiple of LAPACK's bound).  When K's condition number is
+    below 1e6, the computed c are within a relative 1e-8 of the exact ones; they are taken
+    1e-5 relatively (and 1e-12 absolutely) above.
     """
     n = H.shape[-1]
-    lam, V = np.linalg.eigh(H)
+    lam, V = np.linalg.eigh(H - mu * np.eye(n) if mu else H)
     lowest = lam[0] - 64 * n * _U64 * max(abs(lam[0]), abs(lam[-1]))
     if not np.all(np.isfinite(lam)) or lowest <= 0 or lam[-1] > 1e6 * lowest:
         return None
     Z = np.einsum("brn,nj->brj", factors[:t], V / np.sqrt(lam))
     c = np.linalg.eigvalsh(Z @ Z.transpose(0, 2, 1))[:, -1] if t else np.zeros(0)
     return float(lowest), np.maximum(c, 0.0) * (1 + 1e-5) + 1e-12
+
+
+def _shift_rounding(H: np.ndarray, mu: float) -> float:
+    """At most twice the largest rounding of ``H - mu I``'s diagonal (``u (|H_ii| + mu)``)."""
+    return 2 * _U64 * (float(np.abs(np.diagonal(H)).max()) + mu) if mu else 0.0
 
 
 def _proxy_floor(bound: np.ndarray, shift: float) -> np.ndarray:

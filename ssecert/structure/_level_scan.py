@@ -106,6 +106,11 @@ def _screen_margin(task: _LevelTask) -> float:
 # sets screened together (measured best at n = 10 to 20: fewer numpy calls per set, still
 # within the caches)
 _BATCH_SETS = 4096
+# on the level that ranks the sets closest to breaking, after a first batch of
+# ``_BATCH_SETS`` (its threshold is not known before): tier 2 factors only the sets tier 1
+# does not prove above the threshold, gathered, and more of them at once cost less each
+# (``ColexScreen.tier2_sets``)
+_RANKED_BATCH_SETS = 16384
 
 
 # failing sets decided together by ``_refine``'s SVDs: between two groups the scan can end
@@ -166,16 +171,22 @@ def _scan_range(
         segment=segment,
         shared=shared,
     )
-    size = min(_BATCH_SETS if kernel is None else accelerator.DEVICE_BATCH_SETS, hi - lo)
-    room = 0 if kernel is not None else size  # the CPU's single-precision tier's buffers
+    if kernel is not None:
+        batches = _batches(lo, hi, accelerator.DEVICE_BATCH_SETS)
+    elif task.critical:
+        batches = _batches(lo, hi, _RANKED_BATCH_SETS, _BATCH_SETS)
+    else:
+        batches = _batches(lo, hi, _BATCH_SETS)
+    size = max((last - first for first, last in batches), default=0)
+    # the CPU's single-precision tier's buffers
+    room = 0 if kernel is not None else min(size, source.tier2_sets)
     work = np.empty((n, n, room), dtype=np.float32)
     diagonal = np.empty((n, room), dtype=np.float32)
     pending = np.zeros(0, dtype=np.int64)  # failures of the blocks not wholly screened yet
-    for first in reversed(range(lo, hi, size)):
+    for first, last in batches:
         if deadline is not None and time.monotonic() > deadline:
             level.cut_short = True
             break
-        last = min(first + size, hi)
         threshold = None
         if task.critical:
             threshold = candidates[-1][0] if len(candidates) >= _CRITICAL else np.inf
@@ -198,6 +209,18 @@ def _scan_range(
     level.borderline_at.sort()
     level.critical = candidates
     return level
+
+
+def _batches(lo: int, hi: int, size: int, first: int | None = None) -> list[tuple[int, int]]:
+    """The batches of ranks [lo, hi), from the last down: ``size`` ranks each from ``lo`` up
+    (the last may be shorter), or, given ``first``, a first batch of ``first`` ranks below
+    ``hi``, then ``size`` ranks each (the lowest may be shorter)."""
+    if first is None:
+        return [(start, min(start + size, hi)) for start in reversed(range(lo, hi, size))]
+    out = [(max(hi - first, lo), hi)]
+    while out[-1][0] > lo:
+        out.append((max(out[-1][0] - size, lo), out[-1][0]))
+    return out if hi > lo else []
 
 
 def _refine_blocks(
