@@ -231,8 +231,7 @@ def test_the_verdict_level_ranks_the_closest_sets_as_lapack(plant, monkeypatch):
     # many batches: finite thresholds; tier 2 factors a few sets at a time
     monkeypatch.setattr(_level_scan, "_BATCH_SETS", 256)
     monkeypatch.setattr(_level_scan, "_RANKED_BATCH_SETS", 512)
-    monkeypatch.setattr(_combinatorics, "TIER2_MIN_SETS", 96)
-    monkeypatch.setattr(_combinatorics, "TIER2_BYTES", 0)
+    monkeypatch.setattr(_combinatorics, "TIER2_SETS", 96)
     q = _plant_task(plant, 0, True).rest.size
     k = max(j for j in range(q) if math.comb(q, j) <= 12000 and j <= q // 2)
     task = _plant_task(plant, k, True)

@@ -295,11 +295,12 @@ DEFAULT_SINGLE_MEMORY = 16 * 2**20
 # few contiguous calls), else only the sets left open (gathered)
 _GATHER_FRACTION = 0.5
 
-# matrices tier 2 factors together: about 4 MiB of them, at least 4,096 (a factorization of
-# 10 x 10 matrices measured at 60-70 ns a set 16,384 at once against 110 ns 4,096 at once:
-# each numpy call's own cost is shared by more sets)
-TIER2_BYTES = 4 * 2**20
-TIER2_MIN_SETS = 4096
+# tier 1 is skipped for this many sets after a batch where it left most of them open
+_SKIP_SETS = 8 * 4096
+
+# matrices tier 2 factors together (the chunks of a batch of ``_level_scan._RANKED_BATCH_SETS``;
+# measured no faster in larger chunks at n = 12 and 20)
+TIER2_SETS = 4096
 
 
 def _single_level(signed: np.ndarray, base: np.ndarray, m: int) -> np.ndarray:
@@ -440,10 +441,10 @@ class ColexScreen:
         self._bounds: dict[
             int, tuple[float, tuple[float, np.ndarray, np.ndarray, float] | None]
         ] = {}
-        # tier 1 is skipped for this many batches after one where it left most subsets open
+        # tier 1 is skipped for this many sets after a batch where it left most of them open
         self._skip = 0
         self._slack = 0.0 if self.factors is None else _bound_slack(items, base, self.factors, k)
-        self.tier2_sets = max(TIER2_MIN_SETS, TIER2_BYTES // (4 * n * n))
+        self.tier2_sets = TIER2_SETS
         self.device = device
         self._single_device: Any = None  # the single-precision level on the device
         self._shared = {} if shared is None else shared
@@ -746,8 +747,8 @@ class ColexScreen:
         if self.device is not None:
             return self._device_screen(start, N, shift)
         pieces = self._pieces(start, stop)
-        tried = self._skip == 0
-        self._skip = max(self._skip - 1, 0)
+        tried = self._skip <= 0
+        self._skip -= N
         # the ranking asks for sets proved above its threshold: tier 1 at a shift just under it
         mu = 0.0 if threshold is None or not np.isfinite(threshold) else threshold - shift
         mu = max(mu * (1.0 - 2.0**-20), 0.0)
@@ -761,8 +762,8 @@ class ColexScreen:
         else:
             rows = np.flatnonzero(~ok)
         if rows.size > max(64, N // 50):
-            if tried and threshold is None and self.factors is not None and rows.size > N // 2:
-                self._skip = 8  # (the ranking's threshold falls: its tier 1 is kept)
+            if tried and self.factors is not None and rows.size > N // 2:
+                self._skip = _SKIP_SETS
             # many subsets left open: tier 2 for them (for the whole batch, a few calls, when
             # they are most of it), then LAPACK for those it leaves open
             every = rows.size > N * _GATHER_FRACTION

@@ -108,8 +108,8 @@ def _screen_margin(task: _LevelTask) -> float:
 _BATCH_SETS = 4096
 # on the level that ranks the sets closest to breaking, after a first batch of
 # ``_BATCH_SETS`` (its threshold is not known before): tier 2 factors only the sets tier 1
-# does not prove above the threshold, gathered, and more of them at once cost less each
-# (``ColexScreen.tier2_sets``)
+# does not prove above the threshold, gathered, and more of them at once cost less each (a
+# factorization of 10 x 10 matrices: 60-70 ns a set 16,384 at once, 110 ns 4,096 at once)
 _RANKED_BATCH_SETS = 16384
 
 
