@@ -6,7 +6,13 @@ import pytest
 from ssecert.examples import load_example
 from ssecert.observers import build_observer
 from ssecert.stability import thesis_messages
-from ssecert.stability.outcomes import AssumptionCode
+from ssecert.stability.outcomes import (
+    AssumptionCode,
+    SearchStop,
+    SeriesCode,
+    SeriesFailure,
+    StopCode,
+)
 from ssecert.stability.thesis import pi_map, thesis_assumptions
 
 
@@ -130,10 +136,11 @@ def test_a_subnormal_plant_leaves_lemma_1_unchecked_instead_of_crashing():
 
 
 def test_every_assumption_code_has_words_and_only_failures_a_finding():
+    stop = SearchStop(StopCode.DIMENSION, {"dimension": 300, "most": 200})
     facts = {
         "refusal": "REFUSAL", "q": 0.5, "lam": 0.1, "smallest": 1e-300, "claimed": 2.0,
-        "ratio": 7.0, "correct": float("inf"), "search": "SEARCH",
-        "lemma_fails": True, "worst": 1e5, "rho": 0.81, "failure": "", "stopped": "WHY",
+        "ratio": 7.0, "correct": float("inf"),
+        "lemma_fails": True, "worst": 1e5, "rho": 0.81, "failure": None, "stopped": stop,
         "step": 0.1,
         "star": 0.05,
     }  # fmt: skip
@@ -143,9 +150,50 @@ def test_every_assumption_code_has_words_and_only_failures_a_finding():
         assert bool(finding) is (code.verdict.value == "fails"), code
     exceeded = thesis_messages.finding(AssumptionCode.LIPSCHITZ_EXCEEDED, facts)
     assert "infinite here" in exceeded and "factor 3.5" in exceeded  # 7 / 2
-    assert "WHY" in thesis_messages.reason(AssumptionCode.NOT_EVALUATED, facts)
+    assert "dimension 300 (> 200)" in thesis_messages.reason(AssumptionCode.NOT_EVALUATED, facts)
     assert "not finite" in thesis_messages.reason(
-        AssumptionCode.NOT_EVALUATED, {"failure": "", "stopped": ""}
+        AssumptionCode.NOT_EVALUATED, {"failure": None, "stopped": None}
+    )
+    # a failure to evaluate comes before a stop, and a Lipschitz search that sampled nothing
+    # says why
+    overflow = SeriesFailure(SeriesCode.SUM_OVERFLOW)
+    both = {**facts, "failure": overflow, "ratio": None}
+    assert thesis_messages.reason(AssumptionCode.NOT_EVALUATED, both).endswith(
+        "evaluated: the series for Pi overflows"
+    )
+    assert "no ratio could be sampled: the series for Pi overflows" in thesis_messages.reason(
+        AssumptionCode.LIPSCHITZ_NOT_PROVEN, both
     )
     assert "by a factor" in thesis_messages.reason(AssumptionCode.NOT_CONTRACTING, facts)
     assert "0.5 times" in thesis_messages.reason(AssumptionCode.NOT_CONTRACTING, {"worst": 0.5})
+
+
+def test_every_search_failure_and_stop_has_words():
+    facts = {
+        "needed": 2e4, "magnitude": 2e4, "threshold": 1.0, "shrink": 1.0, "most": 10_000,
+        "memory_mib": None, "terms": 7, "norm_F_inv": 1e300, "dimension": 300,
+    }  # fmt: skip
+    for code in SeriesCode:
+        assert thesis_messages.series_failure(SeriesFailure(code, facts)), code
+    for code in StopCode:
+        assert thesis_messages.search_stop(SearchStop(code, facts)), code
+    limited = thesis_messages.series_failure(
+        SeriesFailure(SeriesCode.TOO_MANY_TERMS, {**facts, "memory_mib": 64})
+    )
+    assert limited.endswith("(the cached powers F^-l L1 are bounded to 64 MiB)")
+
+
+def test_the_series_says_why_it_cannot_be_summed_as_data():
+    """Lemma 1's series reports a point it cannot sum as a code with the numbers, and sums the
+    others."""
+    from ssecert.stability.pi_series import _PiSeries
+
+    F_inv, L1 = np.array([[2.0]]), np.array([[1.0]])
+    values, failure = _PiSeries(F_inv, L1, 1.0, 1.0, max_terms=100)(np.array([[0.5], [500.0]]))
+    assert np.isfinite(values[0]).all() and np.isnan(values[1]).all()
+    assert failure is not None and failure.code is SeriesCode.TOO_MANY_TERMS
+    assert failure.facts["needed"] == 501 and failure.facts["most"] == 100
+    values, failure = _PiSeries(np.array([[1e200]]), L1, 1.0, 1.0)(np.array([[5.0]]))
+    assert failure is not None and failure.code is SeriesCode.POWERS_OVERFLOW
+    assert failure.facts["terms"] == 1 and np.isnan(values).all()
+    assert _PiSeries(F_inv, L1, 1.0, 1.0)(np.array([[0.5]]))[1] is None

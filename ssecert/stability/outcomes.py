@@ -24,6 +24,10 @@ __all__ = [
     "RegionCode",
     "SchurCode",
     "SchurState",
+    "SearchStop",
+    "SeriesCode",
+    "SeriesFailure",
+    "StopCode",
     "WitnessKind",
 ]
 
@@ -344,3 +348,51 @@ _ASSUMPTION_FAILS = frozenset(
         AssumptionCode.NOT_CONTRACTING,
     }
 )
+
+
+class SeriesCode(enum.Enum):
+    """Why a point of the thesis's counterexample searches could not be evaluated (the series
+    for Lemma 1's map Pi, ``ssecert.stability.pi_series``; words:
+    ``thesis_messages.series_failure``)."""
+
+    #: a point needs more terms of the series than are summed (facts: needed, magnitude,
+    #: threshold, shrink, most, memory_mib or None when the limit is the term count's)
+    TOO_MANY_TERMS = "too many terms"
+    #: the cached powers of F^-1 overflow before the terms a point needs (facts: terms,
+    #: norm_F_inv, magnitude, needed)
+    POWERS_OVERFLOW = "powers overflow"
+    #: the summed series is not finite
+    SUM_OVERFLOW = "sum overflows"
+    #: the searched ratio is not finite, the series being fine
+    RATIO_NOT_FINITE = "ratio not finite"
+
+
+@dataclass(frozen=True)
+class SeriesFailure:
+    """The first reason a batch of points of a search could not be evaluated: a code and the
+    numbers its words need."""
+
+    code: SeriesCode
+    facts: Mapping[str, Any] = field(default_factory=dict)
+
+
+class StopCode(enum.Enum):
+    """Why a counterexample search stopped before it finished (words:
+    ``thesis_messages.search_stop``)."""
+
+    #: the search's budget of operations and evaluations ran out while sampling
+    BUDGET_SAMPLING = "budget, sampling"
+    #: ... during the local (Nelder-Mead) refinement
+    BUDGET_LOCAL = "budget, local refinement"
+    #: ... before the check of equation (5.9)
+    BUDGET_EQUATION_5_9 = "budget, equation (5.9)"
+    #: no local refinement in this dimension (facts: dimension, most)
+    DIMENSION = "dimension"
+
+
+@dataclass(frozen=True)
+class SearchStop:
+    """Why a search stopped early: a code and its numbers."""
+
+    code: StopCode
+    facts: Mapping[str, Any] = field(default_factory=dict)

@@ -12,6 +12,8 @@ import math
 import numpy as np
 
 from .counterexample_search import SEARCH_MEMORY, _Meter
+from .outcomes import SeriesCode, SeriesFailure
+from .thesis_messages import series_failure
 
 __all__ = ["SeriesError", "series_terms", "pi_map"]
 
@@ -50,7 +52,7 @@ class _PiSeries:
     evaluation is one tensor contraction instead of a loop over terms.  The
     powers are cached up to ``max_terms`` terms within ``memory`` bytes;
     rows that need more terms, or powers that overflow, give NaN and the
-    reason.
+    reason (a ``SeriesFailure``).
     """
 
     def __init__(
@@ -67,11 +69,8 @@ class _PiSeries:
         n, p = L1.shape
         self.memory = memory
         self.max_terms = int(max(1, min(max_terms, memory // (8 * n * p))))
-        self.limit_reason = (
-            ""
-            if self.max_terms == max_terms
-            else f" (the cached powers F^-l L1 are bounded to {memory // 2**20} MiB)"
-        )
+        # the bound on the cached powers, when it is what limits the terms (MiB)
+        self.memory_limit = None if self.max_terms == max_terms else memory // 2**20
         self.W = np.empty((0, p, n))  # W[l] = (F^(-l-1) L1)^T
         self.overflow_at: int | None = None  # first l with a non-finite W_l
         self._next = F_inv.copy()
@@ -114,21 +113,31 @@ class _PiSeries:
         m *= np.sign(a)[:, None, :]
         return m
 
-    def __call__(self, a: np.ndarray, meter: _Meter | None = None) -> tuple[np.ndarray, str]:
+    def __call__(
+        self, a: np.ndarray, meter: _Meter | None = None
+    ) -> tuple[np.ndarray, SeriesFailure | None]:
+        """Pi at the rows of ``a`` (NaN where it cannot be summed) and the first reason a row
+        could not be (None when every row was summed)."""
         a = np.atleast_2d(np.asarray(a, dtype=float))
         rows = a.shape[0]
         n, p = self.L1.shape
         out = np.full((rows, n), np.nan)
         mags = np.abs(a).max(axis=1, initial=0.0)
         needed = np.array([series_terms(float(m), self.q, self.lam) for m in mags])
-        reason = ""
+        failure = None
         ok = needed <= self.max_terms
         if not ok.all():
             worst = int(np.argmax(needed))
-            reason = (
-                f"the series for Pi needs {needed[worst]:.3g} terms at max |a_i| = "
-                f"{mags[worst]:.3g} (threshold {self.lam:g}, shrink {self.q:g}); at most "
-                f"{self.max_terms:,} are summed{self.limit_reason}"
+            failure = SeriesFailure(
+                SeriesCode.TOO_MANY_TERMS,
+                {
+                    "needed": float(needed[worst]),
+                    "magnitude": float(mags[worst]),
+                    "threshold": self.lam,
+                    "shrink": self.q,
+                    "most": self.max_terms,
+                    "memory_mib": self.memory_limit,
+                },
             )
         if ok.any():
             K = int(needed[ok].max())
@@ -136,10 +145,14 @@ class _PiSeries:
             if self.overflow_at is not None and self.overflow_at < K:
                 over = ok & (needed > self.overflow_at)
                 ok &= ~over
-                reason = reason or (
-                    f"the powers of F^-1 overflow after {self.overflow_at} terms of the series "
-                    f"for Pi (||F^-1|| = {np.linalg.norm(self.F_inv, 2):.3g}); "
-                    f"max |a_i| = {mags[over].max():.3g} needs {needed[over].max():.3g}"
+                failure = failure or SeriesFailure(
+                    SeriesCode.POWERS_OVERFLOW,
+                    {
+                        "terms": self.overflow_at,
+                        "norm_F_inv": float(np.linalg.norm(self.F_inv, 2)),
+                        "magnitude": float(mags[over].max()),
+                        "needed": float(needed[over].max()),
+                    },
                 )
         idx = np.flatnonzero(ok)
         if idx.size:
@@ -155,8 +168,8 @@ class _PiSeries:
             bad = ~np.all(np.isfinite(out[idx]), axis=1)
             if bad.any():
                 out[idx[bad]] = np.nan
-                reason = reason or "the series for Pi overflows"
-        return out, reason
+                failure = failure or SeriesFailure(SeriesCode.SUM_OVERFLOW)
+        return out, failure
 
 
 def pi_map(
@@ -179,7 +192,9 @@ def pi_map(
         (an ``ArithmeticError``) when some row needs more than ``max_terms``
         terms or the powers of F^-1 overflow; the message says which.
     """
-    out, reason = _PiSeries(F_inv, L1, q, lam, max_terms=max_terms)(a)
-    if reason or not np.all(np.isfinite(out)):
-        raise SeriesError(reason or "the series for Pi did not give finite values")
+    out, failure = _PiSeries(F_inv, L1, q, lam, max_terms=max_terms)(a)
+    if failure is not None:
+        raise SeriesError(series_failure(failure))
+    if not np.all(np.isfinite(out)):
+        raise SeriesError("the series for Pi did not give finite values")
     return out

@@ -47,6 +47,7 @@ from .counterexample_search import (  # noqa: F401  (the search limits stay impo
     SEARCH_EVALUATIONS,
     SEARCH_FLOPS,
     SEARCH_MEMORY,
+    PairSearch,
     _lipschitz_search,
     _local_search,
     _Meter,
@@ -56,6 +57,7 @@ from .counterexample_search import (  # noqa: F401  (the search limits stay impo
 )
 from .lyapunov import lyapunov_certificate
 from .outcomes import AssumptionCode as Code
+from .outcomes import SearchStop, SeriesFailure, StopCode
 from .pi_series import (  # noqa: F401  (the series stays importable here)
     MAX_SERIES_TERMS,
     SeriesError,
@@ -297,7 +299,7 @@ def _lemma_1_on_pi(
     # each search gets half of the budget, so that one cannot starve the other
     meter = _Meter(SEARCH_FLOPS / 2, SEARCH_EVALUATIONS / 2)
 
-    def pi(a: np.ndarray) -> tuple[np.ndarray, str]:
+    def pi(a: np.ndarray) -> tuple[np.ndarray, SeriesFailure | None]:
         return series(a, meter)
 
     scale = max(lam, 1e-3)
@@ -309,7 +311,7 @@ def _lemma_1_on_pi(
         "equation_5_9_residual": _equation_5_9_residual(inst, pi, rng, scale, search),
         "norm_F_inv": ninv,
         "spectral_radius_F": rho_F,
-        "search": search,
+        "search": search.evidence(),
     }
     if ratio is not None and ratio > claimed * (1 + 1e-9):
         # the claimed constant is wrong, but Pi exists and the corrected bound is valid
@@ -327,18 +329,18 @@ def _lemma_1_on_pi(
         return _Lemma1(item, True, correct, series)
     facts: dict[str, Any] = {"claimed": claimed, "correct": correct, "ratio": ratio}
     if ratio is None:
-        facts["search"] = search["reason"]
+        facts.update(failure=search.failure, stopped=search.stop)
     item = AssumptionResult("lemma_1", Code.LIPSCHITZ_NOT_PROVEN, facts, details)
     return _Lemma1(item, True, correct if np.isfinite(correct) else None, series)
 
 
 def _equation_5_9_residual(
-    inst: _Instance, pi: Any, rng: np.random.Generator, scale: float, search: dict[str, Any]
+    inst: _Instance, pi: Any, rng: np.random.Generator, scale: float, search: PairSearch
 ) -> float | None:
     """Relative residual of F Pi(a) + L1 a = Pi(Psi_q(a)) (5.9) on 200 random a.
 
     None when no a could be evaluated; a search that runs out of budget is
-    noted in ``search``.
+    noted in ``search`` (``late_stop``).
     """
     residual = None
     try:
@@ -350,7 +352,7 @@ def _equation_5_9_residual(
         if np.any(ok):
             residual = float(np.abs(eq[:, ok]).max() / max(1.0, np.abs(pi_a[ok]).max()))
     except _SearchExhausted:
-        search.setdefault("stopped", "the search budget ran out before the (5.9) check")
+        search.late_stop = SearchStop(StopCode.BUDGET_EQUATION_5_9)
     return residual
 
 
@@ -373,11 +375,11 @@ def _assumption_3(
         "search": f"{rows} samples over magnitudes 0.05-100 lambda, then Nelder-Mead",
         "samples_evaluated": evaluated,
     }
-    if stopped:
-        details["stopped"] = stopped
-    if search.failed:
+    if stopped is not None:
+        details["stopped"] = thesis_messages.search_stop(stopped)
+    if search.failed and search.failure is not None:
         details["evaluations_failed"] = search.failed
-        details["first_failure"] = search.reason
+        details["first_failure"] = thesis_messages.series_failure(search.failure)
     bound = None
     if lemma.lipschitz is not None:
         bound = _attack_contraction_bound(inst, lemma.lipschitz)
@@ -393,35 +395,36 @@ def _assumption_3(
         rho_a = bound**2
         return AssumptionResult("assumption_3", Code.CONTRACTING, {"rho": rho_a}, details), rho_a
     if worst_value is None:
-        why = {"failure": search.reason, "stopped": stopped}
+        why = {"failure": search.failure, "stopped": stopped}
         return AssumptionResult("assumption_3", Code.NOT_EVALUATED, why, details), None
     return AssumptionResult("assumption_3", Code.NO_PROOF, {"worst": worst_value}, details), None
 
 
 def _attack_ratio(inst: _Instance, series: _PiSeries, meter: _Meter) -> Any:
-    """The map a -> (|g(a)|^2 / |a|^2 per row, reason), g(a) = Psi_q(a - eps L2 (S Pi(a) + a))."""
+    """The map a -> (|g(a)|^2 / |a|^2 per row, the first ``SeriesFailure`` or None), g(a) =
+    Psi_q(a - eps L2 (S Pi(a) + a))."""
     S, L2, eps, q, lam = inst.S, inst.L2, inst.eps, inst.q, inst.lam
 
-    def g(a: np.ndarray) -> tuple[np.ndarray, str]:
+    def g(a: np.ndarray) -> tuple[np.ndarray, SeriesFailure | None]:
         a = np.atleast_2d(a)
-        values, reason = series(a, meter)
+        values, failure = series(a, meter)
         with np.errstate(over="ignore", invalid="ignore"):
             v = a - eps * (S @ values.T + a.T).T @ L2.T
-            return _psi(v, q, lam), reason
+            return _psi(v, q, lam), failure
 
-    def ratio_of(a: np.ndarray) -> tuple[np.ndarray, str]:
+    def ratio_of(a: np.ndarray) -> tuple[np.ndarray, SeriesFailure | None]:
         a = np.atleast_2d(a)
-        values, reason = g(a)
+        values, failure = g(a)
         with np.errstate(over="ignore", invalid="ignore"):
             r = np.sum(values**2, axis=1) / np.sum(a**2, axis=1)
-        return r, reason
+        return r, failure
 
     return ratio_of
 
 
 def _largest_attack_ratio(
     ratio_of: Any, search: _Search, inst: _Instance, rng: np.random.Generator, rows: int
-) -> tuple[float | None, np.ndarray | None, int, str]:
+) -> tuple[float | None, np.ndarray | None, int, SearchStop | None]:
     """The largest ratio found, its a, the samples evaluated and why the search stopped early.
 
     ``rows`` samples over magnitudes 0.05-100 lambda, then Nelder-Mead from
@@ -430,29 +433,29 @@ def _largest_attack_ratio(
     mags = max(inst.lam, 1e-3) * np.exp(rng.uniform(np.log(0.05), np.log(100.0), (rows, 1)))
     samples = rng.standard_normal((rows, inst.p)) * mags
     ratios = np.full(rows, np.nan)
-    stopped = ""
+    stopped = None
     try:
         batch = max(1, rows // 8)
         for start in range(0, rows, batch):
             sl = slice(start, start + batch)
-            ratios[sl], reason = ratio_of(samples[sl])
-            search.note(reason, int(np.count_nonzero(~np.isfinite(ratios[sl]))))
+            ratios[sl], failure = ratio_of(samples[sl])
+            search.note(failure, int(np.count_nonzero(~np.isfinite(ratios[sl]))))
     except _SearchExhausted:
-        stopped = "the search budget ran out during sampling"
+        stopped = SearchStop(StopCode.BUDGET_SAMPLING)
     finite = np.flatnonzero(np.isfinite(ratios))
     if not finite.size:
         return None, None, 0, stopped
     worst = int(finite[np.argmax(ratios[finite])])
     worst_value, worst_point = float(ratios[worst]), samples[worst]
 
-    def one(a: np.ndarray) -> tuple[float, str]:
+    def one(a: np.ndarray) -> tuple[float, SeriesFailure | None]:
         if not float(a @ a) > 0:
-            return 0.0, ""
-        r, reason = ratio_of(a)
-        return float(r[0]), reason
+            return 0.0, None
+        r, failure = ratio_of(a)
+        return float(r[0]), failure
 
     # then local optimisation from the worst sample
-    if not stopped:
+    if stopped is None:
         stopped = _local_search(search.objective(one), samples[worst].copy(), 400)
     if search.best_point is not None and search.best_value > worst_value:
         worst_value, worst_point = search.best_value, search.best_point

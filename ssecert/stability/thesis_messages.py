@@ -14,8 +14,9 @@ from typing import Any
 
 from ..base.format import factor_above, readable, sig
 from .outcomes import AssumptionCode as Code
+from .outcomes import SearchStop, SeriesCode, SeriesFailure, StopCode
 
-__all__ = ["finding", "reason"]
+__all__ = ["finding", "reason", "search_stop", "series_failure", "why_not_evaluated"]
 
 _PI = "Pi(a) = -sum F^(-l-1) L1 Psi_q^l(a)"
 
@@ -103,7 +104,8 @@ def reason(code: Code, facts: Mapping[str, Any]) -> str:
         found = (
             f"sampling found ratios up to {readable(f['ratio'])}"
             if f.get("ratio") is not None
-            else f"no ratio could be sampled: {f['search']}"
+            else "no ratio could be sampled: "
+            + why_not_evaluated(f["failure"], f["stopped"], "no pair could be evaluated")
         )
         return (
             f"Pi exists, but the claimed constant {readable(f['claimed'])} is not proven: the "
@@ -124,7 +126,7 @@ def reason(code: Code, facts: Mapping[str, Any]) -> str:
             f"and the Lipschitz bound of Pi"
         )
     if code is Code.NOT_EVALUATED:
-        why = f["failure"] or f["stopped"] or "the ratio is not finite"
+        why = why_not_evaluated(f["failure"], f["stopped"], "the ratio is not finite")
         return f"no proof, and no sample could be evaluated: {why}"
     if code is Code.NO_PROOF:
         return (
@@ -169,3 +171,55 @@ def finding(code: Code, facts: Mapping[str, Any]) -> str:
             f"for the a_hat in the evidence its left side {_times(f['worst'])}"
         )
     return ""
+
+
+def series_failure(failure: SeriesFailure) -> str:
+    """Why a point of a counterexample search could not be evaluated."""
+    f, code = failure.facts, failure.code
+    if code is SeriesCode.TOO_MANY_TERMS:
+        limit = (
+            f" (the cached powers F^-l L1 are bounded to {f['memory_mib']} MiB)"
+            if f["memory_mib"] is not None
+            else ""
+        )
+        return (
+            f"the series for Pi needs {f['needed']:.3g} terms at max |a_i| = "
+            f"{f['magnitude']:.3g} (threshold {f['threshold']:g}, shrink {f['shrink']:g}); at "
+            f"most {f['most']:,} are summed{limit}"
+        )
+    if code is SeriesCode.POWERS_OVERFLOW:
+        return (
+            f"the powers of F^-1 overflow after {f['terms']} terms of the series for Pi "
+            f"(||F^-1|| = {f['norm_F_inv']:.3g}); max |a_i| = {f['magnitude']:.3g} needs "
+            f"{f['needed']:.3g}"
+        )
+    if code is SeriesCode.SUM_OVERFLOW:
+        return "the series for Pi overflows"
+    if code is SeriesCode.RATIO_NOT_FINITE:
+        return "a non-finite ratio"
+    raise ValueError(f"no words for {code}")  # pragma: no cover - every code has words
+
+
+def search_stop(stop: SearchStop) -> str:
+    """Why a counterexample search stopped before it finished."""
+    code = stop.code
+    if code is StopCode.BUDGET_SAMPLING:
+        return "the search budget ran out during sampling"
+    if code is StopCode.BUDGET_LOCAL:
+        return "the search budget ran out during the local refinement"
+    if code is StopCode.BUDGET_EQUATION_5_9:
+        return "the search budget ran out before the (5.9) check"
+    if code is StopCode.DIMENSION:
+        return (
+            f"no local refinement in dimension {stop.facts['dimension']} (> {stop.facts['most']})"
+        )
+    raise ValueError(f"no words for {code}")  # pragma: no cover - every code has words
+
+
+def why_not_evaluated(failure: SeriesFailure | None, stop: SearchStop | None, default: str) -> str:
+    """The first of: why a point could not be evaluated, why the search stopped, ``default``."""
+    if failure is not None:
+        return series_failure(failure)
+    if stop is not None:
+        return search_stop(stop)
+    return default
