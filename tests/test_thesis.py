@@ -197,3 +197,25 @@ def test_the_series_says_why_it_cannot_be_summed_as_data():
     assert failure is not None and failure.code is SeriesCode.POWERS_OVERFLOW
     assert failure.facts["terms"] == 1 and np.isnan(values).all()
     assert _PiSeries(F_inv, L1, 1.0, 1.0)(np.array([[0.5]]))[1] is None
+
+
+def test_a_pair_search_writes_its_record():
+    """Lemma 1's search record: why nothing was evaluated, or why it stopped and its first
+    failure; a later stop (the (5.9) check) only where it had not stopped."""
+    from ssecert.stability.counterexample_search import PairSearch
+
+    overflow = SeriesFailure(SeriesCode.SUM_OVERFLOW)
+    late = SearchStop(StopCode.BUDGET_EQUATION_5_9)
+    none = PairSearch(0, 8, failure=overflow, late_stop=late).evidence()
+    assert list(none) == ["pairs_evaluated", "pairs_not_evaluated", "reason", "stopped"]
+    assert none["reason"] == "the series for Pi overflows"
+    assert none["stopped"] == "the search budget ran out before the (5.9) check"
+    some = PairSearch(5, 3, 3, overflow, SearchStop(StopCode.BUDGET_LOCAL), late).evidence()
+    assert some == {
+        "pairs_evaluated": 5,
+        "pairs_not_evaluated": 3,
+        "stopped": "the search budget ran out during the local refinement",
+        "evaluations_failed": 3,
+        "first_failure": "the series for Pi overflows",
+    }
+    assert PairSearch(0, 8).evidence()["reason"] == "no pair could be evaluated"
