@@ -10,7 +10,9 @@ from planted import exact_rank, planted
 
 from ssecert import System, analyze, scan_removals, sparse_observability
 from ssecert.examples import load_example
+from ssecert.structure import sparse_messages
 from ssecert.structure.observability import unobservable_residual
+from ssecert.structure.outcomes import RecheckCode, RecheckProblem, SparseCode
 
 KINDS = ("distinct", "jordan", "identity", "mixed")
 
@@ -386,3 +388,36 @@ def test_a_zero_time_budget_leaves_the_eigenspace_method_its_verdict():
     assert plain.fields["method"] == zero.fields["method"] == "eigenspace"
     assert plain.fields["max_removable"] == zero.fields["max_removable"] == 24
     assert not zero.fields["max_removable_is_lower_bound"]
+
+
+def test_the_check_says_why_by_a_code():
+    """The check's code gives its verdict: a confirmed breaking set, the exact max_removable,
+    a lower bound (the verdict only), a budget that decides nothing."""
+    rng = np.random.default_rng(0)
+    plant = System(np.eye(6), rng.standard_normal((14, 6)))
+    cases = [
+        (sparse_observability(load_example("notes-example-2").system, 1), SparseCode.BREAKING_SET),
+        (sparse_observability(load_example("notes-example-3").system, 1),
+         SparseCode.EXACT_MAX_REMOVABLE),
+        (sparse_observability(plant, 2, method="enumeration", time_budget=0),
+         SparseCode.LOWER_BOUND),
+        (sparse_observability(plant, 2, method="enumeration", max_sets=50), SparseCode.UNDECIDED),
+    ]  # fmt: skip
+    for check, code in cases:
+        assert check.code is code and check.verdict is code.verdict, check.summary
+    assert cases[2][0].fields["max_removable_is_lower_bound"]
+    assert cases[0][0].fields["breaking_set"] is not None
+
+
+def test_every_recheck_problem_has_words():
+    facts = {"kept": (0, 2), "pbh": False, "staircase": True, "eigenvalue": "1", "removed": 2}
+    for code in RecheckCode:
+        for deficient in (True, False):
+            words = sparse_messages.recheck_text(
+                RecheckProblem(code, {**facts, "deficient": deficient})
+            )
+            assert words, code
+    raw = RecheckProblem(RecheckCode.RAW_EIGENVALUE, {**facts, "deficient": False})
+    assert sparse_messages.recheck_text(raw).endswith("is borderline")
+    for code in SparseCode:
+        assert code.verdict.value in ("holds", "fails", "inconclusive")

@@ -16,11 +16,11 @@ from typing import Any
 import numpy as np
 
 from ..numerics.exact import ExactObservability, ExactPlant, Observability
-from ..results import Verdict
 from ..system import System
 from ..tolerances import Tolerances
 from .attacks import StealthyAttack, stealthy_attack
 from .enumeration import SparseMethod, _Outcome
+from .outcomes import SparseCode
 
 __all__: list[str] = []
 
@@ -36,8 +36,9 @@ def _failure(
     evidence: dict[str, Any],
     exact: ExactPlant,
     to_user: Callable[[np.ndarray], np.ndarray],
-) -> tuple[Verdict, str, dict[str, Any] | None]:
-    """Verdict, summary and stealthy-attack witness of a failing check.
+) -> tuple[SparseCode, str, dict[str, Any] | None]:
+    """Code (its verdict: fails, or inconclusive where the breaking set is not confirmed),
+    summary and stealthy-attack witness of a failing check.
 
     ``work`` is the plant in power-of-two units used for float decisions (its state
     directions map to the user's by ``to_user``); the witness is built on the user's
@@ -55,7 +56,7 @@ def _failure(
         z = to_user(outcome.z)
     if decision.state is Observability.OBSERVABLE:
         return (
-            Verdict.INCONCLUSIVE,
+            SparseCode.EXACT_DATA_OBSERVABLE,
             (
                 f"The {outcome.method} method finds breaking set {list(B)}, but without those sensors "
                 f"the exact data are observable (Krylov rank {system.n} modulo a prime): the plant is "
@@ -70,7 +71,7 @@ def _failure(
         not witness.verified or (kept and sc_rank >= system.n)
     ):
         return (
-            Verdict.INCONCLUSIVE,
+            SparseCode.ATTACK_NOT_VERIFIED,
             (
                 f"The {outcome.method} method finds breaking set {list(B)}, but the stealthy attack "
                 f"built from it does not verify (output mismatch {witness.residual:.2e}, kept sensors "
@@ -78,7 +79,7 @@ def _failure(
             ),
             witness_out,
         )
-    return Verdict.FAILS, _failure_summary(system, s, outcome, mr, B), witness_out
+    return SparseCode.BREAKING_SET, _failure_summary(system, s, outcome, mr, B), witness_out
 
 
 def _confirm_breaking_set(

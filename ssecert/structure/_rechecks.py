@@ -21,7 +21,7 @@ from ..tolerances import NONZERO, ZERO, Tolerances
 from ._combinatorics import count_subsets
 from .enumeration import OutcomeStatus, SparseMethod, _enumeration, _Outcome
 from .observability import pbh_margins
-from .outcomes import Problem, ProblemCode
+from .outcomes import Problem, ProblemCode, RecheckCode, RecheckProblem
 
 __all__: list[str] = []
 
@@ -114,7 +114,7 @@ def _recheck_holds(
     tol: Tolerances,
     s: int,
     exact: ExactPlant | None = None,
-) -> tuple[float | None, list[dict[str, Any]], str]:
+) -> tuple[float | None, list[dict[str, Any]], RecheckProblem | None]:
     """Independent re-check of the sets closest to breaking.
 
     Each is also decided on the exact data when affordable: a set the exact
@@ -123,13 +123,13 @@ def _recheck_holds(
     Enumeration results are re-checked by the PBH test at the eigenvalues;
     eigenspace results by the Krylov staircase of the kept sensors.  Returns
     the margin (smallest relative PBH singular value found), the records and
-    a problem string (empty when every re-check agrees).
+    the first problem (None when every re-check agrees).
     """
     from ..numerics.linalg import staircase
 
     records = []
     margin = None
-    problem = ""
+    problem: RecheckProblem | None = None
     centers = np.array([c.center for c in eig.clusters], dtype=complex)
     for kept in outcome.critical:
         if not kept:
@@ -156,24 +156,20 @@ def _recheck_holds(
                 "exact": exact_state,
             }
         )
-        if exact_state is Observability.UNOBSERVABLE and not problem:
-            problem = (
-                f"without sensors outside {list(kept)} the exact data are unobservable "
-                f"(an exact kernel vector), which floating point missed"
-            )
+        if exact_state is Observability.UNOBSERVABLE and problem is None:
+            problem = RecheckProblem(RecheckCode.EXACT_UNOBSERVABLE, {"kept": kept})
         checker_ok = pbh_ok if outcome.method is SparseMethod.ENUMERATION else stair_ok
         if eig.problems and outcome.method is SparseMethod.ENUMERATION:
             checker_ok = stair_ok
         # full Krylov rank of the exact data modulo a prime proves the kept set observable,
         # whatever the floating-point re-check of an ill-conditioned plant says
-        if not checker_ok and exact_state is not Observability.OBSERVABLE and not problem:
-            problem = (
-                f"re-check of kept sensors {list(kept)} does not confirm observability "
-                f"(PBH full rank: {pbh_ok}, staircase full rank: {stair_ok})"
+        if not checker_ok and exact_state is not Observability.OBSERVABLE and problem is None:
+            problem = RecheckProblem(
+                RecheckCode.NOT_CONFIRMED, {"kept": kept, "pbh": pbh_ok, "staircase": stair_ok}
             )
     # Independently of any grouping: at every computed eigenvalue, remove the
     # 2s sensors that see its (numerical) eigenvector best and test PBH there.
-    if not problem:
+    if problem is None:
         raw_margin, raw_problem = _recheck_raw_eigenvalues(system, s, tol, eig)
         if raw_margin is not None:
             margin = raw_margin if margin is None else min(margin, raw_margin)
@@ -183,12 +179,12 @@ def _recheck_holds(
 
 def _recheck_raw_eigenvalues(
     system: System, s: int, tol: Tolerances, eig: EigenAnalysis
-) -> tuple[float | None, str]:
+) -> tuple[float | None, RecheckProblem | None]:
     """PBH at each computed eigenvalue after removing the 2s sensors that see it best."""
     A, C = system.A, system.C
     n, p = system.n, system.p
     if 2 * s >= p:
-        return None, ""
+        return None, None
     norms = np.linalg.norm(C, axis=1)
     safe = np.where(norms > 0, norms, 1.0)
     worst = None
@@ -202,9 +198,8 @@ def _recheck_raw_eigenvalues(
         m, codes = pbh_margins(A, C[kept], np.array([value]), tolerances=tol)
         worst = float(m[0]) if worst is None else min(worst, float(m[0]))
         if codes[0] != NONZERO:
-            return worst, (
-                f"the PBH test at the computed eigenvalue {eig.label(value)}, after removing the "
-                f"{2 * s} sensors that see its eigenvector best, is "
-                f"{'rank deficient' if codes[0] == ZERO else 'borderline'}"
+            return worst, RecheckProblem(
+                RecheckCode.RAW_EIGENVALUE,
+                {"eigenvalue": eig.label(value), "removed": 2 * s, "deficient": codes[0] == ZERO},
             )
-    return worst, ""
+    return worst, None

@@ -14,7 +14,14 @@ from typing import Any
 
 from ..results import Verdict
 
-__all__ = ["IrrepresentableCode", "Problem", "ProblemCode"]
+__all__ = [
+    "IrrepresentableCode",
+    "Problem",
+    "ProblemCode",
+    "RecheckCode",
+    "RecheckProblem",
+    "SparseCode",
+]
 
 
 class ProblemCode(enum.Enum):
@@ -134,3 +141,61 @@ _IRREPRESENTABLE_FAILS = frozenset(
         IrrepresentableCode.EXACTLY_AT_LEAST_ONE,
     }
 )
+
+
+class SparseCode(enum.Enum):
+    """Why the sparse-observability check has its verdict (``Check.code``; its words are
+    written where the check is built, ``ssecert.structure.sparse``)."""
+
+    #: fails: a breaking set confirmed (without its sensors the exact data are unobservable, or
+    #: the floats' stealthy attack verifies)
+    BREAKING_SET = "breaking set"
+    #: inconclusive: a breaking set of the floats, but without it the exact data are observable
+    EXACT_DATA_OBSERVABLE = "exact data observable"
+    #: inconclusive: a breaking set whose stealthy attack does not verify
+    ATTACK_NOT_VERIFIED = "attack not verified"
+    #: holds: the exact max_removable, its closest sets re-checked
+    EXACT_MAX_REMOVABLE = "exact max_removable"
+    #: inconclusive: the re-check of a holds disputes it (a ``RecheckProblem``)
+    RECHECK_DISPUTED = "re-check disputed"
+    #: holds: every set of up to 2s sensors checked, max_removable a lower bound
+    LOWER_BOUND = "lower bound"
+    #: inconclusive: a lower bound whose re-check disputes it
+    LOWER_BOUND_DISPUTED = "lower bound disputed"
+    #: holds: s = 0, and the plant is observable
+    OBSERVABILITY_DECIDES = "observability decides"
+    #: inconclusive: no method decided
+    UNDECIDED = "undecided"
+
+    @property
+    def verdict(self) -> Verdict:
+        """The verdict this code gives."""
+        holds = self in (
+            SparseCode.EXACT_MAX_REMOVABLE,
+            SparseCode.LOWER_BOUND,
+            SparseCode.OBSERVABILITY_DECIDES,
+        )
+        return Verdict.of(holds=holds, fails=self is SparseCode.BREAKING_SET)
+
+
+class RecheckCode(enum.Enum):
+    """What disputes a holds verdict of sparse observability in its re-check
+    (``ssecert.structure._rechecks``)."""
+
+    #: the exact data are unobservable without the sensors outside a kept set (facts: kept)
+    EXACT_UNOBSERVABLE = "exact data unobservable"
+    #: the other numerics do not confirm a kept set observable (facts: kept, pbh, staircase)
+    NOT_CONFIRMED = "not confirmed"
+    #: the PBH test at a computed eigenvalue, without the 2s sensors that see its
+    #: eigenvector best, is rank deficient or borderline (facts: eigenvalue, removed,
+    #: deficient)
+    RAW_EIGENVALUE = "raw eigenvalue"
+
+
+@dataclass(frozen=True)
+class RecheckProblem:
+    """What disputes a holds verdict: a code and the facts its words need
+    (``sparse_messages.recheck_text``)."""
+
+    code: RecheckCode
+    facts: Mapping[str, Any] = field(default_factory=dict)

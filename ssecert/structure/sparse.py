@@ -67,8 +67,9 @@ from .enumeration import (
     placement_note,
 )
 from .observability import observability
+from .outcomes import RecheckProblem, SparseCode
 from .removals import RemovalScan, scan_removals
-from .sparse_messages import problem_texts
+from .sparse_messages import problem_texts, recheck_text
 
 __all__ = [
     "sparse_observability",
@@ -448,18 +449,19 @@ class _Decision:
 
     def make(
         self,
-        verdict: Verdict,
+        code: SparseCode,
         summary: str,
         value: int | None,
         extra: dict[str, Any],
         margin: float | None = None,
         witness: dict | None = None,
     ) -> Check:
-        """The check, with this decision's evidence and tolerances."""
+        """The check, its verdict the code's, with this decision's evidence and tolerances."""
         return Check(
             id="sparse_observability",
             title=f"{self.s}-sparse observability",
-            verdict=verdict,
+            verdict=code.verdict,
+            code=code,
             summary=summary,
             value=value,
             margin=margin,
@@ -470,14 +472,14 @@ class _Decision:
             tolerances=self.tol.to_dict(),
         )
 
-    def failure(self, found: _Outcome) -> tuple[Verdict, str, dict[str, Any] | None]:
-        """Verdict, summary and stealthy attack of a breaking set (``_failure``)."""
+    def failure(self, found: _Outcome) -> tuple[SparseCode, str, dict[str, Any] | None]:
+        """Code, summary and stealthy attack of a breaking set (``_failure``)."""
         return _failure(
             self.system, self.work, self.s, found, self.horizon, self.seed, self.tol,
             self.evidence, self.exact, self.to_user,
         )  # fmt: skip
 
-    def recheck(self) -> tuple[float | None, str]:
+    def recheck(self) -> tuple[float | None, RecheckProblem | None]:
         """Margin and problem of the independent re-check of a holds (``_recheck_holds``)."""
         margin, records, problem = _recheck_holds(
             self.work, self.outcome, self.eig, self.tol, self.s, self.exact
@@ -495,10 +497,10 @@ class _Decision:
         self.evidence["undecided_methods_settled_by"] = (
             "the exact data are unobservable with every sensor kept (an exact kernel vector)"
         )
-        verdict, summary, witness = self.failure(found)
-        if verdict is not Verdict.FAILS:
+        code, summary, witness = self.failure(found)
+        if code is not SparseCode.BREAKING_SET:
             return None
-        return self.make(verdict, summary, -1, self.fields(-1, False, ()), witness=witness)
+        return self.make(code, summary, -1, self.fields(-1, False, ()), witness=witness)
 
     def exact_answer(self) -> Check:
         """A method found the exact max_removable: fails with the stealthy attack, or holds
@@ -507,25 +509,26 @@ class _Decision:
         mr = outcome.max_removable
         assert mr is not None and outcome.breaking_set is not None and outcome.z is not None
         if 2 * s > mr:
-            verdict, summary, witness = self.failure(outcome)
+            code, summary, witness = self.failure(outcome)
             extra = self.fields(mr, False, outcome.breaking_set)
             if outcome.details.get("max_removable_is_upper_bound"):
                 extra["max_removable_is_upper_bound"] = True
                 extra["max_removable_at_least"] = outcome.details.get("max_removable_at_least")
-            return self.make(verdict, summary, mr, extra, witness=witness)
+            return self.make(code, summary, mr, extra, witness=witness)
         margin, problem = self.recheck()
         self.evidence["margin_definition"] = (
             "smallest relative PBH singular value sigma_min([A - lambda I; C_T]) / ||[A; C]||"
             " over the kept-sensor sets T that come closest to breaking"
         )
-        if problem:
+        if problem is not None:
             self.evidence["disputed_max_removable"] = mr
             settled = self.unobservable_plant()
             if settled is not None:
                 return settled
             return self.make(
-                Verdict.INCONCLUSIVE,
-                f"The {outcome.method} method finds max_removable = {mr}, but {problem}.",
+                SparseCode.RECHECK_DISPUTED,
+                f"The {outcome.method} method finds max_removable = {mr}, but "
+                f"{recheck_text(problem)}.",
                 None,
                 self.fields(None, False, None),
                 margin=margin,
@@ -536,7 +539,11 @@ class _Decision:
             f"(s = {s} needed)."
         )
         return self.make(
-            Verdict.HOLDS, summary, mr, self.fields(mr, False, outcome.breaking_set), margin=margin
+            SparseCode.EXACT_MAX_REMOVABLE,
+            summary,
+            mr,
+            self.fields(mr, False, outcome.breaking_set),
+            margin=margin,
         )
 
     def lower_bound_answer(self) -> Check:
@@ -546,8 +553,8 @@ class _Decision:
         mr = outcome.max_removable
         assert mr is not None
         margin, problem = self.recheck()
-        if problem:
-            summary = f"Lower bound max_removable >= {mr}, but {problem}."
+        if problem is not None:
+            summary = f"Lower bound max_removable >= {mr}, but {recheck_text(problem)}."
         else:
             summary = (
                 f"Every set of up to {mr} sensors was checked and none breaks observability, "
@@ -555,7 +562,7 @@ class _Decision:
                 f"not computed ({'; '.join(problem_texts(outcome.problems))})."
             )
         return self.make(
-            Verdict.INCONCLUSIVE if problem else Verdict.HOLDS,
+            SparseCode.LOWER_BOUND if problem is None else SparseCode.LOWER_BOUND_DISPUTED,
             summary,
             mr,
             self.fields(mr, True, None),
@@ -585,7 +592,7 @@ class _Decision:
         outcome = self.outcome
         lower = outcome.max_removable if outcome.status is OutcomeStatus.LOWER_BOUND else None
         return self.make(
-            Verdict.INCONCLUSIVE,
+            SparseCode.UNDECIDED,
             f"Sparse observability could not be decided: {'; '.join(reasons)}.{hint}",
             lower,
             {**self.fields(lower, lower is not None, None), "sets_needed": needed},
@@ -601,7 +608,7 @@ class _Decision:
         if plain.verdict is not Verdict.HOLDS:
             return None
         return self.make(
-            Verdict.HOLDS,
+            SparseCode.OBSERVABILITY_DECIDES,
             f"With s = 0 the condition 0 <= max_removable is the observability of (A, C), "
             f"which holds: {plain.summary} The exact max_removable was not computed "
             f"({'; '.join(reasons)}).",

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
-from .outcomes import Problem, ProblemCode
+from .outcomes import Problem, ProblemCode, RecheckCode, RecheckProblem
 
-__all__ = ["problem_text", "problem_texts"]
+__all__ = ["problem_text", "problem_texts", "recheck_text"]
 
 
 def problem_text(problem: Problem) -> str:
@@ -83,3 +83,25 @@ def problem_text(problem: Problem) -> str:
 def problem_texts(problems: Iterable[Problem]) -> list[str]:
     """The sentences of several problems, in order."""
     return [problem_text(p) for p in problems]
+
+
+def recheck_text(problem: RecheckProblem) -> str:
+    """The clause that says what disputes a holds verdict in its re-check."""
+    f, code = problem.facts, problem.code
+    if code is RecheckCode.EXACT_UNOBSERVABLE:
+        return (
+            f"without sensors outside {list(f['kept'])} the exact data are unobservable "
+            f"(an exact kernel vector), which floating point missed"
+        )
+    if code is RecheckCode.NOT_CONFIRMED:
+        return (
+            f"re-check of kept sensors {list(f['kept'])} does not confirm observability "
+            f"(PBH full rank: {f['pbh']}, staircase full rank: {f['staircase']})"
+        )
+    if code is RecheckCode.RAW_EIGENVALUE:
+        return (
+            f"the PBH test at the computed eigenvalue {f['eigenvalue']}, after removing the "
+            f"{f['removed']} sensors that see its eigenvector best, is "
+            f"{'rank deficient' if f['deficient'] else 'borderline'}"
+        )
+    raise ValueError(f"no words for {code}")  # pragma: no cover - every code has words
