@@ -14,6 +14,7 @@ from ssecert.observers.lure import LureModel
 from ssecert.stability.checks import observer_stability_check
 from ssecert.stability.divergence import GROWTH, divergence_witness
 from ssecert.stability.equilibria import nonzero_equilibrium
+from ssecert.stability.outcomes import SearchCode
 from ssecert.stability.roa import region_of_attraction
 
 
@@ -189,7 +190,8 @@ def test_a_planted_nonzero_equilibrium_is_found_and_confirmed_exactly():
     witness, searched = nonzero_equilibrium(model)
     assert witness is not None and witness["exact"]
     assert abs(abs(witness["initial_error"][0]) - 0.2) < 1e-15
-    assert witness["float_residual"] <= 1e-15 and "patterns tried" in searched
+    assert witness["float_residual"] <= 1e-15 and searched.code is SearchCode.FIRST_FOUND
+    assert searched.facts["tried"] <= searched.facts["count"] == 3
 
 
 def test_the_ugv_search_finds_no_equilibrium_and_says_what_it_searched():

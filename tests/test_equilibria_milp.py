@@ -8,6 +8,8 @@ from ssecert import analyze, spec_from_dict
 from ssecert.observers import build_observer
 from ssecert.observers.lure import LureModel
 from ssecert.stability import equilibria
+from ssecert.stability.outcomes import SearchCode, Searched
+from ssecert.stability.search_messages import searched_text
 
 
 def _planted(extra: int) -> dict:
@@ -126,5 +128,25 @@ def test_the_mixed_integer_search_keeps_one_time_limit_for_all_its_solves(monkey
     witness, note = equilibria._milp_search(model)
     assert witness is None
     assert limits == [10.0, 6.0, 2.0]  # 10 s in all (MILP_SECONDS), not 10 s each
-    assert "found 3 candidate patterns that exact arithmetic refused" in note
-    assert note.endswith("refused; its time limit of 10 s ended it")
+    assert note.code is SearchCode.MILP_REFUSED
+    assert note.facts["refused"] == 3 and note.facts["timed_out"]
+    words = searched_text(note)
+    assert "found 3 candidate patterns that exact arithmetic refused" in words
+    assert words.endswith("refused; its time limit of 10 s ended it")
+
+
+def test_every_search_record_has_words():
+    facts = {
+        "refusal": "R", "m": 12, "count": 531441, "most": 59049, "tried": 5, "found": 0,
+        "nonzero": True, "singular": 2, "status": 1, "message": "M", "box": 1e4,
+        "seconds": 10.0, "refused": 1, "timed_out": False, "samples": 64, "steps": 500,
+        "period": 3, "alive": 2,
+    }  # fmt: skip
+    for code in SearchCode:
+        for balanced in (False, True):
+            words = searched_text(Searched(code, facts, balanced))
+            assert words and words.endswith("(in balanced state coordinates)") is balanced
+    none = searched_text(Searched(SearchCode.PATTERNS_TRIED, facts))
+    assert none.startswith("none among the 531,441") and "(2 with a singular" in none
+    attacked = searched_text(Searched(SearchCode.PATTERNS_TRIED, {**facts, "nonzero": False}))
+    assert attacked.startswith("0 equilibriums among")

@@ -49,6 +49,7 @@ from .lyapunov import LyapunovCertificate, LyapunovMethod, lyapunov_certificate
 from .outcomes import LMICode, Region, RegionCode, WitnessKind
 from .periodic import periodic_orbit
 from .roa import region_of_attraction
+from .search_messages import searched_text
 from .thesis import thesis_assumptions
 from .zames_falb import zames_falb_certificate, zames_falb_gain
 
@@ -112,7 +113,7 @@ def observer_stability_check(
         )
     if cert.verdict is Verdict.INCONCLUSIVE:
         with stage("divergent trajectory search"):
-            witness, searched, cycled = divergence_witness(model), "", ""
+            witness, searched, cycled = divergence_witness(model), None, None
         if witness is None:
             with stage("nonzero equilibrium search"):
                 witness, searched = nonzero_equilibrium(model, budget=budget)
@@ -127,8 +128,8 @@ def observer_stability_check(
         searches = {
             "divergent_trajectory": "none: the large-signal loop A + shrink B Cw has spectral "
             f"radius {sig(radius, 6)}, {why}",
-            "nonzero_equilibrium": searched,
-            "periodic_orbit": cycled,
+            "nonzero_equilibrium": "" if searched is None else searched_text(searched),
+            "periodic_orbit": "" if cycled is None else searched_text(cycled),
         }
         return replace(check, evidence={**check.evidence, "searches": searches}), (model, cert)
     return _circle_stability_check(design, model, cert, tol, title), (model, cert)

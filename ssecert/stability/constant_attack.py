@@ -29,6 +29,7 @@ import numpy as np
 from ..budget import Budget
 from ..observers.lure import LureModel
 from .equilibria import attacked_equilibria
+from .search_messages import searched_text
 
 __all__ = ["constant_attack_outcomes", "default_attacks"]
 
@@ -82,12 +83,12 @@ def constant_attack_outcomes(
     runs = _simulate(model, np.array([a for _, a in kept]))
     records = []
     for (name, a), sim in zip(kept, runs):
-        equilibria, note, undecided = attacked_equilibria(model, a)
+        equilibria, searched, undecided = attacked_equilibria(model, a)
         record: dict[str, Any] = {
             "attack": name,
             "vector": a,
             "equilibria": len(equilibria),
-            "equilibrium_search": note,
+            "equilibrium_search": searched_text(searched),
             "simulation": sim,
         }
         if sim["unbounded"] and not certified:

@@ -24,15 +24,16 @@ globally asymptotically stable.
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 from fractions import Fraction
 from typing import Any
 
 import numpy as np
 
-from ..budget import Budget, format_count
+from ..budget import Budget
 from ..numerics.rational import product, solve
 from ..observers.lure import LureModel
-from .outcomes import WitnessKind
+from .outcomes import SearchCode, Searched, WitnessKind
 
 __all__ = ["nonzero_equilibrium", "attacked_equilibria", "MAX_PATTERNS"]
 
@@ -53,15 +54,16 @@ def milp_cost(model: LureModel) -> tuple[float, float]:
 
 def nonzero_equilibrium(
     model: LureModel, *, milp: bool = True, budget: Budget | None = None
-) -> tuple[dict[str, Any] | None, str]:
-    """An exactly confirmed nonzero equilibrium (the witness) or None, with what was searched.
+) -> tuple[dict[str, Any] | None, Searched]:
+    """An exactly confirmed nonzero equilibrium (the witness) or None, with what was searched
+    (its words: ``search_messages.searched_text``).
 
     More than ``MAX_PATTERNS`` patterns are searched by mixed-integer programming, unless
     ``milp`` is False or the program does not fit ``budget`` (default ``Budget()``; then they
     are not searched).
     """
     if model.m == 0 or model.q <= 0:
-        return None, "no nonlinearity: the only equilibrium of a stable linear map is 0"
+        return None, Searched(SearchCode.NO_NONLINEARITY)
     if milp and 3**model.m > MAX_PATTERNS and model.threshold > 0:
         nbytes, flops = milp_cost(model)
         refusal = (budget or Budget()).check(
@@ -70,13 +72,13 @@ def nonzero_equilibrium(
             flops=flops,
         )
         if refusal is not None:
-            return None, f"not searched: {refusal}"
+            return None, Searched(SearchCode.REFUSED, {"refusal": refusal})
         return _milp_search(model)
-    found, note, _ = _search(model, None, first=True)
-    return (found[0] if found else None), note
+    found, searched, _ = _search(model, None, first=True)
+    return (found[0] if found else None), searched
 
 
-def _milp_search(model: LureModel) -> tuple[dict[str, Any] | None, str]:
+def _milp_search(model: LureModel) -> tuple[dict[str, Any] | None, Searched]:
     """A nonzero equilibrium by mixed-integer programming (too many patterns to enumerate).
 
     Variables xi (N), u (m, the nonlinearity's output) and binaries p, n (m each):
@@ -169,41 +171,35 @@ def _milp_search(model: LureModel) -> tuple[dict[str, Any] | None, str]:
             options={"time_limit": left},
         )
         if result.x is None:
-            what = {
-                2: "none (HiGHS found the patterns infeasible; a solver's claim, not re-checked)",
-                1: f"undecided (the search's time limit of {MILP_SECONDS:g} s was reached)",
-            }.get(result.status, f"undecided (the solver stopped: {result.message.strip()})")
-            return None, (
-                f"{what}: a mixed-integer search over the 3^{m} active/sign patterns "
-                f"(|w_i| <= {MILP_BOX:g} thresholds, HiGHS)"
-                + (
-                    f"; {refused} candidate pattern(s) refused by exact arithmetic"
-                    if refused
-                    else ""
-                )
+            return None, Searched(
+                SearchCode.MILP_NONE,
+                {
+                    "status": int(result.status),
+                    "message": str(result.message).strip(),
+                    "m": m,
+                    "box": MILP_BOX,
+                    "seconds": MILP_SECONDS,
+                    "refused": refused,
+                },
             )
         signs = np.round(result.x[N + m : N + 2 * m]) - np.round(result.x[N + 2 * m :])
         witness = _confirm(model, signs)
         if witness is not None:
-            return witness, (
-                f"found by a mixed-integer search over the 3^{m} active/sign patterns (HiGHS), "
-                "confirmed in exact arithmetic"
-            )
+            return witness, Searched(SearchCode.MILP_FOUND, {"m": m})
         refused += 1
         cut = np.zeros(nv)  # exclude this pattern: sum of the binaries that differ >= 1
         ones = np.concatenate([signs > 0, signs < 0])
         cut[N + m :] = np.where(ones, -1.0, 1.0)
         add(cut, 1.0 - float(ones.sum()), np.inf)
-    ended = "" if refused == MILP_ROUNDS else f"; its time limit of {MILP_SECONDS:g} s ended it"
-    return None, (
-        f"undecided: a mixed-integer search over the 3^{m} active/sign patterns found "
-        f"{refused} candidate patterns that exact arithmetic refused{ended}"
+    return None, Searched(
+        SearchCode.MILP_REFUSED,
+        {"m": m, "refused": refused, "seconds": MILP_SECONDS, "timed_out": refused != MILP_ROUNDS},
     )
 
 
 def attacked_equilibria(
     model: LureModel, attack: np.ndarray
-) -> tuple[list[dict[str, Any]], str, int]:
+) -> tuple[list[dict[str, Any]], Searched, int]:
     """Every equilibrium of the error dynamics under the constant attack ``attack`` (length
     r), each confirmed in exact arithmetic, with what was searched and the number of patterns
     whose equations were too ill-conditioned to decide (0 means the list is complete)."""
@@ -213,40 +209,36 @@ def attacked_equilibria(
         try:
             xi = np.linalg.solve(K, model.E @ a)
         except np.linalg.LinAlgError:
-            return [], "the linear error map has an eigenvalue 1: no unique equilibrium", 1
+            return [], Searched(SearchCode.LINEAR_SINGULAR), 1
         witness = {"initial_error": xi[: model.n_e], "attack_estimate": xi[model.n_e :],
                    "exact": False, "active_signs": np.zeros(0, int),
                    "error_is_zero": not np.any(xi[: model.n_e])}  # fmt: skip
-        return [witness], "the linear error dynamics' unique equilibrium", 0
+        return [witness], Searched(SearchCode.LINEAR_UNIQUE), 0
     scaling = model.balancing()
     if scaling is None:
         return _search(model, a, first=False)
     # the patterns' equations in balanced state coordinates (their conditioning does not
     # depend on the states' units there), each equilibrium scaled back exactly
-    found, note, undecided = _search(model.scaled(scaling), a, first=False)
+    found, searched, undecided = _search(model.scaled(scaling), a, first=False)
     n_e = model.n_e
     for eq in found:
         eq["point"] = eq["point"] * scaling
         eq["initial_error"] = eq["initial_error"] * scaling[:n_e]
         eq["attack_estimate"] = eq["attack_estimate"] * scaling[n_e:]
-    return found, note + " (in balanced state coordinates)", undecided
+    return found, replace(searched, balanced=True), undecided
 
 
 def _search(
     model: LureModel, attack: np.ndarray | None, *, first: bool
-) -> tuple[list[dict[str, Any]], str, int]:
+) -> tuple[list[dict[str, Any]], Searched, int]:
     """Equilibria of the soft threshold's active/sign patterns (nonzero ones without attack),
     confirmed exactly (the first only, or all), what was searched, and how many patterns were
     too ill-conditioned to decide."""
     m = model.m
     count = 3**m
     if count > MAX_PATTERNS:
-        return (
-            [],
-            f"not searched: 3^{m} = {format_count(count)} active/sign patterns exceed "
-            f"{MAX_PATTERNS:,}",
-            count,
-        )
+        too_many = {"m": m, "count": count, "most": MAX_PATTERNS}
+        return [], Searched(SearchCode.TOO_MANY_PATTERNS, too_many), count
     N, lam, q = model.N, model.threshold, model.q
     shift = np.zeros(m) if attack is None else model.Dw @ attack  # w = Cw xi + Dw a
     push = np.zeros(N) if attack is None else model.E @ attack
@@ -276,18 +268,10 @@ def _search(
             ):
                 found.append(witness)
                 if first:
-                    tried = f"{start + i + 1:,} of {count:,} active/sign patterns tried"
-                    return found, tried, singular
-    what = "nonzero equilibrium" if attack is None else "equilibrium"
-    note = (
-        f"{len(found)} {what}{'s' if len(found) != 1 else ''} among the {count:,} active/sign "
-        "patterns of the soft threshold"
-        if found or attack is not None
-        else f"none among the {count:,} active/sign patterns of the soft threshold"
-    )
-    if singular:
-        note += f" ({singular:,} with a singular or ill-conditioned system, not decided)"
-    return found, note, singular
+                    tried = {"tried": start + i + 1, "count": count}
+                    return found, Searched(SearchCode.FIRST_FOUND, tried), singular
+    tried = {"found": len(found), "count": count, "nonzero": attack is None, "singular": singular}
+    return found, Searched(SearchCode.PATTERNS_TRIED, tried), singular
 
 
 def _patterns(m: int, start: int, stop: int) -> np.ndarray:

@@ -24,7 +24,9 @@ __all__ = [
     "RegionCode",
     "SchurCode",
     "SchurState",
+    "SearchCode",
     "SearchStop",
+    "Searched",
     "SeriesCode",
     "SeriesFailure",
     "StopCode",
@@ -396,3 +398,46 @@ class SearchStop:
 
     code: StopCode
     facts: Mapping[str, Any] = field(default_factory=dict)
+
+
+class SearchCode(enum.Enum):
+    """What a search for a witness of instability (a nonzero equilibrium, an equilibrium under
+    a constant attack, a periodic orbit) looked at and found (words:
+    ``ssecert.stability.search_messages``)."""
+
+    #: the map has no soft threshold (or a zero shrink): nothing nonlinear to search
+    NO_NONLINEARITY = "no nonlinearity"
+    #: not searched: the budget refused it (facts: refusal)
+    REFUSED = "refused"
+    #: not searched: too many active/sign patterns (facts: m, count, most)
+    TOO_MANY_PATTERNS = "too many patterns"
+    #: the first confirmed equilibrium, after this many patterns (facts: tried, count)
+    FIRST_FOUND = "first found"
+    #: every pattern tried (facts: found, count, nonzero, singular)
+    PATTERNS_TRIED = "patterns tried"
+    #: the mixed-integer search found no pattern (facts: status, message, m, box, seconds,
+    #: refused)
+    MILP_NONE = "mixed-integer search, none"
+    #: the mixed-integer search found one, confirmed exactly (facts: m)
+    MILP_FOUND = "mixed-integer search, found"
+    #: every candidate of the mixed-integer search refused exactly (facts: m, refused, seconds,
+    #: timed_out)
+    MILP_REFUSED = "mixed-integer search, refused"
+    #: a linear error map with an eigenvalue 1: no unique equilibrium
+    LINEAR_SINGULAR = "linear, singular"
+    #: a linear error map's unique equilibrium
+    LINEAR_UNIQUE = "linear, unique"
+    #: a periodic orbit found and confirmed exactly (facts: samples, steps, period)
+    ORBIT_FOUND = "orbit found"
+    #: no periodic orbit (facts: samples, steps, alive, tried)
+    NO_ORBIT = "no orbit"
+
+
+@dataclass(frozen=True)
+class Searched:
+    """What a witness search looked at and found: a code, its numbers, and whether it ran in
+    balanced state coordinates."""
+
+    code: SearchCode
+    facts: Mapping[str, Any] = field(default_factory=dict)
+    balanced: bool = False

@@ -24,7 +24,7 @@ import numpy as np
 from ..budget import Budget
 from ..numerics.rational import product, solve
 from ..observers.lure import LureModel
-from .outcomes import WitnessKind
+from .outcomes import SearchCode, Searched, WitnessKind
 
 __all__ = ["periodic_orbit", "periodic_orbit_cost"]
 
@@ -42,11 +42,12 @@ def periodic_orbit_cost(model: LureModel) -> tuple[float, float]:
 
 def periodic_orbit(
     model: LureModel, *, seed: int = 0, budget: Budget | None = None
-) -> tuple[dict[str, Any] | None, str]:
-    """An exactly confirmed periodic orbit (the witness) or None, with what was searched;
-    not searched when its simulations do not fit ``budget`` (default ``Budget()``)."""
+) -> tuple[dict[str, Any] | None, Searched]:
+    """An exactly confirmed periodic orbit (the witness) or None, with what was searched (its
+    words: ``search_messages.searched_text``); not searched when its simulations do not fit
+    ``budget`` (default ``Budget()``)."""
     if model.m == 0 or model.q <= 0 or model.threshold <= 0:
-        return None, "no soft threshold: nothing to cycle"
+        return None, Searched(SearchCode.NO_NONLINEARITY, {"periodic": True})
     nbytes, flops = periodic_orbit_cost(model)
     refusal = (budget or Budget()).check(
         f"simulating {SAMPLES} initial errors for {STEPS:,} steps of the {model.N:,}-state "
@@ -55,7 +56,7 @@ def periodic_orbit(
         flops=flops,
     )
     if refusal is not None:
-        return None, f"not searched: {refusal}"
+        return None, Searched(SearchCode.REFUSED, {"refusal": refusal})
     rng = np.random.default_rng(seed)
     start = rng.standard_normal((SAMPLES, model.N))
     start /= np.linalg.norm(start, axis=1, keepdims=True)
@@ -75,16 +76,11 @@ def periodic_orbit(
                 tried += 1
                 witness = _confirm(model, path[-1 - k : -1, i])
                 if witness is not None:
-                    return witness, (
-                        f"{SAMPLES} initial errors simulated for {STEPS} steps; the tail of one "
-                        f"repeats every {k} steps and the orbit is confirmed exactly"
-                    )
+                    found = {"samples": SAMPLES, "steps": STEPS, "period": k}
+                    return witness, Searched(SearchCode.ORBIT_FOUND, found)
                 break
-    note = (
-        f"none: {SAMPLES} initial errors simulated for {STEPS} steps, {int(alive.sum())} "
-        f"neither converged nor diverged, {tried} periodic tails failed their exact confirmation"
-    )
-    return None, note
+    none = {"samples": SAMPLES, "steps": STEPS, "alive": int(alive.sum()), "tried": tried}
+    return None, Searched(SearchCode.NO_ORBIT, none)
 
 
 def _pattern(w: np.ndarray, lam: float) -> np.ndarray:
