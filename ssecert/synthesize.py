@@ -980,6 +980,7 @@ def verify_synthesis(design: Any, proposal: Any, *, clear: float = 100.0) -> dic
     numpy on ``design`` (the design built with the proposed gain), as every certificate is:
     ``verified``, the decay ``alpha`` and ``gamma`` it proves, the margin and its bound."""
     from .observers.lure import LureModel
+    from .stability.lmi_messages import verify_text
     from .stability.lmi_verification import verify_certificate
 
     if proposal.P is None or proposal.g is None:
@@ -1016,7 +1017,7 @@ def verify_synthesis(design: Any, proposal: Any, *, clear: float = 100.0) -> dic
     if ok:
         out.update(alpha=float(proposal.alpha or 0.0), gamma=float(np.sqrt(g)))
     else:
-        out["problem"] = problem
+        out["problem"] = None if problem is None else verify_text(problem)
     return out
 
 

@@ -297,3 +297,21 @@ def test_region_map_starts_no_point_past_its_time_limit():
     assert "cells_not_reached" not in region_map(design, [0.5], [0.1]).to_dict()
     assert region_time_limit(None) is None
     assert region_time_limit(0.0) == REGION_SECONDS and region_time_limit(500.0) == 500.0
+
+
+def test_every_verification_problem_has_words():
+    from ssecert.stability.lmi_messages import verify_text
+    from ssecert.stability.lmi_verification import decide, definite_problem
+    from ssecert.stability.outcomes import VerifyCode, VerifyProblem
+
+    facts = {"value": -1e-3, "channel": 2, "m0": 0.5, "total": 0.6, "smallest": -1e-9,
+             "margin": 1e-20, "clear": 100.0, "bound": 1e-16}  # fmt: skip
+    for code in VerifyCode:
+        assert verify_text(VerifyProblem(code, facts)), code
+    # P not clearly definite, then a margin below its error bound: codes with the numbers
+    assert definite_problem(np.diag([1.0, 1e-18]), 100.0).code is VerifyCode.NOT_CLEARLY_DEFINITE
+    assert definite_problem(np.eye(2), 100.0) is None
+    ok, _, _, problem = decide(np.eye(2), 1e-20, 1e-16, 100.0)
+    assert not ok and problem.code is VerifyCode.MARGIN_NOT_CLEAR
+    assert problem.facts == {"margin": 1e-20, "clear": 100.0, "bound": 1e-16}
+    assert decide(np.eye(2), 1.0, 1e-16, 100.0) == (True, 1.0, 1e-16, None)

@@ -12,6 +12,8 @@ from ssecert.observers import build_observer
 from ssecert.observers.lure import LureModel
 from ssecert.stability.checks import iss_gain_check, observer_stability_check
 from ssecert.stability.lmi import circle_certificate
+from ssecert.stability.lmi_messages import verify_text
+from ssecert.stability.outcomes import VerifyCode
 from ssecert.stability.region import region_map
 from ssecert.stability.zames_falb import (
     verify_zames_falb,
@@ -117,12 +119,14 @@ def test_a_tampered_zames_falb_certificate_is_refused():
     # the delayed coefficients larger than m0 allows: the inequality no longer holds
     short = (np.abs(a).sum(0) + np.abs(b).sum(0)) * 0.999
     ok, _, _, problem = verify_zames_falb(model, P, short, a, b)
-    assert not ok and "m0" in problem
+    assert not ok and problem.code is VerifyCode.CHANNEL_SHORT
+    assert problem.facts["m0"] < problem.facts["total"]
+    assert "m0 = " in verify_text(problem)
     # P from another design
     ok, *_ = verify_zames_falb(model, np.eye(P.shape[0]), m0, a, b)
     assert not ok
     ok, _, _, problem = verify_zames_falb(model, P, m0, a, b * np.nan)
-    assert not ok and "non-finite" in problem
+    assert not ok and problem.code is VerifyCode.NON_FINITE
 
 
 def test_the_zames_falb_gain_bounds_attacked_simulations():

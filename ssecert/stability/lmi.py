@@ -52,10 +52,10 @@ from ..budget import Budget, Refusal
 from ..observers.lure import LureModel, scaling_text
 from ..results import Verdict
 from . import lmi_messages
-from .lmi_messages import corner_reason
+from .lmi_messages import corner_reason, verify_text
 from .lmi_solver import ETA, _solve, lmi_cost  # noqa: F401  (ETA stays importable here)
 from .lmi_verification import circle_matrix, iss_matrix, verify_certificate
-from .outcomes import LMICause, LMICode
+from .outcomes import LMICause, LMICode, VerifyProblem
 
 __all__ = [
     "LureModel",
@@ -537,7 +537,7 @@ def _circle_search(
             return _holds(
                 model, P, t, margin, bound, st, {**details, "attempts": attempts}, LMICode.VERIFIED
             )
-        info["verification_problem"] = problem
+        info["verification_problem"] = None if problem is None else verify_text(problem)
     return LMICertificate(
         Verdict.INCONCLUSIVE,
         "circle",
@@ -663,7 +663,7 @@ def iss_certificate(
                 details={**details, "attempts": attempts, "gamma_squared": g_cert},
                 code=LMICode.VERIFIED,
             )
-        info["verification_problem"] = problem
+        info["verification_problem"] = None if problem is None else verify_text(problem)
     retry, note = balanced_retry(
         model,
         partial(
@@ -845,7 +845,7 @@ def _smallest_gain(gain: Callable[[float], float], grid: np.ndarray) -> tuple[fl
 
 def _verified_gain(
     model: LureModel, P: np.ndarray, t: np.ndarray, alpha: float, g: float, clear: float
-) -> tuple[bool, float, float, str, float]:
+) -> tuple[bool, float, float, VerifyProblem | None, float]:
     """``verify_certificate``'s answer for gamma^2 slightly above g, and that gamma^2.
 
     The Schur complement is tight by construction, so a relative margin of

@@ -15,9 +15,10 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from ..base.format import sig
-from .outcomes import LMICause
+from .outcomes import LMICause, VerifyCode, VerifyProblem
 
 __all__ = [
+    "verify_text",
     "balanced_note",
     "corner_reason",
     "not_written_back",
@@ -135,7 +136,7 @@ def _words(cause: LMICause, facts: Mapping[str, Any]) -> str:
     if cause is LMICause.ZAMES_FALB_NO_DISSIPATION:
         return f"no Zames-Falb dissipation certificate (order {facts['order']}: {facts['status']})"
     if cause is LMICause.ZAMES_FALB_GAIN_NOT_VERIFIED:
-        return f"the Zames-Falb gain was not verified: {facts['problem']}"
+        return f"the Zames-Falb gain was not verified: {_problem(facts['problem'])}"
     if cause is LMICause.P_OUT_OF_RANGE:
         return "the certificate's P leaves the float range in its balanced coordinates"
     if cause is LMICause.NOT_SCALED_BACK:
@@ -150,7 +151,7 @@ def _words(cause: LMICause, facts: Mapping[str, Any]) -> str:
             "is not defined for any scaling tried)"
         )
     if cause is LMICause.GAIN_NOT_VERIFIED:
-        return f"gain not verified: {facts['problem']}"
+        return f"gain not verified: {_problem(facts['problem'])}"
     raise ValueError(f"no words for {cause!r}")  # pragma: no cover - every cause has words
 
 
@@ -158,3 +159,32 @@ def reason(cause: LMICause, facts: Mapping[str, Any]) -> str:
     """Why a certificate of ``cause`` came out as it did (empty for a certified one), with the
     notes it gathered (``facts["notes"]``: balanced retries, a second multiplier) after."""
     return _words(cause, facts) + "".join(facts.get("notes", ()))
+
+
+def verify_text(problem: VerifyProblem) -> str:
+    """Why a recomputed certificate is not verified, in one clause."""
+    f, code = problem.facts, problem.code
+    if code is VerifyCode.NON_FINITE:
+        return "the certificate has non-finite entries"
+    if code is VerifyCode.NEGATIVE_MULTIPLIER:
+        return f"a multiplier is negative ({f['value']:.2e})"
+    if code is VerifyCode.CHANNEL_SHORT:
+        return (
+            f"channel {f['channel']}: m0 = {f['m0']:.3e} is not above the sum of the delayed "
+            f"coefficients' magnitudes {f['total']:.3e}"
+        )
+    if code is VerifyCode.NOT_CLEARLY_DEFINITE:
+        return f"P is not clearly positive definite (lambda_min {f['smallest']:.2e})"
+    if code is VerifyCode.CHOLESKY_FAILED:
+        return "P fails the Cholesky test"
+    if code is VerifyCode.MARGIN_NOT_CLEAR:
+        return (
+            f"the recomputed LMI has largest eigenvalue {-f['margin']:.2e} ||P||, not below "
+            f"-{f['clear']:g} x the error bound {f['bound']:.2e}"
+        )
+    raise ValueError(f"no words for {code}")  # pragma: no cover - every code has words
+
+
+def _problem(problem: VerifyProblem | None) -> str:
+    """A verification problem's clause, empty for none (a verified certificate has none)."""
+    return "" if problem is None else verify_text(problem)

@@ -13,6 +13,7 @@ import numpy as np
 
 from ..observers.lure import LureModel
 from ..tolerances import EPS
+from .outcomes import VerifyCode, VerifyProblem
 
 __all__ = ["circle_matrix", "iss_matrix", "verify_certificate", "definite_problem", "decide"]
 
@@ -77,18 +78,18 @@ def _error_bound(
     return 10.0 * size * EPS * raw / normP + data * (1 + 1e-12) / normP
 
 
-def definite_problem(P: np.ndarray, clear: float) -> str:
-    """Empty when the symmetric P is clearly positive definite: its smallest eigenvalue beats
+def definite_problem(P: np.ndarray, clear: float) -> VerifyProblem | None:
+    """None when the symmetric P is clearly positive definite: its smallest eigenvalue beats
     ``clear`` times a rounding bound and P minus half of it passes a Cholesky test."""
     normP = max(float(np.linalg.norm(P, 2)), np.finfo(float).tiny)
     p_eigs = np.linalg.eigvalsh(P)
     if p_eigs[0] <= clear * 10 * P.shape[0] * EPS * normP:
-        return f"P is not clearly positive definite (lambda_min {p_eigs[0]:.2e})"
+        return VerifyProblem(VerifyCode.NOT_CLEARLY_DEFINITE, {"smallest": float(p_eigs[0])})
     try:
         np.linalg.cholesky(P - 0.5 * p_eigs[0] * np.eye(P.shape[0]))
     except np.linalg.LinAlgError:
-        return "P fails the Cholesky test"
-    return ""
+        return VerifyProblem(VerifyCode.CHOLESKY_FAILED)
+    return None
 
 
 def verify_certificate(
@@ -100,7 +101,7 @@ def verify_certificate(
     alpha: float = 0.0,
     g: float = 0.0,
     clear: float = 100.0,
-) -> tuple[bool, float, float, str]:
+) -> tuple[bool, float, float, VerifyProblem | None]:
     """Re-verify a certificate without the solver.
 
     Returns
@@ -110,15 +111,16 @@ def verify_certificate(
         ``-lambda_max(LMI) / ||P||``.
     bound : float
         Error bound on that quantity.
-    problem : str
-        Empty when ok.
+    problem : VerifyProblem or None
+        Why it is not verified (None when ok); its words: ``lmi_messages.verify_text``.
     """
     P = 0.5 * (np.asarray(P, dtype=float) + np.asarray(P, dtype=float).T)
     t = np.asarray(t, dtype=float)
     if not (np.all(np.isfinite(P)) and np.all(np.isfinite(t))):
-        return False, float("nan"), 0.0, "the certificate has non-finite entries"
+        return False, float("nan"), 0.0, VerifyProblem(VerifyCode.NON_FINITE)
     if model.m and t.min(initial=0.0) < 0:
-        return False, float("nan"), 0.0, f"a multiplier is negative ({t.min():.2e})"
+        negative = VerifyProblem(VerifyCode.NEGATIVE_MULTIPLIER, {"value": float(t.min())})
+        return False, float("nan"), 0.0, negative
     M = circle_matrix(model, P, t, alpha) if kind == "circle" else iss_matrix(model, P, t, alpha, g)
     normP = max(float(np.linalg.norm(P, 2)), np.finfo(float).tiny)
     lam = float(np.linalg.eigvalsh(M)[-1])
@@ -129,20 +131,13 @@ def verify_certificate(
 
 def decide(
     P: np.ndarray, margin: float, bound: float, clear: float
-) -> tuple[bool, float, float, str]:
+) -> tuple[bool, float, float, VerifyProblem | None]:
     """A recomputed LMI's verdict: P clearly positive definite and the margin (``-lambda_max /
-    ||P||``) above ``clear`` times its rounding bound; (ok, margin, bound, problem)."""
+    ||P||``) above ``clear`` times its rounding bound; (ok, margin, bound, problem or None)."""
     problem = definite_problem(P, clear)
-    if problem:
+    if problem is not None:
         return False, margin, bound, problem
     if margin <= clear * bound:
-        return (
-            False,
-            margin,
-            bound,
-            (
-                f"the recomputed LMI has largest eigenvalue {-margin:.2e} ||P||, not below "
-                f"-{clear:g} x the error bound {bound:.2e}"
-            ),
-        )
-    return True, margin, bound, ""
+        facts = {"margin": margin, "clear": clear, "bound": bound}
+        return False, margin, bound, VerifyProblem(VerifyCode.MARGIN_NOT_CLEAR, facts)
+    return True, margin, bound, None

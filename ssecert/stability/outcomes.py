@@ -30,6 +30,8 @@ __all__ = [
     "SeriesCode",
     "SeriesFailure",
     "StopCode",
+    "VerifyCode",
+    "VerifyProblem",
     "WitnessKind",
 ]
 
@@ -441,3 +443,30 @@ class Searched:
     code: SearchCode
     facts: Mapping[str, Any] = field(default_factory=dict)
     balanced: bool = False
+
+
+class VerifyCode(enum.Enum):
+    """Why a certificate recomputed in numpy (``ssecert.stability.lmi_verification``,
+    ``zames_falb.verify_zames_falb``) is not verified (words: ``lmi_messages.verify_text``)."""
+
+    #: the certificate has non-finite entries
+    NON_FINITE = "non-finite"
+    #: a multiplier is negative (facts: value)
+    NEGATIVE_MULTIPLIER = "negative multiplier"
+    #: a Zames-Falb channel's m0 is not above its delayed coefficients (facts: channel, m0,
+    #: total)
+    CHANNEL_SHORT = "channel short"
+    #: P's smallest eigenvalue does not clear its rounding (facts: smallest)
+    NOT_CLEARLY_DEFINITE = "P not clearly definite"
+    #: P minus half its smallest eigenvalue fails a Cholesky factorization
+    CHOLESKY_FAILED = "P fails Cholesky"
+    #: the LMI's margin does not clear its error bound (facts: margin, clear, bound)
+    MARGIN_NOT_CLEAR = "margin not clear"
+
+
+@dataclass(frozen=True)
+class VerifyProblem:
+    """Why a recomputed certificate is not verified: a code and its numbers."""
+
+    code: VerifyCode
+    facts: Mapping[str, Any] = field(default_factory=dict)

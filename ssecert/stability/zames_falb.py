@@ -67,9 +67,10 @@ from .lmi import (
     output_scaled,
     where_verified,
 )
+from .lmi_messages import verify_text
 from .lmi_solver import ETA, _run_clarabel
 from .lmi_verification import decide
-from .outcomes import LMICause, LMICode
+from .outcomes import LMICause, LMICode, VerifyCode, VerifyProblem
 
 __all__ = [
     "ORDERS",
@@ -160,28 +161,24 @@ def verify_zames_falb(
     *,
     g: float | None = None,
     clear: float = 100.0,
-) -> tuple[bool, float, float, str]:
-    """Re-verify a Zames-Falb certificate without the solver: (ok, margin, bound, problem).
+) -> tuple[bool, float, float, VerifyProblem | None]:
+    """Re-verify a Zames-Falb certificate without the solver: (ok, margin, bound, problem or
+    None).
 
     margin is ``-lambda_max(LMI) / ||P||``; bound its rounding error bound.
     """
     P = 0.5 * (np.asarray(P, dtype=float) + np.asarray(P, dtype=float).T)
     m0, a, b = (np.asarray(x, dtype=float) for x in (m0, a, b))
     if not all(np.all(np.isfinite(x)) for x in (P, m0, a, b)):
-        return False, float("nan"), 0.0, "the certificate has non-finite entries"
+        return False, float("nan"), 0.0, VerifyProblem(VerifyCode.NON_FINITE)
     nu = a.shape[0]
     total = np.abs(a).sum(axis=0) + np.abs(b).sum(axis=0)
     guard = 1.0 + 4.0 * (2 * nu + 2) * EPS
     short = m0 < guard * total
     if np.any(short) or np.any(m0 < 0):
         i = int(np.argmax(short | (m0 < 0)))
-        return (
-            False,
-            float("nan"),
-            0.0,
-            f"channel {i}: m0 = {m0[i]:.3e} is not above the sum of the delayed coefficients' "
-            f"magnitudes {total[i]:.3e}",
-        )
+        facts = {"channel": i, "m0": float(m0[i]), "total": float(total[i])}
+        return False, float("nan"), 0.0, VerifyProblem(VerifyCode.CHANNEL_SHORT, facts)
     M = zames_falb_matrix(model, P, m0, a, b, g)
     normP = max(float(np.linalg.norm(P, 2)), np.finfo(float).tiny)
     margin = -float(np.linalg.eigvalsh(M)[-1]) / normP
@@ -332,7 +329,7 @@ def zames_falb_certificate(
         info["verified"] = ok
         if ok:
             return _certificate(model, sol, margin, bound, attempts)
-        info["verification_problem"] = problem
+        info["verification_problem"] = None if problem is None else verify_text(problem)
     retry, note = balanced_retry(
         model,
         partial(
@@ -448,7 +445,7 @@ def zames_falb_gain(
             solver_options,
             balance,
         )
-    problem = ""
+    problem = None
     for g_cert in (g * (1 + 1e-6) + 1e-9 * c**2, g * 1.01 + 1e-6 * c**2):
         ok, margin, bound, problem = verify_zames_falb(model, *sol, g=g_cert, clear=clear)
         if ok:
