@@ -13,7 +13,15 @@ from ssecert.results import Verdict
 from ssecert.stability import lmi_messages, lyapunov_messages, spectral_messages
 from ssecert.stability.lmi import LMICertificate, LureModel, circle_certificate
 from ssecert.stability.lyapunov import LyapunovMethod, lyapunov_certificate
-from ssecert.stability.outcomes import LMICause, LMICode, LyapunovCode, SchurCode, SchurState
+from ssecert.stability.outcomes import (
+    LMICause,
+    LMICode,
+    LyapunovCode,
+    SchurCode,
+    SchurState,
+    VerifyCode,
+    VerifyProblem,
+)
 from ssecert.stability.spectral import EXACT_SCHUR_LIMIT, schur_decision
 from ssecert.stability.zames_falb import zames_falb_certificate
 
@@ -218,7 +226,7 @@ def test_every_lmi_cause_has_words_and_notes_follow_them():
         "attempts": [{"structure": "full", "status": "infeasible", "order": 1}],
         "order": 2,
         "status": "infeasible",
-        "problem": "PROBLEM",
+        "problem": VerifyProblem(VerifyCode.CHOLESKY_FAILED),
     }
     for cause in LMICause:
         words = lmi_messages.reason(cause, facts)
@@ -230,6 +238,9 @@ def test_every_lmi_cause_has_words_and_notes_follow_them():
     assert "0, 0.5" in lmi_messages.reason(LMICause.CORNER_UNSTABLE, facts)
     assert "full: infeasible" in lmi_messages.reason(LMICause.CIRCLE_NOT_VERIFIED, facts)
     assert "order 1: infeasible" in lmi_messages.reason(LMICause.ZAMES_FALB_NOT_VERIFIED, facts)
+    assert lmi_messages.reason(LMICause.GAIN_NOT_VERIFIED, facts).endswith(
+        "gain not verified: P fails the Cholesky test"
+    )
     assert "dead zone" in lmi_messages.reason(LMICause.ERROR_MATRIX_UNSTABLE, facts)
     assert "dead zone" not in lmi_messages.reason(
         LMICause.ERROR_MATRIX_UNSTABLE, {**facts, "channels": 0}
