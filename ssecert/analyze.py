@@ -101,6 +101,7 @@ def reconcile(checks: list[Check]) -> tuple[list[Check], list[str]]:
             by_id[this] = replace(
                 c,
                 verdict=Verdict.INCONCLUSIVE,
+                code=None,  # its code said why it had the verdict withdrawn
                 summary=(
                     f"Withdrawn: this check said {c.verdict.value} but contradicts "
                     f"{other} ({why}); please report this plant. Original: {c.summary}"

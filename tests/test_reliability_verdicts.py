@@ -398,6 +398,8 @@ def test_contradicting_checks_are_withdrawn_not_reported():
     by_id = {c.id: c for c in fixed}
     assert by_id["observability"].verdict.value == "inconclusive"
     assert by_id["sparse_observability"].verdict.value == "inconclusive"
+    assert cert["sparse_observability"].code is not None  # (it said why it held)
+    assert by_id["sparse_observability"].code is None  # withdrawn: no code says why now
     assert "contradicts sparse_observability" in by_id["observability"].summary
     assert notes and by_id["irrepresentable"] == cert["irrepresentable"]
     untouched, none = reconcile(list(cert.checks))

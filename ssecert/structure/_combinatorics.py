@@ -701,7 +701,10 @@ class ColexScreen:
         H^(1/2) (I - H^(-1/2) E H^(-1/2)) H^(1/2)``, so where the sum s of the c of the
         other items is below 1, ``lambda_min(G) >= mu + lambda_min(H) (1 - s)``.  A shift
         ``mu`` near the threshold of the ranking (``screen``) proves most sets above it
-        where ``mu = 0`` proves them only positive definite."""
+        where ``mu = 0`` proves them only positive definite.  Taken off: ``_bound_slack``
+        (the float64 sums, the items against their factors, LAPACK's backward error),
+        ``_shift_rounding`` (K against ``H - mu I``) and the rounding of the bound's own
+        operations."""
         low = np.full(size, -np.inf)
         if self.factors is None:
             return low
@@ -711,8 +714,11 @@ class ColexScreen:
                 continue
             shift, lam, c, sums, rounding = bound
             s = sums[first:last] + c[list(top[:-1])].sum()
+            # less the slack, the rounding of K, and that of the bound's own three operations
+            # (at most 4 u (shift + lambda): 1 - s and its product are within lambda)
+            off = self._slack + rounding + 4 * _U64 * (shift + lam)
             low[row : row + last - first] = np.where(
-                s < 1.0, shift + lam * (1.0 - s) - (self._slack + rounding), -np.inf
+                s < 1.0, shift + lam * (1.0 - s) - off, -np.inf
             )
         return low
 
@@ -850,14 +856,17 @@ def _shared_bound(
     items[t]`` (K differs from ``H - mu I`` by ``_shift_rounding``).
 
     The eigendecomposition of K is backward stable: its eigenvalues are within ``64 n u
-    ||K||`` of K's (a generous multiple of LAPACK's bound).  When K's condition number is
-    below 1e6, the computed c are within a relative 1e-8 of the exact ones; they are taken
-    1e-5 relatively (and 1e-12 absolutely) above.
+    ||K||`` of K's (a generous multiple of LAPACK's bound).  The computed c are then within
+    a relative ``kappa 64 n u`` of the exact ones (kappa the condition number of K), which
+    the condition cap keeps below 1e-6 (kappa at most 1e6, less for n above about 140); they
+    are taken 1e-5 relatively (and 1e-12 absolutely) above, which also covers the rounding
+    of their sums.
     """
     n = H.shape[-1]
     lam, V = np.linalg.eigh(H - mu * np.eye(n) if mu else H)
     lowest = lam[0] - 64 * n * _U64 * max(abs(lam[0]), abs(lam[-1]))
-    if not np.all(np.isfinite(lam)) or lowest <= 0 or lam[-1] > 1e6 * lowest:
+    cap = min(1e6, 1e-6 / (64 * n * _U64))
+    if not np.all(np.isfinite(lam)) or lowest <= 0 or lam[-1] > cap * lowest:
         return None
     Z = np.einsum("brn,nj->brj", factors[:t], V / np.sqrt(lam))
     c = np.linalg.eigvalsh(Z @ Z.transpose(0, 2, 1))[:, -1] if t else np.zeros(0)
