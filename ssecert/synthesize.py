@@ -1017,7 +1017,7 @@ def verify_synthesis(design: Any, proposal: Any, *, clear: float = 100.0) -> dic
     if ok:
         out.update(alpha=float(proposal.alpha or 0.0), gamma=float(np.sqrt(g)))
     else:
-        out["problem"] = None if problem is None else verify_text(problem)
+        out["problem"] = verify_text(problem)
     return out
 
 

@@ -128,8 +128,8 @@ def observer_stability_check(
         searches = {
             "divergent_trajectory": "none: the large-signal loop A + shrink B Cw has spectral "
             f"radius {sig(radius, 6)}, {why}",
-            "nonzero_equilibrium": "" if searched is None else searched_text(searched),
-            "periodic_orbit": "" if cycled is None else searched_text(cycled),
+            "nonzero_equilibrium": searched_text(searched),
+            "periodic_orbit": searched_text(cycled),
         }
         return replace(check, evidence={**check.evidence, "searches": searches}), (model, cert)
     return _circle_stability_check(design, model, cert, tol, title), (model, cert)

@@ -537,7 +537,7 @@ def _circle_search(
             return _holds(
                 model, P, t, margin, bound, st, {**details, "attempts": attempts}, LMICode.VERIFIED
             )
-        info["verification_problem"] = None if problem is None else verify_text(problem)
+        info["verification_problem"] = verify_text(problem)
     return LMICertificate(
         Verdict.INCONCLUSIVE,
         "circle",
@@ -663,7 +663,7 @@ def iss_certificate(
                 details={**details, "attempts": attempts, "gamma_squared": g_cert},
                 code=LMICode.VERIFIED,
             )
-        info["verification_problem"] = None if problem is None else verify_text(problem)
+        info["verification_problem"] = verify_text(problem)
     retry, note = balanced_retry(
         model,
         partial(

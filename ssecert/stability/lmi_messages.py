@@ -136,7 +136,7 @@ def _words(cause: LMICause, facts: Mapping[str, Any]) -> str:
     if cause is LMICause.ZAMES_FALB_NO_DISSIPATION:
         return f"no Zames-Falb dissipation certificate (order {facts['order']}: {facts['status']})"
     if cause is LMICause.ZAMES_FALB_GAIN_NOT_VERIFIED:
-        return f"the Zames-Falb gain was not verified: {_problem(facts['problem'])}"
+        return f"the Zames-Falb gain was not verified: {verify_text(facts['problem'])}"
     if cause is LMICause.P_OUT_OF_RANGE:
         return "the certificate's P leaves the float range in its balanced coordinates"
     if cause is LMICause.NOT_SCALED_BACK:
@@ -151,7 +151,7 @@ def _words(cause: LMICause, facts: Mapping[str, Any]) -> str:
             "is not defined for any scaling tried)"
         )
     if cause is LMICause.GAIN_NOT_VERIFIED:
-        return f"gain not verified: {_problem(facts['problem'])}"
+        return f"gain not verified: {verify_text(facts['problem'])}"
     raise ValueError(f"no words for {cause!r}")  # pragma: no cover - every cause has words
 
 
@@ -161,8 +161,11 @@ def reason(cause: LMICause, facts: Mapping[str, Any]) -> str:
     return _words(cause, facts) + "".join(facts.get("notes", ()))
 
 
-def verify_text(problem: VerifyProblem) -> str:
-    """Why a recomputed certificate is not verified, in one clause."""
+def verify_text(problem: VerifyProblem | None) -> str:
+    """Why a recomputed certificate is not verified, in one clause (empty for None: a verified
+    certificate has no problem)."""
+    if problem is None:
+        return ""
     f, code = problem.facts, problem.code
     if code is VerifyCode.NON_FINITE:
         return "the certificate has non-finite entries"
@@ -183,8 +186,3 @@ def verify_text(problem: VerifyProblem) -> str:
             f"-{f['clear']:g} x the error bound {f['bound']:.2e}"
         )
     raise ValueError(f"no words for {code}")  # pragma: no cover - every code has words
-
-
-def _problem(problem: VerifyProblem | None) -> str:
-    """A verification problem's clause, empty for none (a verified certificate has none)."""
-    return "" if problem is None else verify_text(problem)

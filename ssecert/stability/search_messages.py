@@ -9,8 +9,10 @@ from .outcomes import SearchCode, Searched
 __all__ = ["searched_text"]
 
 
-def searched_text(searched: Searched) -> str:
-    """What a witness search looked at and found, in one clause."""
+def searched_text(searched: Searched | None) -> str:
+    """What a witness search looked at and found, in one clause (empty for None: not run)."""
+    if searched is None:
+        return ""
     text = _text(searched)
     return text + " (in balanced state coordinates)" if searched.balanced else text
 

@@ -329,7 +329,7 @@ def zames_falb_certificate(
         info["verified"] = ok
         if ok:
             return _certificate(model, sol, margin, bound, attempts)
-        info["verification_problem"] = None if problem is None else verify_text(problem)
+        info["verification_problem"] = verify_text(problem)
     retry, note = balanced_retry(
         model,
         partial(

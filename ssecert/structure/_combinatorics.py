@@ -774,10 +774,10 @@ class ColexScreen:
             # they are most of it), then LAPACK for those it leaves open
             every = rows.size > N * _GATHER_FRACTION
             passed, smallest = self._single_tier(pieces, N, work, diagonal, None if every else rows)
-            low = smallest.astype(np.float64) ** 2 + shift
             ok_rows = slice(None) if every else rows
             ok[ok_rows] |= passed
             if screen.low is not None:
+                low = smallest.astype(np.float64) ** 2 + shift
                 screen.low[ok_rows] = np.where(
                     passed, np.maximum(screen.low[ok_rows], low), screen.low[ok_rows]
                 )

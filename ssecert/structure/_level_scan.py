@@ -217,10 +217,12 @@ def _batches(lo: int, hi: int, size: int, first: int | None = None) -> list[tupl
     ``hi``, then ``size`` ranks each (the lowest may be shorter)."""
     if first is None:
         return [(start, min(start + size, hi)) for start in reversed(range(lo, hi, size))]
+    if hi <= lo:
+        return []
     out = [(max(hi - first, lo), hi)]
     while out[-1][0] > lo:
         out.append((max(out[-1][0] - size, lo), out[-1][0]))
-    return out if hi > lo else []
+    return out
 
 
 def _refine_blocks(
