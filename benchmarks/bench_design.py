@@ -22,11 +22,11 @@ import cvxpy as cp
 import numpy as np
 from _common import row
 
+from ssecert.design.search import design_observer
 from ssecert.design.synthesis import synthesize_gain
 from ssecert.examples import load_example
 from ssecert.observers import build_observer
 from ssecert.observers.lure import LureModel
-from ssecert.synthesize import design_observer
 
 CASE = "random-n15-p30"
 PARAMS = {"kind": "elastic_net", "step": 0.3, "threshold": 0.1, "shrink": 0.3}

@@ -23,13 +23,13 @@ from .base import display as _display
 if TYPE_CHECKING:  # the lazily imported names, for type checkers and editors
     from .analyze import analyze
     from .certify import certify
+    from .design.search import design
     from .results import Certificate, Check, Verdict
     from .spec import Spec, SpecError, load_spec, spec_from_dict
     from .structure.attacks import StealthyAttack, stealthy_attack
     from .structure.irrepresentable import irrepresentable, irrepresentable_constant
     from .structure.observability import observability, observability_index
     from .structure.sparse import RemovalScan, scan_removals, sparse_observability
-    from .synthesize import design
     from .system import System
     from .tolerances import Tolerances
 
@@ -46,7 +46,7 @@ _LAZY = {
     "Tolerances": ".tolerances",
     "analyze": ".analyze",
     "certify": ".certify",
-    "design": ".synthesize",
+    "design": ".design.search",
     "observability": ".structure.observability",
     "observability_index": ".structure.observability",
     "sparse_observability": ".structure.sparse",
@@ -109,7 +109,7 @@ class _Package(types.ModuleType):
     Importing ``ssecert.analyze`` (the module) binds it as the package's attribute
     ``analyze``, which is the function ``ssecert.analyze(spec)``; that binding is refused,
     so the function is found (lazily) whoever imported the module first.  The modules stay
-    importable by name (``from ssecert.design import place_gain``, ``import
+    importable by name (``from ssecert.design.gains import place_gain``, ``import
     ssecert.certify``): Python finds them in ``sys.modules``.
     """
 

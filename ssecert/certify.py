@@ -59,7 +59,7 @@ class CertifyResult:
     notes : tuple of str
     comparison : dict or None
         For ``ssecert design``: the synthesised design beside the spec's own
-        (``ssecert.synthesize.compare_designs``).
+        (``ssecert.design.search.compare_designs``).
     """
 
     spec: Spec

@@ -39,7 +39,7 @@ LAYERS = {
     1: ("ssecert.design", "ssecert.observers"),
     2: ("ssecert.spec", "ssecert.examples", "ssecert.inputs", "ssecert.schemas"),
     3: ("ssecert.structure", "ssecert.stability", "ssecert.simulation", "ssecert.estimators"),
-    4: ("ssecert.analyze", "ssecert.certify", "ssecert.synthesize"),
+    4: ("ssecert.analyze", "ssecert.certify", "ssecert.design.search", "ssecert.synthesize"),
     5: ("ssecert.report", "ssecert.experiments"),
     6: (
         "ssecert.cli",
@@ -252,3 +252,16 @@ def test_the_package_root_holds_public_modules_and_subpackages():
         if p.name.startswith("_") and p.name not in ("__init__.py", "__main__.py", "_version.py")
     )
     assert not private, private
+
+
+def test_the_design_command_lives_beside_the_gains_and_stays_importable_where_documented():
+    import ssecert
+    import ssecert.synthesize as old
+    from ssecert.design import search
+
+    assert ssecert.design is search.design
+    assert old.design_observer is search.design_observer
+    assert old.compare_designs is search.compare_designs
+    assert set(search.__all__) <= set(old.__all__)
+    # the gains' package does not bring the command (and analyze) with it
+    assert "ssecert.design.search" not in GRAPH["ssecert.design"]

@@ -11,8 +11,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from ssecert.design.search import choose_decay, compare_designs, design_observer, no_faster
 from ssecert.simulation.metrics import absolute_error, initial_relative_error
-from ssecert.synthesize import choose_decay, compare_designs, design_observer, no_faster
 from ssecert.system import System
 
 

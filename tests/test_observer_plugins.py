@@ -17,6 +17,7 @@ from ssecert.budget import Budget
 from ssecert.certify import certify
 from ssecert.cli import main
 from ssecert.design.gains import Gain, pinv_gain
+from ssecert.design.search import design_kinds, objective_refusal
 from ssecert.observers import (
     BUILTIN_KINDS,
     LinearObserver,
@@ -30,7 +31,6 @@ from ssecert.observers import (
 )
 from ssecert.report.html import render_report
 from ssecert.spec import SpecError, spec_from_dict
-from ssecert.synthesize import design_kinds, objective_refusal
 from ssecert.testing import assert_schur
 from ssecert.testing.strategies import observer_designs
 from ssecert.tolerances import Tolerances
@@ -182,9 +182,12 @@ def test_a_kind_defined_in_a_test_is_offered_by_design(damped):
     assert "damped_pinv" in design_kinds()
     assert design_kinds()[0] == "elastic_net"  # the default stays the built-in one
     # it is designed for the gain objective alone, and says who takes the others
-    assert objective_refusal("gain", "damped_pinv") == ""
+    assert objective_refusal("gain", "damped_pinv") is None
     refusal = objective_refusal("roa", "damped_pinv")
-    assert refusal.startswith("objective 'roa' is for the D-SSO (shrink 1), got kind 'damped_pinv'")
+    assert refusal is not None and refusal.takers == ("the D-SSO (shrink 1)",)
+    assert str(refusal).startswith(
+        "objective 'roa' is for the D-SSO (shrink 1), got kind 'damped_pinv'"
+    )
     with pytest.raises(ValueError, match="objective 'rate' is for the elastic-net observer"):
         ssecert.design(System(A, C), "damped_pinv", objective="rate")
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ssecert.design.synthesis import synthesize_gain, with_gain
+from ssecert.design.synthesis import GainSynthesis, SynthesisCode, synthesize_gain, with_gain
 from ssecert.examples import load_example
 from ssecert.observers import build_observer
 from ssecert.observers.lure import LureModel
@@ -60,7 +60,8 @@ def test_synthesised_gains_on_random_plants_are_certified_and_converge(seed):
 def test_a_dsso_with_shrink_one_on_an_integrator_has_no_certified_gain():
     spec = load_example("ugv")
     found = synthesize_gain(build_observer(spec.system, spec.observer))
-    assert found.L is None and "infeasible" in found.status.lower()
+    assert found.L is None and found.code is SynthesisCode.NOT_SOLVED
+    assert found.status == found.solver  # the solver's own status, as it said it
 
 
 def test_a_luenberger_gain_is_synthesised_and_certified():
@@ -91,8 +92,8 @@ def test_the_designed_observer_written_to_toml_certifies_with_the_same_gain():
     import tomllib
 
     from ssecert import analyze, spec_from_dict
+    from ssecert.design.search import design_observer
     from ssecert.spec.write import dumps, spec_document
-    from ssecert.synthesize import design_observer
 
     spec = load_example("ugv")
     result = design_observer(spec.system, "elastic_net")
@@ -107,7 +108,7 @@ def test_the_designed_observer_written_to_toml_certifies_with_the_same_gain():
 
 
 def test_design_refuses_what_it_cannot_design():
-    from ssecert.synthesize import design_observer
+    from ssecert.design.search import design_observer
 
     spec = load_example("ugv")
     with pytest.raises(ValueError, match="kind"):
@@ -121,8 +122,8 @@ def test_design_refuses_what_it_cannot_design():
 
 
 def test_the_rate_objective_certifies_a_faster_decay_than_the_gain_objective():
+    from ssecert.design.search import verify_synthesis
     from ssecert.design.synthesis import synthesize_rate_gain
-    from ssecert.synthesize import verify_synthesis
 
     spec = load_example("ugv")
     params = {"kind": "elastic_net", "gain": "deadbeat", "step": 0.3, "threshold": 0.1}
@@ -142,7 +143,7 @@ def test_the_rate_objective_certifies_a_faster_decay_than_the_gain_objective():
 
 
 def test_a_certificate_of_another_gain_is_not_verified():
-    from ssecert.synthesize import verify_synthesis
+    from ssecert.design.search import verify_synthesis
 
     spec = load_example("ugv")
     params = {"kind": "elastic_net", "gain": "deadbeat", "step": 0.3, "threshold": 0.1}
@@ -153,7 +154,7 @@ def test_a_certificate_of_another_gain_is_not_verified():
 
 @pytest.mark.slow
 def test_the_roa_objective_widens_the_thesis_region_of_attraction():
-    from ssecert.synthesize import design_observer
+    from ssecert.design.search import design_observer
 
     spec = load_example("ugv")
     result = design_observer(spec.system, "dsso", objective="roa", time_budget=120)
@@ -164,7 +165,7 @@ def test_the_roa_objective_widens_the_thesis_region_of_attraction():
 
 
 def test_the_search_starts_in_the_middle_and_stops_at_the_budget():
-    from ssecert.synthesize import design_observer
+    from ssecert.design.search import design_observer
 
     spec = load_example("ugv")
     result = design_observer(spec.system, "elastic_net", time_budget=0)
@@ -191,7 +192,7 @@ def test_on_random_plants_the_report_compares_the_designs_on_the_same_seeds(seed
     import tomllib
 
     from ssecert import spec_from_dict
-    from ssecert.synthesize import design_observer, design_report, design_spec_text
+    from ssecert.design.search import design_observer, design_report, design_spec_text
 
     rng = np.random.default_rng(100 + seed)
     n, p = 3, 5
@@ -256,13 +257,17 @@ def test_a_synthesis_lmi_over_the_memory_budget_is_refused():
     params = {"kind": "elastic_net", "gain": "deadbeat", "step": 0.3, "threshold": 0.1}
     template = build_observer(spec.system, {**params, "shrink": 0.5})
     found = synthesize_gain(template, budget=Budget(memory=1000))
-    assert found.L is None and "over the memory budget" in found.status
+    assert found.L is None and found.code is SynthesisCode.REFUSED
+    model, rows = LureModel.from_design(template), found.rows
+    assert rows == model.N + model.m + model.r + spec.system.n
+    assert found.refusal is not None and found.refusal.limit == 1000
+    assert found.refusal.need == 8.0 * (rows * (rows + 1) / 2) ** 2
 
 
 def test_the_comparison_says_which_scenarios_it_could_not_compare():
     from types import SimpleNamespace
 
-    from ssecert.synthesize import compare_designs
+    from ssecert.design.search import compare_designs
 
     def result(finals, label):
         sims = {
@@ -297,7 +302,7 @@ def test_the_comparison_says_which_scenarios_it_could_not_compare():
 def test_a_spec_without_scenarios_says_so():
     from types import SimpleNamespace
 
-    from ssecert.synthesize import compare_designs
+    from ssecert.design.search import compare_designs
 
     def result(label):
         spec = SimpleNamespace(observer={"kind": label})
@@ -306,3 +311,25 @@ def test_a_spec_without_scenarios_says_so():
 
     out = compare_designs(result("dsso"), result("elastic_net"))
     assert out["scenarios"] == [] and out["summary"].startswith("The spec has no scenarios")
+
+
+def test_the_words_of_each_way_a_synthesis_ends():
+    from ssecert.budget import Refusal, Resource
+
+    def words(code, **facts):
+        return GainSynthesis(None, None, code, 0.0, **facts).status
+
+    assert words(SynthesisCode.SOLVED, solver="optimal") == "optimal"
+    assert words(SynthesisCode.NOT_SOLVED, solver="infeasible") == "infeasible"
+    refusal = Refusal("the synthesis LMI", Resource.MEMORY, 3 * 2**30, 2**30)
+    assert words(SynthesisCode.REFUSED, refusal=refusal, rows=40) == (
+        "refused: the synthesis LMI has 40 rows; its interior-point system needs about 3 GiB, "
+        "over the memory budget of 1 GiB"
+    )
+    assert words(SynthesisCode.SOLVER_FAILED, solver="SolverError") == "solver failed (SolverError)"
+    assert words(SynthesisCode.NOT_FINITE) == "the solver's gain is not finite"
+    assert words(SynthesisCode.TIME_LIMIT) == "the time limit ended the bisection"
+    assert words(SynthesisCode.NO_DECAY, decay=0.5) == "no decay above 0.5 is feasible"
+    assert GainSynthesis(None, None, SynthesisCode.TIME_LIMIT, 1.5).to_dict()["status"] == (
+        "the time limit ended the bisection"
+    )

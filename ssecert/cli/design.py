@@ -16,8 +16,8 @@ __all__: list[str] = []
 def _kind_names() -> dict[str, str]:
     """The names ``--observer`` takes: each kind ``ssecert design`` offers, by name and by
     alias, to the kind it names."""
+    from ..design.search import design_kinds
     from ..observers import get_kind
-    from ..synthesize import design_kinds
 
     out = {}
     for name in design_kinds():
@@ -28,8 +28,8 @@ def _kind_names() -> dict[str, str]:
 def _kinds_help() -> str:
     """The help of ``--observer``: the default kind (and those of the other objectives),
     then the others by name."""
+    from ..design.search import OBJECTIVES, default_kind, design_kinds
     from ..observers import get_kind
-    from ..synthesize import OBJECTIVES, default_kind, design_kinds
 
     def shown(name: str) -> str:
         return (*get_kind(name).aliases, name)[0]
@@ -135,17 +135,17 @@ def cmd_design(args: argparse.Namespace, argv: Sequence[str] | None = None) -> i
     import hashlib
     import tomllib
 
-    from ..report.html import render_report
-    from ..report.json import certify_json
-    from ..results import to_jsonable
-    from ..spec import spec_from_dict
-    from ..synthesize import (
+    from ..design.search import (
         default_kind,
         design_observer,
         design_report,
         design_spec_text,
         objective_refusal,
     )
+    from ..report.html import render_report
+    from ..report.json import certify_json
+    from ..results import to_jsonable
+    from ..spec import spec_from_dict
     from .files import UsageError, load_argument, output_file, output_folder, write_outputs
     from .progress import stage_display
 
@@ -167,8 +167,8 @@ def cmd_design(args: argparse.Namespace, argv: Sequence[str] | None = None) -> i
     else:
         kind = default_kind(args.objective)
     refusal = objective_refusal(args.objective, kind, option="--observer", given=args.observer)
-    if refusal:
-        raise UsageError(refusal)
+    if refusal is not None:
+        raise UsageError(str(refusal))
     threshold = float(own.get("threshold") or 0.1)
     human = sys.stderr if args.json_path == "-" else sys.stdout
     display = stage_display(json_to_stdout=args.json_path == "-")
@@ -324,7 +324,7 @@ def _print_design(
         out.write(f"  synthesised: certified decay {result.decay:.3g} per step (V(k+1) <= "
                   f"{one_minus(result.decay)} V(k))\n")  # fmt: skip
     if result.linear_radius is not None and result.plant_radius is not None:
-        from ..synthesize import FAST_PLANT, no_faster
+        from ..design.search import FAST_PLANT, no_faster
 
         slow = no_faster(result.linear_radius, result.plant_radius)
         if result.plant_radius <= FAST_PLANT:

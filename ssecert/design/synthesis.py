@@ -29,13 +29,15 @@ from typing import Any
 
 import numpy as np
 
-from ..budget import Budget
+from ..budget import Budget, Refusal, Resource
 from ..observers.base import ObserverDesign
 from ..observers.lure import LureModel
 from ..solvers import solve_conic, solved
+from .outcomes import SynthesisCode
 
 __all__ = [
     "GainSynthesis",
+    "SynthesisCode",
     "synthesize_gain",
     "synthesize_rate_gain",
     "with_gain",
@@ -44,11 +46,12 @@ __all__ = [
 
 @dataclass(frozen=True)
 class GainSynthesis:
-    """A gain proposed by the synthesis LMI, and what the solver said (unverified)."""
+    """A gain proposed by the synthesis LMI, and how the solve ended (unverified): ``code``
+    with the solver's status or the refusal; ``status`` is its sentence."""
 
     L: np.ndarray | None
     gamma_proposed: float | None
-    status: str
+    code: SynthesisCode
     seconds: float
     alpha: float | None = None
     P: np.ndarray | None = None
@@ -57,6 +60,17 @@ class GainSynthesis:
     # the state coordinates x = diag(state_scaling) x_b the LMI was solved in (None: the
     # user's), where its certificate is best verified
     state_scaling: np.ndarray | None = None
+    solver: str = ""  # the solver's status, or the type of the exception it raised
+    refusal: Refusal | None = None  # REFUSED: the memory the LMI would need, and the budget
+    rows: int = 0  # REFUSED: the LMI's rows
+    decay: float | None = None  # NO_DECAY: the smallest decay found infeasible
+
+    @property
+    def status(self) -> str:
+        """How the solve ended, in words (``synthesis_messages.status_text``)."""
+        from .synthesis_messages import status_text
+
+        return status_text(self.code, self.solver, self.refusal, self.rows, self.decay)
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -99,9 +113,9 @@ def synthesize_gain(
         state is limited by the attack estimate's loop.
     """
     start = time.perf_counter()
-    model, refusal = _model(design, budget)
-    if refusal:
-        return GainSynthesis(None, None, refusal, _since(start))
+    model, refused = _model(design, budget)
+    if refused is not None:
+        return replace(refused, seconds=_since(start))
     units = _Units.of(design, model)
     problem, variables = _dissipation_problem(*units.problem_data, alpha, linear=linear)
     return units.back(_solved(problem, variables, start, time_limit))
@@ -124,9 +138,9 @@ def synthesize_rate_gain(
     bisection: no solve starts past it; ``bisections``, default ``RATE_BISECTIONS``, the
     number of halvings of the interval of alpha; ``linear`` as in ``synthesize_gain``)."""
     start = time.perf_counter()
-    model, refusal = _model(design, budget)
-    if refusal:
-        return GainSynthesis(None, None, refusal, _since(start))
+    model, refused = _model(design, budget)
+    if refused is not None:
+        return replace(refused, seconds=_since(start))
 
     def left() -> float | None:
         return None if time_limit is None else max(time_limit - _since(start), 0.1)
@@ -146,8 +160,8 @@ def synthesize_rate_gain(
             low, best = float(variables["alpha"].value), found
     if best is None:
         if high == 1.0:
-            return GainSynthesis(None, None, "the time limit ended the bisection", _since(start))
-        return GainSynthesis(None, None, f"no decay above {high:.3g} is feasible", _since(start))
+            return GainSynthesis(None, None, SynthesisCode.TIME_LIMIT, _since(start))
+        return GainSynthesis(None, None, SynthesisCode.NO_DECAY, _since(start), decay=high)
     # the last feasible alpha sits at the edge: back off so that the certificate has a margin
     variables["alpha"].value = backoff * low
     inner = units.back(_solved(problem, variables, start, left()))
@@ -157,26 +171,26 @@ def synthesize_rate_gain(
 RATE_BISECTIONS = 7  # alpha to within 2^-7 of the best the LMI allows
 
 
-def _model(design: ObserverDesign, budget: Budget | None) -> tuple[LureModel, str]:
-    """The design's Lur'e model and why its synthesis LMI is refused ('' when it is not)."""
+def _model(design: ObserverDesign, budget: Budget | None) -> tuple[LureModel, GainSynthesis | None]:
+    """The design's Lur'e model, and its synthesis refused (None when it is not)."""
     model = LureModel.from_design(design)
     if design.sensing.shape[0] != design.system.p:
         raise NotImplementedError("gain synthesis needs one attack estimate per sensor")
-    return model, _refusal(model, design, budget)
+    return model, _refused(model, design, budget)
 
 
-def _refusal(model: LureModel, design: ObserverDesign, budget: Budget | None) -> str:
-    """Why the synthesis LMI is not attempted ('' when it fits): the interior-point method
-    holds a dense matrix of the LMI's svec size squared."""
+def _refused(
+    model: LureModel, design: ObserverDesign, budget: Budget | None
+) -> GainSynthesis | None:
+    """The synthesis LMI refused when it does not fit the memory budget (None when it fits):
+    the interior-point method holds a dense matrix of the LMI's svec size squared."""
     rows = model.N + model.m + model.r + design.system.n
     memory = 8.0 * (rows * (rows + 1) / 2) ** 2
     allowed = (budget or Budget()).memory
     if memory <= allowed:
-        return ""
-    return (
-        f"refused: the synthesis LMI has {rows} rows; its interior-point system needs about "
-        f"{memory / 2**30:.3g} GiB, over the memory budget of {allowed / 2**30:.3g} GiB"
-    )
+        return None
+    refusal = Refusal("the synthesis LMI", Resource.MEMORY, memory, float(allowed))
+    return GainSynthesis(None, None, SynthesisCode.REFUSED, 0.0, refusal=refusal, rows=rows)
 
 
 @dataclass(frozen=True)
@@ -305,13 +319,17 @@ def _solved(
             warnings.simplefilter("ignore")  # a candidate: certified afterwards either way
             solve_conic(problem, **options)
     except (cp.error.SolverError, ArithmeticError, ValueError) as exc:
-        return GainSynthesis(None, None, f"solver failed ({type(exc).__name__})", _since(start))
+        return GainSynthesis(
+            None, None, SynthesisCode.SOLVER_FAILED, _since(start), solver=type(exc).__name__
+        )
     P1, Y, g = variables["P1"].value, variables["Y"].value, variables["g"].value
     if Y is None or P1 is None or not solved(problem):
-        return GainSynthesis(None, None, str(problem.status), _since(start))
+        return GainSynthesis(
+            None, None, SynthesisCode.NOT_SOLVED, _since(start), solver=str(problem.status)
+        )
     L = np.linalg.solve(0.5 * (P1 + P1.T), Y)
     if not np.all(np.isfinite(L)):
-        return GainSynthesis(None, None, "the solver's gain is not finite", _since(start))
+        return GainSynthesis(None, None, SynthesisCode.NOT_FINITE, _since(start))
     g = max(float(np.asarray(g)), 0.0) if g is not None else None
     P = 0.5 * (P1 + P1.T)
     t = np.zeros(0)
@@ -326,12 +344,13 @@ def _solved(
     return GainSynthesis(
         L,
         None if g is None else float(np.sqrt(g)),
-        str(problem.status),
+        SynthesisCode.SOLVED,
         _since(start),
         alpha=float(variables["alpha"].value),
         P=P,
         multipliers=t,
         g=g,
+        solver=str(problem.status),
     )
 
 

@@ -62,7 +62,7 @@ SSO_GAIN = "sso"
 DERIVED_GAINS = (GainMethod.OGD, SSO_GAIN)
 GAIN_CHOICES = ("deadbeat", "place", "ogd", "pinv")
 # the grids ``ssecert design`` searches for the kinds with a step, and a shrink
-# (``ssecert.synthesize.STEPS`` and ``SHRINKS``)
+# (``ssecert.design.search.STEPS`` and ``SHRINKS``)
 DESIGN_STEPS = (0.1, 0.3, 0.5, 0.7, 1.0)
 DESIGN_SHRINKS = (0.3, 0.5, 0.7, 0.9)
 
