@@ -8,8 +8,10 @@ import math
 import numpy as np
 import pytest
 
+from ssecert.design.outcomes import DecayCode
 from ssecert.design.search import (
     DEFAULT_DECAY,
+    choose_decay,
     choose_noise_decay,
     design_observer,
     objective_refusal,
@@ -31,23 +33,27 @@ def _point(alpha, bound, verified=True):
 def test_the_noise_decay_is_the_fronts_smallest_bound_faster_than_the_plant():
     # the bound is not monotone in the decay: the middle point is the smallest
     front = [_point(0.5, 0.04), _point(0.2, 0.01), _point(0.01, 0.3)]
-    assert choose_noise_decay(front, 0.985)[0] == 0.2
+    choice = choose_noise_decay(front, 0.985)
+    assert (choice.alpha, choice.code, choice.noise_bound) == (
+        0.2,
+        DecayCode.SMALLEST_NOISE_BOUND,
+        0.01,
+    )
     # a point no faster than the plant is not chosen, however small its bound
     slow = [_point(0.5, 0.04), _point(0.001, 0.001)]
-    alpha, why = choose_noise_decay(slow, 0.99)
-    assert alpha == 0.5 and "faster than the plant" in why
+    choice = choose_noise_decay(slow, 0.99)
+    assert (choice.alpha, choice.faster, choice.verified) == (0.5, 1, 2)
     # unverified points and points without a bound do not count
-    assert choose_noise_decay([_point(0.2, None), _point(0.3, 0.1, False)], 0.9)[0] == (
-        DEFAULT_DECAY
-    )
+    choice = choose_noise_decay([_point(0.2, None), _point(0.3, 0.1, False)], 0.9)
+    assert (choice.alpha, choice.code) == (DEFAULT_DECAY, DecayCode.NO_NOISE_BOUND)
     # none faster than the plant: the fastest
-    assert choose_noise_decay([_point(0.01, 0.2), _point(0.02, 0.5)], 0.5)[0] == 0.02
+    choice = choose_noise_decay([_point(0.01, 0.2), _point(0.02, 0.5)], 0.5)
+    assert (choice.alpha, choice.code) == (0.02, DecayCode.FASTEST_NOISE_BOUND)
     # no noise: every bound 0, nothing to minimise; the gain objective's rule decides
     flat = [{**_point(a, 0.0), "gamma": g} for a, g in ((0.5, 3.0), (0.2, 0.5), (0.01, 0.1))]
-    alpha, why = choose_noise_decay(flat, 0.985)
-    assert alpha == 0.2 and why.endswith(
-        "the noise bound is 0 at every point of the front (no noise)"
-    )
+    choice = choose_noise_decay(flat, 0.985)
+    assert (choice.alpha, choice.code) == (0.2, DecayCode.NO_NOISE)
+    assert choice.then == choose_decay(flat, 0.985)
 
 
 def test_the_noise_objective_needs_a_noise_and_a_kind_with_decay():

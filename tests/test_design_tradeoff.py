@@ -11,6 +11,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from ssecert.design.outcomes import DecayChoice, DecayCode
 from ssecert.design.search import choose_decay, compare_designs, design_observer, no_faster
 from ssecert.simulation.metrics import absolute_error, initial_relative_error
 from ssecert.system import System
@@ -76,35 +77,87 @@ def _point(alpha: float, gamma: float) -> dict:
 
 def test_choose_decay_takes_the_smallest_gain_twice_as_fast_as_the_plant():
     front = [_point(0.75, 9.0), _point(0.36, 2.0), _point(0.19, 1.0), _point(0.01, 0.1)]
-    alpha, why = choose_decay(front, 0.94)  # rho^2 = 0.8836: 0.5, 0.8 qualify, 0.9 does not
-    assert alpha == 0.36 and "clearly faster" in why and "0.8836" in why
+    choice = choose_decay(front, 0.94)  # rho^2 = 0.8836: 0.5, 0.8 qualify, 0.9 does not
+    assert (choice.alpha, choice.code) == (0.36, DecayCode.TWICE_AS_FAST)
+    assert choice.contraction == 0.8 and choice.plant_radius == 0.94 and choice.verified == 4
     # a slower plant lets the slower point qualify
-    alpha, _ = choose_decay(front, 0.95)  # rho^2 = 0.9025 >= 0.9
-    assert alpha == 0.19
+    assert choose_decay(front, 0.95).alpha == 0.19  # rho^2 = 0.9025 >= 0.9
 
 
 def test_choose_decay_takes_the_knee_when_nothing_is_twice_as_fast_or_the_plant_is_unstable():
     contractions, gains = (0.981, 0.983, 0.986, 0.989), (50.0, 3.0, 2.0, 1.5)
     front = [_point(1 - c**2, g) for c, g in zip(contractions, gains)]
     corner = 1 - 0.983**2  # the gain falls 17x to it, then little
-    alpha, why = choose_decay(front, 0.99)  # rho^2 = 0.9801: no point is that fast
-    assert "knee" in why and "0.9801" in why
-    assert alpha == corner
-    alpha, why = choose_decay(front, 1.0)
-    assert alpha == corner and "not stable" in why
+    choice = choose_decay(front, 0.99)  # rho^2 = 0.9801: no point is that fast
+    assert (choice.alpha, choice.code, choice.faster) == (corner, DecayCode.KNEE, 4)
+    assert choice.plant_stable and choice.fastest == pytest.approx(0.981)
+    choice = choose_decay(front, 1.0)
+    assert (choice.alpha, choice.code, choice.plant_stable) == (corner, DecayCode.KNEE, False)
+    # fewer than three points faster than the plant: the smallest gain among them
+    choice = choose_decay(front, 0.984)
+    assert (choice.alpha, choice.code, choice.faster) == (corner, DecayCode.FEW_FASTER, 2)
     # nothing faster than the plant: the fastest point, and it says so
-    alpha, why = choose_decay(front, 0.98)
-    assert alpha == 1 - 0.981**2 and "none is faster" in why
+    choice = choose_decay(front, 0.98)
+    assert (choice.alpha, choice.code) == (1 - 0.981**2, DecayCode.FASTEST)
     # no front to read: 1e-3 (the linear loop's own requirement asks for speed)
-    alpha, why = choose_decay([{**_point(0.5, 1.0), "verified": False}], 0.9)
-    assert alpha == 1e-3 and "fewer than two verified points" in why
-    alpha, why = choose_decay([_point(0.5, 1.0)], 1.2)
-    assert alpha == 1e-3 and "ran past its share of the time budget" in why
+    choice = choose_decay([{**_point(0.5, 1.0), "verified": False}], 0.9)
+    assert (choice.alpha, choice.code, choice.verified) == (1e-3, DecayCode.TOO_FEW_POINTS, 0)
+    choice = choose_decay([_point(0.5, 1.0)], 1.2)
+    assert (choice.alpha, choice.code, choice.verified) == (1e-3, DecayCode.TOO_FEW_POINTS, 1)
     # a spectral radius of 1 to rounding (the thesis's normalised plants) is not stable
-    alpha, why = choose_decay([_point(0.5, 1.0)], 1 - 1e-15)
-    assert alpha == 1e-3
-    alpha, why = choose_decay(front, 1 - 1e-15)
-    assert alpha == corner and "not stable" in why
+    assert choose_decay([_point(0.5, 1.0)], 1 - 1e-15).alpha == 1e-3
+    choice = choose_decay(front, 1 - 1e-15)
+    assert (choice.alpha, choice.code, choice.plant_stable) == (corner, DecayCode.KNEE, False)
+
+
+def test_the_words_of_each_decay_rule():
+    def words(code, **facts):
+        return str(DecayChoice(0.25, code, 0.99, facts.pop("stable", True), **facts))
+
+    assert words(DecayCode.TOO_FEW_POINTS) == (
+        "decay 0.25 per step imposed: the trade-off front has fewer than two verified points "
+        "(its solves failed, did not verify, or ran past its share of the time budget)"
+    )
+    assert words(DecayCode.TWICE_AS_FAST, contraction=0.8) == (
+        "decay 0.25 per step imposed, the trade-off front's smallest certified gain whose decay "
+        "is clearly faster than the plant's: error contraction 0.8 per step <= rho(A)^2 = "
+        "0.9801 (the plant's own state: rho(A) = 0.99)"
+    )
+    assert words(DecayCode.KNEE, contraction=0.9, fastest=0.85) == (
+        "decay 0.25 per step imposed, the knee of the trade-off front (error contraction 0.9 "
+        "per step; no certified contraction reaches rho(A)^2 = 0.9801 (the fastest: 0.85))"
+    )
+    assert words(DecayCode.FEW_FASTER, contraction=0.9, faster=1, stable=False) == (
+        "decay 0.25 per step imposed, the smallest certified gain of the 1 verified point of "
+        "the front faster than the plant (too few for a knee) (error contraction 0.9 per step; "
+        "the plant is not stable (rho(A) = 0.99): every certified decay is faster than its own)"
+    )
+    assert words(DecayCode.FASTEST, contraction=0.995) == (
+        "decay 0.25 per step imposed, the fastest the trade-off front certifies (error "
+        "contraction 0.995 per step); none is faster than the plant's own (rho(A) = 0.99)"
+    )
+    assert words(DecayCode.NO_NOISE_BOUND) == (
+        "decay 0.25 per step imposed: no point of the trade-off front has a certified ultimate "
+        "error bound under the noise (its solves failed, did not verify, or ran past its share "
+        "of the time budget)"
+    )
+    noise = {"contraction": 0.9, "noise_bound": 0.01, "verified": 3}
+    assert words(DecayCode.SMALLEST_NOISE_BOUND, faster=2, **noise) == (
+        "decay 0.25 per step imposed, the smallest certified ultimate error bound under noise "
+        "(0.01 for the grid's middle design at that decay) of the 2 verified points of the "
+        "front faster than the plant (error contraction 0.9 per step)"
+    )
+    assert words(DecayCode.SMALLEST_NOISE_BOUND, faster=3, **noise).endswith(
+        "of the 3 verified points of the front (error contraction 0.9 per step)"
+    )
+    assert words(DecayCode.FASTEST_NOISE_BOUND, **noise).endswith(
+        "of the fastest of the front, none being faster than the plant (rho(A) = 0.99) (error "
+        "contraction 0.9 per step)"
+    )
+    then = DecayChoice(0.25, DecayCode.TOO_FEW_POINTS, 0.99, True)
+    assert words(DecayCode.NO_NOISE, then=then) == (
+        f"{then}; the noise bound is 0 at every point of the front (no noise)"
+    )
 
 
 def test_the_error_metrics_do_not_grow_when_the_state_decays():

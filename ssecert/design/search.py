@@ -55,6 +55,7 @@ import os
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from functools import partial
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -63,6 +64,7 @@ from ..observers import get_kind, observer_kinds
 from ..observers.base import DESIGN_SHRINKS, DESIGN_STEPS
 from ..results import Verdict
 from ..system import System
+from .outcomes import DecayChoice, DecayCode
 
 if TYPE_CHECKING:
     from ..noise import MeasurementNoise
@@ -71,6 +73,9 @@ __all__ = [
     "DesignResult",
     "certified_gain",
     "choose_decay",
+    "choose_noise_decay",
+    "DecayChoice",
+    "DecayCode",
     "linear_target",
     "no_faster",
     "tradeoff_front",
@@ -363,10 +368,13 @@ def design_observer(
         front = tradeoff_front(
             middle, time_limit=FRONT_SHARE * time_budget, linear=linear, noise=noise
         )
+        chosen = None
         if objective == "gain" and min_decay is None:
-            alpha, choice = choose_decay(front, plant_radius)
+            chosen = choose_decay(front, plant_radius)
         elif objective == "noise" and min_decay is None:
-            alpha, choice = choose_noise_decay(front, plant_radius)
+            chosen = choose_noise_decay(front, plant_radius)
+        if chosen is not None:
+            alpha, choice = chosen.alpha, str(chosen)
     if linear is not None:
         choice += (
             f"; the linear loop is required to contract by {linear:.4g} per step, rho(A)^2 "
@@ -672,8 +680,9 @@ def _front_noise_bound(
     return found.bound if math.isfinite(found.bound) else None
 
 
-def choose_decay(front: list[dict[str, Any]], plant_radius: float) -> tuple[float, str]:
-    """The decay the ``gain`` objective imposes, read off the trade-off front, and why.
+def choose_decay(front: list[dict[str, Any]], plant_radius: float) -> DecayChoice:
+    """The decay the ``gain`` objective imposes, read off the trade-off front, and the rule
+    that chose it (``str()`` of the result says why).
 
     The smallest verified gain whose certified contraction is at most rho(A)^2 (the
     error falls at least twice as fast, in logarithm, as the plant's own state); else,
@@ -687,58 +696,49 @@ def choose_decay(front: list[dict[str, Any]], plant_radius: float) -> tuple[floa
     >>> front = [{"alpha": 0.5, "contraction": 0.71, "gamma": 3.0, "verified": True},
     ...          {"alpha": 0.2, "contraction": 0.89, "gamma": 0.5, "verified": True},
     ...          {"alpha": 0.01, "contraction": 0.995, "gamma": 0.1, "verified": True}]
-    >>> choose_decay(front, 0.985)[0]
-    0.2
+    >>> choice = choose_decay(front, 0.985)
+    >>> choice.alpha, choice.code
+    (0.2, <DecayCode.TWICE_AS_FAST: 'twice as fast'>)
     """
     good = [p for p in front if p.get("verified") and p.get("gamma") is not None]
+    stable = _stable(plant_radius)
+    choice = partial(
+        DecayChoice, plant_radius=plant_radius, plant_stable=stable, verified=len(good)
+    )
     if len(good) < 2:
-        return DEFAULT_DECAY, (
-            f"decay {DEFAULT_DECAY:g} per step imposed: the trade-off front has fewer than two "
-            "verified points (its solves failed, did not verify, or ran past its share of the "
-            "time budget)"
-        )
-    if _stable(plant_radius):
+        return choice(DEFAULT_DECAY, DecayCode.TOO_FEW_POINTS)
+    fastest = min(p["contraction"] for p in good)
+    if stable:
         twice = [p for p in good if p["contraction"] <= plant_radius**2]
         if twice:
             pick = min(twice, key=lambda p: p["gamma"])
-            return float(pick["alpha"]), (
-                f"decay {pick['alpha']:.3g} per step imposed, the trade-off front's smallest "
-                f"certified gain whose decay is clearly faster than the plant's: error "
-                f"contraction {pick['contraction']:.4g} per step <= rho(A)^2 = "
-                f"{plant_radius**2:.4g} (the plant's own state: rho(A) = {plant_radius:.4g})"
+            return choice(
+                float(pick["alpha"]),
+                DecayCode.TWICE_AS_FAST,
+                contraction=pick["contraction"],
+                fastest=fastest,
             )
     faster = [p for p in good if p["contraction"] < plant_radius]
     if faster:
-        pick = _knee(faster)
-        why = (
-            f"the plant is not stable (rho(A) = {plant_radius:.6g}): every certified decay is "
-            "faster than its own"
-            if not _stable(plant_radius)
-            else f"no certified contraction reaches rho(A)^2 = {plant_radius**2:.4g} (the "
-            f"fastest: {min(p['contraction'] for p in good):.4g})"
-        )
-        where = (
-            "the knee of the trade-off front"
-            if len(faster) >= 3
-            else f"the smallest certified gain of the {len(faster)} verified point"
-            f"{'' if len(faster) == 1 else 's'} of the front faster than the plant (too few for "
-            "a knee)"
-        )
-        return float(pick["alpha"]), (
-            f"decay {pick['alpha']:.3g} per step imposed, {where} (error contraction "
-            f"{pick['contraction']:.4g} per step; {why})"
+        return choice(
+            float((pick := _knee(faster))["alpha"]),
+            DecayCode.KNEE if len(faster) >= 3 else DecayCode.FEW_FASTER,
+            contraction=pick["contraction"],
+            faster=len(faster),
+            fastest=fastest,
         )
     pick = min(good, key=lambda p: p["contraction"])
-    return float(pick["alpha"]), (
-        f"decay {pick['alpha']:.3g} per step imposed, the fastest the trade-off front "
-        f"certifies (error contraction {pick['contraction']:.4g} per step); none is faster "
-        f"than the plant's own (rho(A) = {plant_radius:.4g})"
+    return choice(
+        float(pick["alpha"]),
+        DecayCode.FASTEST,
+        contraction=pick["contraction"],
+        fastest=fastest,
     )
 
 
-def choose_noise_decay(front: list[dict[str, Any]], plant_radius: float) -> tuple[float, str]:
+def choose_noise_decay(front: list[dict[str, Any]], plant_radius: float) -> DecayChoice:
     """The decay the ``noise`` objective imposes, read off the trade-off front's noise axis,
-    and why.
+    and the rule that chose it.
 
     The ultimate error bound under noise is not monotone in the decay (a slow decay lets the
     noise pile up, 1 / alpha; a fast one needs a large gain): the verified point with the
@@ -750,38 +750,33 @@ def choose_noise_decay(front: list[dict[str, Any]], plant_radius: float) -> tupl
     >>> front = [{"alpha": 0.5, "contraction": 0.71, "noise_bound": 0.04, "verified": True},
     ...          {"alpha": 0.2, "contraction": 0.89, "noise_bound": 0.01, "verified": True},
     ...          {"alpha": 0.01, "contraction": 0.995, "noise_bound": 0.3, "verified": True}]
-    >>> choose_noise_decay(front, 0.985)[0]
+    >>> choose_noise_decay(front, 0.985).alpha
     0.2
     """
     good = [p for p in front if p.get("verified") and p.get("noise_bound") is not None]
+    stable = _stable(plant_radius)
+    choice = partial(
+        DecayChoice, plant_radius=plant_radius, plant_stable=stable, verified=len(good)
+    )
     if good and max(p["noise_bound"] for p in good) == 0:  # no noise: nothing to minimise
-        alpha, why = choose_decay(front, plant_radius)
-        return alpha, f"{why}; the noise bound is 0 at every point of the front (no noise)"
+        then = choose_decay(front, plant_radius)
+        return choice(then.alpha, DecayCode.NO_NOISE, then=then)
     if not good:
-        return DEFAULT_DECAY, (
-            f"decay {DEFAULT_DECAY:g} per step imposed: no point of the trade-off front has a "
-            "certified ultimate error bound under the noise (its solves failed, did not verify, "
-            "or ran past its share of the time budget)"
-        )
+        return choice(DEFAULT_DECAY, DecayCode.NO_NOISE_BOUND)
     faster = [p for p in good if p["contraction"] < plant_radius]
     if faster:
         pick = min(faster, key=lambda p: p["noise_bound"])
-        among = (
-            f"the {len(faster)} verified point{'' if len(faster) == 1 else 's'} of the front "
-            "faster than the plant"
-            if len(faster) < len(good)
-            else f"the {len(good)} verified point{'' if len(good) == 1 else 's'} of the front"
-        )
+        code = DecayCode.SMALLEST_NOISE_BOUND
     else:
         pick = min(good, key=lambda p: p["contraction"])
-        among = (
-            f"the fastest of the front, none being faster than the plant (rho(A) = "
-            f"{plant_radius:.4g})"
-        )
-    return float(pick["alpha"]), (
-        f"decay {pick['alpha']:.3g} per step imposed, the smallest certified ultimate error "
-        f"bound under noise ({pick['noise_bound']:.3g} for the grid's middle design at that "
-        f"decay) of {among} (error contraction {pick['contraction']:.4g} per step)"
+        code = DecayCode.FASTEST_NOISE_BOUND
+    return choice(
+        float(pick["alpha"]),
+        code,
+        contraction=pick["contraction"],
+        faster=len(faster),
+        fastest=min(p["contraction"] for p in good),
+        noise_bound=pick["noise_bound"],
     )
 
 

@@ -1,0 +1,87 @@
+"""The words of ``ssecert design``'s choices: why a decay was imposed, from its rule and numbers.
+
+``ssecert.design.search`` chooses the decay on numbers (``DecayChoice``: a ``DecayCode`` and the
+front's figures); this module alone writes the sentence, so that rewording it changes no choice.
+"""
+
+from __future__ import annotations
+
+from .outcomes import DecayChoice, DecayCode
+
+__all__ = ["decay_text"]
+
+_NO_POINTS = "its solves failed, did not verify, or ran past its share of the time budget"
+
+
+def decay_text(choice: DecayChoice) -> str:
+    """Why the decay ``choice.alpha`` is imposed.
+
+    Examples
+    --------
+    >>> from ssecert.design.outcomes import DecayChoice, DecayCode
+    >>> decay_text(DecayChoice(0.36, DecayCode.TWICE_AS_FAST, 0.94, True, contraction=0.8))
+    ... # doctest: +NORMALIZE_WHITESPACE
+    "decay 0.36 per step imposed, the trade-off front's smallest certified gain whose decay
+    is clearly faster than the plant's: error contraction 0.8 per step <= rho(A)^2 = 0.8836
+    (the plant's own state: rho(A) = 0.94)"
+    """
+    code, rho, alpha = choice.code, choice.plant_radius, choice.alpha
+    if code is DecayCode.TOO_FEW_POINTS:
+        return (
+            f"decay {alpha:g} per step imposed: the trade-off front has fewer than two "
+            f"verified points ({_NO_POINTS})"
+        )
+    if code is DecayCode.NO_NOISE_BOUND:
+        return (
+            f"decay {alpha:g} per step imposed: no point of the trade-off front has a "
+            f"certified ultimate error bound under the noise ({_NO_POINTS})"
+        )
+    if code is DecayCode.NO_NOISE:
+        then = "" if choice.then is None else f"{decay_text(choice.then)}; "
+        return f"{then}the noise bound is 0 at every point of the front (no noise)"
+    contraction = choice.contraction if choice.contraction is not None else float("nan")
+    if code is DecayCode.TWICE_AS_FAST:
+        return (
+            f"decay {alpha:.3g} per step imposed, the trade-off front's smallest "
+            f"certified gain whose decay is clearly faster than the plant's: error "
+            f"contraction {contraction:.4g} per step <= rho(A)^2 = "
+            f"{rho**2:.4g} (the plant's own state: rho(A) = {rho:.4g})"
+        )
+    if code in (DecayCode.KNEE, DecayCode.FEW_FASTER):
+        why = (
+            f"the plant is not stable (rho(A) = {rho:.6g}): every certified decay is "
+            "faster than its own"
+            if not choice.plant_stable
+            else f"no certified contraction reaches rho(A)^2 = {rho**2:.4g} (the "
+            f"fastest: {choice.fastest:.4g})"
+        )
+        n = choice.faster
+        where = (
+            "the knee of the trade-off front"
+            if code is DecayCode.KNEE
+            else f"the smallest certified gain of the {n} verified point"
+            f"{'' if n == 1 else 's'} of the front faster than the plant (too few for a knee)"
+        )
+        return (
+            f"decay {alpha:.3g} per step imposed, {where} (error contraction "
+            f"{contraction:.4g} per step; {why})"
+        )
+    if code is DecayCode.FASTEST:
+        return (
+            f"decay {alpha:.3g} per step imposed, the fastest the trade-off front "
+            f"certifies (error contraction {contraction:.4g} per step); none is faster "
+            f"than the plant's own (rho(A) = {rho:.4g})"
+        )
+    if code is DecayCode.SMALLEST_NOISE_BOUND:
+        n = choice.faster if choice.faster < choice.verified else choice.verified
+        among = f"the {n} verified point{'' if n == 1 else 's'} of the front" + (
+            " faster than the plant" if choice.faster < choice.verified else ""
+        )
+    else:  # FASTEST_NOISE_BOUND
+        among = f"the fastest of the front, none being faster than the plant (rho(A) = {rho:.4g})"
+    bound = choice.noise_bound if choice.noise_bound is not None else float("nan")
+    return (
+        f"decay {alpha:.3g} per step imposed, the smallest certified ultimate error "
+        f"bound under noise ({bound:.3g} for the grid's middle design at that "
+        f"decay) of {among} (error contraction {contraction:.4g} per step)"
+    )
