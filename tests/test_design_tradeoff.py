@@ -13,6 +13,7 @@ import pytest
 
 from ssecert.design.outcomes import DecayChoice, DecayCode
 from ssecert.design.search import choose_decay, compare_designs, design_observer, no_faster
+from ssecert.design.search_messages import decay_text
 from ssecert.simulation.metrics import absolute_error, initial_relative_error
 from ssecert.system import System
 
@@ -112,7 +113,7 @@ def test_choose_decay_takes_the_knee_when_nothing_is_twice_as_fast_or_the_plant_
 
 def test_the_words_of_each_decay_rule():
     def words(code, **facts):
-        return str(DecayChoice(0.25, code, 0.99, facts.pop("stable", True), **facts))
+        return decay_text(DecayChoice(0.25, code, 0.99, facts.pop("stable", True), **facts))
 
     assert words(DecayCode.TOO_FEW_POINTS) == (
         "decay 0.25 per step imposed: the trade-off front has fewer than two verified points "
@@ -156,7 +157,7 @@ def test_the_words_of_each_decay_rule():
     )
     then = DecayChoice(0.25, DecayCode.TOO_FEW_POINTS, 0.99, True)
     assert words(DecayCode.NO_NOISE, then=then) == (
-        f"{then}; the noise bound is 0 at every point of the front (no noise)"
+        f"{decay_text(then)}; the noise bound is 0 at every point of the front (no noise)"
     )
 
 

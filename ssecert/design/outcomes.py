@@ -38,7 +38,7 @@ class DecayCode(Enum):
 @dataclass(frozen=True)
 class DecayChoice:
     """The decay a design imposes, read off the trade-off front, and the rule and numbers
-    that chose it; ``str()`` is why, in words (``search_messages.decay_text``).
+    that chose it (why, in words: ``search_messages.decay_text``).
 
     ``contraction`` is the chosen point's certified error contraction per step (None for the
     default decay); ``verified`` and ``faster`` count the front's verified points and those
@@ -57,8 +57,3 @@ class DecayChoice:
     fastest: float | None = None
     noise_bound: float | None = None
     then: DecayChoice | None = None
-
-    def __str__(self) -> str:
-        from .search_messages import decay_text
-
-        return decay_text(self)

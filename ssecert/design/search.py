@@ -65,6 +65,7 @@ from ..observers.base import DESIGN_SHRINKS, DESIGN_STEPS
 from ..results import Verdict
 from ..system import System
 from .outcomes import DecayChoice, DecayCode
+from .search_messages import decay_text
 
 if TYPE_CHECKING:
     from ..noise import MeasurementNoise
@@ -374,7 +375,7 @@ def design_observer(
         elif objective == "noise" and min_decay is None:
             chosen = choose_noise_decay(front, plant_radius)
         if chosen is not None:
-            alpha, choice = chosen.alpha, str(chosen)
+            alpha, choice = chosen.alpha, decay_text(chosen)
     if linear is not None:
         choice += (
             f"; the linear loop is required to contract by {linear:.4g} per step, rho(A)^2 "
@@ -682,7 +683,7 @@ def _front_noise_bound(
 
 def choose_decay(front: list[dict[str, Any]], plant_radius: float) -> DecayChoice:
     """The decay the ``gain`` objective imposes, read off the trade-off front, and the rule
-    that chose it (``str()`` of the result says why).
+    that chose it (``search_messages.decay_text`` says why).
 
     The smallest verified gain whose certified contraction is at most rho(A)^2 (the
     error falls at least twice as fast, in logarithm, as the plant's own state); else,
