@@ -211,7 +211,8 @@ def analyze(
     Certificate
         Checks ``observability``, ``sparse_observability`` (required) and
         ``irrepresentable`` (advisory); with noise (the ``noise`` argument or
-        the spec's ``[noise]``) also ``decoder_error_bound`` (advisory); with an
+        the spec's ``[noise]``) also ``decoder_error_bound`` and ``lasso_error_bound``
+        (advisory); with an
         ``[observer]`` section also
         ``observer_gain``, ``observer_stability`` (required), ``iss_gain``
         and ``thesis_assumptions`` (advisory).
@@ -272,6 +273,13 @@ def analyze(
                 needs=("sparse_observability",),
             )
         )
+        steps.append(
+            Step(
+                "lasso_error_bound",
+                lambda sparse: _lasso_bound(spec, bounded, sparse, max_sets),
+                needs=("sparse_observability",),
+            )
+        )
     if spec.observer is not None:
         from .stability.checks import observer_checks
         from .stability.constant_attack import default_attacks
@@ -298,7 +306,7 @@ def analyze(
     decided = decide(steps, clock)
     checks: list[Check] = [
         decided["observability"], decided["sparse_observability"], decided["irrepresentable"],
-        *([decided["decoder_error_bound"]] if "decoder_error_bound" in decided else []),
+        *(decided[key] for key in ("decoder_error_bound", "lasso_error_bound") if key in decided),
         *decided.get("observer_checks", []),
     ]  # fmt: skip
     checks, notes = reconcile(checks)
@@ -354,6 +362,30 @@ def _decoder_bound(spec: Spec, noise: MeasurementNoise, sparse: Check, max_sets:
             max_sets=min(max_sets, BOUND_SETS),
         )
     return decoder_bound_check(spec.system, found)
+
+
+def _lasso_bound(spec: Spec, noise: MeasurementNoise, sparse: Check, max_sets: int) -> Check:
+    """The lasso_error_bound check: none exists when sparse_observability found a breaking set
+    (it fails with it), else the certified bound (``lasso_error_bound``)."""
+    from .structure.lasso_bound import DEFAULT_MAX_SETS as LASSO_SETS
+    from .structure.lasso_bound import LassoBoundCode, LassoErrorBound, lasso_error_bound
+    from .structure.noise_messages import lasso_bound_check
+
+    breaking = sparse.fields.get("breaking_set")
+    if sparse.verdict is Verdict.FAILS and breaking is not None:
+        found = LassoErrorBound(
+            LassoBoundCode.NOT_IRREPRESENTABLE, float("inf"), noise, spec.horizon,
+            spec.max_attacked,
+        )  # fmt: skip
+        return lasso_bound_check(spec.system, found, [int(i) for i in breaking])
+    found = lasso_error_bound(
+        spec.system,
+        spec.max_attacked,
+        noise,
+        horizon=spec.horizon,
+        max_sets=min(max_sets, LASSO_SETS),
+    )
+    return lasso_bound_check(spec.system, found)
 
 
 class _Clock(Laps):

@@ -224,6 +224,30 @@ _CHECK_FIELDS: dict[str, dict[str, Any]] = {
         "horizon": {"type": "integer", "minimum": 1},
         "decoder": {"enum": ["l0"]},
     },
+    "lasso_error_bound": {
+        "bound": {
+            **_REAL,
+            "description": "certified bound of ||x_hat - x||_2 as lambda comes "
+            "down to lambda_min (Infinity: none)",
+        },
+        "lambda": {"oneOf": [_REAL, {"type": "null"}]},
+        "lambda_min": {**_REAL, "description": "every weight above it is certified"},
+        "lower_bound": {
+            **_REAL,
+            "description": "an error the decoder reaches on an explicit "
+            "attack and noise (as lambda comes down to lambda_min)",
+        },
+        "noise_term": {**_REAL, "description": "the bound is noise_term + bias_per_lambda lambda"},
+        "bias_per_lambda": _REAL,
+        "irrepresentable_constant": _REAL,
+        "irrepresentable_support": _INDEX_LIST,
+        "lambda_support": _INDEX_LIST,
+        "worst_support": _INDEX_LIST,
+        "sigma_min": _REAL,
+        "noise": {"type": "object", "required": ["measurement", "norm"]},
+        "horizon": {"type": "integer", "minimum": 1},
+        "decoder": {"enum": ["lasso"]},
+    },
 }
 _REQUIRED_FIELDS: dict[str, list[str]] = {
     "observability": ["observability_index"],
@@ -233,6 +257,8 @@ _REQUIRED_FIELDS: dict[str, list[str]] = {
     "irrepresentable": ["horizon"],
     "observer_gain": ["L"],
     "decoder_error_bound": ["bound", "lower_bound", "noise", "horizon", "decoder"],
+    "lasso_error_bound": ["bound", "lambda_min", "noise_term", "bias_per_lambda", "noise",
+                          "horizon", "decoder"],
 }  # fmt: skip
 
 

@@ -442,7 +442,7 @@ def _noise_context(
     from .plots import hardening_plot
 
     decoder, observer = cert.get("decoder_error_bound"), cert.get("observer_noise_bound")
-    if decoder is None and observer is None:
+    if decoder is None and observer is None and cert.get("lasso_error_bound") is None:
         return None
     rows: list[tuple[str, str]] = []
     svg = None
@@ -463,6 +463,30 @@ def _noise_context(
             )
     elif decoder is not None:
         rows.append(("l0 decoder", decoder.summary))
+    lasso = cert.get("lasso_error_bound")
+    if lasso is not None and lasso.verdict is Verdict.HOLDS:
+        f = lasso.fields
+        rows += [
+            (
+                "Lasso decoder: certified bound of ||x_hat - x|| for every lambda > "
+                f"{readable(f['lambda_min'])}",
+                f"{readable(f['noise_term'])} + {readable(f['bias_per_lambda'])} lambda "
+                f"({readable(f['bound'])} as lambda comes down to {readable(f['lambda_min'])})",
+            ),
+            (
+                "Lasso decoder: largest irrepresentable constant",
+                readable(f["irrepresentable_constant"]),
+            ),
+        ]
+        if f.get("lower_bound") is not None:
+            rows.append(
+                (
+                    "Lasso decoder: reached by an explicit attack and noise",
+                    readable(f["lower_bound"]),
+                )
+            )
+    elif lasso is not None:
+        rows.append(("Lasso decoder", lasso.summary))
     if observer is not None and observer.verdict is Verdict.HOLDS:
         rows.append(
             ("observer: certified ultimate bound of ||x_hat - x||", readable(observer.value))

@@ -12,9 +12,10 @@ from typing import Any
 from ..base.format import readable
 from ..results import Check, Verdict
 from ..system import System
+from .lasso_bound import LassoBoundCode, LassoErrorBound, lasso_worst_case
 from .noise import BoundCode, DecoderErrorBound, worst_case_pair
 
-__all__ = ["decoder_bound_check", "reason"]
+__all__ = ["decoder_bound_check", "lasso_bound_check", "lasso_reason", "reason"]
 
 TITLE = "Worst-case error of the l0 decoder under noise"
 VALUE_NAME = "certified bound of ||x_hat - x||_2"
@@ -61,7 +62,7 @@ def _sensors(count: int) -> str:
     return f"{count} sensor{'' if count == 1 else 's'}"
 
 
-def _noise_words(found: DecoderErrorBound) -> str:
+def _noise_words(found: DecoderErrorBound | LassoErrorBound) -> str:
     eta = found.noise.eta
     each = (
         f"{readable(float(eta[0]))} on every sensor"
@@ -184,5 +185,151 @@ def decoder_bound_check(system: System, found: DecoderErrorBound) -> Check:
         f"noise gives {readable(found.hardened)}.{tolerance}",
         value=found.bound,
         evidence=evidence,
+        **common,
+    )
+
+
+LASSO_TITLE = "Worst-case error of the Lasso decoder under noise"
+LASSO_VALUE_NAME = "certified bound of ||x_hat - x||_2 (lambda -> lambda_min)"
+LASSO_METHOD = (
+    "primal-dual witness on every support of s sensors: the irrepresentable constant below 1 "
+    "and lambda above the noise's reach, verified for the exact plant"
+)
+
+
+def lasso_reason(found: LassoErrorBound, system: System) -> str:
+    """Why no finite Lasso bound is certified (empty for a certified one)."""
+    code, s = found.code, found.max_attacked
+    if code is LassoBoundCode.NOT_IRREPRESENTABLE:
+        return (
+            f"the irrepresentable constant reaches {readable(found.rho)} >= 1 on the attack "
+            f"support {_names(system, found.rho_support)} (the largest of the {found.sets:,} "
+            "supports), so the witness that bounds the Lasso's error does not exist there; the "
+            "condition is sufficient, not necessary: the Lasso may still do well, but nothing "
+            "here proves it"
+        )
+    if code is LassoBoundCode.LAMBDA_TOO_SMALL:
+        return (
+            f"lambda = {readable(found.lam)} is not above lambda_min = "
+            f"{readable(found.lam_min)}, below which the noise alone may move the attack "
+            "estimate off its support"
+        )
+    if code is LassoBoundCode.NO_MARGIN:
+        return (
+            f"without the sensors {_names(system, found.worst_support)} the others do not "
+            "determine the state with a margin above rounding (the Lasso's solution is not "
+            "proved unique)"
+        )
+    if code is LassoBoundCode.TOO_FEW_SENSORS:
+        return f"with {s} attacked sensors no sensor is left unattacked (s >= p)"
+    if code is LassoBoundCode.TOO_MANY_SETS:
+        facts = found.facts
+        return (
+            f"{found.sets:,} supports of s sensors (the limit: {facts['limit']:,}), about "
+            f"{facts['work']:.2g} floating-point operations (the limit: "
+            f"{facts['work_limit']:.2g})"
+        )
+    if code is LassoBoundCode.OUT_OF_RANGE:
+        return "the observability matrix or the noise bounds leave the floating-point range"
+    if code is LassoBoundCode.RECHECK_FAILED:
+        return "the bound did not survive its re-check in rational arithmetic (please report it)"
+    return ""
+
+
+def lasso_bound_check(
+    system: System, found: LassoErrorBound, breaking_set: list[int] | None = None
+) -> Check:
+    """The ``lasso_error_bound`` check (advisory) of ``found``: holds with a certified bound,
+    fails when sparse_observability's breaking set proves no decoder has one, else
+    inconclusive with the reason."""
+    s, tau = found.max_attacked, found.horizon
+    certified = found.code is LassoBoundCode.CERTIFIED
+    fields: dict[str, Any] = {
+        "bound": found.bound,
+        "lambda": found.lam if certified else None,
+        "lambda_min": found.lam_min,
+        "noise_term": found.noise_term,
+        "bias_per_lambda": found.kappa,
+        "irrepresentable_constant": found.rho,
+        "irrepresentable_support": list(found.rho_support),
+        "lambda_support": list(found.lam_support),
+        "worst_support": list(found.worst_support),
+        "sigma_min": found.sigma,
+        "noise": found.noise.to_dict(),
+        "horizon": tau,
+        "decoder": "lasso",
+    }
+    evidence: dict[str, Any] = {"supports": found.sets, "code": found.code.value}
+    if certified:
+        evidence["deciding_support_terms"] = {
+            "lambda_support": {
+                "rho": found.facts["deciding_rho"],
+                "delta": found.facts["deciding_delta"],
+            },
+            "worst_support": {
+                "beta": found.facts["worst_beta"],
+                "kappa": found.facts["worst_kappa"],
+            },
+        }
+    common: dict[str, Any] = {
+        "id": "lasso_error_bound",
+        "title": LASSO_TITLE,
+        "method": LASSO_METHOD,
+        "required": False,
+        "value_name": LASSO_VALUE_NAME,
+        "fields": fields,
+        "evidence": evidence,
+    }
+    if breaking_set is not None:
+        return Check(
+            verdict=Verdict.FAILS,
+            summary=f"No decoder has a finite worst-case error: removing sensors "
+            f"{_names(system, tuple(breaking_set))} leaves the state unobservable "
+            f"(sparse_observability), so two states explain the same data with at most "
+            f"{_sensors(s)} attacked, even without noise.",
+            value=float("inf"),
+            witness={"breaking_set": list(breaking_set)},
+            **common,
+        )
+    if not certified:
+        return Check(
+            verdict=Verdict.INCONCLUSIVE,
+            summary=f"No worst-case error bound of the Lasso decoder is certified: "
+            f"{lasso_reason(found, system)}.",
+            value=float("inf"),
+            **common,
+        )
+    noise_words = _noise_words(found)
+    reached = lasso_worst_case(system, found)
+    lower = ""
+    if reached is not None:
+        fields["lower_bound"] = reached["lower"]
+        evidence["lower_bound_construction"] = {
+            "support": list(reached["support"]),
+            "lambda": reached["lam"],
+            "attack": reached.get("attack"),
+            "noise": reached.get("noise"),
+            "error": reached.get("error"),
+        }
+        if reached["lower"] > 0:
+            lower = (
+                f" A noise within the bounds and an attack on "
+                f"{_names(system, reached['support'])} drive its error to "
+                f"{readable(reached['lower'])} at lambda = {readable(reached['lam'])} (from "
+                f"x = 0: lower_bound_construction): the worst case lies between the two."
+            )
+    return Check(
+        verdict=Verdict.HOLDS,
+        summary=f"With {noise_words} and any attack on at most {_sensors(s)}, the partial Lasso "
+        f"decoder (1/2 ||Y - O x - a||^2 + lambda ||a||_1 over the window) with any weight "
+        f"lambda > {readable(found.lam_min)} estimates the window's first state within "
+        f"{readable(found.noise_term)} + {readable(found.kappa)} lambda of the truth (2-norm): "
+        f"the noise's reach on the sensors outside the attack, plus the l1 penalty's bias; "
+        f"{readable(found.bound)} as lambda comes down to lambda_min. The irrepresentable "
+        f"constant is at most {readable(found.rho)} < 1 on every support of {_sensors(s)} "
+        f"(largest on {_names(system, found.rho_support) or 'the empty support'}), so the "
+        f"attack estimate stays on the attacked sensors; lambda_min is set by the support "
+        f"{_names(system, found.lam_support) or 'of no sensor'}.{lower}",
+        value=found.bound,
         **common,
     )

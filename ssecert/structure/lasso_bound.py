@@ -1,0 +1,525 @@
+"""Certified worst-case error of the partial Lasso decoder under bounded noise and attack.
+
+The decoder is problem (4) of the Lasso paper over a window of tau steps,
+
+    (x_hat, a_hat) = argmin_{x, a} 1/2 ||Y - O x - a||_2^2 + lam ||a||_1,
+
+with Y = O x + a + w: the attack a nonzero on the rows of at most s sensors, the noise w
+bounded on every sensor i (every sample within eta_i, or the window's samples of sensor i
+within eta_i in 2-norm; ``ssecert.noise.MeasurementNoise``).
+
+The bound is a primal-dual witness (Wainwright's construction for the Lasso, with a
+deterministic noise).  Let S be the rows of s sensors holding the attack and K the others,
+G = O_K' O_K (O_K of full column rank), N = G^-1 O_K' = O_K^+, Z_S = G^-1 O_S' and
+R = I - O_K N (the residual projector on K's rows).  The decoder restricted to attacks on S
+is strictly convex; its solution satisfies
+
+    x_hat - x = N w_K + lam Z_S zeta_S,   zeta_S in [-1, 1]^{|S|} (a subgradient of |a_S|),
+
+and the subgradient it needs on the rows j of K is zeta_j = (R w_K)_j / lam - (O_K Z_S
+zeta_S)_j.  So when
+
+    rho_S = ||O_K Z_S||_inf < 1        (the irrepresentable constant, (6) of the paper), and
+    lam (1 - rho_S) > delta_S = max over the noise of max_j |(R w_K)_j|,
+
+every |zeta_j| < 1: the restricted solution is the decoder's unique solution, its attack
+estimate vanishes outside S, and
+
+    ||x_hat - x||_2 <= beta_S + lam kappa_S,
+    beta_S = max over the noise of ||N w_K||_2,  kappa_S = max over zeta of ||Z_S zeta||_2.
+
+Every attack lies within the rows of some set of exactly s sensors, so with rho_S < 1 for
+every such S the decoder's error is at most max_S (beta_S + lam kappa_S) for every
+lam > lam_min = max_S delta_S / (1 - rho_S).  Without noise lam_min = 0 and the error is
+at most lam max_S kappa_S: the bias of the l1 penalty, which vanishes with lam.
+
+Rigour.  Each set's quantities are computed in floating point from the powers C A^k and
+made upper bounds for the exact plant (the spec's A and C): sigma_min(O_K) from below (as
+for the l0 bound: the Gramian's eigenvalues less their rounding and the powers' a-priori
+error), the computed G^-1 [O_S' O_K'] within eps_Z = ||residual|| / sigma_min^2 of the exact
+one (the residual evaluated with its rounding and the powers' error added), and every
+product's rounding bounded by gamma_k times the norms of its factors.  The printed lam_min
+and bound are re-checked in rational arithmetic from the printed numbers of the sets that
+decide them.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass, field, replace
+from fractions import Fraction
+from typing import Any
+
+import numpy as np
+
+from ..base.validation import as_float_option, as_int_option
+from ..noise import MeasurementNoise
+from ..system import System
+from ..tolerances import gamma
+from ._combinatorics import count_subsets
+from .noise import _block_errors, _kept_sets
+from .noise import _rounded_up as _next_up
+
+__all__ = ["LassoBoundCode", "LassoErrorBound", "lasso_error_bound", "lasso_worst_case"]
+
+DEFAULT_MAX_SETS = 200_000  # supports of s sensors examined
+DEFAULT_MAX_WORK = 3e10  # floating-point operations of the supports' terms (tens of seconds)
+_CHUNK_ENTRIES = 2**22  # floats of one chunk's largest array
+_SAFE = 1.0 + 2.0**-40  # a relative cushion on every bound, far above its own rounding
+
+
+def _rounded_up(x: float) -> float:
+    """x rounded up by an ulp (0 stays 0: nothing to round)."""
+    return 0.0 if x == 0 else _next_up(x)
+
+
+class LassoBoundCode(enum.Enum):
+    """How a Lasso decoder error bound came out."""
+
+    #: a finite bound, certified for the exact plant, for every lam above ``lam_min``
+    CERTIFIED = "certified"
+    #: a support S has rho_S >= 1 (or not proved below 1): the witness does not exist there
+    NOT_IRREPRESENTABLE = "not irrepresentable"
+    #: the given lam is not above ``lam_min``
+    LAMBDA_TOO_SMALL = "lambda too small"
+    #: some O_K is not proved of full column rank: the decoder's solution may not be unique
+    NO_MARGIN = "no margin"
+    #: s >= p: no sensor is left unattacked
+    TOO_FEW_SENSORS = "too few sensors"
+    #: more supports than the limit, or more work than the limit (``facts``)
+    TOO_MANY_SETS = "too many sets"
+    #: the data or the bounds leave the floating-point range
+    OUT_OF_RANGE = "out of range"
+    #: the printed numbers did not survive their rational re-check (please report the plant)
+    RECHECK_FAILED = "re-check failed"
+
+
+@dataclass(frozen=True)
+class LassoErrorBound:
+    """The worst-case error of the partial Lasso decoder over a window (``lasso_error_bound``).
+
+    Attributes
+    ----------
+    code : LassoBoundCode
+    bound : float
+        Certified: ||x_hat - x||_2 <= bound for every attack on at most s sensors, every
+        noise within its bounds and the decoder's weight ``lam`` (inf when none is
+        certified).
+    lam : float
+        The weight the bound is for; ``lam_min`` when none was given (the bound then holds
+        in the limit lam -> lam_min from above, and ``noise_term + lam kappa`` for every
+        larger lam).
+    lam_min : float
+        Every lam above it is certified (0 without noise).
+    rho : float
+        The largest irrepresentable constant over the supports (an upper bound); the
+        certificate needs it below 1.
+    rho_support : tuple of int
+        The sensors of the support with the largest rho.
+    lam_support : tuple of int
+        The support that decides ``lam_min`` (the largest delta_S / (1 - rho_S)).
+    worst_support : tuple of int
+        The support with the largest beta_S + lam kappa_S: the attack the bound is worst for.
+    noise_term : float
+        max_S beta_S: the error the noise alone can cause (the least-squares error on the
+        sensors outside S).
+    kappa : float
+        max_S kappa_S: the bias per unit of lam.
+    sigma : float
+        The certified lower bound of the smallest sigma_min(O_K) over the supports.
+    noise : MeasurementNoise
+    horizon, max_attacked : int
+    sets : int
+        Supports of s sensors examined.
+    facts : mapping
+        The numbers of the deciding supports (for the re-check and the words).
+    """
+
+    code: LassoBoundCode
+    bound: float
+    noise: MeasurementNoise
+    horizon: int
+    max_attacked: int
+    lam: float = math.nan
+    lam_min: float = math.inf
+    rho: float = math.inf
+    rho_support: tuple[int, ...] = ()
+    lam_support: tuple[int, ...] = ()
+    worst_support: tuple[int, ...] = ()
+    noise_term: float = math.inf
+    kappa: float = math.inf
+    sigma: float = 0.0
+    sets: int = 0
+    facts: dict[str, Any] = field(default_factory=dict)
+
+    def at(self, lam: float) -> float:
+        """The certified bound for the weight ``lam`` (inf when lam is not above
+        ``lam_min``): the largest beta_S + lam kappa_S is at most noise_term + lam kappa."""
+        if self.code is not LassoBoundCode.CERTIFIED or not lam > self.lam_min:
+            return math.inf
+        return _rounded_up((self.noise_term + lam * self.kappa) * _SAFE)
+
+
+@dataclass(frozen=True)
+class _Terms:
+    """Upper bounds of each support's numbers, for the exact plant (arrays over supports)."""
+
+    rho: np.ndarray
+    delta: np.ndarray
+    beta: np.ndarray
+    kappa: np.ndarray
+    sigma: np.ndarray
+
+
+def _support_terms(
+    blocks: np.ndarray, errors: np.ndarray, eta: np.ndarray, per_sample: bool, supports: np.ndarray
+) -> _Terms:
+    """rho_S, delta_S, beta_S and kappa_S of every support (rows of ``supports``: sensor
+    indices), each an upper bound for the exact plant; sigma_S a lower bound of sigma_min(O_K)."""
+    p, tau, n = blocks.shape
+    count, s = supports.shape
+    k_rows, s_rows = (p - s) * tau, s * tau
+    flat = blocks.reshape(p * tau, n)
+    frob2 = np.sum(blocks**2, axis=(1, 2))
+    grams = np.einsum("itn,itm->inm", blocks, blocks)
+    total = grams.sum(axis=0)
+    out = {name: np.empty(count) for name in ("rho", "delta", "beta", "kappa", "sigma")}
+    chunk = max(1, _CHUNK_ENTRIES // max(k_rows * p * tau, 1))
+    eta_rows = np.repeat(eta, tau)  # each row's bound (per sample), or its sensor's (blocks)
+    for start in range(0, count, chunk):
+        sup = supports[start : start + chunk]
+        c = sup.shape[0]
+        kept_mask = np.ones((c, p), dtype=bool)
+        np.put_along_axis(kept_mask, sup, False, axis=1)
+        kept = np.nonzero(kept_mask)[1].reshape(c, p - s)
+        rows_k = (kept[:, :, None] * tau + np.arange(tau)).reshape(c, k_rows)
+        rows_s = (sup[:, :, None] * tau + np.arange(tau)).reshape(c, s_rows)
+        O_K = flat[rows_k]  # (c, k_rows, n)
+        O_S = flat[rows_s]  # (c, s_rows, n)
+        G = total - grams[sup].sum(axis=1)
+        # sigma_min(O_K) from below: the Gramian's eigenvalue less its rounding (gamma of the
+        # sums' lengths times the sum of the blocks' norms), LAPACK's backward error, and the
+        # powers' a-priori error e_K (the exact plant's O_K is within e_K of the computed one)
+        lam_min = np.linalg.eigvalsh(G)[:, 0]
+        kept_frob2 = frob2[kept].sum(axis=1)
+        e_K = np.sqrt((errors[kept] ** 2).sum(axis=1)) * _SAFE
+        e_S = np.sqrt((errors[sup] ** 2).sum(axis=1)) * _SAFE
+        g_err = (gamma(tau + p + s + 2) * frob2.sum() + 64 * n * 2.0**-53 * kept_frob2) * _SAFE
+        sigma = np.sqrt(np.maximum(lam_min - g_err, 0.0)) - e_K
+        sigma = np.maximum(sigma, 0.0) / _SAFE
+        good = sigma > 0
+        # Z = G^-1 [O_S' O_K'] by Cholesky where G is proved positive definite
+        G_safe = np.where(good[:, None, None], G, np.eye(n))
+        B = np.concatenate([O_S, O_K], axis=1).transpose(0, 2, 1)  # (c, n, s_rows + k_rows)
+        with np.errstate(all="ignore"):
+            Z = np.linalg.solve(G_safe, B)
+            M = O_K @ Z  # (c, k_rows, s_rows + k_rows): [O_K Z_S, O_K N]
+            residual = O_K.transpose(0, 2, 1) @ M - B
+        norm_OK = np.sqrt(kept_frob2)
+        norm_Z = np.linalg.norm(Z, axis=(1, 2))
+        norm_ZS = np.linalg.norm(Z[:, :, :s_rows], axis=(1, 2))
+        norm_N = np.linalg.norm(Z[:, :, s_rows:], axis=(1, 2))
+        # the exact plant's residual: the computed one, its rounding (gamma of the products'
+        # lengths times the norms of their factors), and the powers' error
+        res = (
+            np.linalg.norm(residual, axis=(1, 2))
+            + gamma(k_rows + n + 2) * (norm_OK**2 * norm_Z + np.linalg.norm(B, axis=(1, 2)))
+            + (2 * norm_OK * e_K + e_K**2) * norm_Z
+            + np.sqrt(e_K**2 + e_S**2)
+        ) * _SAFE
+        with np.errstate(all="ignore"):
+            eps_Z = np.where(good, res / np.where(good, sigma, 1.0) ** 2 * _SAFE, np.inf)
+
+        # the error of a product O_K Z (computed) against the exact plant's: rounding, the
+        # error of Z and the powers' error, in 2-norm
+        err_S, err_K = (
+            (gamma(n + 2) * norm_OK * part + norm_OK * eps_Z + e_K * (part + eps_Z)) * _SAFE
+            for part in (norm_ZS, norm_N)
+        )
+        M_S, M_K = M[:, :, :s_rows], M[:, :, s_rows:]
+        up = 1.0 + gamma(p * tau + 4)
+        # rho: the largest row l1 norm of O_K Z_S; an error E moves it by sqrt(|S|) ||E||_2
+        rho = (np.abs(M_S).sum(axis=2).max(axis=1, initial=0.0) + math.sqrt(s_rows) * err_S) * up
+        R = np.eye(k_rows)[None] - M_K
+        eta_k = eta_rows[rows_k]  # (c, k_rows)
+        norm_eta = np.sqrt((eta_k**2).sum(axis=1))
+        if per_sample:
+            delta = (np.abs(R) @ eta_k[:, :, None])[:, :, 0].max(axis=1)
+            N = Z[:, :, s_rows:]
+            beta_abs = np.sqrt(((np.abs(N) @ eta_k[:, :, None])[:, :, 0] ** 2).sum(axis=1))
+            w_norm = norm_eta  # the largest ||w_K||_2
+        else:
+            per = R.reshape(c, k_rows, p - s, tau)
+            delta = (np.sqrt((per**2).sum(axis=3)) @ eta[kept][:, :, None])[:, :, 0].max(axis=1)
+            N = Z[:, :, s_rows:].reshape(c, n, p - s, tau)
+            block_norms = np.sqrt((N**2).sum(axis=(1, 3)))  # Frobenius >= 2-norm of each block
+            beta_abs = (block_norms * eta[kept]).sum(axis=1)
+            w_norm = np.sqrt((eta[kept] ** 2).sum(axis=1))
+        # an error E of O_K N moves each row's weighted sum by at most ||E||_2 ||eta_K||_2
+        delta = (delta + err_K * w_norm) * up
+        with np.errstate(all="ignore"):
+            beta = np.minimum((beta_abs + eps_Z * w_norm) * up, w_norm / sigma * up)
+        kappa_abs = np.sqrt((np.abs(Z[:, :, :s_rows]).sum(axis=2) ** 2).sum(axis=1))
+        kappa = (
+            np.minimum(kappa_abs + eps_Z * math.sqrt(s_rows), math.sqrt(s_rows) * (norm_ZS + eps_Z))
+            * up
+        )
+        for name, value in (("rho", rho), ("delta", delta), ("beta", beta), ("kappa", kappa)):
+            out[name][start : start + c] = np.where(good, value, np.inf)
+        out["sigma"][start : start + c] = sigma
+    return _Terms(**out)
+
+
+def _blocks_and_errors(system: System, tau: int) -> tuple[np.ndarray, np.ndarray]:
+    """The blocks C_i A^k (shape (p, tau, n)) and upper bounds of each sensor's
+    ||fl(O_i) - O_i||_F: from the exact powers (integers; each entry correctly rounded, so
+    within u |entry|) where their size allows, else as ``System.sensor_blocks`` forms them,
+    with the a-priori bound of their rounding (which grows like |A|^k)."""
+    from ..numerics.exact_powers import exact_observability_matrix
+
+    p, n = system.p, system.n
+    with np.errstate(all="ignore"):
+        exact = exact_observability_matrix(system.A, system.C, tau, max_total_bits=2e7)
+    if exact is None:
+        return system.sensor_blocks(tau), _block_errors(system, tau)
+    scale = 1 << -exact.exponent if exact.exponent < 0 else None
+    flat = np.empty(exact.ints.shape)
+    try:
+        for index, value in np.ndenumerate(exact.ints):
+            # int / int is correctly rounded in Python, however large the integers
+            flat[index] = int(value) / scale if scale else float(int(value) << exact.exponent)
+    except OverflowError:
+        return system.sensor_blocks(tau), _block_errors(system, tau)
+    blocks = flat.reshape(tau, p, n).transpose(1, 0, 2).copy()
+    u = 2.0**-53
+    # |fl(x) - x| <= u |x| <= u / (1 - u) |fl(x)| for normal floats, 2^-1075 below them
+    errors = u / (1 - u) * np.sqrt(np.sum(blocks**2, axis=(1, 2))) + math.sqrt(tau * n) * 2.0**-1074
+    return blocks, errors * _SAFE
+
+
+def lasso_error_bound(
+    system: System,
+    max_attacked: int,
+    noise: MeasurementNoise,
+    *,
+    horizon: int | None = None,
+    lam: float | None = None,
+    max_sets: int = DEFAULT_MAX_SETS,
+    max_work: float = DEFAULT_MAX_WORK,
+) -> LassoErrorBound:
+    """The certified worst-case estimation error of the partial Lasso decoder over a window.
+
+    Parameters
+    ----------
+    system : System
+    max_attacked : int
+        s, the largest number of attacked sensors.
+    noise : MeasurementNoise
+        Per-sensor bounds of the measurement noise.
+    horizon : int, optional
+        tau, the window (default n).
+    lam : float, optional
+        The decoder's weight; by default the bound is given at ``lam_min`` (the limit from
+        above) and ``LassoErrorBound.at`` gives it for any larger weight.
+    max_sets : int, default 200,000
+        Largest number of supports of s sensors examined.
+    max_work : float, default 3e10
+        Largest number of floating-point operations for the supports' terms (each support
+        costs about 2 (p - s) tau (p tau (n + 2) + (p - s) tau)).
+
+    Returns
+    -------
+    LassoErrorBound
+
+    Examples
+    --------
+    Three sensors of one state, one attacked, noise at most 0.1 on each: the irrepresentable
+    constant is 1/2 (Example 1 of the paper), lam must exceed 0.1 / (1 - 1/2) = 0.2, and the
+    error is at most 0.1 (the two safe sensors' average) plus lam / 2 (the l1 bias).
+
+    >>> import numpy as np
+    >>> from ssecert import System
+    >>> plant = System(np.eye(1), np.ones((3, 1)))
+    >>> found = lasso_error_bound(plant, 1, MeasurementNoise.uniform(0.1, 3), horizon=1)
+    >>> round(found.rho, 9), round(found.lam_min, 9), round(found.bound, 9)
+    (0.5, 0.2, 0.2)
+    >>> round(found.at(1.0), 9)
+    0.6
+    """
+    s = as_int_option(max_attacked, "max_attacked", min_value=0)
+    tau = system.n if horizon is None else as_int_option(horizon, "horizon", min_value=1)
+    if lam is not None:
+        lam = as_float_option(lam, "lam", min_value=0.0)
+    p = system.p
+    if noise.eta.shape != (p,):
+        raise ValueError(f"noise: {noise.eta.size} bounds for {p} sensors")
+    base: dict[str, Any] = {"noise": noise, "horizon": tau, "max_attacked": s}
+    if s >= p:
+        return LassoErrorBound(LassoBoundCode.TOO_FEW_SENSORS, math.inf, **base)
+    sets = count_subsets(p, [s])
+    n = system.n
+    work = 2.0 * sets * (p - s) * tau * (p * tau * (n + 2) + (p - s) * tau)
+    if sets > max_sets or work > max_work:
+        return LassoErrorBound(
+            LassoBoundCode.TOO_MANY_SETS,
+            math.inf,
+            sets=sets,
+            facts={"limit": max_sets, "work": work, "work_limit": max_work},
+            **base,
+        )
+    # the noise's terms are linear in it: computed for the bounds over a power of two c >= the
+    # largest (exactly), so that no square under- or overflows, and scaled back by c
+    top = float(np.max(noise.eta)) if p else 0.0
+    c = MeasurementNoise.scale(top)
+    eta = noise.eta / c if top > 0 else np.zeros(p)
+    with np.errstate(all="ignore"):
+        blocks, errors = _blocks_and_errors(system, tau)
+        finite = bool(np.all(np.isfinite(blocks))) and bool(np.isfinite(np.sum(blocks**2)))
+    if not finite or not np.all(np.isfinite(errors)):
+        return LassoErrorBound(LassoBoundCode.OUT_OF_RANGE, math.inf, sets=sets, **base)
+    supports = _kept_sets(p, s)
+    terms = _support_terms(blocks, errors, eta, noise.per_sample, supports)
+    names = lambda j: tuple(int(i) for i in supports[j])  # noqa: E731
+    base["sets"] = sets
+    if not np.all(terms.sigma > 0):
+        j = int(np.argmin(terms.sigma))
+        return LassoErrorBound(LassoBoundCode.NO_MARGIN, math.inf, worst_support=names(j), **base)
+    worst_rho = int(np.argmax(terms.rho))
+    rho = float(terms.rho[worst_rho])
+    smallest = float(terms.sigma.min())
+
+    def common(code: LassoBoundCode, bound: float, **more: Any) -> LassoErrorBound:
+        return LassoErrorBound(
+            code, bound, rho=rho, rho_support=names(worst_rho), sigma=smallest, **base, **more
+        )
+
+    if not rho < 1:
+        return common(LassoBoundCode.NOT_IRREPRESENTABLE, math.inf)
+    with np.errstate(over="ignore"):
+        need = terms.delta / (1.0 - terms.rho) * (1.0 + gamma(4))
+        deciding = int(np.argmax(need))
+        lam_min = _rounded_up(float(need[deciding]) * c) if top > 0 else 0.0
+        noise_term = _rounded_up(float(terms.beta.max()) * c) if top > 0 else 0.0
+        kappa = _rounded_up(float(terms.kappa.max()))
+    if not all(math.isfinite(v) for v in (lam_min, noise_term, kappa)):
+        return common(LassoBoundCode.OUT_OF_RANGE, math.inf)
+    weight = lam_min if lam is None else float(lam)
+    with np.errstate(over="ignore"):
+        per_support = terms.beta * c + weight * terms.kappa
+    worst = int(np.argmax(per_support))
+    found = common(
+        LassoBoundCode.CERTIFIED,
+        _rounded_up(float(per_support[worst]) * (1.0 + gamma(4))),
+        lam=weight,
+        lam_min=lam_min,
+        lam_support=names(deciding),
+        worst_support=names(worst),
+        noise_term=noise_term,
+        kappa=kappa,
+        facts={
+            "deciding_rho": float(terms.rho[deciding]),
+            "deciding_delta": float(terms.delta[deciding]) * c,
+            "worst_beta": float(terms.beta[worst]) * c,
+            "worst_kappa": float(terms.kappa[worst]),
+            "noise_scale": c,
+        },
+    )
+    if not math.isfinite(found.bound):
+        return replace(found, code=LassoBoundCode.OUT_OF_RANGE, bound=math.inf)
+    if lam is not None and not lam > lam_min:
+        return replace(found, code=LassoBoundCode.LAMBDA_TOO_SMALL, bound=math.inf)
+    if not lasso_bound_rechecks(found):
+        return replace(found, code=LassoBoundCode.RECHECK_FAILED)
+    return found
+
+
+def lasso_bound_rechecks(found: LassoErrorBound) -> bool:
+    """The printed lam_min and bound re-derived in rational arithmetic from the printed
+    numbers of the supports that decide them: lam_min (1 - rho_S) >= delta_S on the support
+    deciding lam_min, bound >= beta_S + lam kappa_S on the worst support, and
+    noise_term + lam kappa >= the bound's terms."""
+    if found.code is not LassoBoundCode.CERTIFIED:
+        return False
+    f = found.facts
+    q = Fraction
+    rho, delta = q(f["deciding_rho"]), q(f["deciding_delta"])
+    if not (rho < 1 and q(found.lam_min) * (1 - rho) >= delta):
+        return False
+    beta, kappa = q(f["worst_beta"]), q(f["worst_kappa"])
+    lam = q(found.lam)
+    if q(found.bound) < beta + lam * kappa:
+        return False
+    return q(found.noise_term) >= beta and q(found.kappa) >= kappa
+
+
+def lasso_worst_case(
+    system: System, found: LassoErrorBound, lam: float | None = None
+) -> dict[str, Any] | None:
+    """An attack and a noise within the bounds on which the partial Lasso decoder with weight
+    ``lam`` (default ``found.lam``) is off by ``lower``: how tight the certified bound is.
+
+    On a support S where the witness holds, an attack on S large enough (each entry beyond
+    its noise, lam and the error's reach on its row) keeps the sign of the attack estimate, so
+    zeta_S is the attack's sign and the decoder's error is exactly N w_K + lam Z_S zeta (from
+    x = 0).  Its norm is maximised over the signs and the noise's extreme points by
+    alternating directions, on the supports that decide the bound (None when ``found`` is not
+    certified).  Returns ``lower`` (the error reached, rounded down), the ``support``, the
+    ``attack`` and ``noise`` (the stacked window, rows t p + i), ``lam`` and ``error``.
+    """
+    if found.code is not LassoBoundCode.CERTIFIED:
+        return None
+    weight = found.lam if lam is None else float(lam)
+    if not weight >= found.lam_min:
+        return None
+    p, n, tau = system.p, system.n, found.horizon
+    O = system.observability_matrix(tau)
+    eta = found.noise.eta
+    best: dict[str, Any] | None = None
+    for support in dict.fromkeys((found.worst_support, found.lam_support, found.rho_support)):
+        attacked = set(support)
+        rows_s = [t * p + i for t in range(tau) for i in sorted(attacked)]
+        rows_k = [t * p + i for t in range(tau) for i in range(p) if i not in attacked]
+        O_K, O_S = O[rows_k], O[rows_s]
+        G = O_K.T @ O_K
+        N, Z = np.linalg.solve(G, O_K.T), np.linalg.solve(G, O_S.T)
+        sensor = np.array([r % p for r in rows_k])
+        starts = [np.linalg.svd(M)[0][:, 0] for M in (N, Z) if M.size] + list(np.eye(n))
+        for v in starts:
+            for _ in range(2 * n + 4):
+                sigma = np.where(Z.T @ v >= 0, 1.0, -1.0)
+                reach = N.T @ v
+                if found.noise.per_sample:
+                    w = eta[sensor] * np.where(reach >= 0, 1.0, -1.0)
+                else:
+                    w = np.zeros_like(reach)
+                    for i in set(sensor.tolist()):
+                        mine = sensor == i
+                        size = float(np.linalg.norm(reach[mine]))
+                        w[mine] = eta[i] * (reach[mine] / size if size > 0 else 1 / math.sqrt(tau))
+                error = N @ w + weight * (Z @ sigma)
+                size = float(np.linalg.norm(error))
+                if size == 0:
+                    break
+                if best is None or size > best["error_norm"]:
+                    best = {"error_norm": size, "support": tuple(support), "error": error,
+                            "rows_s": rows_s, "rows_k": rows_k, "sigma": sigma, "w": w}  # fmt: skip
+                if np.allclose(error / size, v, rtol=0, atol=1e-15):
+                    break
+                v = error / size
+    if best is None:
+        return {"lower": 0.0, "support": found.worst_support, "lam": weight}
+    noise = np.zeros(p * tau)
+    noise[best["rows_k"]] = best["w"]
+    # each attacked row beyond its noise (none), lam and the error's reach there
+    reach = np.abs(O[best["rows_s"]] @ best["error"]) + weight
+    attack = np.zeros(p * tau)
+    attack[best["rows_s"]] = best["sigma"] * (2.0 * reach + 1.0)
+    return {
+        "lower": best["error_norm"] * (1 - 2.0**-40),
+        "support": best["support"],
+        "lam": weight,
+        "attack": attack,
+        "noise": noise,
+        "error": best["error"],
+    }
