@@ -211,8 +211,8 @@ def analyze(
     Certificate
         Checks ``observability``, ``sparse_observability`` (required) and
         ``irrepresentable`` (advisory); with noise (the ``noise`` argument or
-        the spec's ``[noise]``) also ``decoder_error_bound`` and ``lasso_error_bound``
-        (advisory); with an
+        the spec's ``[noise]``) also ``decoder_error_bound``, ``l1_error_bound`` and
+        ``lasso_error_bound`` (advisory); with an
         ``[observer]`` section also
         ``observer_gain``, ``observer_stability`` (required), ``iss_gain``
         and ``thesis_assumptions`` (advisory).
@@ -275,6 +275,13 @@ def analyze(
         )
         steps.append(
             Step(
+                "l1_error_bound",
+                lambda sparse: _l1_bound(spec, bounded, sparse),
+                needs=("sparse_observability",),
+            )
+        )
+        steps.append(
+            Step(
                 "lasso_error_bound",
                 lambda sparse: _lasso_bound(spec, bounded, sparse, max_sets),
                 needs=("sparse_observability",),
@@ -306,7 +313,11 @@ def analyze(
     decided = decide(steps, clock)
     checks: list[Check] = [
         decided["observability"], decided["sparse_observability"], decided["irrepresentable"],
-        *(decided[key] for key in ("decoder_error_bound", "lasso_error_bound") if key in decided),
+        *(
+            decided[key]
+            for key in ("decoder_error_bound", "l1_error_bound", "lasso_error_bound")
+            if key in decided
+        ),
         *decided.get("observer_checks", []),
     ]  # fmt: skip
     checks, notes = reconcile(checks)
@@ -362,6 +373,22 @@ def _decoder_bound(spec: Spec, noise: MeasurementNoise, sparse: Check, max_sets:
             max_sets=min(max_sets, BOUND_SETS),
         )
     return decoder_bound_check(spec.system, found)
+
+
+def _l1_bound(spec: Spec, noise: MeasurementNoise, sparse: Check) -> Check:
+    """The l1_error_bound check: none exists when sparse_observability found a breaking set
+    (it fails with it), else the certified bound (``l1_error_bound``)."""
+    from .structure.l1_bound import L1BoundCode, L1ErrorBound, l1_error_bound
+    from .structure.noise_messages import l1_bound_check
+
+    breaking = sparse.fields.get("breaking_set")
+    if sparse.verdict is Verdict.FAILS and breaking is not None:
+        found = L1ErrorBound(
+            L1BoundCode.NOT_NULL_SPACE, float("inf"), noise, spec.horizon, spec.max_attacked
+        )
+        return l1_bound_check(spec.system, found, [int(i) for i in breaking])
+    found = l1_error_bound(spec.system, spec.max_attacked, noise, horizon=spec.horizon)
+    return l1_bound_check(spec.system, found)
 
 
 def _lasso_bound(spec: Spec, noise: MeasurementNoise, sparse: Check, max_sets: int) -> Check:

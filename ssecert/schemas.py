@@ -224,6 +224,21 @@ _CHECK_FIELDS: dict[str, dict[str, Any]] = {
         "horizon": {"type": "integer", "minimum": 1},
         "decoder": {"enum": ["l0"]},
     },
+    "l1_error_bound": {
+        "bound": {**_REAL, "description": "certified bound of ||x_hat - x||_2 (Infinity: none)"},
+        "null_space_constant": {
+            **_REAL,
+            "description": "the largest max ||O_S e||_1 / "
+            "||O_K e||_1 over the sets of s sensors (an upper bound)",
+        },
+        "null_space_support": _INDEX_LIST,
+        "worst_support": _INDEX_LIST,
+        "sigma_min": _REAL,
+        "noise_l1": _REAL,
+        "noise": {"type": "object", "required": ["measurement", "norm"]},
+        "horizon": {"type": "integer", "minimum": 1},
+        "decoder": {"enum": ["l1"]},
+    },
     "lasso_error_bound": {
         "bound": {
             **_REAL,
@@ -257,6 +272,7 @@ _REQUIRED_FIELDS: dict[str, list[str]] = {
     "irrepresentable": ["horizon"],
     "observer_gain": ["L"],
     "decoder_error_bound": ["bound", "lower_bound", "noise", "horizon", "decoder"],
+    "l1_error_bound": ["bound", "null_space_constant", "noise", "horizon", "decoder"],
     "lasso_error_bound": ["bound", "lambda_min", "noise_term", "bias_per_lambda", "noise",
                           "horizon", "decoder"],
 }  # fmt: skip

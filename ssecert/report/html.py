@@ -443,7 +443,7 @@ def _noise_context(
 
     decoder, observer = cert.get("decoder_error_bound"), cert.get("observer_noise_bound")
     if decoder is None and observer is None and cert.get("lasso_error_bound") is None:
-        return None
+        return None  # the decoders' bounds come together
     rows: list[tuple[str, str]] = []
     svg = None
     if decoder is not None and decoder.verdict is Verdict.HOLDS:
@@ -463,6 +463,14 @@ def _noise_context(
             )
     elif decoder is not None:
         rows.append(("l0 decoder", decoder.summary))
+    l1 = cert.get("l1_error_bound")
+    if l1 is not None and l1.verdict is Verdict.HOLDS:
+        rows += [
+            ("l1 decoder: certified bound of ||x_hat - x||", readable(l1.fields["bound"])),
+            ("l1 decoder: largest null-space constant", readable(l1.fields["null_space_constant"])),
+        ]
+    elif l1 is not None:
+        rows.append(("l1 decoder", l1.summary))
     lasso = cert.get("lasso_error_bound")
     if lasso is not None and lasso.verdict is Verdict.HOLDS:
         f = lasso.fields

@@ -172,6 +172,32 @@ class _Terms:
     sigma: np.ndarray
 
 
+def _kept_sigma(
+    G: np.ndarray,
+    frob2: np.ndarray,
+    errors: np.ndarray,
+    sup: np.ndarray,
+    kept: np.ndarray,
+    tau: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Lower bounds of sigma_min(O_K) of the exact plant for each row of ``kept`` (G the
+    computed Gramians: the sum of every block's less the removed ones), and the powers' errors
+    e_K, e_S of the kept and removed rows (``errors``: each sensor's, ``frob2``: each block's
+    squared Frobenius norm).
+
+    The Gramian's smallest eigenvalue less its rounding (gamma of the sums' lengths times the
+    sum of the blocks' norms) and LAPACK's backward error; then e_K off (the exact plant's O_K
+    is within e_K of the computed one)."""
+    p, n, s = frob2.size, G.shape[-1], sup.shape[1]
+    lam_min = np.linalg.eigvalsh(G)[:, 0]
+    kept_frob2 = frob2[kept].sum(axis=1)
+    e_K = np.sqrt((errors[kept] ** 2).sum(axis=1)) * _SAFE
+    e_S = np.sqrt((errors[sup] ** 2).sum(axis=1)) * _SAFE
+    g_err = (gamma(tau + p + s + 2) * frob2.sum() + 64 * n * 2.0**-53 * kept_frob2) * _SAFE
+    sigma = np.sqrt(np.maximum(lam_min - g_err, 0.0)) - e_K
+    return np.maximum(sigma, 0.0) / _SAFE, e_K, e_S
+
+
 def _support_terms(
     blocks: np.ndarray, errors: np.ndarray, eta: np.ndarray, per_sample: bool, supports: np.ndarray
 ) -> _Terms:
@@ -198,18 +224,10 @@ def _support_terms(
         O_K = flat[rows_k]  # (c, k_rows, n)
         O_S = flat[rows_s]  # (c, s_rows, n)
         G = total - grams[sup].sum(axis=1)
-        # sigma_min(O_K) from below: the Gramian's eigenvalue less its rounding (gamma of the
-        # sums' lengths times the sum of the blocks' norms), LAPACK's backward error, and the
-        # powers' a-priori error e_K (the exact plant's O_K is within e_K of the computed one)
-        lam_min = np.linalg.eigvalsh(G)[:, 0]
+        sigma, e_K, e_S = _kept_sigma(G, frob2, errors, sup, kept, tau)
         kept_frob2 = frob2[kept].sum(axis=1)
-        e_K = np.sqrt((errors[kept] ** 2).sum(axis=1)) * _SAFE
-        e_S = np.sqrt((errors[sup] ** 2).sum(axis=1)) * _SAFE
-        g_err = (gamma(tau + p + s + 2) * frob2.sum() + 64 * n * 2.0**-53 * kept_frob2) * _SAFE
-        sigma = np.sqrt(np.maximum(lam_min - g_err, 0.0)) - e_K
-        sigma = np.maximum(sigma, 0.0) / _SAFE
         good = sigma > 0
-        # Z = G^-1 [O_S' O_K'] by Cholesky where G is proved positive definite
+        # Z = G^-1 [O_S' O_K'] where G is proved positive definite
         G_safe = np.where(good[:, None, None], G, np.eye(n))
         B = np.concatenate([O_S, O_K], axis=1).transpose(0, 2, 1)  # (c, n, s_rows + k_rows)
         with np.errstate(all="ignore"):

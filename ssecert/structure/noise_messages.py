@@ -12,10 +12,18 @@ from typing import Any
 from ..base.format import readable
 from ..results import Check, Verdict
 from ..system import System
+from .l1_bound import L1BoundCode, L1ErrorBound
 from .lasso_bound import LassoBoundCode, LassoErrorBound, lasso_worst_case
 from .noise import BoundCode, DecoderErrorBound, worst_case_pair
 
-__all__ = ["decoder_bound_check", "lasso_bound_check", "lasso_reason", "reason"]
+__all__ = [
+    "decoder_bound_check",
+    "l1_bound_check",
+    "l1_reason",
+    "lasso_bound_check",
+    "lasso_reason",
+    "reason",
+]
 
 TITLE = "Worst-case error of the l0 decoder under noise"
 VALUE_NAME = "certified bound of ||x_hat - x||_2"
@@ -62,7 +70,7 @@ def _sensors(count: int) -> str:
     return f"{count} sensor{'' if count == 1 else 's'}"
 
 
-def _noise_words(found: DecoderErrorBound | LassoErrorBound) -> str:
+def _noise_words(found: DecoderErrorBound | LassoErrorBound | L1ErrorBound) -> str:
     eta = found.noise.eta
     each = (
         f"{readable(float(eta[0]))} on every sensor"
@@ -330,6 +338,107 @@ def lasso_bound_check(
         f"(largest on {_names(system, found.rho_support) or 'the empty support'}), so the "
         f"attack estimate stays on the attacked sensors; lambda_min is set by the support "
         f"{_names(system, found.lam_support) or 'of no sensor'}.{lower}",
+        value=found.bound,
+        **common,
+    )
+
+
+L1_TITLE = "Worst-case error of the l1 decoder under noise"
+L1_VALUE_NAME = "certified bound of ||x_hat - x||_2"
+L1_METHOD = (
+    "the l1 decoder's optimality on every set of s sensors, with the null-space constant bounded "
+    "by linear-programming duals made exactly feasible"
+)
+
+
+def l1_reason(found: L1ErrorBound, system: System) -> str:
+    """Why no finite l1 bound is certified (empty for a certified one)."""
+    code, s = found.code, found.max_attacked
+    if code is L1BoundCode.NOT_NULL_SPACE:
+        return (
+            f"the null-space constant reaches {readable(found.theta)} >= 1 on sensors "
+            f"{_names(system, found.theta_support)}: an attack there may move the l1 "
+            "decoder's estimate even without noise (or the bound is not proved below 1)"
+        )
+    if code is L1BoundCode.NO_MARGIN:
+        return (
+            f"without the sensors {_names(system, found.worst_support)} the others do not "
+            "determine the state with a margin above rounding"
+        )
+    if code is L1BoundCode.TOO_FEW_SENSORS:
+        return f"with {s} attacked sensors no sensor is left unattacked (s >= p)"
+    if code is L1BoundCode.TOO_MANY_PROGRAMS:
+        return (
+            f"{found.programs:,} linear programs (sets of s sensors times the sign patterns of "
+            f"their rows over the window), more than the limit of {found.facts['limit']:,}"
+        )
+    if code is L1BoundCode.NOT_SOLVED:
+        return "a linear program was not solved, or the numbers leave the floating-point range"
+    if code is L1BoundCode.RECHECK_FAILED:
+        return "the bound did not survive its re-check in rational arithmetic (please report it)"
+    return ""
+
+
+def l1_bound_check(
+    system: System, found: L1ErrorBound, breaking_set: list[int] | None = None
+) -> Check:
+    """The ``l1_error_bound`` check (advisory) of ``found``: holds with a certified bound,
+    fails when sparse_observability's breaking set proves no decoder has one, else
+    inconclusive with the reason."""
+    s = found.max_attacked
+    fields: dict[str, Any] = {
+        "bound": found.bound,
+        "null_space_constant": found.theta,
+        "null_space_support": list(found.theta_support),
+        "worst_support": list(found.worst_support),
+        "sigma_min": found.sigma,
+        "noise_l1": found.noise_l1,
+        "noise": found.noise.to_dict(),
+        "horizon": found.horizon,
+        "decoder": "l1",
+    }
+    evidence: dict[str, Any] = {
+        "sets": found.sets,
+        "linear_programs": found.programs,
+        "code": found.code.value,
+    }
+    common: dict[str, Any] = {
+        "id": "l1_error_bound",
+        "title": L1_TITLE,
+        "method": L1_METHOD,
+        "required": False,
+        "value_name": L1_VALUE_NAME,
+        "fields": fields,
+        "evidence": evidence,
+    }
+    if breaking_set is not None:
+        return Check(
+            verdict=Verdict.FAILS,
+            summary=f"No decoder has a finite worst-case error: removing sensors "
+            f"{_names(system, tuple(breaking_set))} leaves the state unobservable "
+            f"(sparse_observability), so two states explain the same data with at most "
+            f"{_sensors(s)} attacked, even without noise.",
+            value=float("inf"),
+            witness={"breaking_set": list(breaking_set)},
+            **common,
+        )
+    if found.code is not L1BoundCode.CERTIFIED:
+        return Check(
+            verdict=Verdict.INCONCLUSIVE,
+            summary=f"No worst-case error bound of the l1 decoder is certified: "
+            f"{l1_reason(found, system)}.",
+            value=float("inf"),
+            **common,
+        )
+    return Check(
+        verdict=Verdict.HOLDS,
+        summary=f"With {_noise_words(found)} and any attack on at most {_sensors(s)}, the l1 "
+        f"decoder (argmin ||Y - O x||_1 over the window) estimates the window's first state "
+        f"within {readable(found.bound)} of the truth (2-norm). The null-space constant is at "
+        f"most {readable(found.theta)} < 1 on every set of {_sensors(s)} (largest on "
+        f"{_names(system, found.theta_support) or 'the empty set'}); the bound is largest with "
+        f"the attack on {_names(system, found.worst_support) or 'no sensor'}: 2 ||w_K||_1 / ((1 - "
+        f"theta) sigma_min(O_K)), sigma_min at least {readable(found.sigma)}.",
         value=found.bound,
         **common,
     )
