@@ -41,13 +41,12 @@ from typing import Any
 
 import numpy as np
 
-from ..base.validation import as_int_option
 from ..noise import MeasurementNoise
 from ..system import System
 from ..tolerances import gamma
 from ._combinatorics import count_subsets
 from .lasso_bound import _SAFE, _blocks_and_errors, _kept_sigma, _rounded_up
-from .noise import _kept_sets
+from .noise import _kept_sets, window_inputs
 
 __all__ = ["L1BoundCode", "L1ErrorBound", "l1_bound_rechecks", "l1_error_bound"]
 
@@ -203,11 +202,8 @@ def l1_error_bound(
     >>> round(found.theta, 9), round(found.bound, 6)
     (0.5, 0.565685)
     """
-    s = as_int_option(max_attacked, "max_attacked", min_value=0)
-    tau = system.n if horizon is None else as_int_option(horizon, "horizon", min_value=1)
+    s, tau = window_inputs(system, max_attacked, noise, horizon)
     p = system.p
-    if noise.eta.shape != (p,):
-        raise ValueError(f"noise: {noise.eta.size} bounds for {p} sensors")
     base: dict[str, Any] = {"noise": noise, "horizon": tau, "max_attacked": s}
     if s >= p:
         return L1ErrorBound(L1BoundCode.TOO_FEW_SENSORS, math.inf, **base)

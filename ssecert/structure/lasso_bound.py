@@ -53,12 +53,12 @@ from typing import Any
 
 import numpy as np
 
-from ..base.validation import as_float_option, as_int_option
+from ..base.validation import as_float_option
 from ..noise import MeasurementNoise
 from ..system import System
 from ..tolerances import gamma
 from ._combinatorics import count_subsets
-from .noise import _block_errors, _kept_sets
+from .noise import _block_errors, _kept_sets, window_inputs
 from .noise import _rounded_up as _next_up
 
 __all__ = ["LassoBoundCode", "LassoErrorBound", "lasso_error_bound", "lasso_worst_case"]
@@ -365,13 +365,10 @@ def lasso_error_bound(
     >>> round(found.at(1.0), 9)
     0.6
     """
-    s = as_int_option(max_attacked, "max_attacked", min_value=0)
-    tau = system.n if horizon is None else as_int_option(horizon, "horizon", min_value=1)
+    s, tau = window_inputs(system, max_attacked, noise, horizon)
     if lam is not None:
         lam = as_float_option(lam, "lam", min_value=0.0)
     p = system.p
-    if noise.eta.shape != (p,):
-        raise ValueError(f"noise: {noise.eta.size} bounds for {p} sensors")
     base: dict[str, Any] = {"noise": noise, "horizon": tau, "max_attacked": s}
     if s >= p:
         return LassoErrorBound(LassoBoundCode.TOO_FEW_SENSORS, math.inf, **base)

@@ -374,6 +374,18 @@ def _screen_failures(
     return np.concatenate(found)[:limit]
 
 
+def window_inputs(
+    system: System, max_attacked: Any, noise: MeasurementNoise, horizon: Any
+) -> tuple[int, int]:
+    """s and tau of a decoder bound, checked (tau defaults to n), and the noise's bounds
+    checked against the plant's sensors."""
+    s = as_int_option(max_attacked, "max_attacked", min_value=0)
+    tau = system.n if horizon is None else as_int_option(horizon, "horizon", min_value=1)
+    if noise.eta.shape != (system.p,):
+        raise ValueError(f"noise: {noise.eta.size} bounds for {system.p} sensors")
+    return s, tau
+
+
 def decoder_error_bound(
     system: System,
     max_attacked: int,
@@ -412,11 +424,8 @@ def decoder_error_bound(
     >>> round(found.bound, 6), round(found.lower, 6), found.worst_kept
     (0.241421, 0.1, (0,))
     """
-    s = as_int_option(max_attacked, "max_attacked", min_value=0)
-    tau = system.n if horizon is None else as_int_option(horizon, "horizon", min_value=1)
+    s, tau = window_inputs(system, max_attacked, noise, horizon)
     p = system.p
-    if noise.eta.shape != (p,):
-        raise ValueError(f"noise: {noise.eta.size} bounds for {p} sensors")
     # the bound is linear in the noise: computed for the bounds over a power of two c >= the
     # largest (exactly), so that no square under- or overflows, and scaled back by c
     top = float(np.max(noise.eta)) if p else 0.0

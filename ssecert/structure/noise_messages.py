@@ -30,6 +30,18 @@ VALUE_NAME = "certified bound of ||x_hat - x||_2"
 METHOD = "l0 decoder's optimality on every set of p - 2s sensors (verified sigma_min of O_K)"
 
 
+_TOO_FEW = "with {s} attacked sensors no sensor is left unattacked (s >= p)"
+_OUT_OF_RANGE = "the observability matrix or the noise bounds leave the floating-point range"
+_RECHECK = "the bound did not survive its re-check in rational arithmetic (please report it)"
+
+
+def _no_margin(system: System, removed: tuple[int, ...]) -> str:
+    return (
+        f"without the sensors {_names(system, removed)} the others do not determine the state "
+        "with a margin above rounding"
+    )
+
+
 def reason(found: DecoderErrorBound) -> str:
     """Why no finite bound is certified (empty for a certified one)."""
     code, s = found.code, found.max_attacked
@@ -49,7 +61,7 @@ def reason(found: DecoderErrorBound) -> str:
             "rounding (its smallest singular value is not proved positive)"
         )
     if code is BoundCode.OUT_OF_RANGE:
-        return "the observability matrix or the noise bounds leave the floating-point range"
+        return _OUT_OF_RANGE
     if code is BoundCode.WINDOW_TOO_SHORT:
         return (
             f"sensors {list(found.worst_kept)} over the window of {found.horizon} step"
@@ -58,7 +70,7 @@ def reason(found: DecoderErrorBound) -> str:
             "worst-case error; a longer horizon may"
         )
     if code is BoundCode.RECHECK_FAILED:
-        return "the bound did not survive its re-check in rational arithmetic (please report it)"
+        return _RECHECK
     return ""
 
 
@@ -83,6 +95,21 @@ def _noise_words(found: DecoderErrorBound | LassoErrorBound | L1ErrorBound) -> s
         else f"in 2-norm over the window of {found.horizon} steps"
     )
     return f"noise within {each} ({how})"
+
+
+def _breaking(system: System, s: int, breaking_set: list[int], common: dict[str, Any]) -> Check:
+    """A decoder check that fails with sparse_observability's breaking set: no decoder has a
+    finite worst-case error."""
+    return Check(
+        verdict=Verdict.FAILS,
+        summary=f"No decoder has a finite worst-case error: removing sensors "
+        f"{_names(system, tuple(breaking_set))} leaves the state unobservable "
+        f"(sparse_observability), so two states explain the same data with at most "
+        f"{_sensors(s)} attacked, even without noise.",
+        value=float("inf"),
+        witness={"breaking_set": list(breaking_set)},
+        **common,
+    )
 
 
 def decoder_bound_check(system: System, found: DecoderErrorBound) -> Check:
@@ -125,17 +152,7 @@ def decoder_bound_check(system: System, found: DecoderErrorBound) -> Check:
     }
     if found.code is BoundCode.NOT_SPARSE_OBSERVABLE:
         breaking_set = list(found.facts["breaking_set"])
-        return Check(
-            verdict=Verdict.FAILS,
-            summary=f"No decoder has a finite worst-case error: removing sensors "
-            f"{_names(system, tuple(breaking_set))} leaves the state unobservable "
-            f"(sparse_observability), so two states explain the same data with at most "
-            f"{_sensors(s)} attacked, even without noise.",
-            value=float("inf"),
-            evidence=evidence,
-            witness={"breaking_set": list(breaking_set)},
-            **common,
-        )
+        return _breaking(system, s, breaking_set, {**common, "evidence": evidence})
     if found.code is BoundCode.WINDOW_TOO_SHORT:
         return Check(
             verdict=Verdict.FAILS,
@@ -224,12 +241,10 @@ def lasso_reason(found: LassoErrorBound, system: System) -> str:
         )
     if code is LassoBoundCode.NO_MARGIN:
         return (
-            f"without the sensors {_names(system, found.worst_support)} the others do not "
-            "determine the state with a margin above rounding (the Lasso's solution is not "
-            "proved unique)"
+            f"{_no_margin(system, found.worst_support)} (the Lasso's solution is not proved unique)"
         )
     if code is LassoBoundCode.TOO_FEW_SENSORS:
-        return f"with {s} attacked sensors no sensor is left unattacked (s >= p)"
+        return _TOO_FEW.format(s=s)
     if code is LassoBoundCode.TOO_MANY_SETS:
         facts = found.facts
         return (
@@ -238,9 +253,9 @@ def lasso_reason(found: LassoErrorBound, system: System) -> str:
             f"{facts['work_limit']:.2g})"
         )
     if code is LassoBoundCode.OUT_OF_RANGE:
-        return "the observability matrix or the noise bounds leave the floating-point range"
+        return _OUT_OF_RANGE
     if code is LassoBoundCode.RECHECK_FAILED:
-        return "the bound did not survive its re-check in rational arithmetic (please report it)"
+        return _RECHECK
     return ""
 
 
@@ -289,16 +304,7 @@ def lasso_bound_check(
         "evidence": evidence,
     }
     if breaking_set is not None:
-        return Check(
-            verdict=Verdict.FAILS,
-            summary=f"No decoder has a finite worst-case error: removing sensors "
-            f"{_names(system, tuple(breaking_set))} leaves the state unobservable "
-            f"(sparse_observability), so two states explain the same data with at most "
-            f"{_sensors(s)} attacked, even without noise.",
-            value=float("inf"),
-            witness={"breaking_set": list(breaking_set)},
-            **common,
-        )
+        return _breaking(system, s, breaking_set, common)
     if not certified:
         return Check(
             verdict=Verdict.INCONCLUSIVE,
@@ -361,12 +367,9 @@ def l1_reason(found: L1ErrorBound, system: System) -> str:
             "decoder's estimate even without noise (or the bound is not proved below 1)"
         )
     if code is L1BoundCode.NO_MARGIN:
-        return (
-            f"without the sensors {_names(system, found.worst_support)} the others do not "
-            "determine the state with a margin above rounding"
-        )
+        return _no_margin(system, found.worst_support)
     if code is L1BoundCode.TOO_FEW_SENSORS:
-        return f"with {s} attacked sensors no sensor is left unattacked (s >= p)"
+        return _TOO_FEW.format(s=s)
     if code is L1BoundCode.TOO_MANY_PROGRAMS:
         return (
             f"{found.programs:,} linear programs (sets of s sensors times the sign patterns of "
@@ -375,7 +378,7 @@ def l1_reason(found: L1ErrorBound, system: System) -> str:
     if code is L1BoundCode.NOT_SOLVED:
         return "a linear program was not solved, or the numbers leave the floating-point range"
     if code is L1BoundCode.RECHECK_FAILED:
-        return "the bound did not survive its re-check in rational arithmetic (please report it)"
+        return _RECHECK
     return ""
 
 
@@ -412,16 +415,7 @@ def l1_bound_check(
         "evidence": evidence,
     }
     if breaking_set is not None:
-        return Check(
-            verdict=Verdict.FAILS,
-            summary=f"No decoder has a finite worst-case error: removing sensors "
-            f"{_names(system, tuple(breaking_set))} leaves the state unobservable "
-            f"(sparse_observability), so two states explain the same data with at most "
-            f"{_sensors(s)} attacked, even without noise.",
-            value=float("inf"),
-            witness={"breaking_set": list(breaking_set)},
-            **common,
-        )
+        return _breaking(system, s, breaking_set, common)
     if found.code is not L1BoundCode.CERTIFIED:
         return Check(
             verdict=Verdict.INCONCLUSIVE,
