@@ -155,10 +155,13 @@ def gamma(m: int) -> float:
 
 
 def times_up(x: float, c: float) -> float:
-    """``x`` times the power of two ``c``, exact unless the product is subnormal (then rounded):
-    there taken up a unit in the last place, so that it stays an upper bound."""
+    """``x`` times the power of two ``c``, exact unless the product is subnormal (then rounded)
+    or underflows to 0: there taken up a unit in the last place, so that it stays an upper
+    bound (a positive product that underflows becomes the smallest subnormal)."""
     y = x * c
-    return float(np.nextafter(y, np.inf)) if 0 < abs(y) < 2.0**-1022 else y
+    if 0 < abs(y) < 2.0**-1022 or (y == 0 and x * np.sign(c) > 0):
+        return float(np.nextafter(y, np.inf))
+    return y
 
 
 def product_rounding(

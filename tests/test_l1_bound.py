@@ -127,6 +127,9 @@ def test_the_codes_of_the_ways_a_bound_is_not_certified():
     assert many.code is L1BoundCode.TOO_MANY_PROGRAMS and many.programs == 3
     blind = System(np.eye(2), np.array([[1.0, 0.0], [2.0, 0.0], [0.0, 1.0]]))
     found = l1_error_bound(blind, 1, eta, horizon=1)
+    assert found.code is L1BoundCode.WINDOW_TOO_SHORT and found.worst_support == (2,)
+    close = System(np.eye(2), np.array([[1.0, 0.0], [1.0, 2.0**-60], [0.0, 1.0]]))
+    found = l1_error_bound(close, 1, eta, horizon=1)
     assert found.code is L1BoundCode.NO_MARGIN and found.worst_support == (2,)
 
 

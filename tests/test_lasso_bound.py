@@ -170,10 +170,22 @@ def test_the_codes_of_the_ways_a_bound_is_not_certified():
     assert lasso_error_bound(EXAMPLE_1, 3, eta, horizon=1).code is LassoBoundCode.TOO_FEW_SENSORS
     many = lasso_error_bound(EXAMPLE_1, 1, eta, horizon=1, max_sets=2)
     assert many.code is LassoBoundCode.TOO_MANY_SETS and many.sets == 3
-    # the second state is seen by y3 alone: without it the others do not determine the state
+    # the second state is seen by y3 alone: without it the others do not determine the state,
+    # exactly, over any window; an attack on y3 then hides it
     plant = System(np.eye(2), np.array([[1.0, 0.0], [2.0, 0.0], [0.0, 1.0]]))
     blind = lasso_error_bound(plant, 1, eta, horizon=1)
-    assert blind.code is LassoBoundCode.NO_MARGIN and blind.worst_support == (2,)
+    assert blind.code is LassoBoundCode.WINDOW_TOO_SHORT and blind.worst_support == (2,)
+    assert blind.facts == {"longer_horizon_helps": False}
+    # y1 and y2 nearly alike: full rank exactly, but not with a margin above rounding
+    plant = System(np.eye(2), np.array([[1.0, 0.0], [1.0, 2.0**-60], [0.0, 1.0]]))
+    close = lasso_error_bound(plant, 1, eta, horizon=1)
+    assert close.code is LassoBoundCode.NO_MARGIN and close.worst_support == (2,)
+    # one sensor of a rotation over one step: two steps determine the state
+    rotation = System(np.array([[0.0, 1.0], [-1.0, 0.0]]), np.array([[1.0, 0.0], [1.0, 0.0]]))
+    short = lasso_error_bound(rotation, 0, MeasurementNoise.uniform(0.1, 2), horizon=1)
+    assert short.code is LassoBoundCode.WINDOW_TOO_SHORT
+    assert short.facts == {"longer_horizon_helps": True}
+    assert lasso_reason(short, rotation).endswith("a window of n steps would determine it")
     # y4 repeats y1 and y2 together: an attack on it is represented by the others
     plant = System(np.eye(2), np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 0.0], [3.0, 3.0]]))
     coherent = lasso_error_bound(plant, 1, MeasurementNoise.uniform(0.01, 4), horizon=1)
@@ -275,3 +287,34 @@ def test_the_lasso_papers_noisy_setting_is_not_certified_and_says_why():
     check = irrepresentable(plant, s, horizon=n)
     assert found.code is LassoBoundCode.NOT_IRREPRESENTABLE
     assert found.rho >= check.value and found.rho == pytest.approx(check.value, rel=1e-9)
+
+
+@pytest.mark.filterwarnings("error::RuntimeWarning")
+def test_plants_at_the_edges_of_the_float_range():
+    from ssecert.structure.l1_bound import L1BoundCode, l1_error_bound
+    from ssecert.structure.noise import BoundCode, decoder_error_bound
+
+    # a positive bound that underflows is rounded up, never to 0 (the exact error is positive)
+    calm = lasso_error_bound(EXAMPLE_1, 1, MeasurementNoise.uniform(0.0, 3), horizon=1)
+    assert calm.at(5e-324) > 0
+    loud = System(np.eye(1), np.array([[1e150], [1e150], [1.9e150]]))
+    faint = MeasurementNoise.uniform(1e-300, 3)
+    found = lasso_error_bound(loud, 0, faint, horizon=1)
+    assert found.code is LassoBoundCode.CERTIFIED and found.bound > 0 and found.at(1e-200) > 0
+    assert lasso_bound_rechecks(found)
+    l0 = decoder_error_bound(System(np.eye(1), np.full((3, 1), 1e100)), 1, faint, horizon=1)
+    assert l0.code is BoundCode.CERTIFIED and l0.bound > 0
+    # entries near the bottom of the range: the constants do not change with the units
+    for alpha in (2e-155, 1e-162, 1e153):
+        plant = System(np.eye(1), np.full((3, 1), alpha))
+        eta = MeasurementNoise.uniform(0.01, 3)
+        lasso = lasso_error_bound(plant, 1, eta, horizon=1)
+        assert lasso.code is LassoBoundCode.CERTIFIED and lasso.rho == pytest.approx(0.5)
+        assert lasso.bound == pytest.approx(0.01 / alpha + 0.02 / (2 * alpha), rel=1e-9)
+        l1 = l1_error_bound(plant, 1, eta, horizon=1)
+        assert l1.code is L1BoundCode.CERTIFIED and l1.theta == pytest.approx(0.5)
+    # a sensor that reads nothing, and a window shorter than the observability index
+    blank = System(np.eye(1), np.array([[0.0], [1.0]]))
+    assert lasso_error_bound(blank, 1, MeasurementNoise.uniform(0.01, 2), horizon=1).code is (
+        LassoBoundCode.WINDOW_TOO_SHORT
+    )

@@ -45,7 +45,14 @@ from ..noise import MeasurementNoise
 from ..system import System
 from ..tolerances import gamma
 from ._combinatorics import count_subsets
-from .lasso_bound import _SAFE, _blocks_and_errors, _kept_sigma, _rounded_up
+from .lasso_bound import (
+    _SAFE,
+    _kept_sigma,
+    _rounded_up,
+    _scaled_blocks,
+    _times_up,
+    _window_deficient,
+)
 from .noise import _kept_sets, window_inputs
 
 __all__ = ["L1BoundCode", "L1ErrorBound", "l1_bound_rechecks", "l1_error_bound"]
@@ -71,6 +78,9 @@ class L1BoundCode(enum.Enum):
     NOT_SOLVED = "not solved"
     #: the printed numbers did not survive their rational re-check (please report the plant)
     RECHECK_FAILED = "re-check failed"
+    #: the sensors outside some set (``worst_support``) over the window exactly do not
+    #: determine the state: an attack there makes two states agree, no decoder is bounded
+    WINDOW_TOO_SHORT = "window too short"
 
 
 @dataclass(frozen=True)
@@ -218,11 +228,10 @@ def l1_error_bound(
             facts={"limit": max_programs},
             **base,
         )
-    with np.errstate(all="ignore"):
-        blocks, errors = _blocks_and_errors(system, tau)
-        finite = bool(np.all(np.isfinite(blocks))) and bool(np.isfinite(np.sum(blocks**2)))
-    if not finite or not np.all(np.isfinite(errors)):
+    ranged = _scaled_blocks(system, tau)
+    if ranged is None:
         return L1ErrorBound(L1BoundCode.NOT_SOLVED, math.inf, **base)
+    blocks, errors, d = ranged  # the plant's blocks are 2^d times these: theta does not change
     supports = _kept_sets(p, s)
     kept_mask = np.ones((sets, p), dtype=bool)
     np.put_along_axis(kept_mask, supports, False, axis=1)
@@ -234,7 +243,9 @@ def l1_error_bound(
     names = lambda j: tuple(int(i) for i in supports[j])  # noqa: E731
     if not np.all(sigma > 0):
         j = int(np.argmin(sigma))
-        return L1ErrorBound(L1BoundCode.NO_MARGIN, math.inf, worst_support=names(j), **base)
+        short = _window_deficient(system, [int(i) for i in kept[j]], tau)
+        code = L1BoundCode.NO_MARGIN if short is None else L1BoundCode.WINDOW_TOO_SHORT
+        return L1ErrorBound(code, math.inf, worst_support=names(j), facts=short or {}, **base)
     # each set's largest ||w_K||_1, for the noise over a power of two c (exactly)
     top = float(np.max(noise.eta)) if p else 0.0
     c = MeasurementNoise.scale(top)
@@ -246,7 +257,8 @@ def l1_error_bound(
         rows_k = [i * tau + t for i in kept[j] for t in range(tau)]
         rows_s = [i * tau + t for i in supports[j] for t in range(tau)]
         flat = blocks.reshape(p * tau, -1)
-        value = _theta_upper(flat[rows_k], flat[rows_s], float(sigma[j]), e_K[j], e_S[j])
+        with np.errstate(all="ignore"):
+            value = _theta_upper(flat[rows_k], flat[rows_s], float(sigma[j]), e_K[j], e_S[j])
         if value is None:
             return L1ErrorBound(L1BoundCode.NOT_SOLVED, math.inf, programs=programs, **base)
         thetas[j] = value
@@ -258,18 +270,25 @@ def l1_error_bound(
     }
     if not thetas[j_theta] < 1:
         return L1ErrorBound(L1BoundCode.NOT_NULL_SPACE, math.inf, **common, **base)
-    with np.errstate(over="ignore", divide="ignore"):
+    e_c = math.frexp(c)[1] - 1  # c = 2^e_c
+    with np.errstate(all="ignore"):
         bounds = 2.0 * noise_l1 / ((1.0 - thetas) * sigma) * (1.0 + gamma(6))
-    worst = int(np.argmax(bounds))
-    bound = _rounded_up(float(bounds[worst]) * c) if top > 0 else 0.0
-    if not math.isfinite(bound):
+        worst = int(np.argmax(bounds))
+        # back to the plant's units (bound by c 2^-d, sigma by 2^d, rounded down where
+        # subnormal: a lower bound), rounded up where it could underflow
+        bound = _rounded_up(float(_times_up(bounds[worst], e_c - d)), exact_zero=top == 0)
+        sigma_worst = float(np.ldexp(sigma[worst], d))
+        if sigma_worst < 2.0**-1022:
+            sigma_worst = float(np.nextafter(sigma_worst, 0.0))
+        noise_worst = float(_times_up(noise_l1[worst], e_c))
+    if not math.isfinite(bound) or not math.isfinite(sigma_worst):
         return L1ErrorBound(L1BoundCode.NOT_SOLVED, math.inf, **common, **base)
     found = L1ErrorBound(
         L1BoundCode.CERTIFIED,
         bound,
         worst_support=names(worst),
-        sigma=float(sigma[worst]),
-        noise_l1=float(noise_l1[worst]) * c,
+        sigma=sigma_worst,
+        noise_l1=noise_worst,
         facts={"worst_theta": float(thetas[worst]), "noise_scale": c},
         **common,
         **base,

@@ -47,6 +47,7 @@ from __future__ import annotations
 
 import enum
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
 from typing import Any
@@ -69,9 +70,19 @@ _CHUNK_ENTRIES = 2**22  # floats of one chunk's largest array
 _SAFE = 1.0 + 2.0**-40  # a relative cushion on every bound, far above its own rounding
 
 
-def _rounded_up(x: float) -> float:
-    """x rounded up by an ulp (0 stays 0: nothing to round)."""
-    return 0.0 if x == 0 else _next_up(x)
+def _rounded_up(x: float, exact_zero: bool = False) -> float:
+    """An upper bound of what the computed ``x`` approximates: a few units in its last place
+    up, so that a value that underflowed to 0 (or into the subnormals) is covered too; 0 only
+    where the caller knows the value is exactly 0 (``exact_zero``)."""
+    return 0.0 if exact_zero else _next_up(x)
+
+
+def _times_up(x: np.ndarray | float, exponent: int) -> np.ndarray:
+    """x 2^exponent, rounded up where it is subnormal or underflows (exact elsewhere)."""
+    with np.errstate(all="ignore"):
+        y = np.ldexp(np.asarray(x, dtype=float), exponent)
+        tiny = (np.asarray(x) > 0) & (y < 2.0**-1022)
+    return np.where(tiny, np.nextafter(y, np.inf), y)
 
 
 class LassoBoundCode(enum.Enum):
@@ -93,6 +104,9 @@ class LassoBoundCode(enum.Enum):
     OUT_OF_RANGE = "out of range"
     #: the printed numbers did not survive their rational re-check (please report the plant)
     RECHECK_FAILED = "re-check failed"
+    #: the sensors outside some support (``worst_support``) over the window exactly do not
+    #: determine the state: an attack there makes two states agree, no decoder is bounded
+    WINDOW_TOO_SHORT = "window too short"
 
 
 @dataclass(frozen=True)
@@ -158,7 +172,8 @@ class LassoErrorBound:
         ``lam_min``): the largest beta_S + lam kappa_S is at most noise_term + lam kappa."""
         if self.code is not LassoBoundCode.CERTIFIED or not lam > self.lam_min:
             return math.inf
-        return _rounded_up((self.noise_term + lam * self.kappa) * _SAFE)
+        zero = self.noise_term == 0 and (lam == 0 or self.kappa == 0)
+        return _rounded_up((self.noise_term + lam * self.kappa) * _SAFE, exact_zero=zero)
 
 
 @dataclass(frozen=True)
@@ -316,6 +331,42 @@ def _blocks_and_errors(system: System, tau: int) -> tuple[np.ndarray, np.ndarray
     return blocks, errors * _SAFE
 
 
+def _scaled_blocks(system: System, tau: int) -> tuple[np.ndarray, np.ndarray, int] | None:
+    """``_blocks_and_errors`` divided by 2^d, d chosen so that the largest entry is in [1, 2)
+    (Gramians of a plant whose entries are 1e-155 or 1e150 stay in range; the constants,
+    rho and delta, do not change, sigma_min scales by 2^d, N and Z_S by 2^-d); the division's
+    rounding (subnormal entries only) is added to the errors.  None when out of range."""
+    with np.errstate(all="ignore"):
+        blocks, errors = _blocks_and_errors(system, tau)
+        top = float(np.max(np.abs(blocks))) if blocks.size else 0.0
+        if not (np.all(np.isfinite(blocks)) and np.all(np.isfinite(errors))):
+            return None
+        d = math.frexp(top)[1] - 1 if top > 0 else 0
+        scaled = np.ldexp(blocks, -d)
+        errors = np.ldexp(errors, -d) + math.sqrt(blocks[0].size) * 2.0**-1074
+        if not (np.all(np.isfinite(scaled)) and np.isfinite(np.sum(scaled**2))):
+            return None
+    return scaled, errors * _SAFE, d
+
+
+def _window_deficient(system: System, kept: Sequence[int], tau: int) -> dict[str, bool] | None:
+    """Whether the kept sensors over the window exactly fail to determine the state: None
+    when they do determine it (or it is not decided), else whether a window of n steps would
+    (``longer_horizon_helps``)."""
+    from ..numerics.exact import Observability, exact_stacked_rank
+
+    p, n = system.p, system.n
+
+    def deficient(steps: int) -> bool:
+        rows = [t * p + i for t in range(steps) for i in kept]
+        decision = exact_stacked_rank(system.A, system.C, rows, steps)
+        return decision.state is Observability.UNOBSERVABLE
+
+    if not deficient(tau):
+        return None
+    return {"longer_horizon_helps": tau < n and not deficient(n)}
+
+
 def lasso_error_bound(
     system: System,
     max_attacked: int,
@@ -388,21 +439,30 @@ def lasso_error_bound(
     top = float(np.max(noise.eta)) if p else 0.0
     c = MeasurementNoise.scale(top)
     eta = noise.eta / c if top > 0 else np.zeros(p)
-    with np.errstate(all="ignore"):
-        blocks, errors = _blocks_and_errors(system, tau)
-        finite = bool(np.all(np.isfinite(blocks))) and bool(np.isfinite(np.sum(blocks**2)))
-    if not finite or not np.all(np.isfinite(errors)):
-        return LassoErrorBound(LassoBoundCode.OUT_OF_RANGE, math.inf, sets=sets, **base)
-    supports = _kept_sets(p, s)
-    terms = _support_terms(blocks, errors, eta, noise.per_sample, supports)
-    names = lambda j: tuple(int(i) for i in supports[j])  # noqa: E731
     base["sets"] = sets
+    ranged = _scaled_blocks(system, tau)
+    if ranged is None:
+        return LassoErrorBound(LassoBoundCode.OUT_OF_RANGE, math.inf, **base)
+    blocks, errors, d = ranged  # the plant's blocks are 2^d times these
+    supports = _kept_sets(p, s)
+    with np.errstate(all="ignore"):  # a support without a margin gets inf, never a warning
+        terms = _support_terms(blocks, errors, eta, noise.per_sample, supports)
+    names = lambda j: tuple(int(i) for i in supports[j])  # noqa: E731
     if not np.all(terms.sigma > 0):
         j = int(np.argmin(terms.sigma))
-        return LassoErrorBound(LassoBoundCode.NO_MARGIN, math.inf, worst_support=names(j), **base)
+        kept = [i for i in range(p) if i not in set(names(j))]
+        short = _window_deficient(system, kept, tau)
+        code = LassoBoundCode.NO_MARGIN if short is None else LassoBoundCode.WINDOW_TOO_SHORT
+        return LassoErrorBound(code, math.inf, worst_support=names(j), facts=short or {}, **base)
+    numbers = (terms.rho, terms.delta, terms.beta, terms.kappa)
+    if not all(np.all(~np.isnan(x)) for x in numbers):
+        return LassoErrorBound(LassoBoundCode.OUT_OF_RANGE, math.inf, **base)
     worst_rho = int(np.argmax(terms.rho))
     rho = float(terms.rho[worst_rho])
-    smallest = float(terms.sigma.min())
+    with np.errstate(all="ignore"):  # a lower bound: rounded down where it is subnormal
+        smallest = float(np.ldexp(terms.sigma.min(), d))
+    if smallest < 2.0**-1022:
+        smallest = float(np.nextafter(smallest, 0.0))
 
     def common(code: LassoBoundCode, bound: float, **more: Any) -> LassoErrorBound:
         return LassoErrorBound(
@@ -411,21 +471,28 @@ def lasso_error_bound(
 
     if not rho < 1:
         return common(LassoBoundCode.NOT_IRREPRESENTABLE, math.inf)
-    with np.errstate(over="ignore"):
-        need = terms.delta / (1.0 - terms.rho) * (1.0 + gamma(4))
-        deciding = int(np.argmax(need))
-        lam_min = _rounded_up(float(need[deciding]) * c) if top > 0 else 0.0
-        noise_term = _rounded_up(float(terms.beta.max()) * c) if top > 0 else 0.0
-        kappa = _rounded_up(float(terms.kappa.max()))
+    # back to the plant's units: delta by c (the noise's scale), beta by c 2^-d, kappa by 2^-d,
+    # each rounded up (a value that underflows is covered by the rounding up)
+    e_c = math.frexp(c)[1] - 1  # c = 2^e_c
+    silent = top == 0  # no noise: delta and beta are exactly 0
+    with np.errstate(all="ignore"):
+        need = _times_up(terms.delta / (1.0 - terms.rho) * (1.0 + gamma(4)), e_c)
+        beta = _times_up(terms.beta, e_c - d)
+        kappas = _times_up(terms.kappa, -d)
+    deciding = int(np.argmax(need))
+    lam_min = _rounded_up(float(need[deciding]), exact_zero=silent)
+    noise_term = _rounded_up(float(beta.max()), exact_zero=silent)
+    kappa = _rounded_up(float(kappas.max()), exact_zero=s == 0)
     if not all(math.isfinite(v) for v in (lam_min, noise_term, kappa)):
         return common(LassoBoundCode.OUT_OF_RANGE, math.inf)
     weight = lam_min if lam is None else float(lam)
     with np.errstate(over="ignore"):
-        per_support = terms.beta * c + weight * terms.kappa
+        per_support = beta + weight * kappas
     worst = int(np.argmax(per_support))
+    zero = silent and (weight == 0 or s == 0)
     found = common(
         LassoBoundCode.CERTIFIED,
-        _rounded_up(float(per_support[worst]) * (1.0 + gamma(4))),
+        _rounded_up(float(per_support[worst]) * (1.0 + gamma(4)), exact_zero=zero),
         lam=weight,
         lam_min=lam_min,
         lam_support=names(deciding),
@@ -434,10 +501,11 @@ def lasso_error_bound(
         kappa=kappa,
         facts={
             "deciding_rho": float(terms.rho[deciding]),
-            "deciding_delta": float(terms.delta[deciding]) * c,
-            "worst_beta": float(terms.beta[worst]) * c,
-            "worst_kappa": float(terms.kappa[worst]),
+            "deciding_delta": float(_times_up(terms.delta[deciding], e_c)),
+            "worst_beta": float(beta[worst]),
+            "worst_kappa": float(kappas[worst]),
             "noise_scale": c,
+            "data_scale_exponent": d,
         },
     )
     if not math.isfinite(found.bound):
@@ -496,8 +564,14 @@ def lasso_worst_case(
         rows_s = [t * p + i for t in range(tau) for i in sorted(attacked)]
         rows_k = [t * p + i for t in range(tau) for i in range(p) if i not in attacked]
         O_K, O_S = O[rows_k], O[rows_s]
-        G = O_K.T @ O_K
-        N, Z = np.linalg.solve(G, O_K.T), np.linalg.solve(G, O_S.T)
+        with np.errstate(all="ignore"):
+            G = O_K.T @ O_K
+            try:
+                N, Z = np.linalg.solve(G, O_K.T), np.linalg.solve(G, O_S.T)
+            except np.linalg.LinAlgError:
+                continue
+        if not (np.all(np.isfinite(N)) and np.all(np.isfinite(Z))):
+            continue
         sensor = np.array([r % p for r in rows_k])
         starts = [np.linalg.svd(M)[0][:, 0] for M in (N, Z) if M.size] + list(np.eye(n))
         for v in starts:

@@ -374,6 +374,13 @@ def _screen_failures(
     return np.concatenate(found)[:limit]
 
 
+def _times_down(x: float, c: float) -> float:
+    """x times the power of two c, rounded down where the product is subnormal (a lower
+    bound stays one)."""
+    y = x * c
+    return float(np.nextafter(y, 0.0)) if 0 < y < 2.0**-1022 else y
+
+
 def window_inputs(
     system: System, max_attacked: Any, noise: MeasurementNoise, horizon: Any
 ) -> tuple[int, int]:
@@ -443,7 +450,7 @@ def decoder_error_bound(
         scaled = replace(
             found,
             bound=times_up(found.bound, c),
-            lower=found.lower * c,
+            lower=_times_down(found.lower, c),
             hardened=times_up(found.hardened, c),
             curve=tuple((f, times_up(b, c)) for f, b in found.curve),
         )

@@ -36,9 +36,29 @@ _RECHECK = "the bound did not survive its re-check in rational arithmetic (pleas
 
 
 def _no_margin(system: System, removed: tuple[int, ...]) -> str:
+    if not removed:
+        return "the sensors over the window do not determine the state with a margin above rounding"
     return (
         f"without the sensors {_names(system, removed)} the others do not determine the state "
         "with a margin above rounding"
+    )
+
+
+def _window_short(
+    system: System, removed: tuple[int, ...], horizon: int, longer_helps: bool
+) -> str:
+    kept = [i for i in range(system.p) if i not in set(removed)]
+    steps = f"{horizon} step{'' if horizon == 1 else 's'}"
+    attack = (
+        f"an attack on {_names(system, removed)} then makes two states give the same data"
+        if removed
+        else "two states give the same data"
+    )
+    return (
+        f"sensors {_names(system, tuple(kept))} over the window of {steps} do not determine the "
+        f"state (an exact kernel vector of their observability matrix): {attack}, so no decoder "
+        "over this window has a finite worst-case error"
+        + ("; a window of n steps would determine it" if longer_helps else "")
     )
 
 
@@ -243,6 +263,13 @@ def lasso_reason(found: LassoErrorBound, system: System) -> str:
         return (
             f"{_no_margin(system, found.worst_support)} (the Lasso's solution is not proved unique)"
         )
+    if code is LassoBoundCode.WINDOW_TOO_SHORT:
+        return _window_short(
+            system,
+            found.worst_support,
+            found.horizon,
+            bool(found.facts.get("longer_horizon_helps")),
+        )
     if code is LassoBoundCode.TOO_FEW_SENSORS:
         return _TOO_FEW.format(s=s)
     if code is LassoBoundCode.TOO_MANY_SETS:
@@ -305,6 +332,15 @@ def lasso_bound_check(
     }
     if breaking_set is not None:
         return _breaking(system, s, breaking_set, common)
+    if found.code is LassoBoundCode.WINDOW_TOO_SHORT:
+        kept = [i for i in range(system.p) if i not in set(found.worst_support)]
+        return Check(
+            verdict=Verdict.FAILS,
+            summary=f"No worst-case error bound exists: {lasso_reason(found, system)}.",
+            value=float("inf"),
+            witness={"kept_sensors": kept, "horizon": tau},
+            **common,
+        )
     if not certified:
         return Check(
             verdict=Verdict.INCONCLUSIVE,
@@ -368,6 +404,13 @@ def l1_reason(found: L1ErrorBound, system: System) -> str:
         )
     if code is L1BoundCode.NO_MARGIN:
         return _no_margin(system, found.worst_support)
+    if code is L1BoundCode.WINDOW_TOO_SHORT:
+        return _window_short(
+            system,
+            found.worst_support,
+            found.horizon,
+            bool(found.facts.get("longer_horizon_helps")),
+        )
     if code is L1BoundCode.TOO_FEW_SENSORS:
         return _TOO_FEW.format(s=s)
     if code is L1BoundCode.TOO_MANY_PROGRAMS:
@@ -416,6 +459,15 @@ def l1_bound_check(
     }
     if breaking_set is not None:
         return _breaking(system, s, breaking_set, common)
+    if found.code is L1BoundCode.WINDOW_TOO_SHORT:
+        kept = [i for i in range(system.p) if i not in set(found.worst_support)]
+        return Check(
+            verdict=Verdict.FAILS,
+            summary=f"No worst-case error bound exists: {l1_reason(found, system)}.",
+            value=float("inf"),
+            witness={"kept_sensors": kept, "horizon": found.horizon},
+            **common,
+        )
     if found.code is not L1BoundCode.CERTIFIED:
         return Check(
             verdict=Verdict.INCONCLUSIVE,
