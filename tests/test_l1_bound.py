@@ -149,6 +149,8 @@ def test_the_recheck_and_the_words():
         "3 linear programs (sets of s sensors times the sign patterns of their rows over the "
         "window), more than the limit of 2"
     )
+    huge = l1_error_bound(THREE, 1, MeasurementNoise.uniform(0.01, 3), horizon=40)
+    assert l1_reason(huge, THREE).startswith("about 1.6e+12 linear programs")
 
 
 def test_analyze_reports_the_l1_bound():

@@ -414,9 +414,10 @@ def l1_reason(found: L1ErrorBound, system: System) -> str:
     if code is L1BoundCode.TOO_FEW_SENSORS:
         return _TOO_FEW.format(s=s)
     if code is L1BoundCode.TOO_MANY_PROGRAMS:
+        count = f"{found.programs:,}" if found.programs < 10**7 else f"about {found.programs:.2g}"
         return (
-            f"{found.programs:,} linear programs (sets of s sensors times the sign patterns of "
-            f"their rows over the window), more than the limit of {found.facts['limit']:,}"
+            f"{count} linear programs (sets of s sensors times the sign patterns of their rows "
+            f"over the window), more than the limit of {found.facts['limit']:,}"
         )
     if code is L1BoundCode.NOT_SOLVED:
         return "a linear program was not solved, or the numbers leave the floating-point range"
