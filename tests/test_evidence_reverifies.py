@@ -244,3 +244,84 @@ def test_a_zames_falb_certificate_reverifies_from_json_in_exact_arithmetic():
     assert _positive_definite(_q(ev["P"]))
     M = _zames_falb_lmi(ev["model"], ev["P"], m0, a, b)
     assert _positive_definite([[-x for x in r] for r in M])
+
+
+def _lasso_terms_exact(O, S, eta_rows):
+    """rho_S, delta_S, beta_S^2 and kappa_S^2 of one support in exact arithmetic: rows S of the
+    stacked O attacked, the others K; the noise within eta_rows (per sample) on K."""
+    rows = range(len(O))
+    K = [r for r in rows if r not in S]
+    OK, OS = [O[r] for r in K], [O[r] for r in S]
+    n = len(O[0])
+    G = _mul(list(map(list, zip(*OK))), OK)
+    # G^-1 by Gauss-Jordan in fractions
+    aug = [G[i][:] + [Fraction(int(i == j)) for j in range(n)] for i in range(n)]
+    for c in range(n):
+        pivot = next(r for r in range(c, n) if aug[r][c] != 0)
+        aug[c], aug[pivot] = aug[pivot], aug[c]
+        aug[c] = [x / aug[c][c] for x in aug[c]]
+        for r in range(n):
+            if r != c and aug[r][c] != 0:
+                aug[r] = [x - aug[r][c] * y for x, y in zip(aug[r], aug[c])]
+    Ginv = [row[n:] for row in aug]
+    N = _mul(Ginv, list(map(list, zip(*OK))))  # n x |K|
+    Z = _mul(Ginv, list(map(list, zip(*OS)))) if OS else [[] for _ in range(n)]
+    M = _mul(OK, Z) if OS else [[] for _ in K]
+    rho = max((sum(abs(x) for x in row) for row in M), default=Fraction(0))
+    P = _mul(OK, N)
+    R = [[Fraction(int(i == j)) - P[i][j] for j in range(len(K))] for i in range(len(K))]
+    eta_K = [eta_rows[r] for r in K]
+    delta = max(sum(abs(x) * e for x, e in zip(row, eta_K)) for row in R)
+    beta2 = max(
+        sum(
+            sum(N[i][j] * sg * e for j, (sg, e) in enumerate(zip(signs, eta_K))) ** 2
+            for i in range(n)
+        )
+        for signs in itertools.product((-1, 1), repeat=len(K))
+    )
+    kappa2 = max(
+        (
+            sum(sum(Z[i][j] * sg for j, sg in enumerate(signs)) ** 2 for i in range(n))
+            for signs in itertools.product((-1, 1), repeat=len(S))
+        ),
+        default=Fraction(0),
+    )
+    return rho, delta, beta2, kappa2
+
+
+def test_the_lasso_bound_reverifies_from_json_in_exact_arithmetic():
+    """From the JSON alone: every support's irrepresentable constant is at most the printed one
+    and below 1, lambda_min clears every support's delta / (1 - rho), and the printed bound is at
+    least beta_S + lambda_min kappa_S on every support (the noise's worst signs and the
+    subgradients' enumerated exactly)."""
+    spec = spec_from_dict(
+        {
+            "name": "lasso-reverify",
+            "system": {"A": [[1, 1], [0, 1]], "C": [[1, 0], [0, 1], [1, 0], [0, 1], [1, 1]]},
+            "attack": {"max_attacked": 1, "horizon": 1},
+            "noise": {"measurement": [0.01, 0.02, 0.01, 0.03, 0.01]},
+        }
+    )
+    doc = json.loads(json.dumps(analyze(spec).to_dict()))
+    check = doc["checks"]["lasso_error_bound"]
+    assert check["verdict"] == "holds"
+    A, C = _q(spec.system.A), _q(spec.system.C)  # the spec's data, as its file holds them
+    p, tau = len(C), check["horizon"]
+    O, block = [], C
+    for _ in range(tau):
+        O.extend(block)
+        block = _mul(block, A)
+    eta = [Fraction(x) for x in check["noise"]["measurement"]]
+    eta_rows = [eta[r % p] for r in range(len(O))]
+    lam = Fraction(check["lambda_min"])
+    bound = Fraction(check["bound"])
+    for support in itertools.combinations(range(p), 1):
+        S = [t * p + i for t in range(tau) for i in support]
+        rho, delta, beta2, kappa2 = _lasso_terms_exact(O, S, eta_rows)
+        assert rho <= Fraction(check["irrepresentable_constant"]) and rho < 1
+        assert lam * (1 - rho) >= delta
+        # bound >= sqrt(beta2) + lam sqrt(kappa2), squared twice: with X = bound^2 + beta2 -
+        # lam^2 kappa2, bound >= sqrt(beta2), X >= 0 and X^2 >= 4 bound^2 beta2
+        X = bound**2 + beta2 - lam**2 * kappa2
+        assert bound**2 >= beta2 and X >= 0 and X**2 >= 4 * bound**2 * beta2
+    assert Fraction(check["lower_bound"]) <= bound

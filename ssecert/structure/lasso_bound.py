@@ -271,7 +271,7 @@ def _support_terms(
             for part in (norm_ZS, norm_N)
         )
         M_S, M_K = M[:, :, :s_rows], M[:, :, s_rows:]
-        up = 1.0 + gamma(p * tau + 4)
+        up = 1.0 + gamma(p * tau + n + 4)  # sums over a row (<= p tau) and over n, a root
         # rho: the largest row l1 norm of O_K Z_S; an error E moves it by sqrt(|S|) ||E||_2
         rho = (np.abs(M_S).sum(axis=2).max(axis=1, initial=0.0) + math.sqrt(s_rows) * err_S) * up
         R = np.eye(k_rows)[None] - M_K
