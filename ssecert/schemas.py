@@ -234,6 +234,11 @@ _CHECK_FIELDS: dict[str, dict[str, Any]] = {
         "null_space_support": _INDEX_LIST,
         "worst_support": _INDEX_LIST,
         "sigma_min": _REAL,
+        "inverse_reach": {
+            **_REAL,
+            "description": "||O_K^+||_(1->2) there: the largest 2-norm "
+            "of a column of the pseudo-inverse (an upper bound)",
+        },
         "noise_l1": _REAL,
         "noise": {"type": "object", "required": ["measurement", "norm"]},
         "horizon": {"type": "integer", "minimum": 1},

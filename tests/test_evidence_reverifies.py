@@ -323,5 +323,5 @@ def test_the_lasso_bound_reverifies_from_json_in_exact_arithmetic():
         # bound >= sqrt(beta2) + lam sqrt(kappa2), squared twice: with X = bound^2 + beta2 -
         # lam^2 kappa2, bound >= sqrt(beta2), X >= 0 and X^2 >= 4 bound^2 beta2
         X = bound**2 + beta2 - lam**2 * kappa2
-        assert bound**2 >= beta2 and X >= 0 and X**2 >= 4 * bound**2 * beta2
+        assert bound**2 >= beta2 and X >= 0 and 4 * bound**2 * beta2 <= X**2
     assert Fraction(check["lower_bound"]) <= bound

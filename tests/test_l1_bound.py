@@ -5,7 +5,6 @@ the ways a bound is not certified."""
 from __future__ import annotations
 
 import itertools
-import math
 from dataclasses import replace
 
 import numpy as np
@@ -23,13 +22,15 @@ THREE = System(np.eye(1), np.ones((3, 1)))
 
 
 def test_three_sensors_of_one_state():
-    # the attacked sensor against the two others: theta = 1/2, ||w_K||_1 <= 2 eta,
-    # sigma_min(O_K) = sqrt(2): the bound 2 (2 eta) / (1/2 sqrt(2))
+    # the attacked sensor against the two others: theta = 1/2, ||w_K||_1 <= 2 eta, and
+    # O_K^+ = (1/2, 1/2): the bound 2 (2 eta) (1/2) / (1/2), where 1 / sigma_min(O_K) would
+    # give sqrt(2) times that
     eta = 0.1
     found = l1_error_bound(THREE, 1, MeasurementNoise.uniform(eta, 3), horizon=1)
     assert found.code is L1BoundCode.CERTIFIED and l1_bound_rechecks(found)
     assert found.theta >= 0.5 and found.theta == pytest.approx(0.5, rel=1e-9)
-    assert found.bound == pytest.approx(8 * eta / math.sqrt(2), rel=1e-9)
+    assert found.bound == pytest.approx(4 * eta, rel=1e-9) and found.bound >= 4 * eta
+    assert found.reach == pytest.approx(0.5, rel=1e-9) and found.reach * found.sigma <= 1
     assert found.programs == 3  # three sets, one sign pattern each
     none = l1_error_bound(THREE, 1, MeasurementNoise.uniform(0.0, 3), horizon=1)
     assert none.code is L1BoundCode.CERTIFIED and none.bound == 0.0  # exact recovery
@@ -137,7 +138,8 @@ def test_the_recheck_and_the_words():
     found = l1_error_bound(THREE, 1, MeasurementNoise.uniform(0.01, 3), horizon=1)
     assert l1_bound_rechecks(found) and l1_reason(found, THREE) == ""
     assert not l1_bound_rechecks(replace(found, bound=found.bound * 0.99))
-    assert not l1_bound_rechecks(replace(found, sigma=found.sigma * 0.5))
+    assert not l1_bound_rechecks(replace(found, reach=found.reach * 2))
+    assert not l1_bound_rechecks(replace(found, sigma=found.sigma * 2))  # reach above 1 / sigma
     loud = System(np.eye(1), np.array([[1.0], [1.0], [10.0]]))
     refused = l1_error_bound(loud, 1, MeasurementNoise.uniform(0.01, 3), horizon=1)
     assert l1_reason(refused, loud).startswith(

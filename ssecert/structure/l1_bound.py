@@ -14,7 +14,10 @@ The decoder's optimality, ||a_S + w_S - O_S e||_1 + ||w_K - O_K e||_1 <= ||a_S +
 With theta_S = max_e ||O_S e||_1 / ||O_K e||_1 (the null-space constant of S: below 1 exactly
 when the decoder recovers x from every attack on S without noise),
 
-    ||e||_2 <= ||O_K e||_1 / sigma_min(O_K) <= 2 W_K / ((1 - theta_S) sigma_min(O_K)),
+    ||e||_2 <= nu_K ||O_K e||_1 <= 2 W_K nu_K / (1 - theta_S),
+
+nu_K = ||O_K^+||_{1->2} the largest 2-norm of a column of the pseudo-inverse (e = O_K^+ O_K e;
+at most 1 / sigma_min(O_K), and smaller by up to the square root of K's rows),
 
 W_K the largest ||w_K||_1 (tau sum eta_i per sample, sqrt(tau) sum eta_i for window 2-norm
 bounds).  Every attack lies within the rows of some set of exactly s sensors, so the decoder's
@@ -102,6 +105,9 @@ class L1ErrorBound:
         The set of s sensors whose bound is the largest.
     sigma : float
         The certified lower bound of sigma_min(O_K) there.
+    reach : float
+        The certified upper bound of nu_K = ||O_K^+||_{1->2} there (the largest 2-norm of a
+        column of O_K^+).
     noise_l1 : float
         The largest ||w_K||_1 there.
     noise : MeasurementNoise
@@ -121,10 +127,28 @@ class L1ErrorBound:
     theta_support: tuple[int, ...] = ()
     worst_support: tuple[int, ...] = ()
     sigma: float = 0.0
+    reach: float = math.inf
     noise_l1: float = math.inf
     sets: int = 0
     programs: int = 0
     facts: dict[str, Any] = field(default_factory=dict)
+
+
+def _reach_upper(O_K: np.ndarray, sigma_K: float, e_K: float) -> float:
+    """An upper bound of ||O_K^+||_{1->2} (the largest column 2-norm of the pseudo-inverse)
+    for the exact plant: N = G^-1 O_K' computed, its error at most ||residual|| / sigma_min^2
+    (the residual G N - O_K' evaluated with its rounding and the powers' error)."""
+    k, n = O_K.shape
+    N = np.linalg.solve(O_K.T @ O_K, O_K.T)
+    norm_K, norm_N = float(np.linalg.norm(O_K)), float(np.linalg.norm(N))
+    residual = (
+        float(np.linalg.norm(O_K.T @ (O_K @ N) - O_K.T))
+        + gamma(k + n + 2) * (norm_K**2 * norm_N + norm_K)
+        + (2 * norm_K * e_K + e_K**2) * norm_N
+        + e_K
+    ) * _SAFE
+    columns = float(np.sqrt((N**2).sum(axis=0)).max()) * (1.0 + gamma(n + 2))
+    return (columns + residual / sigma_K**2) * _SAFE
 
 
 def _theta_upper(
@@ -203,14 +227,15 @@ def l1_error_bound(
     Examples
     --------
     Three sensors of one state, one attacked, noise at most 0.1 on each: theta = 1/2 (the
-    attacked sensor against the two others), so the error is at most 2 (0.2) / (1/2) / sqrt(2).
+    attacked sensor against the two others) and ||O_K^+||_(1->2) = 1/2, so the error is at most
+    2 (0.2) (1/2) / (1 - 1/2).
 
     >>> import numpy as np
     >>> from ssecert import System
     >>> plant = System(np.eye(1), np.ones((3, 1)))
     >>> found = l1_error_bound(plant, 1, MeasurementNoise.uniform(0.1, 3), horizon=1)
     >>> round(found.theta, 9), round(found.bound, 6)
-    (0.5, 0.565685)
+    (0.5, 0.4)
     """
     s, tau = window_inputs(system, max_attacked, noise, horizon)
     p = system.p
@@ -252,13 +277,16 @@ def l1_error_bound(
     eta = noise.eta / c if top > 0 else np.zeros(p)
     per_sensor = eta * (tau if noise.per_sample else math.sqrt(tau))
     noise_l1 = per_sensor[kept].sum(axis=1) * (1.0 + gamma(p + 2))
-    thetas = np.empty(sets)
+    thetas, reaches = np.empty(sets), np.empty(sets)
     for j in range(sets):
         rows_k = [i * tau + t for i in kept[j] for t in range(tau)]
         rows_s = [i * tau + t for i in supports[j] for t in range(tau)]
         flat = blocks.reshape(p * tau, -1)
         with np.errstate(all="ignore"):
             value = _theta_upper(flat[rows_k], flat[rows_s], float(sigma[j]), e_K[j], e_S[j])
+            reaches[j] = min(
+                _reach_upper(flat[rows_k], float(sigma[j]), e_K[j]), 1.0 / float(sigma[j])
+            )
         if value is None:
             return L1ErrorBound(L1BoundCode.NOT_SOLVED, math.inf, programs=programs, **base)
         thetas[j] = value
@@ -272,7 +300,7 @@ def l1_error_bound(
         return L1ErrorBound(L1BoundCode.NOT_NULL_SPACE, math.inf, **common, **base)
     e_c = math.frexp(c)[1] - 1  # c = 2^e_c
     with np.errstate(all="ignore"):
-        bounds = 2.0 * noise_l1 / ((1.0 - thetas) * sigma) * (1.0 + gamma(6))
+        bounds = 2.0 * noise_l1 * reaches / (1.0 - thetas) * (1.0 + gamma(6))
         worst = int(np.argmax(bounds))
         # back to the plant's units (bound by c 2^-d, sigma by 2^d, rounded down where
         # subnormal: a lower bound), rounded up where it could underflow
@@ -280,14 +308,16 @@ def l1_error_bound(
         sigma_worst = float(np.ldexp(sigma[worst], d))
         if sigma_worst < 2.0**-1022:
             sigma_worst = float(np.nextafter(sigma_worst, 0.0))
+        reach_worst = float(_times_up(reaches[worst], -d))
         noise_worst = float(_times_up(noise_l1[worst], e_c))
-    if not math.isfinite(bound) or not math.isfinite(sigma_worst):
+    if not all(math.isfinite(v) for v in (bound, sigma_worst, reach_worst)):
         return L1ErrorBound(L1BoundCode.NOT_SOLVED, math.inf, **common, **base)
     found = L1ErrorBound(
         L1BoundCode.CERTIFIED,
         bound,
         worst_support=names(worst),
         sigma=sigma_worst,
+        reach=reach_worst,
         noise_l1=noise_worst,
         facts={"worst_theta": float(thetas[worst]), "noise_scale": c},
         **common,
@@ -300,11 +330,11 @@ def l1_error_bound(
 
 def l1_bound_rechecks(found: L1ErrorBound) -> bool:
     """The printed bound re-derived in rational arithmetic from the printed numbers of the
-    worst set: bound >= 2 noise_l1 / ((1 - theta_S) sigma), theta_S < 1."""
+    worst set: bound >= 2 noise_l1 reach / (1 - theta_S), theta_S < 1, reach <= 1 / sigma."""
     if found.code is not L1BoundCode.CERTIFIED:
         return False
     theta = Fraction(found.facts["worst_theta"])
-    if not (theta < 1 and found.sigma > 0):
+    if not (theta < 1 and found.sigma > 0 and Fraction(found.reach) * Fraction(found.sigma) <= 1):
         return False
-    need = 2 * Fraction(found.noise_l1) / ((1 - theta) * Fraction(found.sigma))
+    need = 2 * Fraction(found.noise_l1) * Fraction(found.reach) / (1 - theta)
     return Fraction(found.bound) >= need

@@ -439,6 +439,7 @@ def l1_bound_check(
         "null_space_support": list(found.theta_support),
         "worst_support": list(found.worst_support),
         "sigma_min": found.sigma,
+        "inverse_reach": found.reach,
         "noise_l1": found.noise_l1,
         "noise": found.noise.to_dict(),
         "horizon": found.horizon,
@@ -484,8 +485,8 @@ def l1_bound_check(
         f"within {readable(found.bound)} of the truth (2-norm). The null-space constant is at "
         f"most {readable(found.theta)} < 1 on every set of {_sensors(s)} (largest on "
         f"{_names(system, found.theta_support) or 'the empty set'}); the bound is largest with "
-        f"the attack on {_names(system, found.worst_support) or 'no sensor'}: 2 ||w_K||_1 / ((1 - "
-        f"theta) sigma_min(O_K)), sigma_min at least {readable(found.sigma)}.",
+        f"the attack on {_names(system, found.worst_support) or 'no sensor'}: 2 ||w_K||_1 "
+        f"||O_K^+||_(1->2) / (1 - theta), ||O_K^+||_(1->2) at most {readable(found.reach)}.",
         value=found.bound,
         **common,
     )
