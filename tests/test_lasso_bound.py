@@ -318,3 +318,31 @@ def test_plants_at_the_edges_of_the_float_range():
     assert lasso_error_bound(blank, 1, MeasurementNoise.uniform(0.01, 2), horizon=1).code is (
         LassoBoundCode.WINDOW_TOO_SHORT
     )
+
+
+@pytest.mark.filterwarnings("error::RuntimeWarning")
+def test_huge_noise_and_huge_plants_stay_in_range():
+    from ssecert.structure.l1_bound import L1BoundCode, l1_error_bound
+
+    # the worst case is built in units where the noise is about 1: never above the bound
+    loud = lasso_error_bound(EXAMPLE_1, 1, MeasurementNoise.uniform(1e160, 3), horizon=1)
+    reached = lasso_worst_case(EXAMPLE_1, loud)
+    assert loud.code is LassoBoundCode.CERTIFIED
+    assert 0 < reached["lower"] <= loud.bound and reached["lower"] == pytest.approx(loud.bound)
+    # a noise bound at the top of the range: out of range, or certified, never an exception
+    wide = System(np.eye(1), np.array([[1e-9], [1e9], [1e9], [1e9]]))
+    found = l1_error_bound(wide, 1, MeasurementNoise.uniform(1.7e308, 4), horizon=1)
+    assert found.code in (L1BoundCode.NOT_SOLVED, L1BoundCode.CERTIFIED)
+    assert found.code is L1BoundCode.NOT_SOLVED or math.isfinite(found.bound)
+    # entries of 1e155 (their squares overflow): decided in power-of-two units
+    big = System(np.eye(1), np.full((3, 1), 1e155))
+    eta = MeasurementNoise.uniform(0.01, 3)
+    assert lasso_error_bound(big, 1, eta, horizon=1).code is LassoBoundCode.CERTIFIED
+    assert l1_error_bound(big, 1, eta, horizon=1).code is L1BoundCode.CERTIFIED
+    # subnormal noise bounds: the printed numbers re-check
+    tiny = MeasurementNoise.uniform(1e-310, 3)
+    for found in (
+        lasso_error_bound(EXAMPLE_1, 1, tiny, horizon=1),
+        l1_error_bound(EXAMPLE_1, 1, tiny, horizon=1),
+    ):
+        assert found.code.value == "certified" and found.bound > 0

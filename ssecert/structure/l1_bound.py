@@ -98,7 +98,8 @@ class L1ErrorBound:
         noise within its bounds (inf when none is certified).
     theta : float
         The largest null-space constant over the sets of s sensors (an upper bound); the
-        certificate needs it below 1.
+        certificate needs it below 1.  Not certified, that of the first set found whose
+        constant is not proved below 1 (the others are not examined).
     theta_support : tuple of int
         The sensors of the set with the largest theta.
     worst_support : tuple of int
@@ -290,6 +291,9 @@ def l1_error_bound(
         if value is None:
             return L1ErrorBound(L1BoundCode.NOT_SOLVED, math.inf, programs=programs, **base)
         thetas[j] = value
+        if not value < 1:  # refused: no bound, whatever the other sets give
+            thetas[j + 1 :] = -math.inf
+            break
     j_theta = int(np.argmax(thetas))
     common: dict[str, Any] = {
         "theta": float(thetas[j_theta]),
@@ -310,7 +314,10 @@ def l1_error_bound(
             sigma_worst = float(np.nextafter(sigma_worst, 0.0))
         reach_worst = float(_times_up(reaches[worst], -d))
         noise_worst = float(_times_up(noise_l1[worst], e_c))
-    if not all(math.isfinite(v) for v in (bound, sigma_worst, reach_worst)):
+        # at least what the printed numbers give (they are rounded up where subnormal)
+        printed = 2.0 * noise_worst * reach_worst / (1.0 - thetas[worst]) * (1.0 + gamma(6))
+        bound = max(bound, _rounded_up(float(printed), exact_zero=top == 0))
+    if not all(math.isfinite(v) for v in (bound, sigma_worst, reach_worst, noise_worst)):
         return L1ErrorBound(L1BoundCode.NOT_SOLVED, math.inf, **common, **base)
     found = L1ErrorBound(
         L1BoundCode.CERTIFIED,
@@ -330,11 +337,11 @@ def l1_error_bound(
 
 def l1_bound_rechecks(found: L1ErrorBound) -> bool:
     """The printed bound re-derived in rational arithmetic from the printed numbers of the
-    worst set: bound >= 2 noise_l1 reach / (1 - theta_S), theta_S < 1, reach <= 1 / sigma."""
+    worst set: bound >= 2 noise_l1 reach / (1 - theta_S), theta_S < 1."""
     if found.code is not L1BoundCode.CERTIFIED:
         return False
     theta = Fraction(found.facts["worst_theta"])
-    if not (theta < 1 and found.sigma > 0 and Fraction(found.reach) * Fraction(found.sigma) <= 1):
+    if not (theta < 1 and found.sigma > 0):
         return False
     need = 2 * Fraction(found.noise_l1) * Fraction(found.reach) / (1 - theta)
     return Fraction(found.bound) >= need

@@ -326,8 +326,12 @@ def _blocks_and_errors(system: System, tau: int) -> tuple[np.ndarray, np.ndarray
         return system.sensor_blocks(tau), _block_errors(system, tau)
     blocks = flat.reshape(tau, p, n).transpose(1, 0, 2).copy()
     u = 2.0**-53
-    # |fl(x) - x| <= u |x| <= u / (1 - u) |fl(x)| for normal floats, 2^-1075 below them
-    errors = u / (1 - u) * np.sqrt(np.sum(blocks**2, axis=(1, 2))) + math.sqrt(tau * n) * 2.0**-1074
+    # |fl(x) - x| <= u |x| <= u / (1 - u) |fl(x)| for normal floats, 2^-1075 below them; each
+    # sensor's norm taken over its largest entry (no square overflows)
+    top = np.max(np.abs(blocks), axis=(1, 2), initial=0.0)
+    safe = np.where(top > 0, top, 1.0)
+    norms = top * np.sqrt(np.sum((blocks / safe[:, None, None]) ** 2, axis=(1, 2)))
+    errors = u / (1 - u) * norms * (1 + 4 * u) + math.sqrt(tau * n) * 2.0**-1074
     return blocks, errors * _SAFE
 
 
@@ -480,7 +484,15 @@ def lasso_error_bound(
         beta = _times_up(terms.beta, e_c - d)
         kappas = _times_up(terms.kappa, -d)
     deciding = int(np.argmax(need))
-    lam_min = _rounded_up(float(need[deciding]), exact_zero=silent)
+    printed_delta = float(_times_up(terms.delta[deciding], e_c))
+    lam_min = max(
+        _rounded_up(float(need[deciding]), exact_zero=silent),
+        # what the printed numbers give (rounded up where subnormal), so that they re-check
+        _rounded_up(
+            printed_delta / (1.0 - float(terms.rho[deciding])) * (1.0 + gamma(4)),
+            exact_zero=silent,
+        ),
+    )
     noise_term = _rounded_up(float(beta.max()), exact_zero=silent)
     kappa = _rounded_up(float(kappas.max()), exact_zero=s == 0)
     if not all(math.isfinite(v) for v in (lam_min, noise_term, kappa)):
@@ -501,7 +513,7 @@ def lasso_error_bound(
         kappa=kappa,
         facts={
             "deciding_rho": float(terms.rho[deciding]),
-            "deciding_delta": float(_times_up(terms.delta[deciding], e_c)),
+            "deciding_delta": printed_delta,
             "worst_beta": float(beta[worst]),
             "worst_kappa": float(kappas[worst]),
             "noise_scale": c,
@@ -536,6 +548,14 @@ def lasso_bound_rechecks(found: LassoErrorBound) -> bool:
     return q(found.noise_term) >= beta and q(found.kappa) >= kappa
 
 
+def _safe_norm(v: np.ndarray) -> float:
+    """||v||_2 without overflow or underflow of the squares."""
+    top = float(np.max(np.abs(v))) if v.size else 0.0
+    if top == 0 or not math.isfinite(top):
+        return top
+    return top * float(np.linalg.norm(v / top))
+
+
 def lasso_worst_case(
     system: System, found: LassoErrorBound, lam: float | None = None
 ) -> dict[str, Any] | None:
@@ -556,14 +576,25 @@ def lasso_worst_case(
     if not weight >= found.lam_min:
         return None
     p, n, tau = system.p, system.n, found.horizon
-    O = system.observability_matrix(tau)
-    eta = found.noise.eta
+    with np.errstate(all="ignore"):
+        O = system.observability_matrix(tau)
+    # in units where O's largest entry and the noise's are about 1 (O = 2^d O', eta = c eta'):
+    # N = 2^-d N', Z = 2^-d Z', so the error N w + lam Z zeta is 2^-d c (N' w' + lam / c Z' zeta)
+    top_O = float(np.max(np.abs(O))) if O.size and np.all(np.isfinite(O)) else 0.0
+    top_eta = float(np.max(found.noise.eta))
+    if top_O == 0 or (top_eta == 0 and weight == 0):
+        return {"lower": 0.0, "support": found.worst_support, "lam": weight}
+    d = math.frexp(top_O)[1]
+    c = MeasurementNoise.scale(top_eta) if top_eta > 0 else 1.0
+    O_unit = np.ldexp(O, -d)
+    eta = found.noise.eta / c
+    lam_unit = weight / c
     best: dict[str, Any] | None = None
     for support in dict.fromkeys((found.worst_support, found.lam_support, found.rho_support)):
         attacked = set(support)
         rows_s = [t * p + i for t in range(tau) for i in sorted(attacked)]
         rows_k = [t * p + i for t in range(tau) for i in range(p) if i not in attacked]
-        O_K, O_S = O[rows_k], O[rows_s]
+        O_K, O_S = O_unit[rows_k], O_unit[rows_s]
         with np.errstate(all="ignore"):
             G = O_K.T @ O_K
             try:
@@ -584,11 +615,12 @@ def lasso_worst_case(
                     w = np.zeros_like(reach)
                     for i in set(sensor.tolist()):
                         mine = sensor == i
-                        size = float(np.linalg.norm(reach[mine]))
+                        size = _safe_norm(reach[mine])
                         w[mine] = eta[i] * (reach[mine] / size if size > 0 else 1 / math.sqrt(tau))
-                error = N @ w + weight * (Z @ sigma)
-                size = float(np.linalg.norm(error))
-                if size == 0:
+                with np.errstate(all="ignore"):
+                    error = N @ w + lam_unit * (Z @ sigma)
+                size = _safe_norm(error)
+                if not 0 < size < math.inf:
                     break
                 if best is None or size > best["error_norm"]:
                     best = {"error_norm": size, "support": tuple(support), "error": error,
@@ -598,17 +630,26 @@ def lasso_worst_case(
                 v = error / size
     if best is None:
         return {"lower": 0.0, "support": found.worst_support, "lam": weight}
-    noise = np.zeros(p * tau)
-    noise[best["rows_k"]] = best["w"]
-    # each attacked row beyond its noise (none), lam and the error's reach there
-    reach = np.abs(O[best["rows_s"]] @ best["error"]) + weight
-    attack = np.zeros(p * tau)
-    attack[best["rows_s"]] = best["sigma"] * (2.0 * reach + 1.0)
+    exponent = math.frexp(c)[1] - 1 - d
+    with np.errstate(all="ignore"):
+        # a lower bound: rounded down (by far more than the construction's own rounding)
+        lower = float(np.ldexp(best["error_norm"] * (1 - 2.0**-40), exponent))
+        if lower < 2.0**-1022:
+            lower = float(np.nextafter(lower, 0.0))
+        error = np.ldexp(best["error"], exponent)
+        noise = np.zeros(p * tau)
+        noise[best["rows_k"]] = best["w"] * c
+        # each attacked row beyond its noise (none), lam and the error's reach there
+        reach = np.abs(O[best["rows_s"]] @ error) + weight
+        attack = np.zeros(p * tau)
+        attack[best["rows_s"]] = best["sigma"] * (2.0 * reach + 1.0)
+    if not all(np.all(np.isfinite(x)) for x in (error, noise, attack)) or not lower < math.inf:
+        return {"lower": 0.0, "support": found.worst_support, "lam": weight}
     return {
-        "lower": best["error_norm"] * (1 - 2.0**-40),
+        "lower": lower,
         "support": best["support"],
         "lam": weight,
         "attack": attack,
         "noise": noise,
-        "error": best["error"],
+        "error": error,
     }

@@ -7,6 +7,7 @@ writes what a user reads about it.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from ..base.format import readable
@@ -362,9 +363,13 @@ def lasso_bound_check(
             "error": reached.get("error"),
         }
         if reached["lower"] > 0:
+            attack = (
+                f" and an attack on {_names(system, reached['support'])} drive"
+                if reached["support"]
+                else " drives"
+            )
             lower = (
-                f" A noise within the bounds and an attack on "
-                f"{_names(system, reached['support'])} drive its error to "
+                f" A noise within the bounds{attack} its error to "
                 f"{readable(reached['lower'])} at lambda = {readable(reached['lam'])} (from "
                 f"x = 0: lower_bound_construction): the worst case lies between the two."
             )
@@ -396,6 +401,11 @@ L1_METHOD = (
 def l1_reason(found: L1ErrorBound, system: System) -> str:
     """Why no finite l1 bound is certified (empty for a certified one)."""
     code, s = found.code, found.max_attacked
+    if code is L1BoundCode.NOT_NULL_SPACE and not math.isfinite(found.theta):
+        return (
+            f"the null-space constant of sensors {_names(system, found.theta_support)} is not "
+            "proved below 1 (its linear programs' duals did not bound it)"
+        )
     if code is L1BoundCode.NOT_NULL_SPACE:
         return (
             f"the null-space constant reaches {readable(found.theta)} >= 1 on sensors "
