@@ -346,3 +346,23 @@ def test_huge_noise_and_huge_plants_stay_in_range():
         l1_error_bound(EXAMPLE_1, 1, tiny, horizon=1),
     ):
         assert found.code.value == "certified" and found.bound > 0
+
+
+def test_a_window_too_short_fails_every_decoder_bound_with_the_kept_sensors():
+    from ssecert.spec import spec_from_dict
+
+    spec = spec_from_dict(
+        {
+            "name": "rotation",
+            "system": {"A": [[0.0, 1.0], [-1.0, 0.0]], "C": [[1.0, 0.0], [1.0, 0.0]]},
+            "attack": {"max_attacked": 0, "horizon": 1},
+            "noise": {"measurement": 0.1},
+        }
+    )
+    cert = analyze(spec)
+    for check_id in ("decoder_error_bound", "l1_error_bound", "lasso_error_bound"):
+        check = cert[check_id]
+        assert check.verdict is Verdict.FAILS and check.value == math.inf, check_id
+    for check_id in ("l1_error_bound", "lasso_error_bound"):
+        assert cert[check_id].witness == {"kept_sensors": [0, 1], "horizon": 1}
+        assert cert[check_id].summary.endswith("a window of n steps would determine it.")

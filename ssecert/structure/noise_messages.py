@@ -133,6 +133,21 @@ def _breaking(system: System, s: int, breaking_set: list[int], common: dict[str,
     )
 
 
+def _window_fails(
+    system: System, removed: tuple[int, ...], horizon: int, why: str, common: dict[str, Any]
+) -> Check:
+    """A decoder check that fails because the sensors outside ``removed`` over the window
+    exactly cannot determine the state (``why`` says so)."""
+    kept = [i for i in range(system.p) if i not in set(removed)]
+    return Check(
+        verdict=Verdict.FAILS,
+        summary=f"No worst-case error bound exists: {why}.",
+        value=float("inf"),
+        witness={"kept_sensors": kept, "horizon": horizon},
+        **common,
+    )
+
+
 def decoder_bound_check(system: System, found: DecoderErrorBound) -> Check:
     """The ``decoder_error_bound`` check (advisory) of ``found``: holds with a certified
     bound, fails when a breaking set of at most 2s sensors proves no bound exists, else
@@ -334,14 +349,8 @@ def lasso_bound_check(
     if breaking_set is not None:
         return _breaking(system, s, breaking_set, common)
     if found.code is LassoBoundCode.WINDOW_TOO_SHORT:
-        kept = [i for i in range(system.p) if i not in set(found.worst_support)]
-        return Check(
-            verdict=Verdict.FAILS,
-            summary=f"No worst-case error bound exists: {lasso_reason(found, system)}.",
-            value=float("inf"),
-            witness={"kept_sensors": kept, "horizon": tau},
-            **common,
-        )
+        why = lasso_reason(found, system)
+        return _window_fails(system, found.worst_support, tau, why, common)
     if not certified:
         return Check(
             verdict=Verdict.INCONCLUSIVE,
@@ -472,14 +481,8 @@ def l1_bound_check(
     if breaking_set is not None:
         return _breaking(system, s, breaking_set, common)
     if found.code is L1BoundCode.WINDOW_TOO_SHORT:
-        kept = [i for i in range(system.p) if i not in set(found.worst_support)]
-        return Check(
-            verdict=Verdict.FAILS,
-            summary=f"No worst-case error bound exists: {l1_reason(found, system)}.",
-            value=float("inf"),
-            witness={"kept_sensors": kept, "horizon": found.horizon},
-            **common,
-        )
+        why = l1_reason(found, system)
+        return _window_fails(system, found.worst_support, found.horizon, why, common)
     if found.code is not L1BoundCode.CERTIFIED:
         return Check(
             verdict=Verdict.INCONCLUSIVE,
