@@ -367,3 +367,41 @@ def test_a_window_too_short_fails_every_decoder_bound_with_the_kept_sensors():
     for check_id in ("l1_error_bound", "lasso_error_bound"):
         assert cert[check_id].witness == {"kept_sensors": [0, 1], "horizon": 1}
         assert cert[check_id].summary.endswith("a window of n steps would determine it.")
+
+
+def test_the_constructed_worst_case_is_a_lower_bound_on_an_ill_conditioned_plant():
+    # four sensors of nearly one direction: cond(O_K) near 1e3, the computed N and Z off by
+    # far more than the construction's own rounding; the exact error from the constructed
+    # attack and noise (x = 0: the witness's closed form in fractions) is at least `lower`
+    from fractions import Fraction
+
+    C = np.array(
+        [
+            [1.0033000478203544, 1.0048966258302836],
+            [-0.6178579900937755, -0.6159046521239556],
+            [1.8221998825208356, 1.821378169238131],
+            [-1.3208085335185262, -1.3215221161309127],
+        ]
+    )
+    plant = System(np.eye(2), C)
+    found = lasso_error_bound(plant, 1, MeasurementNoise.uniform(0.1, 4), horizon=1)
+    lam = found.lam_min * 1.5
+    reached = lasso_worst_case(plant, found, lam)
+    S = list(reached["support"])
+    K = [i for i in range(4) if i not in S]
+    q = [[Fraction(float(x)) for x in row] for row in C]
+    OK, OS = [q[i] for i in K], [q[i] for i in S]
+    # G = OK' OK (2 x 2), e = G^-1 (OK' w_K + lam OS' sign(attack_S))
+    G = [[sum(r[a] * r[b] for r in OK) for b in range(2)] for a in range(2)]
+    det = G[0][0] * G[1][1] - G[0][1] * G[1][0]
+    inv = [[G[1][1] / det, -G[0][1] / det], [-G[1][0] / det, G[0][0] / det]]
+    w = [Fraction(float(reached["noise"][i])) for i in K]
+    sign = [Fraction(int(np.sign(reached["attack"][i]))) for i in S]
+    rhs = [
+        sum(r[a] * wi for r, wi in zip(OK, w))
+        + Fraction(lam) * sum(r[a] * si for r, si in zip(OS, sign))
+        for a in range(2)
+    ]
+    e = [inv[a][0] * rhs[0] + inv[a][1] * rhs[1] for a in range(2)]
+    assert e[0] ** 2 + e[1] ** 2 >= Fraction(reached["lower"]) ** 2
+    assert reached["lower"] <= found.at(lam) and reached["lower"] > 0.99 * found.at(lam)

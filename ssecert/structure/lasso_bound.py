@@ -123,7 +123,8 @@ class LassoErrorBound:
     lam : float
         The weight the bound is for; ``lam_min`` when none was given (the bound then holds
         in the limit lam -> lam_min from above, and ``noise_term + lam kappa`` for every
-        larger lam).
+        larger lam; the decoder itself needs lam > 0, so without noise, lam_min = 0 and the
+        bound 0 are that limit, not a weight).
     lam_min : float
         Every lam above it is certified (0 without noise).
     rho : float
@@ -271,7 +272,8 @@ def _support_terms(
             for part in (norm_ZS, norm_N)
         )
         M_S, M_K = M[:, :, :s_rows], M[:, :, s_rows:]
-        up = 1.0 + gamma(p * tau + n + 4)  # sums over a row (<= p tau) and over n, a root
+        # sums over a row (<= p tau), over n, over a block's n tau entries, and a root
+        up = 1.0 + gamma(p * tau + n * tau + n + 4)
         # rho: the largest row l1 norm of O_K Z_S; an error E moves it by sqrt(|S|) ||E||_2
         rho = (np.abs(M_S).sum(axis=2).max(axis=1, initial=0.0) + math.sqrt(s_rows) * err_S) * up
         R = np.eye(k_rows)[None] - M_K
@@ -556,6 +558,45 @@ def _safe_norm(v: np.ndarray) -> float:
     return top * float(np.linalg.norm(v / top))
 
 
+def _construction_error(
+    blocks: np.ndarray, errors: np.ndarray, tau: int, best: dict[str, Any], lam_unit: float
+) -> float:
+    """An upper bound of ||(N* - N) w + lam (Z* - Z) zeta|| and of the rounding of
+    N w + lam Z zeta, in the construction's units: N*, Z* the exact plant's, N, Z the computed
+    ones, whose error the residual of G [Z N] = [O_S' O_K'] bounds by ||residual|| / sigma^2
+    for the exact plant's O (within ``errors`` of the correctly rounded blocks)."""
+    p, n = blocks.shape[0], blocks.shape[2]
+    O_K, O_S, N, Z = best["O_K"], best["O_S"], best["N"], best["Z"]
+    attacked = sorted({r % p for r in best["rows_s"]})
+    kept = [i for i in range(p) if i not in set(attacked)]
+    e_K = float(np.sqrt((errors[kept] ** 2).sum()))
+    e_S = float(np.sqrt((errors[attacked] ** 2).sum())) if attacked else 0.0
+    with np.errstate(all="ignore"):
+        grams = np.einsum("itn,itm->inm", blocks, blocks)
+        G = grams.sum(axis=0) - grams[attacked].sum(axis=0)
+        sigma, _, _ = _kept_sigma(
+            G[None], np.sum(blocks**2, axis=(1, 2)), errors,
+            np.array([attacked], dtype=np.int64).reshape(1, -1), np.array([kept]), tau,
+        )  # fmt: skip
+        sigma_K = float(sigma[0])
+        B = np.concatenate([O_S, O_K]).T
+        ZN = np.concatenate([Z, N], axis=1)
+        norm_K, norm_ZN = float(np.linalg.norm(O_K)), float(np.linalg.norm(ZN))
+        residual = (
+            float(np.linalg.norm(O_K.T @ (O_K @ ZN) - B))
+            + gamma(O_K.shape[0] + n + 2) * (norm_K**2 * norm_ZN + float(np.linalg.norm(B)))
+            + (2 * norm_K * e_K + e_K**2) * norm_ZN
+            + math.sqrt(e_K**2 + e_S**2)
+        ) * _SAFE
+        if not sigma_K > 0:
+            return math.inf
+        eps = residual / sigma_K**2 * _SAFE
+        reach = _safe_norm(best["w"]) + abs(lam_unit) * math.sqrt(Z.shape[1])
+        own = gamma(O_K.shape[0] + Z.shape[1] + n + 4) * norm_ZN * reach
+        value = (eps * reach + own) * _SAFE
+    return value if math.isfinite(value) else math.inf
+
+
 def lasso_worst_case(
     system: System, found: LassoErrorBound, lam: float | None = None
 ) -> dict[str, Any] | None:
@@ -576,17 +617,15 @@ def lasso_worst_case(
     if not weight >= found.lam_min:
         return None
     p, n, tau = system.p, system.n, found.horizon
-    with np.errstate(all="ignore"):
-        O = system.observability_matrix(tau)
     # in units where O's largest entry and the noise's are about 1 (O = 2^d O', eta = c eta'):
     # N = 2^-d N', Z = 2^-d Z', so the error N w + lam Z zeta is 2^-d c (N' w' + lam / c Z' zeta)
-    top_O = float(np.max(np.abs(O))) if O.size and np.all(np.isfinite(O)) else 0.0
+    ranged = _scaled_blocks(system, tau)
     top_eta = float(np.max(found.noise.eta))
-    if top_O == 0 or (top_eta == 0 and weight == 0):
+    if ranged is None or (top_eta == 0 and weight == 0):
         return {"lower": 0.0, "support": found.worst_support, "lam": weight}
-    d = math.frexp(top_O)[1]
+    blocks, errors, d = ranged
+    O_unit = blocks.transpose(1, 0, 2).reshape(tau * p, n)  # rows t p + i
     c = MeasurementNoise.scale(top_eta) if top_eta > 0 else 1.0
-    O_unit = np.ldexp(O, -d)
     eta = found.noise.eta / c
     lam_unit = weight / c
     best: dict[str, Any] | None = None
@@ -616,7 +655,9 @@ def lasso_worst_case(
                     for i in set(sensor.tolist()):
                         mine = sensor == i
                         size = _safe_norm(reach[mine])
-                        w[mine] = eta[i] * (reach[mine] / size if size > 0 else 1 / math.sqrt(tau))
+                        share = reach[mine] / size if size > 0 else np.full(tau, tau**-0.5)
+                        # a few ulps inside the bound, whatever the division's rounding
+                        w[mine] = eta[i] * share * (1 - 2.0**-48)
                 with np.errstate(all="ignore"):
                     error = N @ w + lam_unit * (Z @ sigma)
                 size = _safe_norm(error)
@@ -624,23 +665,27 @@ def lasso_worst_case(
                     break
                 if best is None or size > best["error_norm"]:
                     best = {"error_norm": size, "support": tuple(support), "error": error,
-                            "rows_s": rows_s, "rows_k": rows_k, "sigma": sigma, "w": w}  # fmt: skip
+                            "rows_s": rows_s, "rows_k": rows_k, "sigma": sigma, "w": w,
+                            "O_K": O_K, "O_S": O_S, "N": N, "Z": Z}  # fmt: skip
                 if np.allclose(error / size, v, rtol=0, atol=1e-15):
                     break
                 v = error / size
     if best is None:
         return {"lower": 0.0, "support": found.worst_support, "lam": weight}
     exponent = math.frexp(c)[1] - 1 - d
+    slack = _construction_error(blocks, errors, tau, best, lam_unit)
     with np.errstate(all="ignore"):
-        # a lower bound: rounded down (by far more than the construction's own rounding)
-        lower = float(np.ldexp(best["error_norm"] * (1 - 2.0**-40), exponent))
+        # a lower bound: the computed error's norm less the error of the computed N and Z
+        # against the exact plant's (from their residual) and its own rounding
+        certain = max(best["error_norm"] * (1 - 2.0**-40) - slack, 0.0)
+        lower = float(np.ldexp(certain, exponent))
         if lower < 2.0**-1022:
             lower = float(np.nextafter(lower, 0.0))
         error = np.ldexp(best["error"], exponent)
         noise = np.zeros(p * tau)
         noise[best["rows_k"]] = best["w"] * c
         # each attacked row beyond its noise (none), lam and the error's reach there
-        reach = np.abs(O[best["rows_s"]] @ error) + weight
+        reach = np.abs(np.ldexp(best["O_S"], d) @ error) + weight
         attack = np.zeros(p * tau)
         attack[best["rows_s"]] = best["sigma"] * (2.0 * reach + 1.0)
     if not all(np.all(np.isfinite(x)) for x in (error, noise, attack)) or not lower < math.inf:
