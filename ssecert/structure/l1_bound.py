@@ -50,11 +50,13 @@ from ..tolerances import gamma
 from ._combinatorics import count_subsets
 from .lasso_bound import (
     _SAFE,
+    _kept_gramians,
     _kept_sigma,
     _rounded_up,
     _scaled_blocks,
     _times_up,
     _window_deficient,
+    inverse_error,
 )
 from .noise import _kept_sets, window_inputs
 
@@ -139,17 +141,10 @@ def _reach_upper(O_K: np.ndarray, sigma_K: float, e_K: float) -> float:
     """An upper bound of ||O_K^+||_{1->2} (the largest column 2-norm of the pseudo-inverse)
     for the exact plant: N = G^-1 O_K' computed, its error at most ||residual|| / sigma_min^2
     (the residual G N - O_K' evaluated with its rounding and the powers' error)."""
-    k, n = O_K.shape
+    n = O_K.shape[1]
     N = np.linalg.solve(O_K.T @ O_K, O_K.T)
-    norm_K, norm_N = float(np.linalg.norm(O_K)), float(np.linalg.norm(N))
-    residual = (
-        float(np.linalg.norm(O_K.T @ (O_K @ N) - O_K.T))
-        + gamma(k + n + 2) * (norm_K**2 * norm_N + norm_K)
-        + (2 * norm_K * e_K + e_K**2) * norm_N
-        + e_K
-    ) * _SAFE
     columns = float(np.sqrt((N**2).sum(axis=0)).max()) * (1.0 + gamma(n + 2))
-    return (columns + residual / sigma_K**2) * _SAFE
+    return (columns + inverse_error(O_K, N, O_K.T, sigma_K, e_K, e_K)) * _SAFE
 
 
 def _theta_upper(
@@ -259,12 +254,8 @@ def l1_error_bound(
         return L1ErrorBound(L1BoundCode.NOT_SOLVED, math.inf, **base)
     blocks, errors, d = ranged  # the plant's blocks are 2^d times these: theta does not change
     supports = _kept_sets(p, s)
-    kept_mask = np.ones((sets, p), dtype=bool)
-    np.put_along_axis(kept_mask, supports, False, axis=1)
-    kept = np.nonzero(kept_mask)[1].reshape(sets, p - s)
+    kept, G = _kept_gramians(blocks, supports)
     frob2 = np.sum(blocks**2, axis=(1, 2))
-    grams = np.einsum("itn,itm->inm", blocks, blocks)
-    G = grams.sum(axis=0) - grams[supports].sum(axis=1)
     sigma, e_K, e_S = _kept_sigma(G, frob2, errors, supports, kept, tau)
     names = lambda j: tuple(int(i) for i in supports[j])  # noqa: E731
     if not np.all(sigma > 0):
@@ -279,10 +270,10 @@ def l1_error_bound(
     per_sensor = eta * (tau if noise.per_sample else math.sqrt(tau))
     noise_l1 = per_sensor[kept].sum(axis=1) * (1.0 + gamma(p + 2))
     thetas, reaches = np.empty(sets), np.empty(sets)
+    flat = blocks.reshape(p * tau, -1)
     for j in range(sets):
         rows_k = [i * tau + t for i in kept[j] for t in range(tau)]
         rows_s = [i * tau + t for i in supports[j] for t in range(tau)]
-        flat = blocks.reshape(p * tau, -1)
         with np.errstate(all="ignore"):
             value = _theta_upper(flat[rows_k], flat[rows_s], float(sigma[j]), e_K[j], e_S[j])
             reaches[j] = min(

@@ -188,6 +188,40 @@ class _Terms:
     sigma: np.ndarray
 
 
+def _kept_gramians(
+    blocks: np.ndarray, supports: np.ndarray, grams: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """The sensors kept by each support (rows of ``supports``) and their Gramians O_K' O_K,
+    the sum of every block's less the removed ones (``grams``: each block's, when computed)."""
+    count, s = supports.shape
+    p = blocks.shape[0]
+    kept_mask = np.ones((count, p), dtype=bool)
+    np.put_along_axis(kept_mask, supports, False, axis=1)
+    kept = np.nonzero(kept_mask)[1].reshape(count, p - s)
+    if grams is None:
+        grams = np.einsum("itn,itm->inm", blocks, blocks)
+    return kept, grams.sum(axis=0) - grams[supports].sum(axis=1)
+
+
+def inverse_error(
+    O_K: np.ndarray, X: np.ndarray, B: np.ndarray, sigma_K: float, e_K: float, e_B: float
+) -> float:
+    """An upper bound of ||X - X*||_2, X* = (O_K' O_K)^-1 B for the exact plant's O_K (within
+    e_K of the one given in Frobenius norm, its B within e_B) and X computed: the residual
+    O_K' O_K X - B evaluated with its rounding and the powers' error, over sigma_min^2
+    (``sigma_K``, a lower bound for the exact plant)."""
+    if not sigma_K > 0:
+        return math.inf
+    norm_K, norm_X = float(np.linalg.norm(O_K)), float(np.linalg.norm(X))
+    residual = (
+        float(np.linalg.norm(O_K.T @ (O_K @ X) - B))
+        + gamma(O_K.shape[0] + O_K.shape[1] + 2) * (norm_K**2 * norm_X + float(np.linalg.norm(B)))
+        + (2 * norm_K * e_K + e_K**2) * norm_X
+        + e_B
+    ) * _SAFE
+    return residual / sigma_K**2 * _SAFE
+
+
 def _kept_sigma(
     G: np.ndarray,
     frob2: np.ndarray,
@@ -225,21 +259,17 @@ def _support_terms(
     flat = blocks.reshape(p * tau, n)
     frob2 = np.sum(blocks**2, axis=(1, 2))
     grams = np.einsum("itn,itm->inm", blocks, blocks)
-    total = grams.sum(axis=0)
     out = {name: np.empty(count) for name in ("rho", "delta", "beta", "kappa", "sigma")}
     chunk = max(1, _CHUNK_ENTRIES // max(k_rows * p * tau, 1))
     eta_rows = np.repeat(eta, tau)  # each row's bound (per sample), or its sensor's (blocks)
     for start in range(0, count, chunk):
         sup = supports[start : start + chunk]
         c = sup.shape[0]
-        kept_mask = np.ones((c, p), dtype=bool)
-        np.put_along_axis(kept_mask, sup, False, axis=1)
-        kept = np.nonzero(kept_mask)[1].reshape(c, p - s)
+        kept, G = _kept_gramians(blocks, sup, grams)
         rows_k = (kept[:, :, None] * tau + np.arange(tau)).reshape(c, k_rows)
         rows_s = (sup[:, :, None] * tau + np.arange(tau)).reshape(c, s_rows)
         O_K = flat[rows_k]  # (c, k_rows, n)
         O_S = flat[rows_s]  # (c, s_rows, n)
-        G = total - grams[sup].sum(axis=1)
         sigma, e_K, e_S = _kept_sigma(G, frob2, errors, sup, kept, tau)
         kept_frob2 = frob2[kept].sum(axis=1)
         good = sigma > 0
@@ -567,30 +597,17 @@ def _construction_error(
     for the exact plant's O (within ``errors`` of the correctly rounded blocks)."""
     p, n = blocks.shape[0], blocks.shape[2]
     O_K, O_S, N, Z = best["O_K"], best["O_S"], best["N"], best["Z"]
-    attacked = sorted({r % p for r in best["rows_s"]})
-    kept = [i for i in range(p) if i not in set(attacked)]
-    e_K = float(np.sqrt((errors[kept] ** 2).sum()))
-    e_S = float(np.sqrt((errors[attacked] ** 2).sum())) if attacked else 0.0
+    attacked = np.array([sorted({r % p for r in best["rows_s"]})], dtype=np.int64)
     with np.errstate(all="ignore"):
-        grams = np.einsum("itn,itm->inm", blocks, blocks)
-        G = grams.sum(axis=0) - grams[attacked].sum(axis=0)
-        sigma, _, _ = _kept_sigma(
-            G[None], np.sum(blocks**2, axis=(1, 2)), errors,
-            np.array([attacked], dtype=np.int64).reshape(1, -1), np.array([kept]), tau,
-        )  # fmt: skip
-        sigma_K = float(sigma[0])
-        B = np.concatenate([O_S, O_K]).T
+        kept, G = _kept_gramians(blocks, attacked.reshape(1, -1))
+        sigma, e_K, e_S = _kept_sigma(
+            G, np.sum(blocks**2, axis=(1, 2)), errors, attacked.reshape(1, -1), kept, tau
+        )
         ZN = np.concatenate([Z, N], axis=1)
-        norm_K, norm_ZN = float(np.linalg.norm(O_K)), float(np.linalg.norm(ZN))
-        residual = (
-            float(np.linalg.norm(O_K.T @ (O_K @ ZN) - B))
-            + gamma(O_K.shape[0] + n + 2) * (norm_K**2 * norm_ZN + float(np.linalg.norm(B)))
-            + (2 * norm_K * e_K + e_K**2) * norm_ZN
-            + math.sqrt(e_K**2 + e_S**2)
-        ) * _SAFE
-        if not sigma_K > 0:
-            return math.inf
-        eps = residual / sigma_K**2 * _SAFE
+        B = np.concatenate([O_S, O_K]).T
+        e_B = math.hypot(float(e_K[0]), float(e_S[0]))
+        eps = inverse_error(O_K, ZN, B, float(sigma[0]), float(e_K[0]), e_B)
+        norm_ZN = float(np.linalg.norm(ZN))
         reach = _safe_norm(best["w"]) + abs(lam_unit) * math.sqrt(Z.shape[1])
         own = gamma(O_K.shape[0] + Z.shape[1] + n + 4) * norm_ZN * reach
         value = (eps * reach + own) * _SAFE
