@@ -8,7 +8,6 @@ import platform
 import sys
 import time
 from collections.abc import Callable, Mapping
-from dataclasses import replace
 from typing import Any
 
 from .budget import Budget, Laps
@@ -16,8 +15,7 @@ from .context import AnalysisContext, sparse_key
 from .inputs import as_spec
 from .noise import MeasurementNoise
 from .numerics.linalg import balanced_units, eigen_clusters
-from .observers import get_kind, observer_kinds
-from .results import Certificate, Check, Step, Verdict, decide
+from .results import Certificate, Check, Step, Verdict, Withdrawn, decide, withdraw
 from .spec import Spec
 from .structure.cost import rounded_seconds
 from .structure.irrepresentable import irrepresentable
@@ -25,93 +23,33 @@ from .structure.observability import observability
 from .structure.sparse import DEFAULT_MAX_SETS, DEFAULT_TIME_BUDGET, sparse_observability
 from .tolerances import Tolerances
 
-__all__ = ["analyze", "environment", "reconcile"]
+__all__ = ["analyze", "environment"]
 
 
-def _contradictions(by_id: dict[str, Check]) -> list[tuple[str, str, str]]:
-    """Pairs of checks whose verdicts cannot both be right, with why."""
-    out = []
-    obs, sparse = by_id.get("observability"), by_id.get("sparse_observability")
-    if obs is not None and sparse is not None:
-        mr = sparse.fields.get("max_removable")
-        lower = sparse.fields.get("max_removable_is_lower_bound")
-        if obs.verdict is Verdict.HOLDS and mr == -1 and not lower:
-            out.append(
-                (
-                    "observability",
-                    "sparse_observability",
-                    "one finds (A, C) observable, the other max_removable = -1",
-                )
-            )
-        if obs.verdict is Verdict.FAILS and mr is not None and mr >= 0:
-            out.append(
-                (
-                    "observability",
-                    "sparse_observability",
-                    f"one finds (A, C) unobservable, the other max_removable = {mr} >= 0",
-                )
-            )
-    gain, stab = by_id.get("observer_gain"), by_id.get("observer_stability")
-    if gain is not None and stab is not None:
-        kind = gain.fields.get("kind")
-        linear = kind in observer_kinds() and not get_kind(kind).estimates_attack
-        if linear and {gain.verdict, stab.verdict} == {Verdict.HOLDS, Verdict.FAILS}:
-            out.append(
-                (
-                    "observer_gain",
-                    "observer_stability",
-                    "both decide the stability of the same linear error matrix A - L C",
-                )
-            )
-        if (
-            gain.verdict is Verdict.FAILS
-            and stab.verdict is Verdict.HOLDS
-            and (gain.witness is not None)
-        ):
-            out.append(
-                (
-                    "observer_gain",
-                    "observer_stability",
-                    "an unstable A - L C (proved by the gain check) rules out a stable "
-                    "observer: near e = 0 the error follows e+ = (A - L C) e",
-                )
-            )
-    return out
+def _against_observability(sparse: Check, observable: Check) -> Check:
+    """The sparse-observability check as reported: withdrawn (``withdraw``) where its
+    max_removable contradicts the observability check decided before it (max_removable >= 0
+    exactly when (A, C) is observable).  The two are decided by different methods from the
+    same eigenvalues, so this finds nothing on a correct run: what it finds is a defect,
+    reported as such by the check that sees it."""
+    removable = sparse.fields.get("max_removable")
+    lower = sparse.fields.get("max_removable_is_lower_bound")
+    why = None
+    if observable.verdict is Verdict.HOLDS and removable == -1 and not lower:
+        why = "(A, C) observable, and max_removable = -1"
+    elif observable.verdict is Verdict.FAILS and removable is not None and removable >= 0:
+        why = f"(A, C) unobservable, and max_removable = {removable} >= 0"
+    return sparse if why is None else withdraw(sparse, observable, why)
 
 
-def reconcile(checks: list[Check]) -> tuple[list[Check], list[str]]:
-    """Make sure no two checks of one certificate contradict each other.
-
-    Verdicts that imply each other (observability and max_removable >= 0;
-    the gain's and the observer's stability of the same linear error
-    matrix) are compared; a contradicting pair becomes inconclusive, each
-    naming the other, so that a defect shows as an open question and never
-    as a confident answer.  Returns the checks and notes for the report.
-
-    It is the last step of ``analyze``, after every check it compares has
-    been built (``decide``); the checks themselves are built from the same
-    eigenvalues and the observability check they need, so it finds nothing
-    on a correct run: what it finds is a defect, reported as such.
-    """
-    by_id = {c.id: c for c in checks}
-    notes: list[str] = []
-    for first, second, why in _contradictions(by_id):
-        for this, other in ((first, second), (second, first)):
-            c = by_id[this]
-            by_id[this] = replace(
-                c,
-                verdict=Verdict.INCONCLUSIVE,
-                code=None,  # its code said why it had the verdict withdrawn
-                summary=(
-                    f"Withdrawn: this check said {c.verdict.value} but contradicts "
-                    f"{other} ({why}); please report this plant. Original: {c.summary}"
-                ),
-                evidence={**c.evidence, "withdrawn_verdict": c.verdict.value, "contradicts": other},
-            )
-        notes.append(
-            f"{first} and {second} contradicted each other ({why}); both are reported inconclusive"
-        )
-    return [by_id[c.id] for c in checks], notes
+def _withdrawn_notes(checks: list[Check]) -> list[str]:
+    """A note for each check withdrawn for contradicting another (``withdraw``)."""
+    return [
+        f"{c.id} contradicted {c.evidence['contradicts']} ({c.evidence['contradiction']}); it "
+        f"is reported inconclusive"
+        for c in checks
+        if c.code is Withdrawn.CONTRADICTS
+    ]
 
 
 def environment() -> dict[str, str]:
@@ -237,7 +175,7 @@ def analyze(
     observer_timings: dict[str, float] = {}
     steps = [
         Step("observability", lambda: observability(system, tolerances=tol, eigen=eig)),
-        Step("sparse_observability", lambda: sparse_observability(
+        Step("sparse_observability", lambda observable: _against_observability(sparse_observability(
             system,
             spec.max_attacked,
             method=method,
@@ -251,7 +189,7 @@ def analyze(
             client=client,
             timing=sparse_timing,
             device=device,
-        )),
+        ), observable), needs=("observability",)),
         Step("irrepresentable", lambda: irrepresentable(
             system,
             spec.max_attacked,
@@ -320,8 +258,8 @@ def analyze(
         ),
         *decided.get("observer_checks", []),
     ]  # fmt: skip
-    checks, notes = reconcile(checks)
-    if context is not None:  # the final (reconciled) check: its witness is the one reported
+    notes = _withdrawn_notes(checks)
+    if context is not None:  # the check as reported: its witness is the one replayed
         context.put(sparse_key(spec.max_attacked), checks[1])
     notes.extend(_short_horizon_notes(spec, checks[0]))
     if bounded is not None and spec.observer is not None:

@@ -9,7 +9,7 @@ from __future__ import annotations
 import enum
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -25,6 +25,8 @@ __all__ = [
     "combine_verdicts",
     "Step",
     "decide",
+    "Withdrawn",
+    "withdraw",
     "QUANTITY_NAMES",
 ]
 
@@ -176,9 +178,9 @@ class Check:
         The reason code that says why the check has its verdict, where its analysis has one
         (the irrepresentable check's ``IrrepresentableCode``, sparse observability's
         ``SparseCode``, the region of attraction's ``RegionCode``, the ``LMICause`` of an
-        observer_stability from a circle certificate): for callers and tests that read the
-        decision instead of the summary's words; not written to JSON.  None where
-        ``analyze`` withdrew a contradicting verdict.
+        observer_stability from a circle certificate, ``Withdrawn`` for a verdict that
+        contradicted a check decided before it): for callers and tests that read the
+        decision instead of the summary's words; not written to JSON.
     """
 
     id: str
@@ -230,6 +232,48 @@ class Check:
         out["evidence"] = self.evidence
         out["tolerances"] = self.tolerances
         return to_jsonable(out)
+
+
+class Withdrawn(enum.Enum):
+    """Why a check reports inconclusive in place of the verdict its analysis reached
+    (``Check.code``, set by ``withdraw``)."""
+
+    CONTRADICTS = "contradicts a check decided before it"
+
+
+def withdraw(check: Check, other: Check, why: str) -> Check:
+    """``check`` reported inconclusive: its verdict contradicts ``other``'s, a check it was
+    decided after (``why``: the implication between them that fails).
+
+    The check that sees the contradiction reports it, where it is built (a step of
+    ``decide`` that needs ``other``): a defect shows as an open question with both answers,
+    never as a confident one.  The original verdict, the other check and why are in the
+    evidence (``withdrawn_verdict``, ``contradicts``, ``contradiction``).
+
+    Examples
+    --------
+    >>> a = Check("a", "A", Verdict.HOLDS, "A holds.")
+    >>> b = withdraw(Check("b", "B", Verdict.FAILS, "B fails."), a, "b implies not a")
+    >>> b.verdict.value, b.code is Withdrawn.CONTRADICTS, b.evidence["contradicts"]
+    ('inconclusive', True, 'a')
+    """
+    return replace(
+        check,
+        verdict=Verdict.INCONCLUSIVE,
+        code=Withdrawn.CONTRADICTS,
+        applies=True,
+        summary=(
+            f"Withdrawn: this check said {check.verdict.value} but contradicts {other.id} "
+            f"({other.verdict.value}: {why}); please report this plant. Original: "
+            f"{check.summary}"
+        ),
+        evidence={
+            **check.evidence,
+            "withdrawn_verdict": check.verdict.value,
+            "contradicts": other.id,
+            "contradiction": why,
+        },
+    )
 
 
 def combine_verdicts(verdicts: Sequence[Verdict | str]) -> Verdict:

@@ -22,6 +22,7 @@ from planted import hidden_jordan, planted
 
 from ssecert import System, analyze, observability, sparse_observability, spec_from_dict
 from ssecert.design.gains import deadbeat_gain, verify_deadbeat
+from ssecert.results import Verdict
 from ssecert.stability.lyapunov import instability_witness, lyapunov_certificate
 from ssecert.stability.outcomes import SchurCode
 from ssecert.stability.spectral import schur_decision
@@ -381,26 +382,73 @@ def test_analyze_agrees_with_the_checks_run_alone_in_any_units():
     )
 
 
-def test_contradicting_checks_are_withdrawn_not_reported():
+def test_a_check_that_contradicts_an_earlier_one_reports_it(monkeypatch):
+    """A contradiction is reported by the check that sees it, where it is built: the later
+    check of the pair is withdrawn (inconclusive, naming the other), the earlier one and every
+    other check are left as built, and the certificate notes the defect."""
+    import importlib
     from dataclasses import replace
 
-    from ssecert.analyze import reconcile
     from ssecert.examples import load_example
+    from ssecert.results import Withdrawn
 
-    cert = analyze(load_example("notes-example-3"))
-    checks = list(cert.checks)
-    i = [c.id for c in checks].index("sparse_observability")
-    checks[i] = replace(
-        checks[i],
-        fields={**checks[i].fields, "max_removable": -1, "max_removable_is_lower_bound": False},
+    analyze_module = importlib.import_module("ssecert.analyze")
+    spec = load_example("notes-example-3")
+    cert = analyze(spec)
+    assert cert["observability"].verdict is Verdict.HOLDS
+    assert cert["sparse_observability"].code is not None
+    assert "contradicts" not in cert["sparse_observability"].evidence
+
+    found = analyze_module.sparse_observability
+
+    def wrong(*args, **kwargs):  # a defect: max_removable = -1 on an observable plant
+        check = found(*args, **kwargs)
+        fields = {**check.fields, "max_removable": -1, "max_removable_is_lower_bound": False}
+        return replace(check, fields=fields)
+
+    monkeypatch.setattr(analyze_module, "sparse_observability", wrong)
+    defect = analyze(spec)
+    sparse = defect["sparse_observability"]
+    assert sparse.verdict is Verdict.INCONCLUSIVE and sparse.code is Withdrawn.CONTRADICTS
+    assert sparse.evidence["contradicts"] == "observability"
+    assert sparse.evidence["withdrawn_verdict"] == cert["sparse_observability"].verdict.value
+    assert defect["observability"].to_dict() == cert["observability"].to_dict()
+    assert defect["irrepresentable"].verdict is cert["irrepresentable"].verdict
+    assert len(defect.meta["notes"]) == len(cert.meta["notes"]) + 1
+
+
+def test_a_stability_check_that_contradicts_the_gain_reports_it(monkeypatch):
+    """observer_stability is decided after observer_gain: a stability verdict that
+    contradicts the gain's (the same A - L C for a Luenberger observer) is withdrawn by the
+    stability check itself; the gain check stays as built."""
+    from dataclasses import replace
+
+    from ssecert.results import Withdrawn
+    from ssecert.stability import checks as checks_module
+
+    spec = spec_from_dict(
+        {
+            "name": "two-states",
+            "system": {"A": [[0.5, 1.0], [0.0, 0.8]], "C": [[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]},
+            "attack": {"max_attacked": 1},
+            "observer": {"kind": "luenberger", "gain": "deadbeat"},
+        }
     )
-    fixed, notes = reconcile(checks)
-    by_id = {c.id: c for c in fixed}
-    assert by_id["observability"].verdict.value == "inconclusive"
-    assert by_id["sparse_observability"].verdict.value == "inconclusive"
-    assert cert["sparse_observability"].code is not None  # (it said why it held)
-    assert by_id["sparse_observability"].code is None  # withdrawn: no code says why now
-    assert "contradicts sparse_observability" in by_id["observability"].summary
-    assert notes and by_id["irrepresentable"] == cert["irrepresentable"]
-    untouched, none = reconcile(list(cert.checks))
-    assert none == [] and [c.verdict for c in untouched] == [c.verdict for c in cert.checks]
+    cert = analyze(spec)
+    assert cert["observer_gain"].verdict is Verdict.HOLDS
+    assert cert["observer_stability"].verdict is Verdict.HOLDS
+
+    built = checks_module.observer_stability_check
+
+    def wrong(*args, **kwargs):  # a defect: the stable error matrix said unstable
+        check, certificate = built(*args, **kwargs)
+        return replace(check, verdict=Verdict.FAILS), certificate
+
+    monkeypatch.setattr(checks_module, "observer_stability_check", wrong)
+    defect = analyze(spec)
+    stability = defect["observer_stability"]
+    assert stability.verdict is Verdict.INCONCLUSIVE and stability.code is Withdrawn.CONTRADICTS
+    assert stability.evidence["contradicts"] == "observer_gain"
+    assert stability.evidence["withdrawn_verdict"] == "fails"
+    assert defect["observer_gain"].to_dict() == cert["observer_gain"].to_dict()
+    assert len(defect.meta["notes"]) == len(cert.meta["notes"]) + 1

@@ -19,7 +19,7 @@ from ..design.gains import GainError
 from ..noise import MeasurementNoise
 from ..observers import ObserverDesign, build_observer
 from ..observers.lure import LureModel, scaling_text
-from ..results import Check, Step, Verdict, decide
+from ..results import Check, Step, Verdict, decide, withdraw
 from ..system import System
 from ..tolerances import Tolerances
 from . import noise_messages, region_messages
@@ -824,7 +824,10 @@ def observer_checks(
         Step("observer_gain", lambda: observer_gain_check(design, tolerances=tol)),
         Step(
             "observer_stability",
-            lambda: observer_stability_check(design, budget=budget, tolerances=tol),
+            lambda gain: _against_gain(
+                observer_stability_check(design, budget=budget, tolerances=tol), gain, design
+            ),
+            needs=("observer_gain",),
         ),
         Step(
             "region_of_attraction",
@@ -877,6 +880,32 @@ def observer_checks(
     if out["region_of_attraction"] is not None:
         checks.append(out["region_of_attraction"])
     return checks
+
+
+def _against_gain(
+    stability: tuple[Check, Any], gain: Check, design: ObserverDesign
+) -> tuple[Check, Any]:
+    """The stability check (and its certificate) as reported: withdrawn (``withdraw``) where
+    it contradicts the gain check decided before it, which decides the stability of the
+    same error matrix A - L C for an observer without an attack estimate, and whose proved
+    instability of A - L C rules out a stable observer of any kind (near e = 0 the error
+    follows e+ = (A - L C) e).  On a correct run it finds nothing: what it finds is a
+    defect, reported by the check that sees it."""
+    check, certificate = stability
+    decided = {gain.verdict, check.verdict}
+    why = None
+    if not design.observer_kind.estimates_attack and decided == {Verdict.HOLDS, Verdict.FAILS}:
+        why = "both decide the stability of the same linear error matrix A - L C"
+    elif (
+        gain.verdict is Verdict.FAILS
+        and check.verdict is Verdict.HOLDS
+        and gain.witness is not None
+    ):
+        why = (
+            "an unstable A - L C (proved by the gain check) rules out a stable observer: near "
+            "e = 0 the error follows e+ = (A - L C) e"
+        )
+    return (check if why is None else withdraw(check, gain, why)), certificate
 
 
 def _stability_with_region(stability: Check, region: Check | None) -> Check:
