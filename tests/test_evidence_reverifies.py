@@ -325,3 +325,66 @@ def test_the_lasso_bound_reverifies_from_json_in_exact_arithmetic():
         X = bound**2 + beta2 - lam**2 * kappa2
         assert bound**2 >= beta2 and X >= 0 and 4 * bound**2 * beta2 <= X**2
     assert Fraction(check["lower_bound"]) <= bound
+
+
+def _l1_ratio_exact(OK, OS):
+    """max ||O_S e||_1 / ||O_K e||_1 over e != 0 in the plane, exactly: both norms are linear
+    on each cone between the lines o^T e = 0 of the rows o of O_K and O_S, so the ratio's
+    maximum is on one of those lines (a direction perpendicular to a row)."""
+    best = Fraction(0)
+    for o in OK + OS:
+        if o[0] == 0 and o[1] == 0:
+            continue
+        d = (-o[1], o[0])
+        below = sum(abs(r[0] * d[0] + r[1] * d[1]) for r in OK)
+        assert below > 0  # O_K has full column rank: no direction it does not see
+        best = max(best, sum(abs(r[0] * d[0] + r[1] * d[1]) for r in OS) / below)
+    return best
+
+
+def test_the_l1_bound_reverifies_from_json_in_exact_arithmetic():
+    """From the JSON alone, on a two-state plant: every set's null-space constant (its exact
+    maximum over the plane) is at most the printed one and below 1, and the printed bound is
+    at least 2 ||w_K||_1 ||O_K^+||_(1->2) / (1 - theta_S) on every set of s sensors, the
+    pseudo-inverse's columns formed exactly."""
+    spec = spec_from_dict(
+        {
+            "name": "l1-reverify",
+            "system": {"A": [[1, 1], [0, 1]], "C": [[1, 0], [0, 1], [1, 0], [0, 1], [1, 1]]},
+            "attack": {"max_attacked": 1, "horizon": 1},
+            "noise": {"measurement": [0.01, 0.02, 0.01, 0.03, 0.01]},
+        }
+    )
+    doc = json.loads(json.dumps(analyze(spec).to_dict()))
+    check = doc["checks"]["l1_error_bound"]
+    assert check["verdict"] == "holds"
+    A, C = _q(spec.system.A), _q(spec.system.C)
+    p, tau = len(C), check["horizon"]
+    O, block = [], C
+    for _ in range(tau):
+        O.extend(block)
+        block = _mul(block, A)
+    eta = [Fraction(x) for x in check["noise"]["measurement"]]
+    bound, theta = Fraction(check["bound"]), Fraction(check["null_space_constant"])
+    assert theta < 1
+    tightest = Fraction(0)
+    for support in itertools.combinations(range(p), 1):
+        S = [t * p + i for t in range(tau) for i in support]
+        K = [r for r in range(len(O)) if r not in S]
+        OK, OS = [O[r] for r in K], [O[r] for r in S]
+        theta_S = _l1_ratio_exact(OK, OS)
+        assert theta_S <= theta
+        # ||O_K^+||_(1->2)^2: the largest squared column norm of (O_K' O_K)^-1 O_K'
+        (a, b), (c, d) = _mul(list(map(list, zip(*OK))), OK)
+        inverse = [
+            [d / (a * d - b * c), -b / (a * d - b * c)],
+            [-c / (a * d - b * c), a / (a * d - b * c)],
+        ]
+        pinv = _mul(inverse, list(map(list, zip(*OK))))
+        reach2 = max(pinv[0][j] ** 2 + pinv[1][j] ** 2 for j in range(len(K)))
+        noise = sum(eta[r % p] for r in K)  # ||w_K||_1 at most, per sample
+        # bound (1 - theta_S) >= 2 noise reach, squared (both sides nonnegative)
+        assert (bound * (1 - theta_S)) ** 2 >= 4 * noise**2 * reach2
+        tightest = max(tightest, 4 * noise**2 * reach2 / (1 - theta_S) ** 2)
+    # the printed bound is the largest of them, up to its certified error terms
+    assert bound**2 <= tightest * (1 + Fraction(1, 10**9))
