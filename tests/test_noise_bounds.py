@@ -152,8 +152,10 @@ def test_codes_of_the_bounds_that_are_not_certified():
     assert decoder_error_bound(close, 0, noise, horizon=1).code is BoundCode.NO_MARGIN
     many = decoder_error_bound(plant, 1, noise, horizon=1, max_sets=2)
     assert many.code is BoundCode.TOO_MANY_SETS and many.facts["limit"] == 2
-    huge = System(np.eye(1), np.full((3, 1), 1e200))
-    assert decoder_error_bound(huge, 1, noise).code is BoundCode.OUT_OF_RANGE
+    # rows C A^k beyond the float range in any units of the sensors (C's are taken in units
+    # where its largest entry is in [1, 2): test_the_l0_bound_takes_sensors_in_any_units)
+    huge = System(np.full((1, 1), 1e200), np.ones((3, 1)))
+    assert decoder_error_bound(huge, 1, noise, horizon=3).code is BoundCode.OUT_OF_RANGE
 
 
 @pytest.mark.parametrize("code", [c for c in BoundCode if c is not BoundCode.CERTIFIED])
@@ -654,3 +656,29 @@ def test_the_noise_searchs_gradient_is_the_lure_models_and_its_ascent_goes_furth
     check = observer_words.sparse_noise_check(design, iss_gain_check(design, cert), noise_bound)
     assert check.verdict is Verdict.HOLDS and search["largest_error"] <= check.value
     assert "projected gradient ascent" in check.summary
+
+
+@pytest.mark.parametrize("exponent", [520, 1000, -560])
+def test_the_l0_bound_takes_sensors_in_any_units(exponent):
+    """Sensors whose rows (and noise bounds) are 2^exponent times a plant's: the decoding
+    problem is the same, so the bound, its lower bound and the worst set are the same (to
+    rounding), the singular values 2^exponent times, re-checked on the exact data (Gramians
+    of rows of 1e156 or 1e301 overflow: the data are taken in units where C's largest entry is
+    in [1, 2))."""
+    rng = np.random.default_rng(0)
+    A, C = np.diag([0.5, 0.9]), rng.standard_normal((5, 2))
+    noise = MeasurementNoise.uniform(1e-3, 5)
+    plain = decoder_error_bound(System(A, C), 1, noise, horizon=2)
+    scaled = decoder_error_bound(
+        System(A, np.ldexp(C, exponent)),
+        1,
+        MeasurementNoise(np.ldexp(noise.eta, exponent), "inf"),
+        horizon=2,
+    )
+    assert plain.code is BoundCode.CERTIFIED and scaled.code is BoundCode.CERTIFIED
+    assert scaled.bound == pytest.approx(plain.bound, rel=1e-12)
+    assert scaled.lower == pytest.approx(plain.lower, rel=1e-12) and scaled.lower <= scaled.bound
+    assert scaled.worst_kept == plain.worst_kept
+    assert scaled.sigma == pytest.approx(math.ldexp(plain.sigma, exponent), rel=1e-12)
+    assert scaled.facts["sigma_rechecked_exactly"] is True
+    assert bound_rechecks(scaled)

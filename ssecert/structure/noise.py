@@ -431,6 +431,66 @@ def decoder_error_bound(
     >>> round(found.bound, 6), round(found.lower, 6), found.worst_kept
     (0.241421, 0.1, (0,))
     """
+    found = _bound_in_units(system, max_attacked, noise, horizon, max_sets)
+    if found.code is BoundCode.OUT_OF_RANGE:
+        # the data in other units: every sensor's rows and noise bounds divided by the power of
+        # two that brings C's largest entry into [1, 2) (the same decoding problem, so the
+        # same errors; its Gramians in range where the spec's would overflow or underflow)
+        units = _sensor_units(system, noise)
+        if units is not None:
+            again = _bound_in_units(units[0], max_attacked, units[1], horizon, max_sets)
+            if again.code is not BoundCode.OUT_OF_RANGE:
+                return _in_spec_units(system, again, noise, units[2])
+    return found
+
+
+def _sensor_units(
+    system: System, noise: MeasurementNoise
+) -> tuple[System, MeasurementNoise, int] | None:
+    """(the plant with C / 2^d, the noise bounds / 2^d, d), d the exponent that brings C's
+    largest entry into [1, 2); None when d = 0 or a division is not exact (subnormal)."""
+    top = float(np.max(np.abs(system.C))) if system.C.size else 0.0
+    d = math.frexp(top)[1] - 1 if top > 0 and math.isfinite(top) else 0
+    C, eta = np.ldexp(system.C, -d), np.ldexp(noise.eta, -d)
+    exact = np.array_equal(np.ldexp(C, d), system.C) and np.array_equal(np.ldexp(eta, d), noise.eta)
+    if d == 0 or not exact:
+        return None
+    return replace(system, C=C), MeasurementNoise(eta, noise.norm), d
+
+
+def _in_spec_units(
+    system: System, found: DecoderErrorBound, noise: MeasurementNoise, d: int
+) -> DecoderErrorBound:
+    """``found`` for the plant in units 2^-d (``_sensor_units``) in the spec's: the errors
+    are the same, the singular values 2^d times, the noise the spec's; re-checked there."""
+    with np.errstate(over="ignore"):
+        sigma, smallest = math.ldexp(found.sigma, d), math.ldexp(found.smallest_sigma, d)
+    back = replace(
+        found,
+        noise=noise,
+        sigma=sigma,
+        smallest_sigma=smallest,
+        facts={**found.facts, "sensor_scale": math.ldexp(1.0, d)},
+    )
+    if found.code is not BoundCode.CERTIFIED:
+        return back
+    if not (math.isfinite(sigma) and math.isfinite(smallest)):
+        return replace(back, code=BoundCode.OUT_OF_RANGE, bound=math.inf)
+    exact = sigma_rechecks(system, back)
+    back = replace(back, facts={**back.facts, "sigma_rechecked_exactly": exact})
+    if not bound_rechecks(back) or exact is False:
+        return replace(back, code=BoundCode.RECHECK_FAILED)
+    return back
+
+
+def _bound_in_units(
+    system: System,
+    max_attacked: int,
+    noise: MeasurementNoise,
+    horizon: int | None,
+    max_sets: int,
+) -> DecoderErrorBound:
+    """``decoder_error_bound`` on the data in the units given."""
     s, tau = window_inputs(system, max_attacked, noise, horizon)
     p = system.p
     # the bound is linear in the noise: computed for the bounds over a power of two c >= the

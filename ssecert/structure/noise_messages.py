@@ -32,7 +32,10 @@ METHOD = "l0 decoder's optimality on every set of p - 2s sensors (verified sigma
 
 
 _TOO_FEW = "with {s} attacked sensors no sensor is left unattacked (s >= p)"
-_OUT_OF_RANGE = "the observability matrix or the noise bounds leave the floating-point range"
+_OUT_OF_RANGE = (
+    "the observability matrix or the noise bounds leave the floating-point range (in any units "
+    "of the sensors)"
+)
 _RECHECK = "the bound did not survive its re-check in rational arithmetic (please report it)"
 
 
