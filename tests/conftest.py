@@ -74,3 +74,21 @@ def pytest_configure(config):
             f"HYPOTHESIS_PROFILE must be one of {', '.join(_ENVIRONMENT_PROFILES)}; got {name!r}"
         )
     config.option.ssecert_profile = _ENVIRONMENT_PROFILES[name]
+
+
+@pytest.fixture
+def sparse_problems(monkeypatch):
+    """The problems of each ``sparse_observability`` call of a test as typed values, read where
+    the check's evidence writes their words: per call, one list of ``Problem`` per method
+    tried, in the order of ``evidence["methods_tried"]``."""
+    from ssecert.structure import sparse
+
+    calls = []
+    evidence = sparse._evidence
+
+    def recording(s, outcome, tried, *args, **kwargs):
+        calls.append([list(o.problems) for o in tried])
+        return evidence(s, outcome, tried, *args, **kwargs)
+
+    monkeypatch.setattr(sparse, "_evidence", recording)
+    return calls

@@ -8,8 +8,9 @@ import pytest
 from ssecert import System
 from ssecert.structure import enumeration, sparse
 from ssecert.structure.cost import calibrate, level_seconds, verdict_cost, workers_for
-from ssecert.structure.outcomes import IrrepresentableCode
+from ssecert.structure.outcomes import IrrepresentableCode, ProblemCode, SparseCode
 from ssecert.structure.sparse import sparse_observability
+from ssecert.structure.sparse_messages import problem_texts
 
 
 def _generic(n: int, p: int, seed: int = 0) -> System:
@@ -66,18 +67,21 @@ def test_a_small_enumeration_is_not_calibrated():
     assert "cost_estimate" not in check.evidence
 
 
-def test_a_refusal_over_the_set_budget_quotes_the_time_it_would_take():
+def test_a_refusal_over_the_set_budget_quotes_the_time_it_would_take(sparse_problems):
     check = sparse_observability(_generic(4, 40), 2, method="enumeration", max_sets=1000)
-    assert check.verdict.value == "inconclusive"
-    problems = " ".join(check.evidence["methods_tried"][0]["problems"])
-    assert "enumeration budget of 1,000 sets reached" in problems
-    assert "would take about" in problems and "--max-sets raises the budget" in problems
+    assert check.verdict.value == "inconclusive" and check.code is SparseCode.UNDECIDED
+    [[problems]] = sparse_problems
+    (refusal,) = [p for p in problems if p.code is ProblemCode.SET_BUDGET]
+    # the seconds the rest of the verdict's sets would take here, quoted in its words
+    # (tests/test_problem_messages.py)
+    assert refusal.facts["max_sets"] == 1000 and refusal.facts["seconds"] > 0
+    assert check.evidence["methods_tried"][0]["problems"] == problem_texts(problems)
 
 
 @pytest.mark.parametrize("allowance", [(0.0, 0.0), None])
 @pytest.mark.parametrize("time_budget", [0.0, None])
 def test_an_eigenspace_search_past_its_allowance_gives_way_to_the_enumeration(
-    time_budget, allowance, monkeypatch
+    time_budget, allowance, monkeypatch, sparse_problems
 ):
     # A = I: one eigenspace of dimension 3, whose hyperplane search auto tries first; its
     # deadline is a multiple of its predicted time (never the refinement's time budget,
@@ -91,7 +95,10 @@ def test_an_eigenspace_search_past_its_allowance_gives_way_to_the_enumeration(
     tried = check.evidence["methods_tried"]
     assert tried[0]["method"] == "eigenspace"
     if time_budget == 0.0 and allowance is not None:
-        assert "the time budget ended after 0 of 66 hyperplanes" in " ".join(tried[0]["problems"])
+        # the search's time ran out before its first hyperplane
+        assert tried[0]["status"] == "budget" and tried[0]["sets_checked"] == 0
+        [problem] = sparse_problems[0][0]
+        assert problem.code is ProblemCode.EIGENSPACE
         assert tried[1]["method"] == "enumeration"
     else:
         assert tried[0]["status"] == "exact"

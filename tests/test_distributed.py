@@ -14,10 +14,13 @@ from ssecert.cli import main
 from ssecert.parallel import rank_ranges
 from ssecert.report.json import certificate_json
 from ssecert.spec import spec_from_dict
-from ssecert.structure import _irrepresentable_scan, enumeration
+from ssecert.structure import _irrepresentable_scan, enumeration, sparse
 from ssecert.structure._combinatorics import colex_blocks, colex_rank
+from ssecert.structure.enumeration import placement_note
 from ssecert.structure.irrepresentable import irrepresentable
+from ssecert.structure.outcomes import ProblemCode, SparseCode
 from ssecert.structure.sparse import sparse_observability
+from ssecert.structure.sparse_messages import placement_text
 
 pytest.importorskip("dask.distributed")
 
@@ -117,19 +120,32 @@ def test_dask_gives_the_in_process_answer(design, client, small_chunks):
 
 
 @pytest.mark.slow
-def test_the_command_line_runs_the_enumeration_on_workers(tmp_path, capsys, small_chunks):
+def test_the_command_line_runs_the_enumeration_on_workers(
+    tmp_path, capsys, small_chunks, monkeypatch
+):
     path = tmp_path / "planted.json"
     path.write_text(json.dumps(_two_planted_breaking_sets()))
     assert main(["analyze", str(path), "--method", "enumeration", "--json", "-"]) == 1
     local = json.loads(capsys.readouterr().out)
+    placed = []
+
+    def placement(outcome):
+        placed.append((dict(outcome.on_workers), list(outcome.in_process)))
+        return placement_note(outcome)
+
+    monkeypatch.setattr(sparse, "placement_note", placement)
     code = main(["analyze", str(path), "--method", "enumeration", "--workers", "2", "--json", "-"])
     assert code == 1
     spread = json.loads(capsys.readouterr().out)
-    # what ran where is said in the notes (small_chunks: every level of 2 sensors or more is
-    # split, the levels of 0 and 1 sensor are one set or fewer sets than ranges)
-    (note,) = [n for n in spread["meta"]["notes"] if n.startswith("sparse_observability: Dask")]
-    assert "Dask workers: the sets of 1 and 2 sensors in " in note
-    assert not any("Dask" in n for n in local["meta"]["notes"])
+    # what ran where is said in the notes (small_chunks: the levels of 1 and 2 sensors are
+    # split alike)
+    [(on_workers, in_process)] = placed
+    assert list(on_workers)[:2] == [1, 2] and on_workers[1] == on_workers[2] > 1
+    words = placement_text(
+        on_workers, in_process, enumeration.MIN_WORKER_SETS, enumeration._CHUNK_OVER_LEVEL
+    )
+    added = [n for n in spread["meta"]["notes"] if n not in local["meta"]["notes"]]
+    assert added == [f"sparse_observability: {words}"]
     local.pop("meta"), spread.pop("meta")
     assert spread == local
 
@@ -167,32 +183,20 @@ def test_rank_ranges_are_whole_rounds_of_the_workers(total, smallest, threads, p
     assert rank_ranges(total, None, smallest) == [(0, total)]
 
 
-def test_placement_note_names_the_levels_in_process_and_on_the_workers():
+def test_placement_note_says_what_ran_where_only_when_a_level_ran():
     outcome = enumeration._Outcome("enumeration", "exact", on_workers={6: 6})
     outcome.in_process.extend([0, 1, 2, 3, 4, 5])
-    note = enumeration.placement_note(outcome)
-    assert note is not None
-    assert note.startswith(
-        "Dask workers: the sets of 6 sensors in 6 ranges; in-process: the sets of 0 to 5 sensors;"
+    # its words: tests/test_problem_messages.py
+    assert enumeration.placement_note(outcome) == placement_text(
+        {6: 6}, [0, 1, 2, 3, 4, 5], enumeration.MIN_WORKER_SETS, enumeration._CHUNK_OVER_LEVEL
     )
-    assert "ranges of at least 500,000 sets and 20 times the partial sums" in note
+    assert enumeration.MIN_WORKER_SETS == 500_000 and enumeration._CHUNK_OVER_LEVEL == 20
     assert enumeration.placement_note(enumeration._Outcome("enumeration", "exact")) is None
-    # levels split alike are named together; a run with no level on the workers says so
-    many = enumeration._Outcome("enumeration", "exact", on_workers={2: 8, 3: 8, 4: 8, 5: 6})
-    many.in_process.extend([0, 1])
-    note = enumeration.placement_note(many)
-    assert note is not None and note.startswith(
-        "Dask workers: the sets of 2 to 4 sensors in 8 ranges each; the sets of 5 sensors in "
-        "6 ranges; in-process: the sets of 0 and 1 sensors;"
-    )
-    small = enumeration._Outcome("enumeration", "exact")
-    small.in_process.extend([0, 1, 2])
-    note = enumeration.placement_note(small)
-    assert note is not None
-    assert note.startswith("every level ran in-process (the sets of 0 to 2 sensors), none on")
 
 
-def test_a_range_that_fails_twice_ends_the_enumeration_with_the_reason(monkeypatch, small_chunks):
+def test_a_range_that_fails_twice_ends_the_enumeration_with_the_reason(
+    monkeypatch, small_chunks, sparse_problems
+):
     scan = enumeration._scan_range
     calls = {"n": 0}
 
@@ -211,9 +215,11 @@ def test_a_range_that_fails_twice_ends_the_enumeration_with_the_reason(monkeypat
     assert check.verdict.value == "inconclusive"
     assert check.fields["max_removable"] == 1
     assert check.fields["max_removable_is_lower_bound"] is True
-    assert "failed twice on the sets of 2 sensors at positions 0 to" in check.summary + str(
-        check.evidence
-    )
+    assert check.code is SparseCode.UNDECIDED
+    [[problems]] = sparse_problems
+    (failed,) = [p for p in problems if p.code is ProblemCode.WORKERS_FAILED]
+    assert failed.facts["removed"] == 2 and failed.facts["first"] == 0
+    assert failed.facts["cause"] == repr(RuntimeError("worker lost"))
     assert check.evidence["failed_chunk"]["lexicographic_positions"][0] == 0
     assert check.evidence["failed_chunk"]["removed_sensors"] == 2
 

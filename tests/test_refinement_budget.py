@@ -21,6 +21,7 @@ from ssecert import System
 from ssecert.numerics.linalg import balanced_units, sensor_subspaces
 from ssecert.structure import _level_scan
 from ssecert.structure.enumeration import _Levels, _Outcome, _scan_level
+from ssecert.structure.outcomes import ProblemCode, SparseCode
 from ssecert.structure.sparse import sparse_observability
 from ssecert.tolerances import Tolerances
 
@@ -153,7 +154,7 @@ def test_a_deadline_that_has_passed_decides_nothing_and_one_in_the_future_everyt
     assert not later.cut_short and later.checked == math.comb(14, args[4])
 
 
-def test_the_budget_stops_a_level_that_runs_past_it(monkeypatch):
+def test_the_budget_stops_a_level_that_runs_past_it(monkeypatch, sparse_problems):
     # every level starts, whatever its prediction: the deadline inside a level must end it;
     # the exact refinement of this plant takes minutes (levels of millions of sets)
     monkeypatch.setattr(_Levels, "past_time_budget", lambda self, k, time_budget: False)
@@ -168,9 +169,16 @@ def test_the_budget_stops_a_level_that_runs_past_it(monkeypatch):
     assert 0 <= stopped["level_sets_checked"] < stopped["level_sets"]
     removed = stopped["level_removed_sensors"]
     assert check.fields["max_removable"] == removed - 1
-    assert f"after {stopped['level_sets_checked']:,} of the {stopped['level_sets']:,} sets" in (
-        check.summary
-    )
+    # the reason says where in the level it stopped (its words: tests/test_problem_messages.py)
+    assert check.code is SparseCode.LOWER_BOUND
+    [[problems]] = sparse_problems
+    (within,) = [p for p in problems if p.code is ProblemCode.TIME_WITHIN_LEVEL]
+    assert within.facts == {
+        "budget": budget,
+        "checked": stopped["level_sets_checked"],
+        "sets": stopped["level_sets"],
+        "removed": removed,
+    }
     # the whole refinement would take far longer than this generous multiple of the budget
     assert timing["refinement_seconds"] < 20 * budget + 5.0
     verdict_only = sparse_observability(system, 1, method="enumeration", time_budget=0.0)

@@ -1,6 +1,7 @@
 """s-sparse observability: both methods against each other and against planted truth."""
 
 import itertools
+import math
 
 import numpy as np
 import pytest
@@ -12,7 +13,7 @@ from ssecert import System, analyze, scan_removals, sparse_observability
 from ssecert.examples import load_example
 from ssecert.structure import sparse_messages
 from ssecert.structure.observability import unobservable_residual
-from ssecert.structure.outcomes import RecheckCode, RecheckProblem, SparseCode
+from ssecert.structure.outcomes import ProblemCode, RecheckCode, RecheckProblem, SparseCode
 
 KINDS = ("distinct", "jordan", "identity", "mixed")
 
@@ -84,7 +85,7 @@ def _consistent(check, pl, s, context):
 
 
 @pytest.mark.parametrize("seed", range(300))
-def test_methods_agree_with_planted_truth(seed):
+def test_methods_agree_with_planted_truth(seed, sparse_problems):
     """Hundreds of plants with a planted smallest breaking set of known size.
 
     Integer similarities keep the data exact, and both methods must then decide and
@@ -105,7 +106,18 @@ def test_methods_agree_with_planted_truth(seed):
             assert decided and not check.fields["max_removable_is_lower_bound"], context
             assert not check.fields.get("max_removable_is_upper_bound"), context
         elif not decided:
-            assert "precision" in check.summary or "borderline" in check.summary, context
+            problems = {p.code for tried in sparse_problems[-1] for p in tried}
+            assert check.code is SparseCode.UNDECIDED, context
+            assert problems & WITHIN_PRECISION_OR_BORDERLINE, (context, problems)
+
+
+# the problems of a plant within the precision of the rank decisions, or borderline there
+WITHIN_PRECISION_OR_BORDERLINE = {
+    ProblemCode.WITHIN_PRECISION,
+    ProblemCode.NOT_EXACT,
+    ProblemCode.BORDERLINE_SUBSPACE,
+    ProblemCode.BORDERLINE_SETS,
+}
 
 
 def _never_wrong(pl, seed, method):
@@ -212,8 +224,12 @@ def test_budget_gives_lower_bound_or_inconclusive():
     assert limited.fields["max_removable_is_lower_bound"] is True
     assert 2 <= limited.fields["max_removable"] <= truth
     starved = sparse_observability(system, 2, method="enumeration", max_sets=10)
-    assert starved.verdict.value == "inconclusive"
-    assert "--max-sets" in starved.summary
+    assert starved.verdict.value == "inconclusive" and starved.code is SparseCode.UNDECIDED
+    # the summary names the sets still needed (and --max-sets: tests/test_problem_messages.py)
+    needed = starved.fields["sets_needed"]
+    assert needed == sum(math.comb(8, k) for k in (2, 3, 4))  # the levels up to 2s not run
+    reasons = [r for tried in starved.evidence["methods_tried"] for r in tried["problems"]]
+    assert starved.summary == sparse_messages.undecided_summary(reasons, needed)
 
 
 @pytest.mark.slow
@@ -279,7 +295,7 @@ def test_bad_method_and_budget():
         sparse_observability(system, 0, max_sets=0)
 
 
-def test_time_budget_settles_the_verdict_first_and_bounds_the_refinement():
+def test_time_budget_settles_the_verdict_first_and_bounds_the_refinement(sparse_problems):
     # a static plant with 12 generic sensors: max_removable = 12 - 3 = 9 exactly
     rng = np.random.default_rng(0)
     system = System(np.eye(3), rng.standard_normal((12, 3)))
@@ -289,8 +305,16 @@ def test_time_budget_settles_the_verdict_first_and_bounds_the_refinement():
     assert quick.verdict.value == "holds"  # every set of up to 2s = 2 sensors was checked
     assert quick.fields["max_removable_is_lower_bound"]
     assert quick.fields["max_removable"] == 2
-    assert "time budget" in quick.summary and "--exact" in quick.summary
+    assert quick.code is SparseCode.LOWER_BOUND
+    # the refinement stopped at the time budget of 0 s (its words point to --exact:
+    # tests/test_problem_messages.py)
+    [[problems]] = sparse_problems[1:]
+    stopped = [p for p in problems if p.code in TIME_BUDGET]
+    assert stopped and all(p.facts["budget"] == 0.0 for p in stopped)
     assert quick.evidence["stopped_by_time_budget"]["time_budget_seconds"] == 0.0
+
+
+TIME_BUDGET = {ProblemCode.TIME_BEFORE_LEVEL, ProblemCode.TIME_WITHIN_LEVEL}
 
 
 def test_time_budget_stops_auto_from_trying_another_method(monkeypatch):

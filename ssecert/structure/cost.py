@@ -219,16 +219,16 @@ def verdict_cost(
 
 def cost_of_the_rest(
     q: int, n: int, k: int, target: int, client: Any | None, time_budget: float | None
-) -> str:
+) -> tuple[float, int | None] | None:
     """What the levels k to ``target`` (past the set budget, up to the verdict's) would cost
-    here, as the end of the refusal's sentence; empty past the verdict's level."""
+    here: the seconds on the client's threads, to three digits, and the Dask workers that
+    would bring them under ``time_budget`` (None when the client's threads suffice or without
+    a positive budget); None past the verdict's level.  The refusal's words are
+    ``sparse_messages.problem_text``'s."""
     if k > target:
-        return ""
+        return None
     seconds = _levels_seconds(q, n, k, target)
     threads = worker_threads(client)
     about = rounded_seconds(_levels_seconds(q, n, k, target, threads))
-    text = f" (the rest of the verdict's sets would take about {about:g} s here"
     workers = workers_for(seconds, time_budget)
-    if workers is not None and workers > threads:
-        text += f"; about {workers:,} Dask workers would take them under {time_budget:g} s"
-    return text + "; --max-sets raises the budget)"
+    return about, workers if workers is not None and workers > threads else None

@@ -56,6 +56,7 @@ from ._level_scan import (
 from .cost import cost_of_the_rest, rounded_seconds, verdict_cost
 from .observability import pbh_margins
 from .outcomes import Problem, ProblemCode
+from .sparse_messages import placement_text
 
 __all__: list[str] = []
 
@@ -351,8 +352,16 @@ class _Levels:
         out.max_removable = self.removed(k) - 1
         removed = self.removed(k)
         rest = cost_of_the_rest(q, self.system.n, k, self.target, self.client, time_budget)
+        seconds, workers = rest if rest is not None else (None, None)
         out.problems.append(
-            Problem.of(ProblemCode.SET_BUDGET, max_sets=max_sets, removed=removed, rest=rest)
+            Problem.of(
+                ProblemCode.SET_BUDGET,
+                max_sets=max_sets,
+                removed=removed,
+                seconds=seconds,
+                workers=workers,
+                time_budget=time_budget,
+            )
         )
         return True
 
@@ -770,48 +779,13 @@ def _joined(chunks: list[tuple[int, int]], count: int) -> list[tuple[int, int]]:
 def placement_note(outcome: _Outcome) -> str | None:
     """What ran where, for an enumeration given a Dask client (None without one): a level is
     split only into ranges of at least ``MIN_WORKER_SETS`` sets and of ``_CHUNK_OVER_LEVEL``
-    times the partial sums each range rebuilds; a level too small for two runs in-process."""
+    times the partial sums each range rebuilds; a level too small for two runs in-process
+    (words: ``sparse_messages.placement_text``)."""
     if not outcome.on_workers and not outcome.in_process:
         return None
-    groups: list[tuple[list[int], int]] = []  # consecutive sizes split alike
-    for size, ranges in outcome.on_workers.items():
-        if groups and groups[-1][1] == ranges and groups[-1][0][-1] == size - 1:
-            groups[-1][0].append(size)
-        else:
-            groups.append(([size], ranges))
-    parts = [
-        f"the sets of {_sizes(sizes)} {_sensors(sizes)} in {ranges} ranges"
-        + (" each" if len(sizes) > 1 else "")
-        for sizes, ranges in groups
-    ]
-    if parts:
-        text = "Dask workers: " + "; ".join(parts)
-        if outcome.in_process:
-            text += f"; in-process: the sets of {_sizes(outcome.in_process)} "
-            text += _sensors(outcome.in_process)
-    else:
-        text = f"every level ran in-process (the sets of {_sizes(outcome.in_process)} "
-        text += f"{_sensors(outcome.in_process)}), none on the Dask workers"
-    if outcome.in_process:
-        text += (
-            f"; a level is split only into ranges of at least {MIN_WORKER_SETS:,} sets and "
-            f"{_CHUNK_OVER_LEVEL} times the partial sums each range rebuilds: a smaller one "
-            "would take longer on the workers"
-        )
-    return text
-
-
-def _sensors(sizes: list[int]) -> str:
-    return "sensor" if sizes == [1] else "sensors"
-
-
-def _sizes(sizes: list[int]) -> str:
-    """'0 to 5' for consecutive sizes, else '1, 3 and 4'."""
-    if len(sizes) > 2 and sizes == list(range(sizes[0], sizes[-1] + 1)):
-        return f"{sizes[0]} to {sizes[-1]}"
-    if len(sizes) == 1:
-        return str(sizes[0])
-    return ", ".join(map(str, sizes[:-1])) + f" and {sizes[-1]}"
+    return placement_text(
+        outcome.on_workers, outcome.in_process, MIN_WORKER_SETS, _CHUNK_OVER_LEVEL
+    )
 
 
 def _from(progress: Progress | None, done: int, total: int) -> Progress | None:

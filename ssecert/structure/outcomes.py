@@ -39,8 +39,10 @@ class ProblemCode(enum.Enum):
     #: the time budget stopped the refinement before a level (``budget``, ``sets``,
     #: ``removed``, ``seconds`` more predicted)
     TIME_BEFORE_LEVEL = "time budget before a level"
-    #: the enumeration budget stopped it before a level (``max_sets``, ``removed``, ``rest``:
-    #: what the rest would cost, in words)
+    #: the enumeration budget stopped it before a level (``max_sets``, ``removed``;
+    #: ``seconds``: what the rest of the verdict's sets would take here, None past the
+    #: verdict's level; ``workers``: the Dask workers that would take them under
+    #: ``time_budget``, or None)
     SET_BUDGET = "set budget"
     #: the Dask workers failed twice on a range (``removed``, ``first``, ``last``, ``cause``)
     WORKERS_FAILED = "workers failed"

@@ -69,7 +69,7 @@ from .enumeration import (
 from .observability import observability
 from .outcomes import RecheckProblem, SparseCode
 from .removals import RemovalScan, scan_removals
-from .sparse_messages import problem_texts, recheck_text
+from .sparse_messages import problem_texts, recheck_text, undecided_summary
 
 __all__ = [
     "sparse_observability",
@@ -583,17 +583,11 @@ class _Decision:
             if held is not None:
                 return held
         needed = next((o.needed for o in self.tried if o.needed is not None), None)
-        hint = ""
-        if needed is not None:
-            hint = (
-                f" About {needed:,} more sensor sets are needed; raise the budget with "
-                f"--max-sets (max_sets=...)."
-            )
         outcome = self.outcome
         lower = outcome.max_removable if outcome.status is OutcomeStatus.LOWER_BOUND else None
         return self.make(
             SparseCode.UNDECIDED,
-            f"Sparse observability could not be decided: {'; '.join(reasons)}.{hint}",
+            undecided_summary(reasons, needed),
             lower,
             {**self.fields(lower, lower is not None, None), "sets_needed": needed},
         )

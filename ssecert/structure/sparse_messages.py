@@ -2,11 +2,17 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping, Sequence
 
 from .outcomes import Problem, ProblemCode, RecheckCode, RecheckProblem
 
-__all__ = ["problem_text", "problem_texts", "recheck_text"]
+__all__ = [
+    "placement_text",
+    "problem_text",
+    "problem_texts",
+    "recheck_text",
+    "undecided_summary",
+]
 
 
 def problem_text(problem: Problem) -> str:
@@ -36,7 +42,8 @@ def problem_text(problem: Problem) -> str:
         removed = f["removed"]
         return (
             f"enumeration budget of {f['max_sets']:,} sets reached before sets of "
-            f"{removed} sensor{'s' if removed != 1 else ''}" + str(f["rest"])
+            f"{removed} sensor{'s' if removed != 1 else ''}"
+            + _rest_text(f["seconds"], f["workers"], f["time_budget"])
         )
     if code is ProblemCode.WORKERS_FAILED:
         return (
@@ -80,6 +87,17 @@ def problem_text(problem: Problem) -> str:
     raise ValueError(f"no words for {code}")  # pragma: no cover - every code has words
 
 
+def _rest_text(seconds: float | None, workers: int | None, time_budget: float | None) -> str:
+    """What the rest of the verdict's sets would cost, as the end of a refusal over the set
+    budget (empty past the verdict's level)."""
+    if seconds is None:
+        return ""
+    text = f" (the rest of the verdict's sets would take about {seconds:g} s here"
+    if workers is not None:
+        text += f"; about {workers:,} Dask workers would take them under {time_budget:g} s"
+    return text + "; --max-sets raises the budget)"
+
+
 def problem_texts(problems: Iterable[Problem]) -> list[str]:
     """The sentences of several problems, in order."""
     return [problem_text(p) for p in problems]
@@ -105,3 +123,65 @@ def recheck_text(problem: RecheckProblem) -> str:
             f"{'rank deficient' if f['deficient'] else 'borderline'}"
         )
     raise ValueError(f"no words for {code}")  # pragma: no cover - every code has words
+
+
+def undecided_summary(reasons: Sequence[str], needed: int | None) -> str:
+    """The summary of a sparse-observability check no method decided: the methods' problems
+    (``reasons``) and, where a budget stopped the enumeration, the sensor sets still
+    ``needed``."""
+    hint = ""
+    if needed is not None:
+        hint = (
+            f" About {needed:,} more sensor sets are needed; raise the budget with "
+            f"--max-sets (max_sets=...)."
+        )
+    return f"Sparse observability could not be decided: {'; '.join(reasons)}.{hint}"
+
+
+def placement_text(
+    on_workers: Mapping[int, int], in_process: Sequence[int], min_sets: int, chunk_over_level: int
+) -> str:
+    """What ran where in an enumeration given a Dask client: the levels (by the number of
+    sensors removed) split into ``on_workers[size]`` ranges, those run ``in_process``, and
+    why a level is not split (ranges of at least ``min_sets`` sets and ``chunk_over_level``
+    times the partial sums each range rebuilds)."""
+    groups: list[tuple[list[int], int]] = []  # consecutive sizes split alike
+    for size, ranges in on_workers.items():
+        if groups and groups[-1][1] == ranges and groups[-1][0][-1] == size - 1:
+            groups[-1][0].append(size)
+        else:
+            groups.append(([size], ranges))
+    parts = [
+        f"the sets of {_sizes(sizes)} {_sensors(sizes)} in {ranges} ranges"
+        + (" each" if len(sizes) > 1 else "")
+        for sizes, ranges in groups
+    ]
+    local = list(in_process)
+    if parts:
+        text = "Dask workers: " + "; ".join(parts)
+        if local:
+            text += f"; in-process: the sets of {_sizes(local)} "
+            text += _sensors(local)
+    else:
+        text = f"every level ran in-process (the sets of {_sizes(local)} "
+        text += f"{_sensors(local)}), none on the Dask workers"
+    if local:
+        text += (
+            f"; a level is split only into ranges of at least {min_sets:,} sets and "
+            f"{chunk_over_level} times the partial sums each range rebuilds: a smaller one "
+            "would take longer on the workers"
+        )
+    return text
+
+
+def _sensors(sizes: list[int]) -> str:
+    return "sensor" if sizes == [1] else "sensors"
+
+
+def _sizes(sizes: list[int]) -> str:
+    """'0 to 5' for consecutive sizes, else '1, 3 and 4'."""
+    if len(sizes) > 2 and sizes == list(range(sizes[0], sizes[-1] + 1)):
+        return f"{sizes[0]} to {sizes[-1]}"
+    if len(sizes) == 1:
+        return str(sizes[0])
+    return ", ".join(map(str, sizes[:-1])) + f" and {sizes[-1]}"
