@@ -65,7 +65,7 @@ from ..observers.base import DESIGN_SHRINKS, DESIGN_STEPS
 from ..results import Verdict
 from ..system import System
 from .outcomes import DecayChoice, DecayCode
-from .search_messages import decay_text
+from .search_messages import comparison_summary, decay_text, no_design_text
 
 if TYPE_CHECKING:
     from ..noise import MeasurementNoise
@@ -964,14 +964,7 @@ def _certified_radius(design: Any, stability: Any) -> float:
 
 def _no_design_reason(kind: str, candidates: list[dict[str, Any]], system: System) -> str:
     why = sorted({str(rec.get("rejected", "not certified")) for rec in candidates})
-    reason = f"no {kind} design of the {len(candidates)} tried was certified: {'; '.join(why)}"
-    modes = _undetectable_modes(system)
-    if modes:
-        reason += (
-            f"; the plant has an unobservable mode that is not stable (eigenvalue "
-            f"{', '.join(f'{m:.4g}' for m in modes)}): no observer's error can converge"
-        )
-    return reason
+    return no_design_text(kind, len(candidates), why, _undetectable_modes(system))
 
 
 def _undetectable_modes(system: System) -> list[complex]:
@@ -1157,33 +1150,8 @@ def compare_designs(own: Any | None, designed: Any) -> dict[str, Any]:
         rows.append(row)
     compared = [r for r in rows if r.get("comparison") in ("better", "no worse", "worse")]
     apart = [r["scenario"] for r in rows if "comparison" in r and r not in compared]
-    if own is None:
-        summary = "The spec has no observer of its own: the synthesised design alone is shown."
-    elif not rows:
-        summary = "The spec has no scenarios: the designs were not simulated."
-    elif not compared:
-        summary = "No scenario was simulated to a finite error for both designs."
-    elif worse:
-        summary = (
-            f"The synthesised design's mean error ||x_hat - x|| over the horizon is worse than "
-            f"the spec's own design's in {len(worse)} of {len(compared)} scenarios compared "
-            f"({', '.join(worse)}); no worse in the others (same seeds: the same plant "
-            "trajectories and attacks)."
-        )
-    else:
-        summary = (
-            f"The synthesised design's mean error ||x_hat - x|| over the horizon is no worse "
-            f"than the spec's own design's in every one of the {len(compared)} scenarios compared (same "
-            "seeds: the same plant trajectories and attacks)."
-        )
-    if own is not None and apart:
-        summary += (
-            f" Not compared ({', '.join(apart)}): a scenario skipped, or a simulation that "
-            "overflowed, for at least one of the designs."
-        )
-    noise_words = _noise_comparison(designs)
-    if noise_words:
-        summary += noise_words
+    noise = _noise_comparison(designs)
+    summary = comparison_summary(own is not None, len(rows), len(compared), worse, apart, noise)
     return {
         "designs": designs,
         "scenarios": rows,
@@ -1194,18 +1162,15 @@ def compare_designs(own: Any | None, designed: Any) -> dict[str, Any]:
     }
 
 
-def _noise_comparison(designs: list[dict[str, Any]]) -> str:
-    """A sentence when the spec's own design has the smaller certified ultimate error under
-    the noise ('' otherwise)."""
+def _noise_comparison(designs: list[dict[str, Any]]) -> tuple[float, float] | None:
+    """The certified ultimate errors under the noise (the spec's own design's, the synthesised
+    one's) when the spec's own is the smaller, else None."""
     rows = {d["design"]: d for d in designs}
     ours = rows.get("synthesised", {}).get("observer_noise_bound_value")
     theirs = rows.get("spec", {}).get("observer_noise_bound_value")
     if ours is None or theirs is None or not (math.isfinite(theirs) and theirs < ours):
-        return ""
-    return (
-        f" The spec's own design has the smaller certified ultimate error under the noise "
-        f"({theirs:.4g} against {ours:.4g})."
-    )
+        return None
+    return theirs, ours
 
 
 def _design_row(label: str, result: Any) -> dict[str, Any]:

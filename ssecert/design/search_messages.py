@@ -1,4 +1,5 @@
-"""The words of ``ssecert design``'s choices: why a decay was imposed, from its rule and numbers.
+"""The words of ``ssecert design``'s choices: why a decay was imposed, from its rule and numbers,
+why no design was certified, and how the synthesised design compares with the spec's own.
 
 ``ssecert.design.search`` chooses the decay on numbers (``DecayChoice``: a ``DecayCode`` and the
 front's figures); this module alone writes the sentence, so that rewording it changes no choice.
@@ -6,9 +7,11 @@ front's figures); this module alone writes the sentence, so that rewording it ch
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 from .outcomes import DecayChoice, DecayCode
 
-__all__ = ["decay_text"]
+__all__ = ["comparison_summary", "decay_text", "no_design_text"]
 
 _NO_POINTS = "its solves failed, did not verify, or ran past its share of the time budget"
 
@@ -85,3 +88,82 @@ def decay_text(choice: DecayChoice) -> str:
         f"bound under noise ({bound:.3g} for the grid's middle design at that "
         f"decay) of {among} (error contraction {contraction:.4g} per step)"
     )
+
+
+def no_design_text(
+    kind: str, tried: int, rejections: Sequence[str], modes: Sequence[complex | float]
+) -> str:
+    """Why no design of ``kind`` was certified: the ``tried`` candidates' distinct
+    ``rejections`` and the plant's unobservable modes that are not stable (``modes``).
+
+    Examples
+    --------
+    >>> no_design_text("dsso", 4, ["observer_stability inconclusive"], [])
+    'no dsso design of the 4 tried was certified: observer_stability inconclusive'
+    """
+    reason = f"no {kind} design of the {tried} tried was certified: {'; '.join(rejections)}"
+    if modes:
+        reason += (
+            f"; the plant has an unobservable mode that is not stable (eigenvalue "
+            f"{', '.join(f'{m:.4g}' for m in modes)}): no observer's error can converge"
+        )
+    return reason
+
+
+def comparison_summary(
+    own: bool,
+    scenarios: int,
+    compared: int,
+    worse: Sequence[str],
+    apart: Sequence[str],
+    noise: tuple[float, float] | None,
+) -> str:
+    """How the synthesised design's simulated error compares with the spec's own design's.
+
+    Parameters
+    ----------
+    own : bool
+        Whether the spec has an observer of its own.
+    scenarios : int
+        The scenarios the synthesised design ran.
+    compared : int
+        Those both designs simulated to a finite error.
+    worse : sequence of str
+        The compared scenarios where the synthesised design's error is worse.
+    apart : sequence of str
+        The scenarios not compared (skipped, or a simulation that overflowed).
+    noise : tuple of float or None
+        The certified ultimate errors under the noise (the spec's own design's, the
+        synthesised one's) when the spec's own is the smaller, else None.
+    """
+    if not own:
+        summary = "The spec has no observer of its own: the synthesised design alone is shown."
+    elif not scenarios:
+        summary = "The spec has no scenarios: the designs were not simulated."
+    elif not compared:
+        summary = "No scenario was simulated to a finite error for both designs."
+    elif worse:
+        summary = (
+            f"The synthesised design's mean error ||x_hat - x|| over the horizon is worse than "
+            f"the spec's own design's in {len(worse)} of {compared} scenarios compared "
+            f"({', '.join(worse)}); no worse in the others (same seeds: the same plant "
+            "trajectories and attacks)."
+        )
+    else:
+        summary = (
+            f"The synthesised design's mean error ||x_hat - x|| over the horizon is no worse "
+            f"than the spec's own design's in every one of the {compared} scenarios compared "
+            "(same seeds: the same plant trajectories and attacks)."
+        )
+    if own and apart:
+        summary += (
+            f" Not compared ({', '.join(apart)}): a scenario skipped, or a simulation that "
+            "overflowed, for at least one of the designs."
+        )
+    if noise is not None:
+        theirs, ours = noise
+        summary += (
+            f" The spec's own design has the smaller certified ultimate error under the noise "
+            f"({theirs:.4g} against {ours:.4g})."
+        )
+    return summary
