@@ -176,11 +176,12 @@ class Check:
         exact distance).  Empty: the float, rounded.
     code : Enum or None, default None
         The reason code that says why the check has its verdict, where its analysis has one
-        (the irrepresentable check's ``IrrepresentableCode``, sparse observability's
-        ``SparseCode``, the region of attraction's ``RegionCode``, the ``LMICause`` of an
-        observer_stability from a circle certificate, ``Withdrawn`` for a verdict that
-        contradicted a check decided before it): for callers and tests that read the
-        decision instead of the summary's words; not written to JSON.
+        (the irrepresentable check's ``IrrepresentableCode``, observability's
+        ``ObservabilityCode``, sparse observability's ``SparseCode``, the region of
+        attraction's ``RegionCode``, the ``LMICause`` of an observer_stability from a circle
+        certificate, ``Withdrawn`` for a verdict that contradicted a check decided before
+        it): for callers and tests that read the decision instead of the summary's words;
+        not written to JSON.
     """
 
     id: str

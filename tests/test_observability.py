@@ -8,6 +8,7 @@ from scipy.linalg import block_diag
 
 from ssecert import System, observability, observability_index
 from ssecert.structure.observability import pbh_margins, unobservable_residual
+from ssecert.structure.outcomes import ObservabilityCode
 
 
 def test_issue_example_is_observable_though_numpy_rank_says_18():
@@ -45,13 +46,15 @@ def test_verdict_matches_planted_truth(seed):
         integer=seed % 2 == 0,
     )
     check = observability(System(pl.A, pl.C))
+    assert check.verdict is check.code.verdict
     if pl.max_removable < 0 and seed % 2 == 1:
         # an orthogonal similarity rounds the planted structure away: the exact data are
         # observable within rounding of an unobservable plant, which floats cannot decide
         assert check.verdict.value in ("fails", "inconclusive")
         if check.verdict.value == "inconclusive":
-            assert "precision" in check.summary
+            assert check.code is ObservabilityCode.WITHIN_PRECISION
             assert check.evidence["exact"]["state"] == "observable"
+            assert check.evidence["distance_to_unobservability"] == check.margin
     elif pl.max_removable < 0:
         assert check.verdict.value == "fails"
         assert check.evidence["exact"]["state"] == "unobservable"
@@ -89,3 +92,14 @@ def test_pbh_margins_zero_at_unobservable_eigenvalue():
 def test_zero_output_matrix_rows_are_allowed():
     check = observability(System(np.eye(2), [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]))
     assert check.verdict.value == "holds"
+
+
+def test_every_observability_code_gives_its_verdict():
+    verdicts = {code: code.verdict.value for code in ObservabilityCode}
+    assert verdicts == {
+        ObservabilityCode.OBSERVABLE: "holds",
+        ObservabilityCode.UNOBSERVABLE: "fails",
+        ObservabilityCode.EXACTLY_UNOBSERVABLE: "fails",
+        ObservabilityCode.WITHIN_PRECISION: "inconclusive",
+        ObservabilityCode.UNDECIDED: "inconclusive",
+    }

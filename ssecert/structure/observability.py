@@ -31,9 +31,10 @@ from ..numerics.linalg import (
     matrix_norm,
     staircase,
 )
-from ..results import Check, Verdict
+from ..results import Check
 from ..system import System
 from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances, classify
+from .outcomes import ObservabilityCode
 
 if TYPE_CHECKING:
     from ..numerics.exact import ExactObservability
@@ -228,17 +229,19 @@ class _Verdicts:
 
     def check(
         self,
-        verdict: Verdict,
+        code: ObservabilityCode,
         summary: str,
         index: int | None,
         unobs: int | None,
         witness: dict | None = None,
     ) -> Check:
-        """The observability Check with this verdict, index and unobservable dimension."""
+        """The observability Check of ``code`` (its verdict), with this index and unobservable
+        dimension."""
         return Check(
             id="observability",
             title="Observability of (A, C)",
-            verdict=verdict,
+            verdict=code.verdict,
+            code=code,
             summary=summary,
             value=index,
             margin=self.margin,
@@ -353,7 +356,7 @@ def _exactly_unobservable(
         "x0 and x0 + z give identical outputs",
     }
     return out.check(
-        Verdict.FAILS,
+        ObservabilityCode.EXACTLY_UNOBSERVABLE,
         "(A, C) is not observable: exact arithmetic on the data finds a state direction that "
         "produces no output (floating point could not resolve it).",
         None,
@@ -367,7 +370,7 @@ def _exactly_observable(out: _Verdicts, n: int) -> Check:
     out.evidence["distance_to_unobservability"] = out.margin
     distance = format_distance(out.margin)
     return out.check(
-        Verdict.INCONCLUSIVE,
+        ObservabilityCode.WITHIN_PRECISION,
         f"In floating point (A, C) looks unobservable, but the exact data are observable "
         f"(Krylov rank {n} modulo a prime): the plant is within a relative distance "
         f"{distance} of an unobservable one, within the precision of the floating-point "
@@ -389,7 +392,7 @@ def _observable(out: _Verdicts, index: int, exact_state: Observability, grouping
             "PBH test has full rank at every one of them)"
         )
     return out.check(
-        Verdict.HOLDS,
+        ObservabilityCode.OBSERVABLE,
         f"(A, C) is observable{confirmed}: x(0) is determined by {index} "
         f"step{'s' if index != 1 else ''} of output; PBH margin {out.margin:.3g}.",
         index,
@@ -460,7 +463,7 @@ def _verified_direction(
                 how.append("in exact arithmetic")
             note = f" (confirmed {' and '.join(how)})" if how else ""
             return out.check(
-                Verdict.FAILS,
+                ObservabilityCode.UNOBSERVABLE,
                 f"(A, C) is not observable: a {unobs}-dimensional subspace of states produces "
                 f"no output{note}.",
                 None,
@@ -489,7 +492,7 @@ def _undecided(
     if directions_tried:
         reasons.append("no unobservable direction survived the simulation check")
     return out.check(
-        Verdict.INCONCLUSIVE,
+        ObservabilityCode.UNDECIDED,
         "Observability could not be decided reliably: " + "; ".join(reasons) + ".",
         None,
         None,

@@ -16,6 +16,7 @@ from ..results import Verdict
 
 __all__ = [
     "IrrepresentableCode",
+    "ObservabilityCode",
     "Problem",
     "ProblemCode",
     "RecheckCode",
@@ -143,6 +144,30 @@ _IRREPRESENTABLE_FAILS = frozenset(
         IrrepresentableCode.EXACTLY_AT_LEAST_ONE,
     }
 )
+
+
+class ObservabilityCode(enum.Enum):
+    """Why the observability check (``ssecert.structure.observability``) has its verdict
+    (``Check.code``; its words are written where the check is built)."""
+
+    #: holds: PBH and the staircase agree on full rank
+    OBSERVABLE = "observable"
+    #: fails: an unobservable subspace, its direction verified (by simulation, the staircase
+    #: or exact arithmetic)
+    UNOBSERVABLE = "unobservable"
+    #: fails: exact arithmetic finds an unobservable direction floating point could not resolve
+    EXACTLY_UNOBSERVABLE = "exactly unobservable"
+    #: inconclusive: unobservable in floating point, observable with the data taken exactly
+    #: (within the precision of the rank decision)
+    WITHIN_PRECISION = "within precision"
+    #: inconclusive: neither method's answer could be trusted
+    UNDECIDED = "undecided"
+
+    @property
+    def verdict(self) -> Verdict:
+        """The verdict this code gives."""
+        fails = self in (ObservabilityCode.UNOBSERVABLE, ObservabilityCode.EXACTLY_UNOBSERVABLE)
+        return Verdict.of(holds=self is ObservabilityCode.OBSERVABLE, fails=fails)
 
 
 class SparseCode(enum.Enum):
