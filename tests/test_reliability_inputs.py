@@ -46,7 +46,7 @@ from ssecert import (
     sparse_observability,
     spec_from_dict,
 )
-from ssecert.cli import main
+from ssecert.cli import _WarningLog, main
 from ssecert.examples import example_path, list_examples
 from ssecert.spec import (
     MAX_BINARY_BYTES,
@@ -1295,19 +1295,34 @@ def test_degenerate_plants_raise_no_warning(tmp_path, capsys, name, observer):
 
 
 @pytest.mark.slow
-def test_what_the_warnings_said_is_kept(tmp_path, capsys):
+def test_what_the_warnings_said_is_kept(tmp_path, capsys, monkeypatch):
+    # the runtime warnings numpy raised, as the command saw them
+    raised: list[tuple[type[Warning], str]] = []
+    show = _WarningLog.show
+
+    def recording(self, message, category, *args, **kwargs):
+        raised.append((category, str(message)))
+        return show(self, message, category, *args, **kwargs)
+
+    monkeypatch.setattr(_WarningLog, "show", recording)
     path = degenerate_spec(tmp_path, "huge", 0)
     status, out, _ = run_quietly(capsys, "analyze", str(path), "--json", str(tmp_path / "a.json"))
     # decided (sensors 0 and 2 are the only ones that see the Jordan block's eigenvector e1,
     # so max_removable = 1 < 2s) or inconclusive, never exit 4
     assert status in (1, 3)
     assert re.search(r"note: overflow encountered in \w+ \(in ssecert\.\w+", out), out
+    said = {text for category, text in raised if category is RuntimeWarning}
+    assert said
     notes = json.loads((tmp_path / "a.json").read_text())["meta"]["notes"]
-    assert any("overflow encountered" in note for note in notes)
+    # every warning's own words are kept, each in a note of its own
+    assert all(any(n == text or n.startswith(f"{text} (") for n in notes) for text in said)
+    raised.clear()
     status, out, _ = run_quietly(capsys, "certify", str(path), "--out", str(tmp_path))
     assert "note: overflow encountered" in out
-    document = json.loads((tmp_path / "huge.json").read_text())
-    assert any("overflow encountered" in note for note in document["notes"])
+    said = {text for category, text in raised if category is RuntimeWarning}
+    assert said
+    kept = json.loads((tmp_path / "huge.json").read_text())["notes"]
+    assert all(any(n == text or n.startswith(f"{text} (") for n in kept) for text in said)
     assert "overflow encountered" in (tmp_path / "huge.html").read_text()
 
 
