@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
+from enum import Enum
 from typing import Any
 
 import numpy as np
@@ -18,11 +19,11 @@ from ..context import OBSERVER, AnalysisContext, shared
 from ..design.gains import GainError
 from ..noise import MeasurementNoise
 from ..observers import ObserverDesign, build_observer
-from ..observers.lure import LureModel, scaling_text
+from ..observers.lure import LureModel
 from ..results import Check, Step, Verdict, decide, withdraw
 from ..system import System
 from ..tolerances import Tolerances
-from . import noise_messages, region_messages
+from . import noise_messages, observer_messages, region_messages
 from .constant_attack import constant_attack_outcomes
 from .divergence import divergence_witness
 from .equilibria import nonzero_equilibrium
@@ -46,7 +47,7 @@ from .lmi import (
     lure_model_cost,
 )
 from .lyapunov import LyapunovCertificate, LyapunovMethod, lyapunov_certificate
-from .outcomes import LMICode, Region, RegionCode, WitnessKind
+from .outcomes import LMICause, LMICode, Region, RegionCode, SchurCode, WitnessKind
 from .periodic import periodic_orbit
 from .roa import region_of_attraction
 from .search_messages import searched_text
@@ -91,7 +92,8 @@ def observer_stability_check(
     refusal = _lure_model_refusal(design, budget)
     if refusal is not None:
         summary = f"No stability certificate: not attempted: {refusal}."
-        return _no_certificate(title, summary, "circle criterion (LMI, Clarabel)"), None
+        method = "circle criterion (LMI, Clarabel)"
+        return _no_certificate(title, summary, method, LMICause.REFUSED), None
     model = design.observer_kind.lure_model(design)
     if not model.finite():
         summary = (
@@ -99,7 +101,8 @@ def observer_stability_check(
             "entry of A - L C, the gain or the sector's vertex loop beyond 1.8e308), so nothing "
             "can be computed or replayed in floating point."
         )
-        return _no_certificate(title, summary, "circle criterion (LMI, Clarabel)"), None
+        method = "circle criterion (LMI, Clarabel)"
+        return _no_certificate(title, summary, method, LMICause.NOT_FINITE), None
     with stage("circle criterion LMIs"):
         cert = circle_certificate(model, budget=budget, clear=tol.certificate_clear)
     if cert.code is LMICode.NOT_VERIFIED:
@@ -140,84 +143,19 @@ def _failure_words(
 ) -> tuple[str, str, float | None, float]:
     """(summary, method, margin, error bound) of a failing observer_stability, by the kind of
     its witness: a divergent trajectory of the large-signal loop, or an exactly confirmed
-    nonzero equilibrium (a wrong estimate kept with no attack) or periodic orbit."""
-    e = np.array2string(np.asarray(witness["initial_error"]), precision=4)
-    start = "The observer is not globally asymptotically stable: "
+    nonzero equilibrium (a wrong estimate kept with no attack) or periodic orbit (the summary:
+    ``observer_messages.failure_summary``)."""
+    summary = observer_messages.failure_summary(witness)
     if witness["kind"] is WitnessKind.PERIODIC_ORBIT:
-        return (
-            f"{start}without attack its error cycles for ever with period {witness['period']}, "
-            f"confirmed in exact arithmetic: from the estimation error e = {e} and the attack "
-            f"estimate it pairs with, the error returns to the same point every "
-            f"{witness['period']} steps." + _replay_disagrees(witness, "return_residual"),
-            "periodic orbit search (simulated tails, confirmed exactly)",
-            None,
-            0.0,
-        )
+        return summary, "periodic orbit search (simulated tails, confirmed exactly)", None, 0.0
     if witness["kind"] is WitnessKind.NONZERO_EQUILIBRIUM:
-        return (
-            f"{start}it has a nonzero equilibrium, confirmed in exact arithmetic: from the "
-            f"estimation error e = {e} and the attack estimate it pairs with, the error stays "
-            f"there forever without attack (active soft-threshold channels "
-            f"{np.flatnonzero(witness['active_signs']).tolist()})."
-            + _equilibrium_replay_words(witness),
-            "equilibrium search (active/sign patterns, exact)",
-            None,
-            0.0,
-        )
+        return summary, "equilibrium search (active/sign patterns, exact)", None, 0.0
     mu = witness["large_signal_eigenvalue"]
     return (
-        f"{start}far from the origin the soft "
-        f"threshold is the identity minus a bounded term, and that large-signal loop has the "
-        f"eigenvalue {sig(mu.real) if mu.imag == 0 else f'{mu.real:.4g} {mu.imag:+.4g}i'} "
-        f"(modulus {sig(abs(mu), 6)} > 1). "
-        f"Along its left eigenvector w the error obeys |w' xi+| >= {abs(mu):.6g} |w' xi| - "
-        f"{witness['beta']:.3g}, so it grows without bound once |w' xi| > "
-        f"{witness['escape_level']:.3g}; replayed: from an initial error of norm "
-        f"{witness['norms'][0]:.3g} (a_hat(0) = "
-        f"{'0' if not np.any(witness['initial_attack_estimate']) else 'as given'}) the error "
-        f"state (e, a_hat) reaches norm {witness['norms'][1]:.3g} in {witness['steps']} "
-        f"step{'' if witness['steps'] == 1 else 's'} without attack."
-        + _replay_disagrees(witness, "growth"),
+        summary,
         "large-signal divergence (eigenvector bound, replayed)",
         abs(mu) - 1.0,
         witness["eigenvalue_error_bound"],
-    )
-
-
-def _replay_disagrees(witness: dict[str, Any], measure: str) -> str:
-    """A sentence when the observer's own simulator did not reproduce the witness ('' else)."""
-    replay = witness.get("observer_replay") or {}
-    if not replay.get("replayed") or replay.get("agrees", True):
-        return ""
-    name = measure.replace("_", " ")
-    return (
-        f" The observer's own simulator did not reproduce it in floating point ({name} "
-        f"{replay.get(measure, float('nan')):.3g} over {replay.get('steps')} steps); the "
-        f"proof above does not rest on that replay."
-    )
-
-
-def _equilibrium_replay_words(witness: dict[str, Any]) -> str:
-    """What the replay of an equilibrium showed, when it did not stay there, and why."""
-    replay = witness.get("observer_replay") or {}
-    moduli = np.asarray(witness.get("local_loop_moduli", []), dtype=float)
-    shown = ", ".join(sig(v, 3) for v in moduli[moduli > 1 + 1e-9][:3])
-    repelling = (
-        f" It is repelling: the linear part of the error's map near it has eigenvalues of "
-        f"modulus {shown} > 1, so any error off it by rounding moves away"
-        if witness.get("repelling")
-        else ""
-    )
-    if not replay.get("replayed") or replay.get("agrees", True):
-        return f"{repelling}." if repelling else ""
-    drift = f"{replay.get('largest_drift', float('nan')):.2g}"
-    steps = replay.get("steps")
-    return (
-        f"{repelling}; the observer's own simulator, started there in floating point (the "
-        f"point rounded), drifted off it by {drift} in {steps} steps."
-        if repelling
-        else f" The observer's own simulator, started there in floating point, drifted off it "
-        f"by {drift} in {steps} steps: the equilibrium is shown in exact arithmetic only."
     )
 
 
@@ -257,6 +195,7 @@ def _witnessed_failure(
         evidence=evidence,
         witness=witness,
         tolerances=_decided_by(tol, error_bound=error_bound, lmi_eta=ETA),
+        code=witness["kind"],
     )
 
 
@@ -330,6 +269,7 @@ def _linear_stability_check(lyap: LyapunovCertificate, tol: Tolerances, title: s
         evidence=_lyapunov_evidence(lyap),
         witness=lyap.witness if verdict is Verdict.FAILS else None,
         tolerances=_decided_by(tol, error_bound=lyap.error_bound),
+        code=lyap.decided_by,
     )
 
 
@@ -339,7 +279,8 @@ def _without_lure_model(design: ObserverDesign, gap: str, tol: Tolerances, title
     and is inconclusive otherwise."""
     kind = design.observer_kind
     if not np.all(np.isfinite(design.error_matrix)):
-        return _no_certificate(title, f"{gap} {overflow_reason(design)}.", "circle criterion")
+        summary = f"{gap} {overflow_reason(design)}."
+        return _no_certificate(title, summary, "circle criterion", SchurCode.NON_FINITE)
     if kind.dead_zone_refusal(design) or kind.dead_zone_model(design) is not None:
         # the dead zone's linear map is the error matrix (F = A (I - step S' S)^m for an SSO)
         lyap = lyapunov_certificate(
@@ -357,12 +298,14 @@ def _without_lure_model(design: ObserverDesign, gap: str, tol: Tolerances, title
                 fields={},
                 evidence={"no_certificate": gap},
                 tolerances=_decided_by(tol),
+                code=WitnessKind.LOCAL_INSTABILITY,
             )
     return _no_certificate(title, gap, "circle criterion")
 
 
-def _no_certificate(title: str, summary: str, method: str) -> Check:
-    """An inconclusive observer_stability: no certificate was attempted."""
+def _no_certificate(title: str, summary: str, method: str, code: Enum | None = None) -> Check:
+    """An inconclusive observer_stability: no certificate was attempted (``code``: why, where
+    a typed outcome says so)."""
     return Check(
         id="observer_stability",
         title=title,
@@ -370,6 +313,7 @@ def _no_certificate(title: str, summary: str, method: str) -> Check:
         summary=summary,
         method=method,
         fields={},
+        code=code,
     )
 
 
@@ -467,19 +411,14 @@ def _zames_falb_stability_check(
         },
         evidence=evidence,
         tolerances=_decided_by(tol, error_bound=cert.error_bound, lmi_eta=ETA),
+        code=cert.cause,
     )
 
 
 def _balanced_note(cert: LMICertificate) -> str:
-    """A sentence when the certificate was solved and verified in balanced state coordinates."""
-    s = cert.details.get("state_scaling")
-    if s is None:
-        return ""
-    return (
-        f" The LMI was solved and verified in balanced coordinates xi = {scaling_text(s)} xi_b "
-        "(an exact change of variables: the states' units differ widely); P is given for the "
-        "spec's coordinates."
-    )
+    """A sentence when the certificate was solved and verified in balanced state coordinates
+    (``observer_messages.balanced_lmi_note``)."""
+    return observer_messages.balanced_lmi_note(cert.details.get("state_scaling"))
 
 
 def _circle_evidence(model: LureModel, cert: LMICertificate) -> dict[str, Any]:
@@ -537,21 +476,9 @@ def iss_gain_check(
         return check
     return replace(
         check,
-        summary=f"{check.summary} {_constant_attack_sentence(records)}",
+        summary=f"{check.summary} {observer_messages.constant_attack_text(records)}",
         evidence={**check.evidence, "constant_attacks": records},
     )
-
-
-def _constant_attack_sentence(records: list[dict[str, Any]]) -> str:
-    """One sentence on where the error goes under the constant attacks analysed."""
-    parts = []
-    for rec in records[:3]:
-        outcome = rec["outcome"]
-        if outcome == "converges to a bias":
-            outcome += f" of norm {rec['bias_norm']:.3g}"
-        parts.append(f"{rec['attack']}: {outcome} ({'proved' if rec['proved'] else 'observed'})")
-    more = f"; {len(records) - 3} more in the evidence" if len(records) > 3 else ""
-    return "Under a constant attack, from zero error: " + "; ".join(parts) + more + "."
 
 
 def _iss_gain(
@@ -583,6 +510,7 @@ def _iss_gain(
                 summary="No ISS gain without a stability certificate.",
                 method="dissipation inequality",
                 fields={"norm": norm},
+                code=LMICause.NO_BASE,
             )
         model, circle = stability
         if circle.kind == "zames-falb":
@@ -652,6 +580,7 @@ def _gain_check(
         fields={"gamma": cert.gamma, "alpha": cert.decay, "norm": norm},
         evidence=evidence,
         tolerances=_decided_by(tol, error_bound=cert.error_bound),
+        code=cert.cause,
     )
 
 

@@ -15,14 +15,16 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ..base.format import one_minus, one_plus, sig
+from ..base.format import one_minus, one_plus
 from ..design.gains import GainError, GainMethod
 from ..numerics.exact_powers import ExactMatrix
 from ..observers import ObserverDesign
 from ..results import Check, Verdict
 from ..system import System
 from ..tolerances import Tolerances
+from . import observer_messages
 from .lyapunov import LyapunovMethod, lyapunov_certificate
+from .outcomes import SchurCode
 from .spectral import SchurState
 
 __all__ = ["observer_gain_check", "EXACT_LIMIT"]
@@ -110,24 +112,8 @@ def observer_gain_check(design: ObserverDesign, *, tolerances: Tolerances | None
     shown = exact_radius(cert)
     if verdict is Verdict.HOLDS and cert.method is LyapunovMethod.EXACT_POWERS:
         fields["spectral_radius"] = cert.contraction
-        summary = f"The linear error dynamics e+ = ({what}) e are stable: {cert.reason}."
-    elif verdict is Verdict.HOLDS:
-        radius = f"spectral radius {sig(_known(cert.spectral_radius))}"
-        if not np.any(F):  # the floats may have underflowed (A (I - step S'S)^m, m large)
-            radius = "its floats are the zero matrix, computed spectral radius 0"
-        summary = (
-            f"The linear error dynamics e+ = ({what}) e are stable ({radius}), certified by a "
-            f"Lyapunov matrix P: the error "
-            f"contracts at least by {sig(_known(cert.contraction))} per step in the P-norm."
-            + balanced_lyapunov_note(cert)
-        )
-    elif verdict is Verdict.FAILS:
-        summary = (
-            f"{what} is not stable: {cert.reason}. With this gain the error does not "
-            f"vanish even without attack."
-        )
-    else:
-        summary = f"The stability of {what} could not be certified: {cert.reason}."
+    # the floats may have underflowed to zero (A (I - step S'S)^m, m large)
+    summary = observer_messages.linear_gain_summary(cert, what, zero=not np.any(F))
     return Check(
         id="observer_gain",
         title=title,
@@ -150,6 +136,7 @@ def observer_gain_check(design: ObserverDesign, *, tolerances: Tolerances | None
         evidence=evidence,
         witness=cert.witness if verdict is Verdict.FAILS else None,
         tolerances=_decided_by(tol, error_bound=cert.error_bound),
+        code=cert.decided_by,
     )
 
 
@@ -183,17 +170,9 @@ def exact_radius(cert: Any) -> ExactRadius | None:
 
 
 def balanced_lyapunov_note(cert: Any) -> str:
-    """A sentence when the Lyapunov matrix was verified in balanced state coordinates."""
-    proof = cert.proof or {}
-    if "state_scaling" not in proof:
-        return ""
-    from ..observers.lure import scaling_text
-
-    return (
-        f" P was found and verified in balanced state coordinates e = "
-        f"{scaling_text(proof['state_scaling'])} e_b (the states' units differ widely) and "
-        f"written back exactly."
-    )
+    """A sentence when the Lyapunov matrix was verified in balanced state coordinates
+    (``observer_messages.balanced_lyapunov_note``)."""
+    return observer_messages.balanced_lyapunov_note(cert.proof)
 
 
 def _overflowed_check(design: ObserverDesign, tol: Tolerances) -> Check:
@@ -210,6 +189,7 @@ def _overflowed_check(design: ObserverDesign, tol: Tolerances) -> Check:
         fields={"L": design.gain.L, "gain_method": design.gain.method, "kind": design.kind},
         evidence={"details": design.gain.details},
         tolerances=_decided_by(tol),
+        code=SchurCode.NON_FINITE,
     )
 
 
@@ -280,11 +260,7 @@ def _deadbeat_check(
     if witness is not None:
         return check(
             verdict=Verdict.FAILS,
-            summary=(
-                f"The deadbeat construction's printed gain is not deadbeat: {problem}. "
-                f"Rounding L to floats destroys the nilpotency of this plant's "
-                f"deadbeat loop." + exact_note
-            ),
+            summary=observer_messages.deadbeat_failure(problem) + exact_note,
             value=details.get("nilpotency_index"),
             margin=None,
             witness=witness,
@@ -307,10 +283,7 @@ def _exact_deadbeat_note(design: ObserverDesign, evidence: dict[str, Any]) -> st
     evidence["exact"] = _exact_deadbeat(design.system)
     if not evidence["exact"].get("verified"):
         return ""
-    return (
-        f" In exact arithmetic the rational gain L_exact (evidence) is nilpotent "
-        f"with index {evidence['exact']['exact_index']}."
-    )
+    return observer_messages.exact_deadbeat_note(evidence["exact"]["exact_index"])
 
 
 def _deadbeat_tolerances(details: Mapping[str, Any]) -> dict[str, Any]:
@@ -322,47 +295,18 @@ def _deadbeat_tolerances(details: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def _nilpotent_summary(details: Mapping[str, Any], fields: dict[str, Any]) -> str:
-    """What a verified deadbeat gain's check says.
+    """What a verified deadbeat gain's check says (``observer_messages.nilpotent_summary``).
 
     An exact nilpotency index that differs from the index to rounding
     becomes ``fields["nilpotency_index"]``, beside
     ``nilpotency_index_to_rounding``.
     """
     index = int(_known(details.get("nilpotency_index")))
-    upper = _known(details.get("spectral_radius_upper_bound"))
-    rel = details["relative_power_norms"][index - 1]
-    exactly = details.get("exactly_nilpotent")
     exact_index = details.get("exact_nilpotency_index")
-    if exactly and exact_index is not None and exact_index != index:
+    if details.get("exactly_nilpotent") and exact_index is not None and exact_index != index:
         fields["nilpotency_index"] = exact_index
         fields["nilpotency_index_to_rounding"] = index
-    if exactly and exact_index is not None:
-        exact = (
-            f"A - L C with the printed L is exactly nilpotent with index {exact_index}: the "
-            f"error vanishes in {exact_index} step{'s' if exact_index != 1 else ''} without "
-            f"attack"
-        )
-        if exact_index == index:
-            return exact + "."
-        rounded = f"||(A - L C)^{index}|| <= {rel:.1e} ||A||^{index}"
-        return exact + f" (to rounding already in {index}: {rounded})."
-    return (
-        f"With the printed L, ||(A - L C)^{index}|| <= {rel:.1e} ||A||^{index} (powers "
-        f"computed exactly from the floats, norms in balanced power-of-two state units): the "
-        f"error vanishes to rounding in {index} "
-        f"step{'s' if index != 1 else ''} without attack{_fastest_note(details)}, and the "
-        f"spectral radius is certified <= {sig(upper, 3)}."
-    )
-
-
-def _fastest_note(details: Mapping[str, Any]) -> str:
-    """Whether the deadbeat index is the observability index, the fastest possible."""
-    nu = details.get("observability_index")
-    if nu is None:
-        return ""
-    if details.get("minimal"):
-        return ", the observability index"
-    return f" (the observability index is {nu}: a faster deadbeat gain exists)"
+    return observer_messages.nilpotent_summary(details)
 
 
 def _deadbeat_instability(design: ObserverDesign) -> dict[str, Any] | None:

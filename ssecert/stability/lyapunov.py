@@ -24,7 +24,7 @@ from ..numerics.linalg import matrix_norm
 from ..results import Verdict
 from ..tolerances import EPS
 from . import lyapunov_messages
-from .outcomes import LyapunovCode, SchurState
+from .outcomes import LyapunovCode, SchurCode, SchurState
 
 if TYPE_CHECKING:
     from .spectral import SchurDecision
@@ -112,6 +112,12 @@ class LyapunovCertificate:
             SchurState.STABLE: Verdict.HOLDS,
             SchurState.UNSTABLE: Verdict.FAILS,
         }.get(self.decision.state, Verdict.INCONCLUSIVE)
+
+    @property
+    def decided_by(self) -> LyapunovCode | SchurCode:
+        """The code that decided the verdict: ``LyapunovCode.VERIFIED`` for a verified P, else
+        the ``SchurCode`` of the exact decision on F."""
+        return self.code if self.decision is None else self.decision.code
 
     @property
     def method(self) -> LyapunovMethod:
