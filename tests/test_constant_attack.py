@@ -11,6 +11,7 @@ from ssecert import analyze, spec_from_dict
 from ssecert.examples import example_path
 from ssecert.observers import build_observer
 from ssecert.observers.lure import LureModel
+from ssecert.stability import observer_messages
 from ssecert.stability.constant_attack import constant_attack_outcomes, default_attacks
 
 
@@ -35,7 +36,9 @@ def test_a_linear_observer_converges_to_its_exact_bias():
     a = np.array([0.0, 5.0, 0.0])
     bias = np.linalg.solve(np.eye(2) - F, L @ a)  # e* = F e* + L a
     np.testing.assert_allclose(np.abs(rec["bias"]), np.abs(bias), rtol=1e-9)
-    assert "constant-velocity-a" in cert["iss_gain"].summary
+    # the summary says where the named attack takes the error, in observer_messages' words
+    assert rec["attack"] == "scenario constant-velocity-a"
+    assert cert["iss_gain"].summary.endswith(observer_messages.constant_attack_text([rec]))
 
 
 def test_an_attack_the_gain_ignores_leaves_no_bias():

@@ -16,8 +16,9 @@ from ssecert.analyze import analyze
 from ssecert.cli import main
 from ssecert.observers import build_observer
 from ssecert.spec import spec_from_dict
+from ssecert.stability import observer_messages, spectral_messages
 from ssecert.stability.checks import observer_gain_check, observer_stability_check
-from ssecert.stability.outcomes import LMICause
+from ssecert.stability.outcomes import LMICause, LyapunovCode, SchurCode, WitnessKind
 
 
 def _spec(A, C, observer, s=0, **extra):
@@ -58,10 +59,13 @@ def test_an_elastic_net_gain_below_rounding_gets_no_fails():
     verdicts = _verdicts(cert)
     assert "fails" not in verdicts.values(), verdicts
     gain = cert["observer_gain"]
-    assert gain.verdict.value == "holds" and "1 - 1e-17 < 1" in gain.summary
+    # held by the exact powers of F = 1 - 1e-17, shown as such (not as the float 1)
+    assert gain.verdict.value == "holds" and gain.code is SchurCode.POWERS_STABLE
+    assert gain.value_text == "1 - 1e-17" and gain.margin == pytest.approx(1e-17, rel=1e-3)
+    assert spectral_messages.below_one(gain.value, gain.margin) == "1 - 1e-17 < 1"
     stability = cert["observer_stability"]
     assert stability.verdict.value == "inconclusive"
-    assert "within rounding of 1" in stability.summary
+    assert stability.code is LMICause.VERTEX_WITHIN_ROUNDING
 
 
 def test_a_luenberger_gain_below_rounding_is_certified_by_its_exact_powers():
@@ -181,8 +185,9 @@ def test_a_repelling_equilibrium_says_so_and_why_its_replay_drifts():
     assert witness["repelling"] and witness["local_loop_moduli"][0] > 1.7
     replay = witness["observer_replay"]
     assert replay["replayed"] and not replay["agrees"]
-    assert "It is repelling" in check.summary
-    assert f"drifted off it by {replay['largest_drift']:.2g} in 50 steps" in check.summary
+    assert check.code is WitnessKind.NONZERO_EQUILIBRIUM and replay["steps"] == 50
+    assert replay["largest_drift"] > 1e-9  # what the summary says it drifted by
+    assert check.summary == observer_messages.failure_summary(witness)
 
 
 # ---------------------------------------------------------------------------
@@ -262,7 +267,11 @@ def test_an_sso_gain_derived_from_its_step_is_exact_from_the_step():
     )
     design = build_observer(spec.system, spec.observer)
     gain = observer_gain_check(design)
-    assert gain.verdict.value == "fails" and "L = step A C^T" in gain.summary
+    # decided on the exact F of L = step A C^T: 1 + 1.09e-47, where the floats' F is stable
+    assert gain.verdict.value == "fails" and gain.code is SchurCode.TRACE_EXCESS
+    excess = gain.evidence["exact_decision"]["spectral_radius_excess"]
+    assert excess == pytest.approx(1.0947644252537622e-47, rel=1e-6)
+    assert gain.value_text == "1 + 1.09e-47"
     assert observer_stability_check(design)[0].verdict.value == "fails"
 
 
@@ -320,7 +329,11 @@ def test_a_lyapunov_certificate_survives_state_units(k):
     )
     for check in ("observer_gain", "observer_stability"):
         assert cert[check].verdict.value == "holds", cert[check].summary
-    assert "balanced state coordinates" in cert["observer_gain"].summary
+    # a verified P, found in balanced state coordinates (its scaling in the proof)
+    gain = cert["observer_gain"]
+    assert gain.code is LyapunovCode.VERIFIED
+    scaling = gain.evidence["exact_decision"]["state_scaling"]
+    assert np.ptp(np.log2(scaling)) > 16
 
 
 def test_the_dead_zone_region_fails_with_its_error_matrix():
@@ -348,7 +361,12 @@ def test_a_large_sso_window_decides_its_error_block_alone():
     )
     design = build_observer(spec.system, spec.observer)
     gain = observer_gain_check(design)
-    assert gain.verdict.value == "fails" and "O_tau" in gain.summary
+    # the exact traces of F = A - L O_tau (window 100) bound its spectral radius below by 1.0058
+    assert gain.verdict.value == "fails" and gain.code is SchurCode.TRACES_BELOW
+    assert (
+        gain.value == pytest.approx(1.0058, abs=1e-4)
+        and gain.evidence["exact_decision"]["rigorous"]
+    )
     assert gain.method == "exact powers of A - L C"
     assert observer_stability_check(design)[0].verdict.value == "fails"
 
@@ -461,7 +479,7 @@ def test_messages_name_what_was_shown():  # a whole analyze of an SSO: about 10 
     )  # fmt: skip
     gain = analyze(spec)["observer_gain"]
     assert gain.value_name == "spectral radius of A (I - step S' S)^100"
-    assert "e+ = (A (I - step S' S)^100) e" in gain.summary
+    assert gain.code is LyapunovCode.VERIFIED
     assert "100 inner steps" in gain.evidence["error_matrix"]
     # an eigenvalue 1 - 2^-53 is not written "1"
     with pytest.raises(AssertionError, match=r"modulus 1 - 1\.1e-16"):

@@ -1,0 +1,118 @@
+"""The words of the observer checks (``ssecert.stability.observer_messages``): each sentence
+from the outcome or the numbers it is written from.
+
+The checks' tests read codes and numbers (``Check.code``, ``value``, ``fields``,
+``evidence``); the sentences those stand for are checked here, once.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ssecert.stability import observer_messages, spectral_messages
+from ssecert.stability.lyapunov import lyapunov_certificate
+from ssecert.stability.outcomes import WitnessKind
+
+
+def test_a_gain_s_summary_names_the_error_matrix_it_decides_on():
+    cert = lyapunov_certificate(np.array([[0.5, 0.1], [0.0, 0.25]]))
+    words = observer_messages.linear_gain_summary(cert, "A (I - step S' S)^100", zero=False)
+    assert words.startswith("The linear error dynamics e+ = (A (I - step S' S)^100) e are stable")
+    assert "certified by a Lyapunov matrix P" in words
+    zero = observer_messages.linear_gain_summary(cert, "A - L C", zero=True)
+    assert "its floats are the zero matrix, computed spectral radius 0" in zero
+    unstable = lyapunov_certificate(np.array([[2.0]]))
+    words = observer_messages.linear_gain_summary(unstable, "A - L C", zero=False)
+    assert words.startswith("A - L C is not stable: ")
+    assert words.endswith("With this gain the error does not vanish even without attack.")
+
+
+def test_an_exact_bound_below_one_is_written_with_its_gap():
+    # F = 1 - 1e-17 exactly: its float is 1.0, the words keep the gap
+    assert spectral_messages.below_one(1.0, 1e-17) == "1 - 1e-17 < 1"
+
+
+def test_certificates_found_in_balanced_coordinates_say_so():
+    scaling = [2.0**47, 2.0**-23]
+    lyapunov = observer_messages.balanced_lyapunov_note({"state_scaling": scaling})
+    assert lyapunov == (
+        " P was found and verified in balanced state coordinates e = diag(2^47, 2^-23) e_b "
+        "(the states' units differ widely) and written back exactly."
+    )
+    assert observer_messages.balanced_lyapunov_note({}) == ""
+    assert observer_messages.balanced_lyapunov_note(None) == ""
+    lmi = observer_messages.balanced_lmi_note(scaling)
+    assert lmi.startswith(" The LMI was solved and verified in balanced coordinates xi = diag(")
+    assert observer_messages.balanced_lmi_note(None) == ""
+
+
+def test_a_deadbeat_gain_s_words_give_its_exact_index():
+    details = {
+        "nilpotency_index": 1,
+        "spectral_radius_upper_bound": 0.0,
+        "relative_power_norms": [2.2e-16, 0.0],
+        "exactly_nilpotent": True,
+        "exact_nilpotency_index": 2,
+    }
+    assert observer_messages.nilpotent_summary(details) == (
+        "A - L C with the printed L is exactly nilpotent with index 2: the error vanishes in 2 "
+        "steps without attack (to rounding already in 1: ||(A - L C)^1|| <= 2.2e-16 ||A||^1)."
+    )
+    rounded = {**details, "exactly_nilpotent": False, "observability_index": 1, "minimal": True}
+    words = observer_messages.nilpotent_summary(rounded)
+    assert "the error vanishes to rounding in 1 step without attack, the observability index" in (
+        words
+    )
+    failure = observer_messages.deadbeat_failure("|tr F^3| / 3 > 1 exactly")
+    assert failure.startswith("The deadbeat construction's printed gain is not deadbeat: ")
+    assert "Rounding L to floats destroys the nilpotency" in failure
+    assert observer_messages.exact_deadbeat_note(3) == (
+        " In exact arithmetic the rational gain L_exact (evidence) is nilpotent with index 3."
+    )
+    assert observer_messages.exact_deadbeat_note(None) == ""
+
+
+@pytest.mark.parametrize("replayed", [False, True])
+def test_a_repelling_equilibrium_says_so_and_why_its_replay_drifts(replayed):
+    witness = {
+        "kind": WitnessKind.NONZERO_EQUILIBRIUM,
+        "initial_error": np.array([0.25]),
+        "active_signs": np.array([1, 0, -1]),
+        "repelling": True,
+        "local_loop_moduli": [1.76, 0.3],
+        "observer_replay": {
+            "replayed": replayed,
+            "agrees": False,
+            "largest_drift": 0.00123,
+            "steps": 50,
+        },
+    }
+    words = observer_messages.failure_summary(witness)
+    assert "it has a nonzero equilibrium, confirmed in exact arithmetic" in words
+    assert "(active soft-threshold channels [0, 2])" in words
+    assert " It is repelling: the linear part of the error's map near it has eigenvalues of " in (
+        words
+    )
+    assert "modulus 1.76 > 1" in words
+    drifted = "drifted off it by 0.0012 in 50 steps."
+    assert words.endswith(drifted) == replayed
+    quiet = observer_messages.failure_summary({**witness, "repelling": False})
+    assert quiet.endswith("the equilibrium is shown in exact arithmetic only.") == replayed
+
+
+def test_constant_attacks_are_named_with_their_outcome():
+    records = [
+        {"attack": "a", "outcome": "converges to a bias", "bias_norm": 1.234, "proved": True},
+        {"attack": "b", "outcome": "converges to zero", "proved": False},
+        {"attack": "c", "outcome": "converges to zero", "proved": True},
+        {"attack": "d", "outcome": "converges to zero", "proved": True},
+    ]
+    assert observer_messages.constant_attack_text(records[:1]) == (
+        "Under a constant attack, from zero error: a: converges to a bias of norm 1.23 (proved)."
+    )
+    assert observer_messages.constant_attack_text(records) == (
+        "Under a constant attack, from zero error: a: converges to a bias of norm 1.23 "
+        "(proved); b: converges to zero (observed); c: converges to zero (proved); 1 more in "
+        "the evidence."
+    )
