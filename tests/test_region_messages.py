@@ -77,3 +77,33 @@ def test_the_analysis_returns_the_code_of_what_it_found():
     assert found.evidence["replay"]["confirmed"] is True
     refused = region_of_attraction(_model(0.5), budget=Budget(memory=1))
     assert refused.code is RegionCode.NOT_ATTEMPTED and refused.radius == 0.0
+
+
+def test_a_certified_region_s_words_give_its_method_and_numbers():
+    evidence = {
+        "ball": 20.0,
+        "transitions": 338,
+        "dead_zone_radius": 0.1429,
+        "replay": {"samples": 64},
+    }
+    wide = region_messages.lure_region_check(
+        Region(10.0, RegionCode.PIECEWISE_CERTIFIED, {}, evidence)
+    )
+    assert wide.summary.startswith("From every initial estimation error with ||e(0)|| <= 10 ")
+    assert "a piecewise-quadratic Lyapunov function over the soft threshold's regions" in (
+        wide.summary
+    )
+    assert "inside the ball of radius 20 and its sublevel set" in wide.summary
+    assert "(338 transitions between regions checked; the dead zone alone certifies 0.1429)" in (
+        wide.summary
+    )
+    balanced = {
+        "replay": {"samples": 32},
+        "state_scaling": [1.0, 2.0**-17],
+        "balanced_radius": 10.0,
+    }
+    region = region_messages.lure_region_check(Region(10.0, RegionCode.CERTIFIED, {}, balanced))
+    assert " Proved in balanced coordinates xi = diag(2^0, 2^-17) xi_b (the states' units " in (
+        region.summary
+    )
+    assert "for ||e_b(0)|| <= 10, which holds whenever ||e(0)|| <= 10;" in region.summary

@@ -10,7 +10,7 @@ beside it, and writes what a user reads.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -29,6 +29,7 @@ __all__ = [
     "reason",
     "applies_to",
     "initial_error_fading",
+    "ascent_text",
 ]
 
 TITLE = "Ultimate error of the observer under noise"
@@ -167,7 +168,7 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
         f"certificate: limsup V <= gamma^2 N^2 / alpha with gamma = {readable(float(gamma))}, "
         f"alpha = {readable(float(alpha))} and N = {readable(found.noise_norm)}. A search "
         f"over {search['sequences']} noise sequences within the bounds (from zero error, "
-        f"{search['steps']} steps{_ascent_words(search)}) reached "
+        f"{search['steps']} steps{ascent_text(search)}) reached "
         f"{readable(search['largest_error'])}." + energy_words,
         value=bound,
         fields={
@@ -250,8 +251,9 @@ GRADIENT_STARTS = 8
 GRADIENT_ITERATIONS = 6  # at most: the ascent stops at a vertex its linearisation keeps
 
 
-def _ascent_words(search: dict[str, Any]) -> str:
-    """How the search's projected gradient ascent took part ('' without one)."""
+def ascent_text(search: Mapping[str, Any]) -> str:
+    """How the search's projected gradient ascent took part (``noise_search``'s record; ''
+    without one)."""
     ascent = search.get("gradient_ascent")
     if not ascent:
         return ""
