@@ -128,3 +128,14 @@ def test_a_noise_search_says_how_its_gradient_ascent_took_part():
     search["gradient_ascent"]["iterations"] = 3
     assert noise_messages.ascent_text(search).endswith("by 3 steps of projected gradient ascent")
     assert noise_messages.ascent_text({"largest_error": 1.0}) == ""
+
+
+def test_words_a_deadbeat_gain_beyond_the_float_range_says_so():
+    # C of order 1e-310: the gain's entries scale as 1 / C; the observer_gain check's summary
+    # gives this sentence ("The requested gain cannot be computed: ...")
+    from ssecert.design.gains import GainError, deadbeat_gain
+    from ssecert.system import System
+
+    C = np.array([[0.9, -0.2], [0.7, 0.5], [0.8, 0.7]]) * 1e-310
+    with pytest.raises(GainError, match=r"^the deadbeat gain overflows the float range \("):
+        deadbeat_gain(System(np.array([[-0.4, -0.9], [1.1, -0.4]]), C))

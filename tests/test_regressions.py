@@ -6,8 +6,11 @@ import numpy as np
 import pytest
 
 from ssecert import System, irrepresentable, load_spec, observability, sparse_observability
+from ssecert.base.format import distance as readable_distance
 from ssecert.cli import main
 from ssecert.design.gains import GainError, deadbeat_gain
+from ssecert.stability import observer_messages
+from ssecert.structure.outcomes import IrrepresentableCode, SparseCode
 
 DATA = Path(__file__).parent / "data"
 
@@ -35,7 +38,12 @@ def test_enumeration_screening_accounts_for_basis_errors():
     assert enum.fields["max_removable"] in (11, None)
     assert auto.verdict.value == "holds"
     assert auto.fields["max_removable"] == 11 and auto.fields["max_removable_is_lower_bound"]
-    assert "precision" in auto.summary
+    # a lower bound because the 12-sensor set is within precision of breaking the plant
+    assert auto.code is SparseCode.LOWER_BOUND
+    assert auto.evidence["within_precision_of_breaking"] == [
+        [1, 3, 4, 5, 7, 8, 9, 10, 11, 12, 13, 15]
+    ]
+    assert auto.evidence["distance_to_breaking"] < 10 * 2.0**-52
 
 
 def test_nilpotency_index_is_invariant_under_scaling():
@@ -133,7 +141,7 @@ def test_irrepresentable_does_not_fail_on_a_rank_deficiency_below_precision(supp
     system = System(np.diag([1.0, 1.0 + 2.0**-52]), np.ones((3, 2)))
     check = irrepresentable(system, support_size, horizon=2)
     assert check.verdict.value == "inconclusive"
-    assert "digits the data do not have" in check.summary
+    assert check.code is IrrepresentableCode.O_TAU_DOUBT
     assert check.evidence["exact_rank_check"]["state"] == "observable"
 
 
@@ -290,7 +298,10 @@ def test_deadbeat_summary_gives_the_exact_index_of_the_printed_gain():
     gain = observer_checks(system, {"kind": "luenberger", "gain": "deadbeat"})[0]
     assert gain.verdict.value == "holds"
     assert gain.fields["nilpotency_index"] == 2 and gain.fields["nilpotency_index_to_rounding"] == 1
-    assert "exactly nilpotent with index 2" in gain.summary
+    details = gain.evidence["details"]
+    assert details["exactly_nilpotent"] and details["exact_nilpotency_index"] == 2
+    assert gain.value == 2 and gain.value_name == "nilpotency index"
+    assert gain.summary.startswith(observer_messages.nilpotent_summary(details))
 
 
 def test_near_zero_distances_are_not_printed_as_zero():
@@ -298,7 +309,10 @@ def test_near_zero_distances_are_not_printed_as_zero():
     system = System(np.diag([1.0, 1.0 + 2.0**-52, 1.0 - 2.0**-53]), np.ones((5, 3)))
     check = observability(system)
     assert check.verdict.value == "inconclusive"
-    assert "below the rounding level" in check.summary and "0.0e+00" not in check.summary
+    # computed as 0, the distance is written as below the rounding level, never as 0.0e+00
+    distance = check.evidence["distance_to_unobservability"]
+    assert distance == 0.0 and check.evidence["exact"]["state"] == "observable"
+    assert readable_distance(distance) == "below the rounding level 2.2e-16"
 
 
 def test_eigenvalue_grouping_tests_each_component_once(monkeypatch):
@@ -324,7 +338,9 @@ def test_a_certain_breaking_set_is_found_past_undecided_smaller_sets():
     assert check.verdict.value == "fails"
     assert check.fields["max_removable_is_upper_bound"]
     assert check.fields["max_removable"] == 3 and check.fields["max_removable_at_least"] == 2
-    assert "whatever digits the data lack" in check.summary
+    # the breaking set is confirmed on the exact data, whatever digits they lack
+    assert check.code is SparseCode.BREAKING_SET and check.evidence["breaking_set_exact"]
+    assert check.evidence["breaking_set_check"]["exact"]["state"] == "unobservable"
     assert check.witness["verified"] and len(check.fields["breaking_set"]) == 4
 
 
@@ -348,7 +364,10 @@ def test_sensor_rows_near_the_bottom_of_the_float_range_end_in_verdicts(scale, g
     cert = analyze(spec)
     assert cert["observer_gain"].verdict.value == gain_row
     if gain_row == "inconclusive":
-        assert "overflows the float range" in cert["observer_gain"].summary
+        # no gain: the deadbeat construction itself overflows (its words: test_observer_messages)
+        assert cert["observer_gain"].fields["L"] is None
+        with pytest.raises(GainError):
+            deadbeat_gain(spec.system)
     else:
         region = cert["region_of_attraction"]
         assert region.verdict.value == "holds"

@@ -21,11 +21,14 @@ from hypothesis import strategies as st
 from planted import hidden_jordan, planted
 
 from ssecert import System, analyze, observability, sparse_observability, spec_from_dict
+from ssecert.base.format import distance as readable_distance
 from ssecert.design.gains import deadbeat_gain, verify_deadbeat
 from ssecert.results import Verdict
+from ssecert.stability import observer_messages
 from ssecert.stability.lyapunov import instability_witness, lyapunov_certificate
 from ssecert.stability.outcomes import SchurCode
 from ssecert.stability.spectral import schur_decision
+from ssecert.structure.outcomes import SparseCode
 
 CYCLIC = 1e6 * np.roll(np.eye(3), 1, axis=0)
 
@@ -91,7 +94,10 @@ def test_deadbeat_gain_is_judged_as_printed_not_as_its_exact_value():
     assert gain.verdict.value == "fails" and stab.verdict.value == "fails"
     assert gain.fields["spectral_radius_lower_bound"] > 4.6
     assert gain.evidence["exact"]["verified"]  # the exact object is nilpotent, and says so
-    assert "exact arithmetic" in gain.summary and "printed" in gain.summary
+    # the printed gain fails with a verified witness; the exact gain's index is said beside it
+    assert gain.witness is not None and gain.witness["verified"]
+    exact_index = gain.evidence["exact"]["exact_index"]
+    assert gain.summary.endswith(observer_messages.exact_deadbeat_note(exact_index))
     L = np.array(gain.fields["L"])
     # the printed L really is unstable: |tr F^3| / 3 > 1 exactly, so rho(F) > 1
     check = verify_deadbeat(CYCLIC, L, [[1, 2, 3]])
@@ -243,7 +249,7 @@ def test_sub_precision_perturbations_are_not_degeneracies(where, exponent):
     check = sparse_observability(System(A, C), 1)
     assert check.verdict.value != "fails" or check.witness.get("z_exact_integers"), check.summary
     if check.verdict.value == "inconclusive":
-        assert "precision" in check.summary
+        assert check.code is SparseCode.EXACT_DATA_OBSERVABLE
     exact_degenerate = sparse_observability(
         System(np.eye(3), np.array([[1.0, 0, 0], [0, 1.0, 0], [1.0, 1.0, 0], [0, 0, 1.0]])), 1
     )
@@ -258,7 +264,10 @@ def test_unobservable_within_rounding_is_inconclusive_with_the_distance():
     check = observability(System(A, C))
     assert check.verdict.value == "inconclusive"
     assert check.evidence["exact"]["state"] == "observable"
-    assert "precision" in check.summary
+    # within the rounding level of an unobservable plant, and said so with the distance
+    distance = check.evidence["distance_to_unobservability"]
+    assert 0 < distance < 2.0**-52 and check.margin == distance
+    assert readable_distance(distance) == "below the rounding level 2.2e-16"
 
 
 def test_a_mode_seen_by_two_to_the_minus_fifty_is_a_change_of_units_away_from_clear():
