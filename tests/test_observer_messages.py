@@ -7,6 +7,8 @@ The checks' tests read codes and numbers (``Check.code``, ``value``, ``fields``,
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -139,3 +141,43 @@ def test_words_a_deadbeat_gain_beyond_the_float_range_says_so():
     C = np.array([[0.9, -0.2], [0.7, 0.5], [0.8, 0.7]]) * 1e-310
     with pytest.raises(GainError, match=r"^the deadbeat gain overflows the float range \("):
         deadbeat_gain(System(np.array([[-0.4, -0.9], [1.1, -0.4]]), C))
+
+
+def test_zames_falb_words_say_whether_the_certificate_holds_for_increments():
+    words = observer_messages.zames_falb_summary(
+        2, incremental=True, sum_bound_factor=12.5, margin=1e-3, error_bound=1e-9
+    )
+    assert "with a Zames-Falb multiplier of order 2 (the soft threshold is slope-restricted " in (
+        words
+    )
+    assert "nonnegative coefficients, so the certificate also holds for increments)" in words
+    assert "sum_k |xi(k)|^2 <= 12.5 |xi(0)|^2 (verified margin 0.001 against an error bound " in (
+        words
+    )
+    odd = observer_messages.zames_falb_summary(
+        1, incremental=False, sum_bound_factor=3.0, margin=1e-3, error_bound=1e-9
+    )
+    assert "(the soft threshold is odd and slope-restricted in [0, shrink])" in odd
+
+
+def test_a_thesis_check_that_fails_says_it_does_not_apply():
+    # a D-SSO with a placed gain: Assumption 3 fails by a factor above 1e300, said by its power
+    # of ten
+    from ssecert.observers import build_observer
+    from ssecert.results import Verdict
+    from ssecert.stability.thesis import thesis_assumptions
+    from ssecert.system import System
+
+    system = System(np.array([[0.9]]), np.array([[1.0], [1.0], [1.0]]))
+    design = build_observer(
+        system,
+        {"kind": "dsso", "gain": "place", "poles": [0.5], "step": 0.5, "threshold": 0.1},
+    )
+    verdict, items = thesis_assumptions(design, observability_holds=True)
+    words = observer_messages.thesis_summary(Verdict(verdict), items)
+    assert Verdict(verdict) is Verdict.FAILS
+    assert "The thesis's stability theorem therefore does not apply to this design." in words
+    assert words.endswith(" Advisory: no verdict of this certificate relies on it.")
+    assert re.search(r"by a factor above 1e\d{3}", words) and "e+" not in words
+    held = observer_messages.thesis_summary(Verdict.HOLDS, items)
+    assert held == "Every assumption of the thesis's stability proof holds on this design."

@@ -107,8 +107,7 @@ def test_summary_numbers_are_rounded_and_never_minus_zero(ugv):
     assert tokens
     assert "-0" not in tokens and "-0.0" not in tokens
     too_long = [t for t in tokens if _significant_digits(t) > 6]
-    assert not too_long, too_long
-    assert "0.9999999999999997" not in summary
+    assert not too_long, too_long  # 0.9999999999999997 among them
 
 
 @pytest.mark.slow
@@ -149,11 +148,8 @@ def test_a_certified_design_s_thesis_check_is_not_a_red_failure(certified):
     badge = _rows(page)["thesis_assumptions"][0]
     assert "does not apply" in badge and "badge fails" not in badge
     assert 'data-verdict="fails"' in badge
-    # its meaning is said, and the astronomically large ratios by their power of ten
-    assert "does not apply to this design" in thesis.summary
-    assert "no verdict of this certificate relies on it" in thesis.summary
-    assert re.search(r"by a factor above 1e\d{3}", thesis.summary)
-    assert "e+" not in thesis.summary
+    # its meaning is said, in observer_messages.thesis_summary's words (test_observer_messages)
+    assert thesis.fields["items"]["assumption_3"] == "fails"
     document = certified.to_dict()["checks"]["thesis_assumptions"]
     assert document["verdict"] == "fails" and document["applies"] is False
 

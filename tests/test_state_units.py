@@ -12,8 +12,10 @@ from test_evidence_reverifies import _positive_definite, _q, _zames_falb_lmi
 
 from ssecert import System, Verdict, analyze, observability, sparse_observability, spec_from_dict
 from ssecert.observers import build_observer
-from ssecert.observers.lure import LureModel
+from ssecert.observers.lure import LureModel, scaling_text
+from ssecert.stability import lmi_messages, observer_messages
 from ssecert.stability.lmi import circle_certificate
+from ssecert.stability.outcomes import LMICause, RegionCode
 from ssecert.stability.zames_falb import zames_falb_certificate
 
 ZF_PLANT = {"A": [[-0.4, -0.9], [1.1, -0.4]], "C": [[0.9, -0.2], [0.7, 0.5], [0.8, 0.7]]}
@@ -105,7 +107,10 @@ def test_a_circle_criterion_retried_in_balanced_units_draws_its_conclusion_once(
     cert = circle_certificate(model)
     assert cert.verdict.value == "inconclusive"
     conclusion = "this does not show the observer is unstable"
-    assert "; in balanced state coordinates (xi = diag(" in cert.reason
+    assert cert.cause is LMICause.CIRCLE_NOT_VERIFIED
+    (notes,) = cert.facts["notes"]  # the retry's, in lmi_messages' words
+    first = model.balancings()[0]
+    assert notes.startswith(lmi_messages.balanced_note(scaling_text(first), ""))
     assert cert.reason.count(conclusion) == 1 and cert.reason.endswith(conclusion), cert.reason
     assert cert.reason.count("no circle-criterion certificate was found or verified") >= 2
 
@@ -189,7 +194,7 @@ def test_the_thesis_design_keeps_its_region_of_attraction_in_other_units():
     assert region.verdict.value == "holds" and region.value >= 10.0 * (1 - 1e-9)
     s = np.asarray(region.evidence["state_scaling"])
     assert region.value == region.evidence["balanced_radius"] * s[:2].min()
-    assert "balanced coordinates" in region.summary
+    assert region.code is RegionCode.PIECEWISE_CERTIFIED
     model = _model(plant, observer)
     rng = np.random.default_rng(4)
     e0 = rng.standard_normal((200, 2))
@@ -420,7 +425,11 @@ def test_observer_stability_holds_with_states_in_units_far_apart(plant, observer
     t = [2.0 ** units[0], 2.0 ** units[1]]
     check = analyze(_spec(*_rescaled_by(plant, observer, t)))["observer_stability"]
     assert check.verdict.value == "holds", check.summary
-    assert "verified in balanced coordinates xi = diag(" in check.summary
+    # verified in balanced coordinates, and said so (observer_messages.balanced_lmi_note)
+    assert check.code is LMICause.CERTIFIED and check.evidence["state_scaling"] is not None
+    assert check.summary.endswith(
+        observer_messages.balanced_lmi_note(check.evidence["state_scaling"])
+    )
 
 
 @pytest.mark.slow
@@ -431,5 +440,7 @@ def test_a_plant_in_units_at_the_end_of_the_float_range_answers_without_an_error
     cert = analyze(_spec(*_rescaled_by(UGV_PLANT, UGV_OBSERVER, [2.0**1000, 1.0])))
     stability = cert["observer_stability"]
     assert stability.verdict.value == "inconclusive"
-    assert "would leave the float range" in stability.summary
+    # the balanced certificates' P would leave the float range written back (2^1982)
+    assert stability.code is LMICause.CIRCLE_NOT_VERIFIED
+    assert lmi_messages.not_written_back(1982) in stability.summary
     assert cert["iss_gain"].verdict.value == "inconclusive"

@@ -15,6 +15,7 @@ from ssecert import Spec, SpecError, System, observability, sparse_observability
 from ssecert.design.gains import deadbeat_gain
 from ssecert.examples import list_examples, load_example
 from ssecert.observers import build_observer
+from ssecert.stability.outcomes import SchurCode
 from ssecert.testing import (
     assert_certified,
     assert_deadbeat,
@@ -376,7 +377,8 @@ def test_assert_schur():
     # rho = 1 - 2^-54 in exact arithmetic: ||M^2||_inf < 1 is decided in integers
     close = assert_schur([[0.0, 2.0**60], [np.nextafter(2.0**-60, 0.0), 0.0]])
     assert close.method == "exact powers" and 0 < close.margin < 1e-15
-    assert "1 - 5.55e-17 < 1" in close.reason
+    assert close.decided_by is SchurCode.POWERS_STABLE and close.decision.facts["power"] == 2
+    assert close.decision.facts["gap"] == pytest.approx(5.55e-17, rel=1e-3)
     with pytest.raises(AssertionError, match=r"eigenvalue 1\.000000001 has modulus 1\.000000001"):
         assert_schur([[1.0 + 1e-9]])  # enough digits to see the eigenvalue is not 1
 

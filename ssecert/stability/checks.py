@@ -371,22 +371,13 @@ def _zames_falb_stability_check(
 ) -> Check:
     """observer_stability of a sparse observer certified by a Zames-Falb multiplier."""
     order = cert.details["order"]
-    nature = (
-        "slope-restricted in [0, shrink]; nonnegative coefficients, so the certificate also "
-        "holds for increments"
-        if cert.details.get("incremental")
-        else "odd and slope-restricted in [0, shrink]"
-    )
-    summary = (
-        f"The error state (e, a_hat) converges to 0 from every initial condition without "
-        f"attack: with a Zames-Falb multiplier of order {order} (the soft threshold is "
-        f"{nature}), V(zeta) = zeta' P zeta over the error state and the "
-        f"last {order} nonlinearity inputs and outputs satisfies V(zeta+) - V(zeta) + sigma <= "
-        f"-eta |xi|^2 with sum_k sigma_k >= 0, so sum_k |xi(k)|^2 <= "
-        f"{cert.details['sum_bound_factor']:.4g} |xi(0)|^2 (verified margin {cert.margin:.3g} "
-        f"against an error bound {cert.error_bound:.1e}). No decay rate is certified: the "
-        f"circle criterion found no quadratic Lyapunov function." + _balanced_note(cert)
-    )
+    summary = observer_messages.zames_falb_summary(
+        order,
+        incremental=bool(cert.details.get("incremental")),
+        sum_bound_factor=cert.details["sum_bound_factor"],
+        margin=_known(cert.margin),
+        error_bound=cert.error_bound,
+    ) + _balanced_note(cert)
     evidence = _circle_evidence(model, cert)
     evidence["lmi"] = (
         "G' P G - diag(P, 0) + sum_i m0_i K0_i - sum_ij (a_ij Ka_ij + b_ij Kb_ij) <= -margin ||P|| I "
@@ -600,31 +591,8 @@ def thesis_assumptions_check(
     """
     holds = None if observability is None else observability.verdict is Verdict.HOLDS
     verdict, items = thesis_assumptions(design, observability_holds=holds, seed=seed, budget=budget)
-    by_name = {i.name: i for i in items}
     failing = [i for i in items if i.verdict is Verdict.FAILS]
-    if verdict == Verdict.HOLDS:
-        summary = "Every assumption of the thesis's stability proof holds on this design."
-    elif verdict == Verdict.FAILS:
-        findings = "; ".join(i.finding or f"{i.name}: {i.reason}" for i in failing)
-        corrected = [i.name for i in failing] == ["lemma_1"] and all(
-            by_name[name].verdict is Verdict.HOLDS for name in ("assumption_3", "epsilon_bound")
-        )
-        if corrected:
-            summary = (
-                f"{findings}. With that bound Assumption 3 and the epsilon bound (5.20) hold: "
-                f"the thesis's stability theorem does not apply as printed, but its argument "
-                f"with the corrected constant does."
-            )
-        else:
-            summary = (
-                f"{findings}. The thesis's stability theorem therefore does not apply to this "
-                f"design."
-            )
-        summary += " Advisory: no verdict of this certificate relies on it."
-    else:
-        summary = "Not all assumptions could be decided: " + "; ".join(
-            f"{i.name}: {i.reason}" for i in items if i.verdict == Verdict.INCONCLUSIVE
-        )
+    summary = observer_messages.thesis_summary(Verdict(verdict), items)
     return Check(
         id="thesis_assumptions",
         title="Thesis assumptions (Ch. 5)",

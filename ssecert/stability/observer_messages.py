@@ -29,6 +29,8 @@ __all__ = [
     "failure_summary",
     "linear_gain_summary",
     "nilpotent_summary",
+    "thesis_summary",
+    "zames_falb_summary",
 ]
 
 
@@ -241,3 +243,60 @@ def constant_attack_text(records: Sequence[Mapping[str, Any]]) -> str:
         parts.append(f"{rec['attack']}: {outcome} ({'proved' if rec['proved'] else 'observed'})")
     more = f"; {len(records) - 3} more in the evidence" if len(records) > 3 else ""
     return "Under a constant attack, from zero error: " + "; ".join(parts) + more + "."
+
+
+def thesis_summary(verdict: Verdict, items: Sequence[Any]) -> str:
+    """The summary of the thesis_assumptions check from its items (``name``, ``verdict``,
+    ``reason`` and, for a failing one, ``finding``: ``ssecert.stability.thesis``).
+
+    A failure says that the stability theorem does not apply (or, where Lemma 1 alone fails
+    and its corrected bound carries Assumption 3 and the epsilon bound, that its argument
+    does with the corrected constant) and that no verdict relies on it.
+    """
+    if verdict is Verdict.HOLDS:
+        return "Every assumption of the thesis's stability proof holds on this design."
+    if verdict is Verdict.FAILS:
+        by_name = {i.name: i for i in items}
+        failing = [i for i in items if i.verdict is Verdict.FAILS]
+        findings = "; ".join(i.finding or f"{i.name}: {i.reason}" for i in failing)
+        corrected = [i.name for i in failing] == ["lemma_1"] and all(
+            by_name[name].verdict is Verdict.HOLDS for name in ("assumption_3", "epsilon_bound")
+        )
+        if corrected:
+            summary = (
+                f"{findings}. With that bound Assumption 3 and the epsilon bound (5.20) hold: "
+                f"the thesis's stability theorem does not apply as printed, but its argument "
+                f"with the corrected constant does."
+            )
+        else:
+            summary = (
+                f"{findings}. The thesis's stability theorem therefore does not apply to this "
+                f"design."
+            )
+        return summary + " Advisory: no verdict of this certificate relies on it."
+    return "Not all assumptions could be decided: " + "; ".join(
+        f"{i.name}: {i.reason}" for i in items if i.verdict == Verdict.INCONCLUSIVE
+    )
+
+
+def zames_falb_summary(
+    order: int, *, incremental: bool, sum_bound_factor: float, margin: float, error_bound: float
+) -> str:
+    """The summary of an observer_stability certified by a Zames-Falb multiplier of ``order``
+    (``incremental``: its delayed coefficients are nonnegative, so it holds for increments)."""
+    nature = (
+        "slope-restricted in [0, shrink]; nonnegative coefficients, so the certificate also "
+        "holds for increments"
+        if incremental
+        else "odd and slope-restricted in [0, shrink]"
+    )
+    return (
+        f"The error state (e, a_hat) converges to 0 from every initial condition without "
+        f"attack: with a Zames-Falb multiplier of order {order} (the soft threshold is "
+        f"{nature}), V(zeta) = zeta' P zeta over the error state and the "
+        f"last {order} nonlinearity inputs and outputs satisfies V(zeta+) - V(zeta) + sigma <= "
+        f"-eta |xi|^2 with sum_k sigma_k >= 0, so sum_k |xi(k)|^2 <= "
+        f"{sum_bound_factor:.4g} |xi(0)|^2 (verified margin {margin:.3g} "
+        f"against an error bound {error_bound:.1e}). No decay rate is certified: the "
+        f"circle criterion found no quadratic Lyapunov function."
+    )
