@@ -18,7 +18,7 @@ import numpy as np
 
 from .analyze import analyze
 from .base.display import html_display
-from .budget import Budget, ResourceLimitError
+from .budget import Budget, Refusal, ResourceLimitError
 from .context import OBSERVER, AnalysisContext
 from .inputs import as_spec
 from .results import Certificate, Verdict, to_jsonable
@@ -399,7 +399,6 @@ def _region(
     design: Any, notes: list[str], say: Progress, budget: Budget, time_limit: float | None = None
 ) -> Any | None:
     """The certified (shrink, step) map of ``design``, its kind's region family."""
-    from .stability.lmi import lmi_cost
     from .stability.region import region_map
 
     m = design.sensing.shape[0]
@@ -412,21 +411,8 @@ def _region(
         )
         return None
     say("mapping the certified (shrink, step) region")
-    step = float(design.step)
-    steps = np.unique(np.round(step * np.geomspace(0.1, 2.0, 6), 12))
-    shrinks = np.array([0.2, 0.4, 0.6, 0.8, 0.9, 1.0])
-    if not np.any(np.isclose(shrinks, design.shrink)):
-        shrinks = np.sort(np.append(shrinks, design.shrink))
-    if not np.any(np.isclose(steps, step)):
-        steps = np.sort(np.append(steps, step))
-    # every grid point may need a block-diagonal and a cross-term solve
-    model = design.observer_kind.lure_model(design)
-    costs = [lmi_cost(model, "circle", st) for st in ("block-diagonal", "cross")]
-    refusal = budget.check(
-        f"the {shrinks.size} x {steps.size} region map ({n + 2 * m} LMI rows per point)",
-        nbytes=max(c[0] for c in costs),
-        flops=shrinks.size * steps.size * sum(c[1] for c in costs),
-    )
+    shrinks, steps = _region_grid(design)
+    refusal = _region_refusal(design, shrinks, steps, budget)
     if refusal is not None:
         notes.append(f"certified region not mapped: {refusal}")
         return None
@@ -438,6 +424,35 @@ def _region(
             "(inconclusive); --time-budget raises the limit"
         )
     return found
+
+
+def _region_grid(design: Any) -> tuple[np.ndarray, np.ndarray]:
+    """The (shrinks, steps) of the certified region map around ``design``'s own."""
+    step = float(design.step)
+    steps = np.unique(np.round(step * np.geomspace(0.1, 2.0, 6), 12))
+    shrinks = np.array([0.2, 0.4, 0.6, 0.8, 0.9, 1.0])
+    if not np.any(np.isclose(shrinks, design.shrink)):
+        shrinks = np.sort(np.append(shrinks, design.shrink))
+    if not np.any(np.isclose(steps, step)):
+        steps = np.sort(np.append(steps, step))
+    return shrinks, steps
+
+
+def _region_refusal(
+    design: Any, shrinks: np.ndarray, steps: np.ndarray, budget: Budget
+) -> Refusal | None:
+    """Why ``budget`` refuses the region map over ``shrinks`` x ``steps`` (None when it fits):
+    every grid point may need a block-diagonal and a cross-term solve."""
+    from .stability.lmi import lmi_cost
+
+    n, m = design.system.n, design.sensing.shape[0]
+    model = design.observer_kind.lure_model(design)
+    costs = [lmi_cost(model, "circle", st) for st in ("block-diagonal", "cross")]
+    return budget.check(
+        f"the {shrinks.size} x {steps.size} region map ({n + 2 * m} LMI rows per point)",
+        nbytes=max(c[0] for c in costs),
+        flops=shrinks.size * steps.size * sum(c[1] for c in costs),
+    )
 
 
 def _command(spec: Spec, seed: int | None, simulate: bool) -> str:

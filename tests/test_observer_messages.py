@@ -181,3 +181,18 @@ def test_a_thesis_check_that_fails_says_it_does_not_apply():
     assert re.search(r"by a factor above 1e\d{3}", words) and "e+" not in words
     held = observer_messages.thesis_summary(Verdict.HOLDS, items)
     assert held == "Every assumption of the thesis's stability proof holds on this design."
+
+
+def test_words_a_window_too_large_to_build_names_its_key_and_size():
+    # the observer_gain check and certify's notes give this refusal as it is
+    from ssecert.budget import ResourceLimitError
+    from ssecert.observers import build_observer
+    from ssecert.system import System
+
+    system = System(np.diag([0.9, 0.8]), np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]))
+    observer = {"kind": "sso", "step": 0.01, "threshold": 0.1, "window": 10**6}
+    with pytest.raises(ResourceLimitError) as refused:
+        build_observer(system, observer)
+    words = str(refused.value)
+    assert words.startswith("observer.window = 1,000,000: the SSO's stacked O_tau (3,000,000 x 2)")
+    assert re.search(r"needs about [\d.]+ TiB of memory, over the memory budget of 2 GiB", words)

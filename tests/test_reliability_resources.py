@@ -31,6 +31,7 @@ from ssecert.examples import load_example
 from ssecert.observers import build_observer
 from ssecert.results import to_jsonable
 from ssecert.simulation.engine import simulate_scenario, simulate_spec
+from ssecert.stability import checks as stability_checks
 from ssecert.stability import counterexample_search, lmi, region, thesis_messages
 from ssecert.stability.checks import observer_checks
 from ssecert.stability.outcomes import AssumptionCode, LMICause, LMICode, SeriesCode
@@ -308,7 +309,10 @@ shrink = 0.5
     code, out, err = _run(capsys, "analyze", spec, "--json", "-")
     assert code == 3, err
     stab = json.loads(out)["checks"]["observer_stability"]
-    assert stab["verdict"] == "inconclusive" and "SolverError" in stab["summary"]
+    assert stab["verdict"] == "inconclusive"
+    # every solve raised, and each attempt records the solver's error as its status
+    statuses = {a["status"] for a in stab["evidence"]["attempts"]}
+    assert statuses == {"solver error: SolverError: Clarabel failed (simulated)"}
 
 
 def test_iss_gain_from_a_circle_certificate_survives_singular_schur_blocks():
@@ -503,8 +507,13 @@ def test_sso_window_50_lmi_is_refused_with_the_estimate():
     checks = {c.id: c for c in observer_checks(spec.system, spec.observer)}
     stab = checks["observer_stability"]
     assert stab.verdict.value == "inconclusive"
-    assert "block-diagonal LMI with 312 rows" in stab.summary
-    assert "over the memory budget of 2 GiB" in stab.summary
+    # refused by the memory budget (2 GiB) with the LMI's estimate, and said so
+    # no solve fits: the LMIs were not verified, each refused with its estimate
+    assert stab.code is LMICause.CIRCLE_NOT_VERIFIED and model.N + model.m == 312
+    refusal = lmi._solve_refusal(model, "circle", "block-diagonal", Budget())
+    assert refusal.resource is Resource.MEMORY and refusal.limit == 2 * 2**30
+    assert refusal.need == nbytes
+    assert str(refusal) in stab.summary
 
 
 def test_sso_window_too_large_to_build_is_inconclusive_not_allocated(tmp_path):
@@ -513,18 +522,26 @@ def test_sso_window_too_large_to_build_is_inconclusive_not_allocated(tmp_path):
     checks = {c.id: c for c in observer_checks(spec.system, spec.observer)}
     assert time.perf_counter() - start < 2
     assert checks["observer_gain"].verdict.value == "inconclusive"
-    assert "observer.window = 1,000,000" in checks["observer_gain"].summary
-    assert "TiB" in checks["observer_gain"].summary
+    assert checks["observer_gain"].fields["L"] is None
+    # the budget's refusal (its words: test_observer_messages) is what the check and the
+    # certificate's notes say
+    with pytest.raises(ResourceLimitError) as refused:
+        build_observer(spec.system, spec.observer)
+    assert str(refused.value) in checks["observer_gain"].summary
     result = certify(spec, simulate=False)
-    assert any("observer was not built" in note for note in result.notes)
+    assert sum(str(refused.value) in note for note in result.notes) == 1
 
 
 def test_small_budget_refuses_the_lure_model_and_the_region_map():
     spec = _window_spec(60)
     tiny = Budget(memory=2**20)
     checks = {c.id: c for c in observer_checks(spec.system, spec.observer, budget=tiny)}
-    assert "not attempted" in checks["observer_stability"].summary
-    assert "1 MiB" in checks["observer_stability"].summary
+    stab = checks["observer_stability"]
+    assert stab.verdict.value == "inconclusive" and stab.code is LMICause.REFUSED
+    design = build_observer(spec.system, spec.observer)
+    refusal = stability_checks._lure_model_refusal(design, tiny)
+    assert refusal.resource is Resource.MEMORY and refusal.limit == 2**20
+    assert str(refusal) in stab.summary
     en = load_example("ugv")
     design = build_observer(
         en.system,
@@ -537,11 +554,14 @@ def test_small_budget_refuses_the_lure_model_and_the_region_map():
             "shrink": 0.5,
         },
     )
-    from ssecert.certify import _region
+    from ssecert.certify import _region, _region_grid, _region_refusal
 
     notes = []
     assert _region(design, notes, lambda message: None, Budget(work=1e6)) is None
-    assert "certified region not mapped" in notes[0] and "work budget" in notes[0]
+    # not mapped: the work budget refuses the grid, and the one note gives the refusal
+    refusal = _region_refusal(design, *_region_grid(design), Budget(work=1e6))
+    assert refusal.resource is Resource.WORK and refusal.need > refusal.limit == 1e6
+    assert len(notes) == 1 and notes[0].endswith(str(refusal))
 
 
 def test_thesis_checks_refuse_huge_attack_estimates():
