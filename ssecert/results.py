@@ -178,10 +178,14 @@ class Check:
         The reason code that says why the check has its verdict, where its analysis has one
         (the irrepresentable check's ``IrrepresentableCode``, observability's
         ``ObservabilityCode``, sparse observability's ``SparseCode``, the region of
-        attraction's ``RegionCode``, the ``LMICause`` of an observer_stability from a circle
-        certificate, ``Withdrawn`` for a verdict that contradicted a check decided before
-        it): for callers and tests that read the decision instead of the summary's words;
-        not written to JSON.
+        attraction's ``RegionCode``; observer_gain's and a linear observer_stability's
+        ``LyapunovCode.VERIFIED`` or the exact decision's ``SchurCode``
+        (``LyapunovCertificate.decided_by``), the ``LMICause`` of an observer_stability from
+        a circle or Zames-Falb certificate or refused before one, the ``WitnessKind`` of a
+        failing one's witness, and iss_gain's ``LMICause``; ``Withdrawn`` for a verdict that
+        contradicted a check decided before it): for callers and tests that read the
+        decision instead of the summary's words; not written to JSON.  None where the check
+        has no typed outcome (a deadbeat gain, an observer not built).
     """
 
     id: str
