@@ -191,3 +191,97 @@ def test_the_sentence_reader_finds_what_it_names():
         "u = x.method in ('a', b)\n"
     )
     assert [line for line, _ in _reads_text(ast.parse(code))] == [1, 2, 3, *range(6, 14)]
+
+
+# tests of the words themselves: a family's message templates (called with codes and facts),
+# how values are written (``base.format``), and the pytest toolkit's assertion messages
+_WORDING_TESTS = ("_messages.py", "test_format.py", "test_testing.py")
+
+
+def _searched_words(tree: object) -> list[tuple[int, str]]:
+    """Asserts that search a summary, reason, note or problem for words (``"x" in
+    check.summary``), unless the text searched is a message template's, called there."""
+    import ast
+
+    def prose(node: object) -> bool:
+        if isinstance(node, ast.Subscript):
+            key = node.slice
+            if isinstance(key, ast.Constant) and isinstance(key.value, str):
+                return any(word in key.value.lower() for word in _PROSE)
+            return prose(node.value)
+        if isinstance(node, ast.BinOp):
+            return prose(node.left) or prose(node.right)
+        if isinstance(node, ast.Call):
+            return any(prose(a) for a in node.args)
+        return _prose_name(node)
+
+    def template(node: object) -> bool:
+        return any(
+            isinstance(n, ast.Call) and "_messages." in ast.unparse(n.func)
+            for n in ast.walk(node)  # type: ignore[arg-type]
+        )
+
+    # words written once at the top of a module (CLAIM = "...") and searched for later
+    named = {
+        target.id
+        for node in getattr(tree, "body", [])
+        if isinstance(node, ast.Assign) and _words(node.value)
+        for target in node.targets
+        if isinstance(target, ast.Name)
+    }
+
+    def words(node: object) -> bool:
+        if isinstance(node, ast.Name):
+            return node.id in named
+        return isinstance(node, (ast.Constant, ast.JoinedStr))
+
+    found = []
+    for node in ast.walk(tree):  # type: ignore[arg-type]
+        if not isinstance(node, ast.Assert):
+            continue
+        for test in ast.walk(node.test):
+            if (
+                isinstance(test, ast.Compare)
+                and any(isinstance(op, (ast.In, ast.NotIn)) for op in test.ops)
+                and words(test.left)
+                and any(prose(side) and not template(side) for side in test.comparators)
+            ):
+                found.append((test.lineno, ast.unparse(test)))
+    return found
+
+
+@pytest.mark.slow
+def test_tests_read_codes_not_sentences():
+    """Verdict tests compare reason codes and numbers; the words are tested where they are
+    written (the message templates, the formatting of values, the toolkit's messages), so
+    that a better sentence breaks no test that meant to check a verdict."""
+    import ast
+
+    offenders = []
+    for path in sorted((ROOT / "tests").glob("test_*.py")):
+        if path.name.endswith(_WORDING_TESTS):
+            continue
+        for line, code in _searched_words(ast.parse(path.read_text(), str(path))):
+            offenders.append(f"tests/{path.name}:{line}: {code}")
+    assert not offenders, "\n".join(offenders)
+
+
+def test_the_words_searcher_finds_what_it_names():
+    import ast
+
+    code = (
+        "CLAIM = 'within precision'\n"
+        "assert 'x' in check.summary\n"
+        "assert f'{v:.3g}' in cert['a'].reason\n"
+        "assert 'y' not in notes[0]\n"
+        "assert 'z' in out['summary']\n"
+        "assert 'w' in ' '.join(found['problems'])\n"
+        "assert CLAIM not in check.summary\n"
+        # a template called with its code and facts, a code, a number: not
+        "assert 'x' in region_messages.reason(code, facts)\n"
+        "assert check.code is Code.X\n"
+        "assert 'x' in fields\n"
+        "assert 0.5 in values\n"
+        "assert name in check.summary\n"
+    )
+    assert [line for line, _ in _searched_words(ast.parse(code))] == [2, 3, 4, 5, 6, 7]
