@@ -245,6 +245,13 @@ def _searched_words(tree: object) -> list[tuple[int, str]]:
                 and any(isinstance(op, (ast.In, ast.NotIn)) for op in test.ops)
                 and words(test.left)
                 and any(prose(side) and not template(side) for side in test.comparators)
+            ) or (
+                isinstance(test, ast.Call)
+                and isinstance(test.func, ast.Attribute)
+                and test.func.attr in ("startswith", "endswith", "count", "find", "index")
+                and prose(test.func.value)
+                and bool(test.args)
+                and words(test.args[0])
             ):
                 found.append((test.lineno, ast.unparse(test)))
     return found
@@ -283,5 +290,7 @@ def test_the_words_searcher_finds_what_it_names():
         "assert 'x' in fields\n"
         "assert 0.5 in values\n"
         "assert name in check.summary\n"
+        "assert check.summary.endswith('done.')\n"
+        "assert found.reason.startswith(region_messages.reason(code, facts))\n"
     )
-    assert [line for line, _ in _searched_words(ast.parse(code))] == [2, 3, 4, 5, 6, 7]
+    assert [line for line, _ in _searched_words(ast.parse(code))] == [2, 3, 4, 5, 6, 7, 13]

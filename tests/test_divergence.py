@@ -11,6 +11,7 @@ from ssecert import analyze, spec_from_dict
 from ssecert.examples import load_example
 from ssecert.observers import build_observer
 from ssecert.observers.lure import LureModel
+from ssecert.stability import observer_messages
 from ssecert.stability.checks import observer_stability_check
 from ssecert.stability.divergence import GROWTH, divergence_witness
 from ssecert.stability.equilibria import nonzero_equilibrium
@@ -160,7 +161,9 @@ def test_the_ugv_dsso_converges_from_its_certified_region():
     assert radius >= 5 and region.evidence["dead_zone_radius"] == pytest.approx(0.1 / 0.7, 1e-3)
     assert "piecewise-quadratic" in region.method
     # the undecided stability check reports the certified region beside it
-    assert cert["observer_stability"].evidence["certified_region_radius"] == radius
+    stability = cert["observer_stability"]
+    assert stability.evidence["certified_region_radius"] == radius
+    assert stability.summary.endswith(observer_messages.region_proved_text(radius))
     # independent replay: initial errors inside the radius, a_hat(0) = 0, converge
     spec = load_example("ugv")
     model = LureModel.from_design(build_observer(spec.system, spec.observer))
@@ -256,7 +259,9 @@ def test_an_sso_with_inner_steps_gets_the_radius_its_dead_zone_proves():
     replay = region.evidence["replay"]
     assert replay["simulator"] == "WindowSSO" and replay["confirmed"]
     assert replay["largest_attack_estimate"] == 0.0
-    assert cert["observer_stability"].evidence["certified_region_radius"] == region.value
+    stability = cert["observer_stability"]
+    assert stability.evidence["certified_region_radius"] == region.value
+    assert stability.summary.endswith(observer_messages.region_proved_text(region.value))
 
 
 def test_an_sso_whose_gradient_step_is_too_long_fails_near_the_origin():

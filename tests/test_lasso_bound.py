@@ -366,7 +366,21 @@ def test_a_window_too_short_fails_every_decoder_bound_with_the_kept_sensors():
         assert check.verdict is Verdict.FAILS and check.value == math.inf, check_id
     for check_id in ("l1_error_bound", "lasso_error_bound"):
         assert cert[check_id].witness == {"kept_sensors": [0, 1], "horizon": 1}
-        assert cert[check_id].summary.endswith("a window of n steps would determine it.")
+        assert cert[check_id].code.name == "WINDOW_TOO_SHORT"
+    # and a window of n steps would determine the state: the reason says so
+    from ssecert.structure import noise_messages
+    from ssecert.structure.l1_bound import l1_error_bound
+
+    lasso = lasso_error_bound(spec.system, 0, spec.noise, horizon=1)
+    l1 = l1_error_bound(spec.system, 0, spec.noise, horizon=1)
+    for found in (lasso, l1):
+        assert found.facts["longer_horizon_helps"] is True
+    assert noise_messages.lasso_reason(lasso, spec.system).endswith(
+        "a window of n steps would determine it"
+    )
+    assert noise_messages.l1_reason(l1, spec.system).endswith(
+        "a window of n steps would determine it"
+    )
 
 
 def test_the_constructed_worst_case_is_a_lower_bound_on_an_ill_conditioned_plant():

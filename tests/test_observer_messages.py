@@ -196,3 +196,9 @@ def test_words_a_window_too_large_to_build_names_its_key_and_size():
     words = str(refused.value)
     assert words.startswith("observer.window = 1,000,000: the SSO's stacked O_tau (3,000,000 x 2)")
     assert re.search(r"needs about [\d.]+ TiB of memory, over the memory budget of 2 GiB", words)
+
+
+def test_words_of_the_region_an_undecided_stability_check_reports():
+    words = observer_messages.region_proved_text(1234.5678)
+    assert words.startswith("What is proved: the error converges from every initial error")
+    assert "||e(0)|| <= 1.23e+03 and a_hat(0) = 0 (region_of_attraction)." in words

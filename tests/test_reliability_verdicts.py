@@ -460,4 +460,41 @@ def test_a_stability_check_that_contradicts_the_gain_reports_it(monkeypatch):
     assert stability.evidence["contradicts"] == "observer_gain"
     assert stability.evidence["withdrawn_verdict"] == "fails"
     assert defect["observer_gain"].to_dict() == cert["observer_gain"].to_dict()
+    # the linear observer's ISS gain rests on its own certificate, not on the withdrawn one
+    assert defect["iss_gain"].verdict is cert["iss_gain"].verdict
+    assert defect["iss_gain"].value == cert["iss_gain"].value
+
+
+def test_nothing_rests_on_a_withdrawn_stability_certificate(monkeypatch):
+    """A sparse observer whose stability is certified while the gain check (planted defect)
+    proves A - L C unstable: observer_stability is withdrawn, and the ISS gain, which would
+    rest on its certificate, has none."""
+    from dataclasses import replace
+
+    from ssecert.results import Withdrawn
+    from ssecert.stability import checks as checks_module
+    from ssecert.stability.outcomes import LMICause
+
+    spec = spec_from_dict(
+        {
+            "name": "sso-plant",
+            "system": {"A": [[0.9, 0.2], [0.0, 0.7]], "C": [[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]},
+            "attack": {"max_attacked": 0},
+            "observer": {"kind": "sso", "step": 0.2, "threshold": 0.1},
+        }
+    )
+    cert = analyze(spec)
+    assert cert["observer_stability"].verdict is Verdict.HOLDS
+    assert cert["iss_gain"].verdict is Verdict.HOLDS
+
+    built = checks_module.observer_gain_check
+
+    def wrong(design, **kwargs):  # a defect: a witness of an unstable A - L C
+        return replace(built(design, **kwargs), verdict=Verdict.FAILS, witness={"planted": 1})
+
+    monkeypatch.setattr(checks_module, "observer_gain_check", wrong)
+    defect = analyze(spec)
+    assert defect["observer_stability"].code is Withdrawn.CONTRADICTS
+    assert defect["iss_gain"].verdict is Verdict.INCONCLUSIVE
+    assert defect["iss_gain"].code is LMICause.NO_BASE
     assert len(defect.meta["notes"]) == len(cert.meta["notes"]) + 1

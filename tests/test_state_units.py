@@ -111,8 +111,10 @@ def test_a_circle_criterion_retried_in_balanced_units_draws_its_conclusion_once(
     (notes,) = cert.facts["notes"]  # the retry's, in lmi_messages' words
     first = model.balancings()[0]
     assert notes.startswith(lmi_messages.balanced_note(scaling_text(first), ""))
-    assert cert.reason.count(conclusion) == 1 and cert.reason.endswith(conclusion), cert.reason
-    assert cert.reason.count("no circle-criterion certificate was found or verified") >= 2
+    assert cert.reason == lmi_messages.reason(cert.cause, cert.facts)
+    words = lmi_messages.reason(cert.cause, cert.facts)
+    assert words.count(conclusion) == 1 and words.endswith(conclusion), words
+    assert words.count("no circle-criterion certificate was found or verified") >= 2
 
 
 @pytest.mark.slow

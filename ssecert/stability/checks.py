@@ -20,7 +20,7 @@ from ..design.gains import GainError
 from ..noise import MeasurementNoise
 from ..observers import ObserverDesign, build_observer
 from ..observers.lure import LureModel
-from ..results import Check, Step, Verdict, decide, withdraw
+from ..results import Check, Step, Verdict, Withdrawn, decide, withdraw
 from ..system import System
 from ..tolerances import Tolerances
 from . import noise_messages, observer_messages, region_messages
@@ -802,18 +802,25 @@ def _against_gain(
             "an unstable A - L C (proved by the gain check) rules out a stable observer: near "
             "e = 0 the error follows e+ = (A - L C) e"
         )
-    return (check if why is None else withdraw(check, gain, why)), certificate
+    if why is None:
+        return check, certificate
+    # nothing after it rests on a certificate its own check withdrew (the ISS gain, the noise
+    # bound: inconclusive without a stability certificate)
+    return withdraw(check, gain, why), None
 
 
 def _stability_with_region(stability: Check, region: Check | None) -> Check:
     """observer_stability as reported: an undecided stability check says what
-    region_of_attraction proves (the step after both in ``observer_checks``)."""
-    if region is None or stability.verdict is not Verdict.INCONCLUSIVE or not region.value:
+    region_of_attraction proves (the step after both in ``observer_checks``); a withdrawn one
+    stays as it was withdrawn."""
+    undecided = stability.verdict is Verdict.INCONCLUSIVE and stability.code is not (
+        Withdrawn.CONTRADICTS
+    )
+    if region is None or not undecided or not region.value:
         return stability
     return replace(
         stability,
-        summary=f"{stability.summary} What is proved: the error converges from every initial "
-        f"error with ||e(0)|| <= {region.value:.3g} and a_hat(0) = 0 (region_of_attraction).",
+        summary=f"{stability.summary} {observer_messages.region_proved_text(region.value)}",
         evidence={**stability.evidence, "certified_region_radius": region.value},
     )
 

@@ -29,6 +29,7 @@ __all__ = [
     "failure_summary",
     "linear_gain_summary",
     "nilpotent_summary",
+    "region_proved_text",
     "thesis_summary",
     "zames_falb_summary",
 ]
@@ -299,4 +300,18 @@ def zames_falb_summary(
         f"{sum_bound_factor:.4g} |xi(0)|^2 (verified margin {margin:.3g} "
         f"against an error bound {error_bound:.1e}). No decay rate is certified: the "
         f"circle criterion found no quadratic Lyapunov function."
+    )
+
+
+def region_proved_text(radius: float) -> str:
+    """What an undecided stability check says region_of_attraction proves.
+
+    Examples
+    --------
+    >>> region_proved_text(0.25)[-57:]
+    '||e(0)|| <= 0.25 and a_hat(0) = 0 (region_of_attraction).'
+    """
+    return (
+        f"What is proved: the error converges from every initial error with ||e(0)|| <= "
+        f"{radius:.3g} and a_hat(0) = 0 (region_of_attraction)."
     )

@@ -439,8 +439,10 @@ def decoder_error_bound(
         units = _sensor_units(system, noise)
         if units is not None:
             again = _bound_in_units(units[0], max_attacked, units[1], horizon, max_sets)
-            if again.code is not BoundCode.OUT_OF_RANGE:
-                return _in_spec_units(system, again, noise, units[2])
+            if again.code is BoundCode.CERTIFIED:  # (else the spec's data's own reason)
+                back = _in_spec_units(system, again, noise, units[2])
+                if back is not None:
+                    return back
     return found
 
 
@@ -451,8 +453,11 @@ def _sensor_units(
     largest entry into [1, 2); None when d = 0 or a division is not exact (subnormal)."""
     top = float(np.max(np.abs(system.C))) if system.C.size else 0.0
     d = math.frexp(top)[1] - 1 if top > 0 and math.isfinite(top) else 0
-    C, eta = np.ldexp(system.C, -d), np.ldexp(noise.eta, -d)
-    exact = np.array_equal(np.ldexp(C, d), system.C) and np.array_equal(np.ldexp(eta, d), noise.eta)
+    with np.errstate(all="ignore"):  # (an overflow or underflow: not exact, None)
+        C, eta = np.ldexp(system.C, -d), np.ldexp(noise.eta, -d)
+        exact = np.array_equal(np.ldexp(C, d), system.C) and np.array_equal(
+            np.ldexp(eta, d), noise.eta
+        )
     if d == 0 or not exact:
         return None
     return replace(system, C=C), MeasurementNoise(eta, noise.norm), d
@@ -460,11 +465,15 @@ def _sensor_units(
 
 def _in_spec_units(
     system: System, found: DecoderErrorBound, noise: MeasurementNoise, d: int
-) -> DecoderErrorBound:
-    """``found`` for the plant in units 2^-d (``_sensor_units``) in the spec's: the errors
-    are the same, the singular values 2^d times, the noise the spec's; re-checked there."""
-    with np.errstate(over="ignore"):
-        sigma, smallest = math.ldexp(found.sigma, d), math.ldexp(found.smallest_sigma, d)
+) -> DecoderErrorBound | None:
+    """A certified ``found`` for the plant in units 2^-d (``_sensor_units``) in the spec's:
+    the errors are the same, the singular values 2^d times, the noise the spec's; re-checked
+    there.  None when a singular value leaves the float range in the spec's units."""
+    with np.errstate(all="ignore"):
+        sigma = float(np.ldexp(found.sigma, d))
+        smallest = float(np.ldexp(found.smallest_sigma, d))
+    if not (math.isfinite(sigma) and math.isfinite(smallest)):
+        return None
     back = replace(
         found,
         noise=noise,
@@ -472,10 +481,6 @@ def _in_spec_units(
         smallest_sigma=smallest,
         facts={**found.facts, "sensor_scale": math.ldexp(1.0, d)},
     )
-    if found.code is not BoundCode.CERTIFIED:
-        return back
-    if not (math.isfinite(sigma) and math.isfinite(smallest)):
-        return replace(back, code=BoundCode.OUT_OF_RANGE, bound=math.inf)
     exact = sigma_rechecks(system, back)
     back = replace(back, facts={**back.facts, "sigma_rechecked_exactly": exact})
     if not bound_rechecks(back) or exact is False:

@@ -32,10 +32,7 @@ METHOD = "l0 decoder's optimality on every set of p - 2s sensors (verified sigma
 
 
 _TOO_FEW = "with {s} attacked sensors no sensor is left unattacked (s >= p)"
-_OUT_OF_RANGE = (
-    "the observability matrix or the noise bounds leave the floating-point range (in any units "
-    "of the sensors)"
-)
+_OUT_OF_RANGE = "the observability matrix or the noise bounds leave the floating-point range"
 _RECHECK = "the bound did not survive its re-check in rational arithmetic (please report it)"
 
 
@@ -188,6 +185,7 @@ def decoder_bound_check(system: System, found: DecoderErrorBound) -> Check:
         "required": False,
         "value_name": VALUE_NAME,
         "fields": fields,
+        "code": found.code,
     }
     if found.code is BoundCode.NOT_SPARSE_OBSERVABLE:
         breaking_set = list(found.facts["breaking_set"])
@@ -347,6 +345,7 @@ def lasso_bound_check(
         "required": False,
         "value_name": LASSO_VALUE_NAME,
         "fields": fields,
+        "code": found.code,
         "evidence": evidence,
     }
     if breaking_set is not None:
@@ -479,6 +478,7 @@ def l1_bound_check(
         "required": False,
         "value_name": L1_VALUE_NAME,
         "fields": fields,
+        "code": found.code,
         "evidence": evidence,
     }
     if breaking_set is not None:
