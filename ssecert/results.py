@@ -182,7 +182,8 @@ class Check:
         ``LyapunovCode.VERIFIED`` or the exact decision's ``SchurCode``
         (``LyapunovCertificate.decided_by``), the ``LMICause`` of an observer_stability from
         a circle or Zames-Falb certificate or refused before one, the ``WitnessKind`` of a
-        failing one's witness, and iss_gain's ``LMICause``; ``Withdrawn`` for a verdict that
+        failing one's witness, and iss_gain's ``LMICause``; the decoder bounds' ``BoundCode``,
+        ``LassoBoundCode`` and ``L1BoundCode``; ``Withdrawn`` for a verdict that
         contradicted a check decided before it): for callers and tests that read the
         decision instead of the summary's words; not written to JSON.  None where the check
         has no typed outcome (a deadbeat gain, an observer not built).
