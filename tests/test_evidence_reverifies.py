@@ -289,21 +289,20 @@ def _lasso_terms_exact(O, S, eta_rows):
     return rho, delta, beta2, kappa2
 
 
-def test_the_lasso_bound_reverifies_from_json_in_exact_arithmetic():
-    """From the JSON alone: every support's irrepresentable constant is at most the printed one
-    and below 1, lambda_min clears every support's delta / (1 - rho), and the printed bound is at
-    least beta_S + lambda_min kappa_S on every support (the noise's worst signs and the
-    subgradients' enumerated exactly)."""
+def _decoder_bound_from_json(check_id):
+    """A decoder bound's JSON on a five-sensor, two-state plant (s = 1, one step, noise per
+    sensor), the stacked observability matrix of the spec's data in fractions, p, tau and the
+    printed noise bounds as fractions."""
     spec = spec_from_dict(
         {
-            "name": "lasso-reverify",
+            "name": "decoder-reverify",
             "system": {"A": [[1, 1], [0, 1]], "C": [[1, 0], [0, 1], [1, 0], [0, 1], [1, 1]]},
             "attack": {"max_attacked": 1, "horizon": 1},
             "noise": {"measurement": [0.01, 0.02, 0.01, 0.03, 0.01]},
         }
     )
     doc = json.loads(json.dumps(analyze(spec).to_dict()))
-    check = doc["checks"]["lasso_error_bound"]
+    check = doc["checks"][check_id]
     assert check["verdict"] == "holds"
     A, C = _q(spec.system.A), _q(spec.system.C)  # the spec's data, as its file holds them
     p, tau = len(C), check["horizon"]
@@ -311,7 +310,15 @@ def test_the_lasso_bound_reverifies_from_json_in_exact_arithmetic():
     for _ in range(tau):
         O.extend(block)
         block = _mul(block, A)
-    eta = [Fraction(x) for x in check["noise"]["measurement"]]
+    return check, O, p, tau, [Fraction(x) for x in check["noise"]["measurement"]]
+
+
+def test_the_lasso_bound_reverifies_from_json_in_exact_arithmetic():
+    """From the JSON alone: every support's irrepresentable constant is at most the printed one
+    and below 1, lambda_min clears every support's delta / (1 - rho), and the printed bound is at
+    least beta_S + lambda_min kappa_S on every support (the noise's worst signs and the
+    subgradients' enumerated exactly)."""
+    check, O, p, tau, eta = _decoder_bound_from_json("lasso_error_bound")
     eta_rows = [eta[r % p] for r in range(len(O))]
     lam = Fraction(check["lambda_min"])
     bound = Fraction(check["bound"])
@@ -347,24 +354,7 @@ def test_the_l1_bound_reverifies_from_json_in_exact_arithmetic():
     maximum over the plane) is at most the printed one and below 1, and the printed bound is
     at least 2 ||w_K||_1 ||O_K^+||_(1->2) / (1 - theta_S) on every set of s sensors, the
     pseudo-inverse's columns formed exactly."""
-    spec = spec_from_dict(
-        {
-            "name": "l1-reverify",
-            "system": {"A": [[1, 1], [0, 1]], "C": [[1, 0], [0, 1], [1, 0], [0, 1], [1, 1]]},
-            "attack": {"max_attacked": 1, "horizon": 1},
-            "noise": {"measurement": [0.01, 0.02, 0.01, 0.03, 0.01]},
-        }
-    )
-    doc = json.loads(json.dumps(analyze(spec).to_dict()))
-    check = doc["checks"]["l1_error_bound"]
-    assert check["verdict"] == "holds"
-    A, C = _q(spec.system.A), _q(spec.system.C)
-    p, tau = len(C), check["horizon"]
-    O, block = [], C
-    for _ in range(tau):
-        O.extend(block)
-        block = _mul(block, A)
-    eta = [Fraction(x) for x in check["noise"]["measurement"]]
+    check, O, p, tau, eta = _decoder_bound_from_json("l1_error_bound")
     bound, theta = Fraction(check["bound"]), Fraction(check["null_space_constant"])
     assert theta < 1
     tightest = Fraction(0)
