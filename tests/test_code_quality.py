@@ -4,6 +4,7 @@ import re
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -144,21 +145,30 @@ def _reads_text(tree: object) -> list[tuple[int, str]]:
     return found
 
 
+def _scan(paths: list[Path], skip: Any, finder: Any) -> list[str]:
+    """``path:line: code`` of what ``finder`` (an AST scanner) finds in each file whose path
+    from the repository root ``skip`` does not exclude."""
+    import ast
+
+    found = []
+    for path in paths:
+        where = path.relative_to(ROOT).as_posix()
+        if not skip(where):
+            tree = ast.parse(path.read_text(), str(path))
+            found.extend(f"{where}:{line}: {code}" for line, code in finder(tree))
+    return found
+
+
 @pytest.mark.slow
 def test_no_decision_is_read_from_a_sentence():
     """Verdicts and decisions travel as enums, flags and numbers; no code outside the renderers
     compares a verdict with its name, searches a reason, summary or problem for a word, or
     compares a state, status or method with a string."""
-    import ast
-
-    package = ROOT / "ssecert"
-    offenders = []
-    for path in sorted(package.rglob("*.py")):
-        where = path.relative_to(package).as_posix()
-        if where.startswith(_RENDERERS):
-            continue
-        for line, code in _reads_text(ast.parse(path.read_text(), str(path))):
-            offenders.append(f"ssecert/{where}:{line}: {code}")
+    offenders = _scan(
+        sorted((ROOT / "ssecert").rglob("*.py")),
+        lambda where: where.startswith(tuple(f"ssecert/{r}" for r in _RENDERERS)),
+        _reads_text,
+    )
     assert not offenders, "\n".join(offenders)
 
 
@@ -262,14 +272,11 @@ def test_tests_read_codes_not_sentences():
     """Verdict tests compare reason codes and numbers; the words are tested where they are
     written (the message templates, the formatting of values, the toolkit's messages), so
     that a better sentence breaks no test that meant to check a verdict."""
-    import ast
-
-    offenders = []
-    for path in sorted((ROOT / "tests").glob("test_*.py")):
-        if path.name.endswith(_WORDING_TESTS):
-            continue
-        for line, code in _searched_words(ast.parse(path.read_text(), str(path))):
-            offenders.append(f"tests/{path.name}:{line}: {code}")
+    offenders = _scan(
+        sorted((ROOT / "tests").glob("test_*.py")),
+        lambda where: where.endswith(_WORDING_TESTS),
+        _searched_words,
+    )
     assert not offenders, "\n".join(offenders)
 
 

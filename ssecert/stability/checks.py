@@ -31,9 +31,7 @@ from .gain_check import (
     EXACT_LIMIT,  # noqa: F401  (stays importable here)
     _decided_by,
     _exact,
-    _known,
     _lyapunov_evidence,
-    balanced_lyapunov_note,
     exact_radius,
     observer_gain_check,
     overflow_reason,
@@ -47,7 +45,7 @@ from .lmi import (
     lure_model_cost,
 )
 from .lyapunov import LyapunovCertificate, LyapunovMethod, lyapunov_certificate
-from .outcomes import LMICause, LMICode, Region, RegionCode, SchurCode, WitnessKind
+from .outcomes import LMICause, LMICode, Region, RegionCode, SchurCode, WitnessKind, known
 from .periodic import periodic_orbit
 from .roa import region_of_attraction
 from .search_messages import searched_text
@@ -241,8 +239,8 @@ def _linear_stability_check(lyap: LyapunovCertificate, tol: Tolerances, title: s
     elif verdict is Verdict.HOLDS:
         summary = (
             f"The error dynamics are linear and certified stable by a Lyapunov matrix "
-            f"(contraction {sig(_known(lyap.contraction))} per step)."
-            + balanced_lyapunov_note(lyap)
+            f"(contraction {sig(known(lyap.contraction))} per step)."
+            + observer_messages.balanced_lyapunov_note(lyap.proof)
         )
     elif verdict is Verdict.FAILS:
         summary = f"The error dynamics are unstable: {lyap.reason}."
@@ -342,7 +340,7 @@ def _circle_stability_check(
         summary = (
             f"The error state (e, a_hat) converges to 0 from every initial condition "
             f"without attack: V = xi' P xi decreases by at least a factor "
-            f"{one_minus(_known(cert.decay))} per step (circle criterion with a diagonal multiplier, "
+            f"{one_minus(known(cert.decay))} per step (circle criterion with a diagonal multiplier, "
             f"{cert.structure} P, verified margin {cert.margin:.3g} against an error bound "
             f"{cert.error_bound:.1e})." + _balanced_note(cert)
         )
@@ -375,7 +373,7 @@ def _zames_falb_stability_check(
         order,
         incremental=bool(cert.details.get("incremental")),
         sum_bound_factor=cert.details["sum_bound_factor"],
-        margin=_known(cert.margin),
+        margin=known(cert.margin),
         error_bound=cert.error_bound,
     ) + _balanced_note(cert)
     evidence = _circle_evidence(model, cert)
@@ -513,15 +511,15 @@ def _iss_gain(
                 model, alpha=0.5 * float(circle.decay or 0.0), budget=budget, clear=clear
             )
             if direct.verdict == Verdict.HOLDS and (
-                cert.gamma is None or _known(direct.gamma) < cert.gamma
+                cert.gamma is None or known(direct.gamma) < cert.gamma
             ):
                 cert = direct
     decay = float(cert.decay or 0.0)
     decrease = f"-{decay:.3g} V(xi) " if decay > 0 else ""
     holds = (
         f"V(xi+) - V(xi) <= {decrease}- |e|^2 + gamma^2 |a|^2 holds with "
-        f"gamma = {_known(cert.gamma):.4g}: the estimation error is input-to-state stable with "
-        f"respect to the attack, with l2 gain at most {_known(cert.gamma):.4g}."
+        f"gamma = {known(cert.gamma):.4g}: the estimation error is input-to-state stable with "
+        f"respect to the attack, with l2 gain at most {known(cert.gamma):.4g}."
         if cert.verdict == Verdict.HOLDS
         else ""
     )
@@ -533,9 +531,9 @@ def _zames_falb_gain_check(cert: LMICertificate, tol: Tolerances, title: str, no
     """iss_gain from a Zames-Falb dissipation certificate (no decay is certified)."""
     holds = (
         f"V(zeta+) - V(zeta) + sigma <= -|e|^2 + gamma^2 |a|^2 holds with gamma = "
-        f"{_known(cert.gamma):.4g} and a Zames-Falb multiplier of order "
+        f"{known(cert.gamma):.4g} and a Zames-Falb multiplier of order "
         f"{cert.details.get('order')} (sum_k sigma_k >= 0): the l2 gain from attack to "
-        f"estimation error is at most {_known(cert.gamma):.4g}."
+        f"estimation error is at most {known(cert.gamma):.4g}."
         if cert.verdict == Verdict.HOLDS
         else ""
     )

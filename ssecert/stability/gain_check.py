@@ -24,7 +24,7 @@ from ..system import System
 from ..tolerances import Tolerances
 from . import observer_messages
 from .lyapunov import LyapunovMethod, lyapunov_certificate
-from .outcomes import SchurCode
+from .outcomes import SchurCode, known
 from .spectral import SchurState
 
 __all__ = ["observer_gain_check", "EXACT_LIMIT"]
@@ -169,12 +169,6 @@ def exact_radius(cert: Any) -> ExactRadius | None:
     return ExactRadius(lower, "spectral radius lower bound of A - L C", text)
 
 
-def balanced_lyapunov_note(cert: Any) -> str:
-    """A sentence when the Lyapunov matrix was verified in balanced state coordinates
-    (``observer_messages.balanced_lyapunov_note``)."""
-    return observer_messages.balanced_lyapunov_note(cert.proof)
-
-
 def _overflowed_check(design: ObserverDesign, tol: Tolerances) -> Check:
     """observer_gain of a design whose error matrix overflows in floating point (an SSO with
     many inner steps of a long step): inconclusive, saying so."""
@@ -206,13 +200,6 @@ def overflow_reason(design: ObserverDesign) -> str:
         f"{what} overflows in floating point (entries beyond 1e308), and its exact value is "
         f"beyond the budget of exact arithmetic"
     )
-
-
-def _known(value: float | None) -> float:
-    """A number a holding certificate always carries (its radius, contraction, gain)."""
-    if value is None:  # pragma: no cover - certificates that hold set it
-        raise RuntimeError("a holding certificate is missing the number it certifies")
-    return value
 
 
 def _exact(design: ObserverDesign) -> ExactMatrix:
@@ -248,7 +235,7 @@ def _deadbeat_check(
     )
     if design.gain.verified:
         summary = _nilpotent_summary(details, fields) + exact_note
-        upper = _known(details.get("spectral_radius_upper_bound"))
+        upper = known(details.get("spectral_radius_upper_bound"))
         return check(
             verdict=Verdict.HOLDS,
             summary=summary,
@@ -301,7 +288,7 @@ def _nilpotent_summary(details: Mapping[str, Any], fields: dict[str, Any]) -> st
     becomes ``fields["nilpotency_index"]``, beside
     ``nilpotency_index_to_rounding``.
     """
-    index = int(_known(details.get("nilpotency_index")))
+    index = int(known(details.get("nilpotency_index")))
     exact_index = details.get("exact_nilpotency_index")
     if details.get("exactly_nilpotent") and exact_index is not None and exact_index != index:
         fields["nilpotency_index"] = exact_index

@@ -18,7 +18,7 @@ from ..base.format import sig
 from ..observers.lure import scaling_text
 from ..results import Verdict
 from .lyapunov import LyapunovCertificate, LyapunovMethod
-from .outcomes import WitnessKind
+from .outcomes import WitnessKind, known
 
 __all__ = [
     "balanced_lmi_note",
@@ -33,13 +33,6 @@ __all__ = [
     "thesis_summary",
     "zames_falb_summary",
 ]
-
-
-def _known(value: float | None) -> float:
-    """A number that a holding certificate always carries."""
-    if value is None:  # pragma: no cover - certificates that hold set it
-        raise RuntimeError("a holding certificate is missing the number it certifies")
-    return value
 
 
 def linear_gain_summary(cert: LyapunovCertificate, what: str, *, zero: bool) -> str:
@@ -59,13 +52,13 @@ def linear_gain_summary(cert: LyapunovCertificate, what: str, *, zero: bool) -> 
     if verdict is Verdict.HOLDS and cert.method is LyapunovMethod.EXACT_POWERS:
         return f"The linear error dynamics e+ = ({what}) e are stable: {cert.reason}."
     if verdict is Verdict.HOLDS:
-        radius = f"spectral radius {sig(_known(cert.spectral_radius))}"
+        radius = f"spectral radius {sig(known(cert.spectral_radius))}"
         if zero:
             radius = "its floats are the zero matrix, computed spectral radius 0"
         return (
             f"The linear error dynamics e+ = ({what}) e are stable ({radius}), certified by a "
             f"Lyapunov matrix P: the error "
-            f"contracts at least by {sig(_known(cert.contraction))} per step in the P-norm."
+            f"contracts at least by {sig(known(cert.contraction))} per step in the P-norm."
             + balanced_lyapunov_note(cert.proof)
         )
     if verdict is Verdict.FAILS:
@@ -104,8 +97,8 @@ def nilpotent_summary(details: Mapping[str, Any]) -> str:
     """What a verified deadbeat gain's check says, from its power test's ``details``: the
     exact nilpotency index of the printed A - L C where its exact powers vanish, else the
     index to rounding and the certified spectral radius bound."""
-    index = int(_known(details.get("nilpotency_index")))
-    upper = _known(details.get("spectral_radius_upper_bound"))
+    index = int(known(details.get("nilpotency_index")))
+    upper = known(details.get("spectral_radius_upper_bound"))
     rel = details["relative_power_norms"][index - 1]
     exact_index = details.get("exact_nilpotency_index")
     if details.get("exactly_nilpotent") and exact_index is not None:

@@ -16,6 +16,7 @@ from typing import Any
 from ..results import Verdict
 
 __all__ = [
+    "known",
     "AssumptionCode",
     "LMICause",
     "LMICode",
@@ -470,3 +471,10 @@ class VerifyProblem:
 
     code: VerifyCode
     facts: Mapping[str, Any] = field(default_factory=dict)
+
+
+def known(value: float | None) -> float:
+    """A number a holding certificate always carries (its radius, contraction, gain)."""
+    if value is None:  # pragma: no cover - certificates that hold set it
+        raise RuntimeError("a holding certificate is missing the number it certifies")
+    return value
