@@ -8,6 +8,7 @@ import platform
 import sys
 import time
 from collections.abc import Callable, Mapping
+from dataclasses import replace
 from typing import Any
 
 from .budget import Budget, Laps
@@ -272,7 +273,8 @@ def analyze(
 
 
 def _noise_of(spec: Spec, noise: MeasurementNoise | float | None) -> MeasurementNoise | None:
-    """The noise the bounds are certified for: the argument's, else the spec's."""
+    """The noise the bounds are certified for: the argument's, else the spec's (a number
+    replaces the spec's measurement bound only: its process noise stays)."""
     if noise is None:
         return spec.noise
     if isinstance(noise, MeasurementNoise):
@@ -281,17 +283,34 @@ def _noise_of(spec: Spec, noise: MeasurementNoise | float | None) -> Measurement
                 f"noise: {noise.eta.size} bounds for the plant's {spec.system.p} sensors"
             )
         return noise
-    return MeasurementNoise.read(noise, spec.system.p)
+    if spec.noise is None:
+        return MeasurementNoise.read(noise, spec.system.p)
+    # the measurement bound replaced, the spec's process noise and draws kept (as --noise)
+    return replace(spec.noise, eta=MeasurementNoise.read(noise, spec.system.p).eta, norm="inf")
+
+
+def _at_sensors(spec: Spec, noise: MeasurementNoise) -> MeasurementNoise | None:
+    """The per-sensor bounds a decoder's window sees (``MeasurementNoise.at_sensors``: the
+    measurement noise plus the process noise's reach); None where they leave the float
+    range."""
+    return noise.at_sensors(spec.system.A, spec.system.C, spec.horizon)
 
 
 def _decoder_bound(spec: Spec, noise: MeasurementNoise, sparse: Check, max_sets: int) -> Check:
     """The decoder_error_bound check: none exists when sparse_observability found a breaking
-    set (it fails with it), else the certified bound (``decoder_error_bound``)."""
+    set (it fails with it), else the certified bound (``decoder_error_bound``) for the noise
+    the window sees at the sensors."""
     from .structure.noise import DEFAULT_MAX_SETS as BOUND_SETS
-    from .structure.noise import BoundCode, DecoderErrorBound, decoder_error_bound
+    from .structure.noise import (
+        BoundCode,
+        DecoderErrorBound,
+        decoder_error_bound,
+        with_sources,
+    )
     from .structure.noise_messages import decoder_bound_check
 
     breaking = sparse.fields.get("breaking_set")
+    seen = _at_sensors(spec, noise)
     if sparse.verdict is Verdict.FAILS and breaking is not None:
         found = DecoderErrorBound(
             BoundCode.NOT_SPARSE_OBSERVABLE,
@@ -302,20 +321,27 @@ def _decoder_bound(spec: Spec, noise: MeasurementNoise, sparse: Check, max_sets:
             spec.max_attacked,
             facts={"breaking_set": [int(i) for i in breaking]},
         )
+    elif seen is None:
+        found = DecoderErrorBound(
+            BoundCode.OUT_OF_RANGE, float("inf"), 0.0, noise, spec.horizon, spec.max_attacked
+        )
     else:
         found = decoder_error_bound(
             spec.system,
             spec.max_attacked,
-            noise,
+            seen,
             horizon=spec.horizon,
             max_sets=min(max_sets, BOUND_SETS),
         )
+        if seen is not noise:
+            found = with_sources(spec.system, found, noise)
     return decoder_bound_check(spec.system, found)
 
 
 def _l1_bound(spec: Spec, noise: MeasurementNoise, sparse: Check) -> Check:
     """The l1_error_bound check: none exists when sparse_observability found a breaking set
-    (it fails with it), else the certified bound (``l1_error_bound``)."""
+    (it fails with it), else the certified bound (``l1_error_bound``) for the noise the
+    window sees at the sensors."""
     from .structure.l1_bound import L1BoundCode, L1ErrorBound, l1_error_bound
     from .structure.noise_messages import l1_bound_check
 
@@ -325,13 +351,23 @@ def _l1_bound(spec: Spec, noise: MeasurementNoise, sparse: Check) -> Check:
             L1BoundCode.NOT_NULL_SPACE, float("inf"), noise, spec.horizon, spec.max_attacked
         )
         return l1_bound_check(spec.system, found, [int(i) for i in breaking])
-    found = l1_error_bound(spec.system, spec.max_attacked, noise, horizon=spec.horizon)
+    seen = _at_sensors(spec, noise)
+    if seen is None:
+        found = L1ErrorBound(
+            L1BoundCode.NOT_SOLVED, float("inf"), noise, spec.horizon, spec.max_attacked
+        )
+        return l1_bound_check(spec.system, found)
+    found = l1_error_bound(spec.system, spec.max_attacked, seen, horizon=spec.horizon)
+    if seen is not noise:
+        found = replace(found, sources=noise)
     return l1_bound_check(spec.system, found)
 
 
 def _lasso_bound(spec: Spec, noise: MeasurementNoise, sparse: Check, max_sets: int) -> Check:
     """The lasso_error_bound check: none exists when sparse_observability found a breaking set
-    (it fails with it), else the certified bound (``lasso_error_bound``)."""
+    (it fails with it), else the certified bound (``lasso_error_bound``) for the noise the
+    window sees at the sensors (the worst case beside it built within the measurement noise
+    alone)."""
     from .structure.lasso_bound import DEFAULT_MAX_SETS as LASSO_SETS
     from .structure.lasso_bound import LassoBoundCode, LassoErrorBound, lasso_error_bound
     from .structure.noise_messages import lasso_bound_check
@@ -343,13 +379,21 @@ def _lasso_bound(spec: Spec, noise: MeasurementNoise, sparse: Check, max_sets: i
             spec.max_attacked,
         )  # fmt: skip
         return lasso_bound_check(spec.system, found, [int(i) for i in breaking])
+    seen = _at_sensors(spec, noise)
+    if seen is None:
+        found = LassoErrorBound(
+            LassoBoundCode.OUT_OF_RANGE, float("inf"), noise, spec.horizon, spec.max_attacked
+        )
+        return lasso_bound_check(spec.system, found)
     found = lasso_error_bound(
         spec.system,
         spec.max_attacked,
-        noise,
+        seen,
         horizon=spec.horizon,
         max_sets=min(max_sets, LASSO_SETS),
     )
+    if seen is not noise:
+        found = replace(found, sources=noise)
     return lasso_bound_check(spec.system, found)
 
 

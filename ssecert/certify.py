@@ -325,6 +325,21 @@ def _scenarios(
     return scenarios
 
 
+def _process_within(spec: Spec, scenario: Mapping[str, Any]) -> bool:
+    """Whether the scenario's process noise is within the spec's (the same input matrix, each
+    bound at most the spec's; none at all where the spec has none)."""
+    omega = np.asarray(scenario.get("process") or [0.0], dtype=float)
+    process = spec.noise.process if spec.noise is not None else None
+    if process is None:
+        return not np.any(omega > 0)
+    G = np.asarray(scenario.get("process_input", process.input), dtype=float)
+    return (
+        G.shape == process.input.shape
+        and bool(np.array_equal(G, process.input))
+        and bool(np.all(omega <= process.omega))
+    )
+
+
 def _beside_noise_bound(
     spec: Spec, design: Any, check: Any, simulations: dict[str, Any]
 ) -> dict[str, Any]:
@@ -342,6 +357,8 @@ def _beside_noise_bound(
             np.asarray(scenario.get("noise", 0.0), dtype=float), (spec.system.p,)
         )
         if bounds is None or np.any(noise > bounds):  # not the noise the bound is for
+            continue
+        if not _process_within(spec, scenario):
             continue
         out[name] = res.with_certified_bound(float(check.value), fading, "observer_noise_bound")
     return out

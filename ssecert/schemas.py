@@ -65,8 +65,27 @@ _SCENARIO: dict[str, dict[str, Any]] = {
             {"type": "number", "minimum": 0},
             {"type": "array", "items": {"type": "number", "minimum": 0}, "minItems": 1},
         ],
-        "description": "bound of the uniform measurement noise, one or one per sensor "
+        "description": "bound of the measurement noise on every sample, one or one per sensor "
         "(default: the [noise] section's, else 0)",
+    },
+    "process": {
+        "oneOf": [
+            {"type": "number", "minimum": 0},
+            {"type": "array", "items": {"type": "number", "minimum": 0}, "minItems": 1},
+        ],
+        "description": "bound of each entry of the process noise w on every step, one or one "
+        "per entry (it enters the state through [noise]'s input, the identity without one; "
+        "default: the [noise] section's, else none)",
+    },
+    "distribution": {
+        "enum": ["uniform", "gaussian"],
+        "description": "how the noise is drawn within its bounds (default: the [noise] "
+        "section's, else uniform)",
+    },
+    "truncation": {
+        "type": "number",
+        "exclusiveMinimum": 0,
+        "description": 'with distribution = "gaussian": the bounds in standard deviations',
     },
     "steps": {"type": "integer", "minimum": 1},
     "runs": {"type": "integer", "minimum": 1},
@@ -111,7 +130,7 @@ def _observer_schemas() -> list[dict[str, Any]]:
 
 def spec_schema() -> dict[str, Any]:
     """The JSON Schema of a spec file (the parsed TOML or JSON document)."""
-    from .noise import NORMS
+    from .noise import DISTRIBUTIONS, NORMS
     from .observers.base import MATRIX_SCHEMA
     from .spec import ATTACK_KINDS, MAX_HORIZON, MAX_NAME_LENGTH, NAME_PATTERN, TABLE_KEYS
 
@@ -159,6 +178,22 @@ def spec_schema() -> dict[str, Any]:
         },
         "norm": {"enum": list(NORMS), "description": '"inf" (every sample, default) or "2" '
                  "(the window's samples of the sensor together)"},
+        "process": {
+            "oneOf": [
+                {"type": "number", "minimum": 0},
+                {"type": "array", "items": {"type": "number", "minimum": 0}, "minItems": 1},
+            ],
+            "description": "process noise: x(k+1) = A x(k) + G w(k), each entry of w within "
+            "its bound on every step (one number: every entry's)",
+        },
+        "input": {**MATRIX_SCHEMA, "description": "G, n x m: how w enters the state "
+                  "(default the identity; needs process)"},
+        "distribution": {"enum": list(DISTRIBUTIONS), "description": "how simulations draw "
+                         "the noise within its bounds: uniform (default) or gaussian, with "
+                         "standard deviation bound / truncation, truncated at the bound"},
+        "truncation": {"type": "number", "exclusiveMinimum": 0,
+                       "description": 'with distribution = "gaussian": the bounds in standard '
+                       "deviations (default 3)"},
     }  # fmt: skip
     top = {
         "name": {"type": "string", "pattern": NAME_PATTERN, "maxLength": MAX_NAME_LENGTH,
@@ -177,7 +212,8 @@ def spec_schema() -> dict[str, Any]:
         "noise": {
             "type": "object",
             "properties": _keys(noise, TABLE_KEYS["noise"], "[noise]"),
-            "required": ["measurement"],
+            "anyOf": [{"required": ["measurement"]}, {"required": ["process"]}],
+            "dependentRequired": {"input": ["process"]},
             "additionalProperties": False,
         },
         "observer": {"oneOf": _observer_schemas()},

@@ -15,6 +15,7 @@ the analysis that depends on it inconclusive instead of guessing.
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from typing import Any
 
 import numpy as np
 
@@ -162,6 +163,25 @@ def times_up(x: float, c: float) -> float:
     if 0 < abs(y) < 2.0**-1022 or (y == 0 and x * np.sign(c) > 0):
         return float(np.nextafter(y, np.inf))
     return y
+
+
+def up_by(x: Any, ops: int) -> Any:
+    """``x`` (nonnegative, a float or an array) taken up by the rounding of ``ops``
+    operations."""
+    return x * (1.0 + gamma(ops + 2))
+
+
+def interval_product(
+    M1: np.ndarray, R1: np.ndarray, M2: np.ndarray, R2: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Midpoint and radius of an interval matrix containing every product of matrices within
+    R1 of M1 and R2 of M2 (Rump's midpoint-radius product: |M1| R2 + R1 (|M2| + R2) plus the
+    rounding of M1 M2, each rounding taken up)."""
+    k = M1.shape[1]
+    mid = M1 @ M2
+    A1, A2 = np.abs(M1), np.abs(M2)
+    rad = A1 @ R2 + R1 @ (A2 + R2) + gamma(k + 2) * (A1 @ A2)
+    return mid, up_by(rad, 3 * k + 4)
 
 
 def product_rounding(

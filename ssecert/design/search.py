@@ -667,6 +667,8 @@ def _front_noise_bound(
     if applies_to(design):
         check = observer_noise_check(design, noise)
         return float(check.value) if check.verdict is Verdict.HOLDS else None
+    if noise.process is not None:  # outside the dissipation inequality (process_refused)
+        return None
     if not own.get("verified") or "state_scaling" in own or not own.get("alpha"):
         return None
     from ..observers.lure import LureModel

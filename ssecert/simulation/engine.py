@@ -303,6 +303,8 @@ def _simulate_chunk(
     for k in range(steps):
         ys[k] = x @ C_T + data.attack[k] + data.noise[k]
         x = x @ A_T
+        if data.process is not None:
+            x = x + data.process[k]
         xs[k + 1] = x
     observer = observer_from_design(design)
     traj = observer.run(ys)

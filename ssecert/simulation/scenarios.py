@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from scipy import special
 
 from ..structure.attacks import initial_state
 from ..system import System
@@ -48,12 +49,16 @@ class ScenarioData:
     x0 : ndarray, shape (runs, n)
     attack : ndarray, shape (steps, runs, p)
     noise : ndarray, shape (steps, runs, p)
+    process : ndarray, shape (steps, runs, n), or None
+        G w(k), what the process noise adds to the state at each step (None without process
+        noise): x(k + 1) = A x(k) + process[k].
     """
 
     runs: np.ndarray
     x0: np.ndarray
     attack: np.ndarray
     noise: np.ndarray
+    process: np.ndarray | None = None
 
 
 def run_rng(seed: int, run: int) -> np.random.Generator:
@@ -76,6 +81,22 @@ def _uniform(rng: np.random.Generator, lo: Any, hi: Any, size: Any) -> np.ndarra
         return rng.uniform(lo, hi, size)
     middle = 0.5 * lo + 0.5 * hi
     return middle + rng.uniform(-0.5, 0.5, size) * 2.0 * (0.5 * hi - 0.5 * lo)
+
+
+def _draw(
+    rng: np.random.Generator, bound: Any, size: tuple[int, ...], scenario: Mapping[str, Any]
+) -> np.ndarray:
+    """Noise within +-``bound`` (a number, or one per entry of the last axis): uniform, or with
+    ``distribution = "gaussian"`` Gaussian with standard deviation bound / truncation,
+    truncated at the bound (by inverting the normal distribution on the uniform draws between
+    its values at -truncation and +truncation)."""
+    if scenario.get("distribution", "uniform") != "gaussian":
+        return _uniform(rng, -bound, bound, size)
+    t = float(scenario.get("truncation", 3.0))
+    edge = float(special.ndtr(-t))
+    z = special.ndtri(rng.uniform(edge, 1.0 - edge, size))
+    # |z / t| <= 1, so each sample is within its bound (a product by at most 1 rounds within)
+    return np.clip(z / t, -1.0, 1.0) * np.asarray(bound, dtype=float)
 
 
 def _support(rng: np.random.Generator, p: int, scenario: Mapping[str, Any]) -> np.ndarray:
@@ -137,6 +158,11 @@ def generate(
     x0 = np.empty((run_ids.size, n))
     attack = np.zeros((steps, run_ids.size, p))
     noise = np.zeros((steps, run_ids.size, p))
+    process = None
+    if scenario.get("process") is not None:  # drawn after the rest: their draws stay the same
+        omega = np.asarray(scenario["process"], dtype=float)
+        G = np.asarray(scenario.get("process_input", np.eye(n)), dtype=float)
+        process = np.zeros((steps, run_ids.size, n))
     if kind == "stealthy":
         if replay is None:
             raise ValueError(
@@ -183,5 +209,7 @@ def generate(
         else:  # pragma: no cover - the spec validator refuses other kinds
             raise ValueError(f"unknown attack kind {kind!r}")
         if np.any(noise_bound > 0):
-            noise[:, j, :] = _uniform(rng, -noise_bound, noise_bound, (steps, p))
-    return ScenarioData(run_ids, x0, attack, noise)
+            noise[:, j, :] = _draw(rng, noise_bound, (steps, p), scenario)
+        if process is not None and np.any(omega > 0):
+            process[:, j, :] = _draw(rng, omega, (steps, omega.size), scenario) @ G.T
+    return ScenarioData(run_ids, x0, attack, noise, process)

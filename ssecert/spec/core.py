@@ -21,10 +21,11 @@ from typing import Any
 
 from ..base.validation import (
     as_choice,
+    as_float_option,
     as_real_matrix,
     describe,
 )
-from ..noise import NORMS, MeasurementNoise
+from ..noise import DEFAULT_TRUNCATION, DISTRIBUTIONS, NORMS, MeasurementNoise, ProcessNoise
 from ..observers import BUILTIN_KINDS, get_kind, observer_kinds
 from ..system import System
 from .files import (
@@ -59,7 +60,7 @@ MAX_HORIZON = 10_000
 OBSERVER_KINDS = BUILTIN_KINDS
 _TOP_KEYS = ("name", "system", "attack", "noise", "observer", "scenario")
 _ATTACK_KEYS = ("max_attacked", "horizon")
-_NOISE_KEYS = ("measurement", "norm")
+_NOISE_KEYS = ("measurement", "norm", "process", "input", "distribution", "truncation")
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
 
 
@@ -121,8 +122,9 @@ def spec_from_dict(
     max_attacked, horizon : int, optional
         Override ``attack.max_attacked`` and ``attack.horizon``.
     noise : float, optional
-        Replaces the ``[noise]`` section by this bound on every sample of every sensor, before
-        the scenarios without a noise of their own take it (``--noise``).
+        Replaces the ``[noise]`` section's measurement bound (and norm) by this bound on every
+        sample of every sensor, before the scenarios without a noise of their own take it
+        (``--noise``); its process noise and distribution stay.
     sha256 : str, optional
         Hash recorded in the Spec.
     default_name : str, optional
@@ -146,8 +148,10 @@ def spec_from_dict(
     """
     check_keys(source, "", data, _TOP_KEYS)
     _check_document(source, data)
-    if noise is not None:
-        data = {**data, "noise": {"measurement": noise}}
+    if noise is not None:  # the measurement bound replaced, the process noise and draws kept
+        kept = data.get("noise") if isinstance(data.get("noise"), Mapping) else {}
+        others = {k: v for k, v in kept.items() if k not in ("measurement", "norm")}
+        data = {**data, "noise": {**others, "measurement": noise}}
     name = _spec_name(source, data.get("name", default_name))
     system = _system(source, require(source, data, "system", ""), name)
     attack_table = data.get("attack", {})
@@ -157,7 +161,7 @@ def spec_from_dict(
     observer = None
     if "observer" in data:
         observer = _observer(source, data["observer"], system.n, system.p)
-    bounds = _noise(source, data["noise"], system.p) if "noise" in data else None
+    bounds = _noise(source, data["noise"], system.n, system.p) if "noise" in data else None
     return Spec(
         name=name,
         system=system,
@@ -170,6 +174,8 @@ def spec_from_dict(
             system.p,
             system.sensors,
             None if bounds is None else _per_sample(bounds, tau),
+            model=bounds,
+            n=system.n,
         ),
         noise=bounds,
         source=source,
@@ -292,14 +298,57 @@ def _per_sample(noise: MeasurementNoise, horizon: int) -> list[float]:
     return [float(v) for v in eta]
 
 
-def _noise(source: str, table: Any, p: int) -> MeasurementNoise:
-    """The ``[noise]`` table: ``measurement`` (one bound or one per sensor) and ``norm``."""
+def _noise(source: str, table: Any, n: int, p: int) -> MeasurementNoise:
+    """The ``[noise]`` table: ``measurement`` (one bound or one per sensor; 0 by default where
+    ``process`` is given), ``norm``, ``process`` and ``input`` (the process noise and the
+    matrix it enters the state through, the identity by default), ``distribution`` and
+    ``truncation`` (how simulations draw the noise)."""
     if not isinstance(table, Mapping):
         raise spec_error(source, "noise", f"expected a table, got {describe(table)}")
     check_keys(source, "noise", table, _NOISE_KEYS)
-    measurement = require(source, table, "measurement", "noise")
+    if "process" not in table:
+        measurement = require(source, table, "measurement", "noise")
+    else:
+        measurement = table.get("measurement", 0.0)
+    if "input" in table and "process" not in table:
+        raise spec_error(source, "noise.input", "input without process: give the bound of w")
     norm = convert(source, "noise.norm", as_choice, table.get("norm", "inf"), "norm", NORMS)
-    return convert(source, "noise.measurement", MeasurementNoise.read, measurement, p, norm)
+    process = None
+    if "process" in table:
+        G = convert(source, "noise.input", ProcessNoise.input_matrix, table.get("input"), n)
+        process = convert(source, "noise.process", ProcessNoise.read, table["process"], G, n)
+    distribution = convert(
+        source,
+        "noise.distribution",
+        as_choice,
+        table.get("distribution", "uniform"),
+        "distribution",
+        DISTRIBUTIONS,
+    )
+    if "truncation" in table and distribution != "gaussian":
+        raise spec_error(
+            source, "noise.truncation", 'truncation applies to distribution = "gaussian" only'
+        )
+    truncation = convert(
+        source,
+        "noise.truncation",
+        as_float_option,
+        table.get("truncation", DEFAULT_TRUNCATION),
+        "truncation",
+        min_value=0.0,
+        min_inclusive=False,
+    )
+    return convert(
+        source,
+        "noise.measurement",
+        MeasurementNoise.read,
+        measurement,
+        p,
+        norm,
+        process=process,
+        distribution=distribution,
+        truncation=truncation,
+    )
 
 
 def _observer(source: str, table: Any, n: int, p: int) -> dict[str, Any]:

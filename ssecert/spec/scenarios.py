@@ -13,6 +13,8 @@ import numbers
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+import numpy as np
+
 from ..base.validation import (
     as_choice,
     as_float_option,
@@ -46,10 +48,15 @@ _SCENARIO_KEYS = (
     "magnitude",
     "period",
     "noise",
+    "process",
+    "distribution",
+    "truncation",
     "steps",
     "runs",
     "seed",
 )
+#: how a scenario draws its noise within the bounds (``ssecert.noise.DISTRIBUTIONS``)
+_DISTRIBUTIONS = ("uniform", "gaussian")
 
 
 def read_scenarios(
@@ -58,13 +65,19 @@ def read_scenarios(
     p: int,
     names: tuple[str, ...] = (),
     noise: Sequence[float] | None = None,
+    *,
+    model: Any = None,
+    n: int | None = None,
 ) -> tuple[dict[str, Any], ...]:
     """The ``[[scenario]]`` tables (one table is taken as a list of one), names unique.
 
     A scenario's ``sensors`` are 0-based indices or the sensors' ``names`` (the system's),
     kept as indices.  Its ``noise`` is one bound or one per sensor on every sample; without
     one, ``noise`` (the spec's ``[noise]`` as a bound on each sample, one per sensor) when given,
-    else 0."""
+    else 0.  Its ``process`` (one bound or one per entry of w on every step, entering the state
+    through the ``[noise]`` section's input, the identity without one: kept beside it as
+    ``process_input``), ``distribution`` and ``truncation`` default to those of ``model`` (the
+    spec's ``MeasurementNoise``) when given; ``n`` is the number of states."""
     if isinstance(raw, Mapping):
         raw = [raw]
     if not isinstance(raw, list):
@@ -79,6 +92,7 @@ def read_scenarios(
         scenario = _scenario(source, f"scenario[{index}]", table, p, names)
         if noise is not None and isinstance(table, Mapping) and "noise" not in table:
             scenario["noise"] = [float(v) for v in noise]
+        _noise_defaults(source, f"scenario[{index}]", scenario, model, n)
         if scenario["name"] in seen:
             raise spec_error(
                 source, f"scenario[{index}].name", f"duplicate scenario name {scenario['name']!r}"
@@ -86,6 +100,39 @@ def read_scenarios(
         seen.add(scenario["name"])
         scenarios.append(scenario)
     return tuple(scenarios)
+
+
+def _noise_defaults(
+    source: str, prefix: str, scenario: dict[str, Any], model: Any, n: int | None
+) -> None:
+    """The scenario's process noise (with its input matrix), distribution and truncation:
+    its own, else the spec's ``[noise]`` (``model``); none of them where neither has one
+    (uniform draws, no process noise)."""
+    process = getattr(model, "process", None)
+    if "process" in scenario or process is not None:
+        G = np.asarray(process.input if process is not None else np.eye(n or 0), dtype=float)
+        m = G.shape[1]
+        bounds = scenario.get("process", None if process is None else process.omega.tolist())
+        if isinstance(bounds, list) and len(bounds) != m:
+            raise spec_error(
+                source,
+                f"{prefix}.process",
+                f"expected one bound or one per entry of w ({m}: the columns of [noise]'s "
+                f"input), got a list of {len(bounds)}",
+            )
+        values = bounds if isinstance(bounds, list) else [bounds] * m
+        scenario["process"] = [float(v) for v in values]
+        scenario["process_input"] = G.tolist()
+    distribution = scenario.get("distribution", getattr(model, "distribution", "uniform"))
+    if "truncation" in scenario and distribution != "gaussian":
+        raise spec_error(
+            source, f"{prefix}.truncation", 'truncation applies to distribution = "gaussian" only'
+        )
+    if distribution == "gaussian":
+        scenario["distribution"] = "gaussian"
+        scenario.setdefault("truncation", getattr(model, "truncation", 3.0))
+    else:
+        scenario.pop("distribution", None)
 
 
 def _scenario(
@@ -240,6 +287,33 @@ def _run_settings(source: str, prefix: str, table: Any, p: int) -> dict[str, Any
     else:
         noise = convert(source, f"{prefix}.noise", as_float_option, raw, "noise", min_value=0.0)
     out: dict[str, Any] = {"noise": noise}
+    if "process" in table:
+        raw = table["process"]
+        items = raw if isinstance(raw, (list, tuple)) else [raw]
+        values = [
+            convert(source, f"{prefix}.process", as_float_option, v, "process", min_value=0.0)
+            for v in items
+        ]
+        out["process"] = values if isinstance(raw, (list, tuple)) else values[0]
+    if "distribution" in table:
+        out["distribution"] = convert(
+            source,
+            f"{prefix}.distribution",
+            as_choice,
+            table["distribution"],
+            "distribution",
+            _DISTRIBUTIONS,
+        )
+    if "truncation" in table:
+        out["truncation"] = convert(
+            source,
+            f"{prefix}.truncation",
+            as_float_option,
+            table["truncation"],
+            "truncation",
+            min_value=0.0,
+            min_inclusive=False,
+        )
     for key in ("steps", "runs"):
         out[key] = convert(
             source,

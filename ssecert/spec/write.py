@@ -33,7 +33,10 @@ def spec_document(spec: Any, observer: Mapping[str, Any] | None = None) -> dict[
     if noise is not None:
         eta = noise.eta
         one = eta.size and bool((eta == eta[0]).all())
-        data["noise"] = {"measurement": float(eta[0]) if one else eta, "norm": noise.norm}
+        data["noise"] = {
+            **noise.to_dict(),
+            "measurement": float(eta[0]) if one else eta,
+        }
     if spec.scenarios:
         data["scenario"] = [_scenario(sc) for sc in spec.scenarios]
     return data
@@ -42,7 +45,8 @@ def spec_document(spec: Any, observer: Mapping[str, Any] | None = None) -> dict[
 def _scenario(scenario: Mapping[str, Any]) -> dict[str, Any]:
     """A scenario's table as its file holds it: no attack takes no magnitude (the reader fills
     in the default range and refuses one written)."""
-    out = {k: v for k, v in scenario.items() if v is not None}
+    # (the process noise's input matrix is the [noise] section's)
+    out = {k: v for k, v in scenario.items() if v is not None and k != "process_input"}
     if out.get("attack") == "none":
         out.pop("magnitude", None)
     return out

@@ -33,6 +33,8 @@ import numpy as np
 
 from ..noise import MeasurementNoise
 from ..tolerances import gamma, times_up
+from ..tolerances import interval_product as _product
+from ..tolerances import up_by as _up
 
 __all__ = [
     "DissipationBound",
@@ -97,23 +99,6 @@ class NoiseGain:
     contraction: float = math.inf
     tail: float = math.inf
     facts: dict[str, Any] = field(default_factory=dict)
-
-
-def _up(x: np.ndarray | float, ops: int) -> Any:
-    """``x`` (nonnegative) taken up by the rounding of ``ops`` operations."""
-    return x * (1.0 + gamma(ops + 2))
-
-
-def _product(
-    M1: np.ndarray, R1: np.ndarray, M2: np.ndarray, R2: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Midpoint and radius of an interval matrix containing every product of matrices within
-    R1 of M1 and R2 of M2 (Rump: |M1| R2 + R1 (|M2| + R2) plus the rounding of M1 M2)."""
-    k = M1.shape[1]
-    mid = M1 @ M2
-    A1, A2 = np.abs(M1), np.abs(M2)
-    rad = A1 @ R2 + R1 @ (A2 + R2) + gamma(k + 2) * (A1 @ A2)
-    return mid, _up(rad, 3 * k + 4)
 
 
 def linear_noise_bound(

@@ -58,7 +58,29 @@ def noise_check(design: ObserverDesign, noise: MeasurementNoise, iss: Check) -> 
     the others (``sparse_noise_check``)."""
     if applies_to(design):
         return observer_noise_check(design, noise, iss)
+    if noise.process is not None:
+        return process_refused(noise)
     return sparse_noise_check(design, iss, noise)
+
+
+def process_refused(noise: MeasurementNoise) -> Check:
+    """The ``observer_noise_bound`` check of a sparse observer under process noise:
+    inconclusive, since iss_gain's dissipation inequality has the measurement vector as its
+    input and the process noise enters the error as G w, outside it."""
+    return Check(
+        id="observer_noise_bound",
+        title=TITLE,
+        method="ISS dissipation inequality with decay (iss_gain's verified certificate)",
+        required=False,
+        value_name=VALUE_NAME,
+        verdict=Verdict.INCONCLUSIVE,
+        summary="No ultimate error bound under noise is certified: the process noise enters "
+        "the error as G w, outside iss_gain's dissipation inequality, whose input is the "
+        "observer's measurement vector (a linear observer's bound covers process noise).",
+        value=math.inf,
+        fields={"ultimate_bound": math.inf, "noise": noise.to_dict()},
+        evidence={"from": "iss_gain", "cause": "process noise"},
+    )
 
 
 def reason(found: NoiseGain) -> str:
@@ -385,11 +407,18 @@ def observer_noise_check(
     kind = design.observer_kind
     rounding_F = kind.exact_error(design).rounding(F)
     rounding_L = kind.gain_rounding(design)
-    found = linear_noise_bound(F, design.L, noise.eta, rounding_F=rounding_F, rounding_L=rounding_L)
+    # process noise: x+ = A x + G w, so e+ = F e + L n - G w, the inputs side by side (G
+    # is the spec's, exact: L's rounding bounds its entries' too, as nothing)
+    inputs, bounds = design.L, noise.eta
+    if noise.process is not None:
+        inputs = np.hstack([design.L, noise.process.input])
+        bounds = np.concatenate([noise.eta, noise.process.omega])
+    found = linear_noise_bound(F, inputs, bounds, rounding_F=rounding_F, rounding_L=rounding_L)
     # a sign pattern of +-eta on every sample reaches the series: within a per-sample bound,
     # not within a window's 2-norm bound (which bounds each sample, so the upper bound holds)
     lower = found.lower if noise.per_sample else 0.0
-    energy, energy_words = _energy(iss, design)
+    # iss_gain's energy gain is from the measurement noise alone: with process noise, none
+    energy, energy_words = _energy(iss, design) if noise.process is None else (None, "")
     fields: dict[str, Any] = {
         "ultimate_bound": found.bound_2,
         "ultimate_bound_inf": found.bound_inf,
@@ -431,6 +460,14 @@ def observer_noise_check(
         else "the spec's bound on every sample of each sensor"
     )
     per_sample = "" if noise.per_sample else " (a window's 2-norm bound bounds each sample)"
+    if noise.process is not None:
+        omega = noise.process.omega
+        per_sample += (
+            f" and process noise within {readable(float(omega[0]))} on every entry of w at "
+            "every step"
+            if omega.size and bool((omega == omega[0]).all())
+            else " and process noise within the spec's bound on each entry of w at every step"
+        )
     return Check(
         verdict=Verdict.HOLDS,
         summary=f"Without attack and with noise within {each}{per_sample}, the estimation "

@@ -119,6 +119,9 @@ class L1ErrorBound:
         Sets of s sensors, and linear programs solved.
     facts : mapping
         The numbers of the worst set (for the re-check and the words).
+    sources : MeasurementNoise or None
+        The spec's noise with its process noise, when ``noise`` is what it adds up to at
+        the sensors (``MeasurementNoise.at_sensors``); None when ``noise`` is the spec's.
     """
 
     code: L1BoundCode
@@ -135,6 +138,7 @@ class L1ErrorBound:
     sets: int = 0
     programs: int = 0
     facts: dict[str, Any] = field(default_factory=dict)
+    sources: MeasurementNoise | None = None
 
 
 def _reach_upper(O_K: np.ndarray, sigma_K: float, e_K: float) -> float:

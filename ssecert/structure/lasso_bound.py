@@ -149,6 +149,9 @@ class LassoErrorBound:
         Supports of s sensors examined.
     facts : mapping
         The numbers of the deciding supports (for the re-check and the words).
+    sources : MeasurementNoise or None
+        The spec's noise with its process noise, when ``noise`` is what it adds up to at
+        the sensors (``MeasurementNoise.at_sensors``); None when ``noise`` is the spec's.
     """
 
     code: LassoBoundCode
@@ -167,6 +170,7 @@ class LassoErrorBound:
     sigma: float = 0.0
     sets: int = 0
     facts: dict[str, Any] = field(default_factory=dict)
+    sources: MeasurementNoise | None = None
 
     def at(self, lam: float) -> float:
         """The certified bound for the weight ``lam`` (inf when lam is not above
@@ -637,13 +641,15 @@ def lasso_worst_case(
     # in units where O's largest entry and the noise's are about 1 (O = 2^d O', eta = c eta'):
     # N = 2^-d N', Z = 2^-d Z', so the error N w + lam Z zeta is 2^-d c (N' w' + lam / c Z' zeta)
     ranged = _scaled_blocks(system, tau)
-    top_eta = float(np.max(found.noise.eta))
+    # with process noise, the measurement noise alone: every sensor takes it independently
+    realizable = found.noise if found.sources is None else found.sources.measurement_only()
+    top_eta = float(np.max(realizable.eta))
     if ranged is None or (top_eta == 0 and weight == 0):
         return {"lower": 0.0, "support": found.worst_support, "lam": weight}
     blocks, errors, d = ranged
     O_unit = blocks.transpose(1, 0, 2).reshape(tau * p, n)  # rows t p + i
     c = MeasurementNoise.scale(top_eta) if top_eta > 0 else 1.0
-    eta = found.noise.eta / c
+    eta = realizable.eta / c
     lam_unit = weight / c
     best: dict[str, Any] | None = None
     for support in dict.fromkeys((found.worst_support, found.lam_support, found.rho_support)):
@@ -665,7 +671,7 @@ def lasso_worst_case(
             for _ in range(2 * n + 4):
                 sigma = np.where(Z.T @ v >= 0, 1.0, -1.0)
                 reach = N.T @ v
-                if found.noise.per_sample:
+                if realizable.per_sample:
                     w = eta[sensor] * np.where(reach >= 0, 1.0, -1.0)
                 else:
                     w = np.zeros_like(reach)

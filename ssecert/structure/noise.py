@@ -65,6 +65,7 @@ __all__ = [
     "BoundCode",
     "DecoderErrorBound",
     "decoder_error_bound",
+    "with_sources",
     "worst_case_pair",
 ]
 
@@ -136,6 +137,8 @@ class DecoderErrorBound:
         (f, the bound with the noise of ``worst_kept``'s sensors times f) for f in
         ``HARDENING``: what hardening that set gives.
     noise : MeasurementNoise
+        The per-sensor bounds the bound is certified for: the spec's noise, or with process
+        noise what it adds up to at the sensors over the window (``sources``).
     horizon, max_attacked : int
     sets : int
         Sets of p - 2s sensors.
@@ -146,6 +149,9 @@ class DecoderErrorBound:
         Sets decided by an SVD.
     facts : mapping
         Numbers the words need (a limit, the data's largest entry).
+    sources : MeasurementNoise or None
+        The spec's noise with its process noise, when ``noise`` is what it adds up to at
+        the sensors (``MeasurementNoise.at_sensors``); None when ``noise`` is the spec's.
     """
 
     code: BoundCode
@@ -165,6 +171,14 @@ class DecoderErrorBound:
     refined: int = 0
     lower_kept: tuple[int, ...] = ()
     facts: dict[str, Any] = field(default_factory=dict)
+    sources: MeasurementNoise | None = None
+
+    @property
+    def realizable(self) -> MeasurementNoise:
+        """The noise the lower bound's construction keeps within: ``noise``, or with process
+        noise (``sources``) its measurement noise alone (the process noise's reach at the
+        sensors is not a noise every sensor can take independently)."""
+        return self.noise if self.sources is None else self.sources.measurement_only()
 
 
 def _block_errors(system: System, horizon: int) -> np.ndarray:
@@ -624,6 +638,26 @@ def _bound_of_unit_noise(
     return replace(found, lower=best, lower_kept=best_kept)
 
 
+def with_sources(
+    system: System, found: DecoderErrorBound, sources: MeasurementNoise
+) -> DecoderErrorBound:
+    """``found``, certified for the noise ``sources`` adds up to at the sensors
+    (``MeasurementNoise.at_sensors``), with its sources, and its lower bound rebuilt within
+    their measurement noise alone (``worst_case_pair`` on the sets of the bound's own lower
+    bound, of the largest bound and of the smallest singular value): the process noise's
+    reach is not a noise each sensor can take on its own."""
+    candidates = dict.fromkeys((found.lower_kept, found.worst_kept, found.smallest_kept))
+    found = replace(found, sources=sources, lower=0.0, lower_kept=())
+    if found.code is not BoundCode.CERTIFIED:
+        return found
+    best, best_kept = 0.0, ()
+    for kept in candidates:
+        pair = worst_case_pair(system, replace(found, lower_kept=kept)) if kept else None
+        if pair is not None and pair["lower"] > best:
+            best, best_kept = float(pair["lower"]), kept
+    return replace(found, lower=best, lower_kept=best_kept)
+
+
 def _bound_with(
     block: np.ndarray,
     sensors: list[int],
@@ -720,8 +754,9 @@ def worst_case_pair(system: System, found: DecoderErrorBound) -> dict[str, Any] 
     _, _, vh = np.linalg.svd(O_K.reshape(-1, system.n))
     v = vh[-1]
     Ov = O_K @ v  # (|K|, tau)
-    size = np.max(np.abs(Ov), axis=1) if found.noise.per_sample else np.linalg.norm(Ov, axis=1)
-    eta = found.noise.eta[kept]
+    realizable = found.realizable
+    size = np.max(np.abs(Ov), axis=1) if realizable.per_sample else np.linalg.norm(Ov, axis=1)
+    eta = realizable.eta[kept]
     with np.errstate(divide="ignore", invalid="ignore"):
         scales = np.where(size > 0, 2.0 * eta / size, np.inf)
     c = float(np.min(scales)) * (1 - 1e-12)

@@ -10,7 +10,10 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import numpy as np
+
 from ..base.format import readable
+from ..noise import MeasurementNoise
 from ..results import Check, Verdict
 from ..system import System
 from .l1_bound import L1BoundCode, L1ErrorBound
@@ -104,18 +107,45 @@ def _sensors(count: int) -> str:
 
 
 def _noise_words(found: DecoderErrorBound | LassoErrorBound | L1ErrorBound) -> str:
-    eta = found.noise.eta
+    if found.sources is None or found.sources.process is None:
+        return f"noise within {_bound_words(found.noise, found.horizon)}"
+    omega = found.sources.process.omega
     each = (
-        f"{readable(float(eta[0]))} on every sensor"
-        if eta.size and (eta == eta[0]).all()
-        else "the spec's bound on each sensor"
+        f"{readable(float(omega[0]))} on every entry of w"
+        if omega.size and (omega == omega[0]).all()
+        else "the spec's bound on each entry of w"
     )
     how = (
         "on every sample"
         if found.noise.per_sample
         else f"in 2-norm over the window of {found.horizon} steps"
     )
-    return f"noise within {each} ({how})"
+    top = readable(float(np.max(found.noise.eta))) if found.noise.eta.size else "0"
+    return (
+        f"measurement noise within {_bound_words(found.sources, found.horizon)} and process "
+        f"noise within {each} at every step (together at most {top} at a sensor, {how})"
+    )
+
+
+def _bound_words(noise: MeasurementNoise, horizon: int) -> str:
+    eta = noise.eta
+    each = (
+        f"{readable(float(eta[0]))} on every sensor"
+        if eta.size and (eta == eta[0]).all()
+        else "the spec's bound on each sensor"
+    )
+    how = "on every sample" if noise.per_sample else f"in 2-norm over the window of {horizon} steps"
+    return f"{each} ({how})"
+
+
+def noise_fields(found: DecoderErrorBound | LassoErrorBound | L1ErrorBound) -> dict[str, Any]:
+    """The check's ``noise`` field (the per-sensor bounds the bound is certified for) and, with
+    process noise, ``noise_sources`` (the spec's measurement and process noise they come
+    from)."""
+    out: dict[str, Any] = {"noise": found.noise.to_dict()}
+    if found.sources is not None:
+        out["noise_sources"] = found.sources.to_dict()
+    return out
 
 
 def _breaking(system: System, s: int, breaking_set: list[int], common: dict[str, Any]) -> Check:
@@ -160,7 +190,7 @@ def decoder_bound_check(system: System, found: DecoderErrorBound) -> Check:
         "hardened_bound": found.hardened,
         "sigma_min": found.sigma,
         "smallest_sigma_min": found.smallest_sigma,
-        "noise": found.noise.to_dict(),
+        **noise_fields(found),
         "horizon": tau,
         "decoder": "l0",
     }
@@ -243,8 +273,8 @@ def decoder_bound_check(system: System, found: DecoderErrorBound) -> Check:
             if found.facts.get("sigma_rechecked_exactly")
             else ""
         )
-        + f"); halving their "
-        f"noise gives {readable(found.hardened)}.{tolerance}",
+        + f"); halving {'the noise they see' if found.sources is not None else 'their noise'} "
+        f"gives {readable(found.hardened)}.{tolerance}",
         value=found.bound,
         evidence=evidence,
         **common,
@@ -322,7 +352,7 @@ def lasso_bound_check(
         "lambda_support": list(found.lam_support),
         "worst_support": list(found.worst_support),
         "sigma_min": found.sigma,
-        "noise": found.noise.to_dict(),
+        **noise_fields(found),
         "horizon": tau,
         "decoder": "lasso",
     }
@@ -462,7 +492,7 @@ def l1_bound_check(
         "sigma_min": found.sigma,
         "inverse_reach": found.reach,
         "noise_l1": found.noise_l1,
-        "noise": found.noise.to_dict(),
+        **noise_fields(found),
         "horizon": found.horizon,
         "decoder": "l1",
     }
