@@ -293,6 +293,8 @@ class MeasurementNoise:
         """
         if self.process is None:
             return self
+        if horizon <= 1:  # the window's one sample: the noise has not reached the state yet
+            return self.measurement_only()
         r = self.process.reach(A, C, horizon)
         if not np.all(np.isfinite(r)):
             return None

@@ -149,8 +149,12 @@ def spec_from_dict(
     check_keys(source, "", data, _TOP_KEYS)
     _check_document(source, data)
     if noise is not None:  # the measurement bound replaced, the process noise and draws kept
-        kept = data.get("noise") if isinstance(data.get("noise"), Mapping) else {}
-        others = {k: v for k, v in kept.items() if k not in ("measurement", "norm")}
+        kept = data.get("noise")
+        others = (
+            {k: v for k, v in kept.items() if k not in ("measurement", "norm")}
+            if isinstance(kept, Mapping)
+            else {}
+        )
         data = {**data, "noise": {**others, "measurement": noise}}
     name = _spec_name(source, data.get("name", default_name))
     system = _system(source, require(source, data, "system", ""), name)

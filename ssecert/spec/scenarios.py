@@ -112,7 +112,9 @@ def _noise_defaults(
     if "process" in scenario or process is not None:
         G = np.asarray(process.input if process is not None else np.eye(n or 0), dtype=float)
         m = G.shape[1]
-        bounds = scenario.get("process", None if process is None else process.omega.tolist())
+        bounds: Any = scenario.get("process")
+        if bounds is None and process is not None:
+            bounds = process.omega.tolist()
         if isinstance(bounds, list) and len(bounds) != m:
             raise spec_error(
                 source,

@@ -650,7 +650,8 @@ def with_sources(
     found = replace(found, sources=sources, lower=0.0, lower_kept=())
     if found.code is not BoundCode.CERTIFIED:
         return found
-    best, best_kept = 0.0, ()
+    best: float = 0.0
+    best_kept: tuple[int, ...] = ()
     for kept in candidates:
         pair = worst_case_pair(system, replace(found, lower_kept=kept)) if kept else None
         if pair is not None and pair["lower"] > best:

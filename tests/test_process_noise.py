@@ -1,0 +1,240 @@
+"""Process noise (x+ = A x + G w, each entry of w bounded) and Gaussian draws: the spec's
+``[noise]`` keys, the bounds certified under it, and the simulations beside them."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from ssecert import System, analyze, spec_from_dict
+from ssecert.estimators import l0_decoder
+from ssecert.noise import MeasurementNoise, ProcessNoise
+from ssecert.results import Verdict
+from ssecert.spec import SpecError
+from ssecert.spec.write import dumps, spec_document
+from ssecert.structure.noise import BoundCode, decoder_error_bound, with_sources
+
+A = [[0.9, 0.1], [0.0, 0.8]]
+C = [[1.0, 0.0], [0.0, 1.0], [1.0, 1.0], [1.0, -1.0], [2.0, 1.0]]
+LINEAR = {"kind": "luenberger", "gain": "place", "poles": [0.3, 0.4]}
+
+
+def _spec(noise: dict | None = None, **more) -> dict:
+    data = {"name": "pn", "system": {"A": A, "C": C}, "attack": {"max_attacked": 1}, **more}
+    if noise is not None:
+        data["noise"] = noise
+    return data
+
+
+def test_the_noise_section_reads_process_noise_and_draws():
+    noise = {"measurement": 0.01, "process": 0.02, "input": [[1.0], [0.5]],
+             "distribution": "gaussian", "truncation": 2.5}  # fmt: skip
+    spec = spec_from_dict(_spec(noise))
+    noise = spec.noise
+    assert noise.eta.tolist() == [0.01] * 5
+    assert noise.process.omega.tolist() == [0.02]
+    assert noise.process.input.tolist() == [[1.0], [0.5]]
+    assert (noise.distribution, noise.truncation) == ("gaussian", 2.5)
+    # the identity by default, and the measurement bound 0 where only process noise is given
+    alone = spec_from_dict(_spec({"process": [0.1, 0.2]})).noise
+    assert alone.eta.tolist() == [0.0] * 5 and alone.process.input.tolist() == np.eye(2).tolist()
+    # written back and read again: the same noise
+    again = spec_from_dict(__import__("tomllib").loads(dumps(spec_document(spec))))
+    assert again.noise == noise
+
+
+@pytest.mark.parametrize(
+    ("noise", "key"),
+    [
+        ({"measurement": 0.1, "process": -1.0}, "noise.process"),
+        ({"measurement": 0.1, "process": [0.1, 0.2, 0.3]}, "noise.process"),
+        ({"measurement": 0.1, "process": 0.1, "input": [[1.0]]}, "noise.input"),
+        ({"measurement": 0.1, "process": 0.1, "input": [[1.0], [float("nan")]]}, "noise.input"),
+        ({"measurement": 0.1, "input": [[1.0], [1.0]]}, "noise.input"),
+        ({"measurement": 0.1, "truncation": 2.0}, "noise.truncation"),
+        ({"measurement": 0.1, "distribution": "gaussian", "truncation": 0.0}, "noise.truncation"),
+        ({"measurement": 0.1, "distribution": "cauchy"}, "noise.distribution"),
+        ({"norm": "inf"}, "noise.measurement"),
+    ],
+)
+def test_bad_process_noise_is_refused_by_key(noise, key):
+    with pytest.raises(SpecError, match=f"key '{key}'"):
+        spec_from_dict(_spec(noise))
+
+
+def test_the_reach_at_the_sensors_in_closed_form():
+    """x+ = 2 x + w, |w| <= 0.5, y = x + n, |n| <= 0.1: sample t is off by 0.1 + 0.5 (2^t - 1);
+    over 3 samples, per sample 1.6, in 2-norm 0.1 + ||(0.5, 1.5)||."""
+    process = ProcessNoise.read(0.5, None, 1)
+    a, c = np.array([[2.0]]), np.array([[1.0]])
+    per_sample = MeasurementNoise(np.array([0.1]), process=process).at_sensors(a, c, 3)
+    assert per_sample.process is None and per_sample.eta[0] == pytest.approx(1.6, rel=1e-14)
+    assert per_sample.eta[0] >= 1.6
+    window = MeasurementNoise(np.array([0.1]), "2", process=process).at_sensors(a, c, 3)
+    assert window.eta[0] == pytest.approx(0.1 + math.hypot(0.5, 1.5), rel=1e-14)
+    assert window.eta[0] >= 0.1 + math.hypot(0.5, 1.5)
+    # one sample sees no process noise; an overflowing reach has no bounds
+    assert MeasurementNoise(np.array([0.1]), process=process).at_sensors(a, c, 1).eta[0] == 0.1
+    huge = MeasurementNoise(np.array([0.1]), process=ProcessNoise.read(1e300, None, 1))
+    assert huge.at_sensors(np.array([[1e10]]), c, 4) is None
+
+
+def test_a_linear_observers_bound_in_closed_form():
+    """x+ = a x + w, y = x + n, L: e+ = (a - L) e + L n - w, so eventually |e| <= (L eta +
+    omega) / (1 - |a - L|), reached by the sign pattern."""
+    a, L, eta, omega = 0.9, 0.5, 0.01, 0.02
+    data = {
+        "name": "scalar",
+        "system": {"A": [[a]], "C": [[1.0]]},
+        "attack": {"max_attacked": 0},
+        "noise": {"measurement": eta, "process": omega},
+        "observer": {"kind": "luenberger", "gain": "place", "poles": [a - L]},
+    }
+    check = analyze(spec_from_dict(data))["observer_noise_bound"]
+    exact = (L * eta + omega) / (1 - (a - L))
+    assert check.verdict is Verdict.HOLDS
+    assert check.value == pytest.approx(exact, rel=1e-9) and check.value >= exact
+    # the series' partial sum, cut once its tail is a millionth of it
+    assert check.fields["lower_bound"] == pytest.approx(exact, rel=1e-5)
+    assert check.fields["lower_bound"] <= exact
+    assert check.fields["energy_gain"] is None  # iss_gain's is from the measurement noise alone
+    assert check.fields["noise"]["process"].tolist() == [omega]
+
+
+def test_sparse_observers_are_not_certified_under_process_noise():
+    net = {**LINEAR, "kind": "elastic_net", "step": 0.3, "threshold": 0.05, "shrink": 0.5}
+    quiet = analyze(spec_from_dict({**_spec({"measurement": 1e-3}), "observer": net}))
+    assert quiet["observer_noise_bound"].verdict is Verdict.HOLDS
+    noisy = {**_spec({"measurement": 1e-3, "process": 1e-3}), "observer": net}
+    check = analyze(spec_from_dict(noisy))["observer_noise_bound"]
+    assert check.verdict is Verdict.INCONCLUSIVE and check.evidence["cause"] == "process noise"
+    assert math.isinf(check.value)
+
+
+def test_decoder_bounds_are_those_of_the_noise_at_the_sensors():
+    spec = spec_from_dict(_spec({"measurement": 0.01, "process": 0.02, "input": [[1.0], [0.5]]}))
+    cert = analyze(spec)
+    seen = spec.noise.at_sensors(spec.system.A, spec.system.C, spec.horizon)
+    plain = decoder_error_bound(spec.system, 1, seen, horizon=spec.horizon)
+    l0 = cert["decoder_error_bound"]
+    assert l0.verdict is Verdict.HOLDS and l0.value == plain.bound
+    assert l0.fields["noise"]["measurement"].tolist() == seen.eta.tolist()
+    assert l0.fields["noise_sources"]["process"].tolist() == [0.02]
+    # larger than without process noise; its lower bound within the measurement noise alone
+    quiet = analyze(spec_from_dict(_spec({"measurement": 0.01})))["decoder_error_bound"]
+    assert l0.value > quiet.value
+    assert 0 < l0.fields["lower_bound"] <= quiet.fields["lower_bound"]
+    assert cert["l1_error_bound"].verdict is Verdict.HOLDS
+    assert cert["l1_error_bound"].fields["noise_sources"]["process"].tolist() == [0.02]
+
+
+def test_process_noise_alone_builds_no_lower_bound_from_its_reach():
+    spec = spec_from_dict(_spec({"process": 0.02}))
+    check = analyze(spec)["decoder_error_bound"]
+    assert check.verdict is Verdict.HOLDS and check.value > 0
+    assert check.fields["lower_bound"] == 0.0  # the reach is not a noise each sensor takes
+    # the bound alone, then with its sources: the lower bound rebuilt, the bound the same
+    seen = spec.noise.at_sensors(spec.system.A, spec.system.C, spec.horizon)
+    found = decoder_error_bound(spec.system, 1, seen, horizon=spec.horizon)
+    assert found.code is BoundCode.CERTIFIED and found.lower > 0
+    rebuilt = with_sources(spec.system, found, spec.noise)
+    assert rebuilt.bound == found.bound and rebuilt.lower == 0.0
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_no_process_and_measurement_noise_takes_the_l0_decoder_beyond_its_bound(seed):
+    """Windows simulated with attacks on one sensor and noise at the vertices of both bounds:
+    the l0 decoder's error on the window's first state stays within the certified bound."""
+    rng = np.random.default_rng(seed)
+    eta, omega = 0.01, 0.05
+    G = np.array([[1.0], [0.5]])
+    spec = spec_from_dict(_spec({"measurement": eta, "process": omega, "input": G.tolist()}))
+    bound = analyze(spec)["decoder_error_bound"].value
+    system, tau = spec.system, spec.horizon
+    O = system.observability_matrix(tau)
+    rows = np.tile(np.arange(system.p), tau)
+    worst = 0.0
+    for _ in range(200):
+        first = rng.standard_normal(2)  # the window's first state: what the decoder estimates
+        x, Y = first.copy(), np.empty((tau, system.p))
+        for t in range(tau):
+            Y[t] = system.C @ x + eta * rng.choice([-1.0, 1.0], system.p)
+            x = system.A @ x + G[:, 0] * omega * rng.choice([-1.0, 1.0])
+        Y[:, rng.integers(system.p)] += rng.uniform(-5, 5, tau)  # the attack
+        estimate = l0_decoder(O, Y.reshape(-1), 1, sensors_of_row=rows, rtol=0.0).x
+        worst = max(worst, float(np.linalg.norm(estimate - first)))
+    assert 0 < worst <= bound
+
+
+def test_gaussian_draws_stay_within_their_bounds():
+    from ssecert.simulation.scenarios import generate
+
+    scenario = {"attack": "none", "noise": [0.1, 0.0, 0.2], "distribution": "gaussian",
+                "truncation": 2.0, "process": [0.3], "process_input": [[1.0], [2.0]]}  # fmt: skip
+    system = System(np.eye(2) * 0.5, np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]))
+    data = generate(system, scenario, range(40), 500, seed=3)
+    assert np.all(np.abs(data.noise) <= [0.1, 0.0, 0.2]) and np.all(data.noise[:, :, 1] == 0)
+    # standard deviation bound / truncation, less the truncated tails (0.8796 of it at 2)
+    assert np.std(data.noise[:, :, 0]) == pytest.approx(0.05 * 0.8796, rel=0.03)
+    w = data.process[:, :, 0]  # G w: the second entry twice the first
+    assert np.all(np.abs(w) <= 0.3) and np.array_equal(data.process[:, :, 1], 2 * w)
+    # uniform draws are those drawn before process noise existed, run by run
+    plain = generate(system, {"attack": "none", "noise": 0.1}, range(3), 20, seed=3)
+    with_process = generate(
+        system, {"attack": "none", "noise": 0.1, "process": [0.3], "process_input": [[1.0], [2.0]]},
+        range(3), 20, seed=3,
+    )  # fmt: skip
+    assert np.array_equal(plain.noise, with_process.noise) and plain.process is None
+
+
+def test_scenarios_take_the_process_noise_of_the_noise_section():
+    scenarios = [
+        {"name": "quiet", "attack": "none"},
+        {"name": "own", "attack": "none", "process": 0.01, "distribution": "uniform"},
+    ]
+    noise = {"measurement": 0.01, "process": 0.02, "input": [[1.0], [0.5]],
+             "distribution": "gaussian"}  # fmt: skip
+    spec = spec_from_dict({**_spec(noise), "scenario": scenarios})
+    quiet, own = spec.scenarios
+    assert quiet["process"] == [0.02] and quiet["process_input"] == [[1.0], [0.5]]
+    assert quiet["distribution"] == "gaussian" and quiet["truncation"] == 3.0
+    assert own["process"] == [0.01] and "distribution" not in own
+    with pytest.raises(SpecError, match=r"scenario\[0\]\.process"):
+        spec_from_dict({**_spec(noise), "scenario": [{**scenarios[0], "process": [0.1, 0.2]}]})
+    with pytest.raises(SpecError, match=r"scenario\[0\]\.truncation"):
+        spec_from_dict({**_spec(), "scenario": [{**scenarios[0], "truncation": 2.0}]})
+    # no [noise]: a scenario's process noise enters every state
+    alone = spec_from_dict({**_spec(), "scenario": [{**scenarios[0], "process": 0.1}]})
+    assert alone.scenarios[0]["process_input"] == np.eye(2).tolist()
+
+
+def test_the_command_line_noise_keeps_the_process_noise():
+    spec = spec_from_dict(_spec({"measurement": 0.5, "norm": "2", "process": 0.02}), noise=0.01)
+    assert spec.noise.eta.tolist() == [0.01] * 5 and spec.noise.norm == "inf"
+    assert spec.noise.process.omega.tolist() == [0.02, 0.02]  # one per state
+    cert = analyze(spec_from_dict(_spec({"process": 0.02})), noise=0.01)
+    assert cert["decoder_error_bound"].fields["noise_sources"]["measurement"].tolist() == [0.01] * 5
+
+
+@pytest.mark.slow
+def test_certify_puts_the_linear_bound_beside_noisy_simulations():
+    from ssecert.certify import certify
+
+    data = {
+        **_spec({"measurement": 0.01, "process": 0.02, "input": [[1.0], [0.5]]}),
+        "observer": LINEAR,
+        "scenario": [
+            {"name": "uniform", "attack": "none", "runs": 50, "steps": 200},
+            {"name": "gaussian", "attack": "none", "runs": 50, "steps": 200,
+             "distribution": "gaussian"},
+            {"name": "louder", "attack": "none", "runs": 5, "process": 0.5},
+        ],
+    }  # fmt: skip
+    doc = certify(spec_from_dict(data), seed=0).to_dict()
+    bound = doc["checks"]["observer_noise_bound"]["value"]
+    for name in ("uniform", "gaussian"):
+        beside = doc["simulations"][name]["certified_bound"]
+        assert beside["within"] is True and 0 < beside["observed_max"] <= bound
+    assert "certified_bound" not in doc["simulations"]["louder"]  # beyond the spec's bound
