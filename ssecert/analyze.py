@@ -289,11 +289,14 @@ def _noise_of(spec: Spec, noise: MeasurementNoise | float | None) -> Measurement
     return replace(spec.noise, eta=MeasurementNoise.read(noise, spec.system.p).eta, norm="inf")
 
 
-def _at_sensors(spec: Spec, noise: MeasurementNoise) -> MeasurementNoise | None:
+def _at_sensors(spec: Spec, noise: MeasurementNoise) -> tuple[MeasurementNoise | None, Any]:
     """The per-sensor bounds a decoder's window sees (``MeasurementNoise.at_sensors``: the
-    measurement noise plus the process noise's reach); None where they leave the float
-    range."""
-    return noise.at_sensors(spec.system.A, spec.system.C, spec.horizon)
+    measurement noise plus the process noise's reach; None where they leave the float range),
+    and what a decoder bound records: ``sources``, the spec's noise where it has process noise
+    (else None), and ``noise``, the bounds seen (the measurement noise where out of range)."""
+    seen = noise.at_sensors(spec.system.A, spec.system.C, spec.horizon)
+    sources = noise if noise.process is not None else None
+    return seen, {"noise": noise.measurement_only() if seen is None else seen, "sources": sources}
 
 
 def _decoder_bound(spec: Spec, noise: MeasurementNoise, sparse: Check, max_sets: int) -> Check:
@@ -310,31 +313,23 @@ def _decoder_bound(spec: Spec, noise: MeasurementNoise, sparse: Check, max_sets:
     from .structure.noise_messages import decoder_bound_check
 
     breaking = sparse.fields.get("breaking_set")
-    seen = _at_sensors(spec, noise)
+    seen, records = _at_sensors(spec, noise)
+    tau, s = spec.horizon, spec.max_attacked
     if sparse.verdict is Verdict.FAILS and breaking is not None:
         found = DecoderErrorBound(
-            BoundCode.NOT_SPARSE_OBSERVABLE,
-            float("inf"),
-            0.0,
-            noise,
-            spec.horizon,
-            spec.max_attacked,
-            facts={"breaking_set": [int(i) for i in breaking]},
-        )
+            BoundCode.NOT_SPARSE_OBSERVABLE, float("inf"), 0.0, horizon=tau, max_attacked=s,
+            facts={"breaking_set": [int(i) for i in breaking]}, **records,
+        )  # fmt: skip
     elif seen is None:
         found = DecoderErrorBound(
-            BoundCode.OUT_OF_RANGE, float("inf"), 0.0, noise, spec.horizon, spec.max_attacked
+            BoundCode.OUT_OF_RANGE, float("inf"), 0.0, horizon=tau, max_attacked=s, **records
         )
     else:
         found = decoder_error_bound(
-            spec.system,
-            spec.max_attacked,
-            seen,
-            horizon=spec.horizon,
-            max_sets=min(max_sets, BOUND_SETS),
+            spec.system, s, seen, horizon=tau, max_sets=min(max_sets, BOUND_SETS)
         )
-        if seen is not noise:
-            found = with_sources(spec.system, found, noise)
+        if records["sources"] is not None:
+            found = with_sources(spec.system, found, records["sources"])
     return decoder_bound_check(spec.system, found)
 
 
@@ -346,21 +341,20 @@ def _l1_bound(spec: Spec, noise: MeasurementNoise, sparse: Check) -> Check:
     from .structure.noise_messages import l1_bound_check
 
     breaking = sparse.fields.get("breaking_set")
+    seen, records = _at_sensors(spec, noise)
+    tau, s = spec.horizon, spec.max_attacked
     if sparse.verdict is Verdict.FAILS and breaking is not None:
         found = L1ErrorBound(
-            L1BoundCode.NOT_NULL_SPACE, float("inf"), noise, spec.horizon, spec.max_attacked
+            L1BoundCode.NOT_NULL_SPACE, float("inf"), horizon=tau, max_attacked=s, **records
         )
         return l1_bound_check(spec.system, found, [int(i) for i in breaking])
-    seen = _at_sensors(spec, noise)
     if seen is None:
         found = L1ErrorBound(
-            L1BoundCode.NOT_SOLVED, float("inf"), noise, spec.horizon, spec.max_attacked
+            L1BoundCode.NOT_SOLVED, float("inf"), horizon=tau, max_attacked=s, **records
         )
         return l1_bound_check(spec.system, found)
-    found = l1_error_bound(spec.system, spec.max_attacked, seen, horizon=spec.horizon)
-    if seen is not noise:
-        found = replace(found, sources=noise)
-    return l1_bound_check(spec.system, found)
+    found = l1_error_bound(spec.system, s, seen, horizon=tau)
+    return l1_bound_check(spec.system, replace(found, sources=records["sources"]))
 
 
 def _lasso_bound(spec: Spec, noise: MeasurementNoise, sparse: Check, max_sets: int) -> Check:
@@ -373,28 +367,21 @@ def _lasso_bound(spec: Spec, noise: MeasurementNoise, sparse: Check, max_sets: i
     from .structure.noise_messages import lasso_bound_check
 
     breaking = sparse.fields.get("breaking_set")
+    seen, records = _at_sensors(spec, noise)
+    tau, s = spec.horizon, spec.max_attacked
     if sparse.verdict is Verdict.FAILS and breaking is not None:
         found = LassoErrorBound(
-            LassoBoundCode.NOT_IRREPRESENTABLE, float("inf"), noise, spec.horizon,
-            spec.max_attacked,
+            LassoBoundCode.NOT_IRREPRESENTABLE, float("inf"), horizon=tau, max_attacked=s,
+            **records,
         )  # fmt: skip
         return lasso_bound_check(spec.system, found, [int(i) for i in breaking])
-    seen = _at_sensors(spec, noise)
     if seen is None:
         found = LassoErrorBound(
-            LassoBoundCode.OUT_OF_RANGE, float("inf"), noise, spec.horizon, spec.max_attacked
+            LassoBoundCode.OUT_OF_RANGE, float("inf"), horizon=tau, max_attacked=s, **records
         )
         return lasso_bound_check(spec.system, found)
-    found = lasso_error_bound(
-        spec.system,
-        spec.max_attacked,
-        seen,
-        horizon=spec.horizon,
-        max_sets=min(max_sets, LASSO_SETS),
-    )
-    if seen is not noise:
-        found = replace(found, sources=noise)
-    return lasso_bound_check(spec.system, found)
+    found = lasso_error_bound(spec.system, s, seen, horizon=tau, max_sets=min(max_sets, LASSO_SETS))
+    return lasso_bound_check(spec.system, replace(found, sources=records["sources"]))
 
 
 class _Clock(Laps):

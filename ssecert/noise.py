@@ -93,6 +93,12 @@ class ProcessNoise:
             omega = np.full(m, as_float_option(process, "process", min_value=0.0))
         return cls(omega, G)
 
+    @property
+    def moves_the_state(self) -> bool:
+        """Whether some entry of w with a positive bound enters the state (a nonzero column of
+        G): without one, the process noise is none."""
+        return bool(np.any((self.omega > 0) & np.any(self.input != 0, axis=0)))
+
     @staticmethod
     def input_matrix(input: Any, n: int) -> np.ndarray:
         """G of a ``[noise]`` section's ``input``: a real matrix with ``n`` rows (the identity
@@ -136,7 +142,8 @@ class ProcessNoise:
             for d in range(steps):
                 mid, rad = interval_product(C, zero_C, M, R)
                 size = np.abs(mid) + rad + tiny * (d + 1)
-                out[:, d] = up_by(size @ self.omega, self.omega.size + 2)
+                # (a product that underflows is taken up by a subnormal unit per term)
+                out[:, d] = up_by(size @ self.omega, self.omega.size + 2) + tiny
                 M, R = interval_product(A, zero_A, M, R)
                 R = R + tiny
         return np.where(np.isfinite(out), out, np.inf)
@@ -182,6 +189,8 @@ class MeasurementNoise:
         object.__setattr__(
             self, "distribution", as_choice(self.distribution, "distribution", DISTRIBUTIONS)
         )
+        if self.process is not None and not self.process.moves_the_state:
+            object.__setattr__(self, "process", None)  # zero process noise is none
         truncation = as_float_option(self.truncation, "truncation", min_value=0.0)
         if not truncation > 0:
             raise ValueError(f"truncation must be > 0, got {truncation}")
@@ -306,7 +315,8 @@ class MeasurementNoise:
                 extra = partial[:, -1] if steps else np.zeros(self.eta.size)
             else:
                 extra = up_by(np.sqrt(up_by(np.sum(partial**2, axis=1), steps + 2)), 2)
-            eta = up_by(self.eta + extra, 1)
+            # the sums' roundings in the subnormal range are absolute: a unit per operation
+            eta = up_by(self.eta + extra, 1) + 2.0**-1074 * (steps + 4)
         if not np.all(np.isfinite(eta)):
             return None
         return MeasurementNoise(eta, self.norm)

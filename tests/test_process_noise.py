@@ -200,7 +200,9 @@ def test_scenarios_take_the_process_noise_of_the_noise_section():
     quiet, own = spec.scenarios
     assert quiet["process"] == [0.02] and quiet["process_input"] == [[1.0], [0.5]]
     assert quiet["distribution"] == "gaussian" and quiet["truncation"] == 3.0
-    assert own["process"] == [0.01] and "distribution" not in own
+    assert own["process"] == [0.01] and own["distribution"] == "uniform"  # its own, kept
+    again = spec_from_dict(__import__("tomllib").loads(dumps(spec_document(spec))))
+    assert [dict(sc) for sc in again.scenarios] == [dict(sc) for sc in spec.scenarios]
     with pytest.raises(SpecError, match=r"scenario\[0\]\.process"):
         spec_from_dict({**_spec(noise), "scenario": [{**scenarios[0], "process": [0.1, 0.2]}]})
     with pytest.raises(SpecError, match=r"scenario\[0\]\.truncation"):
@@ -238,3 +240,81 @@ def test_certify_puts_the_linear_bound_beside_noisy_simulations():
         beside = doc["simulations"][name]["certified_bound"]
         assert beside["within"] is True and 0 < beside["observed_max"] <= bound
     assert "certified_bound" not in doc["simulations"]["louder"]  # beyond the spec's bound
+
+
+@pytest.mark.slow
+def test_the_sise_papers_noise_setting_is_certified_and_simulated():
+    """SISE's Sec. IV: A with N(0, 1/n) entries (spectral radius about 1), 20 sensors with
+    N(0, 1) rows, n = 50, Q = R = 0.01 I: Gaussian noise of standard deviation 0.1, certified
+    truncated at 3 (bounds 0.3, each sample within them with probability 0.9973).  The
+    decoders (no attack, a window of 3 samples) and a linear observer are certified, and truncated
+    Gaussian simulations stay within the observer's bound."""
+    from ssecert.observers import build_observer
+    from ssecert.simulation.engine import simulate_scenario
+    from ssecert.stability.noise_messages import observer_noise_check
+
+    rng = np.random.default_rng(0)
+    n, m = 50, 20
+    A, C = rng.standard_normal((n, n)) / np.sqrt(n), rng.standard_normal((m, n))
+    noise = {"measurement": 0.3, "process": 0.3, "distribution": "gaussian", "truncation": 3.0}
+    data = {"name": "sise", "system": {"A": A.tolist(), "C": C.tolist()},
+            "attack": {"max_attacked": 0, "horizon": 3}, "noise": noise,
+            "scenario": [{"name": "noisy", "attack": "none", "runs": 40, "steps": 150}]}  # fmt: skip
+    spec = spec_from_dict(data)
+    cert = analyze(spec)
+    for key in ("decoder_error_bound", "l1_error_bound", "lasso_error_bound"):
+        check = cert[key]
+        assert check.verdict is Verdict.HOLDS and 0 < check.value < math.inf
+        assert check.fields["noise_sources"]["process"].tolist() == [0.3] * n
+    design = build_observer(spec.system, {"kind": "luenberger", "gain": "place",
+                                          "poles": np.linspace(0.2, 0.6, n).tolist()})  # fmt: skip
+    bound = observer_noise_check(design, spec.noise)
+    assert bound.verdict is Verdict.HOLDS and bound.fields["lower_bound"] <= bound.value
+    result = simulate_scenario(design, spec.scenarios[0], seed=0)
+    error = result.absolute_error[100:]  # the initial error faded (rho(A - L C) = 0.6)
+    assert 0 < float(np.max(error)) <= bound.value
+
+
+def test_zero_process_noise_is_none():
+    net = {**LINEAR, "kind": "elastic_net", "step": 0.3, "threshold": 0.05, "shrink": 0.5}
+    for noise in ({"measurement": 1e-3, "process": 0.0},
+                  {"measurement": 1e-3, "process": 0.5, "input": [[0.0], [0.0]]}):  # fmt: skip
+        spec = spec_from_dict({**_spec(noise), "observer": net})
+        assert spec.noise.process is None and spec.noise == MeasurementNoise.uniform(1e-3, 5)
+        assert analyze(spec)["observer_noise_bound"].verdict is Verdict.HOLDS
+
+
+def test_tiny_and_huge_numbers_stay_bounds():
+    """A reach that underflows is still an upper bound; a linear observer's 2-norm neither
+    underflows below its largest component nor overflows into a certified inf."""
+    tiny = ProcessNoise.read(1e-200, [[1e-200]], 1)
+    seen = MeasurementNoise(np.zeros(3), process=tiny).at_sensors(
+        np.array([[0.5]]), np.ones((3, 1)), 2
+    )
+    assert np.all(seen.eta > 0)
+    data = {"name": "tiny", "system": {"A": [[0.5]], "C": [[1.0], [1.0], [1.0]]},
+            "attack": {"max_attacked": 0},
+            "noise": {"process": 1.0, "input": [[1e-200]]},
+            "observer": {"kind": "luenberger", "gain": [[0.1, 0.1, 0.1]]}}  # fmt: skip
+    check = analyze(spec_from_dict(data))["observer_noise_bound"]
+    assert check.verdict is Verdict.HOLDS
+    assert check.value >= check.fields["ultimate_bound_inf"] >= check.fields["lower_bound"] > 0
+    data["system"]["A"] = [[0.5, 0.0], [0.0, 0.5]]
+    data["system"]["C"] = [[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]
+    data["noise"] = {"process": 0.75, "input": [[1e160], [1e160]]}
+    data["observer"] = {"kind": "luenberger", "gain": [[0.1, 0.0, 0.0], [0.0, 0.1, 0.0]]}
+    huge = analyze(spec_from_dict(data))["observer_noise_bound"]  # (its 2-norm was inf)
+    assert huge.verdict is Verdict.HOLDS
+    assert huge.value == pytest.approx(math.sqrt(2) * 1.25e160, rel=1e-9)
+    assert huge.value >= math.sqrt(2) * 1.25e160
+
+
+def test_a_tiny_truncation_draws_the_uniform_distribution():
+    from ssecert.simulation.scenarios import generate
+
+    system = System(np.eye(1), np.ones((1, 1)))
+    for t in (1e-300, 1e-20, 1e-9):
+        scenario = {"attack": "none", "noise": 0.1, "distribution": "gaussian", "truncation": t}
+        noise = generate(system, scenario, range(20), 500, seed=0).noise
+        assert np.all(np.abs(noise) <= 0.1)
+        assert np.std(noise) == pytest.approx(0.1 / math.sqrt(3), rel=0.03)

@@ -434,6 +434,33 @@ def _headline(cert: Certificate) -> str:
     return "Every required check holds."
 
 
+def _noise_source_rows(cert: Certificate) -> list[tuple[str, str]]:
+    """With process noise: the measurement and process noise the decoders' bounds come from,
+    and what they add up to at the sensors over the window (the ``noise`` the bounds are
+    certified for)."""
+    for key in ("decoder_error_bound", "l1_error_bound", "lasso_error_bound"):
+        check = cert.get(key)
+        if check is None:
+            continue
+        sources = check.fields.get("noise_sources")
+        if sources is None or "process" not in sources:
+            continue
+        seen = np.asarray(check.fields["noise"]["measurement"], dtype=float)
+        return [
+            ("measurement noise: largest bound", readable(float(np.max(sources["measurement"])))),
+            (
+                "process noise x+ = A x + G w: largest bound of an entry of w",
+                readable(float(np.max(sources["process"]))),
+            ),
+            (
+                f"both at the sensors over the window of {check.fields['horizon']} steps: "
+                "largest bound",
+                readable(float(np.max(seen))) if seen.size else "0",
+            ),
+        ]
+    return []
+
+
 def _noise_context(
     system: Any, cert: Certificate, simulations: dict[str, Any]
 ) -> dict[str, Any] | None:
@@ -444,7 +471,7 @@ def _noise_context(
     decoder, observer = cert.get("decoder_error_bound"), cert.get("observer_noise_bound")
     if decoder is None and observer is None and cert.get("lasso_error_bound") is None:
         return None  # the decoders' bounds come together
-    rows: list[tuple[str, str]] = []
+    rows: list[tuple[str, str]] = _noise_source_rows(cert)
     svg = None
     if decoder is not None and decoder.verdict is Verdict.HOLDS:
         kept = ", ".join(system.sensors[i] for i in decoder.fields["worst_kept_sensors"])

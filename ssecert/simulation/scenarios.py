@@ -83,6 +83,11 @@ def _uniform(rng: np.random.Generator, lo: Any, hi: Any, size: Any) -> np.ndarra
     return middle + rng.uniform(-0.5, 0.5, size) * 2.0 * (0.5 * hi - 0.5 * lo)
 
 
+#: below this truncation a truncated Gaussian is drawn as the uniform distribution it tends to
+#: (the normal distribution's values at +-t round together where t is tiny)
+TRUNCATION_UNIFORM = 1e-3
+
+
 def _draw(
     rng: np.random.Generator, bound: Any, size: tuple[int, ...], scenario: Mapping[str, Any]
 ) -> np.ndarray:
@@ -93,6 +98,8 @@ def _draw(
     if scenario.get("distribution", "uniform") != "gaussian":
         return _uniform(rng, -bound, bound, size)
     t = float(scenario.get("truncation", 3.0))
+    if t < TRUNCATION_UNIFORM:  # the density varies by less than t^2 / 2 < 5e-7: uniform
+        return _uniform(rng, -bound, bound, size)
     edge = float(special.ndtr(-t))
     z = special.ndtri(rng.uniform(edge, 1.0 - edge, size))
     # |z / t| <= 1, so each sample is within its bound (a product by at most 1 rounds within)

@@ -119,8 +119,9 @@ def _noise_defaults(
             raise spec_error(
                 source,
                 f"{prefix}.process",
-                f"expected one bound or one per entry of w ({m}: the columns of [noise]'s "
-                f"input), got a list of {len(bounds)}",
+                f"expected one bound or one per entry of w ({m}: "
+                f"{'the columns of [noise] input' if process is not None else 'one per state'}"
+                f"), got a list of {len(bounds)}",
             )
         values = bounds if isinstance(bounds, list) else [bounds] * m
         scenario["process"] = [float(v) for v in values]
@@ -133,6 +134,8 @@ def _noise_defaults(
     if distribution == "gaussian":
         scenario["distribution"] = "gaussian"
         scenario.setdefault("truncation", getattr(model, "truncation", 3.0))
+    elif getattr(model, "distribution", "uniform") == "gaussian":
+        scenario["distribution"] = "uniform"  # its own, against the section's (kept written)
     else:
         scenario.pop("distribution", None)
 

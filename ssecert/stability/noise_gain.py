@@ -145,8 +145,10 @@ def linear_noise_bound(
     found = _unit_noise_bound(
         F, L, eta / c, rounding_F=rounding_F, rounding_L=rounding_L, max_terms=max_terms
     )
-    if c == 1.0 or found.code is not NoiseGainCode.CERTIFIED:
+    if found.code is not NoiseGainCode.CERTIFIED:
         return found
+    if c == 1.0:
+        return _in_range(found)
     with np.errstate(over="ignore"):
         up = np.vectorize(lambda x: times_up(float(x), c))
         componentwise = up(found.componentwise) if found.componentwise.size else found.componentwise
@@ -159,10 +161,28 @@ def linear_noise_bound(
             lower=found.lower * c,
             tail=times_up(found.tail, c),
         )
-    if not math.isfinite(scaled.bound_2):
-        n = found.componentwise.size
-        return NoiseGain(NoiseGainCode.OUT_OF_RANGE, np.full(n, math.inf), np.zeros(n))
-    return scaled
+    return _in_range(scaled)
+
+
+def _in_range(found: NoiseGain) -> NoiseGain:
+    """``found``, or out of range where its bounds overflow (a 2-norm or an entry at inf)."""
+    if math.isfinite(found.bound_2) and bool(np.all(np.isfinite(found.componentwise))):
+        return found
+    n = found.componentwise.size
+    return NoiseGain(NoiseGainCode.OUT_OF_RANGE, np.full(n, math.inf), np.zeros(n))
+
+
+def _norm_up(x: np.ndarray) -> float:
+    """An upper bound of ||x||_2 (x >= 0) that neither under- nor overflows where its largest
+    entry does not: the largest entry times the norm of x over it, at least that entry."""
+    top = float(np.max(x)) if x.size else 0.0
+    if not top > 0 or not math.isfinite(top):
+        return top
+    with np.errstate(over="ignore", under="ignore"):
+        norm = float(_up(top * float(np.linalg.norm(x / top)), x.size + 4))
+    if norm < 2.0**-1022:  # subnormal: each rounding is off by up to a unit, not relatively
+        norm += 2.0**-1074 * (x.size + 4)
+    return max(norm, top)
 
 
 def _unit_noise_bound(
@@ -229,7 +249,7 @@ def _unit_noise_bound(
         NoiseGainCode.CERTIFIED,
         bound,
         reached,
-        bound_2=float(_up(float(np.linalg.norm(bound)), n + 2)),
+        bound_2=_norm_up(bound),
         bound_inf=float(np.max(bound)) if n else 0.0,
         lower=float(np.max(reached)) if n else 0.0,
         terms=terms,
