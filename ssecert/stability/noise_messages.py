@@ -35,8 +35,8 @@ __all__ = [
 TITLE = "Ultimate error of the observer under noise"
 VALUE_NAME = "certified ultimate bound of ||x_hat - x||_2"
 METHOD = (
-    "worst-case series sum_j |F^j L| eta in interval arithmetic, tail bounded by a power of F "
-    "below 1 in norm"
+    "worst-case series sum_j |F^j L| eta (plus |F^j G| omega with process noise) in interval "
+    "arithmetic, tail bounded by a power of F below 1 in norm"
 )
 
 
