@@ -84,9 +84,10 @@ def add_design_parser(sub: Any) -> None:
         metavar="ETA",
         default=None,
         help="measurement noise within ETA on every sample of every sensor, replacing the "
-        "spec's [noise] measurement bound, its process noise kept (written into NAME-design.toml): the trade-off front gains a noise "
-        "axis and both designs their certified ultimate error; --objective noise picks the "
-        "searched design with the smallest",
+        "spec's [noise] measurement bound, its process noise kept (written into "
+        "NAME-design.toml): the trade-off front gains a noise axis and both designs their "
+        "certified ultimate error; --objective noise picks the searched design with the "
+        "smallest",
     )
     design.add_argument(
         "--out",

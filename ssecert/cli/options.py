@@ -232,8 +232,9 @@ def _add_analysis_options(parser: argparse.ArgumentParser) -> None:
         metavar="ETA",
         default=None,
         help="measurement noise within ETA on every sample of every sensor, replacing the "
-        "spec's [noise] measurement bound (its process noise stays): adds the certified worst-case errors of the l0, l1 and Lasso "
-        "decoders (decoder_error_bound, l1_error_bound, lasso_error_bound)",
+        "spec's [noise] measurement bound (its process noise stays): adds the certified "
+        "worst-case errors of the l0, l1 and Lasso decoders (decoder_error_bound, "
+        "l1_error_bound, lasso_error_bound)",
     )
     parser.add_argument(
         "--method",
