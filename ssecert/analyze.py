@@ -143,7 +143,8 @@ def analyze(
         simulations replay); ``certify`` passes its own.
     noise : MeasurementNoise or float, optional
         Bounded measurement noise, replacing the spec's ``[noise]`` section (a
-        number: that bound on every sample of every sensor).
+        number: that bound on every sample of every sensor, replacing the section's
+        measurement bound only, its process noise kept).
 
     Returns
     -------
@@ -281,6 +282,11 @@ def _noise_of(spec: Spec, noise: MeasurementNoise | float | None) -> Measurement
         if noise.eta.shape != (spec.system.p,):
             raise ValueError(
                 f"noise: {noise.eta.size} bounds for the plant's {spec.system.p} sensors"
+            )
+        if noise.process is not None and noise.process.input.shape[0] != spec.system.n:
+            raise ValueError(
+                f"noise: its process noise enters {noise.process.input.shape[0]} states, the "
+                f"plant has {spec.system.n}"
             )
         return noise
     if spec.noise is None:

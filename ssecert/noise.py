@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from .base.validation import as_choice, as_float_option, as_real_matrix
-from .tolerances import interval_product, up_by
+from .tolerances import interval_product, rows_norm_up, up_by
 
 __all__ = ["DISTRIBUTIONS", "MeasurementNoise", "NORMS", "ProcessNoise"]
 
@@ -143,7 +143,9 @@ class ProcessNoise:
                 mid, rad = interval_product(C, zero_C, M, R)
                 size = np.abs(mid) + rad + tiny * (d + 1)
                 # (a product that underflows is taken up by a subnormal unit per term)
-                out[:, d] = up_by(size @ self.omega, self.omega.size + 2) + tiny
+                out[:, d] = up_by(size @ self.omega, self.omega.size + 2) + 2.0**-1074 * (
+                    self.omega.size + 2
+                )
                 M, R = interval_product(A, zero_A, M, R)
                 R = R + tiny
         return np.where(np.isfinite(out), out, np.inf)
@@ -314,7 +316,7 @@ class MeasurementNoise:
             if self.per_sample:
                 extra = partial[:, -1] if steps else np.zeros(self.eta.size)
             else:
-                extra = up_by(np.sqrt(up_by(np.sum(partial**2, axis=1), steps + 2)), 2)
+                extra = rows_norm_up(partial)
             # the sums' roundings in the subnormal range are absolute: a unit per operation
             eta = up_by(self.eta + extra, 1) + 2.0**-1074 * (steps + 4)
         if not np.all(np.isfinite(eta)):

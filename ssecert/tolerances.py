@@ -171,6 +171,19 @@ def up_by(x: Any, ops: int) -> Any:
     return x * (1.0 + gamma(ops + 2))
 
 
+def rows_norm_up(X: np.ndarray) -> np.ndarray:
+    """An upper bound of the 2-norm of each row of X (X >= 0), neither under- nor overflowing
+    where the row's largest entry does not: that entry times the norm of the row over it (at
+    least that entry; a subnormal result taken up by a unit per operation)."""
+    X = np.asarray(X, dtype=float)
+    top = np.max(X, axis=1) if X.shape[1] else np.zeros(X.shape[0])
+    with np.errstate(over="ignore", under="ignore", invalid="ignore", divide="ignore"):
+        ratio = np.where(top[:, None] > 0, X / np.where(top > 0, top, 1.0)[:, None], 0.0)
+        norm = up_by(top * np.sqrt(np.sum(ratio**2, axis=1)), X.shape[1] + 4)
+    norm = np.where(norm < 2.0**-1022, norm + 2.0**-1074 * (X.shape[1] + 4), norm)
+    return np.where(np.isfinite(top), np.maximum(norm, top), top)
+
+
 def interval_product(
     M1: np.ndarray, R1: np.ndarray, M2: np.ndarray, R2: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:

@@ -145,13 +145,16 @@ def test_process_noise_alone_builds_no_lower_bound_from_its_reach():
 
 @pytest.mark.parametrize("seed", range(3))
 def test_no_process_and_measurement_noise_takes_the_l0_decoder_beyond_its_bound(seed):
-    """Windows simulated with attacks on one sensor and noise at the vertices of both bounds:
-    the l0 decoder's error on the window's first state stays within the certified bound."""
+    """Windows simulated with attacks on one sensor, the process noise dominating at the
+    vertices of its bound (signs that push one state direction): the l0 decoder's error on the
+    window's first state goes beyond the bound the measurement noise alone would have, and
+    stays within the certified one."""
     rng = np.random.default_rng(seed)
-    eta, omega = 0.01, 0.05
+    eta, omega = 1e-4, 0.05
     G = np.array([[1.0], [0.5]])
     spec = spec_from_dict(_spec({"measurement": eta, "process": omega, "input": G.tolist()}))
     bound = analyze(spec)["decoder_error_bound"].value
+    quiet = analyze(spec_from_dict(_spec({"measurement": eta})))["decoder_error_bound"].value
     system, tau = spec.system, spec.horizon
     O = system.observability_matrix(tau)
     rows = np.tile(np.arange(system.p), tau)
@@ -159,13 +162,32 @@ def test_no_process_and_measurement_noise_takes_the_l0_decoder_beyond_its_bound(
     for _ in range(200):
         first = rng.standard_normal(2)  # the window's first state: what the decoder estimates
         x, Y = first.copy(), np.empty((tau, system.p))
+        sign = rng.choice([-1.0, 1.0])
         for t in range(tau):
             Y[t] = system.C @ x + eta * rng.choice([-1.0, 1.0], system.p)
-            x = system.A @ x + G[:, 0] * omega * rng.choice([-1.0, 1.0])
+            x = system.A @ x + G[:, 0] * omega * sign
         Y[:, rng.integers(system.p)] += rng.uniform(-5, 5, tau)  # the attack
         estimate = l0_decoder(O, Y.reshape(-1), 1, sensors_of_row=rows, rtol=0.0).x
         worst = max(worst, float(np.linalg.norm(estimate - first)))
-    assert 0 < worst <= bound
+    assert quiet < worst <= bound
+
+
+def test_the_reach_in_2_norm_neither_under_nor_overflows():
+    """Under norm "2" the window's partial sums are summed in squares: at 1e-170 they
+    underflowed (a certified bound of 1e-322 for an error of 1e-170) and at 1e170 overflowed."""
+    base = analyze(spec_from_dict(_spec({"process": 1.0, "norm": "2"})))["decoder_error_bound"]
+    for scale in (1e-170, 1e170):
+        check = analyze(spec_from_dict(_spec({"process": scale, "norm": "2"})))
+        value = check["decoder_error_bound"].value
+        assert value == pytest.approx(base.value * scale, rel=1e-12)
+
+
+def test_a_zero_process_noise_keeps_its_input_for_the_scenarios():
+    noise = {"measurement": 0.01, "process": 0.0, "input": [[1.0], [0.5]]}
+    spec = spec_from_dict({**_spec(noise), "scenario": [
+        {"name": "own", "attack": "none", "process": 0.1}]})  # fmt: skip
+    assert spec.noise.process is None
+    assert spec.scenarios[0]["process_input"] == [[1.0], [0.5]]
 
 
 def test_gaussian_draws_stay_within_their_bounds():

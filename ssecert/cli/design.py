@@ -76,7 +76,7 @@ def add_design_parser(sub: Any) -> None:
         default="gain",
         help="smallest certified l2 gain from attack to error (default), fastest certified "
         "decay, (D-SSO) largest certified region of attraction, or smallest certified "
-        "ultimate error under the measurement noise (the spec's [noise] or --noise)",
+        "ultimate error under the noise (the spec's [noise] or --noise)",
     )
     design.add_argument(
         "--noise",
@@ -317,8 +317,7 @@ def _print_design(
             words.append(f"region of attraction {_num(d['region_of_attraction_value'])}")
         if "observer_noise_bound_value" in d:
             words.append(
-                f"certified ultimate error under the measurement noise "
-                f"{_num(d['observer_noise_bound_value'])}"
+                f"certified ultimate error under the noise {_num(d['observer_noise_bound_value'])}"
             )
         out.write(f"  {label} ({d['kind']}, {params or 'gain only'}): {', '.join(words)}\n")
     if result.decay is not None and args.objective in ("gain", "rate", "noise"):

@@ -471,6 +471,11 @@ def _as_noise(noise: Any, system: System) -> MeasurementNoise | None:
                 f"noise: expected a bound for each of the plant's {system.p} sensors, got "
                 f"{noise.eta.size}"
             )
+        if noise.process is not None and noise.process.input.shape[0] != system.n:
+            raise ValueError(
+                f"noise: its process noise enters {noise.process.input.shape[0]} states, the "
+                f"plant has {system.n}"
+            )
         return noise
     if isinstance(noise, bool):
         raise ValueError(f"noise: expected a bound >= 0 or one per sensor, got {noise!r}")

@@ -180,6 +180,7 @@ def spec_from_dict(
             None if bounds is None else _per_sample(bounds, tau),
             model=bounds,
             n=system.n,
+            process_input=_process_input(data.get("noise"), system.n),
         ),
         noise=bounds,
         source=source,
@@ -300,6 +301,14 @@ def _per_sample(noise: MeasurementNoise, horizon: int) -> list[float]:
     window's 2-norm bound over the square root of the horizon's samples."""
     eta = noise.eta if noise.per_sample else noise.eta / math.sqrt(horizon)
     return [float(v) for v in eta]
+
+
+def _process_input(table: Any, n: int) -> Any:
+    """The ``[noise]`` section's ``input`` (read by ``_noise`` already), for the scenarios' own
+    process noise also where the section's is zero (and so none)."""
+    if isinstance(table, Mapping) and "input" in table:
+        return ProcessNoise.input_matrix(table["input"], n)
+    return None
 
 
 def _noise(source: str, table: Any, n: int, p: int) -> MeasurementNoise:

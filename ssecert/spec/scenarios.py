@@ -68,6 +68,7 @@ def read_scenarios(
     *,
     model: Any = None,
     n: int | None = None,
+    process_input: Any = None,
 ) -> tuple[dict[str, Any], ...]:
     """The ``[[scenario]]`` tables (one table is taken as a list of one), names unique.
 
@@ -77,7 +78,8 @@ def read_scenarios(
     else 0.  Its ``process`` (one bound or one per entry of w on every step, entering the state
     through the ``[noise]`` section's input, the identity without one: kept beside it as
     ``process_input``), ``distribution`` and ``truncation`` default to those of ``model`` (the
-    spec's ``MeasurementNoise``) when given; ``n`` is the number of states."""
+    spec's ``MeasurementNoise``) when given; ``n`` is the number of states and
+    ``process_input`` the section's input matrix, where it has one."""
     if isinstance(raw, Mapping):
         raw = [raw]
     if not isinstance(raw, list):
@@ -92,7 +94,7 @@ def read_scenarios(
         scenario = _scenario(source, f"scenario[{index}]", table, p, names)
         if noise is not None and isinstance(table, Mapping) and "noise" not in table:
             scenario["noise"] = [float(v) for v in noise]
-        _noise_defaults(source, f"scenario[{index}]", scenario, model, n)
+        _noise_defaults(source, f"scenario[{index}]", scenario, model, n, process_input)
         if scenario["name"] in seen:
             raise spec_error(
                 source, f"scenario[{index}].name", f"duplicate scenario name {scenario['name']!r}"
@@ -103,25 +105,37 @@ def read_scenarios(
 
 
 def _noise_defaults(
-    source: str, prefix: str, scenario: dict[str, Any], model: Any, n: int | None
+    source: str,
+    prefix: str,
+    scenario: dict[str, Any],
+    model: Any,
+    n: int | None,
+    process_input: Any = None,
 ) -> None:
     """The scenario's process noise (with its input matrix), distribution and truncation:
     its own, else the spec's ``[noise]`` (``model``); none of them where neither has one
     (uniform draws, no process noise)."""
     process = getattr(model, "process", None)
     if "process" in scenario or process is not None:
-        G = np.asarray(process.input if process is not None else np.eye(n or 0), dtype=float)
+        if process is not None:
+            G = process.input
+        else:  # the section's input even where its own process noise is zero (none)
+            G = np.eye(n or 0) if process_input is None else np.asarray(process_input, float)
         m = G.shape[1]
         bounds: Any = scenario.get("process")
         if bounds is None and process is not None:
             bounds = process.omega.tolist()
         if isinstance(bounds, list) and len(bounds) != m:
+            what = (
+                "one per state"
+                if process_input is None and process is None
+                else "the columns of [noise] input"
+            )
             raise spec_error(
                 source,
                 f"{prefix}.process",
-                f"expected one bound or one per entry of w ({m}: "
-                f"{'the columns of [noise] input' if process is not None else 'one per state'}"
-                f"), got a list of {len(bounds)}",
+                f"expected one bound or one per entry of w ({m}: {what}), got a list of "
+                f"{len(bounds)}",
             )
         values = bounds if isinstance(bounds, list) else [bounds] * m
         scenario["process"] = [float(v) for v in values]

@@ -32,7 +32,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..noise import MeasurementNoise
-from ..tolerances import gamma, times_up
+from ..tolerances import gamma, rows_norm_up, times_up
 from ..tolerances import interval_product as _product
 from ..tolerances import up_by as _up
 
@@ -174,15 +174,8 @@ def _in_range(found: NoiseGain) -> NoiseGain:
 
 def _norm_up(x: np.ndarray) -> float:
     """An upper bound of ||x||_2 (x >= 0) that neither under- nor overflows where its largest
-    entry does not: the largest entry times the norm of x over it, at least that entry."""
-    top = float(np.max(x)) if x.size else 0.0
-    if not top > 0 or not math.isfinite(top):
-        return top
-    with np.errstate(over="ignore", under="ignore"):
-        norm = float(_up(top * float(np.linalg.norm(x / top)), x.size + 4))
-    if norm < 2.0**-1022:  # subnormal: each rounding is off by up to a unit, not relatively
-        norm += 2.0**-1074 * (x.size + 4)
-    return max(norm, top)
+    entry does not (``rows_norm_up``)."""
+    return float(rows_norm_up(np.reshape(x, (1, -1)))[0]) if x.size else 0.0
 
 
 def _unit_noise_bound(
