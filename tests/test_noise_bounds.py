@@ -559,7 +559,7 @@ def test_design_shows_each_designs_noise_bound(tmp_path, capsys):
     path.write_text(json.dumps(data))
     code = main(["design", str(path), "--out", str(tmp_path), "--time-budget", "10"])
     out = capsys.readouterr().out
-    assert code in (0, 3) and out.count("certified ultimate error under the measurement noise") == 2
+    assert code in (0, 3) and out.count("certified ultimate error under the noise") == 2
     doc = json.loads((tmp_path / "noisy-design.json").read_text())
     rows = {d["design"]: d for d in doc["design_comparison"]["designs"]}
     assert (
@@ -567,8 +567,7 @@ def test_design_shows_each_designs_noise_bound(tmp_path, capsys):
         == doc["checks"]["observer_noise_bound"]["value"]
     )
     assert (
-        "certified ultimate error under the measurement noise"
-        in (tmp_path / "noisy-design.html").read_text()
+        "certified ultimate error under the noise" in (tmp_path / "noisy-design.html").read_text()
     )
 
 
