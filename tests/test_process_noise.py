@@ -103,11 +103,29 @@ def test_a_linear_observers_bound_in_closed_form():
     assert check.fields["noise"]["process"].tolist() == [omega]
 
 
-def test_sparse_observers_are_not_certified_under_process_noise():
+def test_a_one_sample_sparse_observer_is_certified_under_process_noise():
+    """The process noise enters the elastic net's error as -G w: a further input of its Lur'e
+    model, the dissipation inequality verified again with it at iss_gain's decay."""
     net = {**LINEAR, "kind": "elastic_net", "step": 0.3, "threshold": 0.05, "shrink": 0.5}
     quiet = analyze(spec_from_dict({**_spec({"measurement": 1e-3}), "observer": net}))
-    assert quiet["observer_noise_bound"].verdict is Verdict.HOLDS
-    noisy = {**_spec({"measurement": 1e-3, "process": 1e-3}), "observer": net}
+    noisy = {**_spec({"measurement": 1e-3, "process": 1e-3, "input": [[1.0], [0.5]]}),
+             "observer": net}  # fmt: skip
+    cert = analyze(spec_from_dict(noisy))
+    check, iss = cert["observer_noise_bound"], cert["iss_gain"]
+    assert check.verdict is Verdict.HOLDS
+    assert check.evidence["from"] == "process noise as a further input"
+    assert check.value > quiet["observer_noise_bound"].value
+    assert check.evidence["alpha"] == pytest.approx(iss.fields["alpha"])
+    assert check.evidence["gamma"] >= iss.fields["gamma"]  # more inputs: no smaller gain
+    # N^2 is the measurement rows' squares plus the process noise's
+    assert check.evidence["noise_norm_per_step"] == pytest.approx(math.sqrt(5e-6 + 1e-6))
+    assert check.fields["energy_gain"] is None  # iss_gain's is from the measurement noise alone
+    assert check.evidence["noise_search"]["largest_error"] <= check.value
+
+
+def test_a_window_observer_is_not_certified_under_process_noise():
+    sso = {"kind": "sso", "step": 0.05, "threshold": 0.01, "window": 2}
+    noisy = {**_spec({"measurement": 1e-3, "process": 1e-3}), "observer": sso}
     check = analyze(spec_from_dict(noisy))["observer_noise_bound"]
     assert check.verdict is Verdict.INCONCLUSIVE and check.evidence["cause"] == "process noise"
     assert math.isinf(check.value)
@@ -262,6 +280,21 @@ def test_certify_puts_the_linear_bound_beside_noisy_simulations():
         beside = doc["simulations"][name]["certified_bound"]
         assert beside["within"] is True and 0 < beside["observed_max"] <= bound
     assert "certified_bound" not in doc["simulations"]["louder"]  # beyond the spec's bound
+    # an elastic net, its bound from the dissipation inequality with the process noise as an
+    # input: 200 runs of uniform and Gaussian noise on both, within it
+    data["observer"] = {**LINEAR, "kind": "elastic_net", "step": 0.3, "threshold": 0.05,
+                        "shrink": 0.5}  # fmt: skip
+    data["noise"] = {"measurement": 0.05, "process": 0.05, "input": [[1.0], [0.5]]}
+    data["scenario"] = [
+        {"name": "uniform", "attack": "none", "runs": 200, "steps": 300},
+        {"name": "gaussian", "attack": "none", "runs": 200, "steps": 300,
+         "distribution": "gaussian", "truncation": 1.0},
+    ]  # fmt: skip
+    doc = certify(spec_from_dict(data), seed=3).to_dict()
+    assert doc["checks"]["observer_noise_bound"]["verdict"] == "holds"
+    for name in ("uniform", "gaussian"):
+        beside = doc["simulations"][name]["certified_bound"]
+        assert beside["within"] is True and 0 < beside["observed_max"] <= beside["bound"]
 
 
 @pytest.mark.slow
@@ -310,7 +343,8 @@ def test_zero_process_noise_is_none():
                   {"measurement": 1e-3, "process": 0.5, "input": [[0.0], [0.0]]}):  # fmt: skip
         spec = spec_from_dict({**_spec(noise), "observer": net})
         assert spec.noise.process is None and spec.noise == MeasurementNoise.uniform(1e-3, 5)
-        assert analyze(spec)["observer_noise_bound"].verdict is Verdict.HOLDS
+        check = analyze(spec)["observer_noise_bound"]
+        assert check.verdict is Verdict.HOLDS and check.evidence["from"] == "iss_gain"
 
 
 def test_tiny_and_huge_numbers_stay_bounds():

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from fractions import Fraction
 from functools import cached_property
 from typing import TYPE_CHECKING
@@ -166,6 +166,39 @@ class LureModel:
     @property
     def r(self) -> int:
         return self.E.shape[1]
+
+    def with_input(self, extra: np.ndarray) -> LureModel:
+        """The model with a further input w entering the state alone, xi+ = A xi + B phi(w_)
+        + E a + ``extra`` w (w not in the nonlinearity's argument): its attack input is then
+        [a; w].  ``extra`` is exact (the spec's data, as its exact matrices take it).
+
+        Examples
+        --------
+        >>> model = LureModel.linear(np.array([[0.5]]), np.array([[1.0]]))
+        >>> model.with_input(np.array([[-1.0]])).E.tolist()
+        [[1.0, -1.0]]
+        """
+        extra = np.asarray(extra, dtype=float)
+        zeros = np.zeros((self.Dw.shape[0], extra.shape[1]))
+        build = None
+        if self.exact_build is not None:
+            parent = self
+
+            def build() -> ExactLure | None:
+                exact = parent.exact()
+                if exact is None:
+                    return None
+                return ExactLure(
+                    exact.A,
+                    exact.B,
+                    exact.Cw,
+                    Dyadic.block([[exact.E, dyadic(extra)]]),
+                    Dyadic.block([[exact.Dw, Dyadic.zeros(zeros.shape)]]),
+                )
+
+        return replace(
+            self, E=np.hstack([self.E, extra]), Dw=np.hstack([self.Dw, zeros]), exact_build=build
+        )
 
     def vertex(self, k: float) -> np.ndarray:
         """Closed loop with phi(w) = k w."""

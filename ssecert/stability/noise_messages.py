@@ -58,15 +58,16 @@ def noise_check(design: ObserverDesign, noise: MeasurementNoise, iss: Check) -> 
     the others (``sparse_noise_check``)."""
     if applies_to(design):
         return observer_noise_check(design, noise, iss)
-    if noise.process is not None:
+    if noise.process is not None and design.window != 1:
         return process_refused(noise)
     return sparse_noise_check(design, iss, noise)
 
 
 def process_refused(noise: MeasurementNoise) -> Check:
-    """The ``observer_noise_bound`` check of a sparse observer under process noise:
-    inconclusive, since iss_gain's dissipation inequality has the measurement vector as its
-    input and the process noise enters the error as G w, outside it."""
+    """The ``observer_noise_bound`` check of a window observer (an SSO over several samples)
+    under process noise: inconclusive, since the process noise reaches its stacked
+    measurements through the window as well as its error, outside the dissipation inequality's
+    inputs."""
     return Check(
         id="observer_noise_bound",
         title=TITLE,
@@ -74,9 +75,10 @@ def process_refused(noise: MeasurementNoise) -> Check:
         required=False,
         value_name=VALUE_NAME,
         verdict=Verdict.INCONCLUSIVE,
-        summary="No ultimate error bound under noise is certified: the process noise enters "
-        "the error as G w, outside iss_gain's dissipation inequality, whose input is the "
-        "observer's measurement vector (a linear observer's bound covers process noise).",
+        summary="No ultimate error bound under noise is certified: over the observer's window "
+        "the process noise reaches the stacked measurements as well as the error, outside the "
+        "dissipation inequality's inputs (a linear observer's bound and a one-sample sparse "
+        "observer's cover process noise).",
         value=math.inf,
         fields={"ultimate_bound": math.inf, "noise": noise.to_dict()},
         evidence={"from": "iss_gain", "cause": "process noise"},
@@ -143,6 +145,30 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
             **common,
         )
     per_row = noise.rows(rows)
+    source, origin = "iss_gain's certificate", "iss_gain"
+    if noise.process is not None:
+        # the process noise enters the error as -G w: a further input of the error model, the
+        # dissipation inequality certified again with it, at iss_gain's decay
+        cert = _with_process_noise(design, model, noise, float(alpha))
+        if cert is None:
+            return Check(
+                verdict=Verdict.INCONCLUSIVE,
+                summary="No ultimate error bound under noise is certified: no dissipation "
+                "inequality with decay is verified with the process noise as a further input "
+                f"of the error model (at iss_gain's decay {readable(float(alpha))}).",
+                value=math.inf,
+                fields={"ultimate_bound": math.inf, "noise": noise.to_dict()},
+                evidence={"from": "process noise as a further input", "cause": "process noise"},
+                **common,
+            )
+        P, alpha, gamma = cert.P, cert.decay, cert.gamma
+        per_row = np.concatenate([per_row, noise.process.omega])
+        source = "a dissipation inequality with the process noise as a further input"
+        origin = "process noise as a further input"
+        common["method"] = (
+            "ISS dissipation inequality with decay, the process noise a further input of the "
+            "error model (verified as iss_gain's)"
+        )
     P = np.asarray(P, dtype=float)
     n = design.system.n
     found = dissipation_bound(P, float(alpha), float(gamma), per_row, n)
@@ -154,21 +180,21 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
             f"ill-conditioned (condition number {readable(cond)}) to invert with a known error.",
             value=math.inf,
             fields={"ultimate_bound": math.inf, "noise": noise.to_dict()},
-            evidence={"from": "iss_gain", "condition_P": cond},
+            evidence={"from": origin, "condition_P": cond},
             **common,
         )
     search = noise_search(design, noise)
-    energy, energy_words = _energy(iss, design)
+    # iss_gain's energy gain is from the measurement noise alone: with process noise, none
+    energy, energy_words = _energy(iss, design) if noise.process is None else (None, "")
     if math.isfinite(bound) and not search["largest_error"] <= bound:
         return Check(
             verdict=Verdict.INCONCLUSIVE,
             summary="No ultimate error bound under noise is certified: a simulated noise "
             f"within the bounds drove the error to {readable(search['largest_error'])}, above "
-            f"the bound {readable(bound)} iss_gain's certificate gives (please report this "
-            "design).",
+            f"the bound {readable(bound)} {source} gives (please report this design).",
             value=math.inf,
             fields={"ultimate_bound": math.inf, "noise": noise.to_dict()},
-            evidence={"from": "iss_gain", "noise_search": search, "bound_found": bound},
+            evidence={"from": origin, "noise_search": search, "bound_found": bound},
             **common,
         )
     if not math.isfinite(bound):
@@ -178,7 +204,7 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
             "floating-point range.",
             value=math.inf,
             fields={"ultimate_bound": math.inf, "noise": noise.to_dict()},
-            evidence={"from": "iss_gain"},
+            evidence={"from": origin},
             **common,
         )
     if 0 < bound < 2.0**-1022:  # a subnormal product is rounded: take it up
@@ -186,8 +212,8 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
     return Check(
         verdict=Verdict.HOLDS,
         summary=f"Without attack and with noise within the spec's bounds on every sample, the "
-        f"estimation error eventually stays within {readable(bound)} (2-norm), from iss_gain's "
-        f"certificate: limsup V <= gamma^2 N^2 / alpha with gamma = {readable(float(gamma))}, "
+        f"estimation error eventually stays within {readable(bound)} (2-norm), from {source}: "
+        f"limsup V <= gamma^2 N^2 / alpha with gamma = {readable(float(gamma))}, "
         f"alpha = {readable(float(alpha))} and N = {readable(found.noise_norm)}. A search "
         f"over {search['sequences']} noise sequences within the bounds (from zero error, "
         f"{search['steps']} steps{ascent_text(search)}) reached "
@@ -199,7 +225,7 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
             "noise": noise.to_dict(),
         },
         evidence={
-            "from": "iss_gain",
+            "from": origin,
             "gamma": gamma,
             "alpha": alpha,
             "noise_norm_per_step": found.noise_norm,
@@ -214,6 +240,28 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
 
 SEARCH_STEPS = 300
 SEARCH_RANDOM = 24
+
+
+def _with_process_noise(
+    design: ObserverDesign, model: Any, noise: MeasurementNoise, alpha: float
+) -> Any:
+    """The verified ISS certificate (``lmi.iss_certificate`` at decay ``alpha``) of the error
+    model with the process noise as a further input (xi+ = ... + [-G; 0] w: e = x_hat - x
+    takes -G w from x+ = A x + G w, w not in the nonlinearity's argument), or None where it
+    does not hold with a decay."""
+    from .lmi import iss_certificate
+
+    assert noise.process is not None
+    G = noise.process.input
+    extra = np.zeros((model.N, G.shape[1]))
+    extra[: design.system.n] = -G
+    try:
+        cert = iss_certificate(model.with_input(extra), alpha=alpha)
+    except (ValueError, np.linalg.LinAlgError):  # the solver's own failures: not certified
+        return None
+    if cert.verdict is not Verdict.HOLDS or cert.P is None or cert.gamma is None:
+        return None
+    return cert if cert.decay else None
 
 
 def noise_search(design: ObserverDesign, noise: MeasurementNoise, seed: int = 0) -> dict[str, Any]:
