@@ -37,6 +37,13 @@ _INDEX_LIST: dict[str, Any] = {"type": "array", "items": {"type": "integer", "mi
 
 # the spec's top-level keys and their schemas; the system's, the attack's and a scenario's keys
 # (each list is checked against the one the reader uses)
+#: one bound >= 0, or a list of them (one per sensor, or per entry of the process noise)
+_BOUNDS: dict[str, Any] = {
+    "oneOf": [
+        {"type": "number", "minimum": 0},
+        {"type": "array", "items": {"type": "number", "minimum": 0}, "minItems": 1},
+    ]
+}
 _SCENARIO: dict[str, dict[str, Any]] = {
     "name": {"type": "string", "minLength": 1},
     "attack": {"enum": None},  # ATTACK_KINDS, filled in
@@ -61,18 +68,12 @@ _SCENARIO: dict[str, dict[str, Any]] = {
     },
     "period": {"type": "integer", "minimum": 1},
     "noise": {
-        "oneOf": [
-            {"type": "number", "minimum": 0},
-            {"type": "array", "items": {"type": "number", "minimum": 0}, "minItems": 1},
-        ],
+        **_BOUNDS,
         "description": "bound of the measurement noise on every sample, one or one per sensor "
         "(default: the [noise] section's, else 0)",
     },
     "process": {
-        "oneOf": [
-            {"type": "number", "minimum": 0},
-            {"type": "array", "items": {"type": "number", "minimum": 0}, "minItems": 1},
-        ],
+        **_BOUNDS,
         "description": "bound of each entry of the process noise w on every step, one or one "
         "per entry (it enters the state through [noise]'s input, the identity without one; "
         "default: the [noise] section's, else none)",
@@ -170,19 +171,13 @@ def spec_schema() -> dict[str, Any]:
     }  # fmt: skip
     noise = {
         "measurement": {
-            "oneOf": [
-                {"type": "number", "minimum": 0},
-                {"type": "array", "items": {"type": "number", "minimum": 0}, "minItems": 1},
-            ],
+            **_BOUNDS,
             "description": "each sensor's noise bound (one number: every sensor's)",
         },
         "norm": {"enum": list(NORMS), "description": '"inf" (every sample, default) or "2" '
                  "(the window's samples of the sensor together)"},
         "process": {
-            "oneOf": [
-                {"type": "number", "minimum": 0},
-                {"type": "array", "items": {"type": "number", "minimum": 0}, "minItems": 1},
-            ],
+            **_BOUNDS,
             "description": "process noise: x(k+1) = A x(k) + G w(k), each entry of w within "
             "its bound on every step (one number: every entry's)",
         },

@@ -22,6 +22,7 @@ from ..base.validation import (
     as_real_matrix,
     describe,
 )
+from ..noise import DISTRIBUTIONS
 from .table import (
     check_keys,
     check_name,
@@ -55,8 +56,6 @@ _SCENARIO_KEYS = (
     "runs",
     "seed",
 )
-#: how a scenario draws its noise within the bounds (``ssecert.noise.DISTRIBUTIONS``)
-_DISTRIBUTIONS = ("uniform", "gaussian")
 
 
 def read_scenarios(
@@ -321,7 +320,7 @@ def _run_settings(source: str, prefix: str, table: Any, p: int) -> dict[str, Any
             as_choice,
             table["distribution"],
             "distribution",
-            _DISTRIBUTIONS,
+            DISTRIBUTIONS,
         )
     if "truncation" in table:
         out["truncation"] = convert(
