@@ -381,3 +381,17 @@ def test_a_tiny_truncation_draws_the_uniform_distribution():
         noise = generate(system, scenario, range(20), 500, seed=0).noise
         assert np.all(np.abs(noise) <= 0.1)
         assert np.std(noise) == pytest.approx(0.1 / math.sqrt(3), rel=0.03)
+
+
+def test_a_sparse_observers_bound_does_not_depend_on_the_units_of_w():
+    """The same G w written with G 1e-200 times smaller and omega that much larger: one gain
+    weighs both noises, so the process noise's columns are scaled (by powers of two, exactly)
+    to the measurement's bounds first (it gave 1.8e200 where the other units gave 0.017)."""
+    net = {**LINEAR, "kind": "elastic_net", "step": 0.3, "threshold": 0.05, "shrink": 0.5}
+    values = []
+    for G, omega in (([[1.0], [0.5]], 1e-3), ([[1e-200], [0.5e-200]], 1e197)):
+        noisy = {**_spec({"measurement": 1e-3, "process": omega, "input": G}), "observer": net}
+        check = analyze(spec_from_dict(noisy))["observer_noise_bound"]
+        assert check.verdict is Verdict.HOLDS
+        values.append(check.value)
+    assert values[1] == pytest.approx(values[0], rel=0.5)

@@ -149,8 +149,8 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
     if noise.process is not None:
         # the process noise enters the error as -G w: a further input of the error model, the
         # dissipation inequality certified again with it, at iss_gain's decay
-        cert = _with_process_noise(design, model, noise, float(alpha))
-        if cert is None:
+        found_process = _with_process_noise(design, model, noise, float(alpha), per_row)
+        if found_process is None:
             return Check(
                 verdict=Verdict.INCONCLUSIVE,
                 summary="No ultimate error bound under noise is certified: no dissipation "
@@ -161,8 +161,9 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
                 evidence={"from": "process noise as a further input", "cause": "process noise"},
                 **common,
             )
+        cert, w_bounds = found_process
         P, alpha, gamma = cert.P, cert.decay, cert.gamma
-        per_row = np.concatenate([per_row, noise.process.omega])
+        per_row = np.concatenate([per_row, w_bounds])
         source = "a dissipation inequality with the process noise as a further input"
         origin = "process noise as a further input"
         common["method"] = (
@@ -242,17 +243,40 @@ SEARCH_STEPS = 300
 SEARCH_RANDOM = 24
 
 
+def _process_columns(G: np.ndarray, omega: np.ndarray, scale: float) -> tuple[Any, Any]:
+    """The process noise's columns G_j 2^(k_j) and bounds omega_j 2^(-k_j) (the same G w,
+    exactly), k_j bringing each bound near ``scale`` (the measurement rows' largest bound):
+    one gain for both noises then weighs them alike, whatever units w is written in.  The
+    columns with no bound or no entry are left out; a scaling that would not be exact is not
+    made."""
+    columns, bounds = [], []
+    for j in range(G.shape[1]):
+        col, bound = G[:, j], float(omega[j])
+        if bound == 0 or not np.any(col):
+            continue
+        k = round(math.log2(bound / scale)) if scale > 0 else 0
+        scaled, shrunk = np.ldexp(col, k), math.ldexp(bound, -k)
+        exact = np.all(np.isfinite(scaled)) and np.array_equal(np.ldexp(scaled, -k), col)
+        if not (exact and math.isfinite(shrunk) and math.ldexp(shrunk, k) == bound):
+            scaled, shrunk = col, bound
+        columns.append(scaled)
+        bounds.append(shrunk)
+    return np.stack(columns, axis=1), np.array(bounds)
+
+
 def _with_process_noise(
-    design: ObserverDesign, model: Any, noise: MeasurementNoise, alpha: float
-) -> Any:
+    design: ObserverDesign, model: Any, noise: MeasurementNoise, alpha: float, rows: Any
+) -> tuple[Any, np.ndarray] | None:
     """The verified ISS certificate (``lmi.iss_certificate`` at decay ``alpha``) of the error
     model with the process noise as a further input (xi+ = ... + [-G; 0] w: e = x_hat - x
-    takes -G w from x+ = A x + G w, w not in the nonlinearity's argument), or None where it
-    does not hold with a decay."""
+    takes -G w from x+ = A x + G w, w not in the nonlinearity's argument; its columns scaled
+    by powers of two to the measurement rows' bounds ``rows``, ``_process_columns``) and the
+    bounds of that input's entries, or None where it does not hold with a decay."""
     from .lmi import iss_certificate
 
-    assert noise.process is not None
-    G = noise.process.input
+    assert noise.process is not None  # a process noise that moves the state: a column left
+    top = float(np.max(rows)) if np.size(rows) else 0.0
+    G, bounds = _process_columns(noise.process.input, noise.process.omega, top)
     extra = np.zeros((model.N, G.shape[1]))
     extra[: design.system.n] = -G
     try:
@@ -261,7 +285,7 @@ def _with_process_noise(
         return None
     if cert.verdict is not Verdict.HOLDS or cert.P is None or cert.gamma is None:
         return None
-    return cert if cert.decay else None
+    return (cert, bounds) if cert.decay else None
 
 
 def noise_search(design: ObserverDesign, noise: MeasurementNoise, seed: int = 0) -> dict[str, Any]:
