@@ -290,16 +290,20 @@ def _with_process_noise(
 
 def noise_search(design: ObserverDesign, noise: MeasurementNoise, seed: int = 0) -> dict[str, Any]:
     """The largest error ||x_hat - x||_2 a search over noise sequences within the bounds
-    drives the observer to, from zero error and no attack (x = 0, so the measurements are the
-    noise): for each state component, the signs that make the linear part's series
-    sum_j |F^j L| eta add up at the last step, and random sign and uniform sequences; run
-    through the observer's own simulator."""
+    drives the observer to, from zero error and no attack (x = 0 without process noise, so the
+    measurements are the noise): for each state component, the signs that make the linear
+    part's series sum_j |F^j L| eta (and |F^j G| omega with process noise) add up at the last
+    step, and random sign and uniform sequences; the plant driven by the process noise where
+    there is one; run through the observer's own simulator."""
     from ..observers import observer_from_design
 
     p, n = design.system.p, design.system.n
     eta = noise.eta  # each sample within it (a window's 2-norm bound bounds each sample too)
+    G = None if noise.process is None else noise.process.input
+    omega = np.zeros(0) if noise.process is None else noise.process.omega
+    m = omega.size
     rng = np.random.default_rng(seed)
-    sequences = []
+    sequences, inputs = [], []
     if design.window == 1:
         F, L = np.asarray(design.error_matrix, dtype=float), np.asarray(design.L, dtype=float)
         terms = [L]
@@ -308,13 +312,18 @@ def noise_search(design: ObserverDesign, noise: MeasurementNoise, seed: int = 0)
         for i in range(n):
             signs = np.array([np.sign(T[i]) for T in terms[::-1]])  # step k: F^(K-1-k) L
             sequences.append(signs * eta)
+            if G is not None:  # e+ = F e + L n - G w: w against F^(K-1-k) G's signs
+                inputs.append(_process_signs(F, G, i, SEARCH_STEPS) * omega)
     for _ in range(SEARCH_RANDOM):
         sequences.append(rng.choice([-1.0, 1.0], (SEARCH_STEPS, p)) * eta)
         sequences.append(rng.uniform(-1.0, 1.0, (SEARCH_STEPS, p)) * eta)
+        if G is not None:
+            inputs.append(rng.choice([-1.0, 1.0], (SEARCH_STEPS, m)) * omega)
+            inputs.append(rng.uniform(-1.0, 1.0, (SEARCH_STEPS, m)) * omega)
     y = np.stack(sequences, axis=1)  # (steps, runs, p)
+    w = np.stack(inputs, axis=1) if G is not None else None  # (steps, runs, m)
     simulator = observer_from_design(design)
-    with np.errstate(all="ignore"):
-        errors = safe_norms(simulator.run(y).x_hat)  # an estimate of 1e200 has a finite norm
+    errors = _driven_errors(design, simulator, y, w, G)
     largest = float(np.max(errors)) if errors.size else 0.0
     out: dict[str, Any] = {
         "largest_error": largest,
@@ -323,14 +332,17 @@ def noise_search(design: ObserverDesign, noise: MeasurementNoise, seed: int = 0)
     }
     if design.sparse and design.window == 1 and errors.size:
         # projected gradient ascent from the sequences that went furthest, through the error's
-        # Lur'e model (its attack input is the measurement vector: the noise), each result
-        # run through the observer's own simulator as the others are
-        starts = y[:, np.argsort(np.max(errors, axis=0))[-GRADIENT_STARTS:], :]
-        ascent = _gradient_ascent(design, starts, eta)
+        # Lur'e model (its attack input is the measurement vector: the noise; the process
+        # noise a further input), each result run through the observer's own simulator as the
+        # others are
+        best = np.argsort(np.max(errors, axis=0))[-GRADIENT_STARTS:]
+        starts = y[:, best, :] if w is None else np.concatenate([y, w], axis=2)[:, best, :]
+        ascent = _gradient_ascent(design, starts, np.concatenate([eta, omega]), G)
         if ascent is not None:
             ascended, iterations = ascent
-            with np.errstate(all="ignore"):
-                found = safe_norms(simulator.run(ascended).x_hat)
+            found = _driven_errors(
+                design, simulator, ascended[:, :, :p], None if w is None else ascended[:, :, p:], G
+            )
             out["largest_error"] = max(largest, float(np.max(found)))
             out["sequences"] += ascended.shape[1]
             out["gradient_ascent"] = {
@@ -339,6 +351,37 @@ def noise_search(design: ObserverDesign, noise: MeasurementNoise, seed: int = 0)
                 "largest_error": float(np.max(found)),
             }
     return out
+
+
+def _process_signs(F: np.ndarray, G: np.ndarray, i: int, steps: int) -> np.ndarray:
+    """The signs of w at each step (steps, m) that push error component i furthest at the last
+    step: e takes -F^(K-1-k) G w(k)."""
+    terms = [G]
+    for _ in range(steps - 1):
+        terms.append(F @ terms[-1])
+    return np.array([-np.sign(T[i]) for T in terms[::-1]])
+
+
+def _driven_errors(
+    design: ObserverDesign,
+    simulator: Any,
+    noise: np.ndarray,
+    process: np.ndarray | None,
+    G: np.ndarray | None,
+) -> np.ndarray:
+    """||x_hat(k) - x(k)|| (steps + 1, runs) from zero with measurement noise ``noise`` (steps,
+    runs, p) and the plant x+ = A x + G w driven by ``process`` (steps, runs, m; x = 0 when
+    None): the observer's own simulator on y = C x + n."""
+    with np.errstate(all="ignore"):
+        if process is None or G is None:
+            return safe_norms(simulator.run(noise).x_hat)  # an estimate of 1e200 is finite
+        A, C = design.system.A, design.system.C
+        steps, runs, _ = noise.shape
+        x = np.zeros((steps + 1, runs, design.system.n))
+        for k in range(steps):
+            x[k + 1] = x[k] @ A.T + process[k] @ G.T
+        y = x[:-1] @ C.T + noise
+        return safe_norms(simulator.run(y).x_hat - x)
 
 
 GRADIENT_STARTS = 8
@@ -359,7 +402,7 @@ def ascent_text(search: Mapping[str, Any]) -> str:
 
 
 def _gradient_ascent(
-    design: ObserverDesign, starts: np.ndarray, eta: np.ndarray
+    design: ObserverDesign, starts: np.ndarray, eta: np.ndarray, G: np.ndarray | None = None
 ) -> tuple[np.ndarray, int] | None:
     """Noise sequences (steps, runs, p) within +-eta that drive the error of a one-sample
     sparse observer far, from ``starts``: each iteration simulates its Lur'e model xi+ = A xi
@@ -368,13 +411,18 @@ def _gradient_ascent(
     moves every sample to the bound in the gradient's direction (the box's vertex that
     maximises the linearised error), until it stays there or ``GRADIENT_ITERATIONS``; the
     best sequences and the gradients taken.  None when the model's attack input is not the
-    measurement vector."""
+    measurement vector.  With the process noise's G, each sequence's last entries are w, a
+    further input of the model (-G w on the error), within the last entries of ``eta``."""
     from ..observers.lure import LureModel
 
     model = LureModel.from_design(design)
     runs = starts.shape[1]
     if not (noise_enters_as_attack(design, model) and model.finite()):
         return None
+    if G is not None:
+        extra = np.zeros((model.N, G.shape[1]))
+        extra[: design.system.n] = -G
+        model = model.with_input(extra)
     noise = starts.copy()
     best = noise.copy()
     best_value = np.full(runs, -np.inf)
