@@ -398,3 +398,23 @@ def test_a_sparse_observers_bound_does_not_depend_on_the_units_of_w():
         assert check.verdict is Verdict.HOLDS
         values.append(check.value)
     assert values[1] == pytest.approx(values[0], rel=0.5)
+
+
+@pytest.mark.slow
+def test_the_design_front_bounds_a_sparse_observer_under_process_noise():
+    """Each front point of an elastic net under process noise carries the bound of its
+    dissipation inequality verified again with w as a further input, and the search (the
+    plant driven by w) stays within it."""
+    from ssecert.design.search import _template, tradeoff_front
+    from ssecert.design.synthesis import synthesize_gain, with_gain
+    from ssecert.stability.noise_messages import noise_search
+
+    spec = spec_from_dict(_spec())
+    noise = MeasurementNoise(np.full(5, 1e-3), process=ProcessNoise.read(1e-3, [[1.0], [0.5]], 2))
+    template = _template(spec.system, "elastic_net", 0.3, 0.3, 0.1)
+    front = tradeoff_front(template, noise=noise, points=4)
+    bounded = [p for p in front if p.get("noise_bound") is not None]
+    assert len(bounded) >= 2
+    for point in bounded:
+        design = with_gain(template, synthesize_gain(template, alpha=point["alpha"]).L)
+        assert noise_search(design, noise)["largest_error"] <= point["noise_bound"]

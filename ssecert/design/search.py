@@ -667,24 +667,34 @@ def _front_noise_bound(
         applies_to,
         noise_enters_as_attack,
         observer_noise_check,
+        process_certificate,
     )
 
     if applies_to(design):
         check = observer_noise_check(design, noise)
         return float(check.value) if check.verdict is Verdict.HOLDS else None
-    if noise.process is not None:  # outside the dissipation inequality (process_refused)
-        return None
     if not own.get("verified") or "state_scaling" in own or not own.get("alpha"):
         return None
     from ..observers.lure import LureModel
 
     rows = design.sensing.shape[0]
-    if not noise_enters_as_attack(design, LureModel.from_design(design)):
+    model = LureModel.from_design(design)
+    if not noise_enters_as_attack(design, model):
         return None
-    P = np.asarray(proposal.P, dtype=float)
-    found = dissipation_bound(
-        P, float(own["alpha"]), float(own["gamma"]), noise.rows(rows), design.system.n
-    )
+    per_row = noise.rows(rows)
+    P, alpha, gamma = np.asarray(proposal.P, dtype=float), own["alpha"], own["gamma"]
+    if noise.process is not None:
+        # the process noise a further input: the inequality verified again with it, at the
+        # point's decay, as certify's check does (``process_certificate``)
+        if design.window != 1:
+            return None
+        process = process_certificate(design, model, noise, float(alpha), per_row)
+        if process is None:
+            return None
+        cert, w_bounds = process
+        P, alpha, gamma = np.asarray(cert.P, dtype=float), cert.decay, cert.gamma
+        per_row = np.concatenate([per_row, w_bounds])
+    found = dissipation_bound(P, float(alpha), float(gamma), per_row, design.system.n)
     return found.bound if math.isfinite(found.bound) else None
 
 

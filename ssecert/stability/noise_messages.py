@@ -29,6 +29,7 @@ __all__ = [
     "reason",
     "applies_to",
     "initial_error_fading",
+    "process_certificate",
     "ascent_text",
 ]
 
@@ -149,7 +150,7 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
     if noise.process is not None:
         # the process noise enters the error as -G w: a further input of the error model, the
         # dissipation inequality certified again with it, at iss_gain's decay
-        found_process = _with_process_noise(design, model, noise, float(alpha), per_row)
+        found_process = process_certificate(design, model, noise, float(alpha), per_row)
         if found_process is None:
             return Check(
                 verdict=Verdict.INCONCLUSIVE,
@@ -264,7 +265,7 @@ def _process_columns(G: np.ndarray, omega: np.ndarray, scale: float) -> tuple[An
     return np.stack(columns, axis=1), np.array(bounds)
 
 
-def _with_process_noise(
+def process_certificate(
     design: ObserverDesign, model: Any, noise: MeasurementNoise, alpha: float, rows: Any
 ) -> tuple[Any, np.ndarray] | None:
     """The verified ISS certificate (``lmi.iss_certificate`` at decay ``alpha``) of the error
