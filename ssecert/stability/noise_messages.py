@@ -278,10 +278,10 @@ def process_certificate(
     assert noise.process is not None  # a process noise that moves the state: a column left
     top = float(np.max(rows)) if np.size(rows) else 0.0
     G, bounds = _process_columns(noise.process.input, noise.process.omega, top)
-    extra = np.zeros((model.N, G.shape[1]))
-    extra[: design.system.n] = -G
     try:
-        cert = iss_certificate(model.with_input(extra), alpha=alpha)
+        cert = iss_certificate(
+            model.with_input(_error_input(model, design.system.n, G)), alpha=alpha
+        )
     except (ValueError, np.linalg.LinAlgError):  # the solver's own failures: not certified
         return None
     if cert.verdict is not Verdict.HOLDS or cert.P is None or cert.gamma is None:
@@ -307,14 +307,14 @@ def noise_search(design: ObserverDesign, noise: MeasurementNoise, seed: int = 0)
     sequences, inputs = [], []
     if design.window == 1:
         F, L = np.asarray(design.error_matrix, dtype=float), np.asarray(design.L, dtype=float)
-        terms = [L]
-        for _ in range(SEARCH_STEPS - 1):
-            terms.append(F @ terms[-1])
+        terms = _powers_times(F, L, SEARCH_STEPS)
+        # e+ = F e + L n - G w: w against the signs of F^(K-1-k) G
+        reach = [] if G is None else _powers_times(F, G, SEARCH_STEPS)[::-1]
         for i in range(n):
             signs = np.array([np.sign(T[i]) for T in terms[::-1]])  # step k: F^(K-1-k) L
             sequences.append(signs * eta)
-            if G is not None:  # e+ = F e + L n - G w: w against F^(K-1-k) G's signs
-                inputs.append(_process_signs(F, G, i, SEARCH_STEPS) * omega)
+            if reach:
+                inputs.append(-np.array([np.sign(T[i]) for T in reach]) * omega)
     for _ in range(SEARCH_RANDOM):
         sequences.append(rng.choice([-1.0, 1.0], (SEARCH_STEPS, p)) * eta)
         sequences.append(rng.uniform(-1.0, 1.0, (SEARCH_STEPS, p)) * eta)
@@ -354,13 +354,20 @@ def noise_search(design: ObserverDesign, noise: MeasurementNoise, seed: int = 0)
     return out
 
 
-def _process_signs(F: np.ndarray, G: np.ndarray, i: int, steps: int) -> np.ndarray:
-    """The signs of w at each step (steps, m) that push error component i furthest at the last
-    step: e takes -F^(K-1-k) G w(k)."""
+def _powers_times(F: np.ndarray, G: np.ndarray, steps: int) -> list[np.ndarray]:
+    """G, F G, ..., F^(steps - 1) G."""
     terms = [G]
     for _ in range(steps - 1):
         terms.append(F @ terms[-1])
-    return np.array([-np.sign(T[i]) for T in terms[::-1]])
+    return terms
+
+
+def _error_input(model: Any, n: int, G: np.ndarray) -> np.ndarray:
+    """The error model's input matrix of the process noise: e = x_hat - x takes -G w from
+    x+ = A x + G w, the model's other states (the attack estimate) nothing."""
+    extra = np.zeros((model.N, G.shape[1]))
+    extra[:n] = -G
+    return extra
 
 
 def _driven_errors(
@@ -421,9 +428,7 @@ def _gradient_ascent(
     if not (noise_enters_as_attack(design, model) and model.finite()):
         return None
     if G is not None:
-        extra = np.zeros((model.N, G.shape[1]))
-        extra[: design.system.n] = -G
-        model = model.with_input(extra)
+        model = model.with_input(_error_input(model, design.system.n, G))
     noise = starts.copy()
     best = noise.copy()
     best_value = np.full(runs, -np.inf)
