@@ -22,7 +22,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy import special
 
 from ..structure.attacks import initial_state
 from ..system import System
@@ -100,6 +99,8 @@ def _draw(
     t = float(scenario.get("truncation", 3.0))
     if t < TRUNCATION_UNIFORM:  # the density varies by less than t^2 / 2 < 5e-7: uniform
         return _uniform(rng, -bound, bound, size)
+    from scipy import special  # only for Gaussian draws
+
     edge = float(special.ndtr(-t))
     z = special.ndtri(rng.uniform(edge, 1.0 - edge, size))
     # |z / t| <= 1, so each sample is within its bound (a product by at most 1 rounds within)
