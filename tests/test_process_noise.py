@@ -418,3 +418,41 @@ def test_the_design_front_bounds_a_sparse_observer_under_process_noise():
     for point in bounded:
         design = with_gain(template, synthesize_gain(template, alpha=point["alpha"]).L)
         assert noise_search(design, noise)["largest_error"] <= point["noise_bound"]
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_noise_at_the_sensors_is_at_least_its_exact_value(seed):
+    """Random plants, G and bounds, entries from 1e-3 to 1e3: the bounds at the sensors are at
+    least the exact sums of |C_i A^d G| omega (in fractions, from the floats as given), per
+    sample and in the window's 2-norm, and within 1e-12 of them."""
+    from fractions import Fraction
+
+    rng = np.random.default_rng(seed)
+    n, p, m, tau = 3, 4, 2, 5
+    A = rng.standard_normal((n, n)) * 10.0 ** rng.uniform(-1, 0.3)
+    C = rng.standard_normal((p, n)) * 10.0 ** rng.uniform(-3, 3, (p, 1))
+    G = rng.standard_normal((n, m))
+    omega, eta = rng.uniform(0, 1, m), rng.uniform(0, 1e-2, p)
+    F = lambda M: [[Fraction(float(v)) for v in row] for row in np.atleast_2d(M)]  # noqa: E731
+    mul = lambda X, Y: [[sum(a * b for a, b in zip(r, c)) for c in zip(*Y)] for r in X]  # noqa: E731
+    Ae, Ce, power = F(A), F(C), F(G)
+    reach = []  # reach[d][i] = sum_j |C_i A^d G|_j omega_j, exactly
+    for _ in range(tau - 1):
+        CP = mul(Ce, power)
+        reach.append([sum(abs(v) * Fraction(float(o)) for v, o in zip(row, omega)) for row in CP])
+        power = mul(Ae, power)
+    process = ProcessNoise(omega, G)
+    for norm in ("inf", "2"):
+        seen = MeasurementNoise(eta, norm, process=process).at_sensors(A, C, tau).eta
+        for i in range(p):
+            sums = [sum(reach[d][i] for d in range(t)) for t in range(1, tau)]
+            if norm == "inf":
+                exact = Fraction(float(eta[i])) + sums[-1]
+                assert Fraction(float(seen[i])) >= exact
+            else:
+                extra = Fraction(float(seen[i])) - Fraction(float(eta[i]))
+                assert extra >= 0 and extra**2 >= sum(s * s for s in sums)
+                exact = Fraction(float(eta[i])) + Fraction(
+                    math.sqrt(float(sum(s * s for s in sums)))
+                )
+            assert float(seen[i]) <= float(exact) * (1 + 1e-12)
