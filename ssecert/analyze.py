@@ -332,7 +332,12 @@ def _decoder_bound(spec: Spec, noise: MeasurementNoise, sparse: Check, max_sets:
         )
     else:
         found = decoder_error_bound(
-            spec.system, s, seen, horizon=tau, max_sets=min(max_sets, BOUND_SETS)
+            spec.system,
+            s,
+            seen,
+            horizon=tau,
+            max_sets=min(max_sets, BOUND_SETS),
+            sources=records["sources"],
         )
         if records["sources"] is not None:
             found = with_sources(spec.system, found, records["sources"])

@@ -456,3 +456,27 @@ def test_the_noise_at_the_sensors_is_at_least_its_exact_value(seed):
                     math.sqrt(float(sum(s * s for s in sums)))
                 )
             assert float(seen[i]) <= float(exact) * (1 + 1e-12)
+
+
+def test_hardening_quiets_the_measurement_noise_and_keeps_the_process_reach():
+    noise = {"measurement": 0.01, "process": 0.02, "input": [[1.0], [0.5]]}
+    spec = spec_from_dict(_spec(noise))
+    check = analyze(spec)["decoder_error_bound"]
+    worst = check.fields["worst_kept_sensors"]
+    assert check.verdict is Verdict.HOLDS and "process noise's reach stays" in check.summary
+    # the bound for the noise the window sees with the worst set's measurement noise halved
+    eta = spec.noise.eta.copy()
+    eta[worst] /= 2
+    halved = MeasurementNoise(eta, process=spec.noise.process)
+    seen = halved.at_sensors(spec.system.A, spec.system.C, spec.horizon)
+    direct = decoder_error_bound(spec.system, 1, seen, horizon=spec.horizon)
+    assert check.fields["hardened_bound"] == pytest.approx(direct.bound, rel=1e-14)
+    # hardening cannot go below what the process noise alone gives
+    reach = spec_from_dict(_spec({"process": 0.02, "input": [[1.0], [0.5]]}))
+    floor = analyze(reach)["decoder_error_bound"].value
+    curve = check.evidence["hardening_curve"]
+    assert curve["scale"][0] == 0.0 and curve["bound"][0] >= floor * (1 - 1e-14)
+    assert curve["bound"][-1] == pytest.approx(check.value, rel=1e-14)
+    # process noise alone: hardening a sensor changes nothing
+    flat = analyze(reach)["decoder_error_bound"].evidence["hardening_curve"]["bound"]
+    assert flat == [flat[-1]] * len(flat)

@@ -48,7 +48,7 @@ from __future__ import annotations
 
 import enum
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
 from typing import Any
@@ -80,6 +80,9 @@ _PAIRS = 8
 #: the scales of the worst set's noise in ``DecoderErrorBound.curve``
 HARDENING = (0.0, 0.25, 0.5, 0.75, 1.0)
 _U = 2.0**-53
+
+# (sensors, scale) -> the noise bounds with those sensors' measurement noise times the scale
+Soften = Callable[[list[int], float], np.ndarray]
 
 
 class BoundCode(enum.Enum):
@@ -414,6 +417,7 @@ def decoder_error_bound(
     *,
     horizon: int | None = None,
     max_sets: int = DEFAULT_MAX_SETS,
+    sources: MeasurementNoise | None = None,
 ) -> DecoderErrorBound:
     """The certified worst-case estimation error of the l0 decoder over a window.
 
@@ -428,6 +432,11 @@ def decoder_error_bound(
         tau, the window (default n).
     max_sets : int, default 200,000
         Largest number of sets of p - 2s sensors examined.
+    sources : MeasurementNoise, optional
+        The measurement and process noise whose bounds at the sensors ``noise`` is
+        (``MeasurementNoise.at_sensors`` over the window): the hardening curve then scales
+        the measurement noise of the set to harden and keeps the process noise's reach
+        (hardening a sensor does not quiet the plant).
 
     Returns
     -------
@@ -445,19 +454,39 @@ def decoder_error_bound(
     >>> round(found.bound, 6), round(found.lower, 6), found.worst_kept
     (0.241421, 0.1, (0,))
     """
-    found = _bound_in_units(system, max_attacked, noise, horizon, max_sets)
+    soften = (
+        None
+        if sources is None
+        else _softened(system, sources, window_inputs(system, max_attacked, noise, horizon)[1])
+    )
+    found = _bound_in_units(system, max_attacked, noise, horizon, max_sets, soften)
     if found.code is BoundCode.OUT_OF_RANGE:
         # the data in other units: every sensor's rows and noise bounds divided by the power of
         # two that brings C's largest entry into [1, 2) (the same decoding problem, so the
         # same errors; its Gramians in range where the spec's would overflow or underflow)
         units = _sensor_units(system, noise)
         if units is not None:
-            again = _bound_in_units(units[0], max_attacked, units[1], horizon, max_sets)
+            again = _bound_in_units(
+                units[0], max_attacked, units[1], horizon, max_sets, soften, units[2]
+            )
             if again.code is BoundCode.CERTIFIED:  # (else the spec's data's own reason)
                 back = _in_spec_units(system, again, noise, units[2])
                 if back is not None:
                     return back
     return found
+
+
+def _softened(system: System, sources: MeasurementNoise, tau: int) -> Soften:
+    """The per-sample bounds at the sensors (``MeasurementNoise.at_sensors``) with the
+    measurement noise of the given sensors times a scale, the process noise as it is."""
+
+    def seen(sensors: list[int], scale: float) -> np.ndarray:
+        eta = sources.eta.copy()
+        eta[sensors] *= scale
+        out = replace(sources, eta=eta).at_sensors(system.A, system.C, tau)
+        return np.full(eta.size, np.inf) if out is None else out.eta
+
+    return seen
 
 
 def _sensor_units(
@@ -508,8 +537,11 @@ def _bound_in_units(
     noise: MeasurementNoise,
     horizon: int | None,
     max_sets: int,
+    soften: Soften | None = None,
+    exponent: int = 0,
 ) -> DecoderErrorBound:
-    """``decoder_error_bound`` on the data in the units given."""
+    """``decoder_error_bound`` on the data in the units given (C and the noise 2^exponent
+    times smaller than the spec's, which ``soften`` gives its bounds in)."""
     s, tau = window_inputs(system, max_attacked, noise, horizon)
     p = system.p
     # the bound is linear in the noise: computed for the bounds over a power of two c >= the
@@ -517,7 +549,14 @@ def _bound_in_units(
     top = float(np.max(noise.eta)) if p else 0.0
     c = MeasurementNoise.scale(top)
     unit = MeasurementNoise(noise.eta / c if top > 0 else np.ones(p), noise.norm)
-    found = _bound_of_unit_noise(system, s, unit, tau, max_sets)
+    unit_soften: Soften | None = None
+    if soften is not None and top > 0:
+
+        def unit_soften(sensors: list[int], scale: float) -> np.ndarray:
+            eta = np.ldexp(soften(sensors, scale), -exponent) / c
+            return MeasurementNoise(eta, noise.norm).block_bounds(tau)
+
+    found = _bound_of_unit_noise(system, s, unit, tau, max_sets, unit_soften)
     found = replace(found, noise=noise, facts={**found.facts, "noise_scale": c})
     if found.code is not BoundCode.CERTIFIED:
         return found
@@ -541,9 +580,15 @@ def _bound_in_units(
 
 
 def _bound_of_unit_noise(
-    system: System, s: int, noise: MeasurementNoise, tau: int, max_sets: int
+    system: System,
+    s: int,
+    noise: MeasurementNoise,
+    tau: int,
+    max_sets: int,
+    soften: Soften | None = None,
 ) -> DecoderErrorBound:
-    """``decoder_error_bound`` for bounds of at most 1."""
+    """``decoder_error_bound`` for bounds of at most 1 (``soften``: the block bounds with
+    some sensors' measurement noise scaled, in the same units)."""
     p = system.p
     base: dict[str, Any] = {"noise": noise, "horizon": tau, "max_attacked": s}
     removed_size = 2 * s
@@ -598,11 +643,19 @@ def _bound_of_unit_noise(
             **base,
         )
     bound = max(_rounded_up(float(bounds[worst])), guard)
-    hardened = _bound_with(block, list(kept_of(worst)), 0.5, removed, s, sigma, floor, up)
+
+    def softer(scale: float) -> np.ndarray:
+        sensors = list(kept_of(worst))
+        if soften is not None:
+            return soften(sensors, scale)
+        out = block.copy()
+        out[sensors] *= scale
+        return out
+
+    hardened = _bound_with(softer(0.5), removed, s, sigma, floor, up)
     smallest = float(sigma[weakest]) if not screened else min(float(sigma[weakest]), floor)
     curve = tuple(
-        (scale, _bound_with(block, list(kept_of(worst)), scale, removed, s, sigma, floor, up))
-        for scale in HARDENING
+        (scale, _bound_with(softer(scale), removed, s, sigma, floor, up)) for scale in HARDENING
     )
     found = DecoderErrorBound(
         BoundCode.CERTIFIED,
@@ -660,24 +713,20 @@ def with_sources(
 
 
 def _bound_with(
-    block: np.ndarray,
-    sensors: list[int],
-    scale: float,
+    softer: np.ndarray,
     removed: np.ndarray,
     s: int,
     sigma: np.ndarray,
     floor: float,
     up: float,
 ) -> float:
-    """The certified bound with the noise of ``sensors`` times ``scale``: the largest over the
-    evaluated sets, and over the others (sigma_min >= ``floor``, 0 when there are none) the
-    largest noise term over ``floor``."""
-    softer = block.copy()
-    softer[sensors] *= scale
+    """The certified bound for the block bounds ``softer`` (some sensors' noise scaled): the
+    largest over the evaluated sets, and over the others (sigma_min >= ``floor``, 0 when
+    there are none) the largest noise term over ``floor``."""
     n_h, m_h = _noise_terms(softer, removed, s)
     value = _rounded_up(float(np.max(_bound_of(n_h, m_h, sigma))))
     if floor > 0:
-        p = block.size
+        p = softer.size
         sq = np.sort(softer**2)[::-1]
         num = (math.sqrt(sq[: p - s].sum() * up) + math.sqrt(sq[: p - 2 * s].sum() * up)) * up
         value = max(value, _rounded_up(num / floor))

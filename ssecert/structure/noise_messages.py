@@ -273,8 +273,10 @@ def decoder_bound_check(system: System, found: DecoderErrorBound) -> Check:
             if found.facts.get("sigma_rechecked_exactly")
             else ""
         )
-        + f"); halving {'the noise they see' if found.sources is not None else 'their noise'} "
-        f"gives {readable(found.hardened)}.{tolerance}",
+        + f"); halving their {'measurement noise' if found.sources is not None else 'noise'} "
+        f"gives {readable(found.hardened)}"
+        + (" (the process noise's reach stays)" if found.sources is not None else "")
+        + f".{tolerance}",
         value=found.bound,
         evidence=evidence,
         **common,
