@@ -306,13 +306,11 @@ class MeasurementNoise:
             return self
         if horizon <= 1:  # the window's one sample: the noise has not reached the state yet
             return self.measurement_only()
-        r = self.process.reach(A, C, horizon)
-        if not np.all(np.isfinite(r)):
+        partial = self._partial_reach(A, C, horizon)
+        if partial is None:
             return None
-        steps = r.shape[1]
+        steps = partial.shape[1]
         with np.errstate(over="ignore", invalid="ignore"):
-            # sample t (1 <= t < horizon) is off by at most the sum of the first t reaches
-            partial = up_by(np.cumsum(r, axis=1), steps) if steps else r
             if self.per_sample:
                 extra = partial[:, -1] if steps else np.zeros(self.eta.size)
             else:
@@ -322,3 +320,48 @@ class MeasurementNoise:
         if not np.all(np.isfinite(eta)):
             return None
         return MeasurementNoise(eta, self.norm)
+
+    def _partial_reach(self, A: np.ndarray, C: np.ndarray, horizon: int) -> np.ndarray | None:
+        """(p, horizon - 1): column t - 1 bounds the most the process noise moves sample t
+        (1 <= t < horizon) of a window from its first state, the sum of the first t reaches
+        (``ProcessNoise.reach``); None where it leaves the float range."""
+        assert self.process is not None
+        r = self.process.reach(A, C, horizon)
+        if not np.all(np.isfinite(r)):
+            return None
+        steps = r.shape[1]
+        with np.errstate(over="ignore", invalid="ignore"):
+            partial = up_by(np.cumsum(r, axis=1), steps) if steps else r
+        return partial if np.all(np.isfinite(partial)) else None
+
+    def window_rows(self, A: np.ndarray, C: np.ndarray, count: int) -> np.ndarray | None:
+        """The bound on each of ``count`` stacked measurement rows over a window of count / p
+        samples from its first state (the rows of one sample after the other, as ``rows``):
+        row t p + i within eta_i plus the process noise's reach at sample t (the sum of
+        ``ProcessNoise.reach`` up to t - 1; every sample of a window within eta_i in either
+        norm).  ``rows`` without process noise; None where a bound leaves the float range.
+
+        Examples
+        --------
+        The scalar plant of ``at_sensors`` over 3 samples: 0.1, 0.1 + 0.5, 0.1 + 0.5 + 1.0.
+
+        >>> noise = MeasurementNoise(np.array([0.1]), process=ProcessNoise.read(0.5, None, 1))
+        >>> rows = noise.window_rows(np.array([[2.0]]), np.array([[1.0]]), 3)
+        >>> exact = np.array([0.1, 0.6, 1.6])
+        >>> bool(np.all(rows >= exact) and np.all(rows <= exact * (1 + 1e-14)))
+        True
+        """
+        p = self.eta.size
+        horizon = count // p if p else 0
+        if self.process is None or horizon <= 1 or horizon * p != count:
+            return self.rows(count)
+        partial = self._partial_reach(A, C, horizon)
+        if partial is None:
+            return None
+        with np.errstate(over="ignore", invalid="ignore"):
+            reach = np.concatenate([np.zeros((p, 1)), partial], axis=1)  # (p, horizon)
+            rows = up_by(self.eta[:, None] + reach, 1) + 2.0**-1074 * 2
+            rows[:, 0] = self.eta  # the window's first sample: its measurement noise alone
+        if not np.all(np.isfinite(rows)):
+            return None
+        return np.ascontiguousarray(rows.T).reshape(-1)  # sample-major, as ``rows``

@@ -126,12 +126,61 @@ def test_a_one_sample_sparse_observer_is_certified_under_process_noise():
     assert search["gradient_ascent"]["iterations"] >= 1
 
 
-def test_a_window_observer_is_not_certified_under_process_noise():
-    sso = {"kind": "sso", "step": 0.05, "threshold": 0.01, "window": 2}
-    noisy = {**_spec({"measurement": 1e-3, "process": 1e-3}), "observer": sso}
-    check = analyze(spec_from_dict(noisy))["observer_noise_bound"]
-    assert check.verdict is Verdict.INCONCLUSIVE and check.evidence["cause"] == "process noise"
-    assert math.isinf(check.value)
+@pytest.mark.parametrize("window", [2, 3])
+def test_a_window_observer_is_certified_under_process_noise(window):
+    """An SSO over a window estimates the window's first state z, z+ = A z + G w; the process
+    noise of the window's later steps reaches its stacked measurements: their rows' bounds
+    take it (``window_rows``), the error model takes -G w as a further input."""
+    sso = {"kind": "sso", "step": 0.05, "threshold": 0.01, "window": window}
+    noise = {"measurement": 1e-3, "process": 1e-3, "input": [[1.0], [0.5]]}
+    spec = spec_from_dict({**_spec(noise), "observer": sso})
+    check = analyze(spec)["observer_noise_bound"]
+    quiet = analyze(spec_from_dict({**_spec({"measurement": 1e-3}), "observer": sso}))
+    assert check.verdict is Verdict.HOLDS
+    assert check.evidence["from"] == "process noise as a further input"
+    assert check.value > quiet["observer_noise_bound"].value
+    search = check.evidence["noise_search"]["largest_error"]
+    assert quiet["observer_noise_bound"].evidence["noise_search"]["largest_error"] < search
+    assert search <= check.value
+
+
+def test_the_window_error_model_is_what_the_sso_does_under_process_noise():
+    """The window SSO's error against its window's first state, simulated on y = C x + n with
+    x+ = A x + G w, equals its Lur'e model's driven by the stacked noise Y - O z and -G w, and
+    every stacked row stays within ``window_rows``."""
+    from ssecert.observers import LureModel, build_observer, observer_from_design
+    from ssecert.stability.noise_messages import _driven_errors, _error_input
+
+    window = 3
+    sso = {"kind": "sso", "step": 0.05, "threshold": 0.01, "window": window}
+    spec = spec_from_dict({**_spec({"measurement": 1e-3, "process": 1e-2}), "observer": sso})
+    system, noise = spec.system, spec.noise
+    design = build_observer(system, spec.observer)
+    G = noise.process.input
+    rng = np.random.default_rng(4)
+    steps, runs, p = 60, 5, system.p
+    n_seq = rng.uniform(-1, 1, (steps, runs, p)) * noise.eta
+    w_seq = rng.choice([-1.0, 1.0], (steps, runs, G.shape[1])) * noise.process.omega
+    errors = _driven_errors(design, observer_from_design(design), n_seq, w_seq, G)
+    x = np.zeros((steps + 1, runs, system.n))
+    for k in range(steps):
+        x[k + 1] = x[k] @ system.A.T + w_seq[k] @ G.T
+    y = x[:-1] @ system.C.T + n_seq
+    O = system.observability_matrix(window)
+    d = window - 1
+    stacked = np.stack(
+        [np.concatenate(list(y[j : j + window]), axis=1) - x[j] @ O.T for j in range(steps - d)]
+    )  # (model steps, runs, p tau): Y - O z, z = x(j)
+    bounds = noise.window_rows(system.A, system.C, p * window)
+    assert np.all(np.abs(stacked) <= bounds)
+    model = LureModel.from_design(design)
+    model = model.with_input(_error_input(model, system.n, G))
+    xi = model.simulate(np.zeros((runs, model.N)), steps - d, np.concatenate(
+        [stacked, w_seq[: steps - d]], axis=2))  # fmt: skip
+    # the observer's estimate after y(j + d) is that of z(j + 1) = x(j + 1)
+    model_errors = np.linalg.norm(xi[1:, :, : system.n], axis=2)
+    np.testing.assert_allclose(errors[d + 1 :], model_errors, rtol=1e-9, atol=1e-15)
+    assert np.max(errors) > 0
 
 
 def test_decoder_bounds_are_those_of_the_noise_at_the_sensors():

@@ -665,6 +665,7 @@ def _front_noise_bound(
     from ..stability.noise_gain import dissipation_bound
     from ..stability.noise_messages import (
         applies_to,
+        measurement_rows,
         noise_enters_as_attack,
         observer_noise_check,
         process_certificate,
@@ -677,17 +678,16 @@ def _front_noise_bound(
         return None
     from ..observers.lure import LureModel
 
-    rows = design.sensing.shape[0]
     model = LureModel.from_design(design)
     if not noise_enters_as_attack(design, model):
         return None
-    per_row = noise.rows(rows)
+    per_row = measurement_rows(design, noise)
+    if per_row is None:
+        return None
     P, alpha, gamma = np.asarray(proposal.P, dtype=float), own["alpha"], own["gamma"]
     if noise.process is not None:
         # the process noise a further input: the inequality verified again with it, at the
         # point's decay, as certify's check does (``process_certificate``)
-        if design.window != 1:
-            return None
         process = process_certificate(design, model, noise, float(alpha), per_row)
         if process is None:
             return None

@@ -30,6 +30,7 @@ __all__ = [
     "applies_to",
     "initial_error_fading",
     "process_certificate",
+    "measurement_rows",
     "ascent_text",
 ]
 
@@ -59,31 +60,16 @@ def noise_check(design: ObserverDesign, noise: MeasurementNoise, iss: Check) -> 
     the others (``sparse_noise_check``)."""
     if applies_to(design):
         return observer_noise_check(design, noise, iss)
-    if noise.process is not None and design.window != 1:
-        return process_refused(noise)
     return sparse_noise_check(design, iss, noise)
 
 
-def process_refused(noise: MeasurementNoise) -> Check:
-    """The ``observer_noise_bound`` check of a window observer (an SSO over several samples)
-    under process noise: inconclusive, since the process noise reaches its stacked
-    measurements through the window as well as its error, outside the dissipation inequality's
-    inputs."""
-    return Check(
-        id="observer_noise_bound",
-        title=TITLE,
-        method="ISS dissipation inequality with decay (iss_gain's verified certificate)",
-        required=False,
-        value_name=VALUE_NAME,
-        verdict=Verdict.INCONCLUSIVE,
-        summary="No ultimate error bound under noise is certified: over the observer's window "
-        "the process noise reaches the stacked measurements as well as the error, outside the "
-        "dissipation inequality's inputs (a linear observer's bound and a one-sample sparse "
-        "observer's cover process noise).",
-        value=math.inf,
-        fields={"ultimate_bound": math.inf, "noise": noise.to_dict()},
-        evidence={"from": "iss_gain", "cause": "process noise"},
-    )
+def measurement_rows(design: ObserverDesign, noise: MeasurementNoise) -> np.ndarray | None:
+    """The bound on each entry of the observer's measurement vector: each sensor's bound, and
+    over a window of several samples (an SSO's stacked measurements, from the window's first
+    state, the one it estimates) the process noise's reach at each sample added
+    (``MeasurementNoise.window_rows``); None where a bound leaves the float range."""
+    system = design.system
+    return noise.window_rows(system.A, system.C, design.sensing.shape[0])
 
 
 def reason(found: NoiseGain) -> str:
@@ -145,7 +131,18 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
             evidence={"from": "iss_gain"},
             **common,
         )
-    per_row = noise.rows(rows)
+    found_rows = measurement_rows(design, noise)
+    if found_rows is None:
+        return Check(
+            verdict=Verdict.INCONCLUSIVE,
+            summary="No ultimate error bound under noise is certified: the process noise's "
+            "reach at the window's samples leaves the floating-point range.",
+            value=math.inf,
+            fields={"ultimate_bound": math.inf, "noise": noise.to_dict()},
+            evidence={"from": "iss_gain", "cause": "process noise"},
+            **common,
+        )
+    per_row = found_rows
     source, origin = "iss_gain's certificate", "iss_gain"
     if noise.process is not None:
         # the process noise enters the error as -G w: a further input of the error model, the
@@ -272,7 +269,13 @@ def process_certificate(
     model with the process noise as a further input (xi+ = ... + [-G; 0] w: e = x_hat - x
     takes -G w from x+ = A x + G w, w not in the nonlinearity's argument; its columns scaled
     by powers of two to the measurement rows' bounds ``rows``, ``_process_columns``) and the
-    bounds of that input's entries, or None where it does not hold with a decay."""
+    bounds of that input's entries, or None where it does not hold with a decay.
+
+    Over a window (an SSO's stacked measurements) the error is that of the window's first
+    state, z+ = A z + G w, and the process noise of the window's later steps reaches the
+    stacked measurements: ``rows`` then bound them with it (``measurement_rows``).  The
+    inequality holds for every input at every step, so the w in the rows and the w in the
+    state may be the same or not: the bound covers both."""
     from .lmi import iss_certificate
 
     assert noise.process is not None  # a process noise that moves the state: a column left
@@ -377,9 +380,10 @@ def _driven_errors(
     process: np.ndarray | None,
     G: np.ndarray | None,
 ) -> np.ndarray:
-    """||x_hat(k) - x(k)|| (steps + 1, runs) from zero with measurement noise ``noise`` (steps,
-    runs, p) and the plant x+ = A x + G w driven by ``process`` (steps, runs, m; x = 0 when
-    None): the observer's own simulator on y = C x + n."""
+    """||x_hat(k) - x(k - d)|| (steps + 1, runs) from zero with measurement noise ``noise``
+    (steps, runs, p) and the plant x+ = A x + G w driven by ``process`` (steps, runs, m; x = 0
+    when None): the observer's own simulator on y = C x + n, its estimate at k that of the
+    state d = its delay steps before (a window's first state; x(j) = 0 for j < 0)."""
     with np.errstate(all="ignore"):
         if process is None or G is None:
             return safe_norms(simulator.run(noise).x_hat)  # an estimate of 1e200 is finite
@@ -389,7 +393,10 @@ def _driven_errors(
         for k in range(steps):
             x[k + 1] = x[k] @ A.T + process[k] @ G.T
         y = x[:-1] @ C.T + noise
-        return safe_norms(simulator.run(y).x_hat - x)
+        run = simulator.run(y)
+        d = int(run.delay)
+        reference = x if d == 0 else np.concatenate([np.zeros_like(x[:d]), x[:-d]], axis=0)
+        return safe_norms(run.x_hat - reference)
 
 
 GRADIENT_STARTS = 8
