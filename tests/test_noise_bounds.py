@@ -14,6 +14,7 @@ from ssecert.noise import MeasurementNoise
 from ssecert.results import Verdict
 from ssecert.spec import SpecError
 from ssecert.spec.write import spec_document
+from ssecert.stability.noise_gain import dissipation_bound
 from ssecert.structure import noise_messages
 from ssecert.structure.noise import (
     BoundCode,
@@ -370,11 +371,17 @@ def test_analyze_bounds_linear_and_sparse_observers():
     check, iss = cert["observer_noise_bound"], cert["iss_gain"]
     assert iss.verdict is Verdict.HOLDS and iss.fields["alpha"] > 0
     assert check.verdict is Verdict.HOLDS and check.evidence["from"] == "iss_gain"
+    used = check.evidence
     expected = math.sqrt(
-        iss.fields["gamma"] ** 2 * 5 * 1e-6 / iss.fields["alpha"]
-        * check.evidence["lambda_max_P_inverse_ee"]
-    )  # fmt: skip
+        used["gamma"] ** 2 * 5 * 1e-6 / used["alpha"] * used["lambda_max_P_inverse_ee"]
+    )
     assert check.value == pytest.approx(expected, rel=1e-9) and check.value >= expected
+    # no larger than iss_gain's own inequality gives
+    own = dissipation_bound(
+        np.asarray(iss.evidence["P"]), iss.fields["alpha"], iss.fields["gamma"],
+        np.full(5, 1e-3), 2,
+    )  # fmt: skip
+    assert check.value <= own.bound
     assert check.fields["energy_gain"] == iss.fields["gamma"]
     search = check.evidence["noise_search"]
     assert 0 < search["largest_error"] <= check.value and search["sequences"] >= 2
