@@ -130,7 +130,7 @@ def test_a_one_sample_sparse_observer_is_certified_under_process_noise():
     assert search["gradient_ascent"]["iterations"] >= 1
 
 
-@pytest.mark.parametrize("window", [2, 3])
+@pytest.mark.parametrize("window", [2, pytest.param(3, marks=pytest.mark.slow)])
 def test_a_window_observer_is_certified_under_process_noise(window):
     """An SSO over a window estimates the window's first state z, z+ = A z + G w; the process
     noise of the window's later steps reaches its stacked measurements: their rows' bounds
@@ -535,7 +535,7 @@ def test_hardening_quiets_the_measurement_noise_and_keeps_the_process_reach():
     assert flat == [flat[-1]] * len(flat)
 
 
-@pytest.mark.parametrize("observer", ["elastic_net", "sso"])
+@pytest.mark.parametrize("observer", ["elastic_net", pytest.param("sso", marks=pytest.mark.slow)])
 def test_the_decay_scan_tightens_the_bound_with_a_certificate_that_re_verifies(observer):
     """The inequality V+ - V <= -alpha V + gamma^2 |n|^2 at decays from iss_gain's up: its
     bound is below the one iss_gain's inequality (with -|e|^2, at its one decay) gives, and its
