@@ -348,7 +348,7 @@ def _l1_bound(spec: Spec, noise: MeasurementNoise, sparse: Check) -> Check:
     """The l1_error_bound check: none exists when sparse_observability found a breaking set
     (it fails with it), else the certified bound (``l1_error_bound``) for the noise the
     window sees at the sensors."""
-    from .structure.l1_bound import L1BoundCode, L1ErrorBound, l1_error_bound
+    from .structure.l1_bound import L1BoundCode, L1ErrorBound, l1_error_bound, with_lower_bound
     from .structure.noise_messages import l1_bound_check
 
     breaking = sparse.fields.get("breaking_set")
@@ -365,7 +365,8 @@ def _l1_bound(spec: Spec, noise: MeasurementNoise, sparse: Check) -> Check:
         )
         return l1_bound_check(spec.system, found)
     found = l1_error_bound(spec.system, s, seen, horizon=tau)
-    return l1_bound_check(spec.system, replace(found, sources=records["sources"]))
+    found = with_lower_bound(spec.system, replace(found, sources=records["sources"]))
+    return l1_bound_check(spec.system, found)
 
 
 def _lasso_bound(spec: Spec, noise: MeasurementNoise, sparse: Check, max_sets: int) -> Check:

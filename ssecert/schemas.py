@@ -257,6 +257,11 @@ _CHECK_FIELDS: dict[str, dict[str, Any]] = {
     },
     "l1_error_bound": {
         "bound": {**_REAL, "description": "certified bound of ||x_hat - x||_2 (Infinity: none)"},
+        "lower_bound": {
+            **_REAL,
+            "description": "the decoder's error on a window built for it (noise within the "
+            "bounds, an attack on the others): its worst case is at least this (0: none built)",
+        },
         "null_space_constant": {
             **_REAL,
             "description": "the largest max ||O_S e||_1 / "

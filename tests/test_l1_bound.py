@@ -167,3 +167,50 @@ def test_analyze_reports_the_l1_bound():
     broken = analyze(load_example("notes-example-2"), noise=0.01)
     assert broken["l1_error_bound"].verdict is Verdict.FAILS
     assert "breaking_set" in broken["l1_error_bound"].witness
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_the_lower_bound_is_the_decoders_error_on_the_window_built_for_it(seed):
+    """The data of x = 0 with the noise (within its bounds on p - s sensors) and the attack (on
+    the others) of ``l1_worst_case`` are explained exactly by x + c v: the l1 decoder returns
+    it, its error is the lower bound, and the bound is above it."""
+    from ssecert.estimators.support_decoders import l1_decoder
+    from ssecert.structure.l1_bound import l1_worst_case, with_lower_bound
+
+    rng = np.random.default_rng(seed)
+    checked = 0
+    while checked < 4:
+        n, p, tau = int(rng.integers(1, 4)), int(rng.integers(3, 7)), int(rng.integers(1, 3))
+        s = int(rng.integers(1, (p - 1) // 2 + 1))
+        plant = System(rng.standard_normal((n, n)) * 0.6, rng.standard_normal((p, n)))
+        noise = MeasurementNoise(rng.uniform(1e-3, 0.1, p), "inf" if rng.random() < 0.6 else "2")
+        found = with_lower_bound(plant, l1_error_bound(plant, s, noise, horizon=tau))
+        if found.code is not L1BoundCode.CERTIFIED:
+            continue
+        case = l1_worst_case(plant, found)
+        assert case is not None and 0 < found.lower <= found.bound
+        assert len(case["attacked"]) == s and set(case["attacked"]).isdisjoint(found.lower_kept)
+        size = np.abs(case["noise"])
+        size = size.max(axis=1) if noise.per_sample else np.linalg.norm(size, axis=1)
+        assert np.all(size <= noise.eta)
+        O = plant.sensor_blocks(tau).reshape(-1, n)  # sensor-major, as the data
+        data = (case["noise"] + case["attack"]).reshape(-1)  # x = 0
+        x_hat = l1_decoder(O, data, tol=1e-10)
+        assert np.linalg.norm(x_hat) == pytest.approx(found.lower, rel=1e-6)
+        checked += 1
+
+
+def test_analyze_reports_the_l1_lower_bound_within_the_measurement_noise():
+    data = {"name": "l1", "system": {"A": [[0.9, 0.1], [0.0, 0.8]],
+            "C": [[1.0, 0.0], [0.0, 1.0], [1.0, 1.0], [1.0, -1.0], [2.0, 1.0]]},
+            "attack": {"max_attacked": 1}, "noise": {"measurement": 0.01}}  # fmt: skip
+    from ssecert import spec_from_dict
+
+    quiet = analyze(spec_from_dict(data))["l1_error_bound"]
+    assert quiet.verdict is Verdict.HOLDS
+    assert 0 < quiet.fields["lower_bound"] < quiet.value
+    assert "errs by" in quiet.summary
+    # process noise: the bound grows, the construction stays within the measurement noise
+    data["noise"] = {"measurement": 0.01, "process": 0.02, "input": [[1.0], [0.5]]}
+    noisy = analyze(spec_from_dict(data))["l1_error_bound"]
+    assert noisy.value > quiet.value and noisy.fields["lower_bound"] == quiet.fields["lower_bound"]

@@ -496,6 +496,13 @@ def _noise_context(
             ("l1 decoder: certified bound of ||x_hat - x||", readable(l1.fields["bound"])),
             ("l1 decoder: largest null-space constant", readable(l1.fields["null_space_constant"])),
         ]
+        if l1.fields.get("lower_bound"):
+            rows.append(
+                (
+                    "l1 decoder: its error on a window built for it",
+                    readable(l1.fields["lower_bound"]),
+                )
+            )
     elif l1 is not None:
         rows.append(("l1 decoder", l1.summary))
     lasso = cert.get("lasso_error_bound")

@@ -40,7 +40,7 @@ import itertools
 import math
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -60,7 +60,14 @@ from .lasso_bound import (
 )
 from .noise import _kept_sets, window_inputs
 
-__all__ = ["L1BoundCode", "L1ErrorBound", "l1_bound_rechecks", "l1_error_bound"]
+__all__ = [
+    "L1BoundCode",
+    "L1ErrorBound",
+    "l1_bound_rechecks",
+    "l1_error_bound",
+    "l1_worst_case",
+    "with_lower_bound",
+]
 
 DEFAULT_MAX_PROGRAMS = 4096  # linear programs (sets times sign patterns)
 
@@ -139,6 +146,91 @@ class L1ErrorBound:
     programs: int = 0
     facts: dict[str, Any] = field(default_factory=dict)
     sources: MeasurementNoise | None = None
+    lower: float = 0.0
+    lower_kept: tuple[int, ...] = ()
+
+    @property
+    def realizable(self) -> MeasurementNoise:
+        """The noise the lower bound's construction keeps within: ``noise``, or with process
+        noise (``sources``) its measurement noise alone."""
+        return self.noise if self.sources is None else self.sources.measurement_only()
+
+
+# sets of s sensors whose kept sensors are tried for the lower bound, beyond the worst set's
+# and the largest null-space constant's: every one up to this many sets
+_LOWER_SETS = 256
+
+
+def with_lower_bound(system: System, found: L1ErrorBound) -> L1ErrorBound:
+    """``found`` with the error the l1 decoder makes on a window built for it (``lower``,
+    ``lower_kept``): for kept sensors K (p - s of them) and v the smallest right singular
+    vector of O_K, the data Y = O (x + c v) are those of the state x with the noise c O_K v on
+    K (c the largest scale within the realizable noise's bounds, less the rounding of O_K v)
+    and the attack c O_S v on the s others; they are explained exactly by x + c v, which the
+    l1 decoder returns (the only state with zero residual, O of full column rank), so its
+    error there is c ||v||.  The largest over the kept sensors of the worst set, of the
+    largest null-space constant and, up to ``_LOWER_SETS`` sets, of every set; 0 when the
+    bound is not certified or no scale is positive (no noise)."""
+    if found.code is not L1BoundCode.CERTIFIED or found.max_attacked >= system.p:
+        return found
+    from .noise import _block_errors
+
+    p, tau, s = system.p, found.horizon, found.max_attacked
+    supports = [found.worst_support, found.theta_support]
+    if count_subsets(p, [s]) <= _LOWER_SETS:
+        supports += [tuple(int(i) for i in row) for row in _kept_sets(p, s)]
+    with np.errstate(all="ignore"):
+        blocks = system.sensor_blocks(tau)  # (p, tau, n)
+        errors = _block_errors(system, tau)
+    if not (np.all(np.isfinite(blocks)) and np.all(np.isfinite(errors))):
+        return found
+    realizable = found.realizable
+    best, best_kept = 0.0, cast(tuple[int, ...], ())
+    for support in dict.fromkeys(supports):
+        kept = [i for i in range(p) if i not in support]
+        O_K = blocks[kept]
+        _, _, vh = np.linalg.svd(O_K.reshape(-1, system.n))
+        v = vh[-1]
+        with np.errstate(all="ignore"):
+            Ov = np.abs(O_K @ v)  # (|K|, tau)
+            size = np.max(Ov, axis=1) if realizable.per_sample else np.linalg.norm(Ov, axis=1)
+            # the exact O_K v is within ||fl(O_i) - O_i||_F ||v||_2 of it on sensor i's rows
+            size = (size + errors[kept] * np.linalg.norm(v)) * (1 + 4 * 2.0**-53 * (tau + 4))
+            scales = np.where(size > 0, realizable.eta[kept] / size, np.inf)
+            c = float(np.min(scales)) * (1 - 2.0**-40)
+            lower = c * float(np.linalg.norm(v)) * (1 - 2.0**-40)
+        if math.isfinite(lower) and lower > best:
+            best, best_kept = lower, tuple(kept)
+    return replace(found, lower=best, lower_kept=best_kept)
+
+
+def l1_worst_case(system: System, found: L1ErrorBound) -> dict[str, Any] | None:
+    """The window ``with_lower_bound`` builds on ``found.lower_kept``: the state x = 0, the
+    noise (within the realizable bounds on the kept sensors, 0 elsewhere), the attack (on the
+    others), the data Y (p, tau) and the state x + c v that explains it exactly, whose error
+    is ``found.lower``; None without one."""
+    if not found.lower_kept:
+        return None
+    tau, kept = found.horizon, list(found.lower_kept)
+    blocks = system.sensor_blocks(tau)
+    _, _, vh = np.linalg.svd(blocks[kept].reshape(-1, system.n))
+    v = vh[-1]
+    lower_c = found.lower / float(np.linalg.norm(v)) / (1 - 2.0**-40)
+    data = lower_c * (blocks @ v)  # (p, tau): O (c v)
+    attacked = [i for i in range(system.p) if i not in found.lower_kept]
+    noise = np.zeros_like(data)
+    noise[kept] = data[kept]
+    attack = np.zeros_like(data)
+    attack[attacked] = data[attacked]
+    return {
+        "x": np.zeros(system.n),
+        "x_explaining": lower_c * v,
+        "noise": noise,
+        "attack": attack,
+        "attacked": attacked,
+        "data": data,
+        "lower": found.lower,
+    }
 
 
 def _reach_upper(O_K: np.ndarray, sigma_K: float, e_K: float) -> float:

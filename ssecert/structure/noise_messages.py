@@ -479,6 +479,20 @@ def l1_reason(found: L1ErrorBound, system: System) -> str:
     return ""
 
 
+def _l1_lower_words(system: System, found: L1ErrorBound) -> str:
+    """The sentence on the l1 decoder's own worst case beside its bound (empty without one)."""
+    if not found.lower > 0:
+        return ""
+    attacked = tuple(i for i in range(system.p) if i not in found.lower_kept)
+    return (
+        f" The decoder itself errs by {readable(found.lower)} on a window built for it "
+        f"(noise within the bounds on {_names(system, found.lower_kept)}, an attack on "
+        f"{_names(system, attacked) or 'no sensor'}: data explained exactly by a state that "
+        f"far away, which it returns), so the bound is within "
+        f"{readable(found.bound / found.lower)}x of its worst case."
+    )
+
+
 def l1_bound_check(
     system: System, found: L1ErrorBound, breaking_set: list[int] | None = None
 ) -> Check:
@@ -488,6 +502,7 @@ def l1_bound_check(
     s = found.max_attacked
     fields: dict[str, Any] = {
         "bound": found.bound,
+        "lower_bound": found.lower,
         "null_space_constant": found.theta,
         "null_space_support": list(found.theta_support),
         "worst_support": list(found.worst_support),
@@ -502,6 +517,7 @@ def l1_bound_check(
         "sets": found.sets,
         "linear_programs": found.programs,
         "code": found.code.value,
+        "lower_bound_kept_sensors": list(found.lower_kept),
     }
     common: dict[str, Any] = {
         "id": "l1_error_bound",
@@ -534,7 +550,8 @@ def l1_bound_check(
         f"most {readable(found.theta)} < 1 on every set of {_sensors(s)} (largest on "
         f"{_names(system, found.theta_support) or 'the empty set'}); the bound is largest with "
         f"the attack on {_names(system, found.worst_support) or 'no sensor'}: 2 ||w_K||_1 "
-        f"||O_K^+||_(1->2) / (1 - theta), ||O_K^+||_(1->2) at most {readable(found.reach)}.",
+        f"||O_K^+||_(1->2) / (1 - theta), ||O_K^+||_(1->2) at most {readable(found.reach)}."
+        + _l1_lower_words(system, found),
         value=found.bound,
         **common,
     )
