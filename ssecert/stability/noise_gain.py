@@ -323,8 +323,9 @@ def dissipation_bound(
     return DissipationBound(unit * c, math.sqrt(N2) * c, top, cond, False)
 
 
-# the decays a sparse observer's ultimate bound is tried at: iss_gain's, then twice it, and so
-# on below 1, while each is verified and the bound falls (``decay_scan``)
+# the decays a sparse observer's ultimate bound is tried at: iss_gain's, then 4 times it, and so
+# on below 1, while each is verified and the bound falls, then twice and half the best
+# (``decay_scan``)
 SCAN_SOLVES = 8
 SCAN_FACTOR = 2.0
 # the scan's LMIs are solved only for error models whose one dissipation LMI is estimated
@@ -354,12 +355,13 @@ def decay_scan(
     model: Any, alpha: float, per_row: np.ndarray, n: int, *, solves: int = SCAN_SOLVES
 ) -> DecayScan | None:
     """The smallest ultimate bound under noise within ``per_row`` (``dissipation_bound``) of
-    the inequality V+ - V <= -a V + g |n|^2 with decay a = ``alpha``, 2 ``alpha``, 4
-    ``alpha`` ... below 1, each solved and verified as iss_gain's certificate is
-    (``lmi.iss_certificate`` of the error model without its output, so that the LMI weighs
-    only V's ellipsoid, which the bound rests on; ``SCAN_STRUCTURES``); the scan stops at the first decay not
-    verified or whose bound is no smaller.  None where none is verified, or where the
-    model's LMI is too large for several solves (``SCAN_OPERATIONS``).
+    the inequality V+ - V <= -a V + g |n|^2 with decay a = ``alpha``, 4 ``alpha``, 16
+    ``alpha`` ... below 1 while each is verified and its bound is smaller, then twice and
+    half the best, at most ``solves`` in all, each solved and verified as iss_gain's
+    certificate is (``lmi.iss_certificate`` of the error model without its output, so that
+    the LMI weighs only V's ellipsoid, which the bound rests on; ``SCAN_STRUCTURES``).  None
+    where none is verified, or where the model's LMI is too large for several solves
+    (``SCAN_OPERATIONS``).
 
     iss_gain's own certificate, with the output's -|e|^2 and at its one decay, weighs the
     l2 gain from attack to error: the bound it gives under noise is often several times
@@ -376,12 +378,10 @@ def decay_scan(
         for st in SCAN_STRUCTURES
         if st != "cross" or lmi_cost(quiet, "iss", "cross")[1] <= SCAN_CROSS_OPERATIONS
     ]
-    best: DecayScan | None = None
     tried: list[dict[str, float]] = []
-    a = float(alpha)
-    for _ in range(solves):
-        if not 0 < a < 1:
-            break
+
+    def attempt(a: float) -> DecayScan | None:
+        """The verified inequality at decay a and its bound (recorded in ``tried``)."""
         cert = None
         for structure in structures:
             try:
@@ -399,15 +399,28 @@ def decay_scan(
             or not cert.decay > 0
         ):
             tried.append({"alpha": a, "bound": math.inf})
-            break
+            return None
         P = np.asarray(cert.P, dtype=float)
         found = dissipation_bound(P, float(cert.decay), float(cert.gamma), per_row, n)
         tried.append({"alpha": a, "bound": found.bound})
         if found.ill_conditioned or not math.isfinite(found.bound):
-            break
-        if best is not None and not found.bound < best.found.bound:
-            break
+            return None
         t = np.zeros(0) if cert.multipliers is None else np.asarray(cert.multipliers, dtype=float)
-        best = DecayScan(found, float(cert.decay), float(cert.gamma), P, t, tried)
-        a *= SCAN_FACTOR
+        return DecayScan(found, float(cert.decay), float(cert.gamma), P, t, tried)
+
+    # coarse steps of SCAN_FACTOR^2 from iss_gain's decay while the bound falls, then the
+    # decays halfway (in logarithm) on either side of the best
+    best: DecayScan | None = None
+    a = float(alpha)
+    while len(tried) < solves - 2 and 0 < a < 1:
+        found = attempt(a)
+        if found is None or (best is not None and not found.found.bound < best.found.bound):
+            break
+        best, a = found, a * SCAN_FACTOR**2
+    if best is not None:
+        for a in (best.alpha * SCAN_FACTOR, best.alpha / SCAN_FACTOR):
+            if len(tried) < solves and alpha <= a < 1 and all(d["alpha"] != a for d in tried):
+                found = attempt(a)
+                if found is not None and found.found.bound < best.found.bound:
+                    best = found
     return None if best is None else best._replace(tried=tried)
