@@ -93,6 +93,20 @@ def reason(found: NoiseGain) -> str:
     return ""
 
 
+def _no_bound(
+    summary: str, evidence: dict[str, Any], common: dict[str, Any], noise: MeasurementNoise
+) -> Check:
+    """An inconclusive ``observer_noise_bound`` check with its reason."""
+    return Check(
+        verdict=Verdict.INCONCLUSIVE,
+        summary=summary,
+        value=math.inf,
+        fields={"ultimate_bound": math.inf, "noise": noise.to_dict()},
+        evidence=evidence,
+        **common,
+    )
+
+
 def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoise) -> Check:
     """The ``observer_noise_bound`` check of an observer certified by a dissipation inequality
     with decay (``iss``, the iss_gain check): noise enters the error dynamics as an attack on
@@ -117,37 +131,31 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
             else "iss_gain's certificate has no decay (alpha = 0), so it bounds the error's "
             "energy, not its size"
         )
-        return Check(
-            verdict=Verdict.INCONCLUSIVE,
-            summary=f"No ultimate error bound under noise is certified: {why}.",
-            value=math.inf,
-            fields={"ultimate_bound": math.inf, "noise": noise.to_dict()},
-            evidence={"from": "iss_gain"},
-            **common,
+        return _no_bound(
+            f"No ultimate error bound under noise is certified: {why}.",
+            {"from": "iss_gain"},
+            common,
+            noise,
         )
     rows = design.sensing.shape[0]
     model = design.observer_kind.lure_model(design)
     if not noise_enters_as_attack(design, model):
-        return Check(
-            verdict=Verdict.INCONCLUSIVE,
-            summary="No ultimate error bound under noise is certified: the error model's "
+        return _no_bound(
+            "No ultimate error bound under noise is certified: the error model's "
             f"attack input ({model.r} entries) is not the observer's measurement vector "
             f"({rows} rows).",
-            value=math.inf,
-            fields={"ultimate_bound": math.inf, "noise": noise.to_dict()},
-            evidence={"from": "iss_gain"},
-            **common,
+            {"from": "iss_gain"},
+            common,
+            noise,
         )
     found_rows = measurement_rows(design, noise)
     if found_rows is None:
-        return Check(
-            verdict=Verdict.INCONCLUSIVE,
-            summary="No ultimate error bound under noise is certified: the process noise's "
+        return _no_bound(
+            "No ultimate error bound under noise is certified: the process noise's "
             "reach at the window's samples leaves the floating-point range.",
-            value=math.inf,
-            fields={"ultimate_bound": math.inf, "noise": noise.to_dict()},
-            evidence={"from": "iss_gain", "cause": "process noise"},
-            **common,
+            {"from": "iss_gain", "cause": "process noise"},
+            common,
+            noise,
         )
     per_row = found_rows
     n = design.system.n
@@ -192,50 +200,41 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
                        if noise.process is not None else "") + " (verified as iss_gain's)"
         )  # fmt: skip
     if found is None:
-        return Check(
-            verdict=Verdict.INCONCLUSIVE,
-            summary="No ultimate error bound under noise is certified: no dissipation "
+        return _no_bound(
+            "No ultimate error bound under noise is certified: no dissipation "
             "inequality with decay is verified with the process noise as a further input "
             f"of the error model (at iss_gain's decay {readable(float(alpha))} or faster).",
-            value=math.inf,
-            fields={"ultimate_bound": math.inf, "noise": noise.to_dict()},
-            evidence={"from": "process noise as a further input", "cause": "process noise"},
-            **common,
+            {"from": "process noise as a further input", "cause": "process noise"},
+            common,
+            noise,
         )
     cond, top, bound = found.condition, found.top, found.bound
     if found.ill_conditioned:
-        return Check(
-            verdict=Verdict.INCONCLUSIVE,
-            summary="No ultimate error bound under noise is certified: iss_gain's P is too "
+        return _no_bound(
+            "No ultimate error bound under noise is certified: iss_gain's P is too "
             f"ill-conditioned (condition number {readable(cond)}) to invert with a known error.",
-            value=math.inf,
-            fields={"ultimate_bound": math.inf, "noise": noise.to_dict()},
-            evidence={"from": origin, "condition_P": cond},
-            **common,
+            {"from": origin, "condition_P": cond},
+            common,
+            noise,
         )
     search = noise_search(design, noise)
     # iss_gain's energy gain is from the measurement noise alone: with process noise, none
     energy, energy_words = _energy(iss, design) if noise.process is None else (None, "")
     if math.isfinite(bound) and not search["largest_error"] <= bound:
-        return Check(
-            verdict=Verdict.INCONCLUSIVE,
-            summary="No ultimate error bound under noise is certified: a simulated noise "
+        return _no_bound(
+            "No ultimate error bound under noise is certified: a simulated noise "
             f"within the bounds drove the error to {readable(search['largest_error'])}, above "
             f"the bound {readable(bound)} {source} gives (please report this design).",
-            value=math.inf,
-            fields={"ultimate_bound": math.inf, "noise": noise.to_dict()},
-            evidence={"from": origin, "noise_search": search, "bound_found": bound},
-            **common,
+            {"from": origin, "noise_search": search, "bound_found": bound},
+            common,
+            noise,
         )
     if not math.isfinite(bound):
-        return Check(
-            verdict=Verdict.INCONCLUSIVE,
-            summary="No ultimate error bound under noise is certified: it leaves the "
-            "floating-point range.",
-            value=math.inf,
-            fields={"ultimate_bound": math.inf, "noise": noise.to_dict()},
-            evidence={"from": origin},
-            **common,
+        return _no_bound(
+            "No ultimate error bound under noise is certified: it leaves the floating-point range.",
+            {"from": origin},
+            common,
+            noise,
         )
     if 0 < bound < 2.0**-1022:  # a subnormal product is rounded: take it up
         bound = float(np.nextafter(bound, np.inf))
