@@ -112,7 +112,9 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
     with decay (``iss``, the iss_gain check): noise enters the error dynamics as an attack on
     every sensor does, so V+ - V <= -alpha V - |e|^2 + gamma^2 |n|^2 gives, without attack,
     limsup V <= gamma^2 N^2 / alpha (N >= |n(k)|, each entry of the observer's measurement
-    vector within its sensor's bound) and |e|^2 <= V lambda_max((P^-1)_ee)."""
+    vector within its sensor's bound) and |e|^2 <= V lambda_max((P^-1)_ee); the smallest of
+    that bound and of ``noise_gain.decay_scan``'s (the inequality without -|e|^2, at decays
+    from iss_gain's up) is the one reported."""
     common: dict[str, Any] = {
         "id": "observer_noise_bound",
         "title": TITLE,
