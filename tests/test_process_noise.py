@@ -576,3 +576,25 @@ def test_the_decay_scan_tightens_the_bound_with_a_certificate_that_re_verifies(o
     top = np.linalg.eigvalsh(np.linalg.inv(scan.P)[:2, :2])[-1]
     value = math.sqrt(scan.gamma**2 * np.sum(rows**2) / scan.alpha * top)
     assert value <= check.value <= value * (1 + 1e-6)
+
+
+def test_an_inequality_without_decay_still_gives_the_energy_gain():
+    """iss_gain holding with alpha = 0 (a Zames-Falb gain) bounds the error's energy, not its
+    size: no ultimate bound, the energy gain reported; none with process noise (iss_gain's
+    gain is from the measurement noise alone)."""
+    from dataclasses import replace as swap
+
+    from ssecert.observers import build_observer
+    from ssecert.stability.noise_messages import sparse_noise_check
+
+    net = {**LINEAR, "kind": "elastic_net", "step": 0.3, "threshold": 0.05, "shrink": 0.5}
+    spec = spec_from_dict({**_spec({"measurement": 1e-3}), "observer": net})
+    iss = analyze(spec)["iss_gain"]
+    assert iss.verdict is Verdict.HOLDS
+    no_decay = swap(iss, fields={**iss.fields, "alpha": 0.0})
+    design = build_observer(spec.system, spec.observer)
+    check = sparse_noise_check(design, no_decay, spec.noise)
+    assert check.verdict is Verdict.INCONCLUSIVE and math.isinf(check.value)
+    assert check.fields["energy_gain"] == iss.fields["gamma"]
+    noisy = MeasurementNoise(spec.noise.eta, process=ProcessNoise.read(1e-3, [[1.0], [0.5]], 2))
+    assert "energy_gain" not in sparse_noise_check(design, no_decay, noisy).fields

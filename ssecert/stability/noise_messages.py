@@ -94,14 +94,22 @@ def reason(found: NoiseGain) -> str:
 
 
 def _no_bound(
-    summary: str, evidence: dict[str, Any], common: dict[str, Any], noise: MeasurementNoise
+    summary: str,
+    evidence: dict[str, Any],
+    common: dict[str, Any],
+    noise: MeasurementNoise,
+    energy: float | None = None,
 ) -> Check:
-    """An inconclusive ``observer_noise_bound`` check with its reason."""
+    """An inconclusive ``observer_noise_bound`` check with its reason (and the energy gain
+    where one is certified)."""
+    fields: dict[str, Any] = {"ultimate_bound": math.inf, "noise": noise.to_dict()}
+    if energy is not None:
+        fields["energy_gain"] = energy
     return Check(
         verdict=Verdict.INCONCLUSIVE,
         summary=summary,
         value=math.inf,
-        fields={"ultimate_bound": math.inf, "noise": noise.to_dict()},
+        fields=fields,
         evidence=evidence,
         **common,
     )
@@ -133,11 +141,22 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
             else "iss_gain's certificate has no decay (alpha = 0), so it bounds the error's "
             "energy, not its size"
         )
+        # without decay, iss_gain's gain still bounds the error's energy under measurement
+        # noise, which enters as an attack on every row of the measurement vector does
+        energy, energy_words = None, ""
+        if (
+            iss.verdict is Verdict.HOLDS
+            and gamma is not None
+            and noise.process is None
+            and noise_enters_as_attack(design, design.observer_kind.lure_model(design))
+        ):
+            energy, energy_words = _energy(iss, design)
         return _no_bound(
-            f"No ultimate error bound under noise is certified: {why}.",
+            f"No ultimate error bound under noise is certified: {why}." + energy_words,
             {"from": "iss_gain"},
             common,
             noise,
+            energy,
         )
     rows = design.sensing.shape[0]
     model = design.observer_kind.lure_model(design)
