@@ -39,6 +39,7 @@ from ..tolerances import up_by as _up
 __all__ = [
     "DecayScan",
     "decay_scan",
+    "decaying_certificate",
     "DissipationBound",
     "NoiseGain",
     "NoiseGainCode",
@@ -351,6 +352,35 @@ class DecayScan(NamedTuple):
     tried: list[dict[str, float]]  # each decay tried: alpha and its bound (inf: none verified)
 
 
+def decaying_certificate(
+    model: Any, alpha: float, structures: tuple[str, ...] = ("auto",)
+) -> Any | None:
+    """``lmi.iss_certificate`` of ``model`` at decay ``alpha``, the structures of P tried in
+    turn until one is verified; None where none holds with a positive decay, P and gamma (the
+    solver's own failures included)."""
+    from ..results import Verdict
+    from .lmi import iss_certificate
+
+    cert = None
+    for structure in structures:
+        try:
+            cert = iss_certificate(model, alpha=alpha, structure=structure)
+        except (ValueError, np.linalg.LinAlgError):  # the solver's own failures
+            cert = None
+        if cert is not None and cert.verdict is Verdict.HOLDS:
+            break
+    if (
+        cert is None
+        or cert.verdict is not Verdict.HOLDS
+        or cert.P is None
+        or cert.gamma is None
+        or cert.decay is None
+        or not cert.decay > 0
+    ):
+        return None
+    return cert
+
+
 def decay_scan(
     model: Any, alpha: float, per_row: np.ndarray, n: int, *, solves: int = SCAN_SOLVES
 ) -> DecayScan | None:
@@ -365,39 +395,23 @@ def decay_scan(
 
     iss_gain's own certificate, with the output's -|e|^2 and at its one decay, weighs the
     l2 gain from attack to error: the bound it gives under noise is often several times
-    this one (on the 2-state test plant's window SSO, 0.245 against 0.059)."""
-    from ..results import Verdict
-    from .lmi import iss_certificate
+    this one (on the 2-state test plant's window SSO, 0.245 against 0.065)."""
     from .lmi_solver import lmi_cost
 
     quiet = replace(model, Ce=np.zeros_like(model.Ce))
     if lmi_cost(quiet, "iss", "block-diagonal")[1] > SCAN_OPERATIONS:
         return None
-    structures = [
+    structures = tuple(
         st
         for st in SCAN_STRUCTURES
         if st != "cross" or lmi_cost(quiet, "iss", "cross")[1] <= SCAN_CROSS_OPERATIONS
-    ]
+    )
     tried: list[dict[str, float]] = []
 
     def attempt(a: float) -> DecayScan | None:
         """The verified inequality at decay a and its bound (recorded in ``tried``)."""
-        cert = None
-        for structure in structures:
-            try:
-                cert = iss_certificate(quiet, alpha=a, structure=structure)
-            except (ValueError, np.linalg.LinAlgError):  # the solver's own failures
-                cert = None
-            if cert is not None and cert.verdict is Verdict.HOLDS:
-                break
-        if (
-            cert is None
-            or cert.verdict is not Verdict.HOLDS
-            or cert.P is None
-            or cert.gamma is None
-            or cert.decay is None
-            or not cert.decay > 0
-        ):
+        cert = decaying_certificate(quiet, a, structures)
+        if cert is None:
             tried.append({"alpha": a, "bound": math.inf})
             return None
         P = np.asarray(cert.P, dtype=float)

@@ -25,6 +25,7 @@ from .noise_gain import (
     NoiseGain,
     NoiseGainCode,
     decay_scan,
+    decaying_certificate,
     dissipation_bound,
     linear_noise_bound,
 )
@@ -190,10 +191,9 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
         # the process noise enters the error as -G w: a further input of the error model, the
         # dissipation inequality certified again with it, at iss_gain's decay
         noise_model, w_bounds = process_model(design, model, noise, per_row)
-        found_process = process_certificate(design, model, noise, float(alpha), per_row)
+        cert = decaying_certificate(noise_model, float(alpha))
         per_row = np.concatenate([per_row, w_bounds])
-        if found_process is not None:
-            cert = found_process[0]
+        if cert is not None:
             P, alpha, gamma = np.asarray(cert.P, dtype=float), cert.decay, cert.gamma
             found = dissipation_bound(P, float(alpha), float(gamma), per_row, n)
         source = "a dissipation inequality with the process noise as a further input"
@@ -342,16 +342,9 @@ def process_certificate(
     stacked measurements: ``rows`` then bound them with it (``measurement_rows``).  The
     inequality holds for every input at every step, so the w in the rows and the w in the
     state may be the same or not: the bound covers both."""
-    from .lmi import iss_certificate
-
     noise_model, bounds = process_model(design, model, noise, rows)
-    try:
-        cert = iss_certificate(noise_model, alpha=alpha)
-    except (ValueError, np.linalg.LinAlgError):  # the solver's own failures: not certified
-        return None
-    if cert.verdict is not Verdict.HOLDS or cert.P is None or cert.gamma is None:
-        return None
-    return (cert, bounds) if cert.decay else None
+    cert = decaying_certificate(noise_model, alpha)
+    return None if cert is None else (cert, bounds)
 
 
 def noise_search(design: ObserverDesign, noise: MeasurementNoise, seed: int = 0) -> dict[str, Any]:
