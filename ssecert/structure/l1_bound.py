@@ -40,7 +40,7 @@ import itertools
 import math
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
-from typing import Any, cast
+from typing import Any
 
 import numpy as np
 
@@ -184,24 +184,31 @@ def with_lower_bound(system: System, found: L1ErrorBound) -> L1ErrorBound:
         errors = _block_errors(system, tau)
     if not (np.all(np.isfinite(blocks)) and np.all(np.isfinite(errors))):
         return found
-    realizable = found.realizable
-    best, best_kept = 0.0, cast(tuple[int, ...], ())
-    for support in dict.fromkeys(supports):
-        kept = [i for i in range(p) if i not in support]
-        O_K = blocks[kept]
-        _, _, vh = np.linalg.svd(O_K.reshape(-1, system.n))
-        v = vh[-1]
-        with np.errstate(all="ignore"):
-            Ov = np.abs(O_K @ v)  # (|K|, tau)
-            size = np.max(Ov, axis=1) if realizable.per_sample else np.linalg.norm(Ov, axis=1)
-            # the exact O_K v is within ||fl(O_i) - O_i||_F ||v||_2 of it on sensor i's rows
-            size = (size + errors[kept] * np.linalg.norm(v)) * (1 + 4 * 2.0**-53 * (tau + 4))
-            scales = np.where(size > 0, realizable.eta[kept] / size, np.inf)
-            c = float(np.min(scales)) * (1 - 2.0**-40)
-            lower = c * float(np.linalg.norm(v)) * (1 - 2.0**-40)
-        if math.isfinite(lower) and lower > best:
-            best, best_kept = lower, tuple(kept)
-    return replace(found, lower=best, lower_kept=best_kept)
+    eta = found.realizable.eta
+    kept = np.array(
+        [[i for i in range(p) if i not in support] for support in dict.fromkeys(supports)]
+    )  # (sets, p - s): every kept set at once
+    O_K = blocks[kept]  # (sets, p - s, tau, n)
+    v = _weakest(O_K)
+    with np.errstate(all="ignore"):
+        Ov = np.abs(np.einsum("skti,si->skt", O_K, v))
+        size = np.max(Ov, axis=2) if found.realizable.per_sample else np.linalg.norm(Ov, axis=2)
+        # the exact O_K v is within ||fl(O_i) - O_i||_F ||v||_2 of it on sensor i's rows
+        norms = np.linalg.norm(v, axis=1)
+        size = (size + errors[kept] * norms[:, None]) * (1 + 4 * 2.0**-53 * (tau + 4))
+        scales = np.where(size > 0, eta[kept] / size, np.inf)
+        lower = np.min(scales, axis=1) * (1 - 2.0**-40) * norms * (1 - 2.0**-40)
+    lower = np.where(np.isfinite(lower), lower, 0.0)
+    j = int(np.argmax(lower))  # the first of the largest
+    if not lower[j] > 0:
+        return replace(found, lower=0.0, lower_kept=())
+    return replace(found, lower=float(lower[j]), lower_kept=tuple(int(i) for i in kept[j]))
+
+
+def _weakest(O_K: np.ndarray) -> np.ndarray:
+    """The smallest right singular vector of each stacked O_K (sets, |K|, tau, n)."""
+    _, _, vh = np.linalg.svd(O_K.reshape(O_K.shape[0], -1, O_K.shape[-1]))
+    return vh[:, -1, :]
 
 
 def l1_worst_case(system: System, found: L1ErrorBound) -> dict[str, Any] | None:
@@ -213,8 +220,7 @@ def l1_worst_case(system: System, found: L1ErrorBound) -> dict[str, Any] | None:
         return None
     tau, kept = found.horizon, list(found.lower_kept)
     blocks = system.sensor_blocks(tau)
-    _, _, vh = np.linalg.svd(blocks[kept].reshape(-1, system.n))
-    v = vh[-1]
+    v = _weakest(blocks[kept][None])[0]
     lower_c = found.lower / float(np.linalg.norm(v)) / (1 - 2.0**-40)
     data = lower_c * (blocks @ v)  # (p, tau): O (c v)
     attacked = [i for i in range(system.p) if i not in found.lower_kept]
