@@ -370,7 +370,7 @@ def test_analyze_bounds_linear_and_sparse_observers():
     cert = analyze(spec_from_dict({**_spec({"measurement": 1e-3}), "observer": net}))
     check, iss = cert["observer_noise_bound"], cert["iss_gain"]
     assert iss.verdict is Verdict.HOLDS and iss.fields["alpha"] > 0
-    assert check.verdict is Verdict.HOLDS and check.evidence["from"] == "iss_gain"
+    assert check.verdict is Verdict.HOLDS and check.evidence["from"] == "decay scan"
     used = check.evidence
     expected = math.sqrt(
         used["gamma"] ** 2 * 5 * 1e-6 / used["alpha"] * used["lambda_max_P_inverse_ee"]

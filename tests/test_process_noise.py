@@ -401,7 +401,8 @@ def test_zero_process_noise_is_none():
         spec = spec_from_dict({**_spec(noise), "observer": net})
         assert spec.noise.process is None and spec.noise == MeasurementNoise.uniform(1e-3, 5)
         check = analyze(spec)["observer_noise_bound"]
-        assert check.verdict is Verdict.HOLDS and check.evidence["from"] == "iss_gain"
+        assert check.verdict is Verdict.HOLDS
+        assert check.evidence["from"] in ("iss_gain", "decay scan")  # measurement noise alone
 
 
 def test_tiny_and_huge_numbers_stay_bounds():

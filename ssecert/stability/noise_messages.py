@@ -209,6 +209,8 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
         found is None or found.ill_conditioned or scan.found.bound < found.bound
     ):
         found, P, alpha, gamma = scan.found, scan.P, scan.alpha, scan.gamma
+        if noise.process is None:
+            origin = "decay scan"
         source = (
             f"a dissipation inequality V+ - V <= -alpha V + gamma^2 |n|^2 at decay "
             f"{readable(scan.alpha)}"
