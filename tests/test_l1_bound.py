@@ -214,3 +214,16 @@ def test_analyze_reports_the_l1_lower_bound_within_the_measurement_noise():
     data["noise"] = {"measurement": 0.01, "process": 0.02, "input": [[1.0], [0.5]]}
     noisy = analyze(spec_from_dict(data))["l1_error_bound"]
     assert noisy.value > quiet.value and noisy.fields["lower_bound"] == quiet.fields["lower_bound"]
+
+
+def test_a_subnormal_lower_bound_is_not_claimed():
+    """Noise of 5e-324: the window's scale is rounded in the subnormal range, where the
+    relative margins do not hold; the lower bound is 0 rather than a number that may be high."""
+    from ssecert.structure.l1_bound import with_lower_bound
+
+    plant = System(np.eye(1), np.ones((3, 1)))
+    for eta, positive in ((5e-324, False), (1e-300, True)):
+        found = with_lower_bound(
+            plant, l1_error_bound(plant, 1, MeasurementNoise.uniform(eta, 3), horizon=1)
+        )
+        assert found.code is L1BoundCode.CERTIFIED and (found.lower > 0) is positive

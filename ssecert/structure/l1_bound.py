@@ -198,7 +198,8 @@ def with_lower_bound(system: System, found: L1ErrorBound) -> L1ErrorBound:
         size = (size + errors[kept] * norms[:, None]) * (1 + 4 * 2.0**-53 * (tau + 4))
         scales = np.where(size > 0, eta[kept] / size, np.inf)
         lower = np.min(scales, axis=1) * (1 - 2.0**-40) * norms * (1 - 2.0**-40)
-    lower = np.where(np.isfinite(lower), lower, 0.0)
+    # (a subnormal result is rounded absolutely, beyond what the factors take off: none)
+    lower = np.where(np.isfinite(lower) & (lower >= 2.0**-1021), lower, 0.0)
     j = int(np.argmax(lower))  # the first of the largest
     if not lower[j] > 0:
         return replace(found, lower=0.0, lower_kept=())
