@@ -547,12 +547,12 @@ def _cmd_examples(args: argparse.Namespace) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``ssecert`` command; returns the exit status."""
-    from ..budget import ResourceLimitError
-    from ..design.gains import GainError
-    from ..parallel import ChunkError, DaskUnavailable
-    from ..spec import SpecError, one_line
-    from ..structure.device import DeviceUnavailable
-
+    # The error classes are imported by _failure when something fails, so that
+    # nothing numerical is imported before a command needs it.
+    given = sys.argv[1:] if argv is None else list(argv)
+    if given[:1] == ["--version"]:  # argparse's answer, without building every command's
+        sys.stdout.write(f"ssecert {__version__}\n")  # parser (the design kinds import numpy)
+        return 0
     parser = _build_parser()
     args = None
     try:
@@ -580,47 +580,58 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command == "reproduce":
             return cmd_reproduce(args)
         raise UsageError(f"unknown command {args.command!r}")  # pragma: no cover
-    except (UsageError, SpecError, ResourceLimitError) as exc:
+    except KeyboardInterrupt:
+        sys.stderr.write("ssecert: interrupted\n")
+        return 130
+    except Exception as exc:
+        return _failure(exc, args)
+
+
+def _failure(exc: Exception, args: argparse.Namespace | None) -> int:
+    """Write what failed to stderr and return the exit status for it."""
+    from ..budget import ResourceLimitError
+    from ..design.gains import GainError
+    from ..parallel import ChunkError, DaskUnavailable
+    from ..spec import SpecError, one_line
+    from ..structure.device import DeviceUnavailable
+
+    if isinstance(exc, (UsageError, SpecError, ResourceLimitError)):
         sys.stderr.write(f"ssecert: error: {one_line(str(exc))}\n")
         return EXIT_BAD_INPUT
-    except GainError as exc:
+    if isinstance(exc, GainError):
         sys.stderr.write(
             f"ssecert: error: the spec's observer gain cannot be computed: {one_line(str(exc))}\n"
         )
         return EXIT_BAD_INPUT
-    except DaskUnavailable as exc:
+    if isinstance(exc, DaskUnavailable):
         option = "--scheduler" if getattr(args, "scheduler", None) else "--workers"
         sys.stderr.write(f"ssecert: error: {option}: {one_line(str(exc))}\n")
         return EXIT_BAD_INPUT
-    except DeviceUnavailable as exc:
+    if isinstance(exc, DeviceUnavailable):
         device = getattr(args, "device", "cuda")
         sys.stderr.write(f"ssecert: error: --device {device}: {one_line(str(exc))}\n")
         return EXIT_BAD_INPUT
-    except ChunkError as exc:  # a simulation chunk failed twice on the workers
+    if isinstance(exc, ChunkError):  # a simulation chunk failed twice on the workers
         sys.stderr.write(f"ssecert: error: {one_line(str(exc))}\n")
         return EXIT_BAD_INPUT
-    except KeyboardInterrupt:
-        sys.stderr.write("ssecert: interrupted\n")
-        return 130
-    except BrokenPipeError:  # e.g. piping into head: stop quietly
+    if isinstance(exc, BrokenPipeError):  # e.g. piping into head: stop quietly
         try:  # and keep the interpreter from complaining when it flushes stdout at exit
             devnull = os.open(os.devnull, os.O_WRONLY)
             os.dup2(devnull, sys.stdout.fileno())
         except (OSError, ValueError):
             pass
         return EXIT_BROKEN_PIPE
-    except MemoryError as exc:
+    if isinstance(exc, MemoryError):
         detail = f" ({one_line(str(exc))})" if str(exc) else ""
         sys.stderr.write(
             f"ssecert: error: out of memory{detail}; the problem is too large for "
             f"this machine (if the spec is small, please report this as a bug)\n"
         )
         return EXIT_BAD_INPUT
-    except Exception as exc:
-        sys.stderr.write(
-            f"ssecert: internal error: {type(exc).__name__}: {exc}\n"
-            "This is a bug in ssecert; please report it with the command and spec file that "
-            "triggered it. Details:\n"
-        )
-        traceback.print_exc(limit=6, file=sys.stderr)
-        return EXIT_INTERNAL
+    sys.stderr.write(
+        f"ssecert: internal error: {type(exc).__name__}: {exc}\n"
+        "This is a bug in ssecert; please report it with the command and spec file that "
+        "triggered it. Details:\n"
+    )
+    traceback.print_exc(limit=6, file=sys.stderr)
+    return EXIT_INTERNAL

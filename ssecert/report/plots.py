@@ -86,6 +86,8 @@ def simulation_plot(name: str, result: Any, *, gid: str) -> str:
     """The estimation error over time, relative to its initial value (what is left of it,
     meaningful whether the state decays or grows) and relative to the present state, and
     the support error: Monte Carlo mean and 10-90% band."""
+    from ..simulation.metrics import nanquantile
+
     has_support = result.support_error is not None
     panels = []
     if getattr(result, "initial_relative_error", None) is not None:
@@ -102,7 +104,7 @@ def simulation_plot(name: str, result: Any, *, gid: str) -> str:
             warnings.filterwarnings("ignore", "Mean of empty slice", RuntimeWarning)
             warnings.filterwarnings("ignore", "All-NaN slice encountered", RuntimeWarning)
             mean = np.nanmean(data, axis=1)
-            lo, hi = np.nanquantile(data, 0.1, axis=1), np.nanquantile(data, 0.9, axis=1)
+            lo, hi = nanquantile(data, 0.1, axis=1), nanquantile(data, 0.9, axis=1)
         if log:
             floor = 1e-17
             mean, lo, hi = (np.maximum(v, floor) for v in (mean, lo, hi))

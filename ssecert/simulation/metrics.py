@@ -38,6 +38,7 @@ __all__ = [
     "support_error",
     "detection_delay",
     "settling_step",
+    "nanquantile",
     "summarize",
     "SUPPORT_RTOL",
 ]
@@ -164,6 +165,43 @@ def summarize(
     return out
 
 
+def nanquantile(
+    values: np.ndarray, q: float, axis: int | None = None, method: str = "linear"
+) -> Any:
+    """``numpy.nanquantile(values, q, axis=axis, method=method)``, the same numbers, without
+    its Python loop over the slices that hold a NaN (numpy quantiles each such slice on its
+    own, about 0.1 ms apiece: seconds for the runs of a report's simulations).
+
+    The slices with the same number m of values are quantiled together, on their m
+    smallest (NumPy sorts NaN last): a quantile depends only on the values, so each is the
+    one numpy.nanquantile gives. All-NaN slices give NaN, without numpy's warning.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> data = np.array([[1.0, np.nan, 3.0], [np.nan, np.nan, np.nan], [4.0, 5.0, 6.0]])
+    >>> nanquantile(data, 0.5, axis=1)
+    array([ 2., nan,  5.])
+    """
+    values = np.asarray(values, dtype=float)
+    if axis is None or values.ndim <= 1:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # an all-NaN slice gives NaN
+            return np.nanquantile(values, q, axis=axis, method=method)
+    moved = np.moveaxis(values, axis, -1)
+    flat = moved.reshape(-1, moved.shape[-1])
+    missing = np.isnan(flat)
+    if not missing.any():
+        return np.quantile(values, q, axis=axis, method=method)
+    counts = flat.shape[1] - np.count_nonzero(missing, axis=1)
+    ordered = np.sort(flat, axis=1)
+    out = np.full(flat.shape[0], np.nan)
+    for m in np.unique(counts[counts > 0]):
+        rows = counts == m
+        out[rows] = np.quantile(ordered[rows, :m], q, axis=1, method=method)
+    return out.reshape(moved.shape[:-1])
+
+
 def quantile(values: np.ndarray, q: float, axis: int | None = None) -> Any:
     """``numpy.nanquantile``, but inf where the quantile involves diverged (inf) runs.
 
@@ -174,15 +212,15 @@ def quantile(values: np.ndarray, q: float, axis: int | None = None) -> Any:
     if not diverged.any():
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN slices give NaN
-            plain = np.nanquantile(values, q, axis=axis)
+            plain = nanquantile(values, q, axis=axis)
         return plain if np.ndim(plain) else float(plain)
     big = np.finfo(float).max
     finite = np.where(diverged, big, values)
     with warnings.catch_warnings(), np.errstate(over="ignore", invalid="ignore"):
         warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN slices give NaN, as intended
-        linear = np.nanquantile(finite, q, axis=axis)
-        low = np.nanquantile(finite, q, axis=axis, method="lower")
-        high = np.nanquantile(finite, q, axis=axis, method="higher")
+        linear = nanquantile(finite, q, axis=axis)
+        low = nanquantile(finite, q, axis=axis, method="lower")
+        high = nanquantile(finite, q, axis=axis, method="higher")
     unbounded = (low >= big) | ((high >= big) & (linear != low))
     result = np.where(unbounded, np.inf, linear)
     return result if np.ndim(result) else float(result)
