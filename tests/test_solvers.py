@@ -95,6 +95,24 @@ def test_the_piecewise_lmi_layer_goes_to_the_chosen_solver():
     assert found == {"CLARABEL": "Solved", "SCS": "optimal"}
 
 
+@pytest.mark.parametrize("name", ["CLARABEL", pytest.param("SCS", marks=needs_scs)])
+def test_the_lmi_layer_maximises_a_scalar(name):
+    # t I <= X <= diag(2, 3, 5): the largest t is 2, through Clarabel and through cvxpy
+    import numpy as np
+
+    from ssecert.stability._conic import LMIProblem
+
+    with using_solver(name):
+        lp = LMIProblem()
+        X, t = lp.block(3), lp.scalar()
+        lp.lmi(np.zeros((3, 3)), [(X, np.eye(3), 1.0)], [(t, np.eye(3), -1.0)])
+        lp.lmi(np.diag([2.0, 3.0, 5.0]), [(X, np.eye(3), -1.0)])
+        lp.maximize(t)
+        x, info = lp.solve()
+    assert x is not None and info["solver"] == name, info
+    assert lp.value(x, t) == pytest.approx(2.0, abs=1e-4)
+
+
 @needs_scs
 def test_the_piecewise_region_is_searched_again_for_another_solver(monkeypatch):
     from ssecert.stability import piecewise

@@ -26,7 +26,7 @@ Definitions (docs/architecture.md, "Simulation metrics"):
 from __future__ import annotations
 
 import warnings
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -166,7 +166,10 @@ def summarize(
 
 
 def nanquantile(
-    values: np.ndarray, q: float, axis: int | None = None, method: str = "linear"
+    values: np.ndarray,
+    q: float,
+    axis: int | None = None,
+    method: Literal["linear", "lower", "higher"] = "linear",
 ) -> Any:
     """``numpy.nanquantile(values, q, axis=axis, method=method)``, the same numbers, without
     its Python loop over the slices that hold a NaN (numpy quantiles each such slice on its

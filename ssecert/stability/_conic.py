@@ -37,9 +37,11 @@ def _triu(d: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 class LMIProblem:
-    """Feasibility of LMIs ``sum_k F_k' X_k F_k + sum_j s_j M_j + C >= delta I``."""
+    """Feasibility of LMIs ``sum_k F_k' X_k F_k + sum_j s_j M_j + C >= delta I``, or the
+    largest scalar variable among their solutions (``maximize``)."""
 
     def __init__(self) -> None:
+        self._maximized: int | None = None  # the handle of the scalar to maximise
         # (offset, size, nonneg, rows, columns of the entries that are variables)
         self._blocks: list[tuple[int, int, bool, np.ndarray, np.ndarray]] = []
         self._size = 0
@@ -84,6 +86,17 @@ class LMIProblem:
     def value(self, x: np.ndarray, handle: int) -> float:
         return float(x[self._blocks[handle][0]])
 
+    def maximize(self, handle: int) -> None:
+        """Maximise the scalar ``handle`` (a ``scalar()``) instead of finding any solution."""
+        self._maximized = handle
+
+    def _objective(self) -> np.ndarray:
+        """q of the objective q' x that the solver minimises."""
+        q = np.zeros(self._size)
+        if self._maximized is not None:
+            q[self._blocks[self._maximized][0]] = -1.0
+        return q
+
     def solve(
         self, *, time_limit: float = 60.0, max_iter: int = 50
     ) -> tuple[np.ndarray | None, dict[str, Any]]:
@@ -95,10 +108,11 @@ class LMIProblem:
         A, b, nonneg, sizes = self._standard_form()
         name = solver_name()
         iterations: int | None
+        q = self._objective()
         if name == "CLARABEL":
-            x, status, iterations = _clarabel(A, b, nonneg, sizes, time_limit, max_iter)
+            x, status, iterations = _clarabel(q, A, b, nonneg, sizes, time_limit, max_iter)
         else:
-            x, status, iterations = _through_cvxpy(A, b, nonneg, sizes, time_limit, max_iter)
+            x, status, iterations = _through_cvxpy(q, A, b, nonneg, sizes, time_limit, max_iter)
         info = {
             "solver": name,
             "status": status,
@@ -162,7 +176,13 @@ class LMIProblem:
 
 
 def _clarabel(
-    A: Any, b: np.ndarray, nonneg: int, sizes: list[int], time_limit: float, max_iter: int
+    q: np.ndarray,
+    A: Any,
+    b: np.ndarray,
+    nonneg: int,
+    sizes: list[int],
+    time_limit: float,
+    max_iter: int,
 ) -> tuple[np.ndarray | None, str, int]:
     """Clarabel's x (None unless solved or almost), its status and iterations."""
     import clarabel
@@ -175,9 +195,7 @@ def _clarabel(
     settings.time_limit = float(time_limit)
     settings.max_iter = int(max_iter)
     size = A.shape[1]
-    solver = clarabel.DefaultSolver(
-        sparse.csc_matrix((size, size)), np.zeros(size), A, b, cones, settings
-    )
+    solver = clarabel.DefaultSolver(sparse.csc_matrix((size, size)), q, A, b, cones, settings)
     solution = solver.solve()
     status = str(solution.status)
     if solution.status not in (clarabel.SolverStatus.Solved, clarabel.SolverStatus.AlmostSolved):
@@ -203,7 +221,13 @@ def _unpack(d: int) -> Any:
 
 
 def _through_cvxpy(
-    A: Any, b: np.ndarray, nonneg: int, sizes: list[int], time_limit: float, max_iter: int
+    q: np.ndarray,
+    A: Any,
+    b: np.ndarray,
+    nonneg: int,
+    sizes: list[int],
+    time_limit: float,
+    max_iter: int,
 ) -> tuple[np.ndarray | None, str, int | None]:
     """The same problem as cvxpy constraints, solved by ``ssecert.solvers.solve_conic``
     (Clarabel's options translated for the chosen solver): x (None unless the status is
@@ -225,7 +249,7 @@ def _through_cvxpy(
         S = cp.reshape(vec, (d, d), order="F")
         constraints.append(0.5 * (S + S.T) >> 0)
         row += k
-    problem = cp.Problem(cp.Minimize(0), constraints)
+    problem = cp.Problem(cp.Minimize(q @ x if np.any(q) else 0), constraints)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)  # verified by the caller, not trusted

@@ -30,7 +30,6 @@ from ..budget import Budget, stage
 from ..numerics.rational import fractions, is_positive_definite, product, solve
 from ..observers.lure import LureModel
 from ..results import Verdict
-from ..solvers import solve_conic
 from .lyapunov import LyapunovMethod, lyapunov_certificate, verified_decrease
 from .outcomes import Region, RegionCode
 from .piecewise import piecewise_region
@@ -143,16 +142,18 @@ def _dead_zone_region(model: LureModel, seed: int, widen: bool = True) -> Region
         return Region.none(code, lyapunov=lyap.reason)
     found = _region(model, 0.5 * (lyap.P + lyap.P.T), lyap.margin, lyap.error_bound, seed)
     found = _with(found, P_from="discrete Lyapunov equation with Q = I")
-    wider = _lmi_matrix(model) if widen and model.N <= LMI_LIMIT and found.radius > 0 else None
-    verified = (
-        verified_decrease(model.A, wider, rounding=model.rounding) if wider is not None else None
-    )
-    if wider is not None and verified is not None:
+    candidate = _lmi_matrix(model) if widen and model.N <= LMI_LIMIT and found.radius > 0 else None
+    if candidate is None:
+        return found
+    wider, solver = candidate
+    verified = verified_decrease(model.A, wider, rounding=model.rounding)
+    if verified is not None:
         other = _region(model, wider, verified[0], verified[1], seed)
         if other.radius > found.radius:
+            by = "Clarabel" if solver == "CLARABEL" else f"{solver} through cvxpy"
             return _with(
                 other,
-                P_from="LMI maximising the radius (cvxpy, Clarabel), verified in numpy",
+                P_from=f"LMI maximising the radius ({by}), verified in numpy",
                 radius_with_Q_identity=found.radius,
             )
     return found
@@ -204,43 +205,43 @@ def _region(
     return Region(radius, RegionCode.CERTIFIED, evidence=evidence)
 
 
-def _lmi_matrix(model: LureModel) -> np.ndarray | None:
+def _lmi_matrix(model: LureModel) -> tuple[np.ndarray, str] | None:
     """A candidate P with a larger certified radius: Y = P^-1 with A Y A' - Y <= -eps I, the dead
     zone's rows Cw_i Y Cw_i' <= threshold^2 and Y >= t E E' (E the estimation-error coordinates),
-    t maximised; None when the solver fails.  Nothing here is trusted: the caller verifies."""
-    try:
-        import cvxpy as cp
-    except ImportError:  # pragma: no cover - a dependency
-        return None
+    t maximised; P and the solver's name, or None when the solver fails.  Nothing here is
+    trusted: the caller verifies."""
+    from ._conic import LMIProblem
+
     N, n_e = model.N, model.n_e
     E = np.zeros((N, n_e))
     E[:n_e] = np.eye(n_e)
-    Y = cp.Variable((N, N), symmetric=True)
-    t = cp.Variable()
     scale = model.threshold**2
-    cons = [
-        model.A @ Y @ model.A.T - Y << -1e-6 * scale * np.eye(N),
-        Y - t * (E @ E.T) >> 0,
-        Y >> 1e-9 * scale * np.eye(N),
-    ]
-    cons += [model.Cw[i] @ Y @ model.Cw[i] <= scale for i in range(model.m)]
-    problem = cp.Problem(cp.Maximize(t), cons)
+    lp = LMIProblem()
+    Y, t = lp.block(N), lp.scalar()
+    eye = np.eye(N)
+    zero = np.zeros((N, N))
+    lp.lmi(zero, [(Y, eye, 1.0), (Y, model.A.T, -1.0)], delta=1e-6 * scale)
+    lp.lmi(zero, [(Y, eye, 1.0)], [(t, E @ E.T, -1.0)])
+    lp.lmi(zero, [(Y, eye, 1.0)], delta=1e-9 * scale)
+    for row in model.Cw:
+        lp.lmi(np.array([[scale]]), [(Y, row.reshape(N, 1), -1.0)])
+    lp.maximize(t)
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
             # an inaccurate solution is only a candidate like any other: it is verified
             warnings.simplefilter("ignore")
-            solve_conic(problem)
-    except (cp.error.SolverError, ArithmeticError, ValueError):
+            x, info = lp.solve()
+    except (ArithmeticError, ValueError):
         return None
-    if Y.value is None or not np.all(np.isfinite(Y.value)):
+    if x is None:
         return None
-    Yv = 0.5 * (Y.value + Y.value.T)
+    Yv = lp.matrix(x, Y)
     try:
         np.linalg.cholesky(Yv)
     except np.linalg.LinAlgError:
         return None
     P = np.linalg.inv(Yv)
-    return 0.5 * (P + P.T)
+    return 0.5 * (P + P.T), info["solver"]
 
 
 def _exact_recheck(model: LureModel, P: np.ndarray, level: float, radius: float) -> dict[str, bool]:
