@@ -136,6 +136,14 @@ BENCHMARKS: dict[str, tuple[str, str]] = {
         "gain required; and the whole `design_observer` search (elastic net, l2 gain) within "
         "its 60 s budget: candidates tried, the first certified, the certified gamma.",
     ),
+    "startup": (
+        "bench_startup.py",
+        "Fixed costs against the goals set for them (the reference column is the goal): "
+        "`import ssecert` and `ssecert --version` (wall-clock, goal 0.5 s), `ssecert analyze "
+        "ugv` on the 2-state packaged example (CPU time, goal 1 s) and `ssecert certify` on "
+        "the packaged example (the README's first command, no goal), each the median over "
+        "fresh processes after a warm-up, with the slowest steps named.",
+    ),
     "computed_once": (
         "bench_computed_once.py",
         "What the shared analysis context saves in one `certify` run of the packaged examples "
@@ -163,6 +171,7 @@ ORDER = (
     "exact observability vs python-flint",
     "cost model",
     "cost model projection",
+    "fixed costs vs goal",
     "shared analysis context",
     "design synthesis LMI",
     "design search",
