@@ -257,7 +257,14 @@ def certify(
         )
         noise_check = cert.get("observer_noise_bound")
         if noise_check is not None and noise_check.verdict is Verdict.HOLDS and design is not None:
-            simulations = _beside_noise_bound(spec, design, noise_check, simulations)
+            radius = noise_check.fields.get("region_radius")
+            if radius is None:
+                simulations = _beside_noise_bound(spec, design, noise_check, simulations)
+            else:  # a bound from near zero error: not for the scenarios' initial errors
+                notes.append(
+                    "observer_noise_bound: holds only from initial errors within "
+                    f"{radius:.4g}, so the simulations are not compared with it"
+                )
     elif simulate and spec.observer is None:
         notes.append("no simulations: the spec has no [observer] section")
     elif not simulate:

@@ -385,9 +385,14 @@ def test_analyze_bounds_linear_and_sparse_observers():
     assert check.fields["energy_gain"] == iss.fields["gamma"]
     search = check.evidence["noise_search"]
     assert 0 < search["largest_error"] <= check.value and search["sequences"] >= 2
-    # a D-SSO with shrink 1 has no decay to build on: undecided, with the reason
+    # a D-SSO with shrink 1 has no decay to build on: no global bound, a local one from its
+    # dead zone (its region stated), none where the noise leaves the dead zone
     dsso = {"kind": "dsso", "step": 0.5, "threshold": 0.1, "gain": "pinv"}
     cert = analyze(spec_from_dict({**_spec({"measurement": 1e-3}), "observer": dsso}))
+    local = cert["observer_noise_bound"]
+    assert local.verdict is Verdict.HOLDS and local.evidence["from"] == "dead zone"
+    assert local.fields["region_radius"] > 0 and "global_reason" in local.evidence
+    cert = analyze(spec_from_dict({**_spec({"measurement": 1.0}), "observer": dsso}))
     assert cert["observer_noise_bound"].verdict is Verdict.INCONCLUSIVE
 
 
@@ -689,3 +694,62 @@ def test_the_l0_bound_takes_sensors_in_any_units(exponent):
     assert scaled.sigma == pytest.approx(math.ldexp(plain.sigma, exponent), rel=1e-12)
     assert scaled.facts["sigma_rechecked_exactly"] is True
     assert bound_rechecks(scaled)
+
+
+def _vertices(bounds):
+    """Every sign pattern times the bounds (the box's corners)."""
+    import itertools
+
+    return np.array(
+        [np.array(s) * bounds for s in itertools.product((-1.0, 1.0), repeat=bounds.size)]
+    )
+
+
+def test_an_observer_certified_near_zero_gets_a_local_noise_bound():
+    # the UGV's SSO (shrink 1) has no global certificate, but near zero error it estimates no
+    # attack and is linear: the dead zone's Lyapunov function bounds the error under noise
+    # from the initial errors it names, and no simulated noise from there goes beyond it
+    from ssecert.examples import load_example
+    from ssecert.observers import build_observer
+
+    spec = load_example("ugv")
+    cert = analyze(spec, noise=1e-2)
+    check = cert["observer_noise_bound"]
+    assert cert["iss_gain"].verdict is not Verdict.HOLDS
+    assert check.verdict is Verdict.HOLDS and check.evidence["from"] == "dead zone"
+    bound, radius = check.value, check.fields["region_radius"]
+    assert 0 < check.evidence["noise_search"]["largest_error"] <= bound and radius > 0
+    # the printed numbers re-derived: rho from P, the reach over the box's corners, the
+    # dead zone's room at sqrt(V) = outer, the bound and the region
+    e = check.evidence
+    P = np.asarray(e["P"])
+    design = build_observer(spec.system, spec.observer)
+    model = design.observer_kind.lure_model(design)
+    w, V = np.linalg.eigh(P)
+    root, inv_root = V @ np.diag(np.sqrt(w)) @ V.T, V @ np.diag(w**-0.5) @ V.T
+    assert np.linalg.norm(root @ model.A @ inv_root, 2) <= e["rho"]
+    eta = np.full(spec.system.p, 1e-2)
+    corners = _vertices(eta)
+    assert max(np.linalg.norm(root @ model.E @ a) for a in corners) <= e["noise_reach"]
+    assert max(np.max(np.abs(model.Dw @ a)) for a in corners) <= e["noise_into_dead_zone"]
+    channel = np.sqrt(np.einsum("ij,jk,ik->i", model.Cw, np.linalg.inv(P), model.Cw))
+    assert np.max(channel) * e["outer_level"] + e["noise_into_dead_zone"] <= e["threshold"]
+    assert e["noise_reach"] / (1 - e["rho"]) <= e["inner_level"] < e["outer_level"]
+    assert bound == pytest.approx(e["inner_level"] * math.sqrt(e["lambda_max_P_inverse_ee"]))
+    assert radius == pytest.approx(e["outer_level"] / math.sqrt(e["lambda_max_P_ee"]))
+    # simulated: initial errors on the region's sphere (attack estimate 0) under random sign
+    # and uniform noises, through the observer's error model: within the bound at the end
+    rng = np.random.default_rng(3)
+    runs, steps = 64, 120
+    e0 = rng.standard_normal((runs, model.n_e))
+    e0 *= radius / np.linalg.norm(e0, axis=1, keepdims=True)
+    xi0 = np.concatenate([e0, np.zeros((runs, model.N - model.n_e))], axis=1)
+    signs = rng.choice([-1.0, 1.0], (steps, runs // 2, eta.size))
+    uniform = rng.uniform(-1.0, 1.0, (steps, runs - runs // 2, eta.size))
+    noise = np.concatenate([signs, uniform], axis=1) * eta
+    path = model.simulate(xi0, steps, attack=noise) @ model.Ce.T
+    assert np.max(np.linalg.norm(path[-20:], axis=-1)) <= bound
+    # noise the dead zone cannot absorb: no bound, with the local reason
+    loud = analyze(spec, noise=0.05)["observer_noise_bound"]
+    assert loud.verdict is Verdict.INCONCLUSIVE and loud.evidence["from"] == "dead zone"
+    assert loud.evidence["problem"] and loud.fields["ultimate_bound"] == math.inf

@@ -533,6 +533,13 @@ def _noise_context(
         rows.append(
             ("observer: certified ultimate bound of ||x_hat - x||", readable(observer.value))
         )
+        if observer.fields.get("region_radius") is not None:
+            rows.append(
+                (
+                    "observer: the bound holds from the initial errors within (dead zone)",
+                    readable(observer.fields["region_radius"]),
+                )
+            )
         if observer.fields.get("lower_bound"):
             rows.append(
                 ("some noise drives a component to", readable(observer.fields["lower_bound"]))

@@ -45,6 +45,8 @@ __all__ = [
     "NoiseGainCode",
     "dissipation_bound",
     "linear_noise_bound",
+    "LocalBound",
+    "local_noise_bound",
 ]
 
 MAX_TERMS = 20_000
@@ -438,3 +440,117 @@ def decay_scan(
                 if found is not None and found.found.bound < best.found.bound:
                     best = found
     return None if best is None else best._replace(tried=tried)
+
+
+class LocalBound(NamedTuple):
+    """An ultimate error bound under noise that holds in the dead zone's invariant set
+    (``local_noise_bound``): from every initial error within ``radius`` (the attack estimate
+    0), the error eventually stays within ``bound``."""
+
+    bound: float  # inf when none is certified
+    radius: float  # ||e(0)|| within which it holds (0 when none)
+    rho: float  # sqrt(V) contracts by at most this per step without noise
+    reach: float  # one sample of noise moves sqrt(V) by at most this
+    inner: float  # r_min = reach / (1 - rho): sqrt(V)'s ultimate level
+    outer: float  # r_max: sqrt(V) up to which the dead zone holds with the noise
+    into_dead_zone: float  # the largest reach of the noise into a channel's input
+    top: float  # lambda_max((P^-1)_ee), taken up
+    top_ee: float  # lambda_max(P_ee), taken up
+    condition: float  # of P
+    problem: str  # why none is certified ("" when one is)
+
+
+def local_noise_bound(model: Any, P: np.ndarray, per_row: np.ndarray, n: int) -> LocalBound:
+    """The ultimate error bound under noise of an observer certified only near zero error, in
+    the dead zone of its nonlinearity, where it is linear: with V = xi' P xi decreasing along
+    xi+ = A xi (verified as the region's Lyapunov function is, ``verified_decrease``) and the
+    noise a entering as xi+ = A xi + B phi(w) + E a, w = Cw xi + Dw a (``model``), each entry
+    of a within ``per_row``.
+
+    In the set sqrt(V) <= r every channel's input satisfies |w_i| <= r sqrt(Cw_i P^-1 Cw_i') +
+    sum_j |Dw_ij| per_row_j; while that is at most the threshold, phi(w) = 0 and sqrt(V(xi+))
+    <= rho sqrt(V(xi)) + max ||E a||_P (rho^2 <= 1 - lambda_min(P - A' P A) / lambda_max(P)).
+    So with r_min = max ||E a||_P / (1 - rho) below the largest such r, r_max, the set sqrt(V)
+    <= r_max is invariant, sqrt(V) falls to r_min, and the error eventually satisfies |e| <=
+    r_min sqrt(lambda_max((P^-1)_ee)), from every initial error with e(0)' P_ee e(0) <=
+    r_max^2, the attack estimate 0.  The model's rounding (``model.rounding``, the floats of
+    [A B E; Cw Dw] against the spec's data) is taken into each term, and every product up by
+    its rounding; P's inverse to a relative 1e-8 of a P with condition number up to 1e8."""
+    from .lyapunov import verified_decrease
+
+    def none(problem: str, **known: float) -> LocalBound:
+        nan = math.nan
+        numbers = {k: known.get(k, nan) for k in LocalBound._fields[2:-1]}
+        return LocalBound(math.inf, 0.0, **numbers, problem=problem)
+
+    P = 0.5 * (np.asarray(P, dtype=float) + np.asarray(P, dtype=float).T)
+    N = P.shape[0]
+    eps = float(model.rounding)
+    threshold = float(model.threshold)
+    if model.m == 0 or not threshold > 0:
+        return none("the observer has no dead zone")
+    verified = verified_decrease(model.A, P, rounding=eps)
+    if verified is None:
+        return none("V = xi' P xi is not verified to decrease in the dead zone")
+    cond = float(np.linalg.cond(P))
+    if not math.isfinite(cond) or cond > 1e8:
+        return none(
+            f"P is too ill-conditioned (condition number {cond:.3g}) to invert", condition=cond
+        )
+    dec_min, error = verified
+    eigs = np.linalg.eigvalsh(P)
+    normP, top_P = float(np.linalg.norm(P, 2)), float(eigs[-1]) * (1 + 64 * N * 2.0**-53)
+    low_P = float(eigs[0]) * (1 - 1e-8 * cond)
+    rho2 = 1.0 - (dec_min - error) * normP / top_P * (1 - gamma(4))
+    rho = math.sqrt(max(rho2, 0.0)) * (1 + gamma(4))
+    if not rho < 1.0:
+        return none("V's decrease leaves no contraction", condition=cond)
+    inverse = np.linalg.inv(P)
+    inverse = 0.5 * (inverse + inverse.T)
+    slack = 1 + 1e-8 * max(cond, 1.0)
+    bounds = np.asarray(per_row, dtype=float)
+    E, Dw, Cw = np.asarray(model.E, float), np.asarray(model.Dw, float), np.asarray(model.Cw, float)
+    with np.errstate(over="ignore", invalid="ignore"):
+        noise_2 = float(rows_norm_up(bounds[None, :])[0]) if bounds.size else 0.0
+        # max ||E a||_P over the box: each column's P-norm times its bound, summed, and
+        # sqrt(lambda_max(E' P E)) ||a||_2; the smaller, with E's rounding (||dE|| ||a||_2);
+        # each quadratic form up by its rounding (gamma(2 N) |x|' |P| |x|)
+        absP = np.abs(P)
+        forms = np.einsum("ij,jk,ki->i", E.T, P, E) + gamma(2 * N + 2) * np.einsum(
+            "ij,jk,ki->i", np.abs(E).T, absP, np.abs(E)
+        )
+        columns = np.sqrt(np.maximum(forms, 0.0)) * (1 + gamma(2))
+        by_columns = float(_up(np.sum(columns * bounds), bounds.size))
+        gram = E.T @ P @ E
+        gram_error = gamma(2 * N + 2) * float(np.linalg.norm(np.abs(E).T @ absP @ np.abs(E), 2))
+        top_gram = float(np.linalg.eigvalsh(0.5 * (gram + gram.T))[-1]) if gram.size else 0.0
+        top_gram += gram_error + 64 * max(gram.shape[0], 1) * 2.0**-53 * abs(top_gram)
+        by_norm = math.sqrt(max(top_gram, 0.0)) * noise_2 * (1 + gamma(4))
+        reach = (min(by_columns, by_norm) + math.sqrt(top_P) * eps * noise_2) * (1 + gamma(4))
+        # the noise's reach into each channel's input, and the state's through P^-1 (its
+        # rounding in slack), Cw's rounding eps ||xi|| with ||xi|| <= sqrt(V / lambda_min(P))
+        into = _up(np.abs(Dw) @ bounds, bounds.size) + eps * noise_2
+        spread = (
+            np.einsum("ij,jk,ik->i", Cw, inverse, Cw) * slack
+            + gamma(2 * N + 2) * np.einsum("ij,jk,ik->i", np.abs(Cw), np.abs(inverse), np.abs(Cw))
+        ) * slack
+        per_state = np.sqrt(np.maximum(spread, 0.0)) * (1 + gamma(2)) + eps / math.sqrt(low_P)
+    if not (math.isfinite(reach) and np.all(np.isfinite(into)) and np.all(np.isfinite(per_state))):
+        return none("the noise's reach leaves the floating-point range", condition=cond, rho=rho)
+    room = threshold - np.max(into) * (1 + gamma(2)) if into.size else threshold
+    known = {"rho": rho, "reach": reach, "into_dead_zone": float(np.max(into, initial=0.0)),
+             "condition": cond}  # fmt: skip
+    if not room > 0:
+        return none("the noise alone can leave the dead zone", **known)
+    outer = float(np.min(room / np.where(per_state > 0, per_state, np.inf))) * (1 - gamma(4))
+    inner = reach / (1.0 - rho) * (1 + gamma(4))
+    known.update(outer=outer, inner=inner)
+    if not inner < outer:
+        return none("the noise drives V beyond the dead zone's invariant set", **known)
+    block = inverse[:n, :n]
+    top = float(np.max(np.linalg.eigvalsh(0.5 * (block + block.T)))) * slack
+    top_ee = float(np.max(np.linalg.eigvalsh(P[:n, :n]))) * (1 + 64 * n * 2.0**-53)
+    bound = inner * math.sqrt(top) * (1 + gamma(4))
+    radius = outer / math.sqrt(top_ee) * (1 - gamma(4))
+    return LocalBound(bound, radius, rho, reach, inner, outer, known["into_dead_zone"], top,
+                      top_ee, cond, "")  # fmt: skip

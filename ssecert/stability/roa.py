@@ -34,7 +34,7 @@ from .lyapunov import LyapunovMethod, lyapunov_certificate, verified_decrease
 from .outcomes import Region, RegionCode
 from .piecewise import piecewise_region
 
-__all__ = ["region_of_attraction"]
+__all__ = ["dead_zone_region", "region_of_attraction"]
 
 SAFETY = 1.0 - 1e-9  # the level used, a hair inside the dead zone's largest invariant set
 SAMPLES = 64  # initial errors on the sphere of the radius, simulated
@@ -113,6 +113,13 @@ def _region_in_units(model: LureModel, seed: int, piecewise: bool, widen: bool) 
     if wider.radius > found.radius:
         return replace(wider, evidence={**wider.evidence, "dead_zone_radius": found.radius})
     return replace(found, evidence={**found.evidence, "piecewise": wider})
+
+
+def dead_zone_region(model: LureModel, seed: int = 0) -> Region:
+    """The region the dead zone's Lyapunov function certifies in the model's own units (its
+    ``P`` and ``level`` in the evidence), the radius 0 with the reason's code when none;
+    ``region_of_attraction`` without the piecewise search and the balancing."""
+    return _dead_zone_region(model, seed)
 
 
 def _dead_zone_region(model: LureModel, seed: int, widen: bool = True) -> Region:
