@@ -709,6 +709,8 @@ def test_an_observer_certified_near_zero_gets_a_local_noise_bound():
     # the UGV's SSO (shrink 1) has no global certificate, but near zero error it estimates no
     # attack and is linear: the dead zone's Lyapunov function bounds the error under noise
     # from the initial errors it names, and no simulated noise from there goes beyond it
+    from dataclasses import replace
+
     from ssecert.examples import load_example
     from ssecert.observers import build_observer
 
@@ -753,3 +755,7 @@ def test_an_observer_certified_near_zero_gets_a_local_noise_bound():
     loud = analyze(spec, noise=0.05)["observer_noise_bound"]
     assert loud.verdict is Verdict.INCONCLUSIVE and loud.evidence["from"] == "dead zone"
     assert loud.evidence["problem"] and loud.fields["ultimate_bound"] == math.inf
+    # an SSO with several inner steps a sample has no error model: the global reason stands
+    steps = {"kind": "sso", "step": 0.5, "threshold": 0.1, "inner_steps": 3}
+    stepped = analyze(replace(spec, observer=steps), noise=1e-2)["observer_noise_bound"]
+    assert stepped.verdict is Verdict.INCONCLUSIVE and stepped.evidence["from"] == "iss_gain"
