@@ -33,6 +33,7 @@ import numpy as np
 
 from ..noise import MeasurementNoise
 from ..tolerances import gamma, rows_norm_up, times_up
+from ..tolerances import gamma as gamma_rounding
 from ..tolerances import interval_product as _product
 from ..tolerances import up_by as _up
 
@@ -47,6 +48,8 @@ __all__ = [
     "linear_noise_bound",
     "LocalBound",
     "local_noise_bound",
+    "SplitBound",
+    "split_bound",
 ]
 
 MAX_TERMS = 20_000
@@ -554,3 +557,72 @@ def local_noise_bound(model: Any, P: np.ndarray, per_row: np.ndarray, n: int) ->
     radius = outer / math.sqrt(top_ee) * (1 - gamma(4))
     return LocalBound(bound, radius, rho, reach, inner, outer, known["into_dead_zone"], top,
                       top_ee, cond, "")  # fmt: skip
+
+
+class SplitBound(NamedTuple):
+    """The ultimate error bound with the process noise split off a measurement-noise
+    inequality (``split_bound``)."""
+
+    bound: float  # inf when none is certified
+    noise_norm: float  # N, a bound of |n(k)| on every sample
+    process_reach: float  # W >= max ||G w||_{P_ee} over the process noise's box
+    split: float  # the epsilon of the split used
+    top: float  # lambda_max((P^-1)_ee), taken up
+    condition: float  # of P
+
+
+def split_bound(
+    P: np.ndarray,
+    alpha: float,
+    gamma: float,
+    per_row: np.ndarray,
+    G: np.ndarray,
+    omega: np.ndarray,
+    n: int,
+    *,
+    points: int = 400,
+) -> SplitBound:
+    """limsup |e| under measurement noise within ``per_row`` and process noise w within
+    ``omega`` (x+ = A x + G w) from a verified V+ - V <= -alpha V + gamma^2 |n|^2 without
+    process noise (V = xi' P xi, e the first ``n`` entries of xi).
+
+    The process noise adds d = (-G w, 0) to the next error state, outside the nonlinearity's
+    argument, so for every eps > 0, V(xi+ + d) <= (1 + eps) V(xi+) + (1 + 1/eps) ||d||_P^2
+    <= (1 + eps)(1 - alpha) V + (1 + eps) gamma^2 N^2 + (1 + 1/eps) W^2, and with (1 + eps)(1 -
+    alpha) < 1, limsup V <= ((1 + eps) gamma^2 N^2 + (1 + 1/eps) W^2) / (1 - (1 + eps)(1 -
+    alpha)); |e|^2 <= V lambda_max((P^-1)_ee).  Every eps gives a bound: the smallest over
+    ``points`` of them (log-spaced in (0, alpha / (1 - alpha))) is taken, each up by its
+    rounding.  W = sum_j omega_j ||G_j||_{P_ee}, the quadratic forms up by their rounding.
+    It needs no further LMI, so it holds wherever the measurement-noise inequality does,
+    whatever the process noise's size (often looser than an inequality with w as an input)."""
+    base = dissipation_bound(P, alpha, gamma, per_row, n)
+    nan = math.nan
+    if base.ill_conditioned or not math.isfinite(base.bound) or not alpha > 0:
+        return SplitBound(math.inf, base.noise_norm, nan, nan, base.top, base.condition)
+    Pee = 0.5 * (P[:n, :n] + P[:n, :n].T)
+    G = np.asarray(G, dtype=float)
+    with np.errstate(over="ignore", invalid="ignore"):
+        forms = np.einsum("ij,jk,ki->i", G.T, Pee, G) + gamma_rounding(2 * n + 2) * np.einsum(
+            "ij,jk,ki->i", np.abs(G).T, np.abs(Pee), np.abs(G)
+        )
+        W = float(_up(np.sum(np.sqrt(np.maximum(forms, 0.0)) * (1 + gamma_rounding(2)) * omega),
+                      omega.size))  # fmt: skip
+    a = (gamma * base.noise_norm) ** 2 * (1 + gamma_rounding(4))
+    b = W * W * (1 + gamma_rounding(2))
+    if not (math.isfinite(a) and math.isfinite(b)):
+        return SplitBound(math.inf, base.noise_norm, W, nan, base.top, base.condition)
+    beta = max(1.0 - alpha, 0.0)
+    if beta == 0.0:  # V+ <= (1 + eps) a + (1 + 1/eps) b for every V: the best eps sqrt(b / a)
+        eps = math.sqrt(b / a) if a > 0 and b > 0 else 1.0
+        grid = np.array([eps])
+    else:
+        grid = (alpha / beta) * np.logspace(-6, math.log10(1 - 1e-6), points)
+    u = 2.0**-53
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+        numerator = ((1 + grid) * a + (1 + 1 / grid) * b) * (1 + 8 * u)
+        room = (1 - (1 + grid) * beta) - 8 * u
+        values = np.where(room > 0, numerator / room * (1 + 2 * u), np.inf)
+    best = int(np.argmin(values))
+    V = float(values[best])
+    bound = math.sqrt(V * base.top) * (1 + gamma_rounding(4)) if math.isfinite(V) else math.inf
+    return SplitBound(bound, base.noise_norm, W, float(grid[best]), base.top, base.condition)

@@ -29,6 +29,7 @@ from .noise_gain import (
     dissipation_bound,
     linear_noise_bound,
     local_noise_bound,
+    split_bound,
 )
 
 __all__ = [
@@ -226,6 +227,37 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
             "tried" + (", the process noise a further input of the error model"
                        if noise.process is not None else "") + " (verified as iss_gain's)"
         )  # fmt: skip
+    formula = "limsup V <= gamma^2 N^2 / alpha"
+    split_evidence: dict[str, float] = {}
+    if noise.process is not None:
+        # iss_gain's own inequality (measurement noise only) with the process noise's step
+        # split off: no further LMI, so it holds whatever the process noise's size
+        P_iss = np.asarray(iss.evidence["P"], dtype=float)
+        a_iss, g_iss = float(iss.fields["alpha"]), float(iss.fields["gamma"])
+        process = noise.process
+        split = split_bound(P_iss, a_iss, g_iss, found_rows, process.input, process.omega, n)
+        if math.isfinite(split.bound) and (
+            found is None or found.ill_conditioned or split.bound < found.bound
+        ):
+            found = DissipationBound(
+                split.bound, split.noise_norm, split.top, split.condition, False
+            )
+            P, alpha, gamma = P_iss, a_iss, g_iss
+            origin = "process noise split off"
+            source = (
+                "iss_gain's inequality (measurement noise only) with the process noise's step "
+                "split off"
+            )
+            formula = (
+                "limsup V <= ((1 + eps) gamma^2 N^2 + (1 + 1/eps) W^2) / (1 - (1 + eps)(1 - "
+                f"alpha)) with eps = {readable(split.split)}, W = {readable(split.process_reach)} "
+                "(the process noise's largest step in V's norm)"
+            )
+            common["method"] = (
+                "ISS dissipation inequality with decay (iss_gain's), the process noise's step "
+                "split off"
+            )
+            split_evidence = {"process_reach_P": split.process_reach, "split": split.split}
     if found is None:
         return _no_bound(
             "No ultimate error bound under noise is certified: no dissipation "
@@ -269,7 +301,7 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
         verdict=Verdict.HOLDS,
         summary=f"Without attack and with noise within the spec's bounds on every sample, the "
         f"estimation error eventually stays within {readable(bound)} (2-norm), from {source}: "
-        f"limsup V <= gamma^2 N^2 / alpha with gamma = {readable(float(gamma))}, "
+        f"{formula} with gamma = {readable(float(gamma))}, "
         f"alpha = {readable(float(alpha))} and N = {readable(found.noise_norm)}. A search "
         f"over {search['sequences']} noise sequences within the bounds (from zero error, "
         f"{search['steps']} steps{ascent_text(search)}) reached "
@@ -292,6 +324,7 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
             # the decays the inequality without the output's term was tried at, and the bound of
             # each (inf: not verified); the smallest bound of these and iss_gain's is the one
             "decays_tried": [] if scan is None else scan.tried,
+            **split_evidence,
         },
         **common,
     )
