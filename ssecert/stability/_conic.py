@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import functools
 import time
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -108,11 +108,11 @@ class LMIProblem:
         A, b, nonneg, sizes = self._standard_form()
         name = solver_name()
         iterations: int | None
-        q = self._objective()
+        form = _Form(self._objective(), A, b, nonneg, sizes)
         if name == "CLARABEL":
-            x, status, iterations = _clarabel(q, A, b, nonneg, sizes, time_limit, max_iter)
+            x, status, iterations = _clarabel(form, time_limit, max_iter)
         else:
-            x, status, iterations = _through_cvxpy(q, A, b, nonneg, sizes, time_limit, max_iter)
+            x, status, iterations = _through_cvxpy(form, time_limit, max_iter)
         info = {
             "solver": name,
             "status": status,
@@ -175,19 +175,23 @@ class LMIProblem:
         return A, np.concatenate(b_parts), first, sizes
 
 
-def _clarabel(
-    q: np.ndarray,
-    A: Any,
-    b: np.ndarray,
-    nonneg: int,
-    sizes: list[int],
-    time_limit: float,
-    max_iter: int,
-) -> tuple[np.ndarray | None, str, int]:
+class _Form(NamedTuple):
+    """The problem minimise q' x with b - A x in the cones: the nonnegative one on the first
+    ``nonneg`` rows, then each LMI's PSD triangle cone of the given sizes."""
+
+    q: np.ndarray
+    A: Any
+    b: np.ndarray
+    nonneg: int
+    sizes: list[int]
+
+
+def _clarabel(form: _Form, time_limit: float, max_iter: int) -> tuple[np.ndarray | None, str, int]:
     """Clarabel's x (None unless solved or almost), its status and iterations."""
     import clarabel
     from scipy import sparse
 
+    q, A, b, nonneg, sizes = form
     cones: list[Any] = [clarabel.NonnegativeConeT(nonneg)] if nonneg else []
     cones += [clarabel.PSDTriangleConeT(d) for d in sizes]
     settings = clarabel.DefaultSettings()
@@ -221,13 +225,7 @@ def _unpack(d: int) -> Any:
 
 
 def _through_cvxpy(
-    q: np.ndarray,
-    A: Any,
-    b: np.ndarray,
-    nonneg: int,
-    sizes: list[int],
-    time_limit: float,
-    max_iter: int,
+    form: _Form, time_limit: float, max_iter: int
 ) -> tuple[np.ndarray | None, str, int | None]:
     """The same problem as cvxpy constraints, solved by ``ssecert.solvers.solve_conic``
     (Clarabel's options translated for the chosen solver): x (None unless the status is
@@ -238,6 +236,7 @@ def _through_cvxpy(
 
     from ..solvers import solve_conic, solved
 
+    q, A, b, nonneg, sizes = form
     x = cp.Variable(A.shape[1])
     constraints = []
     if nonneg:
