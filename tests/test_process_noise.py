@@ -629,3 +629,16 @@ def test_an_inequality_without_decay_still_gives_the_energy_gain():
     assert check.fields["energy_gain"] == iss.fields["gamma"]
     noisy = MeasurementNoise(spec.noise.eta, process=ProcessNoise.read(1e-3, [[1.0], [0.5]], 2))
     assert sparse_noise_check(design, no_decay, noisy).fields.get("energy_gain") is None
+
+
+def test_an_unstable_plants_growth_is_not_taken_for_an_error_the_noise_drove():
+    """Process noise drives an unstable plant's state to 1e18 and beyond in the noise search's
+    300 steps; x_hat - x is then mostly the rounding of both: the search takes each error less
+    what the simulation resolves, and the (local) bound is not refused by a false alarm."""
+    data = {"name": "up", "system": {"A": [[1.2, 0.5], [0.0, 0.7]], "C": C[:4]},
+            "attack": {"max_attacked": 1},
+            "observer": {"kind": "sso", "step": 0.2, "threshold": 0.1, "window": 1},
+            "noise": {"measurement": 1e-4, "process": 1e-5, "input": [[1.0], [0.5]]}}  # fmt: skip
+    check = analyze(spec_from_dict(data))["observer_noise_bound"]
+    assert check.verdict is Verdict.HOLDS and check.evidence["from"] == "dead zone"
+    assert 0 < check.evidence["noise_search"]["largest_error"] <= check.value

@@ -588,7 +588,12 @@ def _driven_errors(
     """||x_hat(k) - x(k - d)|| (steps + 1, runs) from zero with measurement noise ``noise``
     (steps, runs, p) and the plant x+ = A x + G w driven by ``process`` (steps, runs, m; x = 0
     when None): the observer's own simulator on y = C x + n, its estimate at k that of the
-    state d = its delay steps before (a window's first state; x(j) = 0 for j < 0)."""
+    state d = its delay steps before (a window's first state; x(j) = 0 for j < 0).
+
+    Driven by process noise, an unstable plant's state grows, and x_hat - x then holds the
+    rounding of both (about 1e-16 of their size, times what the observer's arithmetic
+    amplifies): each error is taken less 2^-40 ||x||, what the simulation resolves (0 where x
+    left the float range), so that rounding is never reported as an error the noise drove."""
     with np.errstate(all="ignore"):
         if process is None or G is None:
             return safe_norms(simulator.run(noise).x_hat)  # an estimate of 1e200 is finite
@@ -601,7 +606,13 @@ def _driven_errors(
         run = simulator.run(y)
         d = int(run.delay)
         reference = x if d == 0 else np.concatenate([np.zeros_like(x[:d]), x[:-d]], axis=0)
-        return safe_norms(run.x_hat - reference)
+        # (the plant's size: an estimate that diverges from a modest state stays an error)
+        resolution = 2.0**-40 * safe_norms(reference)
+        errors = safe_norms(run.x_hat - reference)
+        resolved = np.isfinite(resolution)
+        return np.where(
+            resolved, np.maximum(errors - np.where(resolved, resolution, 0.0), 0.0), 0.0
+        )
 
 
 GRADIENT_STARTS = 8
