@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import enum
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any, NamedTuple
 
@@ -387,7 +388,13 @@ def decaying_certificate(
 
 
 def decay_scan(
-    model: Any, alpha: float, per_row: np.ndarray, n: int, *, solves: int = SCAN_SOLVES
+    model: Any,
+    alpha: float,
+    per_row: np.ndarray,
+    n: int,
+    *,
+    solves: int = SCAN_SOLVES,
+    bound_of: Callable[[np.ndarray, float, float], DissipationBound] | None = None,
 ) -> DecayScan | None:
     """The smallest ultimate bound under noise within ``per_row`` (``dissipation_bound``) of
     the inequality V+ - V <= -a V + g |n|^2 with decay a = ``alpha``, 4 ``alpha``, 16
@@ -400,7 +407,10 @@ def decay_scan(
 
     iss_gain's own certificate, with the output's -|e|^2 and at its one decay, weighs the
     l2 gain from attack to error: the bound it gives under noise is often several times
-    this one (on the 2-state test plant's window SSO, 0.245 against 0.065)."""
+    this one (on the 2-state test plant's window SSO, 0.245 against 0.065).
+
+    ``bound_of(P, alpha, gamma)`` gives each verified inequality's bound instead of
+    ``dissipation_bound`` (``split_bound``'s, the process noise split off)."""
     from .lmi_solver import lmi_cost
 
     quiet = replace(model, Ce=np.zeros_like(model.Ce))
@@ -420,7 +430,12 @@ def decay_scan(
             tried.append({"alpha": a, "bound": math.inf})
             return None
         P = np.asarray(cert.P, dtype=float)
-        found = dissipation_bound(P, float(cert.decay), float(cert.gamma), per_row, n)
+        decay, gain = float(cert.decay), float(cert.gamma)
+        found = (
+            dissipation_bound(P, decay, gain, per_row, n)
+            if bound_of is None
+            else bound_of(P, decay, gain)
+        )
         tried.append({"alpha": a, "bound": found.bound})
         if found.ill_conditioned or not math.isfinite(found.bound):
             return None
@@ -559,6 +574,44 @@ def local_noise_bound(model: Any, P: np.ndarray, per_row: np.ndarray, n: int) ->
                       top_ee, cond, "")  # fmt: skip
 
 
+def _process_reach(Pee: np.ndarray, G: np.ndarray, omega: np.ndarray) -> float:
+    """W >= max ||G w||_Pee over |w_j| <= omega_j: sum_j omega_j ||G_j||_Pee, each column
+    first brought to entries near 1 by a power of two (so that neither G_j' Pee G_j nor its
+    product with omega_j under- or overflows where W does not: G of 1e-200 and omega of
+    1e197 is the same G w as G of 1 and omega of 1e-3), each quadratic form up by its rounding
+    (gamma(2 n) |g|' |Pee| |g|) and the entries a scaling drops below the subnormal range added
+    back at their largest."""
+    n = Pee.shape[0]
+    absP = np.abs(Pee)
+    total = 0.0
+    for j in range(G.shape[1]):
+        column, bound = G[:, j], float(omega[j])
+        top = float(np.max(np.abs(column))) if column.size else 0.0
+        if top == 0.0 or bound == 0.0:
+            continue
+        if not (math.isfinite(top) and math.isfinite(bound)):
+            return math.inf
+        k = -math.frexp(top)[1]  # g = column 2^k has its largest entry in [0.5, 1)
+        g = np.ldexp(column, k)
+        form = float(g @ Pee @ g) + gamma(2 * n + 2) * float(np.abs(g) @ absP @ np.abs(g))
+        # the entries 2^k took into the subnormal range lost at most 2^-1074 each
+        form += 2.0**-1070 * n * float(absP.max()) * 4 if k < 0 else 0.0
+        norm = math.sqrt(max(form, 0.0)) * (1 + gamma(2))
+        mantissa, exponent = math.frexp(bound)
+        with np.errstate(over="ignore", under="ignore"):
+            reach = float(np.ldexp(norm * mantissa, exponent - k))
+        if 0.0 <= reach < 2.0**-1022:  # rounded in the subnormal range (or to 0): take it up
+            reach = float(np.nextafter(reach, np.inf))
+        total = float(_up(total + reach, 1))
+    return total
+
+
+def split_as_dissipation(split: SplitBound) -> DissipationBound:
+    """A ``split_bound`` as the bound of a dissipation inequality (``decay_scan``'s)."""
+    return DissipationBound(split.bound, split.noise_norm, split.top, split.condition,
+                            not math.isfinite(split.top))  # fmt: skip
+
+
 class SplitBound(NamedTuple):
     """The ultimate error bound with the process noise split off a measurement-noise
     inequality (``split_bound``)."""
@@ -599,18 +652,19 @@ def split_bound(
     nan = math.nan
     if base.ill_conditioned or not math.isfinite(base.bound) or not alpha > 0:
         return SplitBound(math.inf, base.noise_norm, nan, nan, base.top, base.condition)
-    Pee = 0.5 * (P[:n, :n] + P[:n, :n].T)
-    G = np.asarray(G, dtype=float)
-    with np.errstate(over="ignore", invalid="ignore"):
-        forms = np.einsum("ij,jk,ki->i", G.T, Pee, G) + gamma_rounding(2 * n + 2) * np.einsum(
-            "ij,jk,ki->i", np.abs(G).T, np.abs(Pee), np.abs(G)
-        )
-        W = float(_up(np.sum(np.sqrt(np.maximum(forms, 0.0)) * (1 + gamma_rounding(2)) * omega),
-                      omega.size))  # fmt: skip
-    a = (gamma * base.noise_norm) ** 2 * (1 + gamma_rounding(4))
-    b = W * W * (1 + gamma_rounding(2))
-    if not (math.isfinite(a) and math.isfinite(b)):
+    W = _process_reach(0.5 * (P[:n, :n] + P[:n, :n].T), np.asarray(G, float), omega)
+    # in units of c, a power of two near the larger of gamma N and W (linear in both: the
+    # bound scales back by c), the smaller's square taken up where it underflows
+    reach_n = gamma * base.noise_norm * (1 + gamma_rounding(2))
+    largest = max(reach_n, W)
+    if not math.isfinite(largest):
         return SplitBound(math.inf, base.noise_norm, W, nan, base.top, base.condition)
+    if largest == 0.0:
+        return SplitBound(0.0, base.noise_norm, W, nan, base.top, base.condition)
+    c = math.ldexp(1.0, math.frexp(largest)[1])
+    tiny = 2.0**-1022
+    a = (reach_n / c) ** 2 * (1 + gamma_rounding(4)) + (tiny if reach_n > 0 else 0.0)
+    b = (W / c) ** 2 * (1 + gamma_rounding(4)) + (tiny if W > 0 else 0.0)
     beta = max(1.0 - alpha, 0.0)
     if beta == 0.0:  # V+ <= (1 + eps) a + (1 + 1/eps) b for every V: the best eps sqrt(b / a)
         eps = math.sqrt(b / a) if a > 0 and b > 0 else 1.0
@@ -624,5 +678,10 @@ def split_bound(
         values = np.where(room > 0, numerator / room * (1 + 2 * u), np.inf)
     best = int(np.argmin(values))
     V = float(values[best])
-    bound = math.sqrt(V * base.top) * (1 + gamma_rounding(4)) if math.isfinite(V) else math.inf
+    bound = math.inf
+    if math.isfinite(V):
+        with np.errstate(over="ignore", under="ignore"):
+            bound = float(math.sqrt(V * base.top) * (1 + gamma_rounding(4)) * np.float64(c))
+        if 0.0 <= bound < 2.0**-1022:  # rounded in the subnormal range: taken up
+            bound = float(np.nextafter(bound, np.inf))
     return SplitBound(bound, base.noise_norm, W, float(grid[best]), base.top, base.condition)
