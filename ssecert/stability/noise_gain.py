@@ -606,12 +606,6 @@ def _process_reach(Pee: np.ndarray, G: np.ndarray, omega: np.ndarray) -> float:
     return total
 
 
-def split_as_dissipation(split: SplitBound) -> DissipationBound:
-    """A ``split_bound`` as the bound of a dissipation inequality (``decay_scan``'s)."""
-    return DissipationBound(split.bound, split.noise_norm, split.top, split.condition,
-                            not math.isfinite(split.top))  # fmt: skip
-
-
 class SplitBound(NamedTuple):
     """The ultimate error bound with the process noise split off a measurement-noise
     inequality (``split_bound``)."""
@@ -622,6 +616,12 @@ class SplitBound(NamedTuple):
     split: float  # the epsilon of the split used
     top: float  # lambda_max((P^-1)_ee), taken up
     condition: float  # of P
+
+
+def split_as_dissipation(split: SplitBound) -> DissipationBound:
+    """A ``split_bound`` as the bound of a dissipation inequality (``decay_scan``'s)."""
+    return DissipationBound(split.bound, split.noise_norm, split.top, split.condition,
+                            not math.isfinite(split.top))  # fmt: skip
 
 
 def split_bound(

@@ -365,7 +365,6 @@ def _local_check(
     None where the observer has no dead zone, the noise does not enter as an attack or the
     dead zone's region is not certified (the global reason then stands), an inconclusive
     check with the local reason where the dead zone's function does not absorb the noise."""
-    from .lyapunov import lyapunov_certificate
     from .roa import dead_zone_region
 
     try:
@@ -377,7 +376,7 @@ def _local_check(
     per_row = measurement_rows(design, noise)
     if per_row is None:
         return None
-    region = dead_zone_region(model)
+    region, q_identity = dead_zone_region(model)
     if region.radius <= 0 or region.evidence.get("P") is None:
         return None
     noise_model = model
@@ -388,10 +387,9 @@ def _local_check(
     # the region's P (chosen for the largest region, often with a slow decrease) and the
     # discrete Lyapunov equation's with Q = I (a faster one): the smaller bound
     candidates = [(np.asarray(region.evidence["P"], dtype=float), region.evidence.get("P_from"))]
-    lyap = lyapunov_certificate(model.A, exact=model.exact_A())
-    if lyap.verdict is Verdict.HOLDS and lyap.P is not None:
+    if q_identity is not None:  # (the region's own first candidate, solved once)
         candidates.append(
-            (np.asarray(lyap.P, dtype=float), "discrete Lyapunov equation with Q = I")
+            (np.asarray(q_identity, dtype=float), "discrete Lyapunov equation with Q = I")
         )
     tried = [(local_noise_bound(noise_model, P, per_row, n), P, by) for P, by in candidates]
     found, P, P_from = min(tried, key=lambda t: (t[0].bound, -t[0].radius))

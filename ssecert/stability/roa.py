@@ -115,17 +115,24 @@ def _region_in_units(model: LureModel, seed: int, piecewise: bool, widen: bool) 
     return replace(found, evidence={**found.evidence, "piecewise": wider})
 
 
-def dead_zone_region(model: LureModel, seed: int = 0) -> Region:
+def dead_zone_region(model: LureModel, seed: int = 0) -> tuple[Region, np.ndarray | None]:
     """The region the dead zone's Lyapunov function certifies in the model's own units (its
     ``P`` and ``level`` in the evidence), the radius 0 with the reason's code when none;
-    ``region_of_attraction`` without the piecewise search and the balancing."""
-    return _dead_zone_region(model, seed)
+    ``region_of_attraction`` without the piecewise search and the balancing.  Beside it, the
+    verified solution P of the discrete Lyapunov equation with Q = I that the region tried
+    first (None where there is none), whichever P the region kept."""
+    return _dead_zone(model, seed)
 
 
 def _dead_zone_region(model: LureModel, seed: int, widen: bool = True) -> Region:
     """The radius of the largest invariant sublevel set of the dead zone's Lyapunov function."""
+    return _dead_zone(model, seed, widen)[0]
+
+
+def _dead_zone(model: LureModel, seed: int, widen: bool = True) -> tuple[Region, np.ndarray | None]:
+    """``_dead_zone_region`` and the verified Lyapunov solution with Q = I it started from."""
     if model.m == 0 or model.threshold <= 0:
-        return Region.none(RegionCode.NO_DEAD_ZONE)
+        return Region.none(RegionCode.NO_DEAD_ZONE), None
     n_e = model.n_e
     if n_e < model.N and not np.any(model.A[n_e:]):
         # xi+ = A xi with A = [[F, -L], [0, 0]]: its eigenvalues are F's and 0, so F decides
@@ -134,7 +141,7 @@ def _dead_zone_region(model: LureModel, seed: int, widen: bool = True) -> Region
         if local.verdict is Verdict.FAILS:
             return Region.none(
                 RegionCode.DEAD_ZONE_UNSTABLE, error_block=True, lyapunov=local.reason
-            )
+            ), None
     lyap = lyapunov_certificate(model.A, exact=model.exact_A())
     if (
         lyap.verdict is not Verdict.HOLDS
@@ -146,12 +153,12 @@ def _dead_zone_region(model: LureModel, seed: int, widen: bool = True) -> Region
             if lyap.verdict is Verdict.FAILS
             else RegionCode.NO_VERIFIED_LYAPUNOV
         )
-        return Region.none(code, lyapunov=lyap.reason)
+        return Region.none(code, lyapunov=lyap.reason), None
     found = _region(model, 0.5 * (lyap.P + lyap.P.T), lyap.margin, lyap.error_bound, seed)
     found = _with(found, P_from="discrete Lyapunov equation with Q = I")
     candidate = _lmi_matrix(model) if widen and model.N <= LMI_LIMIT and found.radius > 0 else None
     if candidate is None:
-        return found
+        return found, lyap.P
     wider, solver = candidate
     verified = verified_decrease(model.A, wider, rounding=model.rounding)
     if verified is not None:
@@ -162,8 +169,8 @@ def _dead_zone_region(model: LureModel, seed: int, widen: bool = True) -> Region
                 other,
                 P_from=f"LMI maximising the radius ({by}), verified in numpy",
                 radius_with_Q_identity=found.radius,
-            )
-    return found
+            ), lyap.P
+    return found, lyap.P
 
 
 def _with(region: Region, **evidence: Any) -> Region:
