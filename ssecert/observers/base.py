@@ -333,12 +333,14 @@ class ObserverKind:
         the size in the spec that makes it so, asked before anything is allocated."""
         return ""
 
-    def dead_zone_model(self, design: ObserverDesign) -> LureModel | None:
+    def dead_zone_model(self, design: ObserverDesign, *, noise: bool = False) -> LureModel | None:
         """For a design without a Lur'e form (``lure_gap``): its error dynamics while every soft
         threshold stays in its dead zone, as a Lur'e model with B = 0 (xi+ = A xi) whose rows
         Cw are every threshold's input, so that the region-of-attraction search applies; None
-        when the kind has none.  Raises ``ResourceLimitError`` when ``dead_zone_refusal``
-        gives a reason."""
+        when the kind has none.  With ``noise``, its input (E, Dw) is the measurement
+        vector's noise, entering as an attack on every row does (None when the kind does not
+        form it).  Raises ``ResourceLimitError`` when ``dead_zone_refusal`` gives a
+        reason."""
         return None
 
     def region_family(self, design: ObserverDesign) -> ObserverDesign | None:

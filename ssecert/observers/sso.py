@@ -50,6 +50,9 @@ EXACT_INNER_WORK = 2e7  # word operations for the exact powers of an SSO's inner
 # most threshold inputs (inner steps times attack-estimate entries) of a dead-zone model: each is
 # a row of its certificates and a constraint of the LMI that widens its region
 MAX_DEAD_ZONE_ROWS = 20_000
+# most entries of the noise's input to a dead-zone model (inner steps times the square of the
+# measurement vector's length): its threshold inputs' noise terms, formed as a matrix
+MAX_NOISE_ENTRIES = 4_000_000
 
 
 @register
@@ -223,11 +226,17 @@ class SparseSoftObserverKind(SoftThresholdObserverKind):
             )
         return ""
 
-    def dead_zone_model(self, design: ObserverDesign) -> LureModel | None:
+    def dead_zone_model(self, design: ObserverDesign, *, noise: bool = False) -> LureModel | None:
         """With a_hat = 0 and every inner step's threshold input |w| <= threshold, the attack
         estimate stays 0 and each inner ISTA step maps the error by I - step S' S: the error
         follows e+ = A (I - step S' S)^m e, and the threshold inputs of inner step i are
-        -step S (I - step S' S)^(i-1) e."""
+        -step S (I - step S' S)^(i-1) e.
+
+        With ``noise``, the model's input a is the measurement vector's noise (the window's
+        stacked samples, entering as an attack on every row does): inner step i moves the
+        error by step S' a, so with Sigma_i = sum_(j < i) (I - step S' S)^j its threshold
+        input gains (step I - step^2 S Sigma_i S') a and the error step A Sigma_m step S' a.
+        None when that input is beyond ``MAX_NOISE_ENTRIES``."""
         if design.inner_steps == 1:
             return None
         refusal = self.dead_zone_refusal(design)
@@ -235,42 +244,53 @@ class SparseSoftObserverKind(SoftThresholdObserverKind):
             raise ResourceLimitError(refusal)
         n = design.system.n
         S = design.sensing
+        r = S.shape[0]
         nu = design.parameter("step")
         steps = design.inner_steps
+        if noise and steps * r * r > MAX_NOISE_ENTRIES:
+            return None
         inner = np.eye(n) - nu * S.T @ S
-        rows, power = [], np.eye(n)
+        rows, noise_rows, power, total = [], [], np.eye(n), np.zeros((n, n))
+        nuS, nuSt = nu * S, nu * S.T
         for _ in range(steps):
             rows.append(-nu * S @ power)
+            if noise:
+                noise_rows.append(nu * np.eye(r) - nuS @ (total @ nuSt))
+                total = total + power
             power = inner @ power
         W = np.vstack(rows)
         exact_S = self.exact_sensing(design)
         A = design.system.A
+        if noise:
+            E, Dw = A @ (total @ nuSt), np.vstack(noise_rows)
+        else:
+            E, Dw = np.zeros((n, r)), np.zeros((W.shape[0], r))
 
         def build() -> ExactLure | None:
-            powers = _exact_inner_powers(n, exact_S, nu, steps, A)
+            powers = _exact_inner_powers(n, exact_S, nu, steps, A, noise=noise)
             if powers is None:
                 return None
-            F, rows = powers
+            F, rows, inputs = powers
             return ExactLure(
                 A=F,
                 B=Dyadic.zeros((n, W.shape[0])),
                 Cw=Dyadic.block([[r] for r in rows]),
-                E=Dyadic.zeros((n, S.shape[0])),
-                Dw=Dyadic.zeros((W.shape[0], S.shape[0])),
+                E=inputs[0] if inputs else Dyadic.zeros(E.shape),
+                Dw=Dyadic.block([[d] for d in inputs[1:]]) if inputs else Dyadic.zeros(Dw.shape),
             )
 
         return LureModel(
             A=self.error_matrix(design),
             B=np.zeros((n, W.shape[0])),
             Cw=W,
-            E=np.zeros((n, S.shape[0])),
-            Dw=np.zeros((W.shape[0], S.shape[0])),
+            E=E,
+            Dw=Dw,
             Ce=np.eye(n),
             q=float(design.shrink),
             n_e=n,
             threshold=float(design.threshold or 0.0),
             exact_build=build,
-            formation_error=_inner_rounding(A, S, exact_S, nu, steps)[1],
+            formation_error=_inner_rounding(A, S, exact_S, nu, steps, noise=noise)[1],
         )
 
     def simulation_flops(self, design: ObserverDesign) -> float:
@@ -281,30 +301,52 @@ class SparseSoftObserverKind(SoftThresholdObserverKind):
 
 
 def _exact_inner_powers(
-    n: int, S: np.ndarray | Dyadic, nu: float, steps: int, A: np.ndarray
-) -> tuple[Dyadic, list[Dyadic]] | None:
-    """A (I - nu S' S)^steps and the threshold inputs -nu S (I - nu S' S)^i, i < steps, in
-    exact arithmetic; None when their bits would exceed ``EXACT_INNER_WORK``."""
+    n: int,
+    S: np.ndarray | Dyadic,
+    nu: float,
+    steps: int,
+    A: np.ndarray,
+    *,
+    noise: bool = False,
+) -> tuple[Dyadic, list[Dyadic], list[Dyadic]] | None:
+    """A (I - nu S' S)^steps, the threshold inputs -nu S (I - nu S' S)^i, i < steps, and with
+    ``noise`` the noise's inputs (``dead_zone_model``: A Sigma_m nu S' first, then nu I - nu^2
+    S Sigma_i S' of each inner step; empty without), in exact arithmetic; None when their
+    bits would exceed ``EXACT_INNER_WORK``."""
     Sd = as_dyadic(S)
+    r = Sd.shape[0]
     inner = Dyadic.eye(n) - (Sd.T @ Sd).times(nu)
     # each factor adds the bits of ``inner``: the last power has about steps times them
     words = steps * (inner.bits() + 64) / 64.0
-    if steps * n**3 * words**1.6 > EXACT_INNER_WORK:
+    flops = n**3 + (r * n * (n + r) if noise else 0)
+    if steps * flops * words**1.6 > EXACT_INNER_WORK:
         return None
-    nuS = Sd.times(-nu)
-    rows, power = [], Dyadic.eye(n)
+    nuS, nuSt = Sd.times(-nu), Sd.T.times(nu)
+    rows, inputs, power, total = [], [], Dyadic.eye(n), Dyadic.zeros((n, n))
     for _ in range(steps):
         rows.append(nuS @ power)
+        if noise:
+            inputs.append(Dyadic.eye(r).times(nu) + nuS @ (total @ nuSt))
+            total = total + power
         power = inner @ power
-    return dyadic(A) @ power, rows
+    if noise:
+        inputs.insert(0, dyadic(A) @ (total @ nuSt))
+    return dyadic(A) @ power, rows, inputs
 
 
 def _inner_rounding(
-    A: np.ndarray, S: np.ndarray, exact_S: np.ndarray | Dyadic, nu: float, steps: int
+    A: np.ndarray,
+    S: np.ndarray,
+    exact_S: np.ndarray | Dyadic,
+    nu: float,
+    steps: int,
+    *,
+    noise: bool = False,
 ) -> tuple[float, float]:
     """A-priori bounds on the rounding of A (I - nu S'S)^steps and of the dead-zone model
-    (that matrix and every threshold input -nu S (I - nu S'S)^i) computed in floating point,
-    as 2-norms of their distance from the exact values: (bound on F, bound on the model).
+    (that matrix, every threshold input -nu S (I - nu S'S)^i and with ``noise`` the noise's
+    inputs of ``SparseSoftObserverKind.dead_zone_model``) computed in floating point, as
+    2-norms of their distance from the exact values: (bound on F, bound on the model).
 
     One product of n x n matrices X Y is within n gamma_n ||X|| ||Y|| of the exact product of
     its floats (Higham 3.5, with || |X| ||_2 <= sqrt(n) ||X||_2); the recurrence
@@ -314,10 +356,17 @@ def _inner_rounding(
     with relative errors r and r' has 1 + r'' <= (1 + r)(1 + r')(1 + n gamma), so its bound is
     that of the same factors with at most 2 log2 m <= m - 1 roundings, below the sequential
     one; the bound is doubled besides.
+
+    The noise's inputs: the running sum Sigma_i of the powers carries their errors and one
+    rounding of each addition (u sqrt(n) times its norm), sigma_i, and has norm at most s_i
+    (the powers' bounds summed, plus sigma_i); nu S is rounded entrywise (u sqrt(n) ||nu S||)
+    and off the exact nu S by nu dS; each product, the difference with nu I (u sqrt(r) times
+    its norm) and the product by A add theirs; each bound is doubled.
     """
     n = A.shape[0]
+    r = S.shape[0]
     u = float(np.finfo(float).eps) / 2
-    k = max(n, S.shape[0]) + 3
+    k = max(n, r) + 3
     gamma = k * u / (1 - k * u)
     with np.errstate(all="ignore"):
         dS = 0.0 if not isinstance(exact_S, Dyadic) else exact_S.distance_bound(S)
@@ -331,13 +380,33 @@ def _inner_rounding(
         T = np.array([[a, c], [a, a + c]])
         e, p = np.linalg.matrix_power(T, steps) @ np.array([0.0, 1.0]) * (1 + 1e-10 * steps)
         dF = 2.0 * (normA * e + k * gamma * normA * p) * (1 + 1e-12)
+        # nu S: its norm (and the exact one's) and its distance from the exact nu S
+        s_hat = abs(nu) * normS * (1 + u * math.sqrt(n))
+        d_hat = abs(nu) * (u * math.sqrt(n) * normS + dS)
+        kg = k * gamma
         # the threshold input of inner step i, -nu S P_i, one by one (a model that large is
-        # refused before it is built)
+        # refused before it is built); with the noise, its input nu I - nu^2 S Sigma_i S'
         rows, v = 0.0, np.array([0.0, 1.0])
+        sigma, total = 0.0, 0.0  # Sigma_i's error and norm bound (without sigma)
         for _ in range(steps if steps <= MAX_DEAD_ZONE_ROWS else 0):
             row = abs(nu) * (normS * v[0] + dS * v[1] + 2 * k * gamma * normS * v[1])
             rows += row * row
+            if noise:
+                s_i = total + sigma
+                product = (
+                    2 * kg * (1 + kg) * s_hat**2 * s_i + 2 * d_hat * s_i * s_hat
+                    + s_hat**2 * sigma
+                )  # fmt: skip
+                top = abs(nu) + s_hat**2 * s_i * (1 + kg) ** 2
+                dD = 2.0 * (product + u * math.sqrt(r) * top)
+                rows += dD * dD
+                sigma += v[0] + u * math.sqrt(n) * (s_i + v[1])
+                total += v[1]
             v = T @ v
+        if noise:
+            s_m = total + sigma
+            dE = 2.0 * normA * (kg * s_m * s_hat * (2 + kg) + sigma * s_hat + s_m * d_hat)
+            rows += dE * dE
         if steps > MAX_DEAD_ZONE_ROWS:
             rows = math.inf
         model = math.sqrt(dF * dF + rows) * (1 + 1e-10 * min(steps, MAX_DEAD_ZONE_ROWS))

@@ -560,7 +560,10 @@ def local_noise_bound(model: Any, P: np.ndarray, per_row: np.ndarray, n: int) ->
              "condition": cond}  # fmt: skip
     if not room > 0:
         return none("the noise alone can leave the dead zone", **known)
-    outer = float(np.min(room / np.where(per_state > 0, per_state, np.inf))) * (1 - gamma(4))
+    # (a channel the state does not reach is bounded by the noise alone: no level)
+    with np.errstate(over="ignore"):
+        levels = np.where(per_state > 0, room / np.where(per_state > 0, per_state, 1.0), np.inf)
+    outer = float(np.min(levels)) * (1 - gamma(4))
     inner = reach / (1.0 - rho) * (1 + gamma(4))
     known.update(outer=outer, inner=inner)
     if not inner < outer:

@@ -351,6 +351,19 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
     )
 
 
+def _error_model(design: ObserverDesign) -> Any:
+    """The observer's Lur'e model, or for a design without one (an SSO with several inner
+    steps a sample) its dead zone's with the noise as its input (``dead_zone_model``: the
+    error dynamics while it estimates no attack); None when there is neither."""
+    kind = design.observer_kind
+    try:
+        return kind.lure_model(design)
+    except NotImplementedError:
+        if kind.dead_zone_refusal(design):
+            return None
+        return kind.dead_zone_model(design, noise=True)
+
+
 def _local_check(
     design: ObserverDesign,
     noise: MeasurementNoise,
@@ -367,9 +380,8 @@ def _local_check(
     check with the local reason where the dead zone's function does not absorb the noise."""
     from .roa import dead_zone_region
 
-    try:
-        model = design.observer_kind.lure_model(design)
-    except NotImplementedError:  # an SSO with several inner steps a sample: no error model
+    model = _error_model(design)
+    if model is None:
         return None
     if model.m == 0 or not model.threshold > 0 or not noise_enters_as_attack(design, model):
         return None
@@ -658,18 +670,17 @@ def _gradient_ascent(
 ) -> tuple[np.ndarray, int] | None:
     """Noise sequences (steps, runs, p) within +-eta that drive the error of a one-sample
     sparse observer far, from ``starts``: each iteration simulates its Lur'e model xi+ = A xi
-    + B phi(Cw xi + Dw n) + E n from zero, takes the gradient of u' Ce xi at the step where
+    + B phi(Cw xi + Dw n) + E n (an SSO with several inner steps a sample: its dead zone's,
+    linear) from zero, takes the gradient of u' Ce xi at the step where
     the error is largest (u its direction; the adjoint through phi's slopes, 0 or q), and
     moves every sample to the bound in the gradient's direction (the box's vertex that
     maximises the linearised error), until it stays there or ``GRADIENT_ITERATIONS``; the
     best sequences and the gradients taken.  None when the model's attack input is not the
     measurement vector.  With the process noise's G, each sequence's last entries are w, a
     further input of the model (-G w on the error), within the last entries of ``eta``."""
-    from ..observers.lure import LureModel
-
-    model = LureModel.from_design(design)
+    model = _error_model(design)
     runs = starts.shape[1]
-    if not (noise_enters_as_attack(design, model) and model.finite()):
+    if model is None or not (noise_enters_as_attack(design, model) and model.finite()):
         return None
     if G is not None:
         model = model.with_input(_error_input(model, design.system.n, G))

@@ -184,9 +184,16 @@ def _region(
     """The radius that the verified Lyapunov matrix ``P`` of the dead zone certifies."""
     Pinv_Cw = np.linalg.solve(P, model.Cw.T)  # columns P^-1 Cw_i'
     spread = np.einsum("ij,ji->i", model.Cw, Pinv_Cw)  # Cw_i P^-1 Cw_i'
-    spread = np.where(spread > 0, spread, np.inf)
+    # beyond the exact matrices' budget the region rests on the floats: each row's reach
+    # ||P^-1/2 Cw_i'|| then takes the model's rounding eps, at most eps / sqrt(lambda_min(P))
+    unchecked = model.N <= EXACT_LIMIT and model.exact() is None
+    if unchecked:
+        spread = _rounded_spread(model, P, spread)
+    # a row that is zero never leaves the dead zone: it bounds no level
     with np.errstate(over="ignore"):
-        level = SAFETY * float(np.min(np.float64(model.threshold) ** 2 / spread))
+        room = np.float64(model.threshold) ** 2 / np.where(spread > 0, spread, 1.0)
+    room = np.where(spread > 0, room, np.inf)
+    level = SAFETY * float(np.min(room))
     if not math.isfinite(level):
         return Region.none(RegionCode.LEVEL_OUT_OF_RANGE, threshold=model.threshold)
     n_e = model.n_e
@@ -195,7 +202,11 @@ def _region(
     radius = math.sqrt(level / top) * (1 - 1e-12) if math.isfinite(level) and top > 0 else 0.0
     if radius <= 0:
         return Region.none(RegionCode.NO_INVARIANT_SET)
-    exact = _exact_recheck(model, P, level, radius) if model.N <= EXACT_LIMIT else None
+    exact = (
+        _exact_recheck(model, P, level, radius)
+        if model.N <= EXACT_LIMIT and not unchecked
+        else None
+    )
     if exact is not None and not all(exact.values()):
         refuted = [k for k, ok in exact.items() if not ok]
         return Region.none(
@@ -209,9 +220,12 @@ def _region(
         "P": P,
         "lyapunov_margin": margin,
         "lyapunov_error_bound": bound,
-        "binding_row": int(np.argmin(model.threshold**2 / spread)),
+        "binding_row": int(np.argmin(room)),
         "exact_recheck": exact
         if exact is not None
+        else "not run: the model's exact matrices are beyond their budget; verified in "
+        f"floating point, each row's reach up by the model's rounding {model.rounding:.3g}"
+        if unchecked
         else f"not run: error states above {EXACT_LIMIT} are verified in floating point only",
         "method": "largest invariant sublevel set of the dead zone's Lyapunov function",
         "replay": replay,
@@ -256,6 +270,22 @@ def _lmi_matrix(model: LureModel) -> tuple[np.ndarray, str] | None:
         return None
     P = np.linalg.inv(Yv)
     return 0.5 * (P + P.T), info["solver"]
+
+
+def _rounded_spread(model: LureModel, P: np.ndarray, spread: np.ndarray) -> np.ndarray:
+    """Upper bounds of Cx_i P^-1 Cx_i' for the exact rows Cx_i of the model's threshold inputs,
+    within ``model.rounding`` of its floats Cw_i (``spread`` their computed Cw_i P^-1 Cw_i'):
+    ||P^-1/2 Cx_i'|| <= ||P^-1/2 Cw_i'|| + eps / sqrt(lambda_min(P)), the computed values up by
+    a relative 64 N u cond(P) and lambda_min down by as much (inf where P is not positive
+    definite in floating point or too ill-conditioned for that)."""
+    N = P.shape[0]
+    eigs = np.linalg.eigvalsh(0.5 * (P + P.T))
+    slack = 64 * N * 2.0**-53 * (float(eigs[-1]) / float(eigs[0]) if eigs[0] > 0 else math.inf)
+    if not slack < 1e-3:
+        return np.full(spread.shape, np.inf)
+    low = float(eigs[0]) * (1 - slack)
+    reach = np.sqrt(np.maximum(spread, 0.0) * (1 + slack)) + model.rounding / math.sqrt(low)
+    return (reach * (1 + 1e-12)) ** 2
 
 
 def _exact_recheck(model: LureModel, P: np.ndarray, level: float, radius: float) -> dict[str, bool]:
