@@ -705,6 +705,27 @@ def _vertices(bounds):
     )
 
 
+def _rederive_local_bound(check, model, eta):
+    """The local bound's printed numbers re-derived from its P and the model: rho from
+    ||P^1/2 A P^-1/2||, the reach over the box's corners, the dead zone's room at sqrt(V) =
+    outer, the bound and the region."""
+    e = check.evidence
+    P = np.asarray(e["P"])
+    w, V = np.linalg.eigh(P)
+    root, inv_root = V @ np.diag(np.sqrt(w)) @ V.T, V @ np.diag(w**-0.5) @ V.T
+    assert np.linalg.norm(root @ model.A @ inv_root, 2) <= e["rho"]
+    corners = _vertices(eta)
+    assert max(np.linalg.norm(root @ model.E @ a) for a in corners) <= e["noise_reach"]
+    assert max(np.max(np.abs(model.Dw @ a)) for a in corners) <= e["noise_into_dead_zone"]
+    channel = np.sqrt(np.einsum("ij,jk,ik->i", model.Cw, np.linalg.inv(P), model.Cw))
+    assert np.max(channel) * e["outer_level"] + e["noise_into_dead_zone"] <= e["threshold"]
+    assert e["noise_reach"] / (1 - e["rho"]) <= e["inner_level"] < e["outer_level"]
+    limit = e["inner_level"] * math.sqrt(e["lambda_max_P_inverse_ee"])
+    assert check.value == pytest.approx(limit)
+    radius = e["outer_level"] / math.sqrt(e["lambda_max_P_ee"])
+    assert check.fields["region_radius"] == pytest.approx(radius)
+
+
 def test_an_observer_certified_near_zero_gets_a_local_noise_bound():
     # the UGV's SSO (shrink 1) has no global certificate, but near zero error it estimates no
     # attack and is linear: the dead zone's Lyapunov function bounds the error under noise
@@ -722,22 +743,10 @@ def test_an_observer_certified_near_zero_gets_a_local_noise_bound():
     assert 0 < check.evidence["noise_search"]["largest_error"] <= bound and radius > 0
     # the printed numbers re-derived: rho from P, the reach over the box's corners, the
     # dead zone's room at sqrt(V) = outer, the bound and the region
-    e = check.evidence
-    P = np.asarray(e["P"])
     design = build_observer(spec.system, spec.observer)
     model = design.observer_kind.lure_model(design)
-    w, V = np.linalg.eigh(P)
-    root, inv_root = V @ np.diag(np.sqrt(w)) @ V.T, V @ np.diag(w**-0.5) @ V.T
-    assert np.linalg.norm(root @ model.A @ inv_root, 2) <= e["rho"]
     eta = np.full(spec.system.p, 1e-2)
-    corners = _vertices(eta)
-    assert max(np.linalg.norm(root @ model.E @ a) for a in corners) <= e["noise_reach"]
-    assert max(np.max(np.abs(model.Dw @ a)) for a in corners) <= e["noise_into_dead_zone"]
-    channel = np.sqrt(np.einsum("ij,jk,ik->i", model.Cw, np.linalg.inv(P), model.Cw))
-    assert np.max(channel) * e["outer_level"] + e["noise_into_dead_zone"] <= e["threshold"]
-    assert e["noise_reach"] / (1 - e["rho"]) <= e["inner_level"] < e["outer_level"]
-    assert bound == pytest.approx(e["inner_level"] * math.sqrt(e["lambda_max_P_inverse_ee"]))
-    assert radius == pytest.approx(e["outer_level"] / math.sqrt(e["lambda_max_P_ee"]))
+    _rederive_local_bound(check, model, eta)
     # simulated: initial errors on the region's sphere (attack estimate 0) under random sign
     # and uniform noises, through the observer's error model: within the bound at the end
     rng = np.random.default_rng(3)
@@ -794,19 +803,7 @@ def test_an_sso_with_inner_steps_gets_a_local_noise_bound_from_its_dead_zone():
         assert np.allclose(model.Cw @ e0 + model.Dw @ eta, np.concatenate(inputs), atol=1e-17)
     # the a-priori rounding covers the floats' distance from the exact matrices
     assert model.exact().distance_bound(model) <= model.formation_error
-    e = check.evidence
-    P = np.asarray(e["P"])
-    w, V = np.linalg.eigh(P)
-    root, inv_root = V @ np.diag(np.sqrt(w)) @ V.T, V @ np.diag(w**-0.5) @ V.T
-    assert np.linalg.norm(root @ model.A @ inv_root, 2) <= e["rho"]
-    corners = _vertices(np.full(S.shape[0], 1e-2))
-    assert max(np.linalg.norm(root @ model.E @ c) for c in corners) <= e["noise_reach"]
-    assert max(np.max(np.abs(model.Dw @ c)) for c in corners) <= e["noise_into_dead_zone"]
-    channel = np.sqrt(np.einsum("ij,jk,ik->i", model.Cw, np.linalg.inv(P), model.Cw))
-    assert np.max(channel) * e["outer_level"] + e["noise_into_dead_zone"] <= e["threshold"]
-    assert e["noise_reach"] / (1 - e["rho"]) <= e["inner_level"] < e["outer_level"]
-    assert bound == pytest.approx(e["inner_level"] * math.sqrt(e["lambda_max_P_inverse_ee"]))
-    assert radius == pytest.approx(e["outer_level"] / math.sqrt(e["lambda_max_P_ee"]))
+    _rederive_local_bound(check, model, np.full(S.shape[0], 1e-2))
     # the observer's own simulator from the region's sphere, true state 0 (y is the noise)
     runs, steps = 64, 150
     e0 = rng.standard_normal((runs, 2))
