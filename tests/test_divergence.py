@@ -264,6 +264,39 @@ def test_an_sso_with_inner_steps_gets_the_radius_its_dead_zone_proves():
     assert stability.summary.endswith(observer_messages.region_proved_text(region.value))
 
 
+@pytest.mark.slow
+def test_the_lasso_papers_sso_with_tau_n_gets_a_region_and_a_local_noise_bound():
+    # tau = n = 10, 50 inner steps, the paper's step 1 / ||[O I]||^2 and threshold step *
+    # 0.1: the inner steps' exact matrices are beyond their budget, so the dead zone's region
+    # rests on the floats and the model's a-priori rounding; under noise 1e-4 on every sample
+    # the error stays within the local bound, through the observer's own simulator
+    data = _lasso_sso(10, 1.0)
+    A, C = np.array(data["system"]["A"]), np.array(data["system"]["C"])
+    O = np.vstack([C @ np.linalg.matrix_power(A, k) for k in range(10)])
+    step = 1.0 / np.linalg.norm(np.hstack([O, np.eye(O.shape[0])]), 2) ** 2
+    data["observer"].update(step=step, threshold=0.1 * step)
+    data["noise"] = {"measurement": 1e-4}
+    spec = spec_from_dict(data)
+    cert = analyze(spec)
+    region, local = cert["region_of_attraction"], cert["observer_noise_bound"]
+    assert region.verdict.value == "holds" and region.value > 0
+    assert isinstance(region.evidence["exact_recheck"], str)  # (not run: floats only)
+    assert local.verdict.value == "holds" and local.evidence["from"] == "dead zone"
+    assert 0 < local.fields["region_radius"] <= region.value
+    design = build_observer(spec.system, spec.observer)
+    model = design.observer_kind.dead_zone_model(design, noise=True)
+    assert model.exact() is None and 0 < model.rounding < 1e-6
+    simulator = design.observer_kind.simulator(design)
+    rng = np.random.default_rng(6)
+    runs, steps = 16, 60
+    e0 = rng.standard_normal((runs, 10))
+    e0 *= local.fields["region_radius"] / np.linalg.norm(e0, axis=1, keepdims=True)
+    noise = rng.choice([-1e-4, 1e-4], (steps, runs, 15))
+    path = simulator.run(noise, state={**simulator.initial_state(runs), "x_hat": e0})
+    assert not np.any(path.a_hat)  # the attack estimate stays 0: inside the dead zone
+    assert np.max(np.linalg.norm(path.x_hat[-10:], axis=-1)) <= local.value
+
+
 def test_an_sso_whose_gradient_step_is_too_long_fails_near_the_origin():
     # step 0.01 against ||O' O|| ~ 1500 for tau = 10: each inner step expands the error
     cert = analyze(spec_from_dict(_lasso_sso(10, 0.01)))
