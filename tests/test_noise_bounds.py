@@ -846,3 +846,51 @@ def test_a_dead_zone_beyond_its_exact_budget_rests_on_the_rounded_floats(monkeyp
     assert float_region.verdict is Verdict.HOLDS
     assert 0 < float_region.value <= exact_region.value
     assert floats["observer_noise_bound"].verdict is Verdict.HOLDS
+
+
+def test_sensors_of_unlike_noise_weigh_the_rows_of_the_dissipation_inequality():
+    # one sensor 100 times noisier than the others: the inequality for the noise written
+    # n = diag(2^k) nu (k from each row's bound over the largest) gives a far smaller bound
+    # than the unweighted decay scan's; every printed number re-derived, the inequality
+    # sampled through the model's own nonlinearity, and the simulator within the bound
+    from ssecert.observers import build_observer
+    from ssecert.stability.noise_messages import measurement_rows, row_weights
+
+    eta = [1e-1, 1e-3, 1e-3, 1e-3, 1e-3]
+    observer = {"kind": "elastic_net", "step": 0.3, "threshold": 0.05, "shrink": 0.3,
+                "gain": "place", "poles": [0.3, 0.4]}  # fmt: skip
+    spec = spec_from_dict({**_spec({"measurement": eta}), "observer": observer})
+    check = analyze(spec)["observer_noise_bound"]
+    e = check.evidence
+    assert check.verdict is Verdict.HOLDS and e["from"] == "decay scan, rows weighted"
+    unweighted = min(d["bound"] for d in e["decays_tried"])
+    assert check.value < unweighted / 5
+    design = build_observer(spec.system, spec.observer)
+    rows = measurement_rows(design, spec.noise)
+    k = np.asarray(e["row_weights_log2"])
+    assert k.tolist() == row_weights(rows).tolist() == [0, -7, -7, -7, -7]
+    nu = rows / np.ldexp(1.0, k)  # each entry of nu within it
+    assert e["noise_norm_per_step"] == pytest.approx(np.linalg.norm(nu), rel=1e-12)
+    assert e["noise_norm_per_step"] >= np.linalg.norm(nu)
+    P, alpha, gamma = np.asarray(e["P"]), e["alpha"], e["gamma"]
+    inverse_ee = np.linalg.inv(P)[:2, :2]
+    assert np.max(np.linalg.eigvalsh(inverse_ee)) <= e["lambda_max_P_inverse_ee"]
+    expected = math.sqrt(gamma**2 * np.sum(nu**2) / alpha * np.max(np.linalg.eigvalsh(inverse_ee)))
+    assert check.value >= expected and check.value == pytest.approx(expected, rel=1e-5)
+    # V+ - (1 - alpha) V <= gamma^2 |nu|^2, sampled (the model's own soft threshold)
+    model = design.observer_kind.lure_model(design)
+    assert model.input_scaled(k).rounding <= model.rounding  # (exact scalings, by <= 1)
+    rng = np.random.default_rng(8)
+    xi = rng.standard_normal((4000, model.N)) * np.logspace(-3, 1, 4000)[:, None]
+    v = rng.uniform(-1.0, 1.0, (4000, 5)) * nu
+    step = model.simulate(xi, 1, attack=(v * np.ldexp(1.0, k))[None])[1]
+    V = np.einsum("si,ij,sj->s", xi, P, xi)
+    V_next = np.einsum("si,ij,sj->s", step, P, step)
+    assert np.all(V_next - (1 - alpha) * V <= gamma**2 * np.sum(v**2, axis=1) * (1 + 1e-9))
+    # the simulator from zero error under sign and uniform noises in the box
+    assert e["noise_search"]["largest_error"] <= check.value
+    simulator = design.observer_kind.simulator(design)
+    noise = np.concatenate(
+        [rng.choice([-1.0, 1.0], (300, 32, 5)), rng.uniform(-1.0, 1.0, (300, 32, 5))], axis=1
+    ) * np.array(eta)
+    assert np.max(np.linalg.norm(simulator.run(noise).x_hat, axis=-1)) <= check.value

@@ -200,6 +200,38 @@ class LureModel:
             self, E=np.hstack([self.E, extra]), Dw=np.hstack([self.Dw, zeros]), exact_build=build
         )
 
+    def input_scaled(self, k: np.ndarray) -> LureModel:
+        """The model with its attack input a = diag(2^k) a_b: E_b = E diag(2^k), Dw_b = Dw
+        diag(2^k), exactly (powers of two), its exact matrices scaled alike.  With k <= 0 the
+        a-priori rounding bound stays one (each column's error shrinks with it).
+
+        Examples
+        --------
+        >>> model = LureModel.linear(np.array([[0.5]]), np.array([[1.0, 3.0]]))
+        >>> model.input_scaled(np.array([0, -2])).E.tolist()
+        [[1.0, 0.75]]
+        """
+        k = np.asarray(k, dtype=np.int64)
+        if k.shape != (self.r,) or np.any(k > 0):
+            raise ValueError(f"k: expected {self.r} exponents <= 0, got {k.tolist()}")
+        build = None
+        if self.exact_build is not None:
+            parent = self
+
+            def build() -> ExactLure | None:
+                exact = parent.exact()
+                if exact is None:
+                    return None
+                N, m = exact.E.shape[0], exact.Dw.shape[0]
+                return replace(
+                    exact,
+                    E=exact.E.scaled(np.zeros(N, np.int64), k),
+                    Dw=exact.Dw.scaled(np.zeros(m, np.int64), k),
+                )
+
+        w = np.ldexp(1.0, k)
+        return replace(self, E=self.E * w, Dw=self.Dw * w, exact_build=build)
+
     def vertex(self, k: float) -> np.ndarray:
         """Closed loop with phi(w) = k w."""
         return self.A + k * self.B @ self.Cw

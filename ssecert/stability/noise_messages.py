@@ -229,6 +229,37 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
                        if noise.process is not None else "") + " (verified as iss_gain's)"
         )  # fmt: skip
     formula = "limsup V <= gamma^2 N^2 / alpha"
+    weight_evidence: dict[str, Any] = {}
+    weights = row_weights(per_row) if noise.process is None else None
+    if weights is not None:
+        # sensors of unlike noise: the same scan for the noise written n = diag(2^k) nu, each
+        # row's weight near its bound over the largest, so that the LMI weighs the noisy
+        # rows more than the precise ones (often far smaller; never taken when larger)
+        weighted = decay_scan(
+            noise_model.input_scaled(weights),
+            float(iss.fields["alpha"]),
+            per_row / np.ldexp(1.0, weights),
+            n,
+        )
+        if weighted is not None and (
+            found is None or found.ill_conditioned or weighted.found.bound < found.bound
+        ):
+            found, P, alpha, gamma = weighted.found, weighted.P, weighted.alpha, weighted.gamma
+            origin = "decay scan, rows weighted"
+            source = (
+                f"a dissipation inequality V+ - V <= -alpha V + gamma^2 |nu|^2 at decay "
+                f"{readable(weighted.alpha)} for the noise written n = diag(2^k) nu (each "
+                "row's weight 2^k a power of two near its bound over the largest, so |nu_i| <= "
+                "eta_i 2^-k_i; verified as iss_gain's, the smallest bound of the decays tried)"
+            )
+            common["method"] = (
+                "ISS dissipation inequality with decay, the noise's rows weighted, the "
+                "smallest ultimate bound over the decays tried (verified as iss_gain's)"
+            )
+        weight_evidence = {
+            "row_weights_log2": weights.tolist(),
+            "weighted_decays_tried": [] if weighted is None else weighted.tried,
+        }
     split_evidence: dict[str, Any] = {}
     if noise.process is not None:
         # iss_gain's own inequality (measurement noise only) with the process noise's step
@@ -345,10 +376,35 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
             # the decays the inequality without the output's term was tried at, and the bound of
             # each (inf: not verified); the smallest bound of these and iss_gain's is the one
             "decays_tried": [] if scan is None else scan.tried,
+            "P": np.asarray(P, dtype=float),
+            **weight_evidence,
             **split_evidence,
         },
         **common,
     )
+
+
+WEIGHT_FLOOR = -40  # the smallest row weight, 2^-40 (a row without noise gets it)
+
+
+def row_weights(per_row: np.ndarray) -> np.ndarray | None:
+    """The exponents k of the rows' weights 2^k: each row's bound over the largest, rounded to
+    a power of two, at least 2^``WEIGHT_FLOOR``; None where they are all 1 (the rows' bounds
+    within a factor of sqrt(2) of the largest) or no row has noise.
+
+    Examples
+    --------
+    >>> row_weights(np.array([1e-3, 1e-3, 1e-1, 0.0])).tolist()
+    [-7, -7, 0, -40]
+    """
+    rows = np.asarray(per_row, dtype=float)
+    top = float(np.max(rows, initial=0.0))
+    if not top > 0 or not math.isfinite(top):
+        return None
+    with np.errstate(divide="ignore"):
+        k = np.round(np.log2(rows / top))
+    k = np.maximum(np.where(rows > 0, k, WEIGHT_FLOOR), WEIGHT_FLOOR).astype(np.int64)
+    return k if np.any(k) else None
 
 
 def _error_model(design: ObserverDesign) -> Any:
