@@ -352,7 +352,7 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
     return Check(
         verdict=Verdict.HOLDS,
         summary=f"Without attack and with noise within the spec's bounds on every sample, the "
-        f"estimation error eventually stays within {readable(bound)} (2-norm), from {source}: "
+        f"estimation error {settles(bound)} (2-norm), from {source}: "
         f"{formula} with gamma = {readable(float(gamma))}, "
         f"alpha = {readable(float(alpha))} and N = {readable(found.noise_norm)}. A search "
         f"over {search['sequences']} noise sequences within the bounds (from zero error, "
@@ -382,6 +382,18 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
         },
         **common,
     )
+
+
+def settles(bound: float) -> str:
+    """What an ultimate bound says of the error: it eventually stays within a positive one;
+    with 0 (the noise does not reach the error) it converges to 0, which it may never reach.
+
+    Examples
+    --------
+    >>> settles(0.0), settles(0.25)
+    ('converges to 0', 'eventually stays within 0.25')
+    """
+    return "converges to 0" if bound == 0 else f"eventually stays within {readable(bound)}"
 
 
 WEIGHT_FLOOR = -40  # the smallest row weight, 2^-40 (a row without noise gets it)
@@ -506,7 +518,7 @@ def _local_check(
         verdict=Verdict.HOLDS,
         summary=f"Without attack and with noise within the spec's bounds on every sample, from "
         f"every initial error with ||e(0)|| <= {readable(radius)} (attack estimate 0) the "
-        f"estimation error eventually stays within {readable(bound)} (2-norm); no global "
+        f"estimation error {settles(bound)} (2-norm); no global "
         f"bound ({why}). Near zero error the observer estimates no attack (its dead zone) and "
         f"is linear: sqrt(V), V = xi' P xi, contracts by {readable(found.rho)} per step and "
         f"a sample of noise moves it by at most {readable(found.reach)}, so it falls to "
@@ -908,8 +920,12 @@ def observer_noise_check(
     return Check(
         verdict=Verdict.HOLDS,
         summary=f"Without attack and with noise within {each}{per_sample}, the estimation "
-        f"error eventually stays within {readable(found.bound_2)} (2-norm; each component within "
-        f"{readable(found.bound_inf)} at most), whatever the initial error."
+        + (
+            f"error {settles(found.bound_2)} (2-norm; each component within "
+            f"{readable(found.bound_inf)} at most), whatever the initial error."
+            if found.bound_2 > 0
+            else "error converges to 0 whatever the initial error (the noise does not reach it)."
+        )
         + (
             f" Some noise within the bounds drives a component to {readable(lower)}"
             f"{_tightness(found)}."

@@ -57,6 +57,11 @@ def reason(region: Region) -> str:
         )
         why = "is not stable" if code is RegionCode.DEAD_ZONE_UNSTABLE else "has no verified P"
         return f"the linear dynamics of the dead zone ({dynamics}) {why}: {facts['lyapunov']}"
+    if code is RegionCode.LEVEL_OUT_OF_RANGE and facts.get("unreached"):
+        return (
+            "no threshold input depends on the error (every row of the dead zone's inputs is "
+            "zero), so no level bounds a region; this check claims none"
+        )
     if code is RegionCode.LEVEL_OUT_OF_RANGE:
         return (
             "the dead zone's level set is out of floating-point range "

@@ -195,7 +195,11 @@ def _region(
     room = np.where(spread > 0, room, np.inf)
     level = SAFETY * float(np.min(room))
     if not math.isfinite(level):
-        return Region.none(RegionCode.LEVEL_OUT_OF_RANGE, threshold=model.threshold)
+        return Region.none(
+            RegionCode.LEVEL_OUT_OF_RANGE,
+            threshold=model.threshold,
+            unreached=bool(np.all(spread == 0)),
+        )
     n_e = model.n_e
     top = float(np.linalg.eigvalsh(P[:n_e, :n_e])[-1])
     # a hair inside, so that the ball lies strictly in the level set on the printed numbers
