@@ -894,3 +894,55 @@ def test_sensors_of_unlike_noise_weigh_the_rows_of_the_dissipation_inequality():
         [rng.choice([-1.0, 1.0], (300, 32, 5)), rng.uniform(-1.0, 1.0, (300, 32, 5))], axis=1
     ) * np.array(eta)
     assert np.max(np.linalg.norm(simulator.run(noise).x_hat, axis=-1)) <= check.value
+
+
+def test_the_observer_bound_names_the_sensor_to_harden():
+    # the bound with each sensor's noise halved, from the same certificate: the one that
+    # lowers it most is named, re-derived here; a simulation under the halved noise stays
+    # within the hardened bound
+    from ssecert.observers import build_observer
+    from ssecert.stability.noise_gain import linear_noise_bound
+    from ssecert.stability.noise_messages import measurement_rows
+
+    eta = np.array([1e-3, 2e-3, 1e-3, 1e-3, 5e-3])
+    linear = {"kind": "luenberger", "gain": "place", "poles": [0.3, 0.4]}
+    spec = spec_from_dict({**_spec({"measurement": eta.tolist()}), "observer": linear})
+    check = analyze(spec)["observer_noise_bound"]
+    design = build_observer(spec.system, spec.observer)
+    halved = []
+    for i in range(5):
+        scale = np.ones(5)
+        scale[i] = 0.5
+        found = linear_noise_bound(design.error_matrix, design.L, eta * scale)
+        halved.append(found.bound_2)
+    best = int(np.argmin(halved))
+    assert check.fields["worst_sensor"] == spec.system.sensors[best]
+    assert check.fields["hardened_bound"] == pytest.approx(halved[best], rel=1e-9)
+    assert check.fields["hardened_bound"] < check.value
+    scale = np.ones(5)
+    scale[best] = 0.5
+    rng = np.random.default_rng(9)
+    noise = rng.choice([-1.0, 1.0], (300, 64, 5)) * eta * scale
+    path = design.observer_kind.simulator(design).run(noise).x_hat
+    assert np.max(np.linalg.norm(path, axis=-1)) <= check.fields["hardened_bound"]
+    # a sparse observer's dissipation inequality: N from the halved rows, the same P
+    sparse = {"kind": "elastic_net", "step": 0.3, "threshold": 0.05, "shrink": 0.3,
+              "gain": "place", "poles": [0.3, 0.4]}  # fmt: skip
+    spec = spec_from_dict({**_spec({"measurement": eta.tolist()}), "observer": sparse})
+    check = analyze(spec)["observer_noise_bound"]
+    e = check.evidence
+    design = build_observer(spec.system, spec.observer)
+    index = list(spec.system.sensors).index(check.fields["worst_sensor"])
+    scale = np.ones(5)
+    scale[index] = 0.5
+    rows = measurement_rows(design, MeasurementNoise(eta * scale))
+    if e["from"] == "decay scan, rows weighted":
+        rows = rows / np.ldexp(1.0, np.asarray(e["row_weights_log2"]))
+    top = np.max(np.linalg.eigvalsh(np.linalg.inv(np.asarray(e["P"]))[:2, :2]))
+    expected = math.sqrt(e["gamma"] ** 2 * np.sum(rows**2) / e["alpha"] * top)
+    assert check.fields["hardened_bound"] == pytest.approx(expected, rel=1e-5)
+    assert check.fields["hardened_bound"] < check.value
+    # alike sensors: none singled out
+    calm = spec_from_dict({**_spec({"measurement": 1e-3}), "observer": sparse})
+    fields = analyze(calm)["observer_noise_bound"].fields
+    assert fields["worst_sensor"] is None and fields["hardened_bound"] > 0

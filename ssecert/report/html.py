@@ -544,6 +544,15 @@ def _noise_context(
             rows.append(
                 ("some noise drives a component to", readable(observer.fields["lower_bound"]))
             )
+        if observer.fields.get("hardened_bound") is not None:
+            worst = observer.fields.get("worst_sensor")
+            rows += [
+                (
+                    "observer: the sensor to harden",
+                    worst if worst is not None else "none singled out (several lower it alike)",
+                ),
+                ("its noise halved: the bound", readable(observer.fields["hardened_bound"])),
+            ]
     elif observer is not None:
         rows.append(("observer", observer.summary))
     for name, res in simulations.items():

@@ -349,6 +349,21 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
         )
     if 0 < bound < 2.0**-1022:  # a subnormal product is rounded: take it up
         bound = float(np.nextafter(bound, np.inf))
+    hardening: dict[str, Any] = {}
+    harden_words = ""
+    if noise.process is None:
+        # the same inequality bounds the error under any smaller noise: N from the rows of
+        # the noise with one sensor's bound halved (divided by the rows' weights, if any)
+        by_rows = origin == "decay scan, rows weighted"
+        divide = np.ldexp(1.0, weights) if by_rows and weights is not None else 1.0
+
+        def harden(scale: np.ndarray) -> float:
+            rows = measurement_rows(design, _scaled_noise(noise, scale))
+            if rows is None:
+                return math.inf
+            return dissipation_bound(P, float(alpha), float(gamma), rows / divide, n).bound
+
+        hardening, harden_words = _hardening_fields(design, sensor_hardening(noise.eta, harden))
     return Check(
         verdict=Verdict.HOLDS,
         summary=f"Without attack and with noise within the spec's bounds on every sample, the "
@@ -357,12 +372,13 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
         f"alpha = {readable(float(alpha))} and N = {readable(found.noise_norm)}. A search "
         f"over {search['sequences']} noise sequences within the bounds (from zero error, "
         f"{search['steps']} steps{ascent_text(search)}) reached "
-        f"{readable(search['largest_error'])}." + energy_words,
+        f"{readable(search['largest_error'])}." + harden_words + energy_words,
         value=bound,
         fields={
             "ultimate_bound": bound,
             "energy_gain": energy,
             "noise": noise.to_dict(),
+            **hardening,
         },
         evidence={
             "from": origin,
@@ -382,6 +398,69 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
         },
         **common,
     )
+
+
+HARDEN_SENSORS = 64  # sensors whose noise is halved one at a time (the noisiest, beyond)
+
+
+def sensor_hardening(
+    eta: np.ndarray, bound_of: Callable[[np.ndarray], float]
+) -> tuple[int | None, float, int] | None:
+    """The sensor to harden: the one whose noise bound halved lowers the certified bound the
+    most (None where several lower it alike, to a relative 1e-9: the certificate does not
+    tell them apart), that bound (``bound_of(scale)`` certifies one with sensor i's bound
+    times scale[i], from the same certificate), and how many sensors were tried (every
+    sensor with noise, or the ``HARDEN_SENSORS`` noisiest); None where no sensor has noise.
+
+    Examples
+    --------
+    >>> sensor_hardening(np.array([1.0, 3.0]), lambda scale: float(scale @ [1.0, 3.0]))
+    (1, 2.5, 2)
+    >>> sensor_hardening(np.array([1.0, 1.0]), lambda scale: float(scale @ [1.0, 1.0]))
+    (None, 1.5, 2)
+    """
+    noisy = np.flatnonzero(np.asarray(eta) > 0)
+    if noisy.size > HARDEN_SENSORS:
+        noisy = np.sort(noisy[np.argsort(-eta[noisy], kind="stable")[:HARDEN_SENSORS]])
+    bounds = []
+    for i in noisy.tolist():
+        scale = np.ones(eta.size)
+        scale[i] = 0.5
+        bounds.append(float(bound_of(scale)))
+    if not bounds:
+        return None
+    best = int(np.argmin(bounds))
+    tied = sum(1 for b in bounds if b <= bounds[best] * (1 + 1e-9))
+    return (int(noisy[best]) if tied == 1 else None), bounds[best], int(noisy.size)
+
+
+def _hardening_fields(
+    design: ObserverDesign, found: tuple[int | None, float, int] | None
+) -> tuple[dict[str, Any], str]:
+    """The check's fields naming the sensor to harden (None where the certificate does not
+    tell the sensors apart), and the summary's sentence."""
+    if found is None or not math.isfinite(found[1]):
+        return {}, ""
+    sensor, bound, tried = found
+    among = "" if tried == design.system.p else f" (of the {tried} noisiest sensors)"
+    if sensor is None:
+        return (
+            {"worst_sensor": None, "hardened_bound": bound},
+            f" Halving the noise bound of any one of several sensors lowers it alike{among}, "
+            f"to {readable(bound)} (the certificate does not tell them apart).",
+        )
+    name = design.system.sensors[sensor]
+    return (
+        {"worst_sensor": name, "hardened_bound": bound},
+        f" Halving sensor {name}'s noise bound lowers it the most{among}, to {readable(bound)}.",
+    )
+
+
+def _scaled_noise(noise: MeasurementNoise, scale: np.ndarray) -> MeasurementNoise:
+    """``noise`` with each sensor's bound times ``scale``."""
+    from dataclasses import replace
+
+    return replace(noise, eta=noise.eta * scale)
 
 
 def settles(bound: float) -> str:
@@ -456,6 +535,7 @@ def _local_check(
     per_row = measurement_rows(design, noise)
     if per_row is None:
         return None
+    measured = per_row.size
     region, q_identity = dead_zone_region(model)
     if region.radius <= 0 or region.evidence.get("P") is None:
         return None
@@ -498,6 +578,15 @@ def _local_check(
         )
     search = noise_search(design, noise)
     bound, radius = found.bound, found.radius
+    extra = per_row[measured:]  # (the process noise's bounds, unchanged)
+
+    def harden(scale: np.ndarray) -> float:
+        rows = measurement_rows(design, _scaled_noise(noise, scale))
+        if rows is None:
+            return math.inf
+        return local_noise_bound(noise_model, P, np.concatenate([rows, extra]), n).bound
+
+    hardening, harden_words = _hardening_fields(design, sensor_hardening(noise.eta, harden))
     if not search["largest_error"] <= bound:
         return _no_bound(
             "No ultimate error bound under noise is certified: a simulated noise within the "
@@ -527,13 +616,14 @@ def _local_check(
         f"{readable(float(model.threshold))}. A "
         f"search over {search['sequences']} noise sequences within the bounds (from zero "
         f"error, {search['steps']} steps{ascent_text(search)}) reached "
-        f"{readable(search['largest_error'])}." + energy_words,
+        f"{readable(search['largest_error'])}." + harden_words + energy_words,
         value=bound,
         fields={
             "ultimate_bound": bound,
             "energy_gain": energy,
             "region_radius": radius,
             "noise": noise.to_dict(),
+            **hardening,
         },
         evidence=evidence,
         **common,
@@ -902,6 +992,16 @@ def observer_noise_check(
             value=math.inf,
             **common,
         )
+    p = design.system.p
+
+    def harden(scale: np.ndarray) -> float:
+        scaled = bounds.copy()
+        scaled[:p] *= scale
+        again = linear_noise_bound(F, inputs, scaled, rounding_F=rounding_F, rounding_L=rounding_L)
+        return again.bound_2 if again.code is NoiseGainCode.CERTIFIED else math.inf
+
+    hardening, harden_words = _hardening_fields(design, sensor_hardening(noise.eta, harden))
+    fields.update(hardening)
     eta = noise.eta
     each = (
         f"{readable(float(eta[0]))} on every sample of every sensor"
@@ -932,6 +1032,7 @@ def observer_noise_check(
             if lower > 0
             else ""
         )
+        + harden_words
         + energy_words,
         value=found.bound_2,
         **common,
