@@ -255,6 +255,25 @@ _CHECK_FIELDS: dict[str, dict[str, Any]] = {
         "horizon": {"type": "integer", "minimum": 1},
         "decoder": {"enum": ["l0"]},
     },
+    "observer_noise_bound": {
+        "ultimate_bound": {
+            **_REAL,
+            "description": "certified: without attack the error eventually stays within it "
+            "(2-norm; Infinity: none)",
+        },
+        "region_radius": {
+            **_REAL,
+            "description": "a local bound's: it holds from the initial errors within this "
+            "radius (attack estimate 0)",
+        },
+        "worst_sensor": {
+            "type": ["string", "null"],
+            "description": "the sensor whose noise bound halved lowers the bound the most "
+            "(null: several lower it alike)",
+        },
+        "hardened_bound": {**_REAL, "description": "the bound with that sensor's noise halved"},
+        "noise": {"type": "object", "required": ["measurement", "norm"]},
+    },
     "l1_error_bound": {
         "bound": {**_REAL, "description": "certified bound of ||x_hat - x||_2 (Infinity: none)"},
         "lower_bound": {
