@@ -395,6 +395,7 @@ def decay_scan(
     *,
     solves: int = SCAN_SOLVES,
     bound_of: Callable[[np.ndarray, float, float], DissipationBound] | None = None,
+    tried: list[dict[str, float]] | None = None,
 ) -> DecayScan | None:
     """The smallest ultimate bound under noise within ``per_row`` (``dissipation_bound``) of
     the inequality V+ - V <= -a V + g |n|^2 with decay a = ``alpha``, 4 ``alpha``, 16
@@ -410,7 +411,8 @@ def decay_scan(
     this one (on the 2-state test plant's window SSO, 0.245 against 0.065).
 
     ``bound_of(P, alpha, gamma)`` gives each verified inequality's bound instead of
-    ``dissipation_bound`` (``split_bound``'s, the process noise split off)."""
+    ``dissipation_bound`` (``split_bound``'s, the process noise split off).  ``tried``, a
+    list, receives each decay tried and its bound (inf: not verified), also when none is."""
     from .lmi_solver import lmi_cost
 
     quiet = replace(model, Ce=np.zeros_like(model.Ce))
@@ -421,7 +423,7 @@ def decay_scan(
         for st in SCAN_STRUCTURES
         if st != "cross" or lmi_cost(quiet, "iss", "cross")[1] <= SCAN_CROSS_OPERATIONS
     )
-    tried: list[dict[str, float]] = []
+    tried = [] if tried is None else tried
 
     def attempt(a: float) -> DecayScan | None:
         """The verified inequality at decay a and its bound (recorded in ``tried``)."""

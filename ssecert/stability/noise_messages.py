@@ -210,7 +210,8 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
         )
     # the inequality without the output's term at iss_gain's decay and faster ones: where it
     # gives a smaller bound, that bound
-    scan = decay_scan(noise_model, float(iss.fields["alpha"]), per_row, n)
+    scan_tried: list[dict[str, float]] = []
+    scan = decay_scan(noise_model, float(iss.fields["alpha"]), per_row, n, tried=scan_tried)
     if scan is not None and (
         found is None or found.ill_conditioned or scan.found.bound < found.bound
     ):
@@ -235,11 +236,14 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
         # sensors of unlike noise: the same scan for the noise written n = diag(2^k) nu, each
         # row's weight near its bound over the largest, so that the LMI weighs the noisy
         # rows more than the precise ones (often far smaller; never taken when larger)
+        # (from the unweighted scan's best decay, where its LMI is known to verify)
+        weighted_tried: list[dict[str, float]] = []
         weighted = decay_scan(
             noise_model.input_scaled(weights),
-            float(iss.fields["alpha"]),
+            float(iss.fields["alpha"]) if scan is None else scan.alpha,
             per_row / np.ldexp(1.0, weights),
             n,
+            tried=weighted_tried,
         )
         if weighted is not None and (
             found is None or found.ill_conditioned or weighted.found.bound < found.bound
@@ -249,8 +253,9 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
             source = (
                 f"a dissipation inequality V+ - V <= -alpha V + gamma^2 |nu|^2 at decay "
                 f"{readable(weighted.alpha)} for the noise written n = diag(2^k) nu (each "
-                "row's weight 2^k a power of two near its bound over the largest, so |nu_i| <= "
-                "eta_i 2^-k_i; verified as iss_gain's, the smallest bound of the decays tried)"
+                "row's weight 2^k a power of two near its bound over the largest, k in the "
+                "evidence's row_weights_log2, so |nu_i| <= eta_i 2^-k_i; verified as iss_gain's, "
+                "the smallest bound of the decays tried)"
             )
             common["method"] = (
                 "ISS dissipation inequality with decay, the noise's rows weighted, the "
@@ -258,7 +263,7 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
             )
         weight_evidence = {
             "row_weights_log2": weights.tolist(),
-            "weighted_decays_tried": [] if weighted is None else weighted.tried,
+            "weighted_decays_tried": weighted_tried,
         }
     split_evidence: dict[str, Any] = {}
     if noise.process is not None:
@@ -288,6 +293,7 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
             )  # fmt: skip
             if faster is not None and faster.found.bound < found.bound:
                 P, alpha, gamma, scan = faster.P, faster.alpha, faster.gamma, faster
+                scan_tried = faster.tried
                 split = split_bound(P, alpha, gamma, found_rows, G, omega, n)
                 found = split_as_dissipation(split)
                 source = (
@@ -363,7 +369,9 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
                 return math.inf
             return dissipation_bound(P, float(alpha), float(gamma), rows / divide, n).bound
 
-        hardening, harden_words = _hardening_fields(design, sensor_hardening(noise.eta, harden))
+        hardening, harden_words = _hardening_fields(
+            design, noise.eta, sensor_hardening(noise.eta, harden)
+        )
     return Check(
         verdict=Verdict.HOLDS,
         summary=f"Without attack and with noise within the spec's bounds on every sample, the "
@@ -391,7 +399,7 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
             "noise_search": search,
             # the decays the inequality without the output's term was tried at, and the bound of
             # each (inf: not verified); the smallest bound of these and iss_gain's is the one
-            "decays_tried": [] if scan is None else scan.tried,
+            "decays_tried": scan_tried,
             "P": np.asarray(P, dtype=float),
             **weight_evidence,
             **split_evidence,
@@ -435,14 +443,15 @@ def sensor_hardening(
 
 
 def _hardening_fields(
-    design: ObserverDesign, found: tuple[int | None, float, int] | None
+    design: ObserverDesign, eta: np.ndarray, found: tuple[int | None, float, int] | None
 ) -> tuple[dict[str, Any], str]:
     """The check's fields naming the sensor to harden (None where the certificate does not
     tell the sensors apart), and the summary's sentence."""
     if found is None or not math.isfinite(found[1]):
         return {}, ""
     sensor, bound, tried = found
-    among = "" if tried == design.system.p else f" (of the {tried} noisiest sensors)"
+    noisy = int(np.count_nonzero(eta > 0))
+    among = "" if tried >= noisy else f" (of the {tried} noisiest sensors)"
     if sensor is None:
         return (
             {"worst_sensor": None, "hardened_bound": bound},
@@ -475,7 +484,7 @@ def settles(bound: float) -> str:
     return "converges to 0" if bound == 0 else f"eventually stays within {readable(bound)}"
 
 
-WEIGHT_FLOOR = -40  # the smallest row weight, 2^-40 (a row without noise gets it)
+WEIGHT_FLOOR = -20  # the smallest row weight, 2^-20 (a row without noise gets it)
 
 
 def row_weights(per_row: np.ndarray) -> np.ndarray | None:
@@ -486,7 +495,7 @@ def row_weights(per_row: np.ndarray) -> np.ndarray | None:
     Examples
     --------
     >>> row_weights(np.array([1e-3, 1e-3, 1e-1, 0.0])).tolist()
-    [-7, -7, 0, -40]
+    [-7, -7, 0, -20]
     """
     rows = np.asarray(per_row, dtype=float)
     top = float(np.max(rows, initial=0.0))
@@ -586,7 +595,9 @@ def _local_check(
             return math.inf
         return local_noise_bound(noise_model, P, np.concatenate([rows, extra]), n).bound
 
-    hardening, harden_words = _hardening_fields(design, sensor_hardening(noise.eta, harden))
+    hardening, harden_words = _hardening_fields(
+        design, noise.eta, sensor_hardening(noise.eta, harden)
+    )
     if not search["largest_error"] <= bound:
         return _no_bound(
             "No ultimate error bound under noise is certified: a simulated noise within the "
@@ -1000,7 +1011,9 @@ def observer_noise_check(
         again = linear_noise_bound(F, inputs, scaled, rounding_F=rounding_F, rounding_L=rounding_L)
         return again.bound_2 if again.code is NoiseGainCode.CERTIFIED else math.inf
 
-    hardening, harden_words = _hardening_fields(design, sensor_hardening(noise.eta, harden))
+    hardening, harden_words = _hardening_fields(
+        design, noise.eta, sensor_hardening(noise.eta, harden)
+    )
     fields.update(hardening)
     eta = noise.eta
     each = (
