@@ -180,22 +180,13 @@ class LureModel:
         """
         extra = np.asarray(extra, dtype=float)
         zeros = np.zeros((self.Dw.shape[0], extra.shape[1]))
-        build = None
-        if self.exact_build is not None:
-            parent = self
-
-            def build() -> ExactLure | None:
-                exact = parent.exact()
-                if exact is None:
-                    return None
-                return ExactLure(
-                    exact.A,
-                    exact.B,
-                    exact.Cw,
-                    Dyadic.block([[exact.E, dyadic(extra)]]),
-                    Dyadic.block([[exact.Dw, Dyadic.zeros(zeros.shape)]]),
-                )
-
+        build = self._exact_derived(
+            lambda exact: replace(
+                exact,
+                E=Dyadic.block([[exact.E, dyadic(extra)]]),
+                Dw=Dyadic.block([[exact.Dw, Dyadic.zeros(zeros.shape)]]),
+            )
+        )
         return replace(
             self, E=np.hstack([self.E, extra]), Dw=np.hstack([self.Dw, zeros]), exact_build=build
         )
@@ -214,23 +205,31 @@ class LureModel:
         k = np.asarray(k, dtype=np.int64)
         if k.shape != (self.r,) or np.any(k > 0):
             raise ValueError(f"k: expected {self.r} exponents <= 0, got {k.tolist()}")
-        build = None
-        if self.exact_build is not None:
-            parent = self
-
-            def build() -> ExactLure | None:
-                exact = parent.exact()
-                if exact is None:
-                    return None
-                N, m = exact.E.shape[0], exact.Dw.shape[0]
-                return replace(
-                    exact,
-                    E=exact.E.scaled(np.zeros(N, np.int64), k),
-                    Dw=exact.Dw.scaled(np.zeros(m, np.int64), k),
-                )
-
+        N, m = self.N, self.Dw.shape[0]
+        build = self._exact_derived(
+            lambda exact: replace(
+                exact,
+                E=exact.E.scaled(np.zeros(N, np.int64), k),
+                Dw=exact.Dw.scaled(np.zeros(m, np.int64), k),
+            )
+        )
         w = np.ldexp(1.0, k)
         return replace(self, E=self.E * w, Dw=self.Dw * w, exact_build=build)
+
+    def _exact_derived(
+        self, change: Callable[[ExactLure], ExactLure]
+    ) -> Callable[[], ExactLure | None] | None:
+        """The exact build of a model derived from this one by ``change`` of its exact
+        matrices (None where this model's floats are themselves its data)."""
+        if self.exact_build is None:
+            return None
+        parent = self
+
+        def build() -> ExactLure | None:
+            exact = parent.exact()
+            return None if exact is None else change(exact)
+
+        return build
 
     def vertex(self, k: float) -> np.ndarray:
         """Closed loop with phi(w) = k w."""
@@ -253,14 +252,7 @@ class LureModel:
         (``balancing``) every entry is scaled exactly.
         """
         s = np.asarray(s, dtype=float)
-        build = None
-        if self.exact_build is not None:
-            parent = self
-
-            def build() -> ExactLure | None:
-                exact = parent.exact()
-                return None if exact is None else exact.scaled(s)
-
+        build = self._exact_derived(lambda exact: exact.scaled(s))
         spread = float(s.max() / s.min()) if s.size else 1.0
         error = None
         if self.exact_error is not None:
