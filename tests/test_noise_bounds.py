@@ -946,3 +946,40 @@ def test_the_observer_bound_names_the_sensor_to_harden():
     calm = spec_from_dict({**_spec({"measurement": 1e-3}), "observer": sparse})
     fields = analyze(calm)["observer_noise_bound"].fields
     assert fields["worst_sensor"] is None and fields["hardened_bound"] > 0
+
+
+def test_a_tiny_iss_decay_does_not_hold_the_decay_scan_down():
+    # iss_gain certifies this elastic net with decay 5e-9: its bound (1 / alpha) is far from
+    # the best, and climbing from there by factors of 4 ended at 8e-8 (0.0125); the scan now
+    # starts at SCAN_START (a bound over a thousand times smaller), every printed number
+    # re-derived, the search within it
+    from ssecert.observers import build_observer
+    from ssecert.stability.noise_gain import SCAN_START
+    from ssecert.stability.noise_messages import measurement_rows
+
+    L2 = np.diag([0.5441, 0.944, 0.9778, 0.5404, 0.6011]).tolist()
+    data = {
+        "name": "slow-iss",
+        "system": {"A": [[-0.4677]],
+                   "C": [[0.0003], [-0.0067], [-1185.7815], [1.9048], [11.8253]]},
+        "attack": {"max_attacked": 0, "horizon": 1},
+        "observer": {"kind": "elastic_net", "step": 0.7293, "threshold": 0.0258,
+                     "shrink": 0.7771, "gain": "place", "poles": [-0.42], "L2": L2},
+        "noise": {"measurement": [1e-12, 1e-12, 0.0127, 0.0127, 1e-12]},
+    }  # fmt: skip
+    spec = spec_from_dict(data)
+    cert = analyze(spec)
+    check, iss = cert["observer_noise_bound"], cert["iss_gain"]
+    e = check.evidence
+    assert iss.fields["alpha"] < SCAN_START / 4 and e["decays_tried"][0]["alpha"] == SCAN_START
+    assert check.verdict is Verdict.HOLDS and check.value < 1e-4
+    design = build_observer(spec.system, spec.observer)
+    rows = measurement_rows(design, spec.noise)
+    if e["from"] == "decay scan, rows weighted":
+        rows = rows / np.ldexp(1.0, np.asarray(e["row_weights_log2"]))
+    top = np.max(np.linalg.eigvalsh(np.linalg.inv(np.asarray(e["P"]))[:1, :1]))
+    expected = math.sqrt(e["gamma"] ** 2 * np.sum(rows**2) / e["alpha"] * top)
+    # (lambda_max((P^-1)_ee) is taken up by a relative 1e-8 cond(P), P's inverse's error)
+    slack = math.sqrt(1 + 1e-8 * e["condition_P"]) * (1 + 1e-9)
+    assert expected <= check.value <= expected * slack
+    assert 0 < e["noise_search"]["largest_error"] <= check.value

@@ -335,6 +335,7 @@ def dissipation_bound(
 # (``decay_scan``)
 SCAN_SOLVES = 8
 SCAN_FACTOR = 2.0
+SCAN_START = 1e-2  # below it (4 times over), the scan starts here rather than at iss_gain's decay
 # the scan's LMIs are solved only for error models whose one dissipation LMI is estimated
 # below this many operations (``lmi_solver.lmi_cost``, block-diagonal P; measured 0.45 s for
 # 3.2e10 on this machine, an SSO of 2 states and 5 sensors over a window of 3)
@@ -399,8 +400,10 @@ def decay_scan(
 ) -> DecayScan | None:
     """The smallest ultimate bound under noise within ``per_row`` (``dissipation_bound``) of
     the inequality V+ - V <= -a V + g |n|^2 with decay a = ``alpha``, 4 ``alpha``, 16
-    ``alpha`` ... below 1 while each is verified and its bound is smaller, then twice and
-    half the best, at most ``solves`` in all, each solved and verified as iss_gain's
+    ``alpha`` ... below 1 while each is verified and its bound is smaller (from ``alpha``
+    below ``SCAN_START`` / 4: ``SCAN_START``, 4 times it ... and, where ``SCAN_START`` is the
+    best, a quarter of it ... down to ``alpha``; from ``alpha`` where ``SCAN_START`` does not
+    verify), then twice and half the best, at most ``solves`` in all, each solved and verified as iss_gain's
     certificate is (``lmi.iss_certificate`` of the error model without its output, so that
     the LMI weighs only V's ellipsoid, which the bound rests on; ``SCAN_STRUCTURES``).  None
     where none is verified, or where the model's LMI is too large for several solves
@@ -444,15 +447,27 @@ def decay_scan(
         t = np.zeros(0) if cert.multipliers is None else np.asarray(cert.multipliers, dtype=float)
         return DecayScan(found, float(cert.decay), float(cert.gamma), P, t, tried)
 
-    # coarse steps of SCAN_FACTOR^2 from iss_gain's decay while the bound falls, then the
-    # decays halfway (in logarithm) on either side of the best
+    def climb(a: float, factor: float, best: DecayScan | None) -> DecayScan | None:
+        """Coarse steps of ``factor`` from decay a while each verifies and the bound falls."""
+        while len(tried) < solves - 2 and 0 < a < 1 and a >= alpha:
+            found = attempt(a)
+            if found is None or (best is not None and not found.found.bound < best.found.bound):
+                break
+            best, a = found, a * factor
+        return best
+
+    # coarse steps of SCAN_FACTOR^2 up from iss_gain's decay while the bound falls, then the
+    # decays halfway (in logarithm) on either side of the best; from a decay far below
+    # SCAN_START (whose bound, 1 / alpha, is far from the best) the climb starts at
+    # SCAN_START instead, up and then down to iss_gain's decay, and from iss_gain's decay
+    # where SCAN_START does not verify
     best: DecayScan | None = None
-    a = float(alpha)
-    while len(tried) < solves - 2 and 0 < a < 1:
-        found = attempt(a)
-        if found is None or (best is not None and not found.found.bound < best.found.bound):
-            break
-        best, a = found, a * SCAN_FACTOR**2
+    if 0 < alpha < SCAN_START / SCAN_FACTOR**2:
+        best = climb(SCAN_START, SCAN_FACTOR**2, None)
+        if best is not None and best.alpha == SCAN_START:
+            best = climb(SCAN_START / SCAN_FACTOR**2, SCAN_FACTOR**-2, best)
+    if best is None:
+        best = climb(float(alpha), SCAN_FACTOR**2, None)
     if best is not None:
         for a in (best.alpha * SCAN_FACTOR, best.alpha / SCAN_FACTOR):
             if len(tried) < solves and alpha <= a < 1 and all(d["alpha"] != a for d in tried):
