@@ -274,7 +274,7 @@ class SparseSoftObserverKind(SoftThresholdObserverKind):
             return ExactLure(
                 A=F,
                 B=Dyadic.zeros((n, W.shape[0])),
-                Cw=Dyadic.block([[r] for r in rows]),
+                Cw=Dyadic.block([[row] for row in rows]),
                 E=inputs[0] if inputs else Dyadic.zeros(E.shape),
                 Dw=Dyadic.block([[d] for d in inputs[1:]]) if inputs else Dyadic.zeros(Dw.shape),
             )

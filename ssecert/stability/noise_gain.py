@@ -510,88 +510,121 @@ def local_noise_bound(model: Any, P: np.ndarray, per_row: np.ndarray, n: int) ->
     r_min sqrt(lambda_max((P^-1)_ee)), from every initial error with e(0)' P_ee e(0) <=
     r_max^2, the attack estimate 0.  The model's rounding (``model.rounding``, the floats of
     [A B E; Cw Dw] against the spec's data) is taken into each term, and every product up by
-    its rounding; P's inverse to a relative 1e-8 of a P with condition number up to 1e8."""
-    from .lyapunov import verified_decrease
+    its rounding; P's inverse to a relative 1e-8 of a P with condition number up to 1e8.
+    ``LocalNoise(model, P, n)`` computes what depends on P once, for several noises."""
+    return LocalNoise(model, P, n).bound(per_row)
 
-    def none(problem: str, **known: float) -> LocalBound:
-        nan = math.nan
-        numbers = {k: known.get(k, nan) for k in LocalBound._fields[2:-1]}
-        return LocalBound(math.inf, 0.0, **numbers, problem=problem)
 
-    P = 0.5 * (np.asarray(P, dtype=float) + np.asarray(P, dtype=float).T)
-    N = P.shape[0]
-    eps = float(model.rounding)
-    threshold = float(model.threshold)
-    if model.m == 0 or not threshold > 0:
-        return none("the observer has no dead zone")
-    verified = verified_decrease(model.A, P, rounding=eps)
-    if verified is None:
-        return none("V = xi' P xi is not verified to decrease in the dead zone")
-    cond = float(np.linalg.cond(P))
-    if not math.isfinite(cond) or cond > 1e8:
-        return none(
-            f"P is too ill-conditioned (condition number {cond:.3g}) to invert", condition=cond
-        )
-    dec_min, error = verified
-    eigs = np.linalg.eigvalsh(P)
-    normP, top_P = float(np.linalg.norm(P, 2)), float(eigs[-1]) * (1 + 64 * N * 2.0**-53)
-    low_P = float(eigs[0]) * (1 - 1e-8 * cond)
-    rho2 = 1.0 - (dec_min - error) * normP / top_P * (1 - gamma(4))
-    rho = math.sqrt(max(rho2, 0.0)) * (1 + gamma(4))
-    if not rho < 1.0:
-        return none("V's decrease leaves no contraction", condition=cond)
-    inverse = np.linalg.inv(P)
-    inverse = 0.5 * (inverse + inverse.T)
-    slack = 1 + 1e-8 * max(cond, 1.0)
-    bounds = np.asarray(per_row, dtype=float)
-    E, Dw, Cw = np.asarray(model.E, float), np.asarray(model.Dw, float), np.asarray(model.Cw, float)
-    with np.errstate(over="ignore", invalid="ignore"):
-        noise_2 = float(rows_norm_up(bounds[None, :])[0]) if bounds.size else 0.0
-        # max ||E a||_P over the box: each column's P-norm times its bound, summed, and
-        # sqrt(lambda_max(E' P E)) ||a||_2; the smaller, with E's rounding (||dE|| ||a||_2);
-        # each quadratic form up by its rounding (gamma(2 N) |x|' |P| |x|)
-        absP = np.abs(P)
-        forms = np.einsum("ij,jk,ki->i", E.T, P, E) + gamma(2 * N + 2) * np.einsum(
-            "ij,jk,ki->i", np.abs(E).T, absP, np.abs(E)
-        )
-        columns = np.sqrt(np.maximum(forms, 0.0)) * (1 + gamma(2))
-        by_columns = float(_up(np.sum(columns * bounds), bounds.size))
-        gram = E.T @ P @ E
-        gram_error = gamma(2 * N + 2) * float(np.linalg.norm(np.abs(E).T @ absP @ np.abs(E), 2))
-        top_gram = float(np.linalg.eigvalsh(0.5 * (gram + gram.T))[-1]) if gram.size else 0.0
-        top_gram += gram_error + 64 * max(gram.shape[0], 1) * 2.0**-53 * abs(top_gram)
-        by_norm = math.sqrt(max(top_gram, 0.0)) * noise_2 * (1 + gamma(4))
-        reach = (min(by_columns, by_norm) + math.sqrt(top_P) * eps * noise_2) * (1 + gamma(4))
-        # the noise's reach into each channel's input, and the state's through P^-1 (its
-        # rounding in slack), Cw's rounding eps ||xi|| with ||xi|| <= sqrt(V / lambda_min(P))
-        into = _up(np.abs(Dw) @ bounds, bounds.size) + eps * noise_2
-        spread = (
-            np.einsum("ij,jk,ik->i", Cw, inverse, Cw) * slack
-            + gamma(2 * N + 2) * np.einsum("ij,jk,ik->i", np.abs(Cw), np.abs(inverse), np.abs(Cw))
-        ) * slack
-        per_state = np.sqrt(np.maximum(spread, 0.0)) * (1 + gamma(2)) + eps / math.sqrt(low_P)
-    if not (math.isfinite(reach) and np.all(np.isfinite(into)) and np.all(np.isfinite(per_state))):
-        return none("the noise's reach leaves the floating-point range", condition=cond, rho=rho)
-    room = threshold - np.max(into) * (1 + gamma(2)) if into.size else threshold
-    known = {"rho": rho, "reach": reach, "into_dead_zone": float(np.max(into, initial=0.0)),
-             "condition": cond}  # fmt: skip
-    if not room > 0:
-        return none("the noise alone can leave the dead zone", **known)
-    # (a channel the state does not reach is bounded by the noise alone: no level)
-    with np.errstate(over="ignore"):
-        levels = np.where(per_state > 0, room / np.where(per_state > 0, per_state, 1.0), np.inf)
-    outer = float(np.min(levels)) * (1 - gamma(4))
-    inner = reach / (1.0 - rho) * (1 + gamma(4))
-    known.update(outer=outer, inner=inner)
-    if not inner < outer:
-        return none("the noise drives V beyond the dead zone's invariant set", **known)
-    block = inverse[:n, :n]
-    top = float(np.max(np.linalg.eigvalsh(0.5 * (block + block.T)))) * slack
-    top_ee = float(np.max(np.linalg.eigvalsh(P[:n, :n]))) * (1 + 64 * n * 2.0**-53)
-    bound = inner * math.sqrt(top) * (1 + gamma(4))
-    radius = outer / math.sqrt(top_ee) * (1 - gamma(4))
-    return LocalBound(bound, radius, rho, reach, inner, outer, known["into_dead_zone"], top,
-                      top_ee, cond, "")  # fmt: skip
+class LocalNoise:
+    """``local_noise_bound`` for one model and P: what depends on them (V's decrease and
+    contraction, P's inverse, each channel's reach per unit of sqrt(V), E's columns in V's
+    norm) computed once; ``bound(per_row)`` for each noise."""
+
+    def __init__(self, model: Any, P: np.ndarray, n: int) -> None:
+        from .lyapunov import verified_decrease
+
+        self.model, self.n = model, n
+        self.problem, self.known = "", {}
+        P = 0.5 * (np.asarray(P, dtype=float) + np.asarray(P, dtype=float).T)
+        N = P.shape[0]
+        self.eps = eps = float(model.rounding)
+        if model.m == 0 or not float(model.threshold) > 0:
+            self.problem = "the observer has no dead zone"
+            return
+        verified = verified_decrease(model.A, P, rounding=eps)
+        if verified is None:
+            self.problem = "V = xi' P xi is not verified to decrease in the dead zone"
+            return
+        cond = float(np.linalg.cond(P))
+        self.known = {"condition": cond}
+        if not math.isfinite(cond) or cond > 1e8:
+            self.problem = f"P is too ill-conditioned (condition number {cond:.3g}) to invert"
+            return
+        dec_min, error = verified
+        eigs = np.linalg.eigvalsh(P)
+        normP, top_P = float(np.linalg.norm(P, 2)), float(eigs[-1]) * (1 + 64 * N * 2.0**-53)
+        low_P = float(eigs[0]) * (1 - 1e-8 * cond)
+        rho2 = 1.0 - (dec_min - error) * normP / top_P * (1 - gamma(4))
+        self.rho = rho = math.sqrt(max(rho2, 0.0)) * (1 + gamma(4))
+        if not rho < 1.0:
+            self.problem = "V's decrease leaves no contraction"
+            return
+        self.known["rho"] = rho
+        inverse = np.linalg.inv(P)
+        inverse = 0.5 * (inverse + inverse.T)
+        slack = 1 + 1e-8 * max(cond, 1.0)
+        E, Cw = np.asarray(model.E, float), np.asarray(model.Cw, float)
+        self.Dw = np.asarray(model.Dw, float)
+        with np.errstate(over="ignore", invalid="ignore"):
+            # each column of E in V's norm, and sqrt(lambda_max(E' P E)) (the noise's 2-norm
+            # bound's), each quadratic form up by its rounding (gamma(2 N) |x|' |P| |x|)
+            absP = np.abs(P)
+            forms = np.einsum("ij,jk,ki->i", E.T, P, E) + gamma(2 * N + 2) * np.einsum(
+                "ij,jk,ki->i", np.abs(E).T, absP, np.abs(E)
+            )
+            self.columns = np.sqrt(np.maximum(forms, 0.0)) * (1 + gamma(2))
+            gram = E.T @ P @ E
+            gram_error = gamma(2 * N + 2) * float(np.linalg.norm(np.abs(E).T @ absP @ np.abs(E), 2))
+            top_gram = float(np.linalg.eigvalsh(0.5 * (gram + gram.T))[-1]) if gram.size else 0.0
+            top_gram += gram_error + 64 * max(gram.shape[0], 1) * 2.0**-53 * abs(top_gram)
+            self.root_gram = math.sqrt(max(top_gram, 0.0))
+            self.sqrt_top_P = math.sqrt(top_P)
+            # the state's reach into each channel through P^-1 (its rounding in slack), Cw's
+            # rounding eps ||xi|| with ||xi|| <= sqrt(V / lambda_min(P))
+            spread = (
+                np.einsum("ij,jk,ik->i", Cw, inverse, Cw) * slack
+                + gamma(2 * N + 2)
+                * np.einsum("ij,jk,ik->i", np.abs(Cw), np.abs(inverse), np.abs(Cw))
+            ) * slack
+            self.per_state = np.sqrt(np.maximum(spread, 0.0)) * (1 + gamma(2)) + eps / math.sqrt(
+                low_P
+            )
+        block = inverse[:n, :n]
+        self.top = float(np.max(np.linalg.eigvalsh(0.5 * (block + block.T)))) * slack
+        self.top_ee = float(np.max(np.linalg.eigvalsh(P[:n, :n]))) * (1 + 64 * n * 2.0**-53)
+
+    def bound(self, per_row: np.ndarray) -> LocalBound:
+        """The bound and its region for a noise with each entry of a within ``per_row``."""
+        known = dict(self.known)
+
+        def none(problem: str) -> LocalBound:
+            numbers = {k: known.get(k, math.nan) for k in LocalBound._fields[2:-1]}
+            return LocalBound(math.inf, 0.0, **numbers, problem=problem)
+
+        if self.problem:
+            return none(self.problem)
+        eps, rho, threshold = self.eps, self.rho, float(self.model.threshold)
+        bounds = np.asarray(per_row, dtype=float)
+        with np.errstate(over="ignore", invalid="ignore"):
+            noise_2 = float(rows_norm_up(bounds[None, :])[0]) if bounds.size else 0.0
+            # max ||E a||_P over the box: each column's P-norm times its bound, summed, and
+            # sqrt(lambda_max(E' P E)) ||a||_2; the smaller, with E's rounding (||dE|| ||a||_2)
+            by_columns = float(_up(np.sum(self.columns * bounds), bounds.size))
+            by_norm = self.root_gram * noise_2 * (1 + gamma(4))
+            reach = (min(by_columns, by_norm) + self.sqrt_top_P * eps * noise_2) * (1 + gamma(4))
+            # the noise's reach into each channel's input, Dw's rounding eps ||a||_2
+            into = _up(np.abs(self.Dw) @ bounds, bounds.size) + eps * noise_2
+        if not (math.isfinite(reach) and np.all(np.isfinite(into))):
+            return none("the noise's reach leaves the floating-point range")
+        if not np.all(np.isfinite(self.per_state)):
+            return none("the noise's reach leaves the floating-point range")
+        room = threshold - np.max(into) * (1 + gamma(2)) if into.size else threshold
+        known.update(reach=reach, into_dead_zone=float(np.max(into, initial=0.0)))
+        if not room > 0:
+            return none("the noise alone can leave the dead zone")
+        # (a channel the state does not reach is bounded by the noise alone: no level)
+        per_state = self.per_state
+        with np.errstate(over="ignore"):
+            levels = np.where(per_state > 0, room / np.where(per_state > 0, per_state, 1.0), np.inf)
+        outer = float(np.min(levels)) * (1 - gamma(4))
+        inner = reach / (1.0 - rho) * (1 + gamma(4))
+        known.update(outer=outer, inner=inner)
+        if not inner < outer:
+            return none("the noise drives V beyond the dead zone's invariant set")
+        bound = inner * math.sqrt(self.top) * (1 + gamma(4))
+        radius = outer / math.sqrt(self.top_ee) * (1 - gamma(4))
+        return LocalBound(bound, radius, rho, reach, inner, outer, known["into_dead_zone"],
+                          self.top, self.top_ee, known["condition"], "")  # fmt: skip
 
 
 def _process_reach(Pee: np.ndarray, G: np.ndarray, omega: np.ndarray) -> float:

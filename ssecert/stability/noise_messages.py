@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -22,13 +23,13 @@ from ..results import Check, Verdict
 from .divergence import safe_norms
 from .noise_gain import (
     DissipationBound,
+    LocalNoise,
     NoiseGain,
     NoiseGainCode,
     decay_scan,
     decaying_certificate,
     dissipation_bound,
     linear_noise_bound,
-    local_noise_bound,
     split_as_dissipation,
     split_bound,
 )
@@ -467,8 +468,6 @@ def _hardening_fields(
 
 def _scaled_noise(noise: MeasurementNoise, scale: np.ndarray) -> MeasurementNoise:
     """``noise`` with each sensor's bound times ``scale``."""
-    from dataclasses import replace
-
     return replace(noise, eta=noise.eta * scale)
 
 
@@ -560,8 +559,9 @@ def _local_check(
         candidates.append(
             (np.asarray(q_identity, dtype=float), "discrete Lyapunov equation with Q = I")
         )
-    tried = [(local_noise_bound(noise_model, P, per_row, n), P, by) for P, by in candidates]
-    found, P, P_from = min(tried, key=lambda t: (t[0].bound, -t[0].radius))
+    functions = [(LocalNoise(noise_model, P, n), P, by) for P, by in candidates]
+    tried = [(f.bound(per_row), f, P, by) for f, P, by in functions]
+    found, function, P, P_from = min(tried, key=lambda t: (t[0].bound, -t[0].radius))
     evidence: dict[str, Any] = {
         "from": "dead zone",
         "global_reason": why,
@@ -587,17 +587,6 @@ def _local_check(
         )
     search = noise_search(design, noise)
     bound, radius = found.bound, found.radius
-    extra = per_row[measured:]  # (the process noise's bounds, unchanged)
-
-    def harden(scale: np.ndarray) -> float:
-        rows = measurement_rows(design, _scaled_noise(noise, scale))
-        if rows is None:
-            return math.inf
-        return local_noise_bound(noise_model, P, np.concatenate([rows, extra]), n).bound
-
-    hardening, harden_words = _hardening_fields(
-        design, noise.eta, sensor_hardening(noise.eta, harden)
-    )
     if not search["largest_error"] <= bound:
         return _no_bound(
             "No ultimate error bound under noise is certified: a simulated noise within the "
@@ -609,6 +598,15 @@ def _local_check(
             noise,
             energy,
         )
+    extra = per_row[measured:]  # (the process noise's bounds, unchanged)
+
+    def harden(scale: np.ndarray) -> float:
+        rows = measurement_rows(design, _scaled_noise(noise, scale))
+        return math.inf if rows is None else function.bound(np.concatenate([rows, extra])).bound
+
+    hardening, harden_words = _hardening_fields(
+        design, noise.eta, sensor_hardening(noise.eta, harden)
+    )
     evidence.update(
         lambda_max_P_inverse_ee=found.top,
         lambda_max_P_ee=found.top_ee,

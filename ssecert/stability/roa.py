@@ -28,7 +28,7 @@ import numpy as np
 
 from ..budget import Budget, stage
 from ..numerics.rational import fractions, is_positive_definite, product, solve
-from ..observers.lure import LureModel
+from ..observers.lure import ExactLure, LureModel
 from ..results import Verdict
 from .lyapunov import LyapunovMethod, lyapunov_certificate, verified_decrease
 from .outcomes import Region, RegionCode
@@ -186,7 +186,8 @@ def _region(
     spread = np.einsum("ij,ji->i", model.Cw, Pinv_Cw)  # Cw_i P^-1 Cw_i'
     # beyond the exact matrices' budget the region rests on the floats: each row's reach
     # ||P^-1/2 Cw_i'|| then takes the model's rounding eps, at most eps / sqrt(lambda_min(P))
-    unchecked = model.N <= EXACT_LIMIT and model.exact() is None
+    exact_model = model.exact() if model.N <= EXACT_LIMIT else None
+    unchecked = model.N <= EXACT_LIMIT and exact_model is None
     if unchecked:
         spread = _rounded_spread(model, P, spread)
     # a row that is zero never leaves the dead zone: it bounds no level
@@ -206,11 +207,7 @@ def _region(
     radius = math.sqrt(level / top) * (1 - 1e-12) if math.isfinite(level) and top > 0 else 0.0
     if radius <= 0:
         return Region.none(RegionCode.NO_INVARIANT_SET)
-    exact = (
-        _exact_recheck(model, P, level, radius)
-        if model.N <= EXACT_LIMIT and not unchecked
-        else None
-    )
+    exact = None if exact_model is None else _exact_recheck(exact_model, model, P, level, radius)
     if exact is not None and not all(exact.values()):
         refuted = [k for k, ok in exact.items() if not ok]
         return Region.none(
@@ -292,17 +289,14 @@ def _rounded_spread(model: LureModel, P: np.ndarray, spread: np.ndarray) -> np.n
     return (reach * (1 + 1e-12)) ** 2
 
 
-def _exact_recheck(model: LureModel, P: np.ndarray, level: float, radius: float) -> dict[str, bool]:
+def _exact_recheck(
+    exact: ExactLure, model: LureModel, P: np.ndarray, level: float, radius: float
+) -> dict[str, bool]:
     """The three facts the region rests on, decided exactly on the printed floats P, level and
-    radius and the model's exact matrices (from the spec's data): V decreases (P - A' P A > 0,
-    and P > 0), the level set lies in the dead zone (level Cw_i P^-1 Cw_i' <= threshold^2 for
-    every i), and the ball of initial errors lies in the level set (level I - radius^2 P_ee > 0,
-    a_hat(0) = 0).  Every fact is False when the exact matrices are beyond their budget."""
-    exact = model.exact()
-    if exact is None:
-        return dict.fromkeys(
-            ("lyapunov_decrease", "level_set_in_dead_zone", "ball_in_level_set"), False
-        )
+    radius and the model's ``exact`` matrices (from the spec's data): V decreases (P - A' P A
+    > 0, and P > 0), the level set lies in the dead zone (level Cw_i P^-1 Cw_i' <= threshold^2
+    for every i), and the ball of initial errors lies in the level set (level I - radius^2 P_ee
+    > 0, a_hat(0) = 0)."""
     Pq, Aq, Cw = fractions(P), exact.fractions("A"), exact.fractions("Cw")
     n_e = model.n_e
     decrease = [[p - v for p, v in zip(rp, rv)] for rp, rv in zip(Pq, product(
