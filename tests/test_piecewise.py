@@ -4,6 +4,7 @@ LMI layer under it (ssecert.stability._conic)."""
 from __future__ import annotations
 
 from dataclasses import replace
+from fractions import Fraction
 
 import numpy as np
 import pytest
@@ -82,6 +83,30 @@ def test_emptiness_certificates_are_exact_and_respect_the_box():
     assert pw._empty_in_box(H, 10.0) is None
     # 0 <= x <= 1 is not empty
     assert pw._empty_in_box(np.array([[1.0, 0.0], [-1.0, 1.0]]), 10.0) is None
+
+
+def test_emptiness_of_many_sets_in_one_program_is_decided_set_by_set():
+    # the sets of the test above in one linear program, each with its own box, beside a
+    # two-dimensional set empty only in the small box (x >= 4, y >= 4): each answer is the
+    # one of the set alone, and each certificate holds for its own set
+    cases = [
+        (np.array([[1.0, -2.0], [-1.0, 1.0]]), 100.0, True),
+        (np.array([[1.0, -5.0]]), 3.0, True),
+        (np.array([[1.0, -5.0]]), 10.0, False),
+        (np.array([[1.0, 0.0], [-1.0, 1.0]]), 10.0, False),
+        (np.array([[1.0, 0.0, -4.0], [0.0, 1.0, -4.0]]), 3.0, True),
+        (np.array([[1.0, 0.0, -4.0], [0.0, 1.0, -4.0]]), 5.0, False),
+    ]
+    found = pw._empty_in_boxes([(H, box, None) for H, box, _ in cases])
+    assert [y is not None for y in found] == [empty for *_, empty in cases]
+    for (H, box, _), y in zip(cases, found, strict=True):
+        assert (y is None) == (pw._empty_in_box(H, box) is None)
+        if y is not None:  # y >= 0 and y' h + box ||H_x' y||_1 < 0, in exact arithmetic
+            assert min(y) >= 0
+            combo = [
+                sum(yi * Fraction(float(v)) for yi, v in zip(y, col, strict=True)) for col in H.T
+            ]
+            assert combo[-1] + Fraction(box) * sum(abs(v) for v in combo[:-1]) < 0
 
 
 @pytest.mark.slow

@@ -52,7 +52,7 @@ import copy
 import itertools
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
 from functools import partial
@@ -89,6 +89,8 @@ class _Regions:
         self.index = {tuple(s): k for k, s in enumerate(self.signs)}
         self.G: list[np.ndarray] = []
         self.T: list[np.ndarray] = []
+        self._exact_model: LureModel | None = None
+        self._exact_fractions: tuple[list[list[Fraction]], ...] | None = None
         for s in self.signs:
             rows = []
             for i, si in enumerate(s):
@@ -107,12 +109,12 @@ class _Regions:
     def exact_rows(self, model: LureModel, k: int, j: int) -> list[list[Fraction]] | None:
         """The rows of [G_k; G_j T_k] (thresholds 1) formed exactly from the model's exact
         matrices (the spec's data), or None when those are beyond their budget."""
-        exact = model.exact()
-        if exact is None:
+        data = self._exact_data(model)
+        if data is None:
             return None
         from ..numerics.rational import product
 
-        A, B, Cw = exact.fractions("A"), exact.fractions("B"), exact.fractions("Cw")
+        A, B, Cw = data
         q, N = Fraction(model.q), model.N
 
         def G(signs: np.ndarray) -> list[list[Fraction]]:
@@ -131,6 +133,16 @@ class _Regions:
              for a in range(N)]  # fmt: skip
         T.append([Fraction(0)] * N + [Fraction(1)])
         return G(s) + product(G(self.signs[j]), T)
+
+    def _exact_data(self, model: LureModel) -> tuple[list[list[Fraction]], ...] | None:
+        """The model's exact A, B and Cw as fractions (converted once per model), or None."""
+        if self._exact_model is not model:
+            exact = model.exact()
+            self._exact_model = model
+            self._exact_fractions = (
+                None if exact is None else tuple(exact.fractions(k) for k in ("A", "B", "Cw"))
+            )
+        return self._exact_fractions
 
     def exact_inner_rows(self, model: LureModel, k: int) -> list[list[Fraction]] | None:
         """The rows of G_k Z (the initial states (e, a_hat = 0)) formed exactly, or None."""
@@ -205,16 +217,18 @@ def _search(model: LureModel, seed: int, floor: float, clear: float) -> Region:
     unit = replace(model, threshold=1.0)  # the same dynamics, in units of the threshold
     # emptiness in the largest box holds in every smaller one
     empty_pairs = _empty_pairs(regions, unit, OUTER * ladder[-1])
-    empty_inner = {
-        k
-        for k in regions.representatives()
-        if _empty_in_box(
-            regions.G[k] @ _inner_map(model),
-            ladder[-1],
-            partial(regions.exact_inner_rows, unit, k),
-        )
-        is not None
-    }
+    inner = regions.representatives()
+    inner_found = _empty_in_boxes(
+        [
+            (
+                regions.G[k] @ _inner_map(model),
+                ladder[-1],
+                partial(regions.exact_inner_rows, unit, k),
+            )
+            for k in inner
+        ]
+    )
+    empty_inner = {k for k, y in zip(inner, inner_found, strict=True) if y is not None}
     attempts: list[dict[str, Any]] = []
     best: _Attempt | None = None
     lo, hi = -1, len(ladder)  # ladder[lo] verified, ladder[hi] did not
@@ -507,25 +521,59 @@ def _empty_in_box(
     y >= 0 with y' h + box ||H_x' y||_1 < 0.  ``exact`` gives the rows of H in exact
     arithmetic (from the spec's data) when the floats of H were rounded (products of
     matrices); None from it proves nothing.  None when the set is not proved empty."""
+    return _empty_in_boxes([(H, box, exact)])[0]
+
+
+def _empty_in_boxes(
+    problems: Sequence[tuple[np.ndarray, float, Callable[[], list[list[Fraction]] | None] | None]],
+) -> list[list[Fraction] | None]:
+    """``_empty_in_box`` of each (H, box, exact), from one linear program: each set's
+    problem (minimise y' h + box sum(u) with -u <= H_x' y <= u, y >= 0, sum(y) = 1) is a
+    block of its own, so the sum of their objectives is least where each is, and each
+    block's y is checked exactly on its own."""
+    from scipy import sparse
     from scipy.optimize import linprog
 
-    rows, cols = H.shape
-    Hx, h = H[:, :-1], H[:, -1]
-    # minimise y' h + box sum(u) with -u <= Hx' y <= u, y >= 0, sum(y) = 1
-    c = np.r_[h, box * np.ones(cols - 1)]
-    A_ub = np.block([[Hx.T, -np.eye(cols - 1)], [-Hx.T, -np.eye(cols - 1)]])
+    if not problems:
+        return []
+    costs, ubs, eqs, sizes = [], [], [], []
+    for H, box, _ in problems:
+        rows, cols = H.shape
+        Hx, h = H[:, :-1], H[:, -1]
+        costs.append(np.r_[h, box * np.ones(cols - 1)])
+        ubs.append(np.block([[Hx.T, -np.eye(cols - 1)], [-Hx.T, -np.eye(cols - 1)]]))
+        eqs.append(np.r_[np.ones(rows), np.zeros(cols - 1)][None])
+        sizes.append(rows + cols - 1)
+    c = np.concatenate(costs)
     res = linprog(
         c,
-        A_ub=A_ub,
-        b_ub=np.zeros(2 * (cols - 1)),
-        A_eq=np.r_[np.ones(rows), np.zeros(cols - 1)][None],
-        b_eq=[1.0],
-        bounds=[(0, None)] * (rows + cols - 1),
+        A_ub=sparse.block_diag(ubs, format="csr"),
+        b_ub=np.zeros(sum(u.shape[0] for u in ubs)),
+        A_eq=sparse.block_diag(eqs, format="csr"),
+        b_eq=np.ones(len(problems)),
+        bounds=(0, None),
         method="highs",
     )
-    if res.status != 0 or res.fun >= 0:
-        return None
-    y = [Fraction(max(float(v), 0.0)) for v in res.x[:rows]]
+    if res.status != 0:
+        return [None] * len(problems)
+    out: list[list[Fraction] | None] = []
+    edges = np.cumsum([0, *sizes])
+    for (H, box, exact), a, b, cost in zip(problems, edges[:-1], edges[1:], costs, strict=True):
+        x = res.x[a:b]
+        out.append(None if float(cost @ x) >= 0 else _farkas(H, box, x[: H.shape[0]], exact))
+    return out
+
+
+def _farkas(
+    H: np.ndarray,
+    box: float,
+    y_float: np.ndarray,
+    exact: Callable[[], list[list[Fraction]] | None] | None,
+) -> list[Fraction] | None:
+    """y (the LP's, clipped to be nonnegative) when it proves {x : H (x, 1) >= 0, |x_i| <=
+    box} empty in exact arithmetic, else None."""
+    rows, cols = H.shape
+    y = [Fraction(max(float(v), 0.0)) for v in y_float]
     Hq = exact() if exact is not None else [[Fraction(float(v)) for v in row] for row in H]
     if Hq is None:
         return None
@@ -539,17 +587,22 @@ def _empty_pairs(regions: _Regions, model: LureModel, box: float) -> set[tuple[i
     with its Farkas certificate checked.  Transitions seen on sampled states need no LP (a
     transition kept that is in fact empty only costs an LMI)."""
     seen = _sampled_pairs(model, regions, box)
-    out = set()
-    for k in regions.representatives():
-        T = regions.T[k]
-        for j in range(len(regions.signs)):
-            if (k == regions.zero and j == regions.zero) or (k, j) in seen:
-                continue
-            H = np.vstack([regions.G[k], regions.G[j] @ T])
-            exact = partial(regions.exact_rows, model, k, j)
-            if _empty_in_box(H, box, exact) is not None:
-                out.add((k, j))
-    return out
+    pairs = [
+        (k, j)
+        for k in regions.representatives()
+        for j in range(len(regions.signs))
+        if not (k == regions.zero and j == regions.zero) and (k, j) not in seen
+    ]
+    problems = [
+        (
+            np.vstack([regions.G[k], regions.G[j] @ regions.T[k]]),
+            box,
+            partial(regions.exact_rows, model, k, j),
+        )
+        for k, j in pairs
+    ]
+    found = _empty_in_boxes(problems)
+    return {pair for pair, y in zip(pairs, found, strict=True) if y is not None}
 
 
 def _sampled_pairs(
