@@ -204,3 +204,50 @@ def test_the_deadbeat_tests_say_why_from_their_numbers():
     assert "1.00e-06 is not clearly" in deadbeat_messages.nilpotency_reason(
         2, (1e-6, 1e-9), 1e-8, 1.0, False
     )
+
+
+def _random_rational_matrix(rng, rows, cols):
+    """Small integers and halves, often rank-deficient (a repeated or zero row)."""
+    M = rng.integers(-3, 4, (rows, cols)) / rng.choice([1, 2], (rows, cols))
+    if rows > 1 and rng.random() < 0.5:
+        M[-1] = M[0] if rng.random() < 0.5 else 0.0
+    return M
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_exact_linear_algebra_matches_sympy(seed):
+    # the exact deadbeat construction reads its bases off reduced row echelon forms (unique):
+    # each helper gives sympy's answer, so the construction gives sympy's gain
+    from fractions import Fraction
+
+    from ssecert.numerics import rational as rq
+
+    rng = np.random.default_rng(seed)
+    for _ in range(8):
+        rows, cols = (int(v) for v in rng.integers(1, 6, 2))
+        M = _random_rational_matrix(rng, rows, cols)
+        Mq = rq.fractions(M)
+        S = sp.Matrix([[sp.Rational(Fraction(float(v))) for v in row] for row in M])
+        R, pivots = rq.rref(Mq)
+        SR, Spivots = S.rref()
+        assert pivots == list(Spivots)
+        assert [[sp.Rational(x) for x in row] for row in R] == SR.tolist()
+        assert rq.rank(Mq) == S.rank()
+        expected = [[sp.Rational(x) for x in v] for v in rq.nullspace(Mq, columns=cols)]
+        assert expected == [list(v) for v in S.nullspace()]
+        b = list(S * sp.Matrix(rng.integers(-2, 3, cols)))
+        x = rq.particular_solution(Mq, [Fraction(int(v.p), int(v.q)) for v in b])
+        sol, params = S.gauss_jordan_solve(sp.Matrix(b))
+        assert [sp.Rational(v) for v in x] == list(sol.subs(dict.fromkeys(params, 0)))
+        Y = sp.Matrix(rng.integers(-2, 3, (rows, 2)))
+        mn = rq.minimum_norm_solution(
+            Mq, [[Fraction(int(v)) for v in row] for row in Y.tolist()], cols
+        )
+        assert [[sp.Rational(v) for v in row] for row in mn] == (
+            (S.T * S).pinv() * S.T * Y
+        ).tolist()
+        if rows == cols:
+            inv = rq.inverse(Mq)
+            assert (inv is None) == (S.det() == 0)
+            if inv is not None:
+                assert [[sp.Rational(v) for v in row] for row in inv] == S.inv().tolist()

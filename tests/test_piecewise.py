@@ -219,3 +219,30 @@ def test_the_replay_goes_on_while_a_slow_trajectory_stays_inside(monkeypatch):
     monkeypatch.setattr(pw, "MAX_STEPS", 40)  # not converged by then: not confirmed
     assert not pw._replay(model, 50.0, 1e6, seed=0)["confirmed"]
     assert not pw._replay(model, 50.0, 20.0, seed=0)["confirmed"]  # it leaves a smaller ball
+
+
+def test_exact_combinations_are_those_of_the_exact_rows():
+    # y' [G_k; G_j T_k] formed as y_1' G_k + (y_2' G_j) T_k equals y' times the rows formed
+    # exactly, and those rows are the floats' (the model's rounding apart)
+    from ssecert.numerics.rational import product
+
+    model = _ugv_model(0.7)
+    regions = pw._Regions(model)
+    unit = replace(model, threshold=1.0)
+    rng = np.random.default_rng(0)
+    for k, j in [(0, 0), (4, 13), (13, 26), (1, 24)]:
+        Gk, Gj = regions._exact_G(unit, k), regions._exact_G(unit, j)
+        T = regions._exact_T(unit, k)
+        rows = Gk + product(Gj, T)
+        floats = np.vstack([regions.G[k], regions.G[j] @ regions.T[k]])
+        np.testing.assert_allclose(np.array(rows, dtype=float), floats, rtol=1e-12, atol=1e-12)
+        y = [Fraction(int(v), 7) for v in rng.integers(0, 9, len(rows))]
+        expected = [
+            sum(a * row[c] for a, row in zip(y, rows, strict=True)) for c in range(len(rows[0]))
+        ]
+        assert regions.exact_combination(unit, k, j, y) == expected
+        inner = [row[: model.n_e] + [row[model.N]] for row in Gk]
+        z = y[: len(Gk)]
+        assert regions.exact_inner_combination(unit, k, z) == [
+            sum(a * row[c] for a, row in zip(z, inner, strict=True)) for c in range(len(inner[0]))
+        ]

@@ -10,7 +10,7 @@ linear error matrix is F = A - L C; a deadbeat gain makes F nilpotent.
   nilpotency is verified by matrix powers, never by eigenvalues (a 15 x 15
   nilpotent matrix has computed eigenvalues near 0.09);
 * ``exact_deadbeat_gain``: the same construction in rational arithmetic
-  (sympy) for plants with rational data, verified exactly;
+  (Fractions) for plants with rational data, verified exactly;
 * ``nilpotency`` (the floating-point power test) and ``verify_deadbeat``
   (the test of a printed gain on the exact powers of its A - L C).
 
@@ -481,7 +481,12 @@ def _deadbeat_construction(
 
 
 def exact_deadbeat_gain(A: Sequence[Sequence[Any]], C: Sequence[Sequence[Any]]) -> Gain:
-    """The deadbeat construction in exact rational arithmetic (sympy).
+    """The deadbeat construction in exact rational arithmetic.
+
+    The same steps as ``deadbeat_gain`` on the exact values, with Fractions
+    (``ssecert.numerics.rational``): the bases are read off reduced row
+    echelon forms, which are unique, and the gain is the minimum-norm
+    solution, so the result does not depend on how the eliminations pivot.
 
     Parameters
     ----------
@@ -491,9 +496,10 @@ def exact_deadbeat_gain(A: Sequence[Sequence[Any]], C: Sequence[Sequence[Any]]) 
     Returns
     -------
     Gain
-        ``L`` as floats; ``details["L_exact"]`` holds the rational entries as
-        strings and ``details["exact_index"]`` the exact nilpotency index
-        (F^k == 0 exactly and F^(k-1) != 0).
+        ``L`` as floats (each the rational entry correctly rounded);
+        ``details["L_exact"]`` holds the rational entries as strings and
+        ``details["exact_index"]`` the exact nilpotency index (F^k == 0
+        exactly and F^(k-1) != 0).
 
     Raises
     ------
@@ -506,27 +512,35 @@ def exact_deadbeat_gain(A: Sequence[Sequence[Any]], C: Sequence[Sequence[Any]]) 
     >>> g.details["exact_index"], g.details["L_exact"]
     (2, [['2'], ['1']])
     """
-    import sympy as sp
+    from ..numerics.rational import minimum_norm_solution, nullspace, product, transpose
 
     Ae = _rational_matrix(A)
     Ce = _rational_matrix(C)
-    n = Ae.shape[0]
-    Ad, Bd = Ae.T, Ce.T
-    basis_B = Bd.columnspace()
-    if not basis_B:
+    n = len(Ae)
+    if not any(x != 0 for row in Ce for x in row):
         raise GainError("C is zero: no observer gain can do anything")
-    NB = sp.Matrix.hstack(*Bd.T.nullspace()) if Bd.T.nullspace() else sp.zeros(n, 0)
-    R = NB.T * Ad if NB.shape[1] else sp.zeros(0, n)
-    flag = _exact_flag(NB, R, n)
-    X, W = _exact_adapted_basis(flag, NB, R, n)
-    rhs = (W - Ad * X) * X.inv()
-    # rhs lies in range(B): solve B Fd = rhs exactly
-    Fd = (Bd.T * Bd).pinv() * Bd.T * rhs
-    Le = -Fd.T
-    exact_index = _exact_nilpotency_index(Ae - Le * Ce, n)
-    L = np.array(Le.evalf(17).tolist(), dtype=float)
-    Af = np.array(Ae.evalf(17).tolist(), dtype=float)
-    Cf = np.array(Ce.evalf(17).tolist(), dtype=float)
+    Ad, Bd = transpose(Ae), transpose(Ce)
+    NBt = nullspace(Ce, columns=n)  # the rows of NB': a basis of ker C
+    R = product(NBt, Ad)  # NB' A', d x n
+    flag = _exact_flag(NBt, R, n)
+    X, W = _exact_adapted_basis(flag, NBt, R, n)
+    from ..numerics.rational import inverse
+
+    Xinv = inverse(X)
+    if Xinv is None:
+        raise GainError("(A, C) is not observable: the exact deadbeat basis is singular")
+    AX = product(Ad, X)
+    rhs = product([[w - ax for w, ax in zip(wr, axr)] for wr, axr in zip(W, AX)], Xinv)
+    # rhs lies in range(B): the minimum-norm solution of B Fd = rhs
+    Fd = minimum_norm_solution(Bd, rhs, columns=len(Ce))
+    Le = [[-x for x in row] for row in transpose(Fd)]
+    LC = product(Le, Ce)
+    exact_index = _exact_nilpotency_index(
+        [[a - lc for a, lc in zip(ra, rlc)] for ra, rlc in zip(Ae, LC)], n
+    )
+    L = np.array([[float(x) for x in row] for row in Le], dtype=float).reshape(n, len(Ce))
+    Af = np.array([[float(x) for x in row] for row in Ae], dtype=float)
+    Cf = np.array([[float(x) for x in row] for row in Ce], dtype=float).reshape(len(Ce), n)
     from ..numerics.linalg import staircase
 
     obs_index = staircase(Af, Cf).index
@@ -540,48 +554,49 @@ def exact_deadbeat_gain(A: Sequence[Sequence[Any]], C: Sequence[Sequence[Any]]) 
             "nilpotency_index": exact_index,
             "observability_index": obs_index,
             "minimal": exact_index == obs_index,
-            "L_exact": [[str(x) for x in row] for row in Le.tolist()],
+            "L_exact": [[str(x) for x in row] for row in Le],
             "test": "F^k == 0 exactly in rational arithmetic, F^(k-1) != 0",
         },
     )
 
 
-def _rational_matrix(rows: Sequence[Sequence[Any]]) -> Any:
-    """The sympy matrix of ``rows``, each entry the rational it represents exactly."""
-    import sympy as sp
+def _rational_matrix(rows: Sequence[Sequence[Any]]) -> list[list[Fraction]]:
+    """``rows`` as Fractions, each entry the rational it represents exactly."""
 
-    def rational(x: Any) -> sp.Rational:
+    def rational(x: Any) -> Fraction:
         if isinstance(x, (float, np.floating)):
-            return sp.Rational(Fraction(float(x)))
+            return Fraction(float(x))
         if isinstance(x, Fraction):
-            return sp.Rational(x.numerator, x.denominator)
-        return sp.Rational(x)
+            return x
+        return Fraction(x)
 
-    return sp.Matrix([[rational(x) for x in row] for row in rows])
-
-
-def _span(vectors: list, n: int) -> Any:
-    """The n-row sympy matrix whose columns are ``vectors`` (n x 0 when there are none)."""
-    import sympy as sp
-
-    return sp.Matrix.hstack(*vectors) if vectors else sp.zeros(n, 0)
+    return [[rational(x) for x in row] for row in rows]
 
 
-def _exact_flag(NB: Any, R: Any, n: int) -> list[list]:
-    """The kernels V_1 = ker R, V_i = {x : R x in R V_(i-1)} up to R^n, as lists of vectors."""
-    import sympy as sp
+def _columns(vectors: list[list[Fraction]], n: int) -> list[list[Fraction]]:
+    """The n-row matrix whose columns are ``vectors`` (n x 0 when there are none)."""
+    return [[v[i] for v in vectors] for i in range(n)]
 
-    V = R.nullspace() if R.shape[0] else [sp.eye(n)[:, j] for j in range(n)]
+
+def _identity(n: int) -> list[list[Fraction]]:
+    return [[Fraction(int(i == j)) for j in range(n)] for i in range(n)]
+
+
+def _exact_flag(
+    NBt: list[list[Fraction]], R: list[list[Fraction]], n: int
+) -> list[list[list[Fraction]]]:
+    """The kernels V_1 = ker R, V_i = {x : R x in R V_(i-1)} up to R^n, as lists of vectors
+    (``NBt``: the rows of NB', a basis of ker C; R = NB' A')."""
+    from ..numerics.rational import nullspace, product, transpose
+
+    d = len(NBt)
+    V = nullspace(R, columns=n) if d else _identity(n)
     flag = [V]
     while len(V) < n:
-        fixed = NB.T * _span(V, n)
+        fixed = product(NBt, _columns(V, n)) if V else [[] for _ in range(d)]
         # V_next = {x : R x in range(NB^T V)}: kernel of the projection onto its complement
-        comp = fixed.T.nullspace()  # vectors orthogonal to range(NB^T V)
-        if comp:
-            M = _span(comp, n).T * R
-            V_next = M.nullspace()
-        else:
-            V_next = [sp.eye(n)[:, j] for j in range(n)]
+        comp = nullspace(transpose(fixed, d), columns=d)  # orthogonal to range(NB^T V)
+        V_next = nullspace(product(comp, R), columns=n) if comp else _identity(n)
         if len(V_next) <= len(V):
             raise GainError("(A, C) is not observable: the exact deadbeat flag stops early")
         flag.append(V_next)
@@ -589,39 +604,47 @@ def _exact_flag(NB: Any, R: Any, n: int) -> list[list]:
     return flag
 
 
-def _exact_adapted_basis(flag: list[list], NB: Any, R: Any, n: int) -> tuple[Any, Any]:
-    """A basis X adapted to the flag and W, the image of each direction under the closed loop."""
-    import sympy as sp
+def _exact_adapted_basis(
+    flag: list[list[list[Fraction]]], NBt: list[list[Fraction]], R: list[list[Fraction]], n: int
+) -> tuple[list[list[Fraction]], list[list[Fraction]]]:
+    """A basis X adapted to the flag and W, the image of each direction under the closed loop
+    (as n x n matrices, one direction a column)."""
+    from ..numerics.rational import particular_solution, product, rank
 
-    X_cols: list = []
-    W_cols: list = []
-    prev: list = []
+    X_cols: list[list[Fraction]] = []
+    W_cols: list[list[Fraction]] = []
+    prev: list[list[Fraction]] = []
     for i, Vi in enumerate(flag):
         for v in Vi:
-            candidate = _span(X_cols + [v], n)
-            if candidate.rank() > len(X_cols):
+            if rank([*X_cols, v]) > len(X_cols):
                 X_cols.append(v)
                 if i == 0:
-                    W_cols.append(sp.zeros(n, 1))
+                    W_cols.append([Fraction(0)] * n)
                 else:
-                    P = _span(prev, n)
-                    sol, params = (NB.T * P).gauss_jordan_solve(R * v)
-                    sol = sol.subs(dict.fromkeys(params, 0))
-                    W_cols.append(P * sol)
+                    Rv = [sum((r * x for r, x in zip(row, v)), Fraction(0)) for row in R]
+                    sol = particular_solution(product(NBt, _columns(prev, n)), Rv)
+                    if sol is None:
+                        raise GainError("the exact deadbeat construction found no image")
+                    W_cols.append(
+                        [sum((c * p[j] for c, p in zip(sol, prev)), Fraction(0)) for j in range(n)]
+                    )
         prev = Vi
-    return _span(X_cols, n), _span(W_cols, n)
+    return _columns(X_cols, n), _columns(W_cols, n)
 
 
-def _exact_nilpotency_index(Fe: Any, n: int) -> int | None:
+def _exact_nilpotency_index(Fe: list[list[Fraction]], n: int) -> int | None:
     """The smallest k with Fe^k == 0 exactly (None when Fe^n is not zero)."""
-    import sympy as sp
+    from ..numerics.rational import product
 
-    power = sp.eye(n)
+    def zero(M: list[list[Fraction]]) -> bool:
+        return not any(x != 0 for row in M for x in row)
+
+    power = _identity(n)
     exact_index = None
     for k in range(1, n + 1):
         previous = power
-        power = power * Fe
-        if power.is_zero_matrix:
-            exact_index = k if not previous.is_zero_matrix else k - 1
+        power = product(power, Fe)
+        if zero(power):
+            exact_index = k if not zero(previous) else k - 1
             break
     return exact_index

@@ -91,6 +91,7 @@ class _Regions:
         self.T: list[np.ndarray] = []
         self._exact_model: LureModel | None = None
         self._exact_fractions: tuple[list[list[Fraction]], ...] | None = None
+        self._exact_cache: dict[str, dict[int, list[list[Fraction]]]] = {"G": {}, "T": {}}
         for s in self.signs:
             rows = []
             for i, si in enumerate(s):
@@ -106,51 +107,69 @@ class _Regions:
             T[N, N] = 1.0
             self.T.append(T)
 
-    def exact_rows(self, model: LureModel, k: int, j: int) -> list[list[Fraction]] | None:
-        """The rows of [G_k; G_j T_k] (thresholds 1) formed exactly from the model's exact
-        matrices (the spec's data), or None when those are beyond their budget."""
+    def _exact_G(self, model: LureModel, k: int) -> list[list[Fraction]] | None:
+        """The rows of G_k (threshold 1) from the model's exact Cw, or None beyond its budget."""
         data = self._exact_data(model)
         if data is None:
             return None
-        from ..numerics.rational import product
-
-        A, B, Cw = data
-        q, N = Fraction(model.q), model.N
-
-        def G(signs: np.ndarray) -> list[list[Fraction]]:
-            rows = []
-            for i, si in enumerate(signs):
+        if k not in self._exact_cache["G"]:
+            Cw, rows = data[2], []
+            for i, si in enumerate(self.signs[k]):
                 if si == 0:
                     rows += [[-v for v in Cw[i]] + [Fraction(1)], [*Cw[i], Fraction(1)]]
                 else:
                     rows.append([int(si) * v for v in Cw[i]] + [Fraction(-1)])
-            return rows
+            self._exact_cache["G"][k] = rows
+        return self._exact_cache["G"][k]
 
-        s = self.signs[k]
-        on = [i for i in range(model.m) if s[i] != 0]
-        T = [[A[a][b] + q * sum((B[a][i] * Cw[i][b] for i in on), Fraction(0))
-              for b in range(N)] + [-q * sum((B[a][i] * int(s[i]) for i in on), Fraction(0))]
-             for a in range(N)]  # fmt: skip
-        T.append([Fraction(0)] * N + [Fraction(1)])
-        return G(s) + product(G(self.signs[j]), T)
+    def _exact_T(self, model: LureModel, k: int) -> list[list[Fraction]] | None:
+        """T_k (threshold 1) from the model's exact A, B and Cw, or None beyond their budget."""
+        data = self._exact_data(model)
+        if data is None:
+            return None
+        if k not in self._exact_cache["T"]:
+            A, B, Cw = data
+            q, N, s = Fraction(model.q), model.N, self.signs[k]
+            on = [i for i in range(model.m) if s[i] != 0]
+            T = [[A[a][b] + q * sum((B[a][i] * Cw[i][b] for i in on), Fraction(0))
+                  for b in range(N)] + [-q * sum((B[a][i] * int(s[i]) for i in on), Fraction(0))]
+                 for a in range(N)]  # fmt: skip
+            T.append([Fraction(0)] * N + [Fraction(1)])
+            self._exact_cache["T"][k] = T
+        return self._exact_cache["T"][k]
+
+    def exact_combination(
+        self, model: LureModel, k: int, j: int, y: list[Fraction]
+    ) -> list[Fraction] | None:
+        """y' [G_k; G_j T_k] (thresholds 1) exactly, from the model's exact matrices (the
+        spec's data), as y_1' G_k + (y_2' G_j) T_k; None when those are beyond their budget."""
+        Gk, Gj, T = self._exact_G(model, k), self._exact_G(model, j), self._exact_T(model, k)
+        if Gk is None or Gj is None or T is None:
+            return None
+        head, tail = y[: len(Gk)], y[len(Gk) :]
+        z = _combine(tail, Gj)
+        return [a + b for a, b in zip(_combine(head, Gk), _combine(z, T), strict=True)]
+
+    def exact_inner_combination(
+        self, model: LureModel, k: int, y: list[Fraction]
+    ) -> list[Fraction] | None:
+        """y' G_k Z exactly (Z: the initial states (e, a_hat = 0), ``_inner_map``), or None."""
+        Gk = self._exact_G(model, k)
+        if Gk is None:
+            return None
+        n, N = model.n_e, model.N
+        return _combine(y, [row[:n] + [row[N]] for row in Gk])
 
     def _exact_data(self, model: LureModel) -> tuple[list[list[Fraction]], ...] | None:
         """The model's exact A, B and Cw as fractions (converted once per model), or None."""
         if self._exact_model is not model:
             exact = model.exact()
             self._exact_model = model
+            self._exact_cache = {"G": {}, "T": {}}
             self._exact_fractions = (
                 None if exact is None else tuple(exact.fractions(k) for k in ("A", "B", "Cw"))
             )
         return self._exact_fractions
-
-    def exact_inner_rows(self, model: LureModel, k: int) -> list[list[Fraction]] | None:
-        """The rows of G_k Z (the initial states (e, a_hat = 0)) formed exactly, or None."""
-        rows = self.exact_rows(model, k, k)
-        if rows is None:
-            return None
-        n, N = model.n_e, model.N
-        return [row[:n] + [row[N]] for row in rows[: len(self.G[k])]]
 
     def mirror(self, k: int) -> int:
         return self.index[tuple(-self.signs[k])]
@@ -184,7 +203,12 @@ def piecewise_region(
     return copy.deepcopy(found)
 
 
-_CACHE: dict[bytes, Region] = {}  # the search is a pure function of these
+_CACHE: dict[bytes, Region] = {}
+
+# y -> y' H in exact arithmetic (None beyond the exact data's budget)
+Combination = Callable[
+    [list[Fraction]], list[Fraction] | None
+]  # the search is a pure function of these
 
 
 def _key(model: LureModel, *numbers: float) -> bytes:
@@ -223,7 +247,7 @@ def _search(model: LureModel, seed: int, floor: float, clear: float) -> Region:
             (
                 regions.G[k] @ _inner_map(model),
                 ladder[-1],
-                partial(regions.exact_inner_rows, unit, k),
+                partial(regions.exact_inner_combination, unit, k),
             )
             for k in inner
         ]
@@ -432,6 +456,12 @@ def _inner_map(model: LureModel) -> np.ndarray:
     return Z
 
 
+def _combine(y: list[Fraction], rows: list[list[Fraction]]) -> list[Fraction]:
+    """y' rows, exactly (rows a nonempty list of equally long rows)."""
+    return [sum((a * row[c] for a, row in zip(y, rows, strict=True)), Fraction(0))
+            for c in range(len(rows[0]))]  # fmt: skip
+
+
 def _sym(M: np.ndarray) -> np.ndarray:
     return 0.5 * (M + M.T)
 
@@ -515,17 +545,17 @@ def _perturbation(X: np.ndarray, P: np.ndarray, d: float) -> float:
 
 
 def _empty_in_box(
-    H: np.ndarray, box: float, exact: Callable[[], list[list[Fraction]] | None] | None = None
+    H: np.ndarray, box: float, exact: Combination | None = None
 ) -> list[Fraction] | None:
     """A Farkas certificate that {x : H (x, 1) >= 0, |x_i| <= box} is empty, checked exactly:
-    y >= 0 with y' h + box ||H_x' y||_1 < 0.  ``exact`` gives the rows of H in exact
-    arithmetic (from the spec's data) when the floats of H were rounded (products of
-    matrices); None from it proves nothing.  None when the set is not proved empty."""
+    y >= 0 with y' h + box ||H_x' y||_1 < 0.  ``exact(y)`` gives y' H in exact arithmetic
+    (from the spec's data) when the floats of H were rounded (products of matrices); None
+    from it proves nothing.  None when the set is not proved empty."""
     return _empty_in_boxes([(H, box, exact)])[0]
 
 
 def _empty_in_boxes(
-    problems: Sequence[tuple[np.ndarray, float, Callable[[], list[list[Fraction]] | None] | None]],
+    problems: Sequence[tuple[np.ndarray, float, Combination | None]],
 ) -> list[list[Fraction] | None]:
     """``_empty_in_box`` of each (H, box, exact), from one linear program: each set's
     problem (minimise y' h + box sum(u) with -u <= H_x' y <= u, y >= 0, sum(y) = 1) is a
@@ -565,19 +595,17 @@ def _empty_in_boxes(
 
 
 def _farkas(
-    H: np.ndarray,
-    box: float,
-    y_float: np.ndarray,
-    exact: Callable[[], list[list[Fraction]] | None] | None,
+    H: np.ndarray, box: float, y_float: np.ndarray, exact: Combination | None
 ) -> list[Fraction] | None:
     """y (the LP's, clipped to be nonnegative) when it proves {x : H (x, 1) >= 0, |x_i| <=
     box} empty in exact arithmetic, else None."""
-    rows, cols = H.shape
     y = [Fraction(max(float(v), 0.0)) for v in y_float]
-    Hq = exact() if exact is not None else [[Fraction(float(v)) for v in row] for row in H]
-    if Hq is None:
+    if exact is None:
+        combo: list[Fraction] | None = _combine(y, [[Fraction(float(v)) for v in row] for row in H])
+    else:
+        combo = exact(y)
+    if combo is None:
         return None
-    combo = [sum((y[i] * Hq[i][c] for i in range(rows)), Fraction(0)) for c in range(cols)]
     spread = sum((abs(v) for v in combo[:-1]), Fraction(0))
     return y if combo[-1] + Fraction(box) * spread < 0 else None
 
@@ -597,7 +625,7 @@ def _empty_pairs(regions: _Regions, model: LureModel, box: float) -> set[tuple[i
         (
             np.vstack([regions.G[k], regions.G[j] @ regions.T[k]]),
             box,
-            partial(regions.exact_rows, model, k, j),
+            partial(regions.exact_combination, model, k, j),
         )
         for k, j in pairs
     ]
