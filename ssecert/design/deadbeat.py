@@ -512,7 +512,13 @@ def exact_deadbeat_gain(A: Sequence[Sequence[Any]], C: Sequence[Sequence[Any]]) 
     >>> g.details["exact_index"], g.details["L_exact"]
     (2, [['2'], ['1']])
     """
-    from ..numerics.rational import minimum_norm_solution, nullspace, product, transpose
+    from ..numerics.rational import (
+        inverse,
+        minimum_norm_solution,
+        nullspace,
+        product,
+        transpose,
+    )
 
     Ae = _rational_matrix(A)
     Ce = _rational_matrix(C)
@@ -524,8 +530,6 @@ def exact_deadbeat_gain(A: Sequence[Sequence[Any]], C: Sequence[Sequence[Any]]) 
     R = product(NBt, Ad)  # NB' A', d x n
     flag = _exact_flag(NBt, R, n)
     X, W = _exact_adapted_basis(flag, NBt, R, n)
-    from ..numerics.rational import inverse
-
     Xinv = inverse(X)
     if Xinv is None:
         raise GainError("(A, C) is not observable: the exact deadbeat basis is singular")

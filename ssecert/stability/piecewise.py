@@ -203,12 +203,10 @@ def piecewise_region(
     return copy.deepcopy(found)
 
 
-_CACHE: dict[bytes, Region] = {}
+_CACHE: dict[bytes, Region] = {}  # the search is a pure function of these
 
 # y -> y' H in exact arithmetic (None beyond the exact data's budget)
-Combination = Callable[
-    [list[Fraction]], list[Fraction] | None
-]  # the search is a pure function of these
+Combination = Callable[[list[Fraction]], list[Fraction] | None]
 
 
 def _key(model: LureModel, *numbers: float) -> bytes:
