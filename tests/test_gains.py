@@ -2,6 +2,7 @@
 
 import types
 import warnings
+from fractions import Fraction
 
 import control
 import numpy as np
@@ -251,3 +252,25 @@ def test_exact_linear_algebra_matches_sympy(seed):
             assert (inv is None) == (S.det() == 0)
             if inv is not None:
                 assert [[sp.Rational(v) for v in row] for row in inv] == S.inv().tolist()
+
+
+@pytest.mark.parametrize(
+    ("A", "C", "field"),
+    [
+        ([[1, 1], [0, 1]], [[1, 0, 5]], "C must have rows of 2"),
+        ([[1, 1, 0], [0, 1, 1]], [[1, 0, 0]], "A must be square"),
+        ([[1, 0], [0, 1]], [[1, 0], [1]], "C must have rows of 2"),
+        ([[float("nan")]], [[1]], "A must be finite"),
+        ([[1]], [["x"]], "C must hold rational numbers"),
+    ],
+)
+def test_exact_deadbeat_refuses_bad_shapes_and_entries_by_name(A, C, field):
+    with pytest.raises(ValueError, match=field):
+        exact_deadbeat_gain(A, C)
+
+
+def test_exact_deadbeat_gain_beyond_the_floats_is_infinite_not_an_error():
+    # the exact gain 1e400 exists; its float is inf, the exact index still 1
+    gain = exact_deadbeat_gain([[1e200]], [[1e-200]])
+    assert gain.L[0, 0] == np.inf and gain.details["exact_index"] == 1
+    assert gain.details["L_exact"] == [[str(Fraction(1e200) / Fraction(1e-200))]]

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 from fractions import Fraction
+from functools import partial
 
 import numpy as np
 import pytest
@@ -246,3 +247,41 @@ def test_exact_combinations_are_those_of_the_exact_rows():
         assert regions.exact_inner_combination(unit, k, z) == [
             sum(a * row[c] for a, row in zip(z, inner, strict=True)) for c in range(len(inner[0]))
         ]
+
+
+def test_badly_scaled_transitions_are_proved_empty_as_one_program_each_would():
+    # sensors of 6e4 and 6: entries of H up to 1.7e13, where the one program for every
+    # transition fails in HiGHS; the transitions are then proved one program each, and
+    # every certificate holds exactly
+    spec = spec_from_dict(
+        {
+            "name": "scaled",
+            "system": {
+                "A": [[-0.942, -0.877], [0.271, 0.25]],
+                "C": [[24000.0, -57999.99999999999], [-5.84, -6.2], [-6280.0, -3730.0]],
+            },
+            "attack": {"max_attacked": 1, "horizon": 2},
+            "observer": {"kind": "sso", "step": 0.5, "threshold": 0.1},
+        }
+    )
+    model = LureModel.from_design(build_observer(spec.system, spec.observer))
+    regions = pw._Regions(model)
+    unit = replace(model, threshold=1.0)
+    box = 20.0
+    empty = pw._empty_pairs(regions, unit, box)
+    seen = pw._sampled_pairs(unit, regions, box)
+    candidates = [
+        (k, j)
+        for k in regions.representatives()
+        for j in range(len(regions.signs))
+        if not (k == regions.zero and j == regions.zero) and (k, j) not in seen
+    ]
+    alone = set()
+    for k, j in candidates:
+        H = np.vstack([regions.G[k], regions.G[j] @ regions.T[k]])
+        y = pw._empty_in_boxes([(H, box, partial(regions.exact_combination, unit, k, j))])[0]
+        if y is not None:
+            alone.add((k, j))
+            combo = regions.exact_combination(unit, k, j, y)
+            assert min(y) >= 0 and combo[-1] + Fraction(box) * sum(abs(v) for v in combo[:-1]) < 0
+    assert len(alone) > 50 and empty == alone

@@ -520,9 +520,13 @@ def exact_deadbeat_gain(A: Sequence[Sequence[Any]], C: Sequence[Sequence[Any]]) 
         transpose,
     )
 
-    Ae = _rational_matrix(A)
-    Ce = _rational_matrix(C)
+    Ae = _rational_matrix(A, "A")
+    Ce = _rational_matrix(C, "C")
     n = len(Ae)
+    if n == 0 or any(len(row) != n for row in Ae):
+        raise ValueError(f"A must be square with at least one row; got {_shape(Ae)}")
+    if not Ce or any(len(row) != n for row in Ce):
+        raise ValueError(f"C must have rows of {n} entries (A is {n} x {n}); got {_shape(Ce)}")
     if not any(x != 0 for row in Ce for x in row):
         raise GainError("C is zero: no observer gain can do anything")
     Ad, Bd = transpose(Ae), transpose(Ce)
@@ -542,16 +546,18 @@ def exact_deadbeat_gain(A: Sequence[Sequence[Any]], C: Sequence[Sequence[Any]]) 
     exact_index = _exact_nilpotency_index(
         [[a - lc for a, lc in zip(ra, rlc)] for ra, rlc in zip(Ae, LC)], n
     )
-    L = np.array([[float(x) for x in row] for row in Le], dtype=float).reshape(n, len(Ce))
+    L = np.array([[_float(x) for x in row] for row in Le], dtype=float).reshape(n, len(Ce))
     Af = np.array([[float(x) for x in row] for row in Ae], dtype=float)
     Cf = np.array([[float(x) for x in row] for row in Ce], dtype=float).reshape(len(Ce), n)
     from ..numerics.linalg import staircase
 
     obs_index = staircase(Af, Cf).index
+    with np.errstate(invalid="ignore"):  # an L beyond the floats' range: inf, its products nan
+        error_matrix = Af - L @ Cf
     return Gain(
         L=L,
         method=GainMethod.DEADBEAT,
-        error_matrix=Af - L @ Cf,
+        error_matrix=error_matrix,
         verified=exact_index is not None and exact_index == obs_index,
         details={
             "exact_index": exact_index,
@@ -564,17 +570,35 @@ def exact_deadbeat_gain(A: Sequence[Sequence[Any]], C: Sequence[Sequence[Any]]) 
     )
 
 
-def _rational_matrix(rows: Sequence[Sequence[Any]]) -> list[list[Fraction]]:
+def _rational_matrix(rows: Sequence[Sequence[Any]], name: str) -> list[list[Fraction]]:
     """``rows`` as Fractions, each entry the rational it represents exactly."""
 
     def rational(x: Any) -> Fraction:
         if isinstance(x, (float, np.floating)):
+            if not math.isfinite(x):
+                raise ValueError(f"{name} must be finite; got {x}")
             return Fraction(float(x))
         if isinstance(x, Fraction):
             return x
-        return Fraction(x)
+        try:
+            return Fraction(x)
+        except (TypeError, ValueError):
+            raise ValueError(f"{name} must hold rational numbers; got {x!r}") from None
 
     return [[rational(x) for x in row] for row in rows]
+
+
+def _shape(rows: list[list[Fraction]]) -> str:
+    lengths = sorted({len(row) for row in rows})
+    return f"{len(rows)} rows of {' or '.join(map(str, lengths)) or 0} entries"
+
+
+def _float(x: Fraction) -> float:
+    """x correctly rounded, +-inf beyond the floats' range."""
+    try:
+        return float(x)
+    except OverflowError:
+        return math.inf if x > 0 else -math.inf
 
 
 def _columns(vectors: list[list[Fraction]], n: int) -> list[list[Fraction]]:

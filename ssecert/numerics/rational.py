@@ -130,10 +130,15 @@ def nullspace(M: Matrix, columns: int | None = None) -> list[list[Fraction]]:
     return basis
 
 
-def particular_solution(M: Matrix, b: list[Fraction]) -> list[Fraction] | None:
+def particular_solution(
+    M: Matrix, b: list[Fraction], columns: int | None = None
+) -> list[Fraction] | None:
     """The solution of M x = b whose free variables (those of M's reduced row echelon form)
-    are 0; None when there is none."""
-    cols = len(M[0]) if M else 0
+    are 0; None when there is none (``columns``: M's number of columns where it has no
+    rows)."""
+    cols = len(M[0]) if M else (columns or 0)
+    if not M:
+        return [Fraction(0)] * cols
     R, pivots = rref([list(row) + [b[i]] for i, row in enumerate(M)])
     if cols in pivots:
         return None
@@ -156,11 +161,14 @@ def inverse(M: Matrix) -> Matrix | None:
 
 def minimum_norm_solution(B: Matrix, Y: Matrix, columns: int) -> Matrix:
     """B^+ Y, the least-squares solution of B X = Y of least norm (B with ``columns``
-    columns), from the full-rank factorisation B = F G: F the pivot columns of B, G the
-    nonzero rows of its reduced row echelon form, B^+ = G' (G G')^(-1) (F'F)^(-1) F'."""
+    columns and at least one row, Y with as many rows), from the full-rank factorisation
+    B = F G: F the pivot columns of B, G the nonzero rows of its reduced row echelon form,
+    B^+ = G' (G G')^(-1) (F'F)^(-1) F'."""
+    if not B or len(Y) != len(B):
+        raise ValueError(f"B X = Y needs B with rows and Y with as many: {len(B)} and {len(Y)}")
     R, pivots = rref(B)
     if not pivots:
-        return [[Fraction(0)] * (len(Y[0]) if Y else 0) for _ in range(columns)]
+        return [[Fraction(0)] * len(Y[0]) for _ in range(columns)]
     F = [[row[c] for c in pivots] for row in B]
     G = R[: len(pivots)]
     Gt, Ft = transpose(G), transpose(F)

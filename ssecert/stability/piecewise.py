@@ -558,38 +558,81 @@ def _empty_in_boxes(
     """``_empty_in_box`` of each (H, box, exact), from one linear program: each set's
     problem (minimise y' h + box sum(u) with -u <= H_x' y <= u, y >= 0, sum(y) = 1) is a
     block of its own, so the sum of their objectives is least where each is, and each
-    block's y is checked exactly on its own."""
+    block's y is checked exactly on its own.  One program's tolerances serve every block,
+    so a badly scaled block may come back less accurate, or fail the whole program: where
+    the program fails, and for each block whose objective is negative (by more than
+    ``_ZERO`` of its data) but whose y does not pass the exact check, the block's program
+    is solved alone, as one per set would be."""
+    if not problems:
+        return []
+    blocks = [_farkas_program(H, box) for H, box, _ in problems]
+    solved = _solve_programs(blocks)
+    out: list[list[Fraction] | None] = []
+    for (H, box, exact), block, x in zip(problems, blocks, solved, strict=True):
+        found, negative = _farkas_of(H, box, exact, block, x)
+        if found is None and (x is None or negative):
+            alone = _solve_programs([block])[0]
+            found = _farkas_of(H, box, exact, block, alone)[0] if alone is not None else None
+        out.append(found)
+    return out
+
+
+# a block whose objective is below 0 but whose y fails the exact check is solved alone; one
+# whose objective is within this of 0, relative to its largest entry of H times (1 + box), is
+# not (the sets that are not empty sit at 0, within about 1e-17 of it)
+_ZERO = 1e-14
+
+
+class _Program(NamedTuple):
+    """One block of ``_empty_in_boxes``'s linear program."""
+
+    cost: np.ndarray
+    upper: np.ndarray  # A_ub (its b_ub is 0)
+    equal: np.ndarray  # the row of sum(y) = 1
+
+
+def _farkas_program(H: np.ndarray, box: float) -> _Program:
+    rows, cols = H.shape
+    Hx, h = H[:, :-1], H[:, -1]
+    return _Program(
+        np.r_[h, box * np.ones(cols - 1)],
+        np.block([[Hx.T, -np.eye(cols - 1)], [-Hx.T, -np.eye(cols - 1)]]),
+        np.r_[np.ones(rows), np.zeros(cols - 1)][None],
+    )
+
+
+def _solve_programs(blocks: list[_Program]) -> list[np.ndarray | None]:
+    """Each block's solution from one HiGHS program (None for every block where it fails)."""
     from scipy import sparse
     from scipy.optimize import linprog
 
-    if not problems:
-        return []
-    costs, ubs, eqs, sizes = [], [], [], []
-    for H, box, _ in problems:
-        rows, cols = H.shape
-        Hx, h = H[:, :-1], H[:, -1]
-        costs.append(np.r_[h, box * np.ones(cols - 1)])
-        ubs.append(np.block([[Hx.T, -np.eye(cols - 1)], [-Hx.T, -np.eye(cols - 1)]]))
-        eqs.append(np.r_[np.ones(rows), np.zeros(cols - 1)][None])
-        sizes.append(rows + cols - 1)
-    c = np.concatenate(costs)
     res = linprog(
-        c,
-        A_ub=sparse.block_diag(ubs, format="csr"),
-        b_ub=np.zeros(sum(u.shape[0] for u in ubs)),
-        A_eq=sparse.block_diag(eqs, format="csr"),
-        b_eq=np.ones(len(problems)),
+        np.concatenate([b.cost for b in blocks]),
+        A_ub=sparse.block_diag([b.upper for b in blocks], format="csr"),
+        b_ub=np.zeros(sum(b.upper.shape[0] for b in blocks)),
+        A_eq=sparse.block_diag([b.equal for b in blocks], format="csr"),
+        b_eq=np.ones(len(blocks)),
         bounds=(0, None),
         method="highs",
     )
     if res.status != 0:
-        return [None] * len(problems)
-    out: list[list[Fraction] | None] = []
-    edges = np.cumsum([0, *sizes])
-    for (H, box, exact), a, b, cost in zip(problems, edges[:-1], edges[1:], costs, strict=True):
-        x = res.x[a:b]
-        out.append(None if float(cost @ x) >= 0 else _farkas(H, box, x[: H.shape[0]], exact))
-    return out
+        return [None] * len(blocks)
+    edges = np.cumsum([0, *(b.cost.size for b in blocks)])
+    return [res.x[lo:hi] for lo, hi in itertools.pairwise(edges)]
+
+
+def _farkas_of(
+    H: np.ndarray, box: float, exact: Combination | None, block: _Program, x: np.ndarray | None
+) -> tuple[list[Fraction] | None, bool]:
+    """(the certificate in the block's solution x, or None; whether its objective is below 0
+    by more than ``_ZERO`` of its data)."""
+    if x is None:
+        return None, False
+    value = float(block.cost @ x)
+    if value >= 0:
+        return None, False
+    negative = value < -_ZERO * float(np.abs(H).max(initial=0.0)) * (1.0 + box)
+    return _farkas(H, box, x[: H.shape[0]], exact), negative
 
 
 def _farkas(
