@@ -601,11 +601,6 @@ def _float(x: Fraction) -> float:
         return math.inf if x > 0 else -math.inf
 
 
-def _columns(vectors: list[list[Fraction]], n: int) -> list[list[Fraction]]:
-    """The n-row matrix whose columns are ``vectors`` (n x 0 when there are none)."""
-    return [[v[i] for v in vectors] for i in range(n)]
-
-
 def _identity(n: int) -> list[list[Fraction]]:
     return [[Fraction(int(i == j)) for j in range(n)] for i in range(n)]
 
@@ -621,7 +616,7 @@ def _exact_flag(
     V = nullspace(R, columns=n) if d else _identity(n)
     flag = [V]
     while len(V) < n:
-        fixed = product(NBt, _columns(V, n)) if V else [[] for _ in range(d)]
+        fixed = product(NBt, transpose(V, n)) if V else [[] for _ in range(d)]
         # V_next = {x : R x in range(NB^T V)}: kernel of the projection onto its complement
         comp = nullspace(transpose(fixed, d), columns=d)  # orthogonal to range(NB^T V)
         V_next = nullspace(product(comp, R), columns=n) if comp else _identity(n)
@@ -637,7 +632,7 @@ def _exact_adapted_basis(
 ) -> tuple[list[list[Fraction]], list[list[Fraction]]]:
     """A basis X adapted to the flag and W, the image of each direction under the closed loop
     (as n x n matrices, one direction a column)."""
-    from ..numerics.rational import particular_solution, product, rank
+    from ..numerics.rational import particular_solution, product, rank, transpose
 
     X_cols: list[list[Fraction]] = []
     W_cols: list[list[Fraction]] = []
@@ -650,14 +645,14 @@ def _exact_adapted_basis(
                     W_cols.append([Fraction(0)] * n)
                 else:
                     Rv = [sum((r * x for r, x in zip(row, v)), Fraction(0)) for row in R]
-                    sol = particular_solution(product(NBt, _columns(prev, n)), Rv)
+                    sol = particular_solution(product(NBt, transpose(prev, n)), Rv)
                     if sol is None:
                         raise GainError("the exact deadbeat construction found no image")
                     W_cols.append(
                         [sum((c * p[j] for c, p in zip(sol, prev)), Fraction(0)) for j in range(n)]
                     )
         prev = Vi
-    return _columns(X_cols, n), _columns(W_cols, n)
+    return transpose(X_cols, n), transpose(W_cols, n)
 
 
 def _exact_nilpotency_index(Fe: list[list[Fraction]], n: int) -> int | None:

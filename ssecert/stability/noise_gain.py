@@ -604,9 +604,8 @@ class LocalNoise:
             reach = (min(by_columns, by_norm) + self.sqrt_top_P * eps * noise_2) * (1 + gamma(4))
             # the noise's reach into each channel's input, Dw's rounding eps ||a||_2
             into = _up(np.abs(self.Dw) @ bounds, bounds.size) + eps * noise_2
-        if not (math.isfinite(reach) and np.all(np.isfinite(into))):
-            return none("the noise's reach leaves the floating-point range")
-        if not np.all(np.isfinite(self.per_state)):
+        finite = math.isfinite(reach) and np.all(np.isfinite(into))
+        if not (finite and np.all(np.isfinite(self.per_state))):
             return none("the noise's reach leaves the floating-point range")
         room = threshold - np.max(into) * (1 + gamma(2)) if into.size else threshold
         known.update(reach=reach, into_dead_zone=float(np.max(into, initial=0.0)))

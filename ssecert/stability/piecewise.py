@@ -61,6 +61,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..budget import stage
+from ..numerics.rational import fractions, product
 from ..observers.lure import LureModel
 from ..tolerances import EPS
 from .outcomes import Region, RegionCode
@@ -146,9 +147,11 @@ class _Regions:
         Gk, Gj, T = self._exact_G(model, k), self._exact_G(model, j), self._exact_T(model, k)
         if Gk is None or Gj is None or T is None:
             return None
-        head, tail = y[: len(Gk)], y[len(Gk) :]
-        z = _combine(tail, Gj)
-        return [a + b for a, b in zip(_combine(head, Gk), _combine(z, T), strict=True)]
+        head, tail = [y[: len(Gk)]], [y[len(Gk) :]]
+        return [
+            a + b
+            for a, b in zip(product(head, Gk)[0], product(product(tail, Gj), T)[0], strict=True)
+        ]
 
     def exact_inner_combination(
         self, model: LureModel, k: int, y: list[Fraction]
@@ -158,7 +161,7 @@ class _Regions:
         if Gk is None:
             return None
         n, N = model.n_e, model.N
-        return _combine(y, [row[:n] + [row[N]] for row in Gk])
+        return product([y], [row[:n] + [row[N]] for row in Gk])[0]
 
     def _exact_data(self, model: LureModel) -> tuple[list[list[Fraction]], ...] | None:
         """The model's exact A, B and Cw as fractions (converted once per model), or None."""
@@ -454,12 +457,6 @@ def _inner_map(model: LureModel) -> np.ndarray:
     return Z
 
 
-def _combine(y: list[Fraction], rows: list[list[Fraction]]) -> list[Fraction]:
-    """y' rows, exactly (rows a nonempty list of equally long rows)."""
-    return [sum((a * row[c] for a, row in zip(y, rows, strict=True)), Fraction(0))
-            for c in range(len(rows[0]))]  # fmt: skip
-
-
 def _sym(M: np.ndarray) -> np.ndarray:
     return 0.5 * (M + M.T)
 
@@ -642,7 +639,7 @@ def _farkas(
     box} empty in exact arithmetic, else None."""
     y = [Fraction(max(float(v), 0.0)) for v in y_float]
     if exact is None:
-        combo: list[Fraction] | None = _combine(y, [[Fraction(float(v)) for v in row] for row in H])
+        combo: list[Fraction] | None = product([y], fractions(H))[0]
     else:
         combo = exact(y)
     if combo is None:
