@@ -123,6 +123,7 @@ def test_design_minimises_the_certified_noise_bound(tmp_path, capsys):
     assert "tradeoff-noise-front" in (tmp_path / "ugv-design.html").read_text()
 
 
+@pytest.mark.slow
 def test_the_trade_off_plot_has_a_noise_panel_only_for_positive_bounds():
     import warnings
 

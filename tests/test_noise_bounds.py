@@ -830,6 +830,7 @@ def test_a_dead_zone_row_that_is_zero_bounds_no_level():
     assert 0 < local.fields["region_radius"] <= region.value
 
 
+@pytest.mark.slow
 def test_a_dead_zone_beyond_its_exact_budget_rests_on_the_rounded_floats(monkeypatch):
     # without the exact matrices (their budget 0 here) the region is verified in floating
     # point with each row's reach up by the model's a-priori rounding: no larger than the
@@ -896,6 +897,7 @@ def test_sensors_of_unlike_noise_weigh_the_rows_of_the_dissipation_inequality():
     assert np.max(np.linalg.norm(simulator.run(noise).x_hat, axis=-1)) <= check.value
 
 
+@pytest.mark.slow
 def test_the_observer_bound_names_the_sensor_to_harden():
     # the bound with each sensor's noise halved, from the same certificate: the one that
     # lowers it most is named, re-derived here; a simulation under the halved noise stays

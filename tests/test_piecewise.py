@@ -249,6 +249,7 @@ def test_exact_combinations_are_those_of_the_exact_rows():
         ]
 
 
+@pytest.mark.slow
 def test_badly_scaled_transitions_are_proved_empty_as_one_program_each_would():
     # sensors of 6e4 and 6: entries of H up to 1.7e13, where the one program for every
     # transition fails in HiGHS; the transitions are then proved one program each, and

@@ -103,6 +103,7 @@ def test_a_linear_observers_bound_in_closed_form():
     assert check.fields["noise"]["process"].tolist() == [omega]
 
 
+@pytest.mark.slow
 def test_a_one_sample_sparse_observer_is_certified_under_process_noise():
     """The process noise enters the elastic net's error as -G w: a further input of its Lur'e
     model, the dissipation inequality verified again with it at iss_gain's decay."""
@@ -130,6 +131,7 @@ def test_a_one_sample_sparse_observer_is_certified_under_process_noise():
     assert search["gradient_ascent"]["iterations"] >= 1
 
 
+@pytest.mark.slow
 def test_process_noise_far_above_the_measurement_noise_is_split_off():
     """Process noise 1e5 times the measurement noise: the inequality with w as a further
     input does not verify, but iss_gain's own (measurement noise only) with the process
@@ -163,7 +165,8 @@ def test_process_noise_far_above_the_measurement_noise_is_split_off():
     assert found.bound >= check.value * (1 - 1e-3)
 
 
-@pytest.mark.parametrize("window", [2, pytest.param(3, marks=pytest.mark.slow)])
+@pytest.mark.slow
+@pytest.mark.parametrize("window", [2, 3])
 def test_a_window_observer_is_certified_under_process_noise(window):
     """An SSO over a window estimates the window's first state z, z+ = A z + G w; the process
     noise of the window's later steps reaches its stacked measurements: their rows' bounds
@@ -427,6 +430,7 @@ def test_the_sise_papers_noise_setting_is_certified_and_simulated():
     assert 0 < float(np.max(error)) <= bound.value
 
 
+@pytest.mark.slow
 def test_zero_process_noise_is_none():
     net = {**LINEAR, "kind": "elastic_net", "step": 0.3, "threshold": 0.05, "shrink": 0.5}
     for noise in ({"measurement": 1e-3, "process": 0.0},
@@ -474,6 +478,7 @@ def test_a_tiny_truncation_draws_the_uniform_distribution():
         assert np.std(noise) == pytest.approx(0.1 / math.sqrt(3), rel=0.03)
 
 
+@pytest.mark.slow
 def test_a_sparse_observers_bound_does_not_depend_on_the_units_of_w():
     """The same G w written with G 1e-200 times smaller and omega that much larger: one gain
     weighs both noises, so the process noise's columns are scaled (by powers of two, exactly)
@@ -612,6 +617,7 @@ def test_the_decay_scan_tightens_the_bound_with_a_certificate_that_re_verifies(o
     assert value <= check.value <= value * (1 + 1e-6)
 
 
+@pytest.mark.slow
 def test_an_inequality_without_decay_still_gives_the_energy_gain():
     """iss_gain holding with alpha = 0 (a Zames-Falb gain) bounds the error's energy, not its
     size: no global ultimate bound (the dead zone's local one instead), the energy gain
@@ -653,6 +659,7 @@ def test_an_unstable_plants_growth_is_not_taken_for_an_error_the_noise_drove():
     ("measurement", "process", "G"),
     [(5e-324, 1e-3, [[1.0], [0.5]]), (1e-3, 1e-3, [[1e300], [0.5]])],
 )
+@pytest.mark.slow
 def test_extreme_noise_sizes_keep_the_sparse_bound_certified(measurement, process, G):
     """A measurement bound of 5e-324 (its ratio to the process noise overflowed the scaling of
     w's columns: OverflowError) and a process noise reaching 1e297: bounded, and no noise the

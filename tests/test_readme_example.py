@@ -31,6 +31,7 @@ def test_the_readme_links_the_pages_that_hold_its_former_sections():
         assert f"](docs/site/guide/{page.name})" in text, page.name
 
 
+@pytest.mark.slow
 def test_readme_example_runs_as_shown(tmp_path):
     blocks = _blocks(GUIDE / "property-tests.md")
     code = next(body for lang, body in blocks if lang == "python")

@@ -465,6 +465,7 @@ def test_a_stability_check_that_contradicts_the_gain_reports_it(monkeypatch):
     assert defect["iss_gain"].value == cert["iss_gain"].value
 
 
+@pytest.mark.slow
 def test_nothing_rests_on_a_withdrawn_stability_certificate(monkeypatch):
     """A sparse observer whose stability is certified while the gain check (planted defect)
     proves A - L C unstable: observer_stability is withdrawn, and the ISS gain, which would

@@ -294,6 +294,7 @@ def test_overrides_load_or_refuse(doc, override):
 
 @_LIMITED
 @given(doc=mutated(), fmt=st.sampled_from(["toml", "json"]))
+@pytest.mark.slow
 def test_spec_files_load_or_refuse(tmp_path_factory, doc, fmt):
     path = tmp_path_factory.mktemp("fuzz") / f"spec.{fmt}"
     text = to_toml(doc) if fmt == "toml" else to_json(doc)
