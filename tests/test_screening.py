@@ -289,11 +289,38 @@ def test_tier_two_fills_the_selected_rows_as_the_whole_batch():
     whole = np.empty((n, n, N), dtype=np.float32)
     source.fill(pieces, whole)
     rows = np.flatnonzero(rng.random(N) < 0.3)
-    assert np.array_equal(source.fill_rows(pieces, rows), whole[:, :, rows])
+    assert np.array_equal(source.fill_rows(pieces, rows, start), whole[:, :, rows])
     for a, b in [(0, N), (5, 40), (N - 9, N)]:
         part = np.empty((n, n, b - a), dtype=np.float32)
         source.fill(_clip(pieces, a, b), part)
         assert np.array_equal(part, whole[:, :, a:b])
+
+
+@pytest.mark.parametrize("k", [1, 3, 5])
+def test_matrices_formed_one_by_one_are_those_of_the_levels(k):
+    """A few sets' matrices are formed one by one, without the levels of partial sums (the
+    refinement levels ask for a few hundred sets of millions): bit for bit the matrices the
+    levels give, in float64 (LAPACK's decisions) and in single precision (tier 2)."""
+    rng = np.random.default_rng(k)
+    q, n = 14, 5
+    F = rng.standard_normal((q, 2, n)) * np.exp(rng.uniform(-6, 6, (q, 1, 1)))
+    items = np.einsum("qrn,qrm->qnm", F, F)
+    total = math.comb(q, k)
+    ranks = np.sort(rng.choice(total, size=min(total, 9), replace=False))
+    one_by_one = ColexScreen(items, items.sum(axis=0), k, 1e-3, memory=8 * n * n * 40,
+                             single_memory=4 * n * n * 40)  # fmt: skip
+    levels = ColexScreen(items, items.sum(axis=0), k, 1e-3, memory=8 * n * n * 40,
+                         single_memory=4 * n * n * 40)  # fmt: skip
+    levels._formed = {"float64": total, "float32": total}  # as if many had been asked
+    assert np.array_equal(one_by_one.matrices(ranks), levels.matrices(ranks))
+    assert one_by_one._sums is None and levels._sums is not None
+    start = int(ranks[0])
+    pieces = levels._pieces(start, total)
+    rows = ranks - start
+    assert np.array_equal(
+        one_by_one.fill_rows(pieces, rows, start), levels.fill_rows(pieces, rows, start)
+    )
+    assert one_by_one._sums32 is None and levels._sums32 is not None
 
 
 @pytest.mark.parametrize("lo, hi, size, first", [(0, 10, 3, None), (4, 50, 8, 3), (5, 6, 4, 2)])

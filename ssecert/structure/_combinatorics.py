@@ -430,6 +430,8 @@ class ColexScreen:
             m32 = min(m32, k - 1)  # tier 1 needs a top, the largest item at least
         self.m32 = m32
         self._sums32: np.ndarray | None = None
+        # matrices formed one by one while no level is built (``_direct``): how many so far
+        self._formed = {"float64": 0, "float32": 0}
         self._signed32 = sign * items.astype(np.float32)
         # the walk through the tops of the single-precision level: (where the last range
         # asked stopped, the tops after the current one, the current one); the sum of the
@@ -495,19 +497,47 @@ class ColexScreen:
         hi = np.minimum(np.minimum(lo + self.chunk, count), stop - offset)
         return offset + lo, offset + hi
 
+    def _direct(self, precision: str, level: int, count: int) -> bool:
+        """Whether ``count`` more matrices are formed one by one (their ``level`` smallest
+        items added in turn, as the level of partial sums adds them) rather than from the
+        level, built for them: while the level is not built and the matrices formed one by
+        one, these included, cost no more additions than building it would (a level that
+        only a few sets ask for, as on most refinement levels, is never built)."""
+        built = self._sums if precision == "float64" else self._sums32
+        if built is not None or (precision, level) in self._shared:
+            return False
+        formed = self._formed[precision] + count
+        if formed * level > math.comb(self.items.shape[0], level):
+            return False
+        self._formed[precision] = formed
+        return True
+
+    @staticmethod
+    def _bottoms(start: np.ndarray, signed: np.ndarray, subsets: np.ndarray) -> np.ndarray:
+        """``start`` plus the ``signed`` items of each subset's columns in turn, shape
+        (len(subsets), n, n): bit for bit the sums of ``_level`` and ``_single_level`` (each
+        the sum of the smaller items plus one signed item)."""
+        out = np.repeat(start[None], subsets.shape[0], axis=0)
+        for j in range(subsets.shape[1]):
+            out += np.take(signed, subsets[:, j], axis=0)
+        return out
+
     def matrices(self, ranks: np.ndarray) -> np.ndarray:
         """The float64 matrices of the given ranks (ascending), bit for bit those of the
         blocks of ``colex_blocks``."""
-        if self._sums is None:
-            key = ("float64", self.m)
-            if key not in self._shared:
-                self._shared[key] = _level(self.items, self.base, self.sign, self.m)
-            self._sums = self._shared[key]
-        sums = self._sums[0]
         ranks = np.asarray(ranks, dtype=np.int64)
         subsets = self.subsets(ranks)
-        offset, _ = self._tops(subsets)
-        part = sums[ranks - offset]
+        if self._direct("float64", self.m, ranks.size):
+            signed = self.sign * self.items
+            part = self._bottoms(self.base, signed, subsets[:, : self.m])
+        else:
+            if self._sums is None:
+                key = ("float64", self.m)
+                if key not in self._shared:
+                    self._shared[key] = _level(self.items, self.base, self.sign, self.m)
+                self._sums = self._shared[key]
+            offset, _ = self._tops(subsets)
+            part = self._sums[0][ranks - offset]
         if self.m == self.k:
             return part
         tops = subsets[:, self.m :]
@@ -571,14 +601,17 @@ class ColexScreen:
             total = total + upper
         return rows, first - rows, np.ascontiguousarray(total.transpose(1, 2, 0))
 
+    def _shifted32(self) -> np.ndarray:
+        """The base minus the margin, in single precision (the level's first sum)."""
+        n = self.base.shape[-1]
+        return np.asarray(self.base - self.margin * np.eye(n), dtype=np.float32)
+
     def _single(self) -> np.ndarray:
         """The single-precision level of partial sums minus the margin, batch last."""
         if self._sums32 is None:
             key = ("float32", self.m32)
             if key not in self._shared:
-                n = self.base.shape[-1]
-                shifted = np.asarray(self.base - self.margin * np.eye(n), dtype=np.float32)
-                self._shared[key] = _single_level(self._signed32, shifted, self.m32)
+                self._shared[key] = _single_level(self._signed32, self._shifted32(), self.m32)
             self._sums32 = self._shared[key]
         return self._sums32
 
@@ -609,15 +642,21 @@ class ColexScreen:
                 np.add(sums[:, :, first:last], total[:, :, None], out=where)
 
     def fill_rows(
-        self, pieces: list[tuple[int, int, int, tuple[int, ...]]], rows: np.ndarray
+        self, pieces: list[tuple[int, int, int, tuple[int, ...]]], rows: np.ndarray, start: int
     ) -> np.ndarray:
-        """The matrices of ``fill`` for the selected rows of the batch only (ascending), bit
-        for bit the same, batch last, shape (n, n, len(rows))."""
+        """The matrices of ``fill`` for the selected rows of the batch of ranks from ``start``
+        only (ascending), bit for bit the same, batch last, shape (n, n, len(rows))."""
         starts = np.array([piece[0] for piece in pieces], dtype=np.int64)
         firsts = np.array([piece[1] for piece in pieces], dtype=np.int64)
         which = np.searchsorted(starts, rows, side="right") - 1
-        # (``take``: the result batch last and contiguous, as the factorization wants it)
-        out = np.take(self._single(), firsts[which] + rows - starts[which], axis=2, mode="clip")
+        if self._direct("float32", self.m32, rows.size):
+            bottoms = self.subsets(start + rows)[:, : self.m32]
+            out = self._bottoms(self._shifted32(), self._signed32, bottoms).transpose(1, 2, 0)
+            out = np.ascontiguousarray(out)
+        else:
+            # (``take``: the result batch last and contiguous, as the factorization wants it)
+            level = self._single()
+            out = np.take(level, firsts[which] + rows - starts[which], axis=2, mode="clip")
         edges = np.flatnonzero(np.diff(which)) + 1
         for a, b in itertools.pairwise([0, *edges.tolist(), rows.size]):
             total = self._top_total(pieces[which[a]][3])
@@ -628,14 +667,15 @@ class ColexScreen:
     def _single_tier(
         self,
         pieces: list[tuple[int, int, int, tuple[int, ...]]],
+        start: int,
         N: int,
         work: np.ndarray,
         diagonal: np.ndarray,
         rows: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Tier 2 on the whole batch (or on the selected rows, gathered), at most
-        ``tier2_sets`` matrices (and the buffers' room) at a time: (passed, smallest pivot) of
-        each single-precision factorization."""
+        """Tier 2 on the whole batch of ranks from ``start`` (or on the selected rows,
+        gathered), at most ``tier2_sets`` matrices (and the buffers' room) at a time:
+        (passed, smallest pivot) of each single-precision factorization."""
         size = N if rows is None else rows.size
         step = max(min(self.tier2_sets, work.shape[2]), 1)
         passed, smallest = np.empty(size, dtype=bool), np.empty(size, dtype=np.float32)
@@ -645,7 +685,7 @@ class ColexScreen:
                 mats = work[:, :, : b - a]
                 self.fill(_clip(pieces, a, b), mats)
             else:
-                mats = self.fill_rows(pieces, rows[a:b])
+                mats = self.fill_rows(pieces, rows[a:b], start)
             diag = diagonal[:, : b - a]
             cholesky_batch_last(mats, diag)
             passed[a:b], smallest[a:b] = single_passed(diag)
@@ -773,7 +813,9 @@ class ColexScreen:
             # many subsets left open: tier 2 for them (for the whole batch, a few calls, when
             # they are most of it), then LAPACK for those it leaves open
             every = rows.size > N * _GATHER_FRACTION
-            passed, smallest = self._single_tier(pieces, N, work, diagonal, None if every else rows)
+            passed, smallest = self._single_tier(
+                pieces, start, N, work, diagonal, None if every else rows
+            )
             ok_rows = slice(None) if every else rows
             ok[ok_rows] |= passed
             if screen.low is not None:
