@@ -229,7 +229,7 @@ def test_the_verdict_level_ranks_the_closest_sets_as_lapack(plant, monkeypatch):
     from ssecert.structure import _combinatorics, _level_scan
 
     # many batches: finite thresholds; tier 2 factors a few sets at a time
-    monkeypatch.setattr(_level_scan, "_BATCH_SETS", 256)
+    monkeypatch.setattr(_level_scan, "_FIRST_RANKED_SETS", 256)
     monkeypatch.setattr(_level_scan, "_RANKED_BATCH_SETS", 512)
     monkeypatch.setattr(_combinatorics, "TIER2_SETS", 96)
     q = _plant_task(plant, 0, True).rest.size
