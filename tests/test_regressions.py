@@ -345,13 +345,15 @@ def test_a_certain_breaking_set_is_found_past_undecided_smaller_sets():
 
 
 @pytest.mark.slow
+@pytest.mark.filterwarnings("error")
 @pytest.mark.parametrize("scale, gain_row", [(1e-308, "holds"), (1e-310, "inconclusive")])
 def test_sensor_rows_near_the_bottom_of_the_float_range_end_in_verdicts(scale, gain_row):
     """C of order 1e-308 put exact powers of 1e308 past 2.0 ** 1024 in the spectral bound (an
     OverflowError); at 1e-310 the deadbeat gain itself overflows, which is said as such.  At
     1e-308 the dead zone |Cw_i xi| <= 0.1 holds errors up to about 1e307, where the deadbeat
     loop alone acts: the region is proved in balanced coordinates (states 2^1023 from the
-    channels' units), within that dead zone."""
+    channels' units), within that dead zone.  No warning escapes (the piecewise search's
+    samples and the LMIs' data overflowed with RuntimeWarnings, an error under -W error)."""
     from ssecert import analyze, spec_from_dict
 
     C = (np.array([[0.9, -0.2], [0.7, 0.5], [0.8, 0.7]]) * scale).tolist()

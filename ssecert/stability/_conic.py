@@ -153,9 +153,12 @@ class LMIProblem:
             for handle, F, sign in terms:
                 offset, _, _, ra, ca = self._blocks[handle]
                 # F' E_ab F for the basis E_ab of the block's entry (a, b)
-                outer = np.einsum("ai,bj->abij", F, F)
-                basis = outer[ra, ca] + np.where((ra != ca)[:, None, None], outer[ca, ra], 0.0)
-                coeff = -sign * scale[None, :] * basis[:, r_out, c_out]  # (entries, svec)
+                # (data beyond the floats' range become inf or NaN here, which the solver
+                # refuses by name: no warning of their own)
+                with np.errstate(over="ignore", invalid="ignore"):
+                    outer = np.einsum("ai,bj->abij", F, F)
+                    basis = outer[ra, ca] + np.where((ra != ca)[:, None, None], outer[ca, ra], 0.0)
+                    coeff = -sign * scale[None, :] * basis[:, r_out, c_out]  # (entries, svec)
                 entry, out = np.nonzero(coeff)
                 data.append(coeff[entry, out])
                 row_index.append(row + out)

@@ -689,11 +689,14 @@ def _sampled_pairs(
         z = rng.standard_normal((per_region, N)) * np.exp(
             rng.uniform(np.log(1e-2), np.log(box), (per_region, 1))
         )
-        xi = w @ pinv.T + z @ null.T
-        inside = _codes(xi @ model.Cw.T, weights) == k
-        nxt = xi @ model.A.T + model.phi(xi @ model.Cw.T) @ model.B.T
-        for j in np.unique(_codes(nxt @ model.Cw.T, weights)[inside]).tolist():
-            out.add((k, j))
+        # (states near the floats' limits overflow: those samples are dropped, not counted)
+        with np.errstate(over="ignore", invalid="ignore"):
+            xi = w @ pinv.T + z @ null.T
+            nxt = xi @ model.A.T + model.phi(xi @ model.Cw.T) @ model.B.T
+            seen = np.all(np.isfinite(xi), axis=1) & np.all(np.isfinite(nxt @ model.Cw.T), axis=1)
+            inside = seen & (_codes(xi @ model.Cw.T, weights) == k)
+            for j in np.unique(_codes(nxt @ model.Cw.T, weights)[inside]).tolist():
+                out.add((k, j))
     return out
 
 
