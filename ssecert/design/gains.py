@@ -162,11 +162,13 @@ def ogd_gain(system: System, step: float) -> Gain:
     [[0.25, 0.25]]
     """
     step = as_float_option(step, "step", min_value=0.0, min_inclusive=False)
-    L = step * system.A @ system.C.T
+    with np.errstate(over="ignore", invalid="ignore"):  # beyond the floats: inf, as computed
+        L = step * system.A @ system.C.T
+        error = system.A - L @ system.C
     return Gain(
         L=L,
         method=GainMethod.OGD,
-        error_matrix=system.A - L @ system.C,
+        error_matrix=error,
         verified=True,
         details={"step": step},
     )

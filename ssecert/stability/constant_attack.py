@@ -20,6 +20,7 @@ exactly confirmed equilibrium is observed, not proved.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from itertools import combinations, islice
 from typing import Any
@@ -130,11 +131,16 @@ def constant_attack_outcomes(
 
 def _settle(record: dict[str, Any], eq: dict[str, Any], *, proved: bool) -> None:
     bias = np.asarray(eq["initial_error"], dtype=float)
+    with np.errstate(over="ignore"):
+        size = float(np.linalg.norm(bias))
+    top = float(np.max(np.abs(bias))) if bias.size else 0.0
+    if not math.isfinite(size) and math.isfinite(top):  # the squares overflowed, not the norm
+        size = top * float(np.linalg.norm(bias / top))
     record.update(
         outcome="converges to zero" if eq.get("error_is_zero") else "converges to a bias",
         proved=proved,
         bias=bias,
-        bias_norm=float(np.linalg.norm(bias)),
+        bias_norm=size,
         attack_estimate=np.asarray(eq["attack_estimate"], dtype=float),
         exact=bool(eq.get("exact")),
     )

@@ -316,7 +316,8 @@ def to_original_coordinates(cert: LMICertificate, s: np.ndarray, N: int) -> LMIC
         return None
     inv = np.ones(cert.P.shape[0])
     inv[:N] = 1.0 / np.asarray(s, dtype=float)
-    P = cert.P * inv[:, None] * inv[None, :]
+    with np.errstate(over="ignore", invalid="ignore"):  # beyond the floats: no certificate
+        P = cert.P * inv[:, None] * inv[None, :]
     if not np.all(np.isfinite(P)) or not np.array_equal(P / inv[:, None] / inv[None, :], cert.P):
         return None
     details = {
@@ -638,7 +639,8 @@ def iss_certificate(
             continue
         P, t, g, info = _solve(solved, "iss", st, alpha, solver_options or {})
         if c != 1.0 and P is not None and t is not None and g is not None:
-            P, t, g = P * c**2, t * c**2, g * c**2
+            with np.errstate(over="ignore"):  # beyond the floats: the verification fails
+                P, t, g = P * c**2, t * c**2, g * c**2
             info["output_scaling"] = c
         attempts.append(info)
         if P is None or t is None or g is None:  # None only when the solve failed

@@ -121,7 +121,9 @@ def _iss_lmi(model: LureModel, P: Any, T: Any, alpha: float, g: Any) -> tuple[An
     H = np.hstack([model.A, model.B, model.E])
     Z = np.zeros
     M = H.T @ P @ H
-    top = model.Ce.T @ model.Ce - (1.0 - alpha) * P
+    with np.errstate(over="ignore", invalid="ignore"):  # inf data: the solver refuses it
+        CeCe = model.Ce.T @ model.Ce
+    top = CeCe - (1.0 - alpha) * P
     M = M + cp.bmat(
         [
             [top, Z((N, m + r))],

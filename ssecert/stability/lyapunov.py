@@ -190,8 +190,9 @@ def instability_witness(
     w = z.copy()
     total = 0.0
     for _ in range(steps):
-        w = F @ w
-        size = float(np.linalg.norm(w))
+        with np.errstate(over="ignore", invalid="ignore"):  # an overflow ends the walk
+            w = F @ w
+            size = float(np.linalg.norm(w))
         if size == 0.0 or not np.isfinite(size):
             break
         total += np.log(size)
