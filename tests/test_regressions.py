@@ -384,32 +384,41 @@ def test_a_power_bound_beyond_the_float_range_is_infinite():
     assert _pow2(1e4) == np.inf and _pow2(1023.5) < np.inf and _pow2(-1e5) == 0.0
 
 
-_NEAR_THE_LIMITS = [  # (seed, scale of C, observer): each raised a RuntimeWarning in analyze
-    (7, 1e-300, {"kind": "luenberger", "gain": "deadbeat"}),
+_NEAR_THE_LIMITS = [  # (seed, p, scale of C, observer): each raised a RuntimeWarning
+    (7, 3, 1e-300, {"kind": "luenberger", "gain": "deadbeat"}),
     (
         16,
+        3,
         1e300,
         {"kind": "elastic_net", "gain": "deadbeat", "step": 1.0, "threshold": 0.1, "shrink": 0.8},
     ),
-    (20, 1e-150, {"kind": "dsso", "step": 0.5, "threshold": 0.1}),
-    (27, 1e150, {"kind": "sso", "step": 0.5, "threshold": 0.1}),
-    (28, 1e300, {"kind": "sso", "step": 0.5, "threshold": 0.1}),
+    (20, 3, 1e-150, {"kind": "dsso", "step": 0.5, "threshold": 0.1}),
+    (27, 3, 1e150, {"kind": "sso", "step": 0.5, "threshold": 0.1}),
+    (28, 3, 1e300, {"kind": "sso", "step": 0.5, "threshold": 0.1}),
+    (70, 4, 1e300, {"kind": "sso", "step": 0.5, "threshold": 0.1, "window": 2}),
+    (
+        82,
+        4,
+        1e300,
+        {"kind": "elastic_net", "gain": "deadbeat", "step": 1.0, "threshold": 0.1, "shrink": 0.8},
+    ),
 ]
 
 
 @pytest.mark.slow
 @pytest.mark.filterwarnings("error")
-@pytest.mark.parametrize("seed, scale, observer", _NEAR_THE_LIMITS)
-def test_sensors_near_the_floats_limits_raise_no_warning(seed, scale, observer):
+@pytest.mark.parametrize("seed, p, scale, observer", _NEAR_THE_LIMITS)
+def test_sensors_near_the_floats_limits_raise_no_warning(seed, p, scale, observer):
     """Sensors of order 1e+-150 to 1e+-300 overflowed in the iss LMI's data, the balanced
-    certificate's way back, the output scaling, the instability witness, the OGD gain and a
-    constant attack's bias norm, each a RuntimeWarning (an error under -W error); the checks
-    end in verdicts, and every holding check's value is a number."""
+    certificate's way back, the output scaling, the instability witness, the OGD and SSO
+    gains, the periodic orbit search and a constant attack's bias norm, each a
+    RuntimeWarning (an error under -W error); the checks end in verdicts, and every holding
+    check's value is a number."""
     from ssecert import analyze, spec_from_dict
 
     rng = np.random.default_rng(seed)
     A = rng.standard_normal((2, 2)) * 0.5
-    C = rng.standard_normal((3, 2)) * scale
+    C = rng.standard_normal((p, 2)) * scale
     if seed % 2:
         A = A * (1 + 2.0**-50)
     spec = spec_from_dict({"name": "near-limits", "system": {"A": A.tolist(), "C": C.tolist()},

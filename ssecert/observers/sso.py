@@ -96,11 +96,13 @@ class SparseSoftObserverKind(SoftThresholdObserverKind):
                     f"the stacked observability matrix O_tau overflows for the window "
                     f"tau = {window} (C A^k is not finite in floating point)"
                 )
-            L = step * system.A @ sensing.T
+            with np.errstate(over="ignore", invalid="ignore"):  # beyond the floats: inf
+                L = step * system.A @ sensing.T
+                error = system.A - L @ sensing
             gain = Gain(
                 L=L,
                 method=SSO_GAIN,
-                error_matrix=system.A - L @ sensing,
+                error_matrix=error,
                 verified=True,
                 details={"step": step, "window": window},
             )

@@ -63,8 +63,7 @@ def periodic_orbit(
     start *= model.threshold * 10.0 ** rng.uniform(-1.0, 3.0, (SAMPLES, 1))
     with np.errstate(all="ignore"):
         path = model.simulate(start, STEPS)
-    end = path[-1]
-    size = np.linalg.norm(end, axis=1)
+        size = np.linalg.norm(path[-1], axis=1)  # (inf where it overflows: not alive)
     alive = np.isfinite(size) & (size > 1e-9 * model.threshold) & (size < 1e12 * model.threshold)
     tried = 0
     for i in np.flatnonzero(alive):
