@@ -396,6 +396,7 @@ _NEAR_THE_LIMITS = [  # (seed, p, scale of C, observer): each raised a RuntimeWa
     (27, 3, 1e150, {"kind": "sso", "step": 0.5, "threshold": 0.1}),
     (28, 3, 1e300, {"kind": "sso", "step": 0.5, "threshold": 0.1}),
     (70, 4, 1e300, {"kind": "sso", "step": 0.5, "threshold": 0.1, "window": 2}),
+    (6, 3, 2.0**-1060, {"kind": "luenberger", "gain": "pinv"}),
     (
         82,
         4,
@@ -409,11 +410,11 @@ _NEAR_THE_LIMITS = [  # (seed, p, scale of C, observer): each raised a RuntimeWa
 @pytest.mark.filterwarnings("error")
 @pytest.mark.parametrize("seed, p, scale, observer", _NEAR_THE_LIMITS)
 def test_sensors_near_the_floats_limits_raise_no_warning(seed, p, scale, observer):
-    """Sensors of order 1e+-150 to 1e+-300 overflowed in the iss LMI's data, the balanced
-    certificate's way back, the output scaling, the instability witness, the OGD and SSO
-    gains, the periodic orbit search and a constant attack's bias norm, each a
-    RuntimeWarning (an error under -W error); the checks end in verdicts, and every holding
-    check's value is a number."""
+    """Sensors of order 1e+-150 to 1e+-300 (and subnormal) overflowed in the iss LMI's data,
+    the balanced certificate's way back, the output scaling, the instability witness, the
+    OGD, SSO and pseudo-inverse gains, the periodic orbit search and a constant attack's bias
+    norm, each a RuntimeWarning (an error under -W error); the checks end in verdicts, and
+    every holding check's value is a number."""
     from ssecert import analyze, spec_from_dict
 
     rng = np.random.default_rng(seed)

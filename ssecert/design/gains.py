@@ -198,11 +198,13 @@ def pinv_gain(system: System) -> Gain:
             f"the pseudo-inverse gain A C^+ needs C of full column rank; rank(C) = {rank} < "
             f"n = {system.n}"
         )
-    L = system.A @ np.linalg.pinv(C)
+    with np.errstate(over="ignore", invalid="ignore"):  # beyond the floats: inf, as computed
+        L = system.A @ np.linalg.pinv(C)
+        error = system.A - L @ C
     return Gain(
         L=L,
         method=GainMethod.PINV,
-        error_matrix=system.A - L @ C,
+        error_matrix=error,
         verified=True,
         details={"rank_C": rank},
     )
