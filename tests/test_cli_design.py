@@ -98,6 +98,14 @@ def test_an_unknown_kind_is_refused(capsys):
     assert "--observer" in capsys.readouterr().err
 
 
+def test_the_help_names_every_kind(capsys):
+    with pytest.raises(SystemExit):
+        main(["design", "--help"])
+    printed = capsys.readouterr().out
+    assert "--observer KIND" in printed and "elastic-net (default" in printed
+    assert "luenberger" in printed
+
+
 @pytest.mark.slow
 def test_a_plant_file_designs_with_the_number_of_attacked_sensors(tmp_path, capsys):
     import numpy as np

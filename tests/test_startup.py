@@ -25,6 +25,24 @@ def test_import_ssecert_does_not_import_scipy_control_or_the_analyses():
     assert out == "[]"
 
 
+def test_the_command_line_parser_imports_no_analysis_until_a_command_needs_it():
+    # the design command's kinds import every observer (and SciPy): built only when the
+    # design command parses its arguments or prints its help
+    out = _fresh(
+        "import sys; from ssecert.cli import _build_parser; parser = _build_parser(); "
+        "parser.parse_args(['examples']); "
+        "print(sorted(m for m in ('scipy', 'ssecert.observers', 'ssecert.design.search') "
+        "if m in sys.modules))"
+    )
+    assert out == "[]"
+    out = _fresh(
+        "import sys; from ssecert.cli import _build_parser; "
+        "args = _build_parser().parse_args(['design', 'ugv', '--observer', 'dsso']); "
+        "print(args.observer, 'ssecert.design.search' in sys.modules)"
+    )
+    assert out == "dsso True"
+
+
 def test_a_function_named_like_its_module_stays_the_function():
     # importing the module ssecert.analyze first used to leave nothing to rebind the name
     out = _fresh(

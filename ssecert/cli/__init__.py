@@ -26,7 +26,7 @@ import os
 import sys
 import traceback
 import warnings
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, NoReturn
@@ -59,6 +59,30 @@ EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE, what a shell reports for a closed pipe
 
 
 class _Parser(argparse.ArgumentParser):
+    """The command's parsers: one-line errors, and arguments completed when first used."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        # what completes this parser's arguments (choices and help that cost imports), run
+        # before it parses or formats its help: a command pays only for its own parser's
+        self.completions: list[Callable[[], None]] = []
+
+    def _complete(self) -> None:
+        while self.completions:
+            self.completions.pop(0)()
+
+    def parse_known_args(self, args: Any = None, namespace: Any = None) -> Any:
+        self._complete()
+        return super().parse_known_args(args, namespace)
+
+    def format_usage(self) -> str:
+        self._complete()
+        return super().format_usage()
+
+    def format_help(self) -> str:
+        self._complete()
+        return super().format_help()
+
     def error(self, message: str) -> NoReturn:  # one line, no usage dump
         raise UsageError(f"{message} (see '{self.prog} --help')")
 

@@ -67,9 +67,12 @@ def add_design_parser(sub: Any) -> None:
         ),
     )
     design.add_argument("spec", metavar="SPEC", help="spec file or packaged example name")
-    design.add_argument(
-        "--observer", choices=sorted(_kind_names()), metavar="KIND", help=_kinds_help()
-    )
+    observer = design.add_argument("--observer", metavar="KIND")
+
+    def complete() -> None:  # the kinds import every observer: only when design is asked
+        observer.choices, observer.help = sorted(_kind_names()), _kinds_help()
+
+    design.completions.append(complete)
     design.add_argument(
         "--objective",
         choices=("gain", "rate", "roa", "noise"),
