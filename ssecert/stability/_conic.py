@@ -155,10 +155,13 @@ class LMIProblem:
                 # F' E_ab F for the basis E_ab of the block's entry (a, b)
                 # (data beyond the floats' range become inf or NaN here, which the solver
                 # refuses by name: no warning of their own)
+                # (the products F[a, i] F[b, j] of the entries asked only, each as it is)
                 with np.errstate(over="ignore", invalid="ignore"):
-                    outer = np.einsum("ai,bj->abij", F, F)
-                    basis = outer[ra, ca] + np.where((ra != ca)[:, None, None], outer[ca, ra], 0.0)
-                    coeff = -sign * scale[None, :] * basis[:, r_out, c_out]  # (entries, svec)
+                    Fa, Fb = F[ra], F[ca]
+                    basis = Fa[:, r_out] * Fb[:, c_out] + np.where(
+                        (ra != ca)[:, None], Fb[:, r_out] * Fa[:, c_out], 0.0
+                    )
+                    coeff = -sign * scale[None, :] * basis  # (entries, svec)
                 entry, out = np.nonzero(coeff)
                 data.append(coeff[entry, out])
                 row_index.append(row + out)
