@@ -341,3 +341,34 @@ def test_the_words_of_each_way_a_synthesis_ends():
     assert GainSynthesis(None, None, SynthesisCode.TIME_LIMIT, 1.5).to_dict()["status"] == (
         "the time limit ended the bisection"
     )
+
+
+@pytest.mark.parametrize(
+    "observer",
+    [
+        {"kind": "luenberger", "gain": "deadbeat"},
+        {"kind": "elastic_net", "gain": "pinv", "step": 0.3, "threshold": 0.1, "shrink": 0.6},
+    ],
+)
+@pytest.mark.parametrize("exponent", [-20, 20])
+def test_sensors_in_units_a_power_of_two_apart_get_the_same_gain_in_those_units(observer, exponent):
+    """The synthesis LMI is solved with the sensors in units that bring the sensing's
+    largest entry into [1, 2): the same problem, bit for bit, whatever power of two the
+    sensors' units are, and its own certificate verifies in those units."""
+    from ssecert.design.search import verify_synthesis
+
+    rng = np.random.default_rng(4)
+    A = np.array([[1.1, 0.2], [0.0, 0.9]])
+    C = rng.standard_normal((4, 2))
+    C /= 2.0 ** np.floor(np.log2(np.abs(C).max()))  # its largest entry in [1, 2)
+    sigma = 2.0**exponent
+    plain = build_observer(System(A, C), observer)
+    threshold = {"threshold": observer["threshold"] * sigma} if "threshold" in observer else {}
+    scaled = build_observer(System(A, C * sigma), {**observer, **threshold})
+    one, other = synthesize_gain(plain), synthesize_gain(scaled)
+    assert one.L is not None and other.L is not None
+    assert np.array_equal(other.L, one.L / sigma)
+    assert other.gamma_proposed == one.gamma_proposed / sigma
+    own = verify_synthesis(with_gain(scaled, other.L), other)
+    assert own["verified"] and own["sensor_units"] == f"2^{exponent}"
+    assert own["gamma"] == pytest.approx(one.gamma_proposed / sigma, rel=1e-5)

@@ -1019,34 +1019,69 @@ def verify_synthesis(design: Any, proposal: Any, *, clear: float = 100.0) -> dic
     if proposal.P is None or proposal.g is None:
         return {"verified": False, "problem": proposal.status}
     model = LureModel.from_design(design)
-    g = proposal.g * (1 + 1e-6) + 1e-9  # a slightly larger gain, so that the margin survives
     t = proposal.multipliers if proposal.multipliers is not None else np.zeros(0)
     alpha = float(proposal.alpha or 0.0)
-    ok, margin, bound, problem = verify_certificate(
-        model, proposal.P, t, kind="iss", alpha=alpha, g=g, clear=clear
-    )
-    out: dict[str, Any] = {"verified": bool(ok), "margin": margin, "error_bound": bound}
-    tried = [] if proposal.state_scaling is None else [np.asarray(proposal.state_scaling)]
-    if not ok:
-        tried += [s for s in model.balancings() if not any(np.array_equal(s, t) for t in tried)]
-    for s in () if ok else tried:
-        # the same inequality by congruence, in balanced state coordinates: first those the
-        # synthesis solved in
-        scale = np.ones(proposal.P.shape[0])
-        scale[: model.N] = s
-        P_b = proposal.P * scale[:, None] * scale[None, :]
-        if np.all(np.isfinite(P_b)) and np.array_equal(
-            P_b / scale[:, None] / scale[None, :], proposal.P
-        ):
+    solved_in = None
+    if proposal.state_scaling is not None:
+        solved_in = (np.asarray(proposal.state_scaling), int(proposal.sensor_exponent))
+    # the coordinates to try: the user's, then those the synthesis solved in, then the
+    # model's balancings; with the sensors in other units, those it solved in first (the
+    # slack on gamma^2 is absolute: in the user's units it would swamp a small gamma)
+    tried: list[tuple[np.ndarray, int] | None] = [None]
+    if solved_in is not None:
+        tried.insert(0 if solved_in[1] else 1, solved_in)
+    ok, margin, bound, problem, g = False, math.nan, math.nan, None, math.nan
+    out: dict[str, Any] = {}
+    extra = False
+    while tried:
+        where = tried.pop(0)
+        if where is None:
+            # a slightly larger gain, so that the margin survives
+            g = proposal.g * (1 + 1e-6) + 1e-9
             ok, margin, bound, problem = verify_certificate(
-                model.scaled(s), P_b, t, kind="iss", alpha=alpha, g=g, clear=clear
+                model, proposal.P, t, kind="iss", alpha=alpha, g=g, clear=clear
             )
+            out = {"verified": bool(ok), "margin": margin, "error_bound": bound}
+        else:
+            # the same inequality by congruence, in balanced state coordinates (and the
+            # sensors' units 2^-j: the multipliers and gamma^2 times 2^-2j)
+            s, j = where
+            scale = np.ones(proposal.P.shape[0])
+            scale[: model.N] = s
+            P_b = proposal.P * scale[:, None] * scale[None, :]
+            t_b = np.ldexp(t, -2 * j)
+            g_b = math.ldexp(proposal.g, -2 * j) * (1 + 1e-6) + 1e-9
+            if not (
+                np.all(np.isfinite(P_b))
+                and np.array_equal(P_b / scale[:, None] / scale[None, :], proposal.P)
+                and np.array_equal(np.ldexp(t_b, 2 * j), t)
+                and math.isfinite(math.ldexp(g_b, 2 * j))
+            ):
+                continue
+            ok, margin, bound, problem = verify_certificate(
+                model.scaled(s, sensors=j), P_b, t_b, kind="iss", alpha=alpha, g=g_b,
+                clear=clear,
+            )  # fmt: skip
             if ok:
+                g = math.ldexp(g_b, 2 * j)
                 out = {"verified": True, "margin": margin, "error_bound": bound,
                        "state_scaling": s.tolist(),
                        "margin_coordinates": "verified in the balanced coordinates "
                        "xi = diag(state_scaling) xi_b"}  # fmt: skip
-                break
+                if j:
+                    out["sensor_units"] = f"2^{-j}"
+                    out["margin_coordinates"] += (
+                        f", with the attack and the channels in units 2^{-j}"
+                    )
+        if ok:
+            break
+        if not extra:
+            extra = True
+            tried += [
+                (s, 0)
+                for s in model.balancings()
+                if solved_in is None or not (np.array_equal(s, solved_in[0]) and solved_in[1] == 0)
+            ]
     if ok:
         out.update(alpha=float(proposal.alpha or 0.0), gamma=float(np.sqrt(g)))
     else:

@@ -22,6 +22,7 @@ scratch, and only their verified gamma is reported.
 
 from __future__ import annotations
 
+import math
 import time
 import warnings
 from dataclasses import dataclass, replace
@@ -60,6 +61,8 @@ class GainSynthesis:
     # the state coordinates x = diag(state_scaling) x_b the LMI was solved in (None: the
     # user's), where its certificate is best verified
     state_scaling: np.ndarray | None = None
+    # and the sensors' units, 2^-sensor_exponent (``LureModel.scaled``)
+    sensor_exponent: int = 0
     solver: str = ""  # the solver's status, or the type of the exception it raised
     refusal: Refusal | None = None  # REFUSED: the memory the LMI would need, and the budget
     rows: int = 0  # REFUSED: the LMI's rows
@@ -195,19 +198,25 @@ def _refused(
 
 @dataclass(frozen=True)
 class _Units:
-    """The coordinates x = diag(s) x_b the synthesis LMI is solved in: powers of two that
-    balance the plant's states (``state_balancing``), so that an LMI solver meets a plant
-    written with states in units 2^30 apart as it meets the plant in its own units.  The
-    attack, the channels and the error norm |e| keep the user's units (``LureModel.scaled``
-    keeps Ce S), so the LMI is the user's, by an exact congruence; the error's weight Ce S
-    is then divided by a power of two c (its largest entry in [1, 2)), which divides
-    V, the multipliers and gamma^2 by c^2: the same LMI, without entries 2^60 apart."""
+    """The coordinates the synthesis LMI is solved in: x = diag(s) x_b with powers of two s
+    that balance the plant's states (``state_balancing``), so that an LMI solver meets a
+    plant written with states in units 2^30 apart as it meets the plant in its own units,
+    and, where the sensing's largest entry (in those states) is not within a factor 2^4 of
+    1, sensors in units of a power of two sigma that bring it into [1, 2): the attack, the
+    attack estimate and the channels multiplied by sigma (the soft threshold is positively
+    homogeneous, so its sector stays [0, q]), which multiplies the sector multipliers and
+    gamma^2 by sigma^-2 and the gain by sigma^-1.  The error norm |e| keeps the user's
+    units (``LureModel.scaled`` keeps Ce S), so the LMI is the user's, by an exact
+    congruence; the error's weight Ce S is then divided by a power of two c (its largest
+    entry in [1, 2)), which divides V, the multipliers and gamma^2 by c^2: the same LMI,
+    without entries 2^60 apart."""
 
     model: LureModel
     A: np.ndarray
     sensing: np.ndarray
     states: np.ndarray | None = None
     weight: float = 1.0
+    sensors: float = 1.0  # sigma
 
     @classmethod
     def of(cls, design: ObserverDesign, model: LureModel) -> _Units:
@@ -215,15 +224,23 @@ class _Units:
         from ..numerics.linalg import state_balancing
 
         A, S = design.system.A, design.sensing
-        s = state_balancing(A, pow2_row_scaling(S)[:, None] * S, canonical=True)
-        if s is None or model.n_e != A.shape[0]:
+        if model.n_e != A.shape[0]:
             return cls(model, A, S)
-        full = np.concatenate([s, np.ones(model.N - model.n_e)])
-        balanced = model.scaled(full)
+        s = state_balancing(A, pow2_row_scaling(S)[:, None] * S, canonical=True)
+        states = np.ones(A.shape[0]) if s is None else s
+        sensed = S * states[None, :]
+        top = float(np.max(np.abs(sensed))) if sensed.size else 0.0
+        sigma = 1.0 if 2.0**-4 <= top < 2.0**4 else pow2_scale(top)
+        if s is None and sigma == 1.0:
+            return cls(model, A, S)
+        # the attack estimate in the sensors' units too: a_hat = a_hat_b / sigma
+        full = np.concatenate([states, np.full(model.N - model.n_e, 1.0 / sigma)])
+        balanced = model.scaled(full, sensors=math.frexp(sigma)[1] - 1)
         top = float(np.max(np.abs(balanced.Ce))) if balanced.Ce.size else 0.0
         c = 1.0 / pow2_scale(top) if top > 0 and np.isfinite(top) else 1.0
         balanced = replace(balanced, Ce=balanced.Ce / c)
-        return cls(balanced, A * (s[None, :] / s[:, None]), S * s[None, :], s, c)
+        A_b = A * (states[None, :] / states[:, None])
+        return cls(balanced, A_b, sensed * sigma, full, c, sigma)
 
     @property
     def problem_data(self) -> tuple[LureModel, np.ndarray, np.ndarray]:
@@ -231,20 +248,22 @@ class _Units:
 
     def back(self, found: GainSynthesis) -> GainSynthesis:
         """The solve's gain, P, multipliers and gamma in the user's coordinates:
-        L = S L_b, P = c^2 S^-1 P_b S^-1, T = c^2 T_b, gamma = c gamma_b."""
-        s, c = self.states, self.weight
-        if s is None or found.L is None:
+        L = sigma S L_b, P = c^2 S^-1 P_b S^-1 (S with 1 / sigma for the attack estimate),
+        T = (c sigma)^2 T_b, gamma = c sigma gamma_b."""
+        full, c = self.states, self.weight * self.sensors
+        if full is None or found.L is None:
             return found
-        full = np.concatenate([s, np.ones(self.model.N - self.model.n_e)])
-        P = None if found.P is None else c * c * found.P / (full[:, None] * full[None, :])
+        n = self.model.n_e
+        P = None if found.P is None else self.weight**2 * found.P / np.outer(full, full)
         return replace(
             found,
-            L=s[:, None] * found.L,
+            L=full[:n, None] * self.sensors * found.L,
             P=P,
             multipliers=None if found.multipliers is None else c * c * found.multipliers,
             g=None if found.g is None else c * c * found.g,
             gamma_proposed=None if found.gamma_proposed is None else c * found.gamma_proposed,
             state_scaling=full,
+            sensor_exponent=math.frexp(self.sensors)[1] - 1,
         )
 
 

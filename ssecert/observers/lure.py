@@ -50,16 +50,17 @@ class ExactLure:
         """One matrix (``"A"``, ``"B"``, ``"Cw"``, ``"E"``, ``"Dw"``) as rows of Fractions."""
         return getattr(self, name).to_fractions()
 
-    def scaled(self, s: np.ndarray) -> ExactLure:
-        """The same dynamics in the coordinates xi = diag(s) xi_b, s powers of two."""
+    def scaled(self, s: np.ndarray, sensors: int = 0) -> ExactLure:
+        """The same dynamics in the coordinates xi = diag(s) xi_b, s powers of two, with the
+        channels and the attack in units 2^-sensors (``LureModel.scaled``)."""
         k = np.round(np.log2(np.asarray(s, dtype=float))).astype(np.int64)
         m, r = self.B.shape[1], self.E.shape[1]
-        zm, zr = np.zeros(m, np.int64), np.zeros(r, np.int64)
+        jm, jr = np.full(m, sensors, np.int64), np.full(r, sensors, np.int64)
         return ExactLure(
             self.A.scaled(-k, k),
-            self.B.scaled(-k, zm),
-            self.Cw.scaled(zm, k),
-            self.E.scaled(-k, zr),
+            self.B.scaled(-k, -jm),
+            self.Cw.scaled(jm, k),
+            self.E.scaled(-k, -jr),
             self.Dw,
         )
 
@@ -244,16 +245,27 @@ class LureModel:
         """
         return design.observer_kind.lure_model(design)
 
-    def scaled(self, s: np.ndarray) -> LureModel:
-        """The same dynamics in the coordinates xi = diag(s) xi_b.
+    def scaled(self, s: np.ndarray, sensors: int = 0) -> LureModel:
+        """The same dynamics in the coordinates xi = diag(s) xi_b, and with ``sensors``
+        (an exponent j), the channels, the nonlinearity's output, the attack and the
+        threshold in units 2^-j (multiplied by sigma = 2^j).
 
-        A_b = S^-1 A S, B_b = S^-1 B, Cw_b = Cw S, E_b = S^-1 E, Ce_b = Ce S;
-        the channels and the attack keep their units.  With powers of two
-        (``balancing``) every entry is scaled exactly.
+        A_b = S^-1 A S, B_b = S^-1 B / sigma, Cw_b = sigma Cw S, E_b = S^-1 E / sigma,
+        Dw_b = Dw, Ce_b = Ce S: the soft threshold is positively homogeneous, so its
+        sector stays [0, q]; without ``sensors`` the channels and the attack keep their
+        units.  With powers of two (``balancing``) every entry is scaled exactly.
         """
         s = np.asarray(s, dtype=float)
-        build = self._exact_derived(lambda exact: exact.scaled(s))
+        sigma = math.ldexp(1.0, int(sensors))
+        build = self._exact_derived(lambda exact: exact.scaled(s, int(sensors)))
         spread = float(s.max() / s.min()) if s.size else 1.0
+        # the 2-norm of [A B E; Cw Dw] grows by at most the largest row factor times the
+        # largest column factor of the change: rows 1 / s and sigma, columns s and 1 / sigma
+        growth = (
+            max(1.0 / float(s.min()), sigma) * max(float(s.max()), 1.0 / sigma)
+            if s.size
+            else max(sigma, 1.0 / sigma)
+        )
         error = None
         if self.exact_error is not None:
             base, k = self.exact_error, np.round(np.log2(s[: self.n_e])).astype(np.int64)
@@ -265,18 +277,18 @@ class LureModel:
             error = ExactMatrix(error_build, None, base.source)
         return LureModel(
             self.A * (s[None, :] / s[:, None]),
-            self.B / s[:, None],
-            self.Cw * s[None, :],
-            self.E / s[:, None],
+            self.B / s[:, None] / sigma,
+            self.Cw * s[None, :] * sigma,
+            self.E / s[:, None] / sigma,
             self.Dw,
             self.Ce * s[None, :],
             self.q,
             self.n_e,
-            self.threshold,
+            self.threshold * sigma,
             build,
-            self.formation_error * spread,
+            self.formation_error * growth,
             error,
-            self.spread * spread,
+            self.spread * max(spread, growth),
         )
 
     def balancing(self, spread: float = 16.0, *, canonical: bool = False) -> np.ndarray | None:
