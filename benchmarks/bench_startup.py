@@ -7,6 +7,8 @@ operating system's file cache, is left out):
 * ``ssecert --version`` (wall-clock), goal 0.5 s;
 * ``ssecert analyze ugv`` (the 2-state packaged example), CPU time of the process
   (user + system), goal 1 s; the note names its slowest steps (``meta.timings``);
+* ``ssecert analyze notes-example-0`` (a 3-state packaged example without an observer: the
+  command's own fixed costs around a small analysis), CPU time, against the same goal;
 * ``ssecert certify`` on the packaged example (the README's first command), wall-clock,
   no goal: the note names its slowest steps.
 
@@ -103,6 +105,11 @@ def measure(runs: int) -> dict[str, Any]:
         analyze = [*python, "-m", "ssecert", "analyze", "ugv", "--json", str(certificate)]
         out["analyze"] = median_of(analyze, runs)
         out["analyze_steps"] = slowest(certificate)
+        small = Path(scratch) / "small.json"
+        out["small"] = median_of(
+            [*python, "-m", "ssecert", "analyze", "notes-example-0", "--json", str(small)], runs
+        )
+        out["small_steps"] = slowest(small)
         folder = Path(scratch) / "certify"
         out["certify"] = median_of([*python, "-m", "ssecert", "certify", "--out", str(folder)],
                                    max(1, runs // 2))  # fmt: skip
@@ -128,6 +135,14 @@ def to_rows(m: dict[str, Any]) -> list[dict[str, Any]]:
             1.0,
             goal,
             f"{median}; wall-clock {m['analyze'][0]:.2f} s; slowest steps: {m['analyze_steps']}",
+        ),
+        row(
+            NAME,
+            "`ssecert analyze notes-example-0` (n = 3, p = 3, no observer), CPU time",
+            m["small"][1],
+            1.0,
+            goal,
+            f"{median}; wall-clock {m['small'][0]:.2f} s; slowest steps: {m['small_steps']}",
         ),
         row(
             NAME,

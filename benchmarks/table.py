@@ -140,7 +140,9 @@ BENCHMARKS: dict[str, tuple[str, str]] = {
         "bench_startup.py",
         "Fixed costs against the goals set for them (the reference column is the goal): "
         "`import ssecert` and `ssecert --version` (wall-clock, goal 0.5 s), `ssecert analyze "
-        "ugv` on the 2-state packaged example (CPU time, goal 1 s) and `ssecert certify` on "
+        "ugv` on the 2-state packaged example (CPU time, goal 1 s), `ssecert analyze` on a "
+        "3-state example without an observer (the command's own fixed costs, CPU time, against "
+        "the same goal) and `ssecert certify` on "
         "the packaged example (the README's first command, no goal), each the median over "
         "fresh processes after a warm-up, with the slowest steps named.",
     ),
