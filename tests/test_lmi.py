@@ -148,6 +148,22 @@ def test_linear_observer_iss_gain():
     assert peak <= cert.gamma <= 1.05 * peak + 1e-3
 
 
+@pytest.mark.parametrize("exponent", [-12, 0, 12])
+def test_a_linear_observer_iss_gain_in_any_units_of_the_attack(exponent):
+    """The LMI's margin is imposed on every block: without the attack in units near the
+    input's, gamma^2 could not go below it (a gain of 4e-4 read as 1e-2); the gain of the
+    same loop with its attack in units 2^exponent apart is that gain times 2^-exponent,
+    within the certificates' slack, and stays above the frequency response's peak."""
+    F = np.array([[0.5, 0.2], [0.0, 0.3]])
+    L = np.array([[1.0], [0.5]]) * 2.0**-exponent
+    cert = iss_certificate(LureModel.linear(F, L))
+    assert cert.verdict == "holds"
+    z = np.exp(1j * np.linspace(0, np.pi, 400))
+    peak = max(np.linalg.norm(np.linalg.solve(zz * np.eye(2) - F, L)) for zz in z)
+    assert peak <= cert.gamma <= 1.05 * peak
+    assert ("input_scaling" in cert.details["attempts"][0]) == (exponent != 0)
+
+
 def test_solver_failure_is_inconclusive(monkeypatch):
     import cvxpy
 

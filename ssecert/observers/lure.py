@@ -195,7 +195,8 @@ class LureModel:
     def input_scaled(self, k: np.ndarray) -> LureModel:
         """The model with its attack input a = diag(2^k) a_b: E_b = E diag(2^k), Dw_b = Dw
         diag(2^k), exactly (powers of two), its exact matrices scaled alike.  With k <= 0 the
-        a-priori rounding bound stays one (each column's error shrinks with it).
+        a-priori rounding bound stays one (each column's error shrinks with it); otherwise it
+        grows by 2^max(k).
 
         Examples
         --------
@@ -204,8 +205,8 @@ class LureModel:
         [[1.0, 0.75]]
         """
         k = np.asarray(k, dtype=np.int64)
-        if k.shape != (self.r,) or np.any(k > 0):
-            raise ValueError(f"k: expected {self.r} exponents <= 0, got {k.tolist()}")
+        if k.shape != (self.r,):
+            raise ValueError(f"k: expected {self.r} exponents, got {k.tolist()}")
         N, m = self.N, self.Dw.shape[0]
         build = self._exact_derived(
             lambda exact: replace(
@@ -215,7 +216,14 @@ class LureModel:
             )
         )
         w = np.ldexp(1.0, k)
-        return replace(self, E=self.E * w, Dw=self.Dw * w, exact_build=build)
+        growth = math.ldexp(1.0, int(max(k.max(initial=0), 0)))
+        return replace(
+            self,
+            E=self.E * w,
+            Dw=self.Dw * w,
+            exact_build=build,
+            formation_error=self.formation_error * growth,
+        )
 
     def _exact_derived(
         self, change: Callable[[ExactLure], ExactLure]

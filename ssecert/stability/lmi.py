@@ -41,6 +41,7 @@ re-verification in ``lmi_verification``; this module decides.
 from __future__ import annotations
 
 import itertools
+import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from functools import partial
@@ -392,6 +393,23 @@ def output_scaled(model: LureModel, spread: float = 16.0) -> tuple[float, LureMo
     return c, replace(model, Ce=model.Ce / c)
 
 
+def input_units(model: LureModel, spread: float = 16.0) -> tuple[int, LureModel]:
+    """(k, model with its attack a = 2^k a_b, ``LureModel.input_scaled``): k the power of two
+    that brings the 2-norm of the attack's input [E; Dw] near 1, so that the dissipation LMI
+    meets an attack in units the solver can handle (its margin, imposed on every block, would
+    otherwise keep gamma^2 above it: a gain of 1e-3 read as 1e-2); k = 0 when that norm is
+    within ``spread`` of 1.  The certificate (P, T) is the same, gamma^2 is 4^-k times the
+    solved one."""
+    inputs = np.vstack([model.E, model.Dw]) if model.r else np.zeros((0, 0))
+    norm = float(np.linalg.norm(inputs, 2)) if inputs.size else 0.0
+    if not np.isfinite(norm) or norm <= 0.0 or 1.0 / spread < norm < spread:
+        return 0, model
+    k = -round(float(np.log2(norm)))
+    if abs(k) > 255:  # 4^k, and gamma^2 scaled back by it, would leave the floats
+        return 0, model
+    return k, model.input_scaled(np.full(model.r, k, dtype=np.int64))
+
+
 def balanced_retry(
     model: LureModel,
     certify: Callable[[LureModel], LMICertificate],
@@ -626,6 +644,7 @@ def iss_certificate(
         )
     attempts = []
     c, solved = output_scaled(model)  # solved with e in units c, the certificate scaled back
+    k, solved = input_units(solved)  # and with a = 2^k a_b: gamma^2 scaled back by 4^-k
     structures = STRUCTURES if structure == "auto" else [structure]
     for st in structures:
         if st == "full" and structure == "auto" and model.N + model.m + model.r > FULL_LIMIT:
@@ -642,14 +661,31 @@ def iss_certificate(
             with np.errstate(over="ignore"):  # beyond the floats: the verification fails
                 P, t, g = P * c**2, t * c**2, g * c**2
             info["output_scaling"] = c
+        if k and g is not None:
+            g = math.ldexp(g, -2 * k)
+            info["input_scaling"] = f"2^{k}"
         attempts.append(info)
         if P is None or t is None or g is None:  # None only when the solve failed
             continue
-        # certify a slightly larger gain than the optimum so that the margin survives
-        g_cert = g * (1 + 1e-6) + 1e-9 * c**2
+        # certify a slightly larger gain than the optimum so that the margin survives (the
+        # absolute part in the units the LMI was solved in)
+        g_cert = g * (1 + 1e-6) + math.ldexp(1e-9 * c**2, -2 * k)
         ok, margin, bound, problem = verify_certificate(
             model, P, t, kind="iss", alpha=alpha, g=g_cert, clear=clear
         )
+        where: dict[str, Any] = {}
+        if not ok and k:
+            # the same inequality with a = 2^k a_b (gamma^2 times 4^k), where it was solved
+            scaled = model.input_scaled(np.full(model.r, k, dtype=np.int64))
+            ok, margin, bound, problem = verify_certificate(
+                scaled, P, t, kind="iss", alpha=alpha, g=math.ldexp(g_cert, 2 * k), clear=clear
+            )
+            where = {
+                "input_scaling": f"2^{k}",
+                "margin_coordinates": "margin and error_bound are those of the LMI "
+                f"recomputed with the attack in units 2^{k} (a = 2^{k} a_b, gamma^2 times "
+                f"4^{k}), where it was verified",
+            }
         info["verified"] = ok
         if ok:
             return LMICertificate(
@@ -662,7 +698,7 @@ def iss_certificate(
                 decay=alpha,
                 gamma=float(np.sqrt(g_cert)),
                 structure=st,
-                details={**details, "attempts": attempts, "gamma_squared": g_cert},
+                details={**details, "attempts": attempts, "gamma_squared": g_cert, **where},
                 code=LMICode.VERIFIED,
             )
         info["verification_problem"] = verify_text(problem)
