@@ -256,3 +256,19 @@ def test_a_nonnegative_multiplier_proves_where_a_constant_attack_takes_the_error
     path = model.simulate(xi0, T, attack=np.broadcast_to(attack, (T, 300, model.r)))
     bias = np.asarray(record["bias"])
     assert np.all(np.abs(path[-1, :, : model.n_e] - bias) <= 1e-9 * (1 + np.abs(bias)))
+
+
+def test_the_zames_falb_gain_of_an_attack_in_small_units_is_not_held_at_the_margin():
+    """With the attack's input [E; Dw] 2^-12 of the design's, the gain is 2^-12 of its gain:
+    the LMI is solved with the attack in units near its input's (its margin, imposed on
+    every block, would otherwise keep gamma^2 above 1e-4)."""
+    from ssecert.stability.zames_falb import zames_falb_gain
+
+    model = LureModel.from_design(_design())
+    stability = zames_falb_certificate(model)
+    gain = zames_falb_gain(model, stability)
+    small = model.input_scaled(np.full(model.r, -12))
+    scaled = zames_falb_gain(small, zames_falb_certificate(small))
+    assert gain.verdict == "holds" and scaled.verdict == "holds"
+    assert scaled.gamma < 0.01
+    assert scaled.gamma == pytest.approx(gain.gamma * 2.0**-12, rel=1e-3)

@@ -49,6 +49,7 @@ with a rounding guard.
 
 from __future__ import annotations
 
+import math
 import time
 from functools import partial
 from typing import Any
@@ -64,6 +65,7 @@ from .lmi import (
     LMICertificate,
     balanced_retry,
     channel_vertex_instability,
+    input_units,
     output_scaled,
     where_verified,
 )
@@ -429,10 +431,14 @@ def zames_falb_gain(
             facts={"refusal": skip},
         )
     c, solved = output_scaled(model)  # solved with e in units c, the certificate scaled back
+    k, solved = input_units(solved)  # and with a = 2^k a_b: gamma^2 scaled back by 4^-k
     sol, g, info = _solve(solved, nu, True, solver_options or {})
     if c != 1.0 and sol is not None and g is not None:
         sol, g = tuple(x * c**2 for x in sol), g * c**2
         info["output_scaling"] = c
+    if k and g is not None:
+        g = math.ldexp(g, -2 * k)
+        info["input_scaling"] = f"2^{k}"
     if sol is None or g is None:
         return _gain_retry(
             model,
@@ -446,8 +452,18 @@ def zames_falb_gain(
             balance,
         )
     problem = None
-    for g_cert in (g * (1 + 1e-6) + 1e-9 * c**2, g * 1.01 + 1e-6 * c**2):
+    # (the absolute parts of the slack in the units the LMI was solved in)
+    slack = math.ldexp(c**2, -2 * k)
+    for g_cert in (g * (1 + 1e-6) + 1e-9 * slack, g * 1.01 + 1e-6 * slack):
         ok, margin, bound, problem = verify_zames_falb(model, *sol, g=g_cert, clear=clear)
+        if not ok and k:
+            # the same inequality with a = 2^k a_b (gamma^2 times 4^k), where it was solved
+            scaled = model.input_scaled(np.full(model.r, k, dtype=np.int64))
+            ok, margin, bound, problem = verify_zames_falb(
+                scaled, *sol, g=math.ldexp(g_cert, 2 * k), clear=clear
+            )
+            if ok:
+                info["verified_with_input_scaling"] = True
         if ok:
             cert = _certificate(model, sol, margin, bound, [info], gamma_squared=g_cert)
             return LMICertificate(
