@@ -428,3 +428,24 @@ def test_sensors_near_the_floats_limits_raise_no_warning(seed, p, scale, observe
     for check in cert.checks:
         if check.verdict.value == "holds" and isinstance(check.value, float):
             assert not np.isnan(check.value), check.id
+
+
+def test_an_sso_with_a_step_near_the_floats_bottom_is_answered(tmp_path, capsys):
+    # its dead zone's balancing reaches the floats' ends: the scaled model's rounding bound
+    # divided by zero (an internal error) where it should grow to inf
+    spec = tmp_path / "tiny-step.toml"
+    spec.write_text(
+        'name = "x"\n[system]\nA = [[1.01, 0.1], [0, 0.9]]\nC = [[1, 0], [0, 1], [1, 1], [1, -1]]\n'
+        "[attack]\nmax_attacked = 1\n"
+        '[observer]\nkind = "sso"\nstep = 1e-300\nthreshold = 1e-300\nwindow = 2\n'
+        "inner_steps = 3\n"
+    )
+    assert main(["analyze", str(spec), "--quiet"]) in (0, 1, 3)
+    assert "internal error" not in capsys.readouterr().err
+
+
+def test_the_irrepresentable_budget_counts_the_supports_exactly():
+    # C(20, 3) = 1,140 read as 10 ** log10, rounded down: "1,139 supports exceed 1,139"
+    C = np.random.default_rng(0).standard_normal((20, 4))
+    check = irrepresentable(System(np.eye(4), C), 3, max_sets=1139)
+    assert "C(20, 3) = 1,140 supports exceed the budget of 1,139" in check.summary

@@ -269,11 +269,13 @@ class LureModel:
         spread = float(s.max() / s.min()) if s.size else 1.0
         # the 2-norm of [A B E; Cw Dw] grows by at most the largest row factor times the
         # largest column factor of the change: rows 1 / s and sigma, columns s and 1 / sigma
-        growth = (
-            max(1.0 / float(s.min()), sigma) * max(float(s.max()), 1.0 / sigma)
-            if s.size
-            else max(sigma, 1.0 / sigma)
-        )
+        # (in numpy floats: a scaling at the floats' ends makes it inf, as the spread)
+        with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
+            growth = float(
+                np.maximum(1.0 / s.min(), sigma) * np.maximum(s.max(), 1.0 / sigma)
+                if s.size
+                else max(sigma, 1.0 / sigma)
+            )
         error = None
         if self.exact_error is not None:
             base, k = self.exact_error, np.round(np.log2(s[: self.n_e])).astype(np.int64)

@@ -368,7 +368,9 @@ def _decided_by_size(
         facts: dict[str, Any] = {"k": k, "items": items, "noun": out.noun}
         return out.check(Code.SUPPORT_TOO_LARGE, math.inf, every, facts)
     if total is None:
-        count = 10 ** min(log10_comb(items, k), 308)
+        digits = log10_comb(items, k)
+        # exact where it has few digits (a power of ten rounded down read C(20, 3) as 1,139)
+        count: float = math.comb(items, k) if digits < 300 else 10 ** min(digits, 308)
         facts = {"items": items, "k": k, "count": count, "max_sets": max_sets}
         return out.check(Code.TOO_MANY_SUPPORTS, math.nan, None, facts)
     if k == items:
