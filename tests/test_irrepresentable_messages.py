@@ -64,3 +64,14 @@ def test_too_many_supports_are_counted_in_scientific_notation():
     )
     assert "C(400, 200) = " in words and "e+119" in words
     assert "budget of 1,000" in words and "--max-sets" in words
+
+
+def test_the_irrepresentable_budget_counts_the_supports_exactly():
+    # C(20, 3) = 1,140 read as 10 ** log10, rounded down: "1,139 supports exceed 1,139"
+    import numpy as np
+
+    from ssecert import System, irrepresentable
+
+    C = np.random.default_rng(0).standard_normal((20, 4))
+    check = irrepresentable(System(np.eye(4), C), 3, max_sets=1139)
+    assert "C(20, 3) = 1,140 supports exceed the budget of 1,139" in check.summary

@@ -442,10 +442,3 @@ def test_an_sso_with_a_step_near_the_floats_bottom_is_answered(tmp_path, capsys)
     )
     assert main(["analyze", str(spec), "--quiet"]) in (0, 1, 3)
     assert "internal error" not in capsys.readouterr().err
-
-
-def test_the_irrepresentable_budget_counts_the_supports_exactly():
-    # C(20, 3) = 1,140 read as 10 ** log10, rounded down: "1,139 supports exceed 1,139"
-    C = np.random.default_rng(0).standard_normal((20, 4))
-    check = irrepresentable(System(np.eye(4), C), 3, max_sets=1139)
-    assert "C(20, 3) = 1,140 supports exceed the budget of 1,139" in check.summary
