@@ -53,7 +53,7 @@ from __future__ import annotations
 import math
 import os
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from functools import partial
 from typing import TYPE_CHECKING, Any
@@ -1024,17 +1024,23 @@ def verify_synthesis(design: Any, proposal: Any, *, clear: float = 100.0) -> dic
     solved_in = None
     if proposal.state_scaling is not None:
         solved_in = (np.asarray(proposal.state_scaling), int(proposal.sensor_exponent))
-    # the coordinates to try: the user's, then those the synthesis solved in, then the
-    # model's balancings; with the sensors in other units, those it solved in first (the
-    # slack on gamma^2 is absolute: in the user's units it would swamp a small gamma)
-    tried: list[tuple[np.ndarray, int] | None] = [None]
-    if solved_in is not None:
-        tried.insert(0 if solved_in[1] else 1, solved_in)
+
+    def coordinates() -> Iterator[tuple[np.ndarray, int] | None]:
+        """The coordinates to try (None: the user's): the user's, then those the synthesis
+        solved in; with the sensors in other units, those it solved in first (the slack on
+        gamma^2 is absolute: in the user's units it would swamp a small gamma); then the
+        model's balancings, computed only when those fail."""
+        first: list[tuple[np.ndarray, int] | None] = [None]
+        if solved_in is not None:
+            first.insert(0 if solved_in[1] else 1, solved_in)
+        yield from first
+        for s in model.balancings():
+            if solved_in is None or not (np.array_equal(s, solved_in[0]) and solved_in[1] == 0):
+                yield s, 0
+
     ok, margin, bound, problem, g = False, math.nan, math.nan, None, math.nan
     out: dict[str, Any] = {}
-    extra = False
-    while tried:
-        where = tried.pop(0)
+    for where in coordinates():
         if where is None:
             # a slightly larger gain, so that the margin survives
             g = proposal.g * (1 + 1e-6) + 1e-9
@@ -1075,13 +1081,6 @@ def verify_synthesis(design: Any, proposal: Any, *, clear: float = 100.0) -> dic
                     )
         if ok:
             break
-        if not extra:
-            extra = True
-            tried += [
-                (s, 0)
-                for s in model.balancings()
-                if solved_in is None or not (np.array_equal(s, solved_in[0]) and solved_in[1] == 0)
-            ]
     if ok:
         out.update(alpha=float(proposal.alpha or 0.0), gamma=float(np.sqrt(g)))
     else:

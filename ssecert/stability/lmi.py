@@ -73,6 +73,9 @@ __all__ = [
     "corner_reason",
     "balanced_retry",
     "output_scaled",
+    "input_units",
+    "in_input_units",
+    "input_units_note",
     "to_original_coordinates",
     "where_verified",
 ]
@@ -407,7 +410,24 @@ def input_units(model: LureModel, spread: float = 16.0) -> tuple[int, LureModel]
     k = -round(float(np.log2(norm)))
     if abs(k) > 255:  # 4^k, and gamma^2 scaled back by it, would leave the floats
         return 0, model
-    return k, model.input_scaled(np.full(model.r, k, dtype=np.int64))
+    return k, in_input_units(model, k)
+
+
+def in_input_units(model: LureModel, k: int) -> LureModel:
+    """The model with its attack a = 2^k a_b (``LureModel.input_scaled``, every input alike):
+    the inequality ``input_units`` solves, where a certificate is verified again when it does
+    not verify in the user's units (gamma^2 times 4^k there)."""
+    return model.input_scaled(np.full(model.r, k, dtype=np.int64))
+
+
+def input_units_note(k: int) -> dict[str, str]:
+    """The details of a certificate verified with its attack in units 2^k (``in_input_units``)."""
+    return {
+        "input_scaling": f"2^{k}",
+        "margin_coordinates": "margin and error_bound are those of the LMI "
+        f"recomputed with the attack in units 2^{k} (a = 2^{k} a_b, gamma^2 times "
+        f"4^{k}), where it was verified",
+    }
 
 
 def balanced_retry(
@@ -676,16 +696,16 @@ def iss_certificate(
         where: dict[str, Any] = {}
         if not ok and k:
             # the same inequality with a = 2^k a_b (gamma^2 times 4^k), where it was solved
-            scaled = model.input_scaled(np.full(model.r, k, dtype=np.int64))
             ok, margin, bound, problem = verify_certificate(
-                scaled, P, t, kind="iss", alpha=alpha, g=math.ldexp(g_cert, 2 * k), clear=clear
+                in_input_units(model, k),
+                P,
+                t,
+                kind="iss",
+                alpha=alpha,
+                g=math.ldexp(g_cert, 2 * k),
+                clear=clear,
             )
-            where = {
-                "input_scaling": f"2^{k}",
-                "margin_coordinates": "margin and error_bound are those of the LMI "
-                f"recomputed with the attack in units 2^{k} (a = 2^{k} a_b, gamma^2 times "
-                f"4^{k}), where it was verified",
-            }
+            where = input_units_note(k)
         info["verified"] = ok
         if ok:
             return LMICertificate(
