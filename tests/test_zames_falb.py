@@ -272,3 +272,8 @@ def test_the_zames_falb_gain_of_an_attack_in_small_units_is_not_held_at_the_marg
     assert gain.verdict == "holds" and scaled.verdict == "holds"
     assert scaled.gamma < 0.01
     assert scaled.gamma == pytest.approx(gain.gamma * 2.0**-12, rel=1e-3)
+    # solved with the attack in units 2^k, k > 0, and verified there: said as the ISS gain
+    # says it
+    units = scaled.details["attempts"][0]["input_scaling"]
+    assert units.startswith("2^") and int(units[2:]) > 0
+    assert scaled.details["input_scaling"] == units and "margin_coordinates" in scaled.details
