@@ -9,6 +9,7 @@ code are checked once, here (``ssecert.stability.spectral_messages`` and
 import numpy as np
 import pytest
 
+from ssecert.numerics.schur_cohn import SCHUR_COHN_LIMIT
 from ssecert.results import Verdict
 from ssecert.stability import lmi_messages, lyapunov_messages, spectral_messages
 from ssecert.stability.lmi import LMICertificate, LureModel, circle_certificate
@@ -24,6 +25,8 @@ from ssecert.stability.outcomes import (
 )
 from ssecert.stability.spectral import EXACT_SCHUR_LIMIT, schur_decision
 from ssecert.stability.zames_falb import zames_falb_certificate
+
+_NEAR_ONE = np.array([[1.0 - 2.0**-30, 1.0], [np.nextafter(2.0**-60, 0.0), 1.0 - 2.0**-30]])
 
 # (plant, the code that decides it): each answer known by construction
 PLANTS = {
@@ -42,9 +45,17 @@ PLANTS = {
         np.diag([1.5] + [0.1] * EXACT_SCHUR_LIMIT),
         SchurCode.FIRST_ORDER,
     ),
-    # eigenvalues 1 - 2^-30 +- (slightly less than 2^-30): rho < 1 by ~1e-21
-    "rho 1 - 1e-21": (
-        np.array([[1.0 - 2.0**-30, 1.0], [np.nextafter(2.0**-60, 0.0), 1.0 - 2.0**-30]]),
+    # eigenvalues 1 - 2^-30 +- (slightly less than 2^-30): rho < 1 by ~1e-25, where no power
+    # up to 2^8 has a norm below 1; the exact characteristic polynomial decides it
+    "rho 1 - 1e-25": (_NEAR_ONE, SchurCode.SCHUR_COHN_STABLE),
+    # eigenvalues +-i and 1/2: |tr F^m| stays below n = 3, no eigenvalue is +-1
+    "rotation and a stable mode": (
+        np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 0.5]]),
+        SchurCode.SCHUR_COHN_FAILS,
+    ),
+    # copies of it beyond the Schur-Cohn limit: nothing decides it
+    "rho 1 - 1e-25, n beyond the Schur-Cohn limit": (
+        np.kron(np.eye(SCHUR_COHN_LIMIT // 2 + 1), _NEAR_ONE),
         SchurCode.UNDECIDED,
     ),
     "not finite": (np.array([[np.nan]]), SchurCode.NON_FINITE),
@@ -64,7 +75,10 @@ def test_each_schur_code_is_reached_and_decides_state_and_rigour(name):
 
 
 def test_the_codes_decide_states_as_documented():
-    assert {c for c in SchurCode if c.state is SchurState.STABLE} == {SchurCode.POWERS_STABLE}
+    assert {c for c in SchurCode if c.state is SchurState.STABLE} == {
+        SchurCode.POWERS_STABLE,
+        SchurCode.SCHUR_COHN_STABLE,
+    }
     assert {c for c in SchurCode if c.state is SchurState.UNKNOWN} == {
         SchurCode.NON_FINITE,
         SchurCode.UNDECIDED,
@@ -100,6 +114,7 @@ def test_every_schur_code_has_a_method_and_a_reason():
         "lower": 1.25,
         "eigenvalue": -1.0,
         "bound": 1e-14,
+        "j": 1,
     }
     for code in SchurCode:
         words = spectral_messages.reason(code, facts, 1.5 + 0j, 1.5, 0.5)
@@ -122,8 +137,14 @@ def test_schur_words_show_which_side_of_one_a_number_is_on():
     eigen = spectral_messages.method(SchurCode.EIGENVALUE_ON_CIRCLE, {"eigenvalue": 1 + 2**-40})
     assert eigen != "exact eigenvalue 1" and eigen.startswith("exact eigenvalue 1.0000")
     # a certified radius interval just below 1 prints on its side of 1
-    undecided = schur_decision(PLANTS["rho 1 - 1e-21"][0]).reason
+    undecided = schur_decision(PLANTS["rho 1 - 1e-25, n beyond the Schur-Cohn limit"][0]).reason
     assert "certified 1 <=" not in undecided and "certified 0.99999" in undecided
+    # the Schur-Cohn test's radius 1 - 2^-j, and the bound it proves below 1
+    stable = schur_decision(_NEAR_ONE)
+    j = stable.facts["j"]
+    assert stable.method == f"exact Schur-Cohn test: rho < 1 - 2^-{j}" and j > 53
+    assert stable.radius_upper == 1.0 and stable.details["spectral_radius_gap"] == 2.0**-j
+    assert f"radius 1 - 2^-{j}" in stable.reason and "below 1 - " in stable.reason
 
 
 # ---- the Lyapunov certificate --------------------------------------------------------------
@@ -155,10 +176,17 @@ def test_schur_words_show_which_side_of_one_a_number_is_on():
             LyapunovMethod.LYAPUNOV,
         ),
         (
-            PLANTS["rho 1 - 1e-21"][0],
+            PLANTS["rho 1 - 1e-25, n beyond the Schur-Cohn limit"][0],
             LyapunovCode.NOT_VERIFIED,
             Verdict.INCONCLUSIVE,
             LyapunovMethod.LYAPUNOV,
+        ),
+        # within the Schur-Cohn limit the exact characteristic polynomial proves it
+        (
+            _NEAR_ONE,
+            LyapunovCode.NOT_VERIFIED,
+            Verdict.HOLDS,
+            LyapunovMethod.SCHUR_COHN,
         ),
     ],
 )

@@ -234,7 +234,7 @@ def _linear_stability_check(lyap: LyapunovCertificate, tol: Tolerances, title: s
     """observer_stability of a linear observer, from its Lyapunov certificate."""
     verdict = Verdict(lyap.verdict)
     shown = exact_radius(lyap)
-    if verdict is Verdict.HOLDS and lyap.method is LyapunovMethod.EXACT_POWERS:
+    if verdict is Verdict.HOLDS and lyap.method is not LyapunovMethod.LYAPUNOV:
         summary = f"The error dynamics are linear and stable: {lyap.reason}."
     elif verdict is Verdict.HOLDS:
         summary = (
@@ -255,7 +255,7 @@ def _linear_stability_check(lyap: LyapunovCertificate, tol: Tolerances, title: s
         margin=lyap.margin,
         method="discrete Lyapunov"
         if lyap.method is LyapunovMethod.LYAPUNOV
-        else "exact powers of A - L C",
+        else f"{lyap.method.value} of A - L C",
         value_name="contraction per step (P-norm)"
         if lyap.method is LyapunovMethod.LYAPUNOV
         else "spectral radius bound of A - L C",

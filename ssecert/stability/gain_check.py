@@ -110,7 +110,7 @@ def observer_gain_check(design: ObserverDesign, *, tolerances: Tolerances | None
     evidence.update(_lyapunov_evidence(cert))
     verdict = Verdict(cert.verdict)
     shown = exact_radius(cert)
-    if verdict is Verdict.HOLDS and cert.method is LyapunovMethod.EXACT_POWERS:
+    if verdict is Verdict.HOLDS and cert.method is not LyapunovMethod.LYAPUNOV:
         fields["spectral_radius"] = cert.contraction
     # the floats may have underflowed to zero (A (I - step S'S)^m, m large)
     summary = observer_messages.linear_gain_summary(cert, what, zero=not np.any(F))
@@ -123,7 +123,7 @@ def observer_gain_check(design: ObserverDesign, *, tolerances: Tolerances | None
         margin=cert.margin,
         method="discrete Lyapunov (dlyap)"
         if cert.method is LyapunovMethod.LYAPUNOV
-        else f"exact powers of {what}",
+        else f"{cert.method.value} of {what}",
         # exact powers bound the spectral radius; their margin is that bound's distance from 1
         value_name=(
             shown.name.replace("A - L C", what)
@@ -155,7 +155,7 @@ def exact_radius(cert: Any) -> ExactRadius | None:
     the lower bound, "1 + 8.67e-19" where the exact traces exceed n by less than a float
     resolves (F = 1 + 2^-60)."""
     proof = cert.proof or {}
-    if cert.method is not LyapunovMethod.EXACT_POWERS or "state" not in proof:
+    if cert.method is LyapunovMethod.LYAPUNOV or "state" not in proof:
         return None
     state = SchurState(proof["state"])  # the decision's, as ``SchurDecision.to_dict`` keeps it
     if state is SchurState.UNKNOWN:

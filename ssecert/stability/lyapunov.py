@@ -44,6 +44,8 @@ class LyapunovMethod(enum.StrEnum):
 
     LYAPUNOV = "lyapunov"  # a Lyapunov matrix P verified in floating point with a margin
     EXACT_POWERS = "exact powers"  # the exact decision on F (``schur_decision``)
+    # the exact decision on F by the Schur-Cohn test of its characteristic polynomial
+    SCHUR_COHN = "exact Schur-Cohn test"
 
 
 @dataclass(frozen=True)
@@ -124,11 +126,14 @@ class LyapunovCertificate:
         """``LYAPUNOV`` (P verified in floating point with a margin, an instability not proved
         exactly, or nothing decided) or ``EXACT_POWERS`` (no verified P, but rho(F) <= ||F^m||^(1/m) < 1 on
         the exact F, ``contraction`` then that bound on the asymptotic rate, not a per-step
-        factor; or instability proved on the exact F)."""
+        factor; or instability proved on the exact F), ``SCHUR_COHN`` (the same, decided by the
+        Schur-Cohn test of the exact characteristic polynomial)."""
         d = self.decision
         if d is not None and (
             d.state is SchurState.STABLE or (d.rigorous and d.state is SchurState.UNSTABLE)
         ):
+            if d.code in (SchurCode.SCHUR_COHN_STABLE, SchurCode.SCHUR_COHN_FAILS):
+                return LyapunovMethod.SCHUR_COHN
             return LyapunovMethod.EXACT_POWERS
         return LyapunovMethod.LYAPUNOV
 
@@ -262,8 +267,13 @@ def lyapunov_certificate(
     if exact is None and parts is not None:
         exact = ExactMatrix.error_matrix(*parts)
     cert = _certificate_in_units(F, Q, clear, exact)
-    if cert.verdict is not Verdict.INCONCLUSIVE:
+    assert cert is not None  # (decided exactly where no P verifies)
+    if cert.verdict is Verdict.FAILS or (
+        cert.verdict is Verdict.HOLDS and cert.method is not LyapunovMethod.SCHUR_COHN
+    ):
         return cert
+    # a P verified in balanced coordinates also bounds the contraction per step, which the
+    # Schur-Cohn test's radius bound does not
     balanced = _in_balanced_units(F, clear, exact)
     return cert if balanced is None else balanced
 
@@ -290,8 +300,8 @@ def _in_balanced_units(
         return None if value is None else value.scaled(-k, k)
 
     exact_b = ExactMatrix(build, None, f"{source}, in balanced state coordinates")
-    cert = _certificate_in_units(F_b, np.eye(F.shape[0]), clear, exact_b)
-    if cert.verdict is not Verdict.HOLDS or cert.P is None:
+    cert = _certificate_in_units(F_b, np.eye(F.shape[0]), clear, exact_b, decide_exactly=False)
+    if cert is None or cert.verdict is not Verdict.HOLDS or cert.P is None:
         return None
     # any positive multiple of P is a Lyapunov matrix: c = max(s) min(s) centres the entries
     # c / (s_i s_j) on 1, so states 2^900 apart give a P of entries within 2^+-900
@@ -314,14 +324,20 @@ def _in_balanced_units(
 
 
 def _certificate_in_units(
-    F: np.ndarray, Q: np.ndarray, clear: float, exact: ExactMatrix | None
-) -> LyapunovCertificate:
-    """``lyapunov_certificate`` in the coordinates F is written in."""
+    F: np.ndarray,
+    Q: np.ndarray,
+    clear: float,
+    exact: ExactMatrix | None,
+    *,
+    decide_exactly: bool = True,
+) -> LyapunovCertificate | None:
+    """``lyapunov_certificate`` in the coordinates F is written in; where no P verifies, the
+    exact decision on F, or None without ``decide_exactly``."""
     n = F.shape[0]
     rho = float(np.abs(np.linalg.eigvals(F)).max()) if n else 0.0
     P, code, facts = _lyapunov_solution(F, Q)
     if P is None:
-        return _exact_fallback(F, exact, rho, code, facts)
+        return _exact_fallback(F, exact, rho, code, facts) if decide_exactly else None
     c = _check_solution(F, Q, P, 0.0 if exact is None else exact.rounding(F))
     contraction = _verified_contraction(c, clear)
     if contraction is not None:
@@ -338,6 +354,8 @@ def _certificate_in_units(
     margins = {"decrease": c.dec_min, "p_min": c.p_min, "bound": c.bound}
     margin = min(c.dec_min, c.p_min)  # negative when P or the decrease is indefinite
     unverified = _Unverified(c.P, c.decrease, margin, c.bound, c.condition, c.residual)
+    if not decide_exactly:
+        return None
     return _exact_fallback(F, exact, rho, LyapunovCode.NOT_VERIFIED, margins, unverified)
 
 

@@ -49,7 +49,7 @@ def linear_gain_summary(cert: LyapunovCertificate, what: str, *, zero: bool) -> 
         Whether the floats of F are the zero matrix (they may have underflowed).
     """
     verdict = Verdict(cert.verdict)
-    if verdict is Verdict.HOLDS and cert.method is LyapunovMethod.EXACT_POWERS:
+    if verdict is Verdict.HOLDS and cert.method is not LyapunovMethod.LYAPUNOV:
         return f"The linear error dynamics e+ = ({what}) e are stable: {cert.reason}."
     if verdict is Verdict.HOLDS:
         radius = f"spectral radius {sig(known(cert.spectral_radius))}"

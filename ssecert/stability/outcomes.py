@@ -62,6 +62,12 @@ class SchurCode(enum.Enum):
     TRACES_BELOW = "exact traces"
     #: unstable: F - lambda I has an exact kernel vector for a float lambda of modulus >= 1
     EIGENVALUE_ON_CIRCLE = "exact eigenvalue"
+    #: stable: the exact characteristic polynomial passes the Schur-Cohn test, also scaled to
+    #: a radius 1 - 2^-j (rho < 1 - 2^-j), where no exact power decides it
+    SCHUR_COHN_STABLE = "exact Schur-Cohn test"
+    #: unstable: the exact characteristic polynomial fails the Schur-Cohn test (an eigenvalue
+    #: of modulus >= 1)
+    SCHUR_COHN_FAILS = "exact Schur-Cohn test fails"
     #: unstable (not rigorous): the dominant eigenvalue clears 1 by its first-order bound
     FIRST_ORDER = "first-order eigenvalue bound"
     #: nothing decides it
@@ -70,7 +76,7 @@ class SchurCode(enum.Enum):
     @property
     def state(self) -> SchurState:
         """The state this code decides."""
-        if self is SchurCode.POWERS_STABLE:
+        if self in (SchurCode.POWERS_STABLE, SchurCode.SCHUR_COHN_STABLE):
             return SchurState.STABLE
         if self in (SchurCode.NON_FINITE, SchurCode.UNDECIDED):
             return SchurState.UNKNOWN

@@ -12,6 +12,10 @@ matrix of the printed gain):
 * **unstable** when rho(F) >= (|trace F^m| / n)^(1/m) > 1 for an exact power
   m, or when F - I or F + I has an exact kernel vector (an eigenvalue on the
   unit circle: not asymptotically stable);
+* where neither decides (rho within a hair of 1, n <= ``SCHUR_COHN_LIMIT``):
+  **stable** when the exact characteristic polynomial passes the Schur-Cohn
+  test on the circle of a radius 1 - 2^-j, **unstable** when it fails it on
+  the unit circle (``ssecert.numerics.schur_cohn``);
 * otherwise a dominant eigenvalue that exceeds 1 by more than its
   first-order error bound n eps ||F|| kappa is reported as unstable, with
   the method saying so; anything else is undecided.
@@ -19,6 +23,7 @@ matrix of the printed gain):
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -34,6 +39,12 @@ from ..numerics.exact import (
     spectral_radius_bound,
 )
 from ..numerics.exact_powers import ExactMatrix
+from ..numerics.schur_cohn import (
+    SCHUR_COHN_LIMIT,
+    characteristic_polynomial,
+    radius_below,
+    schur_stable,
+)
 from ..tolerances import EPS
 from . import spectral_messages
 from .outcomes import SchurCode, SchurState
@@ -203,9 +214,73 @@ def schur_decision(
             decided = _exact_eigenvalue_on_circle(
                 value, n, powers.radius_bound, powers.radius_lower, lam, details
             )
+        if decided is None:
+            decided = _decided_by_schur_cohn(value, source, upper, lower, lam, details)
         if decided is not None:
             return decided
     return _decided_to_first_order(lam, bound, upper, lower, details)
+
+
+# bisection steps that tighten the radius 1 - 2^-j of a stable polynomial's bound
+_SCHUR_COHN_BISECTIONS = 4
+
+
+def _decided_by_schur_cohn(
+    exact: Dyadic,
+    source: str,
+    upper: float,
+    lower: float,
+    lam: complex,
+    details: dict[str, Any],
+) -> SchurDecision | None:
+    """Stable or unstable by the Schur-Cohn test of the exact characteristic polynomial
+    (n <= ``SCHUR_COHN_LIMIT``), or None.
+
+    Stable needs a radius bound: the test is run again on the circles of radius r = 1 - 2^-j
+    (j from the computed eigenvalue's distance to 1, then doubled) until one holds every
+    root, which proves rho < r, and a few bisections tighten j; none up to 2^-1074 (or the
+    budget) decides nothing."""
+    n = exact.shape[0]
+    if not 0 < n <= SCHUR_COHN_LIMIT:
+        return None
+    coefficients = characteristic_polynomial(exact)
+    stable = schur_stable(coefficients)
+    if stable is None:
+        details["schur_cohn"] = "beyond its budget"
+        return None
+    if not stable:
+        return SchurDecision(
+            SchurCode.SCHUR_COHN_FAILS, upper, max(lower, 1.0), lam, {"source": source}, details
+        )
+    gap = 1.0 - abs(lam) if np.isfinite(abs(lam)) else 0.0
+    j = max(1, math.ceil(-math.log2(gap)) + 1) if 0.0 < gap < 1.0 else 1
+    failed, proved = 0, None  # rho >= 1 - 2^-failed; rho < 1 - 2^-proved
+    while proved is None:  # j doubled until a radius 1 - 2^-j holds every root
+        below = radius_below(coefficients, j)
+        if below is None:
+            break
+        if below:
+            proved = j
+        elif j == 1074:
+            break
+        else:
+            failed, j = j, min(2 * j, 1074)
+    for _ in range(_SCHUR_COHN_BISECTIONS):  # then a tighter j between
+        if proved is None or proved - failed <= 1:
+            break
+        j = (failed + proved) // 2
+        below = radius_below(coefficients, j)
+        if below is None:
+            break
+        failed, proved = (failed, j) if below else (j, proved)
+    if proved is not None:
+        gap = math.ldexp(1.0, -proved)
+        upper = min(upper, 1.0 - gap)  # (rounds to 1 for j > 53: still a bound)
+        details["spectral_radius_gap"] = gap
+        facts: dict[str, Any] = {"source": source, "upper": upper, "gap": gap, "j": proved}
+        return SchurDecision(SchurCode.SCHUR_COHN_STABLE, upper, lower, lam, facts, details)
+    details["schur_cohn"] = "stable, with no radius 1 - 2^-j (j <= 1074) proved"
+    return None
 
 
 def _decided_by_powers(

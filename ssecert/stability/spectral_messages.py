@@ -49,6 +49,10 @@ def method(code: SchurCode, facts: Mapping[str, Any]) -> str:
         return f"exact traces: rho >= (|tr F^{m}| / n)^(1/{m})"
     if code is SchurCode.EIGENVALUE_ON_CIRCLE:
         return f"exact eigenvalue {_eigenvalue(facts['eigenvalue'])}"
+    if code is SchurCode.SCHUR_COHN_STABLE:
+        return f"exact Schur-Cohn test: rho < 1 - 2^-{facts['j']}"
+    if code is SchurCode.SCHUR_COHN_FAILS:
+        return "exact Schur-Cohn test: rho >= 1"
     if code is SchurCode.FIRST_ORDER:
         return "first-order eigenvalue bound"
     return "none"
@@ -94,6 +98,18 @@ def reason(
             f"F has the eigenvalue {_eigenvalue(facts['eigenvalue'])} exactly (F - lambda I has "
             f"an exact kernel vector), of modulus >= 1: the error along it never decays"
         )
+    if code is SchurCode.SCHUR_COHN_STABLE:
+        return (
+            f"the exact characteristic polynomial {facts['source']} passes the Schur-Cohn test "
+            f"on the circle of radius 1 - 2^-{facts['j']}, so its spectral radius is below "
+            f"{below_one(facts['upper'], facts['gap'])}"
+        )
+    if code is SchurCode.SCHUR_COHN_FAILS:
+        return (
+            f"the exact characteristic polynomial {facts['source']} fails the Schur-Cohn test, "
+            f"so it has an eigenvalue of modulus at least 1: the error does not converge to 0 "
+            f"from every state"
+        )
     if code is SchurCode.FIRST_ORDER:
         return (
             f"the dominant eigenvalue {eigenvalue:.6g} exceeds 1 in modulus by more "
@@ -104,4 +120,7 @@ def reason(
         if upper is not None and lower is not None
         else ""
     )
-    return f"neither exact powers nor traces nor a clear eigenvalue decide it{bounds}"
+    return (
+        f"neither exact powers nor traces nor the Schur-Cohn test nor a clear eigenvalue "
+        f"decide it{bounds}"
+    )
