@@ -164,6 +164,38 @@ def test_a_linear_observer_iss_gain_in_any_units_of_the_attack(exponent):
     assert ("input_scaling" in cert.details["attempts"][0]) == (exponent != 0)
 
 
+@pytest.mark.parametrize("exponent", [-12, 10])
+def test_sensors_in_far_units_get_the_same_certificates(exponent):
+    """The UGV's elastic net with its sensors in units 2^exponent apart (C times 2^exponent,
+    the gain divided by it): the soft threshold's sector does not change, so the certified
+    decay is of the same order and the l2 gain is 2^-exponent times (C times 1e3 read a
+    decay 8,500 times smaller and a gain 380 times larger, the LMIs solved in the user's
+    units)."""
+    system = load_example("ugv").system
+    params = {"kind": "elastic_net", "step": 0.7, "threshold": 0.1, "shrink": 0.5}
+    base = build_observer(system, {**params, "gain": "deadbeat"})
+    units = 2.0**exponent
+    far = build_observer(
+        System(system.A, system.C * units),
+        {**params, "gain": (np.asarray(base.L) / units).tolist()},
+    )
+    model, scaled = LureModel.from_design(base), LureModel.from_design(far)
+    circle, circle_far = circle_certificate(model), circle_certificate(scaled)
+    assert circle.verdict == circle_far.verdict == "holds"
+    assert circle_far.decay > 0.25 * circle.decay
+    iss, iss_far = iss_certificate(model), iss_certificate(scaled)
+    assert iss.verdict == iss_far.verdict == "holds"
+    assert iss_far.gamma * units == pytest.approx(iss.gamma, rel=0.1)
+    # solved in units 2^-j of the sensors (sensor_exponent), verified there, written back
+    assert iss_far.details["sensor_exponent"] == lmi.sensor_units(scaled)[1] != 0
+    assert lmi.sensor_units(model) is None
+    # the gain from the circle certificate, computed where it was verified, in user units
+    carried = iss_from_circle(scaled, circle_far)
+    assert carried.verdict == "holds" and carried.gamma * units == pytest.approx(
+        iss_from_circle(model, circle).gamma, rel=0.5
+    )
+
+
 def test_solver_failure_is_inconclusive(monkeypatch):
     import cvxpy
 

@@ -76,6 +76,8 @@ __all__ = [
     "input_units",
     "in_input_units",
     "input_units_note",
+    "sensor_units",
+    "in_sensor_units",
     "to_original_coordinates",
     "where_verified",
 ]
@@ -308,35 +310,102 @@ def channel_vertex_instability(model: LureModel) -> dict[str, Any] | None:
     }
 
 
-def to_original_coordinates(cert: LMICertificate, s: np.ndarray, N: int) -> LMICertificate | None:
-    """A certificate of ``model.scaled(s)`` written for ``model`` (None if not exactly).
+def to_original_coordinates(
+    cert: LMICertificate, s: np.ndarray, N: int, sensors: int = 0
+) -> LMICertificate | None:
+    """A certificate of ``model.scaled(s, sensors)`` written for ``model`` (None if not
+    exactly).
 
     With xi = diag(s) xi_b the Lyapunov function zeta_b' P_b zeta_b is zeta' P zeta with
     P = diag(1 / s, I) P_b diag(1 / s, I) (only the first N coordinates are states): exact
-    for powers of two.  The margin and error bound stay those verified in the balanced
-    coordinates, where the LMI is recomputed; ``state_scaling`` records s.
+    for powers of two.  With the channels and the attack in units 2^-sensors (sigma =
+    2^sensors times the user's), the sector multipliers and gamma^2 are sigma^2 times those
+    of the scaled model.  The margin and error bound stay those verified in the balanced
+    coordinates, where the LMI is recomputed; ``state_scaling`` records s (and
+    ``sensor_exponent`` the sensors' units).
     """
     if cert.P is None:
         return None
     inv = np.ones(cert.P.shape[0])
     inv[:N] = 1.0 / np.asarray(s, dtype=float)
+    j = int(sensors)
     with np.errstate(over="ignore", invalid="ignore"):  # beyond the floats: no certificate
         P = cert.P * inv[:, None] * inv[None, :]
+        t = None if cert.multipliers is None else np.ldexp(cert.multipliers, 2 * j)
     if not np.all(np.isfinite(P)) or not np.array_equal(P / inv[:, None] / inv[None, :], cert.P):
         return None
+    if t is not None and not np.all(np.isfinite(t)):
+        return None
+    where = "the balanced coordinates xi = diag(state_scaling) xi_b"
+    if j:
+        where += (
+            f", with the channels, the nonlinearity's output and the attack in units 2^{-j} "
+            f"(sensor_exponent: multipliers and gamma^2 times 4^{j} there)"
+        )
     details = {
         **cert.details,
         "state_scaling": np.asarray(s, dtype=float),
-        "margin_coordinates": "margin and error_bound are those of the LMI recomputed in the "
-        "balanced coordinates xi = diag(state_scaling) xi_b, where it was verified; P is written "
-        "for the spec's coordinates, where the same inequality holds by congruence, with its "
-        "margin relative to ||P|| changed by the scaling",
+        "margin_coordinates": f"margin and error_bound are those of the LMI recomputed in "
+        f"{where}, where it was verified; P is written for the spec's coordinates, where the "
+        "same inequality holds by congruence, with its margin relative to ||P|| changed by the "
+        "scaling",
     }
+    gamma = cert.gamma
+    if j:
+        details["sensor_exponent"] = j
+        if gamma is not None:
+            gamma = math.ldexp(gamma, j)
+        if details.get("gamma_squared") is not None:
+            details["gamma_squared"] = math.ldexp(details["gamma_squared"], 2 * j)
     if "sum_bound_factor" in details:  # sum |xi|^2 <= max(s)^2 sum |xi_b|^2
         details["sum_bound_factor"] = (
             float(np.max(s)) ** 2 * float(np.linalg.eigvalsh(P[:N, :N])[-1]) / details["eta"]
         )
-    return replace(cert, P=P, details=details)
+    return replace(cert, P=P, multipliers=t, gamma=gamma, details=details)
+
+
+# the channels' largest entry within this factor of 1 keeps the sensors' units
+SENSOR_SPREAD = 2.0**4
+
+
+def sensor_units(model: LureModel) -> tuple[np.ndarray, int] | None:
+    """(s, j): the coordinates an LMI of ``model`` is solved in first where its sensors are
+    in units far from 1 (the largest entry of the channels' error columns Cw[:, :n_e] not
+    within ``SENSOR_SPREAD`` of 1): the channels, the nonlinearity's output (and so the
+    attack estimate, s = 2^-j on its states) and the attack in units of the power of two
+    2^-j that brings that entry into [1, 2) (``LureModel.scaled(s, sensors=j)``, exact);
+    None where the units are near 1.  The soft threshold is positively homogeneous, so the
+    sector stays [0, q]: the same inequalities, without entries 1e6 apart (sensors in units of
+    1e-3 read a decay 1e4 times too small)."""
+    from ..numerics.exact import pow2_scale
+
+    if model.n_e == 0 or model.m == 0:
+        return None
+    channels = model.Cw[:, : model.n_e]
+    top = float(np.max(np.abs(channels))) if channels.size else 0.0
+    if not np.isfinite(top) or top == 0.0 or 1.0 / SENSOR_SPREAD <= top < SENSOR_SPREAD:
+        return None
+    j = math.frexp(pow2_scale(top))[1] - 1
+    if abs(j) > 255:  # 4^j, and gamma^2 scaled back by it, would leave the floats
+        return None
+    s = np.concatenate([np.ones(model.n_e), np.full(model.N - model.n_e, math.ldexp(1.0, -j))])
+    return s, j
+
+
+def in_sensor_units(
+    model: LureModel, certify: Callable[[LureModel], LMICertificate]
+) -> LMICertificate | None:
+    """``certify`` run on ``model`` in the units of ``sensor_units`` and its certificate
+    written back (``to_original_coordinates``); None where the units are near 1 or it
+    certifies nothing there."""
+    units = sensor_units(model)
+    if units is None:
+        return None
+    s, j = units
+    inside = certify(model.scaled(s, sensors=j))
+    if inside.verdict is not Verdict.HOLDS or inside.P is None:
+        return None
+    return to_original_coordinates(inside, s, model.N, sensors=j)
 
 
 def where_verified(
@@ -351,10 +420,12 @@ def where_verified(
     if s is None or cert.P is None:
         return None
     s = np.asarray(s, dtype=float)
+    j = int(cert.details.get("sensor_exponent", 0))
     scale = np.ones(cert.P.shape[0])
     scale[: model.N] = s
     with np.errstate(over="ignore"):
         P_b = cert.P * scale[:, None] * scale[None, :]
+        t_b = None if cert.multipliers is None else np.ldexp(cert.multipliers, -2 * j)
     if not np.all(np.isfinite(P_b)):
         return LMICertificate(
             Verdict.INCONCLUSIVE,
@@ -365,12 +436,16 @@ def where_verified(
     inside = replace(
         cert,
         P=P_b,
-        details={k: v for k, v in cert.details.items() if k != "state_scaling"},
+        multipliers=t_b,
+        gamma=None if cert.gamma is None else math.ldexp(cert.gamma, -j),
+        details={
+            k: v for k, v in cert.details.items() if k not in ("state_scaling", "sensor_exponent")
+        },
     )
-    found = compute(model.scaled(s), inside)
+    found = compute(model.scaled(s, sensors=j), inside)
     if found.verdict is not Verdict.HOLDS:
         return found
-    back = to_original_coordinates(found, s, model.N)
+    back = to_original_coordinates(found, s, model.N, sensors=j)
     if back is None:
         return LMICertificate(
             Verdict.INCONCLUSIVE,
@@ -504,6 +579,10 @@ def circle_certificate(
         clear=clear,
         budget=budget or Budget(),
     )
+    if not reuse:  # (reused certificates are tried in the user's units first)
+        first = in_sensor_units(model, search)
+        if first is not None:
+            return first
     cert = search(model, reuse=reuse)
     if cert.code is not LMICode.NOT_VERIFIED:
         return cert  # certified, decided or refused before any LMI was solved
@@ -662,6 +741,20 @@ def iss_certificate(
             cause=cause,
             facts=facts,
         )
+    first = in_sensor_units(
+        model,
+        partial(
+            iss_certificate,
+            alpha=alpha,
+            structure=structure,
+            solver_options=solver_options,
+            clear=clear,
+            budget=budget,
+            balance=False,
+        ),
+    )
+    if first is not None:
+        return first
     attempts = []
     c, solved = output_scaled(model)  # solved with e in units c, the certificate scaled back
     k, solved = input_units(solved)  # and with a = 2^k a_b: gamma^2 scaled back by 4^-k
