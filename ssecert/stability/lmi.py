@@ -741,18 +741,17 @@ def iss_certificate(
             cause=cause,
             facts=facts,
         )
-    first = in_sensor_units(
-        model,
-        partial(
-            iss_certificate,
-            alpha=alpha,
-            structure=structure,
-            solver_options=solver_options,
-            clear=clear,
-            budget=budget,
-            balance=False,
-        ),
+    # the same search without its balanced retry: in the sensors' units, and balanced below
+    again = partial(
+        iss_certificate,
+        alpha=alpha,
+        structure=structure,
+        solver_options=solver_options,
+        clear=clear,
+        budget=budget,
+        balance=False,
     )
+    first = in_sensor_units(model, again)
     if first is not None:
         return first
     attempts = []
@@ -815,20 +814,7 @@ def iss_certificate(
                 code=LMICode.VERIFIED,
             )
         info["verification_problem"] = verify_text(problem)
-    retry, note = balanced_retry(
-        model,
-        partial(
-            iss_certificate,
-            alpha=alpha,
-            structure=structure,
-            solver_options=solver_options,
-            clear=clear,
-            budget=budget,
-            balance=False,
-        ),
-        enabled=balance,
-        attempts=attempts,
-    )
+    retry, note = balanced_retry(model, again, enabled=balance, attempts=attempts)
     if retry is not None:
         return retry
     return LMICertificate(
