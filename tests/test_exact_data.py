@@ -481,9 +481,12 @@ def test_messages_name_what_was_shown():  # a whole analyze of an SSO: about 10 
     assert gain.value_name == "spectral radius of A (I - step S' S)^100"
     assert gain.code is LyapunovCode.VERIFIED
     assert "100 inner steps" in gain.evidence["error_matrix"]
-    # an eigenvalue 1 - 2^-53 is not written "1"
+    # an eigenvalue 1 - 2^-53 is not written "1" (a Jordan block at it, with 19 stable
+    # states: beyond the Schur-Cohn test's 20, which proves the block alone stable)
+    jordan = np.array([[1 - 2.0**-53, 1.0], [0.0, 1 - 2.0**-53]])
+    assert assert_schur(jordan).method.value == "exact Schur-Cohn test"
     with pytest.raises(AssertionError, match=r"modulus 1 - 1\.1e-16"):
-        assert_schur([[1 - 2.0**-53, 1.0], [0.0, 1 - 2.0**-53]])
+        assert_schur(np.block([[jordan, np.zeros((2, 19))], [np.zeros((19, 2)), np.eye(19) / 8]]))
     # an estimate just over its budget is not "1e+12 over 1e+12"
     assert "1.0000001e+12 floating-point operations, over the work budget of 1e+12" in (
         Budget(work=1e12).refusal("x", flops=1.0000001e12)

@@ -478,8 +478,10 @@ def assert_schur(M: Any) -> Any:
 
     The certificate is a Lyapunov matrix P with M^T P M - P < 0, recomputed
     and checked against a floating-point error bound
-    (``ssecert.stability.lyapunov.lyapunov_certificate``); a computed
-    spectral radius below 1 alone is not accepted.
+    (``ssecert.stability.lyapunov.lyapunov_certificate``), or, where no P
+    verifies, the exact decision on M's floats (an exact power of norm below
+    1, or the Schur-Cohn test of the exact characteristic polynomial); a
+    computed spectral radius below 1 alone is not accepted.
 
     Parameters
     ----------
