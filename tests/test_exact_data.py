@@ -497,3 +497,23 @@ def test_messages_name_what_was_shown():  # a whole analyze of an SSO: about 10 
                   "observer": {"kind": "dsso", "gain": "deadbeat", "step": 0.7,
                                "threshold": 0.1}}))["observer_gain"]  # fmt: skip
     assert ugv.margin != 1.0 and margin_text(ugv).startswith("1 - ")
+
+
+@pytest.mark.parametrize(
+    ("A", "code"),
+    [
+        ([[2.0, 0.0], [0.0, 0.5]], SchurCode.TRACES_BELOW),
+        # eigenvalues +-i and 1/2: the Schur-Cohn test of the exact characteristic polynomial
+        ([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 0.5]], SchurCode.SCHUR_COHN_FAILS),
+    ],
+)
+def test_an_exact_instability_shows_no_margin(A, code):
+    # the margin of the Lyapunov solution that did not verify is not "1 - spectral radius
+    # bound" (it read -1 beside a lower bound of 1)
+    n = len(A)
+    cert = analyze(
+        _spec(A, np.eye(n).tolist(), {"kind": "luenberger", "gain": np.zeros((n, n)).tolist()})
+    )
+    for check in ("observer_gain", "observer_stability"):
+        assert cert[check].verdict.value == "fails" and cert[check].code is code
+        assert cert[check].margin is None

@@ -252,7 +252,11 @@ def _linear_stability_check(lyap: LyapunovCertificate, tol: Tolerances, title: s
         verdict=verdict,
         summary=summary,
         value=lyap.contraction,
-        margin=lyap.margin,
+        # (an exact instability has no margin: that of the Lyapunov solution that did not
+        # verify is not "1 - spectral radius bound")
+        margin=lyap.margin
+        if lyap.method is LyapunovMethod.LYAPUNOV or verdict is Verdict.HOLDS
+        else None,
         method="discrete Lyapunov"
         if lyap.method is LyapunovMethod.LYAPUNOV
         else f"{lyap.method.value} of A - L C",

@@ -120,7 +120,11 @@ def observer_gain_check(design: ObserverDesign, *, tolerances: Tolerances | None
         verdict=verdict,
         summary=summary,
         value=fields["spectral_radius"] if shown is None else shown.value,
-        margin=cert.margin,
+        # (an exact instability has no margin: that of the Lyapunov solution that did not
+        # verify is not "1 - spectral radius bound")
+        margin=cert.margin
+        if cert.method is LyapunovMethod.LYAPUNOV or verdict is Verdict.HOLDS
+        else None,
         method="discrete Lyapunov (dlyap)"
         if cert.method is LyapunovMethod.LYAPUNOV
         else f"{cert.method.value} of {what}",
