@@ -488,7 +488,9 @@ def _exact_gap(P: Dyadic, m: int) -> float:
     one = 1 << -e
     if top >= one:
         return 0.0
-    return float(Fraction(one - top, one * m)) * (1 - 1e-15)
+    # (a quotient of integers is rounded correctly, as the Fraction's float was, without its
+    # gcd: quadratic in the bits of powers whose entries lie 2^600 apart)
+    return (one - top) / (one * m) * (1 - 1e-15)
 
 
 def _pow2(x: float) -> float:
@@ -507,15 +509,19 @@ def _trace_excess(trace: int, exponent: int, n: int, m: int) -> tuple[float, flo
     (T - n) / (m T) on rho(F) - 1 and T - n, both rounded down; None when T <= n.
 
     rho^m >= T / n = x^m with x >= 1, and x^m - 1 <= m x^(m-1) (x - 1) <= m (T / n) (x - 1)."""
-    total = Fraction(trace) * Fraction(2) ** exponent
-    if total <= n:
+    # T - n = excess / unit and (T - n) / (m T) = excess / (m trace), in integers (quotients of
+    # integers are rounded correctly, as a Fraction's float is, without its gcd)
+    unit = 1 << -exponent if exponent < 0 else 1
+    whole = trace << exponent if exponent > 0 else trace
+    excess = whole - n * unit
+    if excess <= 0:
         return None
     down = 1 - 1e-15
     try:
-        beyond = float(total - n) * down
+        beyond = excess / unit * down
     except OverflowError:
         beyond = math.inf
-    return float((total - n) / (m * total)) * down, beyond
+    return excess / (m * whole) * down, beyond
 
 
 def _trace_radius_lower(trace: int, exponent: int, n: int, m: int) -> float:

@@ -236,26 +236,36 @@ def _decided_by_schur_cohn(
     """Stable or unstable by the Schur-Cohn test of the exact characteristic polynomial
     (n <= ``SCHUR_COHN_LIMIT``), or None.
 
-    Stable needs a radius bound: the test is run again on the circles of radius r = 1 - 2^-j
-    (j from the computed eigenvalue's distance to 1, then doubled) until one holds every
-    root, which proves rho < r, and a few bisections tighten j; none up to 2^-1074 (or the
-    budget) decides nothing."""
+    Stable needs a radius bound: the test runs on the circles of radius r = 1 - 2^-j, first
+    with j from the computed eigenvalue's distance to 1 (where that circle holds every root,
+    one test decides), else, once the unit circle holds them, with j doubled until one does,
+    which proves rho < r, and a few bisections tighten j; none up to 2^-1074 (or the budget)
+    decides nothing."""
     n = exact.shape[0]
     if not 0 < n <= SCHUR_COHN_LIMIT:
         return None
     coefficients = characteristic_polynomial(exact)
-    stable = schur_stable(coefficients)
-    if stable is None:
-        details["schur_cohn"] = "beyond its budget"
-        return None
-    if not stable:
-        return SchurDecision(
-            SchurCode.SCHUR_COHN_FAILS, upper, max(lower, 1.0), lam, {"source": source}, details
-        )
     gap = 1.0 - abs(lam) if np.isfinite(abs(lam)) else 0.0
-    j = max(1, math.ceil(-math.log2(gap)) + 1) if 0.0 < gap < 1.0 else 1
+    j = min(max(1, math.ceil(-math.log2(gap)) + 1), 1074) if 0.0 < gap < 1.0 else 1
     failed, proved = 0, None  # rho >= 1 - 2^-failed; rho < 1 - 2^-proved
+    if j > 1:  # the computed eigenvalue's radius first: one test where it is right
+        below = radius_below(coefficients, j)
+        if below is None:
+            details["schur_cohn"] = "beyond its budget"
+            return None
+        proved, failed = (j, 0) if below else (None, j)
+    if proved is None:
+        stable = schur_stable(coefficients)
+        if stable is None:
+            details["schur_cohn"] = "beyond its budget"
+            return None
+        if not stable:
+            return SchurDecision(
+                SchurCode.SCHUR_COHN_FAILS, upper, max(lower, 1.0), lam, {"source": source}, details
+            )
+        j = max(2 * failed, 1)
     while proved is None:  # j doubled until a radius 1 - 2^-j holds every root
+        j = min(j, 1074)
         below = radius_below(coefficients, j)
         if below is None:
             break
@@ -264,8 +274,8 @@ def _decided_by_schur_cohn(
         elif j == 1074:
             break
         else:
-            failed, j = j, min(2 * j, 1074)
-    for _ in range(_SCHUR_COHN_BISECTIONS):  # then a tighter j between
+            failed, j = j, 2 * j
+    for _ in range(_SCHUR_COHN_BISECTIONS if failed else 0):  # then a tighter j between
         if proved is None or proved - failed <= 1:
             break
         j = (failed + proved) // 2
