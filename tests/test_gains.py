@@ -274,3 +274,22 @@ def test_exact_deadbeat_gain_beyond_the_floats_is_infinite_not_an_error():
     gain = exact_deadbeat_gain([[1e200]], [[1e-200]])
     assert gain.L[0, 0] == np.inf and gain.details["exact_index"] == 1
     assert gain.details["L_exact"] == [[str(Fraction(1e200) / Fraction(1e-200))]]
+
+
+@pytest.mark.parametrize("gain", ["pinv", "place"])
+def test_gains_of_states_in_units_far_apart(gain):
+    # the same plant with its states in units 2^30 and 2^-30: C's singular values mix the
+    # units (the pseudo-inverse read rank(C) = 1 < 2, the placement refused); computed in the
+    # balanced units, the gain is the plant's own, S L (A - L C similar to the plant's)
+    A = np.array([[0.98, 0.1], [-0.2, 0.9]])
+    C = np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]])
+    t = np.array([2.0**30, 2.0**-30])
+    far = System(A * t[:, None] / t[None, :], C / t[None, :])
+    if gain == "pinv":
+        base, got = pinv_gain(System(A, C)), pinv_gain(far)
+    else:
+        base, got = place_gain(System(A, C), [0.5, 0.4]), place_gain(far, [0.5, 0.4])
+        assert np.sort(np.abs(np.linalg.eigvals(got.error_matrix))) == pytest.approx([0.4, 0.5])
+    assert np.allclose(got.L / t[:, None], base.L, rtol=1e-9, atol=1e-12)
+    assert np.ptp(np.log2(got.details["state_scaling"])) >= 16
+    assert "state_scaling" not in base.details

@@ -21,6 +21,7 @@ from __future__ import annotations
 import math
 import warnings
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -103,20 +104,26 @@ def place_gain(system: System, poles: Sequence[complex]) -> Gain:
     wanted = np.asarray(poles, dtype=complex)
     if wanted.shape != (system.n,):
         raise GainError(f"poles: expected {system.n} poles (one per state), got {wanted.size}")
+    # with the states in units far apart, placed in the balanced units (A_b = S^-1 A S,
+    # C_b = C S, L = S L_b: the same poles) and re-checked there
+    units = _far_state_units(system)
+    unit = np.ones(system.n) if units is None else units
+    A_b, C_b = system.A * (unit[None, :] / unit[:, None]), system.C * unit[None, :]
     # place_poles needs B = C^T of full column rank: place with an independent subset of
     # sensors (pivoted QR) and give the others zero gain; the poles are re-checked below
-    rows = _independent_rows(system.C)
+    rows = _independent_rows(C_b)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
-            K = place_poles(system.A.T, system.C[rows].T, wanted, method="YT").gain_matrix
+            K = place_poles(A_b.T, C_b[rows].T, wanted, method="YT").gain_matrix
         except Exception as exc:  # ValueError, LinAlgError, ...
             raise GainError(f"pole placement refused: {exc}") from None
-    L = np.zeros((system.n, system.p))
-    L[:, rows] = np.asarray(K, dtype=float).T
+    L_b = np.zeros((system.n, system.p))
+    L_b[:, rows] = np.asarray(K, dtype=float).T
+    L = unit[:, None] * L_b
     F = system.A - L @ system.C
-    got = np.linalg.eigvals(F)
-    scale = max(1.0, float(np.linalg.norm(system.A, 2)), float(np.abs(wanted).max(initial=0.0)))
+    got = np.linalg.eigvals(F if units is None else A_b - L_b @ C_b)
+    scale = max(1.0, float(np.linalg.norm(A_b, 2)), float(np.abs(wanted).max(initial=0.0)))
     ratio, dist = _match_poles(got, wanted, scale)
     notes = [str(w.message) for w in caught]
     if ratio > 1.0:
@@ -136,6 +143,7 @@ def place_gain(system: System, poles: Sequence[complex]) -> Gain:
             "sensors_used": rows,
             "max_pole_error": float(dist.max()),
             "warnings": notes,
+            **({} if units is None else {"state_scaling": units}),
         },
     )
 
@@ -174,6 +182,24 @@ def ogd_gain(system: System, step: float) -> Gain:
     )
 
 
+# states whose balancing spreads them by this much are in units far apart: the gains that
+# rest on a rank or an eigenvalue problem are computed in the balanced units
+_FAR_STATES = 2.0**16
+
+
+def _far_state_units(system: System) -> np.ndarray | None:
+    """The powers of two s of the plant's canonical state balancing (``state_balancing``)
+    where they spread the states by ``_FAR_STATES`` or more, else None: x = diag(s) x_b, with
+    A_b = S^-1 A S and C_b = C S exact, and a gain L_b of the balanced plant is L = S L_b
+    (A - L C = S (A_b - L_b C_b) S^-1)."""
+    from ..numerics.linalg import state_balancing
+
+    s = state_balancing(system.A, system.C, canonical=True)
+    if s is None or float(np.max(s) / np.min(s)) < _FAR_STATES:
+        return None
+    return s
+
+
 def pinv_gain(system: System) -> Gain:
     """Pseudo-inverse gain L = A C^+, for C of full column rank (then A - L C = 0).
 
@@ -189,7 +215,11 @@ def pinv_gain(system: System) -> Gain:
     >>> float(abs(g.error_matrix).max()) < 1e-12
     True
     """
-    C = system.C
+    # with the states in units far apart, the rank and C^+ = S (C S)^+ (full column rank) of
+    # the balanced C S: C's own singular values would mix the units
+    units = _far_state_units(system)
+    scale = np.ones(system.n) if units is None else units
+    C = system.C * scale[None, :]
     s = np.linalg.svd(C, compute_uv=False)
     tol = Tolerances().rtol(*C.shape) * max(float(s[0]), np.finfo(float).tiny)
     rank = int(np.count_nonzero(classify(s, tol) == NONZERO))
@@ -199,12 +229,15 @@ def pinv_gain(system: System) -> Gain:
             f"n = {system.n}"
         )
     with np.errstate(over="ignore", invalid="ignore"):  # beyond the floats: inf, as computed
-        L = system.A @ np.linalg.pinv(C)
-        error = system.A - L @ C
+        L = (system.A * scale[None, :]) @ np.linalg.pinv(C)
+        error = system.A - L @ system.C
+    details: dict[str, Any] = {"rank_C": rank}
+    if units is not None:
+        details["state_scaling"] = units
     return Gain(
         L=L,
         method=GainMethod.PINV,
         error_matrix=error,
         verified=True,
-        details={"rank_C": rank},
+        details=details,
     )
