@@ -527,6 +527,17 @@ def run_benchmark(name: str, *, quick: bool) -> dict[str, Any]:
     return {"rows": rows, "seconds": seconds, "date": date, "quick": quick, "machine": machine()}
 
 
+def kept_entry(previous: dict[str, Any] | None, entry: dict[str, Any]) -> dict[str, Any]:
+    """The entry a benchmark's run leaves in results.json: the new one, unless it found
+    nothing to measure here (no rows) where the previous one has rows measured on another
+    machine (a GPU machine's: a run on a machine without one does not erase them)."""
+    if entry["rows"] or not previous or not previous.get("rows"):
+        return entry
+    if previous.get("machine", entry["machine"]) == entry["machine"]:
+        return entry
+    return previous
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="smaller sizes and repeats")
@@ -540,9 +551,10 @@ def main(argv: list[str] | None = None) -> int:
     )
     args = parser.parse_args(argv)
     results: dict[str, Any] = {"machine": machine(), "benchmarks": {}}
-    if (args.only or args.no_run) and RESULTS.is_file():
+    previous = json.loads(RESULTS.read_text(encoding="utf-8")) if RESULTS.is_file() else None
+    if (args.only or args.no_run) and previous is not None:
         # the table's machine stays: a benchmark rerun elsewhere (a GPU machine) says where
-        results = json.loads(RESULTS.read_text(encoding="utf-8"))
+        results = previous
     failed = []
     for name in [] if args.no_run else args.only or list(BENCHMARKS):
         print(f"{name}: running {BENCHMARKS[name][0]}", file=sys.stderr, flush=True)
@@ -552,8 +564,12 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{name}: failed with exit status {exc.returncode}", file=sys.stderr)
             failed.append(name)
             continue
-        results["benchmarks"][name] = entry
+        before = (previous or {}).get("benchmarks", {}).get(name)
+        results["benchmarks"][name] = kept_entry(before, entry)
         print(f"{name}: {format_seconds(entry['seconds'])}", file=sys.stderr, flush=True)
+        if results["benchmarks"][name] is before and before is not entry:
+            print(f"{name}: nothing to measure here; its rows from another machine kept",
+                  file=sys.stderr, flush=True)  # fmt: skip
     if not results["benchmarks"]:
         return 1
     atomic_write_text(RESULTS, json.dumps(results, indent=1) + "\n")
