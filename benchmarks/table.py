@@ -529,11 +529,10 @@ def run_benchmark(name: str, *, quick: bool) -> dict[str, Any]:
 
 def kept_entry(previous: dict[str, Any] | None, entry: dict[str, Any]) -> dict[str, Any]:
     """The entry a benchmark's run leaves in results.json: the new one, unless it found
-    nothing to measure here (no rows) where the previous one has rows measured on another
-    machine (a GPU machine's: a run on a machine without one does not erase them)."""
+    nothing to measure (no rows: no GPU, or an optional reference not installed) where the
+    previous one has rows, which stay with their date and machine (a run without a GPU or
+    without python-flint does not erase what one with them measured)."""
     if entry["rows"] or not previous or not previous.get("rows"):
-        return entry
-    if previous.get("machine", entry["machine"]) == entry["machine"]:
         return entry
     return previous
 
@@ -568,7 +567,7 @@ def main(argv: list[str] | None = None) -> int:
         results["benchmarks"][name] = kept_entry(before, entry)
         print(f"{name}: {format_seconds(entry['seconds'])}", file=sys.stderr, flush=True)
         if results["benchmarks"][name] is before and before is not entry:
-            print(f"{name}: nothing to measure here; its rows from another machine kept",
+            print(f"{name}: nothing to measure here; its rows of {before.get('date', '?')} kept",
                   file=sys.stderr, flush=True)  # fmt: skip
     if not results["benchmarks"]:
         return 1

@@ -150,13 +150,15 @@ def test_every_benchmark_script_exposes_rows(table, monkeypatch):
         assert signature.parameters["quick"].default is False, script
 
 
-def test_a_run_without_a_gpu_keeps_the_gpu_machines_rows(table):
+def test_a_run_with_nothing_to_measure_keeps_the_rows_measured_before(table):
     here = {"cpus": 2, "cpu_model": "AMD EPYC"}
     gpu = {"rows": ROWS[:1], "machine": {"cpus": 16, "cpu_model": "Xeon"}, "seconds": 25.0}
     empty = {"rows": [], "machine": here, "seconds": 0.8}
-    assert table.kept_entry(gpu, empty) is gpu
-    # rows measured here replace them; an empty run replaces an empty or local entry
+    assert table.kept_entry(gpu, empty) is gpu  # no GPU here
+    flint = {"rows": ROWS[1:2], "machine": here, "seconds": 2.0}
+    assert table.kept_entry(flint, empty) is flint  # python-flint not installed now
+    # rows measured now replace them; an empty run replaces an empty entry or none
     measured = {"rows": ROWS[1:2], "machine": here, "seconds": 30.0}
     assert table.kept_entry(gpu, measured) is measured
     assert table.kept_entry(None, empty) is empty
-    assert table.kept_entry({"rows": ROWS[:1], "machine": here}, empty) is empty
+    assert table.kept_entry({"rows": [], "machine": here}, empty) is empty
