@@ -81,3 +81,13 @@ def test_small_and_invalid_polynomials():
     big = characteristic_polynomial(dyadic(_hidden_triangular([0.5, 0.25, 0.125, -0.5], 2)))
     assert schur_stable(big, max_bits=8) is None  # beyond the budget: undecided
     assert schur_stable(big) is True
+
+
+def test_the_characteristic_polynomial_is_checked_independently():
+    from ssecert.numerics.schur_cohn import _cayley_hamilton
+
+    F = dyadic(_hidden_triangular([1 - 2.0**-52, 0.5, -0.75], 4))
+    c = [1, *[0] * 3]
+    assert not _cayley_hamilton(F, c)  # z^3 does not annihilate it
+    a = characteristic_polynomial(F)  # (checked inside: it would raise otherwise)
+    assert schur_stable(a) is True

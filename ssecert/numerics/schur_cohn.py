@@ -50,6 +50,8 @@ def characteristic_polynomial(F: Dyadic) -> list[int]:
         return [1]
     rows = [[ZZ(int(x)) for x in row] for row in F.ints]
     c = [int(x) for x in DomainMatrix(rows, (n, n), ZZ).charpoly()]  # c[0] = 1 leads
+    if not _cayley_hamilton(F, c):  # sympy's polynomial checked independently
+        raise ArithmeticError("the characteristic polynomial fails Cayley-Hamilton")
     e = F.exponent
     if e <= 0:
         return [c[n - k] << (-e * k) for k in range(n + 1)]
@@ -110,3 +112,24 @@ def radius_below(
     return schur_stable(
         [int(a) * r**k << (j * (n - k)) for k, a in enumerate(coefficients)], max_bits
     )
+
+
+_PRIMES = (67108859, 67108837)  # below 2^26: n <= 2^11 products of residues fit in int64
+
+
+def _cayley_hamilton(F: Dyadic, c: list[int]) -> bool:
+    """Whether c (c[0] = 1 leading) annihilates the integer matrix M behind F modulo two
+    primes (Horner: M^n + c[1] M^(n-1) + ... + c[n] I = 0): an independent check of the
+    characteristic polynomial, in int64 arithmetic."""
+    import numpy as np
+
+    n = F.shape[0]
+    for prime in _PRIMES:
+        M = np.array([[int(x) % prime for x in row] for row in F.ints], dtype=np.int64)
+        acc = np.zeros((n, n), dtype=np.int64)
+        for coefficient in c:
+            acc = (acc @ M) % prime
+            acc[np.diag_indices(n)] = (acc[np.diag_indices(n)] + coefficient % prime) % prime
+        if np.any(acc):
+            return False
+    return True

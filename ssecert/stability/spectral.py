@@ -244,7 +244,11 @@ def _decided_by_schur_cohn(
     n = exact.shape[0]
     if not 0 < n <= SCHUR_COHN_LIMIT:
         return None
-    coefficients = characteristic_polynomial(exact)
+    try:
+        coefficients = characteristic_polynomial(exact)
+    except ArithmeticError:  # (sympy's polynomial not confirmed: nothing decided)
+        details["schur_cohn"] = "the characteristic polynomial did not check"
+        return None
     gap = 1.0 - abs(lam) if np.isfinite(abs(lam)) else 0.0
     j = min(max(1, math.ceil(-math.log2(gap)) + 1), 1074) if 0.0 < gap < 1.0 else 1
     failed, proved = 0, None  # rho >= 1 - 2^-failed; rho < 1 - 2^-proved
