@@ -220,8 +220,9 @@ class _Units:
 
     @classmethod
     def of(cls, design: ObserverDesign, model: LureModel) -> _Units:
-        from ..numerics.exact import pow2_row_scaling, pow2_scale
+        from ..numerics.exact import pow2_row_scaling, pow2_scale, pow2_units
         from ..numerics.linalg import state_balancing
+        from ..stability.lmi import SENSOR_SPREAD
 
         A, S = design.system.A, design.sensing
         if model.n_e != A.shape[0]:
@@ -230,7 +231,7 @@ class _Units:
         states = np.ones(A.shape[0]) if s is None else s
         sensed = S * states[None, :]
         top = float(np.max(np.abs(sensed))) if sensed.size else 0.0
-        sigma = 1.0 if 2.0**-4 <= top < 2.0**4 else pow2_scale(top)
+        sigma = pow2_units(top, SENSOR_SPREAD)
         if s is None and sigma == 1.0:
             return cls(model, A, S)
         # the attack estimate in the sensors' units too: a_hat = a_hat_b / sigma

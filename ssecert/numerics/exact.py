@@ -79,6 +79,15 @@ def pow2_scale(x: float) -> float:
     return math.ldexp(1.0, min(-math.frexp(x)[1] + 1, 1023))
 
 
+def pow2_units(top: float, spread: float = 2.0**4) -> float:
+    """The unit (a power of two) for quantities whose largest magnitude is ``top``: 1 where
+    ``top`` is within ``spread`` of 1 (or zero, or not finite), else ``pow2_scale(top)``,
+    which brings it into [1, 2).  One rule for every "units far from 1" decision."""
+    if not np.isfinite(top) or top == 0.0 or 1.0 / spread <= top < spread:
+        return 1.0
+    return pow2_scale(top)
+
+
 def pow2_row_scaling(M: np.ndarray) -> np.ndarray:
     """Powers of two d_i with d_i ||M_i|| in [1, 2) (1 for zero rows): exact row units.
 

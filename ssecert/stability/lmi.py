@@ -377,15 +377,15 @@ def sensor_units(model: LureModel) -> tuple[np.ndarray, int] | None:
     None where the units are near 1.  The soft threshold is positively homogeneous, so the
     sector stays [0, q]: the same inequalities, without entries 1e6 apart (sensors in units of
     1e-3 read a decay 1e4 times too small)."""
-    from ..numerics.exact import pow2_scale
+    from ..numerics.exact import pow2_units
 
     if model.n_e == 0 or model.m == 0:
         return None
     channels = model.Cw[:, : model.n_e]
-    top = float(np.max(np.abs(channels))) if channels.size else 0.0
-    if not np.isfinite(top) or top == 0.0 or 1.0 / SENSOR_SPREAD <= top < SENSOR_SPREAD:
+    sigma = pow2_units(float(np.max(np.abs(channels))) if channels.size else 0.0, SENSOR_SPREAD)
+    if sigma == 1.0:
         return None
-    j = math.frexp(pow2_scale(top))[1] - 1
+    j = math.frexp(sigma)[1] - 1
     if abs(j) > 255:  # 4^j, and gamma^2 scaled back by it, would leave the floats
         return None
     s = np.concatenate([np.ones(model.n_e), np.full(model.N - model.n_e, math.ldexp(1.0, -j))])

@@ -251,23 +251,19 @@ def _decided_by_schur_cohn(
         return None
     gap = 1.0 - abs(lam) if np.isfinite(abs(lam)) else 0.0
     j = min(max(1, math.ceil(-math.log2(gap)) + 1), 1074) if 0.0 < gap < 1.0 else 1
-    failed, proved = 0, None  # rho >= 1 - 2^-failed; rho < 1 - 2^-proved
-    if j > 1:  # the computed eigenvalue's radius first: one test where it is right
-        below = radius_below(coefficients, j)
-        if below is None:
-            details["schur_cohn"] = "beyond its budget"
-            return None
-        proved, failed = (j, 0) if below else (None, j)
-    if proved is None:
-        stable = schur_stable(coefficients)
-        if stable is None:
-            details["schur_cohn"] = "beyond its budget"
-            return None
-        if not stable:
-            return SchurDecision(
-                SchurCode.SCHUR_COHN_FAILS, upper, max(lower, 1.0), lam, {"source": source}, details
-            )
-        j = max(2 * failed, 1)
+    # the computed eigenvalue's radius first (one test where it is right), else the unit circle
+    below = radius_below(coefficients, j) if j > 1 else False
+    stable = True if below else (None if below is None else schur_stable(coefficients))
+    if stable is None:
+        details["schur_cohn"] = "beyond its budget"
+        return None
+    if not stable:
+        return SchurDecision(
+            SchurCode.SCHUR_COHN_FAILS, upper, max(lower, 1.0), lam, {"source": source}, details
+        )
+    # rho >= 1 - 2^-failed; rho < 1 - 2^-proved
+    proved, failed = (j, 0) if below else (None, j if j > 1 else 0)
+    j = max(2 * failed, 1)
     while proved is None:  # j doubled until a radius 1 - 2^-j holds every root
         j = min(j, 1074)
         below = radius_below(coefficients, j)
