@@ -187,13 +187,49 @@ def test_sensors_in_far_units_get_the_same_certificates(exponent):
     assert iss.verdict == iss_far.verdict == "holds"
     assert iss_far.gamma * units == pytest.approx(iss.gamma, rel=0.1)
     # solved in units 2^-j of the sensors (sensor_exponent), verified there, written back
-    assert iss_far.details["sensor_exponent"] == lmi.sensor_units(scaled)[1] != 0
+    assert iss_far.details["sensor_exponent"] == lmi.sensor_units(scaled).exponent != 0
     assert lmi.sensor_units(model) is None
     # the gain from the circle certificate, computed where it was verified, in user units
     carried = iss_from_circle(scaled, circle_far)
     assert carried.verdict == "holds" and carried.gamma * units == pytest.approx(
         iss_from_circle(model, circle).gamma, rel=0.5
     )
+
+
+def test_sensors_in_units_far_from_each_other_get_the_same_decay():
+    """An elastic net whose six sensors are in units 2^10, 1 and 2^-10 apart (C's rows times
+    them, the gain's columns divided by them): each channel is solved in units of its own
+    (the multipliers are diagonal, the soft threshold homogeneous), so the certified decay
+    is of the order of the balanced sensors' (one unit for all read 1.5e-9 for 0.04); the
+    certificate verifies where it was solved and is written back exactly."""
+    rng = np.random.default_rng(3)
+    A, C = np.diag([0.5, 0.6, 0.7, 0.8]), rng.standard_normal((6, 4)).round(2)
+    params = {"kind": "elastic_net", "step": 0.5, "threshold": 0.1, "shrink": 0.5}
+    base = build_observer(System(A, C), {**params, "gain": "place", "poles": [0.3, 0.3, 0.4, 0.4]})
+    d = 2.0 ** np.array([10, 10, 0, 0, -10, -10])
+    far = build_observer(
+        System(A, C * d[:, None]), {**params, "gain": (np.asarray(base.L) / d).tolist()}
+    )
+    model, mixed = LureModel.from_design(base), LureModel.from_design(far)
+    circle, circle_mixed = circle_certificate(model), circle_certificate(mixed)
+    assert circle.verdict == circle_mixed.verdict == "holds"
+    assert circle_mixed.decay > 0.25 * circle.decay
+    exponents = circle_mixed.details["channel_exponents"]
+    assert max(exponents) - min(exponents) >= 20
+    assert exponents == lmi.sensor_units(mixed).channels.tolist()
+    assert lmi.sensor_units(mixed, channels=False).channels is None
+    seen = {}
+
+    def inside(scaled, cert):
+        seen["verified"] = verify_certificate(scaled, cert.P, cert.multipliers)[0]
+        return cert
+
+    back = lmi.where_verified(mixed, circle_mixed, inside)
+    assert seen["verified"]
+    assert np.array_equal(back.P, circle_mixed.P)
+    assert np.array_equal(back.multipliers, circle_mixed.multipliers)
+    iss = iss_certificate(mixed)
+    assert iss.verdict == "holds" and "channel_exponents" not in iss.details
 
 
 def test_solver_failure_is_inconclusive(monkeypatch):

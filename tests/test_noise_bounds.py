@@ -959,7 +959,7 @@ def test_a_tiny_iss_decay_does_not_hold_the_decay_scan_down(monkeypatch):
     from ssecert.observers import build_observer
     from ssecert.stability import lmi
 
-    monkeypatch.setattr(lmi, "sensor_units", lambda model: None)
+    monkeypatch.setattr(lmi, "sensor_units", lambda model, channels=True: None)
     from ssecert.stability.noise_gain import SCAN_START
     from ssecert.stability.noise_messages import measurement_rows
 

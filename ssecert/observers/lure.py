@@ -50,18 +50,26 @@ class ExactLure:
         """One matrix (``"A"``, ``"B"``, ``"Cw"``, ``"E"``, ``"Dw"``) as rows of Fractions."""
         return getattr(self, name).to_fractions()
 
-    def scaled(self, s: np.ndarray, sensors: int = 0) -> ExactLure:
+    def scaled(
+        self, s: np.ndarray, sensors: int = 0, channels: np.ndarray | None = None
+    ) -> ExactLure:
         """The same dynamics in the coordinates xi = diag(s) xi_b, s powers of two, with the
-        channels and the attack in units 2^-sensors (``LureModel.scaled``)."""
+        channels and the attack in units 2^-sensors, or each channel in its own
+        (``LureModel.scaled``)."""
         k = np.round(np.log2(np.asarray(s, dtype=float))).astype(np.int64)
         m, r = self.B.shape[1], self.E.shape[1]
-        jm, jr = np.full(m, sensors, np.int64), np.full(r, sensors, np.int64)
+        jr = np.full(r, sensors, np.int64)
+        if channels is None:
+            jm, Dw = np.full(m, sensors, np.int64), self.Dw
+        else:
+            jm = np.asarray(channels, dtype=np.int64)
+            Dw = self.Dw.scaled(jm, -jr)
         return ExactLure(
             self.A.scaled(-k, k),
             self.B.scaled(-k, -jm),
             self.Cw.scaled(jm, k),
             self.E.scaled(-k, -jr),
-            self.Dw,
+            Dw,
         )
 
     def distance_bound(self, model: LureModel) -> float:
@@ -95,6 +103,8 @@ class LureModel:
     Ce: np.ndarray
     q: float
     n_e: int
+    # NaN where the channels are in units of their own (``scaled`` with ``channels``): one
+    # threshold per channel there, no single value (the sector LMIs do not read it)
     threshold: float = 0.0
     # the exact matrices from the spec's data (None: beyond their budget); without it the
     # model's own floats are its data
@@ -253,29 +263,47 @@ class LureModel:
         """
         return design.observer_kind.lure_model(design)
 
-    def scaled(self, s: np.ndarray, sensors: int = 0) -> LureModel:
+    def scaled(
+        self, s: np.ndarray, sensors: int = 0, channels: np.ndarray | None = None
+    ) -> LureModel:
         """The same dynamics in the coordinates xi = diag(s) xi_b, and with ``sensors``
         (an exponent j), the channels, the nonlinearity's output, the attack and the
-        threshold in units 2^-j (multiplied by sigma = 2^j).
+        threshold in units 2^-j (multiplied by sigma = 2^j); with ``channels`` (one exponent
+        per channel), each channel and its part of the nonlinearity's output in units of its
+        own (the attack in units 2^-j still).
 
-        A_b = S^-1 A S, B_b = S^-1 B / sigma, Cw_b = sigma Cw S, E_b = S^-1 E / sigma,
-        Dw_b = Dw, Ce_b = Ce S: the soft threshold is positively homogeneous, so its
-        sector stays [0, q]; without ``sensors`` the channels and the attack keep their
-        units.  With powers of two (``balancing``) every entry is scaled exactly.
+        A_b = S^-1 A S, B_b = S^-1 B / sigma, Cw_b = sigma Cw S, E_b = S^-1 E / sigma_a,
+        Dw_b = sigma Dw / sigma_a, Ce_b = Ce S (sigma diagonal with ``channels``, sigma_a =
+        2^j): the soft threshold is positively homogeneous, so its sector stays [0, q] (with
+        ``channels``, its threshold is one per channel, and the model's ``threshold`` NaN:
+        such a model is for the sector LMIs only); without ``sensors`` the
+        channels and the attack keep their units.  With powers of two (``balancing``) every
+        entry is scaled exactly.
         """
         s = np.asarray(s, dtype=float)
-        sigma = math.ldexp(1.0, int(sensors))
-        build = self._exact_derived(lambda exact: exact.scaled(s, int(sensors)))
+        sigma_a = math.ldexp(1.0, int(sensors))
+        if channels is None:
+            sigma = np.full(self.m, sigma_a)
+            threshold = self.threshold * sigma_a
+            build = self._exact_derived(lambda exact: exact.scaled(s, int(sensors)))
+        else:
+            j = np.asarray(channels, dtype=np.int64)
+            sigma = np.ldexp(1.0, j)
+            threshold = math.nan
+            build = self._exact_derived(lambda exact: exact.scaled(s, int(sensors), j))
         spread = float(s.max() / s.min()) if s.size else 1.0
         # the 2-norm of [A B E; Cw Dw] grows by at most the largest row factor times the
-        # largest column factor of the change: rows 1 / s and sigma, columns s and 1 / sigma
-        # (in numpy floats: a scaling at the floats' ends makes it inf, as the spread)
+        # largest column factor of the change: rows 1 / s and sigma, columns s, 1 / sigma
+        # and 1 / sigma_a (in numpy floats: a scaling at the floats' ends makes it inf, as
+        # the spread)
         with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
-            growth = float(
-                np.maximum(1.0 / s.min(), sigma) * np.maximum(s.max(), 1.0 / sigma)
-                if s.size
-                else max(sigma, 1.0 / sigma)
+            rows = max(1.0 / s.min() if s.size else 0.0, float(sigma.max(initial=sigma_a)))
+            columns = max(
+                float(s.max()) if s.size else 0.0,
+                1.0 / float(sigma.min(initial=sigma_a)),
+                1.0 / sigma_a,
             )
+            growth = float(rows * columns)
         error = None
         if self.exact_error is not None:
             base, k = self.exact_error, np.round(np.log2(s[: self.n_e])).astype(np.int64)
@@ -287,14 +315,14 @@ class LureModel:
             error = ExactMatrix(error_build, None, base.source)
         return LureModel(
             self.A * (s[None, :] / s[:, None]),
-            self.B / s[:, None] / sigma,
-            self.Cw * s[None, :] * sigma,
-            self.E / s[:, None] / sigma,
-            self.Dw,
+            self.B / s[:, None] / sigma[None, :],
+            self.Cw * s[None, :] * sigma[:, None],
+            self.E / s[:, None] / sigma_a,
+            self.Dw if channels is None else sigma[:, None] * self.Dw / sigma_a,
             self.Ce * s[None, :],
             self.q,
             self.n_e,
-            self.threshold * sigma,
+            threshold,
             build,
             self.formation_error * growth,
             error,

@@ -311,33 +311,50 @@ def channel_vertex_instability(model: LureModel) -> dict[str, Any] | None:
 
 
 def to_original_coordinates(
-    cert: LMICertificate, s: np.ndarray, N: int, sensors: int = 0
+    cert: LMICertificate,
+    s: np.ndarray,
+    N: int,
+    sensors: int = 0,
+    channels: np.ndarray | None = None,
 ) -> LMICertificate | None:
-    """A certificate of ``model.scaled(s, sensors)`` written for ``model`` (None if not
-    exactly).
+    """A certificate of ``model.scaled(s, sensors, channels)`` written for ``model`` (None
+    if not exactly).
 
     With xi = diag(s) xi_b the Lyapunov function zeta_b' P_b zeta_b is zeta' P zeta with
     P = diag(1 / s, I) P_b diag(1 / s, I) (only the first N coordinates are states): exact
     for powers of two.  With the channels and the attack in units 2^-sensors (sigma =
     2^sensors times the user's), the sector multipliers and gamma^2 are sigma^2 times those
-    of the scaled model.  The margin and error bound stay those verified in the balanced
-    coordinates, where the LMI is recomputed; ``state_scaling`` records s (and
-    ``sensor_exponent`` the sensors' units).
+    of the scaled model; with ``channels``, each channel's multiplier is 4^channels[i]
+    times its own (gamma^2 still 4^sensors).  The margin and error bound stay those
+    verified in the balanced coordinates, where the LMI is recomputed; ``state_scaling``
+    records s (``sensor_exponent`` the attack's units, ``channel_exponents`` the
+    channels').
     """
     if cert.P is None:
         return None
     inv = np.ones(cert.P.shape[0])
     inv[:N] = 1.0 / np.asarray(s, dtype=float)
     j = int(sensors)
+    per = None if channels is None else np.asarray(channels, dtype=np.int64)
     with np.errstate(over="ignore", invalid="ignore"):  # beyond the floats: no certificate
         P = cert.P * inv[:, None] * inv[None, :]
-        t = None if cert.multipliers is None else np.ldexp(cert.multipliers, 2 * j)
+        t = (
+            None
+            if cert.multipliers is None
+            else np.ldexp(cert.multipliers, 2 * (j if per is None else per))
+        )
     if not np.all(np.isfinite(P)) or not np.array_equal(P / inv[:, None] / inv[None, :], cert.P):
         return None
     if t is not None and not np.all(np.isfinite(t)):
         return None
     where = "the balanced coordinates xi = diag(state_scaling) xi_b"
-    if j:
+    if per is not None:
+        where += (
+            f", with each channel and its part of the nonlinearity's output in units "
+            f"2^-channel_exponents[i] (its multiplier times 4^channel_exponents[i] there) and "
+            f"the attack in units 2^{-j} (sensor_exponent: gamma^2 times 4^{j} there)"
+        )
+    elif j:
         where += (
             f", with the channels, the nonlinearity's output and the attack in units 2^{-j} "
             f"(sensor_exponent: multipliers and gamma^2 times 4^{j} there)"
@@ -351,7 +368,9 @@ def to_original_coordinates(
         "scaling",
     }
     gamma = cert.gamma
-    if j:
+    if per is not None:
+        details["channel_exponents"] = per.tolist()
+    if j or per is not None:
         details["sensor_exponent"] = j
         if gamma is not None:
             gamma = math.ldexp(gamma, j)
@@ -368,44 +387,80 @@ def to_original_coordinates(
 SENSOR_SPREAD = 2.0**4
 
 
-def sensor_units(model: LureModel) -> tuple[np.ndarray, int] | None:
-    """(s, j): the coordinates an LMI of ``model`` is solved in first where its sensors are
-    in units far from 1 (the largest entry of the channels' error columns Cw[:, :n_e] not
-    within ``SENSOR_SPREAD`` of 1): the channels, the nonlinearity's output (and so the
-    attack estimate, s = 2^-j on its states) and the attack in units of the power of two
-    2^-j that brings that entry into [1, 2) (``LureModel.scaled(s, sensors=j)``, exact);
-    None where the units are near 1.  The soft threshold is positively homogeneous, so the
-    sector stays [0, q]: the same inequalities, without entries 1e6 apart (sensors in units of
-    1e-3 read a decay 1e4 times too small)."""
-    from ..numerics.exact import pow2_units
+@dataclass(frozen=True)
+class SensorUnits:
+    """Where an LMI of a model is solved first (``sensor_units``): the states scaled by s,
+    the attack in units 2^-exponent, the channels too, or each in units 2^-channels[i]."""
+
+    s: np.ndarray
+    exponent: int
+    channels: np.ndarray | None = None
+
+    def apply(self, model: LureModel) -> LureModel:
+        return model.scaled(self.s, sensors=self.exponent, channels=self.channels)
+
+    def back(self, cert: LMICertificate, N: int) -> LMICertificate | None:
+        return to_original_coordinates(cert, self.s, N, self.exponent, self.channels)
+
+
+def sensor_units(model: LureModel, *, channels: bool = True) -> SensorUnits | None:
+    """The coordinates an LMI of ``model`` is solved in first where its sensors are in units
+    far from 1 or from each other; None where they are near 1.
+
+    The units are those of the channels' error columns Cw[:, :n_e].  Where the largest
+    entries of the channels' rows are within ``SENSOR_SPREAD`` of each other, one unit for
+    all: where their largest entry is not within ``SENSOR_SPREAD`` of 1, the channels, the
+    nonlinearity's output (and so the attack estimate, scaled by 2^-j on its states) and the
+    attack in units of the power of two 2^-j that brings that entry into [1, 2).  Where
+    they are farther apart, each channel (and its part of the nonlinearity's output and of
+    the attack estimate) in units of its own, the power of two that brings its row's
+    largest entry into [1, 2), and the attack in units 2^-j still.  All exact
+    (``LureModel.scaled``): the soft threshold is positively homogeneous, so the sector
+    stays [0, q], and its multipliers are diagonal: the same inequalities, without entries
+    1e6 apart (sensors in units of 1e-3 read a decay 1e4 times too small, sensors 1e3 and
+    1e-3 a decay of 1.5e-9 for one of 0.04)."""
+    from ..numerics.exact import pow2_scale, pow2_units
 
     if model.n_e == 0 or model.m == 0:
         return None
-    channels = model.Cw[:, : model.n_e]
-    sigma = pow2_units(float(np.max(np.abs(channels))) if channels.size else 0.0, SENSOR_SPREAD)
-    if sigma == 1.0:
+    rows = model.Cw[:, : model.n_e]
+    if not rows.size:
         return None
+    with np.errstate(invalid="ignore"):
+        tops = np.max(np.abs(rows), axis=1)
+    if not np.all(np.isfinite(tops)):
+        return None
+    sigma = pow2_units(float(tops.max()), SENSOR_SPREAD)
     j = math.frexp(sigma)[1] - 1
-    if abs(j) > 255:  # 4^j, and gamma^2 scaled back by it, would leave the floats
+    seen = tops[tops > 0]
+    rest = model.N - model.n_e  # the attack estimate's states: one per channel, or none
+    per = None
+    if channels and seen.size and seen.max() >= SENSOR_SPREAD * seen.min() and rest in (0, model.m):
+        per = np.array([math.frexp(pow2_scale(t))[1] - 1 if t > 0 else j for t in tops.tolist()])
+    elif sigma == 1.0:
         return None
-    s = np.concatenate([np.ones(model.n_e), np.full(model.N - model.n_e, math.ldexp(1.0, -j))])
-    return s, j
+    if abs(j) > 255 or (per is not None and np.abs(per).max() > 255):
+        return None  # 4^j, and gamma^2 scaled back by it, would leave the floats
+    if per is None:
+        scale = np.full(rest, math.ldexp(1.0, -j))
+    else:
+        scale = np.ldexp(1.0, -per) if rest else np.ones(0)
+    return SensorUnits(np.concatenate([np.ones(model.n_e), scale]), j, per)
 
 
 def in_sensor_units(
-    model: LureModel, certify: Callable[[LureModel], LMICertificate]
+    model: LureModel, certify: Callable[[LureModel], LMICertificate], *, channels: bool = True
 ) -> LMICertificate | None:
     """``certify`` run on ``model`` in the units of ``sensor_units`` and its certificate
     written back (``to_original_coordinates``); None where the units are near 1 or it
     certifies nothing there."""
-    units = sensor_units(model)
+    units = sensor_units(model, channels=channels)
     if units is None:
         return None
-    s, j = units
-    inside = certify(model.scaled(s, sensors=j))
+    inside = certify(units.apply(model))
     if inside.verdict is not Verdict.HOLDS or inside.P is None:
         return None
-    return to_original_coordinates(inside, s, model.N, sensors=j)
+    return units.back(inside, model.N)
 
 
 def where_verified(
@@ -421,11 +476,17 @@ def where_verified(
         return None
     s = np.asarray(s, dtype=float)
     j = int(cert.details.get("sensor_exponent", 0))
+    listed = cert.details.get("channel_exponents")
+    per = None if listed is None else np.asarray(listed, dtype=np.int64)
     scale = np.ones(cert.P.shape[0])
     scale[: model.N] = s
     with np.errstate(over="ignore"):
         P_b = cert.P * scale[:, None] * scale[None, :]
-        t_b = None if cert.multipliers is None else np.ldexp(cert.multipliers, -2 * j)
+        t_b = (
+            None
+            if cert.multipliers is None
+            else np.ldexp(cert.multipliers, -2 * (j if per is None else per))
+        )
     if not np.all(np.isfinite(P_b)):
         return LMICertificate(
             Verdict.INCONCLUSIVE,
@@ -439,13 +500,16 @@ def where_verified(
         multipliers=t_b,
         gamma=None if cert.gamma is None else math.ldexp(cert.gamma, -j),
         details={
-            k: v for k, v in cert.details.items() if k not in ("state_scaling", "sensor_exponent")
+            k: v
+            for k, v in cert.details.items()
+            if k not in ("state_scaling", "sensor_exponent", "channel_exponents")
         },
     )
-    found = compute(model.scaled(s, sensors=j), inside)
+    units = SensorUnits(s, j, per)
+    found = compute(units.apply(model), inside)
     if found.verdict is not Verdict.HOLDS:
         return found
-    back = to_original_coordinates(found, s, model.N, sensors=j)
+    back = units.back(found, model.N)
     if back is None:
         return LMICertificate(
             Verdict.INCONCLUSIVE,
@@ -751,7 +815,7 @@ def iss_certificate(
         budget=budget,
         balance=False,
     )
-    first = in_sensor_units(model, again)
+    first = in_sensor_units(model, again, channels=False)
     if first is not None:
         return first
     attempts = []
