@@ -222,7 +222,6 @@ class _Units:
     def of(cls, design: ObserverDesign, model: LureModel) -> _Units:
         from ..numerics.exact import pow2_row_scaling, pow2_scale, pow2_units
         from ..numerics.linalg import state_balancing
-        from ..stability.lmi import SENSOR_SPREAD
 
         A, S = design.system.A, design.sensing
         if model.n_e != A.shape[0]:
@@ -231,7 +230,7 @@ class _Units:
         states = np.ones(A.shape[0]) if s is None else s
         sensed = S * states[None, :]
         top = float(np.max(np.abs(sensed))) if sensed.size else 0.0
-        sigma = pow2_units(top, SENSOR_SPREAD)
+        sigma = pow2_units(top)
         if s is None and sigma == 1.0:
             return cls(model, A, S)
         # the attack estimate in the sensors' units too: a_hat = a_hat_b / sigma

@@ -79,7 +79,11 @@ def pow2_scale(x: float) -> float:
     return math.ldexp(1.0, min(-math.frexp(x)[1] + 1, 1023))
 
 
-def pow2_units(top: float, spread: float = 2.0**4) -> float:
+# quantities whose largest magnitude is within this factor of 1 keep their units
+UNITS_SPREAD = 2.0**4
+
+
+def pow2_units(top: float, spread: float = UNITS_SPREAD) -> float:
     """The unit (a power of two) for quantities whose largest magnitude is ``top``: 1 where
     ``top`` is within ``spread`` of 1 (or zero, or not finite), else ``pow2_scale(top)``,
     which brings it into [1, 2).  One rule for every "units far from 1" decision."""

@@ -50,6 +50,7 @@ from typing import Any
 import numpy as np
 
 from ..budget import Budget, Refusal
+from ..numerics.exact import UNITS_SPREAD
 from ..observers.lure import LureModel, scaling_text
 from ..results import Verdict
 from . import lmi_messages
@@ -384,7 +385,7 @@ def to_original_coordinates(
 
 
 # the channels' largest entry within this factor of 1 keeps the sensors' units
-SENSOR_SPREAD = 2.0**4
+SENSOR_SPREAD = UNITS_SPREAD
 
 
 @dataclass(frozen=True)
