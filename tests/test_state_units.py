@@ -13,7 +13,7 @@ from test_evidence_reverifies import _positive_definite, _q, _zames_falb_lmi
 from ssecert import System, Verdict, analyze, observability, sparse_observability, spec_from_dict
 from ssecert.observers import build_observer
 from ssecert.observers.lure import LureModel, scaling_text
-from ssecert.stability import lmi_messages, observer_messages
+from ssecert.stability import lmi, lmi_messages, observer_messages
 from ssecert.stability.lmi import circle_certificate
 from ssecert.stability.outcomes import LMICause, RegionCode
 from ssecert.stability.zames_falb import zames_falb_certificate
@@ -78,11 +78,20 @@ def _circle_negative_definite(model, P, t):
     return _positive_definite([[-x for x in row] for row in M])
 
 
-def test_a_circle_certificate_survives_a_change_of_state_units():
+def test_a_circle_certificate_survives_a_change_of_state_units(monkeypatch):
     plant, observer = _rescaled(UGV_PLANT, UGV_OBSERVER, 17)
     model = _model(plant, observer)
-    assert circle_certificate(model, balance=False).verdict.value == "inconclusive"
-    document = json.loads(json.dumps(analyze(_spec(plant, observer)).to_dict()))
+    # the channels' rows are in units 2^17 apart too: each in units of its own certifies it
+    # (checked below); the states' units alone, first
+    with monkeypatch.context() as patch:
+        patch.setattr(lmi, "sensor_units", lambda model, channels=True: None)
+        assert circle_certificate(model, balance=False).verdict.value == "inconclusive"
+        document = json.loads(json.dumps(analyze(_spec(plant, observer)).to_dict()))
+    own = json.loads(json.dumps(analyze(_spec(plant, observer)).to_dict()))
+    ev = own["checks"]["observer_stability"]["evidence"]
+    assert own["checks"]["observer_stability"]["verdict"] == "holds"
+    assert len(set(ev["channel_exponents"])) > 1
+    assert _circle_negative_definite(ev["model"], ev["P"], ev["multipliers_T"])
     check = document["checks"]["observer_stability"]
     assert check["verdict"] == "holds" and check["method"].startswith("circle")
     ev = check["evidence"]
