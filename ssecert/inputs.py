@@ -80,9 +80,29 @@ def as_spec(
     TypeError
         For a design of another type, or a plant without ``max_attacked``.
     """
+    from .base.validation import as_int_option, describe
     from .spec import Spec, spec_from_dict
     from .spec.write import spec_document
 
+    if max_attacked is not None:
+        max_attacked = as_int_option(max_attacked, "max_attacked", min_value=0)
+    if horizon is not None:
+        horizon = as_int_option(horizon, "horizon", min_value=1)
+    if observer is not None and not isinstance(observer, Mapping):
+        raise TypeError(
+            "observer: expected an [observer] section as a mapping, for example "
+            f'{{"kind": "luenberger", "gain": "deadbeat"}}, got {describe(observer)}'
+        )
+    if scenarios is not None and not isinstance(scenarios, (str, Mapping)):
+        scenarios = list(scenarios)
+    if scenarios is not None and (
+        isinstance(scenarios, (str, Mapping))
+        or not all(isinstance(scenario, Mapping) for scenario in scenarios)
+    ):
+        raise TypeError(
+            "scenarios: expected a sequence of [[scenario]] sections, each a mapping, got "
+            f"{describe(scenarios)}"
+        )
     if isinstance(design, (str, os.PathLike)):
         spec = _load(os.fspath(design), max_attacked=max_attacked, horizon=horizon)
         if observer is None and scenarios is None and name is None:

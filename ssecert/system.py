@@ -178,7 +178,8 @@ class System:
     @classmethod
     def _from_matrices(cls, A: Any, C: Any, sensors: Sequence[str] | None, name: str) -> System:
         names = sensors if sensors is None or isinstance(sensors, str) else tuple(sensors)
-        return cls(np.asarray(A, dtype=float), np.asarray(C, dtype=float), names, name)  # type: ignore[arg-type]
+        # (as given: the constructor refuses complex data rather than dropping its imaginary part)
+        return cls(np.asarray(A), np.asarray(C), names, name)  # type: ignore[arg-type]
 
     @property
     def n(self) -> int:

@@ -348,6 +348,28 @@ def test_json_onto_a_folder(tmp_path, capsys):
     assert os.listdir(tmp_path) == []
 
 
+def test_no_output_replaces_the_spec_or_another_output(tmp_path, capsys, monkeypatch):
+    """The certificate written over the spec it certifies (``certify plant.json --out .``,
+    ``analyze g.json --json g.json``), or the .mat over the JSON: refused before any work,
+    every file as it was."""
+    monkeypatch.chdir(tmp_path)
+    spec = tmp_path / "plant.json"
+    text = json.dumps(
+        {"system": {"A": [[0.5]], "C": [[1.0], [1.0], [1.0]]}, "attack": {"max_attacked": 1}}
+    )
+    spec.write_text(text)
+    for argv, option in (
+        (["certify", "plant.json", "--out", ".", "--no-sim"], "--out ."),
+        (["analyze", "plant.json", "--json", "plant.json"], "--json"),
+        (["analyze", "plant.json", "--json", "./plant.json"], "--json"),
+        (["simulate", "plant.json", "--json", "plant.json"], "--json"),
+        (["analyze", "plant.json", "--json", "same.x", "--mat", "same.x"], "--mat"),
+    ):
+        status, out, err = run(argv, capsys)
+        assert_usage_error(status, out, err, option)
+        assert spec.read_text() == text and sorted(os.listdir(tmp_path)) == ["plant.json"]
+
+
 # ---------------------------------------------------------------------------
 # bad input: exit 2, one line on stderr, no traceback
 # ---------------------------------------------------------------------------

@@ -3,7 +3,7 @@
 import control as ct
 import numpy as np
 import pytest
-from scipy import signal
+from scipy import signal, sparse
 
 from ssecert import System, analyze
 from ssecert.examples import load_example
@@ -44,6 +44,12 @@ def test_continuous_time_systems_and_other_objects_are_refused_with_the_way_out(
         System.from_scipy(signal.lti([[0.0]], [[1.0]], [[1.0]], [[0.0]]))
     with pytest.raises(TypeError, match="scipy.signal dlti"):
         System.from_scipy(np.eye(2))
+    # complex data is refused, as System refuses it, not cut to its real part
+    complex_plant = signal.dlti(
+        [[0.5 + 0.3j, 0.0], [0.0, 0.9]], [[0.0], [1.0]], np.eye(2), np.zeros((2, 1)), dt=1
+    )
+    with pytest.raises(TypeError, match="real"):
+        System.from_scipy(complex_plant)
 
 
 def _answers(cert) -> str:
@@ -109,6 +115,18 @@ def test_a_plant_without_its_attack_bound_or_another_object_is_refused():
         as_spec(42, max_attacked=1)
     with pytest.raises(SpecError, match="observer.threshold"):
         as_spec(UGV.system, max_attacked=1, observer={"kind": "sso", "step": 0.2})
+    # arguments of the wrong type are named as the Python arguments they are
+    for keywords, name in (
+        ({"observer": "luenberger"}, "observer"),
+        ({"scenarios": {"attack": "constant"}}, "scenarios"),
+        ({"scenarios": ["constant"]}, "scenarios"),
+        ({"max_attacked": "1"}, "max_attacked"),
+        ({"horizon": 1.5}, "horizon"),
+    ):
+        with pytest.raises(TypeError, match=f"^{name}"):
+            as_spec(UGV.system, **{"max_attacked": 1, **keywords})
+    with pytest.raises(TypeError, match="toarray"):
+        System(sparse.csr_matrix(np.eye(2)), np.eye(2))
 
 
 def test_a_linear_observer_exports_to_python_control_and_runs_alike():

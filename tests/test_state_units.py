@@ -249,6 +249,19 @@ def test_a_breaking_sets_stealthy_attack_is_given_in_the_users_units():
     assert np.linalg.norm(C[0] @ z) > 0
 
 
+@pytest.mark.parametrize("v", [1e-15, 1e-300, 1.9e-22])
+def test_a_state_whose_row_holds_only_a_tiny_diagonal_entry_is_not_moved_away(v):
+    # A = diag(v, 1): LAPACK's balancing (its norms include the diagonal, which no change of
+    # units moves) put state 0 in units 2^-50, where the sensors (1, 1) and (1, -1) read as
+    # one: sparse observability was inconclusive ("relative distance below the rounding
+    # level"); the plant is as far from breaking as A = diag(0, 1) (c2d of diag(-1, -50)
+    # with dt = 1 has v = 1.9e-22)
+    C = np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0], [1.0, -1.0]])
+    for a in (v, 0.0):
+        check = sparse_observability(System(np.diag([a, 1.0]), C), 1)
+        assert check.verdict == Verdict.HOLDS and check.fields["max_removable"] == 2
+
+
 def test_a_state_seen_only_through_its_diagonal_and_one_sensor_keeps_observability():
     # state 0's column of A holds only its diagonal entry, and one sensor sees it: LAPACK's
     # balancing (its norms include the diagonal, C's rows fixed) took the plant in units 2^50

@@ -229,6 +229,11 @@ def as_real_matrix(
                 )
         array = np.array(flat, dtype=np.float64).reshape(nested) if flat else np.zeros(nested)
     else:
+        if not isinstance(value, np.ndarray) and callable(getattr(value, "toarray", None)):
+            raise TypeError(
+                f"{name} must be a dense array, got a {type(value).__name__} (a sparse "
+                f"matrix): pass {name}.toarray()"
+            )
         array = np.asarray(value)
         kind = array.dtype.kind
         if kind == "b":

@@ -34,7 +34,14 @@ from typing import Any, NoReturn
 from .._version import __version__
 from .audit import add_audit_parser, cmd_audit
 from .design import add_design_parser, cmd_design
-from .files import UsageError, load_argument, output_file, output_folder, write_outputs
+from .files import (
+    UsageError,
+    load_argument,
+    output_file,
+    output_folder,
+    separate_outputs,
+    write_outputs,
+)
 from .options import (
     _add_analysis_options,
     _add_budget_options,
@@ -316,6 +323,7 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     if args.mat_path == "-":
         raise UsageError("--mat -: a .mat file is binary; give a file path")
     mat_target = output_file("--mat", args.mat_path)
+    separate_outputs(args.spec, [("--json", target), ("--mat", mat_target)])
     spec, load_notes = _load(
         args.spec, max_attacked=args.max_attacked, horizon=args.horizon, noise=args.noise
     )
@@ -385,6 +393,11 @@ def _cmd_certify(args: argparse.Namespace, argv: Sequence[str] | None) -> int:
     for path in (html_path, json_path):
         if path.is_dir():
             raise UsageError(f"--out {args.out}: {path} is a folder; the report needs that name")
+    # (--json may name the folder's certificate: the same document)
+    separate_outputs(
+        args.spec, [(f"--out {args.out}", html_path), (f"--out {args.out}", json_path)]
+    )
+    separate_outputs(args.spec, [("--json", target)])
     human = _Silent() if args.quiet else sys.stderr if args.json_path == "-" else sys.stdout
     display = stage_display(
         quiet=args.quiet, verbose=args.verbose, json_to_stdout=args.json_path == "-"
@@ -439,6 +452,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from ..simulation.engine import simulate_spec
 
     target = output_file("--json", args.json_path)
+    separate_outputs(args.spec, [("--json", target)])
     spec, load_notes = _load(args.spec, max_attacked=args.max_attacked)
     if spec.observer is None or not spec.scenarios:
         raise UsageError(

@@ -150,7 +150,14 @@ def cmd_design(args: argparse.Namespace, argv: Sequence[str] | None = None) -> i
     from ..report.json import certify_json
     from ..results import to_jsonable
     from ..spec import spec_from_dict
-    from .files import UsageError, load_argument, output_file, output_folder, write_outputs
+    from .files import (
+        UsageError,
+        load_argument,
+        output_file,
+        output_folder,
+        separate_outputs,
+        write_outputs,
+    )
     from .progress import stage_display
 
     folder = output_folder("--out", args.out)
@@ -185,6 +192,8 @@ def cmd_design(args: argparse.Namespace, argv: Sequence[str] | None = None) -> i
             f"--json {args.json_path}: design writes its spec file, report and certificate "
             f"there ({', '.join(p.name for p in paths.values())}); give another path"
         )
+    separate_outputs(args.spec, [(f"--out {args.out}", path) for path in paths.values()])
+    separate_outputs(args.spec, [("--json", target)])
     with display.showing():  # cleared before the summary is printed
         say(f"searching {kind} designs ({args.objective})")
         result = design_observer(

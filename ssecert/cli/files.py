@@ -5,11 +5,18 @@ folders and files checked before any work, and the outputs written all or nothin
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-__all__ = ["UsageError", "load_argument", "output_folder", "output_file", "write_outputs"]
+__all__ = [
+    "UsageError",
+    "load_argument",
+    "output_folder",
+    "output_file",
+    "separate_outputs",
+    "write_outputs",
+]
 
 
 class UsageError(Exception):
@@ -73,6 +80,30 @@ def output_file(option: str, text: str | None) -> Path | None:
     if not path.exists() and not os.access(parent, os.W_OK | os.X_OK):
         raise UsageError(f"{option} {text}: cannot write in {parent}: permission denied")
     return path
+
+
+def separate_outputs(spec: str, outputs: Sequence[tuple[str, Path | None]]) -> None:
+    """UsageError, before any work, where an output is the spec file named on the command line
+    (the run would replace it) or two of ``outputs`` are one file (the later would replace the
+    earlier).  Each output is (the option as typed, ``--json`` or ``--out FOLDER``, and the
+    path it writes)."""
+    source = os.path.realpath(spec) if spec and os.path.isfile(spec) else None
+    seen: dict[str, str] = {}
+    for option, path in outputs:
+        if path is None:
+            continue
+        key = os.path.realpath(path)
+        if key == source:
+            raise UsageError(
+                f"{option}: {path} is the spec file {spec}, which the run would replace; "
+                "give another path"
+            )
+        if key in seen:
+            raise UsageError(
+                f"{option}: {path} is also the file of {seen[key]}; give each output a path of "
+                "its own"
+            )
+        seen[key] = option
 
 
 def write_outputs(files: Mapping[Path, str | bytes]) -> None:

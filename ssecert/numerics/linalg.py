@@ -103,8 +103,12 @@ def _state_balancing(
     include the diagonal (LAPACK >= 3.5), which a diagonal similarity does not change, and
     the rows of C stay fixed: a state whose column of A holds only its diagonal entry, or
     which one sensor sees, is taken for balanced whatever its units (one state of a plant in
-    units 2^50 was, and gebal met another's units halfway).  So the columns of the
-    observability matrix of gebal's result are then equilibrated (``_observability_balancing``),
+    units 2^50 was, and gebal met another's units halfway); and a state whose row holds only
+    a tiny diagonal entry is put in units far from the others' (A = diag(1e-15, 1): 2^-50,
+    and two sensors that see both states at once read as one).  So with ``canonical``,
+    where the least-squares scaling found the units within 2^16 of each other, gebal's is not
+    used beyond that spread either.  The columns of the observability matrix of gebal's
+    result are then equilibrated (``_observability_balancing``),
     a further scaling used only beyond a spread of ``EXTREME_SPREAD`` (2^16): moderate units
     change no decision, and plants gebal balances (or leaves alone) keep its coordinates.
     """
@@ -128,7 +132,9 @@ def _state_balancing(
         K[:n, :n], K[n:, :n] = A, C
         _, (scale, _) = matrix_balance(K, permute=False, separate=True)
         states = np.asarray(scale[:n], dtype=float)
-        if not _spread_beyond(states, spread):
+        if not _spread_beyond(states, spread) or (
+            canonical and _spread_beyond(states, EXTREME_SPREAD)
+        ):
             states = np.ones(n)
         more = np.ones(n)
         A_g = A * (states[None, :] / states[:, None])
