@@ -197,12 +197,34 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
     else:
         # the process noise enters the error as -G w: a further input of the error model, the
         # dissipation inequality certified again with it, at iss_gain's decay
-        noise_model, w_bounds = process_model(design, model, noise, per_row)
-        cert = decaying_certificate(noise_model, float(alpha))
-        per_row = np.concatenate([per_row, w_bounds])
+        # (its columns weighed like the measurement rows, and in the spec's units: one gain
+        # for both noises, so where one noise is far smaller than the other the first can be
+        # far looser; the smaller bound at iss_gain's decay chooses, the scan below follows)
+        rows_alone, chosen = per_row, None
+        for own_units in (False, True):
+            variant, w_bounds = process_model(design, model, noise, rows_alone, own_units=own_units)
+            if chosen is not None and np.array_equal(w_bounds, chosen[1][rows_alone.size :]):
+                break  # (the same columns: nothing new to solve)
+            rows_v = np.concatenate([rows_alone, w_bounds])
+            cert = decaying_certificate(variant, float(alpha))
+            bound_v = None
+            if cert is not None:
+                P_v, a_v, g_v = np.asarray(cert.P, dtype=float), cert.decay, cert.gamma
+                bound_v = dissipation_bound(P_v, float(a_v), float(g_v), rows_v, n)
+            if chosen is None or (
+                bound_v is not None
+                and not bound_v.ill_conditioned
+                and (
+                    chosen[2] is None
+                    or chosen[2].ill_conditioned
+                    or bound_v.bound < chosen[2].bound
+                )
+            ):
+                chosen = (variant, rows_v, bound_v, cert)
+        assert chosen is not None
+        noise_model, per_row, found, cert = chosen
         if cert is not None:
             P, alpha, gamma = np.asarray(cert.P, dtype=float), cert.decay, cert.gamma
-            found = dissipation_bound(P, float(alpha), float(gamma), per_row, n)
         source = "a dissipation inequality with the process noise as a further input"
         origin = "process noise as a further input"
         common["method"] = (
@@ -275,8 +297,22 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
         process = noise.process
         G, omega = process.input, process.omega
         split = split_bound(P_iss, a_iss, g_iss, found_rows, G, omega, n)
-        if math.isfinite(split.bound) and (
-            found is None or found.ill_conditioned or split.bound < found.bound
+        # faster decays of the measurement-noise inequality (the decay scan without w as an
+        # input) split the same way: often much smaller (and, as the process noise vanishes,
+        # the bound without it)
+        faster = None
+        if math.isfinite(split.bound):
+            faster = decay_scan(
+                model, a_iss, found_rows, n,
+                bound_of=lambda P_, a_, g_: split_as_dissipation(
+                    split_bound(P_, a_, g_, found_rows, G, omega, n)
+                ),
+            )  # fmt: skip
+        smallest = split.bound
+        if faster is not None and faster.found.bound < smallest:
+            smallest = faster.found.bound
+        if math.isfinite(smallest) and (
+            found is None or found.ill_conditioned or smallest < found.bound
         ):
             found = split_as_dissipation(split)
             P, alpha, gamma = P_iss, a_iss, g_iss
@@ -284,14 +320,6 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
                 "iss_gain's inequality (measurement noise only) with the process noise's step "
                 "split off"
             )
-            # where the split wins, faster decays of the measurement-noise inequality (the
-            # decay scan without w as an input) split the same way: often much smaller
-            faster = decay_scan(
-                model, a_iss, found_rows, n,
-                bound_of=lambda P_, a_, g_: split_as_dissipation(
-                    split_bound(P_, a_, g_, found_rows, G, omega, n)
-                ),
-            )  # fmt: skip
             if faster is not None and faster.found.bound < found.bound:
                 P, alpha, gamma, scan = faster.P, faster.alpha, faster.gamma, faster
                 scan_tried = faster.tried
@@ -643,19 +671,19 @@ SEARCH_STEPS = 300
 SEARCH_RANDOM = 24
 
 
-def _process_columns(G: np.ndarray, omega: np.ndarray, scale: float) -> tuple[Any, Any]:
+def _process_columns(G: np.ndarray, omega: np.ndarray, scale: float | None) -> tuple[Any, Any]:
     """The process noise's columns G_j 2^(k_j) and bounds omega_j 2^(-k_j) (the same G w,
     exactly), k_j bringing each bound near ``scale`` (the measurement rows' largest bound):
-    one gain for both noises then weighs them alike, whatever units w is written in.  The
-    columns with no bound or no entry are left out; a scaling that would not be exact is not
-    made."""
+    one gain for both noises then weighs them alike, whatever units w is written in; with
+    ``scale`` None, k_j = 0 (w in the spec's units).  The columns with no bound or no entry
+    are left out; a scaling that would not be exact is not made."""
     columns, bounds = [], []
     for j in range(G.shape[1]):
         col, bound = G[:, j], float(omega[j])
         if bound == 0 or not np.any(col):
             continue
         # (the exponents' difference: bound / scale overflows for a scale of 5e-324)
-        k = math.frexp(bound)[1] - math.frexp(scale)[1] if scale > 0 else 0
+        k = math.frexp(bound)[1] - math.frexp(scale)[1] if scale is not None and scale > 0 else 0
         with np.errstate(over="ignore", under="ignore"):  # a scaling out of range is not made
             scaled, shrunk = np.ldexp(col, k), math.ldexp(bound, -k)
             exact = np.all(np.isfinite(scaled)) and np.array_equal(np.ldexp(scaled, -k), col)
@@ -667,14 +695,21 @@ def _process_columns(G: np.ndarray, omega: np.ndarray, scale: float) -> tuple[An
 
 
 def process_model(
-    design: ObserverDesign, model: Any, noise: MeasurementNoise, rows: Any
+    design: ObserverDesign,
+    model: Any,
+    noise: MeasurementNoise,
+    rows: Any,
+    *,
+    own_units: bool = False,
 ) -> tuple[Any, np.ndarray]:
     """The error model with the process noise as a further input (xi+ = ... + [-G; 0] w, its
     columns scaled by powers of two to the measurement rows' bounds ``rows``,
-    ``_process_columns``) and the bounds of that input's entries."""
+    ``_process_columns``, or in the spec's units with ``own_units``) and the bounds of that
+    input's entries."""
     assert noise.process is not None  # a process noise that moves the state: a column left
     top = float(np.max(rows)) if np.size(rows) else 0.0
-    G, bounds = _process_columns(noise.process.input, noise.process.omega, top)
+    scale = None if own_units else top
+    G, bounds = _process_columns(noise.process.input, noise.process.omega, scale)
     return model.with_input(_error_input(model, design.system.n, G)), bounds
 
 
