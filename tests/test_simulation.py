@@ -262,3 +262,26 @@ def test_dsso_with_identity_dynamics_and_pinv_gain_is_ijam():
         ref = ijam(C, y, lam, nu=nu, iterations=k, tol=0.0)
         np.testing.assert_allclose(traj.x_hat[-1, 0], ref.x, rtol=1e-10, atol=1e-12)
         np.testing.assert_allclose(traj.a_hat[-1, 0], ref.a, rtol=1e-10, atol=1e-12)
+
+
+def test_errors_that_are_the_rounding_of_a_huge_state_are_said_so():
+    """rho(A) = 1.2 over 300 steps: the state reaches about 1e23, and x_hat - x, a difference
+    of two numbers near it, is only rounding (the error model alone, independent of x,
+    converges); the scenario says from which step, and its JSON carries it.  Over 60 steps
+    nothing is lost, and a stable plant's converging error (below its state's rounding) is
+    not flagged."""
+    A = np.array([[1.2, 0.1], [0.0, 0.5]])
+    C = np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]])
+    design = build_observer(System(A, C), {"kind": "luenberger", "gain": "place",
+                                           "poles": [0.3, 0.4]})  # fmt: skip
+    scenario = {"name": "c", "attack": "constant", "sensors": [0], "magnitude": [1.0, 2.0],
+                "noise": 0.0, "steps": 300, "runs": 4, "seed": 0}  # fmt: skip
+    long = simulate_scenario(design, scenario)
+    assert long.unresolved_from is not None and 100 < long.unresolved_from < 300
+    assert long.to_dict()["unresolved_from_step"] == long.unresolved_from
+    assert len(long.notes) == 1
+    short = simulate_scenario(design, {**scenario, "steps": 60})
+    assert short.unresolved_from is None and "unresolved_from_step" not in short.to_dict()
+    stable = build_observer(System(0.5 * A, C), {"kind": "luenberger", "gain": "deadbeat"})
+    calm = simulate_scenario(stable, {**scenario, "magnitude": [0.0, 0.0]})
+    assert calm.unresolved_from is None and float(calm.absolute_error[-1].max()) < 1e-12

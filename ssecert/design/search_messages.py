@@ -131,7 +131,8 @@ def comparison_summary(
     worse : sequence of str
         The compared scenarios where the synthesised design's error is worse.
     apart : sequence of str
-        The scenarios not compared (skipped, or a simulation that overflowed).
+        The scenarios not compared (skipped, a simulation that overflowed, or one whose
+        errors are the floats' rounding of an unstable plant's huge state).
     noise : tuple of float or None
         The certified ultimate errors under the noise (the spec's own design's, the
         synthesised one's) when the spec's own is the smaller, else None.
@@ -141,7 +142,7 @@ def comparison_summary(
     elif not scenarios:
         summary = "The spec has no scenarios: the designs were not simulated."
     elif not compared:
-        summary = "No scenario was simulated to a finite error for both designs."
+        summary = "No scenario was simulated to a finite, resolved error for both designs."
     elif worse:
         summary = (
             f"The synthesised design's mean error ||x_hat - x|| over the horizon is worse than "
@@ -157,8 +158,9 @@ def comparison_summary(
         )
     if own and apart:
         summary += (
-            f" Not compared ({', '.join(apart)}): a scenario skipped, or a simulation that "
-            "overflowed, for at least one of the designs."
+            f" Not compared ({', '.join(apart)}): a scenario skipped, a simulation that "
+            "overflowed, or errors that are the floats' rounding of an unstable plant's state "
+            "(see the scenario's notes), for at least one of the designs."
         )
     if noise is not None:
         theirs, ours = noise

@@ -151,6 +151,10 @@ class ScenarioResult:
     certified_bound : mapping or None
         Beside a certified error bound (``with_certified_bound``): the bound, the largest
         error observed once the initial error has had time to fade, and whether it is within.
+    unresolved_from : int or None
+        The first step from which the errors are the floats' rounding of a huge simulated
+        state rather than the observer's (an unstable plant), with a note; None where every
+        step is resolved.
 
     ``ssecert.simulation.metrics`` defines each; the relative error grows without bound
     when the state decays and the error does not, so designs are compared on the
@@ -172,6 +176,8 @@ class ScenarioResult:
     absolute_error: np.ndarray | None = None
     initial_relative_error: np.ndarray | None = None
     certified_bound: dict[str, Any] | None = None
+    # the first step whose errors are the floats' rounding of a huge state (``_unresolved_from``)
+    unresolved_from: int | None = None
 
     def final(self) -> dict[str, float | None]:
         """Aggregates at the last step."""
@@ -218,6 +224,11 @@ class ScenarioResult:
             "seconds": self.seconds,
             "notes": list(self.notes),
             **({"certified_bound": self.certified_bound} if self.certified_bound else {}),
+            **(
+                {"unresolved_from_step": self.unresolved_from}
+                if self.unresolved_from is not None
+                else {}
+            ),
         }
 
     def with_certified_bound(
@@ -313,6 +324,7 @@ def _simulate_chunk(
     x_ref = xs if d == 0 else np.concatenate([np.repeat(xs[:1], d, axis=0), xs[:-d]], axis=0)
     error = absolute_error(traj.x_hat, x_ref)
     out = {
+        "state_norm": np.linalg.norm(x_ref, axis=-1),
         "absolute_error": error,
         "initial_relative_error": initial_relative_error(error, data.x0),
         "relative_error": relative_error(traj.x_hat, x_ref, data.x0[None]),
@@ -413,6 +425,7 @@ def simulate_scenario(
             f"{runs} runs, the first at step {first:,}: their errors are reported as inf from "
             f"then on"
         )
+    unresolved = _unresolved_from(merged.pop("state_norm"), merged["absolute_error"], notes)
     return ScenarioResult(
         name=str(scenario.get("name", "scenario")),
         attack=scenario["attack"],
@@ -428,7 +441,41 @@ def simulate_scenario(
         notes=tuple(notes),
         absolute_error=merged["absolute_error"],
         initial_relative_error=merged["initial_relative_error"],
+        unresolved_from=unresolved,
     )
+
+
+# the simulated state's rounding taken as 2^-40 ||x||: x_hat and x each carry a relative
+# rounding of a few thousand eps after the steps of a simulation
+STATE_ROUNDING = 2.0**-40
+
+
+def _unresolved_from(state_norm: np.ndarray, error: np.ndarray, notes: list[str]) -> int | None:
+    """The first step from which the error metrics are the floats' rounding rather than the
+    observer's, or None: where the simulated state is so large (an unstable plant) that
+    x_hat - x, a difference of two numbers near it, is known only to about 2^-40 ||x||, and
+    that is within a factor 1,000 of both the largest error at that step and the largest
+    initial error (an error converging to 0 on a stable plant stays resolved: it is below the
+    state's rounding, but so is nothing it is compared with).  A note says so."""
+    from ..base.format import readable
+
+    with np.errstate(over="ignore", invalid="ignore"):
+        finite = np.where(np.isfinite(state_norm), state_norm, 0.0)
+        rounding = np.max(finite, axis=1) * STATE_ROUNDING  # (steps + 1,)
+        largest = np.max(np.where(np.isfinite(error), error, 0.0), axis=1)
+        lost = (rounding > 0) & (rounding >= 1e-3 * largest) & (rounding >= 1e-3 * largest[0])
+    if not lost.any():
+        return None
+    first = int(np.argmax(lost))
+    top = float(rounding[first:].max())
+    notes.append(
+        f"from step {first:,} the simulated state reaches {readable(top / STATE_ROUNDING)}, "
+        f"so x_hat - x is known only to about {readable(top)} "
+        f"(2^-40 ||x||), within a factor 1,000 of the errors reported: from there on they are "
+        "the rounding of the floats, not the observer's error (the plant is unstable; fewer "
+        "steps keep the state within the floats' resolution)"
+    )
+    return first
 
 
 @dataclass(frozen=True)
