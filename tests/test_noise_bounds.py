@@ -989,3 +989,16 @@ def test_a_tiny_iss_decay_does_not_hold_the_decay_scan_down(monkeypatch):
     slack = math.sqrt(1 + 1e-8 * e["condition_P"]) * (1 + 1e-9)
     assert expected <= check.value <= expected * slack
     assert 0 < e["noise_search"]["largest_error"] <= check.value
+
+
+def test_no_noise_through_a_contraction_bounds_the_error_by_exactly_zero():
+    # every term of sum_j |F^j L| eta is 0: the bound was 3e-323 (their rounding, taken up)
+    from ssecert.stability.noise_gain import NoiseGainCode, linear_noise_bound
+
+    F, L = np.array([[0.5, 0.2], [0.0, 0.3]]), np.array([[1.0, 0.5], [0.2, 1.0]])
+    found = linear_noise_bound(F, L, np.zeros(2))
+    assert found.code is NoiseGainCode.CERTIFIED and found.bound_2 == found.bound_inf == 0.0
+    assert not np.any(found.componentwise)
+    # a stable F is still needed: an unstable one is not certified, noise or none
+    unstable = linear_noise_bound(np.array([[1.5]]), np.array([[1.0]]), np.zeros(1))
+    assert unstable.code is not NoiseGainCode.CERTIFIED

@@ -319,7 +319,7 @@ def _print_design(
     for d in comparison["designs"]:
         label = "the spec's design" if d["design"] == "spec" else "synthesised"
         if d.get("observer_gain") not in (None, "holds"):
-            out.write(f"  {label}: its observer gain is {d['observer_gain']} (see the report)\n")
+            out.write(f"  {label}: observer_gain {d['observer_gain']} (see the report)\n")
         params = ", ".join(
             f"{k} {d[k]:g}" for k in ("step", "threshold", "shrink") if isinstance(d.get(k), float)
         )

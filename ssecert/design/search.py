@@ -1120,7 +1120,13 @@ def _guarantee(result: DesignResult) -> str:
         parts.append(f"certified decay {result.decay:.3g} per step")
     if result.radius is not None:
         parts.append(f"certified region of attraction {result.radius:.4g}")
-    return ", ".join(parts) or "certified"
+    text = ", ".join(parts) or "certified"
+    if result.decay is not None:  # (a comment line of its own)
+        text += (
+            "\n# (that decay is the synthesis LMI's certificate's; ssecert certify's circle "
+            "criterion,\n# solved for its margin rather than its decay, may report a smaller one)"
+        )
+    return text
 
 
 def design_report(

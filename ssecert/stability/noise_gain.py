@@ -156,6 +156,12 @@ def linear_noise_bound(
     )
     if found.code is not NoiseGainCode.CERTIFIED:
         return found
+    if not np.any(eta):  # no noise, a contraction: every term is exactly 0 (not its rounding)
+        zeros = np.zeros_like(found.componentwise)
+        return replace(
+            found, componentwise=zeros, reached=zeros, bound_2=0.0, bound_inf=0.0, lower=0.0,
+            tail=0.0,
+        )  # fmt: skip
     if c == 1.0:
         return _in_range(found)
     with np.errstate(over="ignore"):
