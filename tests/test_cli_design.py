@@ -170,3 +170,8 @@ def test_an_unobservable_unstable_plant_gets_the_reason(tmp_path, capsys):
     assert status == 1 and list(tmp_path.iterdir()) == [spec]
     assert "not observable even with every sensor" in printed
     assert "unobservable mode that is not stable (eigenvalue 1.2)" in printed
+    # an earlier run's files in --out are left, and named, not taken for this run's
+    earlier = tmp_path / "unobs-design.toml"
+    earlier.write_text("# earlier\n")
+    assert main(["design", str(spec), "--out", str(tmp_path)]) == 1
+    assert str(earlier) in capsys.readouterr().out and earlier.read_text() == "# earlier\n"

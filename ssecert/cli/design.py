@@ -282,6 +282,12 @@ def cmd_design(args: argparse.Namespace, argv: Sequence[str] | None = None) -> i
             f"{verdict.upper() if verdict == 'fails' else verdict} (exit status "
             f"{report.exit_code})\n"
         )
+    if report is None:
+        earlier = [str(path) for path in paths.values() if path.exists()]
+        if earlier:  # (not this run's: say so, so that they are not read as its result)
+            human.write(
+                f"note: files of an earlier design are left as they were: {', '.join(earlier)}\n"
+            )
     if args.json_path == "-":
         sys.stdout.write(rendered)
     # the written design's certificate decides, as for certify; nothing written: 1
