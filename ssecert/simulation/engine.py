@@ -324,7 +324,9 @@ def _simulate_chunk(
     x_ref = xs if d == 0 else np.concatenate([np.repeat(xs[:1], d, axis=0), xs[:-d]], axis=0)
     error = absolute_error(traj.x_hat, x_ref)
     out = {
-        "state_norm": np.linalg.norm(x_ref, axis=-1),
+        # the largest finite ||x|| and error of the chunk's runs at each step, (steps + 1, 1)
+        "state_norm": _largest_finite(np.sqrt(np.einsum("...i,...i->...", x_ref, x_ref))),
+        "largest_error": _largest_finite(error),
         "absolute_error": error,
         "initial_relative_error": initial_relative_error(error, data.x0),
         "relative_error": relative_error(traj.x_hat, x_ref, data.x0[None]),
@@ -336,6 +338,15 @@ def _simulate_chunk(
         out["support_error"] = support_error(traj.a_hat, truth)
         out["detection_delay"] = detection_delay(traj.a_hat[1:], data.attack)
     return out
+
+
+# per step, the largest of a chunk's runs (``_simulate_chunk``)
+_TOPS = ("state_norm", "largest_error")
+
+
+def _largest_finite(values: np.ndarray) -> np.ndarray:
+    """The largest finite entry of each row (0 where none), shape (rows, 1)."""
+    return np.max(values, axis=-1, keepdims=True, initial=0.0, where=np.isfinite(values))
 
 
 def simulate_scenario(
@@ -410,6 +421,8 @@ def simulate_scenario(
         for r0 in range(0, runs, chunk_runs)
     ]
     parts = map_ordered(_chunk, chunks, client)
+    # (the per-step largest ||x|| and error first, their chunks' arrays freed before the merge)
+    tops = [np.max(np.hstack([p.pop(key) for p in parts]), axis=1) for key in _TOPS]
     merged = {key: np.concatenate([p[key] for p in parts], axis=-1) for key in parts[0]}
     notes = []
     bad = ~np.isfinite(merged["relative_error"])  # (steps + 1, runs)
@@ -425,7 +438,7 @@ def simulate_scenario(
             f"{runs} runs, the first at step {first:,}: their errors are reported as inf from "
             f"then on"
         )
-    unresolved = _unresolved_from(merged.pop("state_norm"), merged["absolute_error"], notes)
+    unresolved = _unresolved_from(tops[0], tops[1], notes)
     return ScenarioResult(
         name=str(scenario.get("name", "scenario")),
         attack=scenario["attack"],
@@ -452,7 +465,8 @@ STATE_ROUNDING = 2.0**-40
 
 def _unresolved_from(state_norm: np.ndarray, error: np.ndarray, notes: list[str]) -> int | None:
     """The first step from which the error metrics are the floats' rounding rather than the
-    observer's, or None: where the simulated state is so large (an unstable plant) that
+    observer's, or None (``state_norm``, ``error``: the largest finite ||x|| and ||x_hat -
+    x|| of the runs at each step, shape (steps + 1,)): where the simulated state is so large (an unstable plant) that
     x_hat - x, a difference of two numbers near it, is known only to about 2^-40 ||x||, and
     that is within a factor 1,000 of both the largest error at that step and the largest
     initial error (an error converging to 0 on a stable plant stays resolved: it is below the
@@ -460,9 +474,7 @@ def _unresolved_from(state_norm: np.ndarray, error: np.ndarray, notes: list[str]
     from ..base.format import readable
 
     with np.errstate(over="ignore", invalid="ignore"):
-        finite = np.where(np.isfinite(state_norm), state_norm, 0.0)
-        rounding = np.max(finite, axis=1) * STATE_ROUNDING  # (steps + 1,)
-        largest = np.max(np.where(np.isfinite(error), error, 0.0), axis=1)
+        rounding, largest = state_norm * STATE_ROUNDING, error
         lost = (rounding > 0) & (rounding >= 1e-3 * largest) & (rounding >= 1e-3 * largest[0])
     if not lost.any():
         return None
