@@ -55,6 +55,12 @@ def solver_name() -> str:
     return _SOLVER.get()
 
 
+def solver_label() -> str:
+    """The solver the LMIs go to, as a method's words name it ("Clarabel", "SCS", ...)."""
+    name = solver_name()
+    return "Clarabel" if name == "CLARABEL" else name
+
+
 def check_solver(name: str) -> str:
     """``name`` upper-cased, when cvxpy has it installed and it handles semidefinite cones.
 

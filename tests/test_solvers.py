@@ -10,6 +10,7 @@ from ssecert.examples import load_example
 from ssecert.observers import build_observer
 from ssecert.observers.lure import LureModel
 from ssecert.solvers import check_solver, solve_conic, solver_name, using_solver
+from ssecert.stability.checks import observer_checks
 from ssecert.stability.lmi import circle_certificate
 
 
@@ -148,3 +149,17 @@ def test_the_piecewise_region_lmis_are_solved_by_the_chosen_solver_and_verified(
         assert found.record["solver"] == name
         assert found.ok and found.record["verified"], found.record  # re-verified in numpy
         assert found.margin > 100 * found.bound
+
+
+@needs_scs
+def test_the_method_names_the_solver_the_lmis_went_to():
+    from ssecert.solvers import solver_label
+
+    assert solver_label() == "Clarabel"
+    spec = load_example("ugv")
+    observer = {"kind": "elastic_net", "gain": "pinv", "step": 0.3, "threshold": 0.1,
+                "shrink": 0.5}  # fmt: skip
+    with using_solver("SCS"):
+        assert solver_label() == "SCS"
+        checks = {c.id: c for c in observer_checks(spec.system, observer)}
+    assert checks["observer_stability"].method.endswith("(LMI, SCS)")

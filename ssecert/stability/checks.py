@@ -21,6 +21,7 @@ from ..noise import MeasurementNoise
 from ..observers import ObserverDesign, build_observer
 from ..observers.lure import LureModel
 from ..results import Check, Step, Verdict, Withdrawn, decide, withdraw
+from ..solvers import solver_label
 from ..system import System
 from ..tolerances import Tolerances
 from . import noise_messages, observer_messages, region_messages
@@ -90,7 +91,7 @@ def observer_stability_check(
     refusal = _lure_model_refusal(design, budget)
     if refusal is not None:
         summary = f"No stability certificate: not attempted: {refusal}."
-        method = "circle criterion (LMI, Clarabel)"
+        method = f"circle criterion (LMI, {solver_label()})"
         return _no_certificate(title, summary, method, LMICause.REFUSED), None
     model = design.observer_kind.lure_model(design)
     if not model.finite():
@@ -99,7 +100,7 @@ def observer_stability_check(
             "entry of A - L C, the gain or the sector's vertex loop beyond 1.8e308), so nothing "
             "can be computed or replayed in floating point."
         )
-        method = "circle criterion (LMI, Clarabel)"
+        method = f"circle criterion (LMI, {solver_label()})"
         return _no_certificate(title, summary, method, LMICause.NOT_FINITE), None
     with stage("circle criterion LMIs"):
         cert = circle_certificate(model, budget=budget, clear=tol.certificate_clear)
@@ -359,7 +360,7 @@ def _circle_stability_check(
         summary=summary,
         value=cert.decay,
         margin=cert.margin,
-        method="circle criterion (LMI, Clarabel)",
+        method=f"circle criterion (LMI, {solver_label()})",
         fields=fields,
         evidence=_circle_evidence(model, cert),
         witness=cert.details.get("witness") if verdict is Verdict.FAILS else None,
@@ -394,7 +395,7 @@ def _zames_falb_stability_check(
         summary=summary,
         value=None,
         margin=cert.margin,
-        method=f"Zames-Falb multiplier of order {order} (LMI, Clarabel)",
+        method=f"Zames-Falb multiplier of order {order} (LMI, {solver_label()})",
         fields={
             "decay_rate": None,
             "structure": "zames-falb",
@@ -520,10 +521,18 @@ def _iss_gain(
                 cert = direct
     decay = float(cert.decay or 0.0)
     decrease = f"-{decay:.3g} V(xi) " if decay > 0 else ""
+    stacked = "stacked " if design.window > 1 else ""
     holds = (
         f"V(xi+) - V(xi) <= {decrease}- |e|^2 + gamma^2 |a|^2 holds with "
         f"gamma = {known(cert.gamma):.4g}: the estimation error is input-to-state stable with "
-        f"respect to the attack, with l2 gain at most {known(cert.gamma):.4g}."
+        f"respect to the {stacked}attack, with l2 gain at most {known(cert.gamma):.4g}"
+        + (
+            f" (a the attack stacked over the window of {design.window} samples: each sample "
+            f"enters up to {design.window} times, so the gain from the attack itself is at most "
+            f"sqrt({design.window}) times that)."
+            if stacked
+            else "."
+        )
         if cert.verdict == Verdict.HOLDS
         else ""
     )

@@ -53,6 +53,7 @@ from ..budget import Budget, Refusal
 from ..numerics.exact import UNITS_SPREAD
 from ..observers.lure import LureModel, scaling_text
 from ..results import Verdict
+from ..solvers import solver_label
 from . import lmi_messages
 from .lmi_messages import corner_reason, verify_text
 from .lmi_solver import ETA, _solve, lmi_cost  # noqa: F401  (ETA stays importable here)
@@ -190,7 +191,9 @@ def _solve_refusal(model: LureModel, kind: str, structure: str, budget: Budget) 
     nbytes, flops = lmi_cost(model, kind, structure)
     size = model.N + model.m + (model.r if kind == "iss" else 0)
     return budget.check(
-        f"the {structure} LMI with {size} rows (cvxpy and Clarabel)", nbytes=nbytes, flops=flops
+        f"the {structure} LMI with {size} rows (cvxpy and {solver_label()})",
+        nbytes=nbytes,
+        flops=flops,
     )
 
 
@@ -360,13 +363,20 @@ def to_original_coordinates(
             f", with the channels, the nonlinearity's output and the attack in units 2^{-j} "
             f"(sensor_exponent: multipliers and gamma^2 times 4^{j} there)"
         )
+    eta = ", eta" if "eta" in cert.details else ""  # (a Zames-Falb certificate's)
     details = {
         **cert.details,
         "state_scaling": np.asarray(s, dtype=float),
-        "margin_coordinates": f"margin and error_bound are those of the LMI recomputed in "
-        f"{where}, where it was verified; P is written for the spec's coordinates, where the "
+        "margin_coordinates": f"margin and error_bound{eta} are those of the LMI recomputed "
+        f"in {where}, where it was verified; P is written for the spec's coordinates, where the "
         "same inequality holds by congruence, with its margin relative to ||P|| changed by the "
-        "scaling",
+        "scaling"
+        + (
+            " (and eta divided by max(state_scaling)^2: V(zeta+) - V(zeta) + sigma <= -eta "
+            "|xi_b|^2 <= -eta / max(state_scaling)^2 |xi|^2)"
+            if eta
+            else ""
+        ),
     }
     gamma = cert.gamma
     if per is not None:

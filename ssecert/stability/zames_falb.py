@@ -59,7 +59,7 @@ import numpy as np
 from ..budget import Budget, Refusal, Resource
 from ..observers.lure import LureModel
 from ..results import Verdict
-from ..solvers import solver_name
+from ..solvers import solver_label, solver_name
 from ..tolerances import EPS
 from .lmi import (
     LMICertificate,
@@ -271,7 +271,7 @@ def _refusal(model: LureModel, nu: int, attack: bool, budget: Budget) -> Refusal
     if size > ZF_LIMIT:
         return Refusal(f"the order-{nu} LMI", Resource.ROWS, size, ZF_LIMIT)
     return budget.check(
-        f"the order-{nu} Zames-Falb LMI with {size} rows (cvxpy and Clarabel)",
+        f"the order-{nu} Zames-Falb LMI with {size} rows (cvxpy and {solver_label()})",
         nbytes=nbytes,
         flops=flops,
     )
