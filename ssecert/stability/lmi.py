@@ -340,12 +340,13 @@ def to_original_coordinates(
     inv[:N] = 1.0 / np.asarray(s, dtype=float)
     j = int(sensors)
     per = None if channels is None else np.asarray(channels, dtype=np.int64)
+    units = SensorUnits(np.asarray(s, dtype=float), j, per)
     with np.errstate(over="ignore", invalid="ignore"):  # beyond the floats: no certificate
         P = cert.P * inv[:, None] * inv[None, :]
         t = (
             None
             if cert.multipliers is None
-            else np.ldexp(cert.multipliers, 2 * (j if per is None else per))
+            else np.ldexp(cert.multipliers, units.multiplier_exponents)
         )
     if not np.all(np.isfinite(P)) or not np.array_equal(P / inv[:, None] / inv[None, :], cert.P):
         return None
@@ -406,6 +407,11 @@ class SensorUnits:
     s: np.ndarray
     exponent: int
     channels: np.ndarray | None = None
+
+    @property
+    def multiplier_exponents(self) -> int | np.ndarray:
+        """The sector multipliers are 2^this times those solved in these units."""
+        return 2 * (self.exponent if self.channels is None else self.channels)
 
     def apply(self, model: LureModel) -> LureModel:
         return model.scaled(self.s, sensors=self.exponent, channels=self.channels)
@@ -488,7 +494,7 @@ def where_verified(
     s = np.asarray(s, dtype=float)
     j = int(cert.details.get("sensor_exponent", 0))
     listed = cert.details.get("channel_exponents")
-    per = None if listed is None else np.asarray(listed, dtype=np.int64)
+    units = SensorUnits(s, j, None if listed is None else np.asarray(listed, dtype=np.int64))
     scale = np.ones(cert.P.shape[0])
     scale[: model.N] = s
     with np.errstate(over="ignore"):
@@ -496,7 +502,7 @@ def where_verified(
         t_b = (
             None
             if cert.multipliers is None
-            else np.ldexp(cert.multipliers, -2 * (j if per is None else per))
+            else np.ldexp(cert.multipliers, -units.multiplier_exponents)
         )
     if not np.all(np.isfinite(P_b)):
         return LMICertificate(
@@ -516,7 +522,6 @@ def where_verified(
             if k not in ("state_scaling", "sensor_exponent", "channel_exponents")
         },
     )
-    units = SensorUnits(s, j, per)
     found = compute(units.apply(model), inside)
     if found.verdict is not Verdict.HOLDS:
         return found
