@@ -89,3 +89,41 @@ def test_default_attacks_without_a_constant_scenario_are_unit_attacks_on_s_senso
 def test_a_stacked_attack_of_the_wrong_length_is_skipped():
     model = LureModel.linear(np.array([[0.5]]), np.array([[1.0, 1.0]]))
     assert constant_attack_outcomes(model, [("x", np.ones(3))], certified=True) == []
+
+
+_BIG_SENSOR = {
+    "name": "big-sensor",
+    "system": {
+        "A": [[-0.4, -0.9], [1.1, -0.4]],
+        "C": [[9e8, -2e8], [0.7, 0.5], [0.8, 0.7]],
+    },
+    "attack": {"max_attacked": 1},
+    "observer": {
+        "kind": "elastic_net",
+        "gain": [
+            [6.133836580638581e-10, -0.4952565541160872, -0.7567071304702643],
+            [1.3779455268795268e-09, 0.01581148627970962, -0.18902376823421455],
+        ],
+        "step": 1.0,
+        "threshold": 0.1,
+        "shrink": 0.8,
+    },
+}
+
+
+def test_an_attack_estimate_large_in_its_sensors_units_is_not_growth():
+    # sensor 0 reads in units 1e9 times smaller: the estimate of its attack settles near
+    # 6.5e7 (an error of 0.07 there), after a transient of 3.6e8, more than 1e8 times a unit
+    # attack on sensor 1; the error itself settles at 0.134
+    spec = spec_from_dict(_BIG_SENSOR)
+    model = LureModel.from_design(build_observer(spec.system, spec.observer))
+    records = constant_attack_outcomes(model, default_attacks(3, 1), certified=False)
+    assert [r["outcome"] for r in records] == ["converges to a bias"] * 3
+    assert records[1]["bias_norm"] == pytest.approx(0.1338, abs=1e-4)
+    assert abs(records[1]["attack_estimate"][0]) > 1e7  # large in sensor 0's units
+    # the same plant with twice the gain (rho(F) = 1.07): still unbounded
+    gain = (2 * np.array(_BIG_SENSOR["observer"]["gain"])).tolist()
+    spec = spec_from_dict({**_BIG_SENSOR, "observer": {**_BIG_SENSOR["observer"], "gain": gain}})
+    model = LureModel.from_design(build_observer(spec.system, spec.observer))
+    records = constant_attack_outcomes(model, default_attacks(3, 1), certified=False)
+    assert [r["outcome"] for r in records] == ["unbounded"] * 3

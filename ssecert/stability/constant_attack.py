@@ -30,6 +30,7 @@ import numpy as np
 from ..budget import Budget
 from ..observers.lure import LureModel
 from .equilibria import attacked_equilibria
+from .lmi import sensor_units
 from .search_messages import searched_text
 
 __all__ = ["constant_attack_outcomes", "default_attacks"]
@@ -81,7 +82,8 @@ def constant_attack_outcomes(
     flops = 2.0 * STEPS * len(kept) * (N * N + 2 * N * m + N * model.r)
     if (budget or Budget()).check("constant attacks", flops=flops) is not None:
         return []
-    runs = _simulate(model, np.array([a for _, a in kept]))
+    weight = _units(model)
+    runs = _simulate(model, np.array([a for _, a in kept]), weight)
     records = []
     for (name, a), sim in zip(kept, runs):
         equilibria, searched, undecided = attacked_equilibria(model, a)
@@ -114,7 +116,11 @@ def constant_attack_outcomes(
                 f"gave {len(equilibria)} equilibria",
             )
         else:
-            near = [eq for eq in equilibria if _distance(sim["final"], eq) <= 1e-6 * sim["scale"]]
+            near = [
+                eq
+                for eq in equilibria
+                if _distance(sim["final"], eq, weight) <= 1e-6 * sim["scale"]
+            ]
             if near and sim["settled"]:
                 _settle(record, near[0], proved=False)
                 record["how"] = (
@@ -146,14 +152,15 @@ def _settle(record: dict[str, Any], eq: dict[str, Any], *, proved: bool) -> None
     )
 
 
-def _distance(final: np.ndarray, eq: dict[str, Any]) -> float:
+def _distance(final: np.ndarray, eq: dict[str, Any], weight: np.ndarray) -> float:
     point = np.concatenate([eq["initial_error"], eq["attack_estimate"]])
-    return float(np.linalg.norm(np.asarray(final) - point))
+    return float(np.linalg.norm((np.asarray(final) - point) * weight))
 
 
-def _simulate(model: LureModel, attacks: np.ndarray) -> list[dict[str, Any]]:
+def _simulate(model: LureModel, attacks: np.ndarray, weight: np.ndarray) -> list[dict[str, Any]]:
     """From zero error and zero attack estimate under each constant attack (rows of
-    ``attacks``, simulated together), until each settles or grows past its limit."""
+    ``attacks``, simulated together), until each settles or grows past its limit, its size
+    measured as the norm of ``weight`` * xi (``_units``)."""
     count = attacks.shape[0]
     xi = np.zeros((count, model.N))
     shift = attacks @ model.Dw.T if model.m else np.zeros((count, 0))
@@ -165,15 +172,15 @@ def _simulate(model: LureModel, attacks: np.ndarray) -> list[dict[str, Any]]:
     with np.errstate(all="ignore"):  # an overflow is the growth this looks for
         first = push + (model.phi(shift) @ model.B.T if model.m else 0.0)
         scale = np.maximum(np.abs(attacks).max(axis=1, initial=0.0), 1.0)
-        scale = np.maximum(scale, np.nan_to_num(np.linalg.norm(first, axis=1), posinf=0.0))
+        scale = np.maximum(scale, np.nan_to_num(np.linalg.norm(first * weight, axis=1), posinf=0.0))
         for k in range(1, STEPS + 1):
             x = xi[live]
             nxt = x @ model.A.T + push[live]
             if model.m:
                 nxt = nxt + model.phi(x @ model.Cw.T + shift[live]) @ model.B.T
-            size = np.linalg.norm(nxt, axis=1)
+            size = np.linalg.norm(nxt * weight, axis=1)
             grew = ~np.all(np.isfinite(nxt), axis=1) | (size > UNBOUNDED * scale[live])
-            change = np.linalg.norm(nxt - x, axis=1)
+            change = np.linalg.norm((nxt - x) * weight, axis=1)
             settled = ~grew & (change <= SETTLED * np.maximum(size, scale[live]))
             for j in np.flatnonzero(grew | settled):
                 row = int(live[j])
@@ -192,3 +199,12 @@ def _simulate(model: LureModel, attacks: np.ndarray) -> list[dict[str, Any]]:
         out[rest] = {"steps": STEPS, "unbounded": False, "settled": False, "final": xi[rest],
                      "scale": float(scale[rest])}  # fmt: skip
     return [r for r in out if r is not None]
+
+
+def _units(model: LureModel) -> np.ndarray:
+    """The weights the growth is measured with: each attack estimate in the units of its
+    channel's sensor (``lmi.sensor_units``: a sensor read in units 1e9 times smaller has an
+    attack estimate 1e9 times larger for the same error, which is not growth), the error in
+    its own; ones where the sensors' units are near 1."""
+    units = sensor_units(model)
+    return np.ones(model.N) if units is None else 1.0 / units.s
