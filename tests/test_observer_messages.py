@@ -47,6 +47,8 @@ def test_certificates_found_in_balanced_coordinates_say_so():
     lmi = observer_messages.balanced_lmi_note(scaling)
     assert lmi.startswith(" The LMI was solved and verified in balanced coordinates xi = diag(")
     assert observer_messages.balanced_lmi_note(None) == ""
+    sensors = observer_messages.balanced_lmi_note(scaling, -29)
+    assert "sensors' units" in sensors and "states' units" not in sensors
 
 
 def test_a_deadbeat_gain_s_words_give_its_exact_index():

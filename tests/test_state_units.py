@@ -194,6 +194,45 @@ def test_a_zames_falb_gain_survives_a_change_of_state_units():
     assert np.sum(e**2) <= gain.value**2 * np.sum(a**2)
 
 
+def _sensor_rescaled(plant, observer, k):
+    """The same observer with sensor 0 read in units 2^-k: its row of C times 2^k, the gain's
+    column divided by it."""
+    spec = _spec(plant, observer)
+    L = np.asarray(build_observer(spec.system, spec.observer).L)
+    d = np.ones(len(plant["C"]))
+    d[0] = 2.0**k
+    C = np.asarray(plant["C"], dtype=float) * d[:, None]
+    return {"A": plant["A"], "C": C.tolist()}, {**observer, "gain": (L / d).tolist()}
+
+
+def test_a_zames_falb_certificate_and_gain_survive_a_sensor_in_far_units():
+    # only a multiplier of order 2 certifies this design; with sensor 0 in units 2^-30 its
+    # LMIs are solved with each channel (and its past inputs and outputs) in units of its own
+    # and written back exactly: the certificate the JSON prints holds in the user's units
+    plant, observer = _sensor_rescaled(ZF_PLANT, ZF_OBSERVER, 30)
+    document = json.loads(json.dumps(analyze(_spec(plant, observer)).to_dict()))
+    check = document["checks"]["observer_stability"]
+    assert check["verdict"] == "holds" and check["method"].startswith("Zames-Falb")
+    ev = check["evidence"]
+    assert ev["channel_exponents"][0] <= -29 and ev["channel_exponents"][1:] == [1, 1]
+    m0, a, b = ev["multipliers_m0"], ev["u_delays"], ev["v_delays"]
+    for i in range(len(m0)):  # m0_i >= sum_j |a_ji| + |b_ji|, in fractions
+        delays = sum(abs(Fraction(r[i])) for r in a) + sum(abs(Fraction(r[i])) for r in b)
+        assert Fraction(m0[i]) >= delays
+    assert _positive_definite(_q(ev["P"]))
+    M = _zames_falb_lmi(ev["model"], ev["P"], m0, a, b)
+    assert _positive_definite([[-x for x in r] for r in M])
+    # the gain, and the constant attacks' convergence it proves
+    gain = document["checks"]["iss_gain"]
+    assert gain["verdict"] == "holds"
+    model = _model(plant, observer)
+    attack = np.random.default_rng(4).standard_normal((400, model.r))
+    e = model.simulate(np.zeros(model.N), 400, attack=attack)[:, : model.n_e]
+    assert np.sum(e**2) <= gain["value"] ** 2 * np.sum(attack**2)
+    records = gain["evidence"]["constant_attacks"]
+    assert [(r["outcome"], r["proved"]) for r in records] == [("converges to a bias", True)] * 3
+
+
 @pytest.mark.slow
 def test_the_thesis_design_keeps_its_region_of_attraction_in_other_units():
     # the UGV's D-SSO (shrink 1): undecided, with a certified region of radius 10 in its own

@@ -412,7 +412,9 @@ def _zames_falb_stability_check(
 def _balanced_note(cert: LMICertificate) -> str:
     """A sentence when the certificate was solved and verified in balanced state coordinates
     (``observer_messages.balanced_lmi_note``)."""
-    return observer_messages.balanced_lmi_note(cert.details.get("state_scaling"))
+    return observer_messages.balanced_lmi_note(
+        cert.details.get("state_scaling"), cert.details.get("sensor_exponent")
+    )
 
 
 def _circle_evidence(model: LureModel, cert: LMICertificate) -> dict[str, Any]:

@@ -336,11 +336,13 @@ def to_original_coordinates(
     """
     if cert.P is None:
         return None
-    inv = np.ones(cert.P.shape[0])
-    inv[:N] = 1.0 / np.asarray(s, dtype=float)
     j = int(sensors)
     per = None if channels is None else np.asarray(channels, dtype=np.int64)
     units = SensorUnits(np.asarray(s, dtype=float), j, per)
+    m = 0 if cert.multipliers is None else int(np.size(cert.multipliers))
+    if cert.P.shape[0] > N and m == 0:
+        return None  # a lifted P without its channels
+    inv = units.coordinates(cert.P.shape[0], m)
     with np.errstate(over="ignore", invalid="ignore"):  # beyond the floats: no certificate
         P = cert.P * inv[:, None] * inv[None, :]
         t = (
@@ -367,6 +369,7 @@ def to_original_coordinates(
     eta = ", eta" if "eta" in cert.details else ""  # (a Zames-Falb certificate's)
     details = {
         **cert.details,
+        **units.delays(cert, back=True),
         "state_scaling": np.asarray(s, dtype=float),
         "margin_coordinates": f"margin and error_bound{eta} are those of the LMI recomputed "
         f"in {where}, where it was verified; P is written for the spec's coordinates, where the "
@@ -412,6 +415,36 @@ class SensorUnits:
     def multiplier_exponents(self) -> int | np.ndarray:
         """The sector multipliers are 2^this times those solved in these units."""
         return 2 * (self.exponent if self.channels is None else self.channels)
+
+    def channel_exponents(self, m: int) -> np.ndarray:
+        """Each of the m channels is in units 2^-this (the nonlinearity's output alike)."""
+        if self.channels is not None:
+            return np.asarray(self.channels, dtype=np.int64)
+        return np.full(m, self.exponent, dtype=np.int64)
+
+    def coordinates(self, size: int, m: int) -> np.ndarray:
+        """T with zeta_b = diag(T) zeta for a Lyapunov function over ``size`` coordinates: the
+        states divided by s and, beyond them, a Zames-Falb certificate's past nonlinearity
+        outputs and inputs (m per delay, ``zames_falb``), each times its channel's 2^j."""
+        N = self.s.size
+        T = np.empty(size)
+        T[:N] = 1.0 / self.s
+        if size > N:
+            T[N:] = np.tile(np.ldexp(1.0, self.channel_exponents(m)), (size - N) // max(m, 1))
+        return T
+
+    def delays(self, cert: LMICertificate, back: bool) -> dict[str, Any]:
+        """A Zames-Falb certificate's delayed coefficients (``u_delays``, ``v_delays``, one
+        column per channel) in the user's units (``back``) or in these: like the multipliers,
+        4^j times those of the scaled model; {} for a certificate without them."""
+        out: dict[str, Any] = {}
+        for key in ("u_delays", "v_delays"):
+            value = cert.details.get(key)
+            if value is not None:
+                value = np.asarray(value, dtype=float)
+                k = 2 * self.channel_exponents(value.shape[-1])
+                out[key] = np.ldexp(value, k if back else -k)
+        return out
 
     def apply(self, model: LureModel) -> LureModel:
         return model.scaled(self.s, sensors=self.exponent, channels=self.channels)
@@ -495,8 +528,7 @@ def where_verified(
     j = int(cert.details.get("sensor_exponent", 0))
     listed = cert.details.get("channel_exponents")
     units = SensorUnits(s, j, None if listed is None else np.asarray(listed, dtype=np.int64))
-    scale = np.ones(cert.P.shape[0])
-    scale[: model.N] = s
+    scale = 1.0 / units.coordinates(cert.P.shape[0], model.m)
     with np.errstate(over="ignore"):
         P_b = cert.P * scale[:, None] * scale[None, :]
         t_b = (
@@ -517,9 +549,12 @@ def where_verified(
         multipliers=t_b,
         gamma=None if cert.gamma is None else math.ldexp(cert.gamma, -j),
         details={
-            k: v
-            for k, v in cert.details.items()
-            if k not in ("state_scaling", "sensor_exponent", "channel_exponents")
+            **{
+                k: v
+                for k, v in cert.details.items()
+                if k not in ("state_scaling", "sensor_exponent", "channel_exponents")
+            },
+            **units.delays(cert, back=False),
         },
     )
     found = compute(units.apply(model), inside)

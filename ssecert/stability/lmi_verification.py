@@ -63,12 +63,14 @@ def _error_bound(
     model: LureModel, P: np.ndarray, t: np.ndarray, size: int, output: bool = True
 ) -> float:
     """Rounding error bound on the eigenvalues of the recomputed LMI, relative to ||P||;
-    ``output`` when the LMI has the |e|^2 term (the dissipation LMI, not the circle one)."""
+    ``output`` when the LMI has the |e|^2 term and the attack (the dissipation LMI, not the
+    circle one: its matrix has no E or Dw, which may be in units of their own)."""
     normP = max(float(np.linalg.norm(P, 2)), np.finfo(float).tiny)
-    G = np.hstack([model.A, model.B, model.E])
+    G = np.hstack([model.A, model.B, model.E] if output else [model.A, model.B])
     normG = float(np.linalg.norm(G, 2))
     tmax = float(np.abs(t).max(initial=0.0))
-    normC = float(np.linalg.norm(np.hstack([model.Cw, model.Dw]), 2)) if model.m else 0.0
+    Cw = np.hstack([model.Cw, model.Dw]) if output else model.Cw
+    normC = float(np.linalg.norm(Cw, 2)) if model.m else 0.0
     normCe = float(np.linalg.norm(model.Ce, 2)) if output else 0.0
     raw = (normG**2 + 2.0) * normP + (2 * model.q * normC + 2) * tmax + normCe**2
     # the model's floats are within d of the exact matrices of the spec's data: G'PG moves by

@@ -81,15 +81,18 @@ def balanced_lyapunov_note(proof: Mapping[str, Any] | None) -> str:
     )
 
 
-def balanced_lmi_note(scaling: Any) -> str:
+def balanced_lmi_note(scaling: Any, sensors: Any = None) -> str:
     """A sentence when an LMI certificate was solved and verified in balanced coordinates
-    (``scaling``: its ``state_scaling``, None for none; '' then)."""
+    (``scaling``: its ``state_scaling``, None for none; '' then), with ``sensors`` its
+    ``sensor_exponent`` where the sensors were put in units of their own there."""
     if scaling is None:
         return ""
+    why = "the states' units differ widely"
+    if sensors is not None:
+        why = "the sensors' units are far from 1 or from each other (sensor_exponent, channel_exponents)"
     return (
         f" The LMI was solved and verified in balanced coordinates xi = {scaling_text(scaling)} "
-        "xi_b (an exact change of variables: the states' units differ widely); P is given for "
-        "the spec's coordinates."
+        f"xi_b (an exact change of variables: {why}); P is given for the spec's coordinates."
     )
 
 

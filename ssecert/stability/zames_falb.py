@@ -66,6 +66,7 @@ from .lmi import (
     balanced_retry,
     channel_vertex_instability,
     in_input_units,
+    in_sensor_units,
     input_units,
     input_units_note,
     output_scaled,
@@ -188,7 +189,9 @@ def verify_zames_falb(
     margin = -float(np.linalg.eigvalsh(M)[-1]) / normP
     lift_norm = float(np.linalg.norm(_lifted(model, nu, g is not None)["G"], 2))
     coef = float(np.abs(_coefficients(m0, a, b)).sum())
-    side = float(np.linalg.norm(np.hstack([model.Cw, model.Dw]), 2)) * model.q + 1.0
+    # (the attack's Dw is in the LMI only in its gain form)
+    Cw = np.hstack([model.Cw, model.Dw]) if g is not None else model.Cw
+    side = float(np.linalg.norm(Cw, 2)) * model.q + 1.0
     # the |e|^2 - g |a|^2 terms are in the LMI only in its gain form
     extra = float(np.linalg.norm(model.Ce, 2)) ** 2 + abs(g) if g is not None else 0.0
     raw = (lift_norm**2 + 2.0) * normP + 2.0 * coef * side**2 + extra
@@ -316,6 +319,18 @@ def zames_falb_certificate(
             cause=LMICause.CORNER_UNSTABLE,
             facts={"corner": corner},
         )
+    again = partial(
+        zames_falb_certificate,
+        orders=orders,
+        clear=clear,
+        budget=budget,
+        solver_options=solver_options,
+        balance=False,
+    )
+    if balance:  # first in the sensors' units where they are far from 1 or from each other
+        first = in_sensor_units(model, again)
+        if first is not None:
+            return first
     # nonnegative coefficients first (the certificate then also proves convergence to the
     # equilibrium of every constant attack), then signed ones (the soft threshold is odd)
     for signed, nu in [(False, nu) for nu in orders] + [(True, nu) for nu in orders]:
@@ -334,19 +349,7 @@ def zames_falb_certificate(
         if ok:
             return _certificate(model, sol, margin, bound, attempts)
         info["verification_problem"] = verify_text(problem)
-    retry, note = balanced_retry(
-        model,
-        partial(
-            zames_falb_certificate,
-            orders=orders,
-            clear=clear,
-            budget=budget,
-            solver_options=solver_options,
-            balance=False,
-        ),
-        enabled=balance,
-        attempts=attempts,
-    )
+    retry, note = balanced_retry(model, again, enabled=balance, attempts=attempts)
     if retry is not None:
         return retry
     return LMICertificate(
