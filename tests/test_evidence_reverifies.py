@@ -21,6 +21,7 @@ from planted import exact_rank as _rank
 
 from ssecert import System, analyze, spec_from_dict
 from ssecert.design.gains import deadbeat_gain, verify_deadbeat
+from ssecert.examples import load_example
 
 
 def _q(M):
@@ -378,3 +379,129 @@ def test_the_l1_bound_reverifies_from_json_in_exact_arithmetic():
         tightest = max(tightest, 4 * noise**2 * reach2 / (1 - theta_S) ** 2)
     # the printed bound is the largest of them, up to its certified error terms
     assert bound**2 <= tightest * (1 + Fraction(1, 10**9))
+
+
+def _pwq_region_reverifies(model, cert):
+    """The piecewise-quadratic region certificate (``ssecert.stability.piecewise``) checked
+    again in fractions from the JSON alone: in z = (xi / threshold, 1), every region's
+    function, every LMI with its multiplier, and every Farkas certificate of a transition or
+    an initial region left out; returns the number of LMIs checked."""
+    A, B, Cw = _q(model["A"]), _q(model["B"]), _q(model["Cw"])
+    q, N, m, n = Fraction(float(model["q"])), len(A), len(B[0]), int(model["n_e"])
+    zero, one = Fraction(0), Fraction(1)
+    patterns = cert["patterns"]
+    P = [_q(F) for F in cert["functions"]]
+    alpha, r, R = (Fraction(float(cert[k])) for k in ("alpha", "radius", "ball"))
+    level = R * R
+
+    def G(k):
+        rows = []
+        for i, si in enumerate(patterns[k]):
+            if si == 0:
+                rows += [[-c for c in Cw[i]] + [one], [*Cw[i], one]]
+            else:
+                rows.append([si * c for c in Cw[i]] + [-one])
+        return rows
+
+    def T(k):
+        s = patterns[k]
+        rows = [
+            [A[a][b] + q * sum((B[a][i] * Cw[i][b] for i in range(m) if s[i]), zero)
+             for b in range(N)] + [-q * sum((B[a][i] * s[i] for i in range(m)), zero)]
+            for a in range(N)
+        ]  # fmt: skip
+        return rows + [[zero] * N + [one]]
+
+    def tr(X):
+        return [list(r) for r in zip(*X)]
+
+    def diag(values):
+        return [[v if i == j else zero for j in range(len(values))] for i, v in enumerate(values)]
+
+    def comb(*terms):
+        out = [[zero] * len(terms[0][1][0]) for _ in terms[0][1]]
+        for c, X in terms:
+            out = [[o + c * x for o, x in zip(ro, rx)] for ro, rx in zip(out, X)]
+        return out
+
+    last = [[zero] * N + [one]]
+    Z = [[one if (i == j < n) or (i == N and j == n) else zero for j in range(n + 1)]
+         for i in range(N + 1)]  # fmt: skip
+    Iq, E1 = diag([one] * N + [zero]), diag([zero] * N + [one])
+    In, e1 = diag([one] * n + [zero]), diag([zero] * n + [one])
+    # the mirrored regions' functions are the representatives' conjugated by J = diag(-I, 1)
+    J = diag([-one] * N + [one])
+    for k, s in enumerate(patterns):
+        mirror = patterns.index([-v for v in s])
+        assert P[k] == _mul(_mul(J, P[mirror]), J)
+    # the dead zone's decrease: A' P0 A - P0 + alpha I < 0
+    dead = patterns.index([0] * m)
+    P0 = [row[:N] for row in P[dead][:N]]
+    assert all(v == 0 for v in P[dead][N]) and all(row[N] == 0 for row in P[dead])
+    D = comb((one, _mul(_mul(tr(A), P0), A)), (-one, P0), (alpha, diag([one] * N)))
+    assert _positive_definite([[-x for x in row] for row in D])
+    seen = set()
+    for item in cert["lmis"]:
+        k, j, kind = item["region"], item["to"], item["kind"]
+        w, s = [Fraction(float(x)) for x in item["multiplier_last_row"]], Fraction(item["scalar"])
+        assert min(w) >= 0 and s >= 0
+        if kind == "outer":
+            H = G(k) + last
+        elif kind == "inner":
+            H = _mul(G(k) + last, Z)
+        else:
+            H = G(k) + _mul(G(j), T(k)) + last
+        W = [[w[b] if a == len(w) - 1 else (w[a] if b == len(w) - 1 else zero)
+              for b in range(len(w))] for a in range(len(w))]  # fmt: skip
+        HWH = _mul(_mul(tr(H), W), H)
+        if kind == "outer":  # P_k - c E1 - s (Iq - c E1) - H'WH > 0
+            M = comb((one, P[k]), (-level, E1), (-s, comb((one, Iq), (-level, E1))), (-one, HWH))
+        elif kind == "inner":  # c e1 - Z' P_k Z - s (r^2 e1 - In) - H'WH > 0
+            M = comb((level, e1), (-one, _mul(_mul(tr(Z), P[k]), Z)),
+                     (-s, comb((r * r, e1), (-one, In))), (-one, HWH))  # fmt: skip
+        else:  # T' P_j T - P_k + alpha Iq + H'WH + s (c E1 - Iq) < 0
+            Tk = T(k)
+            M = comb((-one, _mul(_mul(tr(Tk), P[j]), Tk)), (one, P[k]), (-alpha, Iq),
+                     (-one, HWH), (-s, comb((level, E1), (-one, Iq))))  # fmt: skip
+        assert _positive_definite(M), (kind, k, j)
+        seen.add((kind, k, j))
+    for item in cert["empty_transitions"] + cert["empty_initial"]:
+        k = item["region"]
+        y = [Fraction(float(x)) for x in item["farkas"]]
+        if "to" in item:
+            H, key = G(k) + _mul(G(item["to"]), T(k)), ("decrease", k, item["to"])
+        else:
+            H, key = _mul(G(k) + last, Z)[:-1], ("inner", k, k)
+        assert min(y) >= 0
+        combo = _mul([y], H)[0]
+        assert combo[-1] + Fraction(float(item["box"])) * sum(abs(v) for v in combo[:-1]) < 0
+        assert Fraction(float(item["box"])) >= (R if "to" in item else r)
+        seen.add(key)
+    # every representative region: its outer and inner LMIs, and every transition from it
+    for k, s in enumerate(patterns):
+        if patterns.index([-v for v in s]) < k:
+            continue
+        assert ("outer", k, k) in seen and ("inner", k, k) in seen
+        for j in range(len(patterns)):
+            assert k == j == dead or ("decrease", k, j) in seen, (k, j)
+    return len(cert["lmis"])
+
+
+@pytest.mark.slow
+def test_the_piecewise_region_of_attraction_reverifies_from_json_in_exact_arithmetic():
+    # the UGV's D-SSO (shrink 1, an eigenvalue at 1): no quadratic function certifies it;
+    # the piecewise-quadratic one proves convergence from every initial error of norm <= 10
+    document = json.loads(json.dumps(analyze(load_example("ugv")).to_dict()))
+    region = document["checks"]["region_of_attraction"]
+    assert region["verdict"] == "holds" and region["value"] == pytest.approx(10.0)
+    model = document["checks"]["observer_stability"]["evidence"]["model"]
+    cert = region["evidence"]["certificate"]
+    assert Fraction(cert["radius"]) * Fraction(model["threshold"]) >= Fraction(region["value"])
+    assert _pwq_region_reverifies(model, cert) > 300
+    # a multiplier taken away, or a function changed, is caught
+    broken = json.loads(json.dumps(cert))
+    broken["lmis"][-1]["multiplier_last_row"] = [0.0] * len(
+        broken["lmis"][-1]["multiplier_last_row"]
+    )
+    with pytest.raises(AssertionError):
+        _pwq_region_reverifies(model, broken)

@@ -169,6 +169,17 @@ def test_the_json_keeps_every_digit_and_names_the_quantities(ugv):
     assert f'title="{gain["margin"]!r}"' in page
 
 
+@pytest.mark.slow
+def test_a_stack_of_matrices_in_the_evidence_is_shown_as_matrices(ugv):
+    # the piecewise-quadratic region's functions: one (N + 1) x (N + 1) matrix per region
+    page, document = ugv
+    functions = document["checks"]["region_of_attraction"]["evidence"]["certificate"]["functions"]
+    shape = " x ".join(str(d) for d in np.shape(functions))
+    assert f"<summary>{shape} array</summary>" in page
+    # no nested list of numbers written out raw
+    assert not re.search(r"\[\[-?[\d.e+-]+, -?\d", _text(page))
+
+
 def test_a_large_plant_is_shown_truncated_with_its_shape():
     rng = np.random.default_rng(0)
     spec = spec_from_dict(

@@ -126,6 +126,8 @@ def _render(value: Any, depth: int = 0) -> str:
             arr = None
         if arr is not None and arr.dtype.kind in "biufc" and arr.ndim in (1, 2) and arr.size:
             return _matrix(arr)
+        if arr is not None and arr.dtype.kind in "biufc" and arr.ndim > 2 and arr.size:
+            return _stack(arr)
         items = list(value)
         if not items:
             return "[]"
@@ -148,6 +150,15 @@ def _render(value: Any, depth: int = 0) -> str:
             ", ".join(_fmt(it) for it in items[:50]) + (" ..." if len(items) > 50 else "")
         )
     return escape(_fmt(value))
+
+
+def _stack(arr: np.ndarray) -> str:
+    """A stack of matrices (a numeric array of 3 or more dimensions): the first ``MAX_ROWS``
+    along its first axis, each as a matrix, folded."""
+    shape = " x ".join(str(d) for d in arr.shape)
+    shown = "".join(_matrix(np.reshape(a, (a.shape[0], -1))) for a in arr[:MAX_ROWS])
+    note = f"<p>the first {MAX_ROWS} shown, all in the JSON</p>" if arr.shape[0] > MAX_ROWS else ""
+    return f"<details><summary>{shape} array</summary>{shown}{note}</details>"
 
 
 def _cell(value: Any, digits: int = 6) -> str:

@@ -20,6 +20,20 @@ ask:
 3. the initial errors are in it: V_s(xi) <= c on region s for xi = (e, 0)
    with |e| <= r.
 
+As matrices (the evidence's ``certificate``, in z = (xi / threshold, 1); G_s the rows
+of region s's inequalities G_s z >= 0: (-c_i, 1) and (c_i, 1) for a channel in the dead
+zone, (s_i c_i, -1) for an active one, c_i the rows of Cw; T_s = [[A_s, b_s], [0, 1]]
+at threshold 1; W >= 0 zero but for its last row and column; Iq = diag(I, 0), E1 =
+diag(0, 1); Z (e, 1) = (xi, 1) for xi = (e, 0), In and e1 alike for (e, 1)):
+
+1. decrease, H = [G_s; G_t T_s; (0, 1)]: T_s' P_t T_s - P_s + alpha Iq + H' W H
+   + sigma (c E1 - Iq) < 0;
+2. outer, H = [G_s; (0, 1)]: P_s - c E1 - sigma (Iq - c E1) - H' W H > 0;
+3. inner, H = [G_s; (0, 1)] Z: c e1 - Z' P_s Z - sigma (r^2 e1 - In) - H' W H > 0;
+
+sigma >= 0 the ball's scalar; a transition or initial region left out has y >= 0 with
+y' [G_s; G_t T_s] (or y' G_s Z) = (h, h_0), h_0 + box ||h||_1 < 0.
+
 Then S = {|xi| < R : V_s(xi) <= c for a region s of xi} is invariant (by 1,
 V_t(xi+) <= c, so by 2 xi+ is back in the ball) and V decreases along every
 trajectory in it by alpha |xi|^2 while staying bounded below on the ball, so
@@ -52,7 +66,7 @@ import copy
 import itertools
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
 from functools import partial
@@ -253,7 +267,7 @@ def _search(model: LureModel, seed: int, floor: float, clear: float) -> Region:
             for k in inner
         ]
     )
-    empty_inner = {k for k, y in zip(inner, inner_found, strict=True) if y is not None}
+    empty_inner = {k: y for k, y in zip(inner, inner_found, strict=True) if y is not None}
     attempts: list[dict[str, Any]] = []
     best: _Attempt | None = None
     lo, hi = -1, len(ladder)  # ladder[lo] verified, ladder[hi] did not
@@ -285,8 +299,58 @@ def _search(model: LureModel, seed: int, floor: float, clear: float) -> Region:
         "error_bound": best.bound,
         "attempts": attempts,
         "replay": replay,
+        "certificate": _certificate(
+            regions, best, r, empty_pairs, empty_inner, OUTER * ladder[-1], ladder[-1]
+        ),
     }
     return Region(r * lam * (1 - 1e-12), RegionCode.PIECEWISE_CERTIFIED, evidence=evidence)
+
+
+def _certificate(
+    regions: _Regions,
+    best: _Attempt,
+    r: float,
+    empty_pairs: Mapping[tuple[int, int], list[Fraction]],
+    empty_inner: Mapping[int, list[Fraction]],
+    box: float,
+    inner_box: float,
+) -> dict[str, Any]:
+    """The verified certificate, everything needed to check it again (the module docstring's
+    inequalities, in units of the threshold): the functions P_s of every region, and for
+    every region s of a pair (s, -s) listed first (``representatives``; the other's are the
+    same conjugated by J = diag(-I, 1)) each LMI's multiplier and ball scalar, and the Farkas
+    certificates of the transitions and initial regions left out as empty."""
+
+    def floats(y: list[Fraction]) -> list[float]:
+        return [float(v) for v in y]  # (dyadic: the floats the LP returned, exactly)
+
+    return {
+        "coordinates": "z = (xi / threshold, 1): the LMIs are posed in units of the threshold",
+        "alpha": ALPHA,
+        "radius": r,
+        "ball": OUTER * r,
+        "patterns": regions.signs.astype(int),
+        "functions": best.functions,
+        "lmis": [
+            {
+                "kind": item.kind,
+                "region": item.region,
+                "to": item.to,
+                # W is zero but for its last row and column (``_multiplier_mask``)
+                "multiplier_last_row": np.asarray(item.multiplier)[-1],
+                "scalar": float(item.scalar),
+            }
+            for item in best.lmis
+        ],
+        "empty_transitions": [
+            {"region": k, "to": j, "farkas": floats(y), "box": box}
+            for (k, j), y in sorted(empty_pairs.items())
+        ],
+        "empty_initial": [
+            {"region": k, "farkas": floats(y), "box": inner_box}
+            for k, y in sorted(empty_inner.items())
+        ],
+    }
 
 
 def _solved_by(attempt: _Attempt) -> str:
@@ -328,8 +392,8 @@ def _attempt(
     r: float,
     R: float,
     clear: float,
-    empty_pairs: set[tuple[int, int]],
-    empty_inner: set[int],
+    empty_pairs: Mapping[tuple[int, int], list[Fraction]],
+    empty_inner: Mapping[int, list[Fraction]],
 ) -> _Attempt:
     """Pose, solve and verify the LMIs for initial errors of radius r inside the ball R
     (both in thresholds)."""
@@ -648,9 +712,11 @@ def _farkas(
     return y if combo[-1] + Fraction(box) * spread < 0 else None
 
 
-def _empty_pairs(regions: _Regions, model: LureModel, box: float) -> set[tuple[int, int]]:
+def _empty_pairs(
+    regions: _Regions, model: LureModel, box: float
+) -> dict[tuple[int, int], list[Fraction]]:
     """The transitions (k, j) that no step makes inside the box, for representatives k, each
-    with its Farkas certificate checked.  Transitions seen on sampled states need no LP (a
+    with its Farkas certificate, checked.  Transitions seen on sampled states need no LP (a
     transition kept that is in fact empty only costs an LMI)."""
     seen = _sampled_pairs(model, regions, box)
     pairs = [
@@ -668,7 +734,7 @@ def _empty_pairs(regions: _Regions, model: LureModel, box: float) -> set[tuple[i
         for k, j in pairs
     ]
     found = _empty_in_boxes(problems)
-    return {pair for pair, y in zip(pairs, found, strict=True) if y is not None}
+    return {pair: y for pair, y in zip(pairs, found, strict=True) if y is not None}
 
 
 def _sampled_pairs(
