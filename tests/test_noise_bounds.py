@@ -376,6 +376,19 @@ def test_analyze_bounds_linear_and_sparse_observers():
         used["gamma"] ** 2 * 5 * 1e-6 / used["alpha"] * used["lambda_max_P_inverse_ee"]
     )
     assert check.value == pytest.approx(expected, rel=1e-9) and check.value >= expected
+    # the inequality it rests on, V+ - V <= -alpha V + gamma^2 |n|^2 (the decay scan's has no
+    # |e|^2 term), holds with the printed P, multipliers T, alpha and gamma
+    from dataclasses import replace
+
+    from ssecert.observers import build_observer
+    from ssecert.observers.lure import LureModel
+    from ssecert.stability.lmi_verification import iss_matrix
+
+    spec = spec_from_dict({**_spec({"measurement": 1e-3}), "observer": net})
+    model = LureModel.from_design(build_observer(spec.system, spec.observer))
+    P, T = np.asarray(used["P"]), np.asarray(used["multipliers_T"])
+    M = iss_matrix(replace(model, Ce=0 * model.Ce), P, T, used["alpha"], used["gamma"] ** 2)
+    assert T.shape == (model.m,) and np.linalg.eigvalsh(M)[-1] < -1e-6 * np.linalg.norm(P, 2)
     # no larger than iss_gain's own inequality gives
     own = dissipation_bound(
         np.asarray(iss.evidence["P"]), iss.fields["alpha"], iss.fields["gamma"],

@@ -191,6 +191,7 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
     source, origin = "iss_gain's certificate", "iss_gain"
     noise_model = model
     found: DissipationBound | None = None
+    T = iss.evidence.get("multipliers_T")  # the sector multipliers of the inequality used
     if noise.process is None:
         P = np.asarray(P, dtype=float)
         found = dissipation_bound(P, float(alpha), float(gamma), per_row, n)
@@ -225,6 +226,7 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
         noise_model, per_row, found, cert = chosen
         if cert is not None:
             P, alpha, gamma = np.asarray(cert.P, dtype=float), cert.decay, cert.gamma
+            T = cert.multipliers
         source = "a dissipation inequality with the process noise as a further input"
         origin = "process noise as a further input"
         common["method"] = (
@@ -239,6 +241,7 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
         found is None or found.ill_conditioned or scan.found.bound < found.bound
     ):
         found, P, alpha, gamma = scan.found, scan.P, scan.alpha, scan.gamma
+        T = scan.multipliers
         if noise.process is None:
             origin = "decay scan"
         source = (
@@ -272,6 +275,7 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
             found is None or found.ill_conditioned or weighted.found.bound < found.bound
         ):
             found, P, alpha, gamma = weighted.found, weighted.P, weighted.alpha, weighted.gamma
+            T = weighted.multipliers
             origin = "decay scan, rows weighted"
             source = (
                 f"a dissipation inequality V+ - V <= -alpha V + gamma^2 |nu|^2 at decay "
@@ -316,12 +320,14 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
         ):
             found = split_as_dissipation(split)
             P, alpha, gamma = P_iss, a_iss, g_iss
+            T = iss.evidence.get("multipliers_T")
             source = (
                 "iss_gain's inequality (measurement noise only) with the process noise's step "
                 "split off"
             )
             if faster is not None and faster.found.bound < found.bound:
                 P, alpha, gamma, scan = faster.P, faster.alpha, faster.gamma, faster
+                T = faster.multipliers
                 scan_tried = faster.tried
                 split = split_bound(P, alpha, gamma, found_rows, G, omega, n)
                 found = split_as_dissipation(split)
@@ -430,6 +436,9 @@ def sparse_noise_check(design: ObserverDesign, iss: Check, noise: MeasurementNoi
             # each (inf: not verified); the smallest bound of these and iss_gain's is the one
             "decays_tried": scan_tried,
             "P": np.asarray(P, dtype=float),
+            # the sector multipliers T of the dissipation inequality the summary names (with
+            # P, alpha and gamma: its LMI is iss_gain's, of the error model it names)
+            "multipliers_T": None if T is None else np.asarray(T, dtype=float),
             **weight_evidence,
             **split_evidence,
         },
