@@ -9,6 +9,7 @@ import pytest
 
 from ssecert import load_spec
 from ssecert.cli import main
+from ssecert.design.search_messages import comparison_summary
 
 
 @pytest.mark.slow
@@ -175,3 +176,24 @@ def test_an_unobservable_unstable_plant_gets_the_reason(tmp_path, capsys):
     earlier.write_text("# earlier\n")
     assert main(["design", str(spec), "--out", str(tmp_path)]) == 1
     assert str(earlier) in capsys.readouterr().out and earlier.read_text() == "# earlier\n"
+
+
+@pytest.mark.slow
+def test_the_comparison_says_when_the_spec_design_has_the_larger_region(tmp_path, capsys):
+    # a D-SSO with step 0.05 has a dead zone twice as wide as the grid's smallest step gives
+    spec = tmp_path / "own.toml"
+    spec.write_text(
+        'name = "own"\n[system]\nA = [[1.0, 1.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.5]]\n'
+        "C = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 1.0, 0.0], "
+        "[0.0, 1.0, 1.0], [1.0, 0.0, 1.0]]\n[attack]\nmax_attacked = 1\n"
+        '[observer]\nkind = "dsso"\ngain = "deadbeat"\nstep = 0.05\nthreshold = 1.0\n'
+    )
+    out = tmp_path / "out"
+    main(["design", str(spec), "--objective", "roa", "--out", str(out), "--json", "-"])
+    comparison = json.loads(capsys.readouterr().out)["comparison"]
+    designs = {d["design"]: d for d in comparison["designs"]}
+    theirs = designs["spec"]["region_of_attraction_value"]
+    ours = designs["synthesised"]["region_of_attraction_value"]
+    assert theirs > ours > 0
+    # (no scenarios: the summary says so, then which region is larger)
+    assert comparison["summary"] == comparison_summary(True, 0, 0, [], [], None, (theirs, ours))

@@ -39,3 +39,13 @@ def test_the_comparison_says_when_the_spec_design_has_the_smaller_noise_bound():
         " The spec's own design has the smaller certified ultimate error under the noise "
         "(0.5 against 2.25)."
     )
+
+
+def test_the_comparison_says_when_the_spec_design_has_the_larger_region():
+    words = comparison_summary(True, 1, 1, [], [], None, (14.142, 7.071))
+    assert words.endswith(
+        " The spec's own design has the larger certified region of attraction (radius 14.14 "
+        "against 7.071)."
+    )
+    none = comparison_summary(True, 1, 1, [], [], None, (0.5, 0.0))
+    assert none.endswith("(radius 0.5 against 0 (none certified)).")

@@ -1208,7 +1208,10 @@ def compare_designs(own: Any | None, designed: Any) -> dict[str, Any]:
     compared = [r for r in rows if r.get("comparison") in ("better", "no worse", "worse")]
     apart = [r["scenario"] for r in rows if "comparison" in r and r not in compared]
     noise = _noise_comparison(designs)
-    summary = comparison_summary(own is not None, len(rows), len(compared), worse, apart, noise)
+    region = _region_comparison(designs)
+    summary = comparison_summary(
+        own is not None, len(rows), len(compared), worse, apart, noise, region
+    )
     return {
         "designs": designs,
         "scenarios": rows,
@@ -1228,6 +1231,17 @@ def _noise_comparison(designs: list[dict[str, Any]]) -> tuple[float, float] | No
     if ours is None or theirs is None or not (math.isfinite(theirs) and theirs < ours):
         return None
     return theirs, ours
+
+
+def _region_comparison(designs: list[dict[str, Any]]) -> tuple[float, float] | None:
+    """The certified regions of attraction (the spec's own design's, the synthesised one's,
+    0 where none is certified) when the spec's own is the larger, else None."""
+    rows = {d["design"]: d for d in designs}
+    theirs = rows.get("spec", {}).get("region_of_attraction_value")
+    if theirs is None:
+        return None
+    ours = rows.get("synthesised", {}).get("region_of_attraction_value") or 0.0
+    return (theirs, ours) if theirs > ours else None
 
 
 def _design_row(label: str, result: Any) -> dict[str, Any]:

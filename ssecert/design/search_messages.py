@@ -117,6 +117,7 @@ def comparison_summary(
     worse: Sequence[str],
     apart: Sequence[str],
     noise: tuple[float, float] | None,
+    region: tuple[float, float] | None = None,
 ) -> str:
     """How the synthesised design's simulated error compares with the spec's own design's.
 
@@ -136,6 +137,9 @@ def comparison_summary(
     noise : tuple of float or None
         The certified ultimate errors under the noise (the spec's own design's, the
         synthesised one's) when the spec's own is the smaller, else None.
+    region : tuple of float or None
+        The certified regions of attraction (the spec's own design's, the synthesised
+        one's, 0 for none) when the spec's own is the larger, else None.
     """
     if not own:
         summary = "The spec has no observer of its own: the synthesised design alone is shown."
@@ -167,5 +171,11 @@ def comparison_summary(
         summary += (
             f" The spec's own design has the smaller certified ultimate error under the noise "
             f"({theirs:.4g} against {ours:.4g})."
+        )
+    if region is not None:
+        theirs, ours = region
+        summary += (
+            f" The spec's own design has the larger certified region of attraction (radius "
+            f"{theirs:.4g} against {ours:.4g}{' (none certified)' if ours == 0 else ''})."
         )
     return summary
