@@ -71,10 +71,11 @@ def region_of_attraction(
     other).  Without
     ``widen`` only the Lyapunov matrix with Q = I is tried (no LMI: the design-space map).
 
-    When nothing is certified and the states' units differ widely, the region is searched
-    again in balanced coordinates xi = diag(s) xi_b (``LureModel.balancing``, exact): a radius
-    r_b there holds for ||e(0)|| <= r_b min(s_e) in the model's own units (``state_scaling``,
-    ``balanced_radius``; the other numbers then are in the balanced coordinates).
+    When the states' units differ widely, the region is searched again in balanced
+    coordinates xi = diag(s) xi_b (``LureModel.balancing``, exact): a radius r_b there holds
+    for ||e(0)|| <= r_b min(s_e) in the model's own units, kept where larger than the one
+    certified in those units (``state_scaling``, ``balanced_radius``, ``unbalanced_radius``;
+    the other numbers then are in the balanced coordinates).
 
     Radius 0, not attempted, when the dead zone's Lyapunov solve and replay (``region_cost``)
     do not fit ``budget`` (default ``Budget()``).
@@ -88,8 +89,10 @@ def region_of_attraction(
     if refusal is not None:
         return Region.none(RegionCode.NOT_ATTEMPTED, refusal=refusal)
     found = _region_in_units(model, seed, piecewise, widen)
-    if found.radius > 0:
+    if found.code is RegionCode.DEAD_ZONE_UNSTABLE or math.isinf(found.radius):
         return found
+    # where the states' units are far apart, also in balanced coordinates: the larger region
+    # (the model's own units can hide a piecewise function that balanced ones find)
     for s in model.balancings():
         inner = _region_in_units(model.scaled(s), seed, piecewise, widen)
         if inner.radius > 0:
@@ -97,9 +100,13 @@ def region_of_attraction(
     else:
         return found
     low = float(np.min(s[: model.n_e]))
+    if not inner.radius * low > found.radius:
+        return found
     evidence = {**inner.evidence, "state_scaling": s, "balanced_radius": inner.radius}
     if "dead_zone_radius" in evidence:
         evidence["dead_zone_radius"] = float(evidence["dead_zone_radius"]) * low
+    if found.radius > 0:
+        evidence["unbalanced_radius"] = found.radius
     return replace(inner, radius=inner.radius * low, evidence=evidence)
 
 
