@@ -1015,3 +1015,36 @@ def test_no_noise_through_a_contraction_bounds_the_error_by_exactly_zero():
     # a stable F is still needed: an unstable one is not certified, noise or none
     unstable = linear_noise_bound(np.array([[1.5]]), np.array([[1.0]]), np.zeros(1))
     assert unstable.code is not NoiseGainCode.CERTIFIED
+
+
+@pytest.mark.parametrize("unit", [1e150, 2.0**40, 2.0**10])
+def test_a_linear_observer_s_noise_bound_survives_states_in_far_units(unit):
+    # the UGV's Luenberger observer with the position in units `unit` times smaller: the
+    # powers of A - L C have entries 1e148 there, and no float bound of their infinity norm
+    # is below 1; in balanced coordinates the series is bounded and written back exactly
+    # (within the series' tail and rounding of the bound in the spec's own units)
+    from ssecert.observers import build_observer
+    from ssecert.stability.noise_messages import observer_noise_check
+
+    def check(t):
+        system = System(
+            [[1.0, 0.0099 * t], [0.0, 0.9876]], [[1.0 / t, 0.0], [0.0, 1.0], [0.0, 1.0]]
+        )
+        design = build_observer(
+            system, {"kind": "luenberger", "gain": [[0.5 * t, 0, 0], [0, 0.2, 0.2]]}
+        )
+        return observer_noise_check(design, MeasurementNoise(np.full(3, 0.01)))
+
+    base, far = check(1.0), check(unit)
+    assert base.verdict is Verdict.HOLDS and "state_scaling" not in base.evidence
+    assert far.verdict is Verdict.HOLDS and "state_scaling" in far.evidence
+    scale = np.array([unit, 1.0])
+    np.testing.assert_allclose(
+        far.fields["componentwise"], base.fields["componentwise"] * scale, rtol=1e-4
+    )
+    np.testing.assert_allclose(
+        far.evidence["reached_componentwise"],
+        base.evidence["reached_componentwise"] * scale,
+        rtol=1e-4,
+    )
+    assert far.fields["lower_bound"] <= far.fields["ultimate_bound_inf"]

@@ -39,6 +39,8 @@ from ..tolerances import interval_product as _product
 from ..tolerances import up_by as _up
 
 __all__ = [
+    "balanced_noise_bound",
+    "tighter_noise_bound",
     "DecayScan",
     "decay_scan",
     "decaying_certificate",
@@ -177,6 +179,87 @@ def linear_noise_bound(
             tail=times_up(found.tail, c),
         )
     return _in_range(scaled)
+
+
+def balanced_noise_bound(
+    F: np.ndarray,
+    L: np.ndarray,
+    eta: np.ndarray,
+    exact_F: Any,
+    *,
+    rounding_L: float = 0.0,
+    max_terms: int = MAX_TERMS,
+) -> tuple[NoiseGain, np.ndarray] | None:
+    """``linear_noise_bound`` in balanced state coordinates e = diag(s) e_b (s powers of two
+    from LAPACK's balancing of F, exact), written back: |e_i| <= s_i |e_b,i| (the bound and
+    the worst case reached, componentwise, exactly; the contraction and the tail are the
+    balanced coordinates'); with s.  None where F's states need no balancing or L does not
+    scale exactly.  A stable F whose states are in units 1e150 apart has powers whose
+    infinity norm no float bound proves below 1 in those units.
+
+    ``exact_F`` (an ``ExactMatrix``) gives F's exact value, whose rounding in the balanced
+    coordinates is measured on it; ``rounding_L`` bounds ||L - exact||_2, so ||S^-1 (L -
+    exact)||_2 <= rounding_L / min(s)."""
+    from ..numerics.exact_powers import ExactMatrix
+    from ..numerics.linalg import state_balancing
+
+    F = np.asarray(F, dtype=float)
+    L = np.asarray(L, dtype=float)
+    s = state_balancing(F, np.zeros((0, F.shape[0])))
+    if s is None:
+        return None
+    k = np.round(np.log2(s)).astype(np.int64)
+    with np.errstate(all="ignore"):
+        F_b = F * (s[None, :] / s[:, None])
+        L_b = L / s[:, None]
+        if not (
+            np.all(np.isfinite(F_b))
+            and np.array_equal(F_b * (s[:, None] / s[None, :]), F)
+            and np.array_equal(L_b * s[:, None], L)
+        ):
+            return None  # (not exactly representable in the balanced coordinates)
+
+    def build() -> Any:
+        value = exact_F.value
+        return None if value is None else value.scaled(-k, k)
+
+    rounding_F = ExactMatrix(build, None, "F in balanced state coordinates").rounding(F_b)
+    rounding = times_up(rounding_L, float(1.0 / s.min())) if rounding_L else 0.0
+    found = linear_noise_bound(
+        F_b, L_b, eta, rounding_F=rounding_F, rounding_L=rounding, max_terms=max_terms
+    )
+    if found.code is not NoiseGainCode.CERTIFIED:
+        return found, s
+    with np.errstate(over="ignore"):
+        up = np.vectorize(lambda x, c: times_up(float(x), float(c)), otypes=[float])
+        componentwise = up(found.componentwise, s) if s.size else found.componentwise
+        reached = found.reached * s  # (a lower bound: rounding down keeps it one)
+    back = replace(
+        found,
+        componentwise=componentwise,
+        reached=reached,
+        bound_2=_norm_up(componentwise) if np.all(np.isfinite(componentwise)) else math.inf,
+        bound_inf=float(np.max(componentwise)) if componentwise.size else 0.0,
+        lower=float(np.max(reached)) if reached.size else 0.0,
+    )
+    return _in_range(back), s
+
+
+def tighter_noise_bound(own: NoiseGain, other: NoiseGain) -> NoiseGain:
+    """Two certified bounds of the same error (``own`` in the spec's coordinates, ``other``
+    written back from balanced ones), componentwise the smaller bound and the larger worst
+    case reached; the series' terms, contraction and tail are ``own``'s."""
+    with np.errstate(over="ignore"):
+        componentwise = np.minimum(own.componentwise, other.componentwise)
+        reached = np.maximum(own.reached, other.reached)
+    return replace(
+        own,
+        componentwise=componentwise,
+        reached=reached,
+        bound_2=min(own.bound_2, other.bound_2, _norm_up(componentwise)),
+        bound_inf=float(np.max(componentwise)) if componentwise.size else 0.0,
+        lower=float(np.max(reached)) if reached.size else 0.0,
+    )
 
 
 def _in_range(found: NoiseGain) -> NoiseGain:

@@ -19,6 +19,7 @@ import numpy as np
 from ..base.format import readable
 from ..noise import MeasurementNoise
 from ..observers import ObserverDesign
+from ..observers.lure import scaling_text
 from ..results import Check, Verdict
 from .divergence import safe_norms
 from .noise_gain import (
@@ -26,12 +27,14 @@ from .noise_gain import (
     LocalNoise,
     NoiseGain,
     NoiseGainCode,
+    balanced_noise_bound,
     decay_scan,
     decaying_certificate,
     dissipation_bound,
     linear_noise_bound,
     split_as_dissipation,
     split_bound,
+    tighter_noise_bound,
 )
 
 __all__ = [
@@ -1005,7 +1008,24 @@ def observer_noise_check(
     if noise.process is not None:
         inputs = np.hstack([design.L, noise.process.input])
         bounds = np.concatenate([noise.eta, noise.process.omega])
-    found = linear_noise_bound(F, inputs, bounds, rounding_F=rounding_F, rounding_L=rounding_L)
+    exact_F = kind.exact_error(design)
+
+    def bound_of(noise_bounds: np.ndarray) -> tuple[NoiseGain, np.ndarray | None, bool]:
+        """The bound in the spec's units and, where the states' units are far apart, in
+        balanced state coordinates (their s), componentwise the smaller where both are
+        certified (and whether both were)."""
+        found = linear_noise_bound(
+            F, inputs, noise_bounds, rounding_F=rounding_F, rounding_L=rounding_L
+        )
+        balanced = balanced_noise_bound(F, inputs, noise_bounds, exact_F, rounding_L=rounding_L)
+        if balanced is None or balanced[0].code is not NoiseGainCode.CERTIFIED:
+            return found, None, False
+        if found.code is not NoiseGainCode.CERTIFIED:
+            return balanced[0], balanced[1], False
+        return tighter_noise_bound(found, balanced[0]), balanced[1], True
+
+    found, scaling, both = bound_of(bounds)
+
     # a sign pattern of +-eta on every sample reaches the series: within a per-sample bound,
     # not within a window's 2-norm bound (which bounds each sample, so the upper bound holds)
     lower = found.lower if noise.per_sample else 0.0
@@ -1029,6 +1049,9 @@ def observer_noise_check(
         "rounding_L": rounding_L,
         "code": found.code.value,
     }
+    if scaling is not None:
+        evidence["state_scaling"] = scaling
+        evidence["note"] = balanced_noise_note(scaling, both)
     common: dict[str, Any] = {
         "id": "observer_noise_bound",
         "title": TITLE,
@@ -1050,7 +1073,7 @@ def observer_noise_check(
     def harden(scale: np.ndarray) -> float:
         scaled = bounds.copy()
         scaled[:p] *= scale
-        again = linear_noise_bound(F, inputs, scaled, rounding_F=rounding_F, rounding_L=rounding_L)
+        again = bound_of(scaled)[0]
         return again.bound_2 if again.code is NoiseGainCode.CERTIFIED else math.inf
 
     hardening, harden_words = _hardening_fields(
@@ -1087,8 +1110,28 @@ def observer_noise_check(
             if lower > 0
             else ""
         )
+        + ("" if scaling is None else " " + balanced_noise_note(scaling, both))
         + harden_words
         + energy_words,
         value=found.bound_2,
         **common,
+    )
+
+
+def balanced_noise_note(scaling: np.ndarray, both: bool = False) -> str:
+    """A sentence when a linear observer's noise bound was computed in balanced state
+    coordinates (``noise_gain.balanced_noise_bound``), with ``both`` where the spec's
+    coordinates certified one too (``noise_gain.tighter_noise_bound``)."""
+    where = f"balanced state coordinates e = {scaling_text(scaling)} e_b"
+    if both:
+        return (
+            f"The series was also bounded in {where} (an exact change of variables: the "
+            "states' units differ widely) and written back, |e_i| <= s_i |e_b,i|: each "
+            "component's bound is the smaller of the two (its terms, contraction and tail "
+            "are the spec's coordinates')."
+        )
+    return (
+        f"The series was bounded in {where} (an exact change of variables: the states' units "
+        "differ widely) and written back componentwise, |e_i| <= s_i |e_b,i|; its terms, "
+        "contraction and tail are those coordinates'."
     )
