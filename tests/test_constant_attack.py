@@ -127,3 +127,54 @@ def test_an_attack_estimate_large_in_its_sensors_units_is_not_growth():
     model = LureModel.from_design(build_observer(spec.system, spec.observer))
     records = constant_attack_outcomes(model, default_attacks(3, 1), certified=False)
     assert [r["outcome"] for r in records] == ["unbounded"] * 3
+
+
+_MIXED_UNITS = {
+    "name": "mixed-units",
+    "system": {
+        "A": [[0.658, -2.593, 1.802], [0.888, -1.069, 1.156], [0.725, 0.585, 0.057]],
+        "C": [
+            [-790273982.464, -175019917.312, -517543559.168],
+            [0.0005849609375, 3.90625e-05, -0.00028515625],
+            [-800.768, -263.168, 8.192],
+            [-0.276, 1.294, 1.007],
+            [-2.524815499782562e-09, -1.759268343448639e-09, -1.6298145055770873e-10],
+        ],
+    },
+    "attack": {"max_attacked": 1},
+    "observer": {
+        "kind": "elastic_net",
+        "gain": [
+            [-5.519999129611056e-09, 0.0, 0.0, -0.8173831057367233, 1421850203.647768],
+            [-3.1372517268441423e-09, 0.0, 0.0, -0.35610660224971524, 669187050.9079216],
+            [7.096049067183165e-10, 0.0, 0.0, -0.12563046212518136, -495524638.6001171],
+        ],
+        "step": 1.2,
+        "threshold": 0.1,
+        "shrink": 0.5,
+    },
+}
+
+
+def test_large_biases_and_cycles_are_not_growth_and_the_nearest_equilibrium_is_taken():
+    # sensors in units from 2^-30 to 2^30 apart (C's rows, the gain's columns divided):
+    # a unit attack on sensor 4 settles on an error of 4.4e8 (sensor 4 reads it as 1), on
+    # sensors 0 and 3 the run ends in a cycle of period 2 near an error of 1.1e8, more than
+    # 1e8 times the attack but not growing: neither is unbounded.  Sensors 1 and 2 have
+    # zero columns in the gain: the error stays exactly 0, and an equilibrium with a bias of
+    # 3.5e-10 within the tolerance of the one reached is not taken for it.
+    spec = spec_from_dict(_MIXED_UNITS)
+    model = LureModel.from_design(build_observer(spec.system, spec.observer))
+    records = constant_attack_outcomes(model, default_attacks(5, 1), certified=False)
+    outcomes = [r["outcome"] for r in records]
+    assert outcomes == ["undecided", "converges to zero", "converges to zero", "undecided",
+                        "converges to a bias"]  # fmt: skip
+    assert records[4]["bias_norm"] > 1e8
+    # the cycle, replayed: every other step the same state, consecutive ones far apart
+    a = np.zeros(5)
+    a[0] = 1.0
+    end = model.simulate(np.zeros(model.N), 3001, np.tile(a, (3001, 1)))[-3:]
+    n = model.n_e
+    assert np.linalg.norm(end[2, :n] - end[0, :n]) <= 1e-9 * np.linalg.norm(end[0, :n])
+    assert np.linalg.norm(end[1] - end[0]) > 1e-3 * np.linalg.norm(end[0])
+    assert 1e8 < np.linalg.norm(end[0, :n]) < 1e9
