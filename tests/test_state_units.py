@@ -233,6 +233,22 @@ def test_a_zames_falb_certificate_and_gain_survive_a_sensor_in_far_units():
     assert [(r["outcome"], r["proved"]) for r in records] == [("converges to a bias", True)] * 3
 
 
+@pytest.mark.parametrize("k", [300, -300])
+def test_a_zames_falb_certificate_survives_a_sensor_at_the_far_ends_of_the_floats(k):
+    # a sensor in units 2^300 apart: every solve in the spec's units fails; in the channels'
+    # own units (4^300 still a float) the certificate is found and written back exactly
+    plant, observer = _sensor_rescaled(ZF_PLANT, ZF_OBSERVER, k)
+    document = json.loads(json.dumps(analyze(_spec(plant, observer)).to_dict()))
+    check = document["checks"]["observer_stability"]
+    assert check["verdict"] == "holds" and check["method"].startswith("Zames-Falb")
+    ev = check["evidence"]
+    assert abs(ev["channel_exponents"][0] + k) <= 1
+    m0, a, b = ev["multipliers_m0"], ev["u_delays"], ev["v_delays"]
+    assert _positive_definite(_q(ev["P"]))
+    M = _zames_falb_lmi(ev["model"], ev["P"], m0, a, b)
+    assert _positive_definite([[-x for x in r] for r in M])
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("k", [17, -17])
 def test_the_thesis_design_keeps_its_region_of_attraction_in_other_units(k):

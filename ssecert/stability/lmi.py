@@ -385,16 +385,22 @@ def to_original_coordinates(
     gamma = cert.gamma
     if per is not None:
         details["channel_exponents"] = per.tolist()
-    if j or per is not None:
-        details["sensor_exponent"] = j
-        if gamma is not None:
-            gamma = math.ldexp(gamma, j)
-        if details.get("gamma_squared") is not None:
-            details["gamma_squared"] = math.ldexp(details["gamma_squared"], 2 * j)
-    if "sum_bound_factor" in details:  # sum |xi|^2 <= max(s)^2 sum |xi_b|^2
-        details["sum_bound_factor"] = (
-            float(np.max(s)) ** 2 * float(np.linalg.eigvalsh(P[:N, :N])[-1]) / details["eta"]
-        )
+    with np.errstate(over="ignore"):  # beyond the floats: no certificate
+        if j or per is not None:
+            details["sensor_exponent"] = j
+            if gamma is not None:
+                gamma = float(np.ldexp(gamma, j))
+            if details.get("gamma_squared") is not None:
+                details["gamma_squared"] = float(np.ldexp(details["gamma_squared"], 2 * j))
+        scaled = [gamma, details.get("gamma_squared"), *units.delays(cert, back=True).values()]
+        if not all(np.all(np.isfinite(x)) for x in scaled if x is not None):
+            return None
+        if "sum_bound_factor" in details:  # sum |xi|^2 <= max(s)^2 sum |xi_b|^2
+            details["sum_bound_factor"] = float(
+                np.float64(np.max(s)) ** 2
+                * np.float64(np.linalg.eigvalsh(P[:N, :N])[-1])
+                / details["eta"]
+            )
     return replace(cert, P=P, multipliers=t, gamma=gamma, details=details)
 
 
@@ -489,8 +495,9 @@ def sensor_units(model: LureModel, *, channels: bool = True) -> SensorUnits | No
         per = np.array([math.frexp(pow2_scale(t))[1] - 1 if t > 0 else j for t in tops.tolist()])
     elif sigma == 1.0:
         return None
-    if abs(j) > 255 or (per is not None and np.abs(per).max() > 255):
-        return None  # 4^j, and gamma^2 scaled back by it, would leave the floats
+    if abs(j) > 511 or (per is not None and np.abs(per).max() > 511):
+        return None  # 4^j would leave the floats (a certificate written back with them is
+        # refused where it does: ``to_original_coordinates``)
     if per is None:
         scale = np.full(rest, math.ldexp(1.0, -j))
     else:
