@@ -939,6 +939,13 @@ def iss_certificate(
     retry, note = balanced_retry(model, again, enabled=balance, attempts=attempts)
     if retry is not None:
         return retry
+    units = sensor_units(model) if balance else None
+    if units is not None and units.channels is not None:
+        # each channel in units of its own: a looser gain than one unit for all gives (the
+        # attack stays in one unit), where that gives none
+        alone = in_sensor_units(model, again, channels=True)
+        if alone is not None:
+            return alone
     return LMICertificate(
         Verdict.INCONCLUSIVE,
         "iss",
