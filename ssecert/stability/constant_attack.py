@@ -81,7 +81,8 @@ def constant_attack_outcomes(
     if not kept:
         return []
     N, m = model.N, model.m
-    flops = 2.0 * STEPS * len(kept) * (N * N + 2 * N * m + N * model.r)
+    # (a run past UNBOUNDED times the attack's size may take up to twice STEPS)
+    flops = 4.0 * STEPS * len(kept) * (N * N + 2 * N * m + N * model.r)
     if (budget or Budget()).check("constant attacks", flops=flops) is not None:
         return []
     weight = _units(model)
@@ -189,11 +190,11 @@ def _simulate(model: LureModel, attacks: np.ndarray, weight: np.ndarray) -> list
             size = np.linalg.norm(nxt * weight, axis=1)
             finite = np.all(np.isfinite(nxt), axis=1)
             past = finite & (size > limit[live])
-            first = past & ~crossed[live]
-            limit[live[first]] = UNBOUNDED * size[first]
-            cap[live[first]] = k + STEPS
-            crossed[live[first]] = True
-            grew = ~finite | (past & ~first)
+            newly = past & ~crossed[live]
+            limit[live[newly]] = UNBOUNDED * size[newly]
+            cap[live[newly]] = k + STEPS
+            crossed[live[newly]] = True
+            grew = ~finite | (past & ~newly)
             change = np.linalg.norm((nxt - x) * weight, axis=1)
             settled = ~grew & (change <= SETTLED * np.maximum(size, scale[live]))
             for j in np.flatnonzero(grew | settled):
