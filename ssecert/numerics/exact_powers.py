@@ -285,6 +285,17 @@ class ExactMatrix:
         exact = self.value
         return math.inf if exact is None else exact.distance_bound(computed)
 
+    def similar(self, k: np.ndarray, source: str) -> ExactMatrix:
+        """The exact S^-1 X S, S = diag(2^k) (a change of state units by powers of two), of
+        this matrix X, formed on demand; its rounding is measured on it."""
+        parent = self
+
+        def build() -> Dyadic | None:
+            value = parent.value
+            return None if value is None else value.scaled(-k, k)
+
+        return ExactMatrix(build, None, source)
+
     @classmethod
     def error_matrix(
         cls,

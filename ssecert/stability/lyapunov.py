@@ -293,13 +293,8 @@ def _in_balanced_units(
         return None
     k = np.round(np.log2(s)).astype(np.int64)
     F_b = F * (s[None, :] / s[:, None])
-    source = exact.source if exact is not None else "F"
-
-    def build() -> Any:
-        value = dyadic(F) if exact is None else exact.value
-        return None if value is None else value.scaled(-k, k)
-
-    exact_b = ExactMatrix(build, None, f"{source}, in balanced state coordinates")
+    base = exact if exact is not None else ExactMatrix(lambda: dyadic(F), None, "F")
+    exact_b = base.similar(k, f"{base.source}, in balanced state coordinates")
     cert = _certificate_in_units(F_b, np.eye(F.shape[0]), clear, exact_b, decide_exactly=False)
     if cert is None or cert.verdict is not Verdict.HOLDS or cert.P is None:
         return None

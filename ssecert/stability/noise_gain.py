@@ -200,7 +200,6 @@ def balanced_noise_bound(
     ``exact_F`` (an ``ExactMatrix``) gives F's exact value, whose rounding in the balanced
     coordinates is measured on it; ``rounding_L`` bounds ||L - exact||_2, so ||S^-1 (L -
     exact)||_2 <= rounding_L / min(s)."""
-    from ..numerics.exact_powers import ExactMatrix
     from ..numerics.linalg import state_balancing
 
     F = np.asarray(F, dtype=float)
@@ -219,11 +218,7 @@ def balanced_noise_bound(
         ):
             return None  # (not exactly representable in the balanced coordinates)
 
-    def build() -> Any:
-        value = exact_F.value
-        return None if value is None else value.scaled(-k, k)
-
-    rounding_F = ExactMatrix(build, None, "F in balanced state coordinates").rounding(F_b)
+    rounding_F = exact_F.similar(k, "F in balanced state coordinates").rounding(F_b)
     rounding = times_up(rounding_L, float(1.0 / s.min())) if rounding_L else 0.0
     found = linear_noise_bound(
         F_b, L_b, eta, rounding_F=rounding_F, rounding_L=rounding, max_terms=max_terms
