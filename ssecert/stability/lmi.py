@@ -392,7 +392,7 @@ def to_original_coordinates(
                 gamma = float(np.ldexp(gamma, j))
             if details.get("gamma_squared") is not None:
                 details["gamma_squared"] = float(np.ldexp(details["gamma_squared"], 2 * j))
-        scaled = [gamma, details.get("gamma_squared"), *units.delays(cert, back=True).values()]
+        scaled = [gamma, *(details.get(k) for k in ("gamma_squared", "u_delays", "v_delays"))]
         if not all(np.all(np.isfinite(x)) for x in scaled if x is not None):
             return None
         if "sum_bound_factor" in details:  # sum |xi|^2 <= max(s)^2 sum |xi_b|^2
