@@ -178,16 +178,19 @@ def test_an_unobservable_unstable_plant_gets_the_reason(tmp_path, capsys):
     assert str(earlier) in capsys.readouterr().out and earlier.read_text() == "# earlier\n"
 
 
+_OWN_DSSO = (
+    'name = "own"\n[system]\nA = [[1.0, 1.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.5]]\n'
+    "C = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 1.0, 0.0], "
+    "[0.0, 1.0, 1.0], [1.0, 0.0, 1.0]]\n[attack]\nmax_attacked = 1\n"
+    '[observer]\nkind = "dsso"\ngain = "deadbeat"\nstep = 0.05\nthreshold = 1.0\n'
+)
+
+
 @pytest.mark.slow
 def test_the_comparison_says_when_the_spec_design_has_the_larger_region(tmp_path, capsys):
     # a D-SSO with step 0.05 has a dead zone twice as wide as the grid's smallest step gives
     spec = tmp_path / "own.toml"
-    spec.write_text(
-        'name = "own"\n[system]\nA = [[1.0, 1.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.5]]\n'
-        "C = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 1.0, 0.0], "
-        "[0.0, 1.0, 1.0], [1.0, 0.0, 1.0]]\n[attack]\nmax_attacked = 1\n"
-        '[observer]\nkind = "dsso"\ngain = "deadbeat"\nstep = 0.05\nthreshold = 1.0\n'
-    )
+    spec.write_text(_OWN_DSSO)
     out = tmp_path / "out"
     main(["design", str(spec), "--objective", "roa", "--out", str(out), "--json", "-"])
     comparison = json.loads(capsys.readouterr().out)["comparison"]
@@ -197,3 +200,18 @@ def test_the_comparison_says_when_the_spec_design_has_the_larger_region(tmp_path
     assert theirs > ours > 0
     # (no scenarios: the summary says so, then which region is larger)
     assert comparison["summary"] == comparison_summary(True, 0, 0, [], [], None, (theirs, ours))
+
+
+def test_a_globally_stable_design_is_not_said_to_have_the_smaller_region(tmp_path, capsys):
+    # the D-SSO's region is certified (radius 14.14); a Luenberger design whose
+    # observer_stability holds converges from every initial error, and has no region check
+    spec = tmp_path / "own.toml"
+    spec.write_text(_OWN_DSSO)
+    main(["design", str(spec), "--observer", "luenberger", "--out", str(tmp_path / "out"),
+          "--json", "-"])  # fmt: skip
+    comparison = json.loads(capsys.readouterr().out)["comparison"]
+    designs = {d["design"]: d for d in comparison["designs"]}
+    assert designs["spec"]["region_of_attraction_value"] > 0
+    assert designs["synthesised"]["observer_stability"] == "holds"
+    assert "region_of_attraction" not in designs["synthesised"]
+    assert comparison["summary"] == comparison_summary(True, 0, 0, [], [], None, None)

@@ -178,3 +178,13 @@ def test_large_biases_and_cycles_are_not_growth_and_the_nearest_equilibrium_is_t
     assert np.linalg.norm(end[2, :n] - end[0, :n]) <= 1e-9 * np.linalg.norm(end[0, :n])
     assert np.linalg.norm(end[1] - end[0]) > 1e-3 * np.linalg.norm(end[0])
     assert 1e8 < np.linalg.norm(end[0, :n]) < 1e9
+
+
+def test_growth_from_a_huge_attack_is_measured_past_the_squares_overflow():
+    # error e+ = 1.01 e + a with a = 1e150: past 1e154 the squares of the error overflow
+    # (numpy's norm reads inf there); the run must still be seen to grow 1e8 times past the
+    # attack and 1e8 times further (about 3,700 steps), not end undecided
+    model = LureModel.linear(np.array([[1.01]]), np.array([[1.0]]))
+    records = constant_attack_outcomes(model, [("huge", np.array([1e150]))], certified=False)
+    assert [r["outcome"] for r in records] == ["unbounded"]
+    assert records[0]["simulation"]["steps"] < 5000

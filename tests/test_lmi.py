@@ -399,3 +399,26 @@ def test_every_verification_problem_has_words():
     assert not ok and problem.code is VerifyCode.MARGIN_NOT_CLEAR
     assert problem.facts == {"margin": 1e-20, "clear": 100.0, "bound": 1e-16}
     assert decide(np.eye(2), 1.0, 1e-16, 100.0) == (True, 1.0, 1e-16, None)
+
+
+@pytest.mark.parametrize("key", ["multipliers", "gamma_squared", "u_delays"])
+def test_a_write_back_that_would_round_into_the_subnormals_is_refused(key):
+    # a certificate solved with the attack in units 2^505: its multipliers, gamma^2 and
+    # delays are 4^-505 times those verified, below the normal floats where bits are lost
+    from ssecert.results import Verdict
+    from ssecert.stability.outcomes import LMICode
+
+    def written_back(value: float, rounded: str | None):
+        number = {k: (1.2345678901234e-5 if k == rounded else value) for k in
+                  ("multipliers", "gamma_squared", "u_delays")}  # fmt: skip
+        cert = lmi.LMICertificate(
+            Verdict.HOLDS, "iss", P=np.array([[2.0, 0.5], [0.5, 1.0]]),
+            multipliers=np.array([number["multipliers"]]), gamma=1.0, code=LMICode.VERIFIED,
+            details={"gamma_squared": number["gamma_squared"], "u_delays": [[number["u_delays"]]]},
+        )  # fmt: skip
+        return lmi.to_original_coordinates(cert, np.array([1.0, 2.0**505]), 2, sensors=-505)
+
+    assert written_back(0.75, key) is None
+    exact = written_back(0.75, None)
+    assert exact is not None and exact.multipliers[0] == np.ldexp(0.75, -1010)
+    assert exact.details["gamma_squared"] == np.ldexp(0.75, -1010)

@@ -1234,13 +1234,20 @@ def _noise_comparison(designs: list[dict[str, Any]]) -> tuple[float, float] | No
 
 
 def _region_comparison(designs: list[dict[str, Any]]) -> tuple[float, float] | None:
-    """The certified regions of attraction (the spec's own design's, the synthesised one's,
-    0 where none is certified) when the spec's own is the larger, else None."""
+    """The certified regions of attraction (the spec's own design's, the synthesised one's:
+    inf for a design whose observer_stability holds, which converges from every initial
+    error, 0 where none is certified) when the spec's own is the larger, else None."""
     rows = {d["design"]: d for d in designs}
-    theirs = rows.get("spec", {}).get("region_of_attraction_value")
+
+    def radius(row: dict[str, Any]) -> float | None:
+        if row.get("observer_stability") == Verdict.HOLDS.value:
+            return math.inf
+        return row.get("region_of_attraction_value")
+
+    theirs = radius(rows.get("spec", {}))
     if theirs is None:
         return None
-    ours = rows.get("synthesised", {}).get("region_of_attraction_value") or 0.0
+    ours = radius(rows.get("synthesised", {})) or 0.0
     return (theirs, ours) if theirs > ours else None
 
 

@@ -7,6 +7,7 @@ front's figures); this module alone writes the sentence, so that rewording it ch
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 from .outcomes import DecayChoice, DecayCode
@@ -139,7 +140,16 @@ def comparison_summary(
         synthesised one's) when the spec's own is the smaller, else None.
     region : tuple of float or None
         The certified regions of attraction (the spec's own design's, the synthesised
-        one's, 0 for none) when the spec's own is the larger, else None.
+        one's, 0 for none, inf for a design whose observer_stability holds) when the spec's
+        own is the larger, else None.
+
+    Examples
+    --------
+    >>> summary = comparison_summary(True, 0, 0, [], [], None, (math.inf, 7.071))
+    >>> print(summary)  # doctest: +NORMALIZE_WHITESPACE
+    The spec has no scenarios: the designs were not simulated. The spec's own design has the
+    larger certified region of attraction (every initial error: its observer_stability
+    holds, against radius 7.071).
     """
     if not own:
         summary = "The spec has no observer of its own: the synthesised design alone is shown."
@@ -174,8 +184,14 @@ def comparison_summary(
         )
     if region is not None:
         theirs, ours = region
+        against = f"{ours:.4g}{' (none certified)' if ours == 0 else ''}"
         summary += (
-            f" The spec's own design has the larger certified region of attraction (radius "
-            f"{theirs:.4g} against {ours:.4g}{' (none certified)' if ours == 0 else ''})."
+            " The spec's own design has the larger certified region of attraction ("
+            + (
+                f"every initial error: its observer_stability holds, against radius {against}"
+                if math.isinf(theirs)
+                else f"radius {theirs:.4g} against {against}"
+            )
+            + ")."
         )
     return summary

@@ -14,8 +14,8 @@ inequality holds for the difference of any two trajectories under the same
 attack (the attack cancels).  The outcome is then proved: the error converges
 to zero when e* = 0 exactly, otherwise to the bias e*.  Without a certificate
 the outcome is what a simulation from zero error shows (``proved`` false):
-growth past ``UNBOUNDED`` times the attack's size and then as much again (or an
-overflow) is reported unbounded, convergence to the nearest exactly confirmed
+growth past ``UNBOUNDED`` times the attack's size and then ``UNBOUNDED`` times further
+within ``STEPS`` more steps (or an overflow) is reported unbounded, convergence to the nearest exactly confirmed
 equilibrium is observed, not proved; a run that does neither (a cycle) is
 undecided.
 """
@@ -154,6 +154,15 @@ def _settle(record: dict[str, Any], eq: dict[str, Any], *, proved: bool) -> None
     )
 
 
+def _row_norms(v: np.ndarray) -> np.ndarray:
+    """Each row's 2-norm, finite for finite rows (their squares may overflow: each row is
+    brought near 1 by a power of two first, which changes no bit where nothing overflows or
+    underflows); inf or NaN for a row that is not finite."""
+    top = np.max(np.abs(v), axis=1, initial=0.0)
+    k = np.frexp(np.where(np.isfinite(top), top, 1.0))[1]
+    return np.ldexp(np.linalg.norm(np.ldexp(v, -k[:, None]), axis=1), k)
+
+
 def _distance(final: np.ndarray, eq: dict[str, Any], weight: np.ndarray) -> float:
     point = np.concatenate([eq["initial_error"], eq["attack_estimate"]])
     return float(np.linalg.norm((np.asarray(final) - point) * weight))
@@ -174,7 +183,7 @@ def _simulate(model: LureModel, attacks: np.ndarray, weight: np.ndarray) -> list
     with np.errstate(all="ignore"):  # an overflow is the growth this looks for
         first = push + (model.phi(shift) @ model.B.T if model.m else 0.0)
         scale = np.maximum(np.abs(attacks).max(axis=1, initial=0.0), 1.0)
-        scale = np.maximum(scale, np.nan_to_num(np.linalg.norm(first * weight, axis=1), posinf=0.0))
+        scale = np.maximum(scale, np.nan_to_num(_row_norms(first * weight), posinf=0.0))
         # past UNBOUNDED times the attack's size a run must grow UNBOUNDED times further
         # (a large bias, 1e8 for a unit attack on a sensor that reads the state 2^30 times
         # smaller, is reached and kept), in STEPS more steps (a growth at the rate that
@@ -187,7 +196,7 @@ def _simulate(model: LureModel, attacks: np.ndarray, weight: np.ndarray) -> list
             nxt = x @ model.A.T + push[live]
             if model.m:
                 nxt = nxt + model.phi(x @ model.Cw.T + shift[live]) @ model.B.T
-            size = np.linalg.norm(nxt * weight, axis=1)
+            size = _row_norms(nxt * weight)
             finite = np.all(np.isfinite(nxt), axis=1)
             past = finite & (size > limit[live])
             newly = past & ~crossed[live]
@@ -195,7 +204,7 @@ def _simulate(model: LureModel, attacks: np.ndarray, weight: np.ndarray) -> list
             cap[live[newly]] = k + STEPS
             crossed[live[newly]] = True
             grew = ~finite | (past & ~newly)
-            change = np.linalg.norm((nxt - x) * weight, axis=1)
+            change = _row_norms((nxt - x) * weight)
             settled = ~grew & (change <= SETTLED * np.maximum(size, scale[live]))
             for j in np.flatnonzero(grew | settled):
                 row = int(live[j])

@@ -325,14 +325,17 @@ def to_original_coordinates(
     if not exactly).
 
     With xi = diag(s) xi_b the Lyapunov function zeta_b' P_b zeta_b is zeta' P zeta with
-    P = diag(1 / s, I) P_b diag(1 / s, I) (only the first N coordinates are states): exact
-    for powers of two.  With the channels and the attack in units 2^-sensors (sigma =
-    2^sensors times the user's), the sector multipliers and gamma^2 are sigma^2 times those
-    of the scaled model; with ``channels``, each channel's multiplier is 4^channels[i]
-    times its own (gamma^2 still 4^sensors).  The margin and error bound stay those
-    verified in the balanced coordinates, where the LMI is recomputed; ``state_scaling``
-    records s (``sensor_exponent`` the attack's units, ``channel_exponents`` the
-    channels').
+    P = T P_b T, T = diag(1 / s, ...) (``SensorUnits.coordinates``: the first N coordinates
+    are states; a Zames-Falb certificate's lifted past inputs and outputs follow, each times
+    its channel's 2^j): exact for powers of two.  With the channels and the attack in units
+    2^-sensors (sigma = 2^sensors times the user's), the sector multipliers and gamma^2 are
+    sigma^2 times those of the scaled model; with ``channels``, each channel's multiplier
+    (and its Zames-Falb delays) is 4^channels[i] times its own (gamma^2 still 4^sensors).
+    Every number written back must give the verified one back exactly when its power of two
+    is undone (none beyond the floats or rounded into the subnormals); else None.  The
+    margin and error bound stay those verified in the balanced coordinates, where the LMI
+    is recomputed; ``state_scaling`` records s (``sensor_exponent`` the attack's units,
+    ``channel_exponents`` the channels').
     """
     if cert.P is None:
         return None
@@ -352,7 +355,7 @@ def to_original_coordinates(
         )
     if not np.all(np.isfinite(P)) or not np.array_equal(P / inv[:, None] / inv[None, :], cert.P):
         return None
-    if t is not None and not np.all(np.isfinite(t)):
+    if t is not None and not _undone(t, cert.multipliers, units.multiplier_exponents):
         return None
     where = "the balanced coordinates xi = diag(state_scaling) xi_b"
     if per is not None:
@@ -385,23 +388,41 @@ def to_original_coordinates(
     gamma = cert.gamma
     if per is not None:
         details["channel_exponents"] = per.tolist()
-    with np.errstate(over="ignore"):  # beyond the floats: no certificate
+    # every number written back must be exactly the one verified, times its power of two
+    # (beyond the floats, or into the subnormals where bits are lost: no certificate)
+    written = []  # (the number written back, the one verified, the power of two between)
+    for key in ("u_delays", "v_delays"):
+        if key in details:
+            k = 2 * units.channel_exponents(np.shape(details[key])[-1])
+            written.append((details[key], cert.details[key], k))
+    with np.errstate(over="ignore"):
         if j or per is not None:
             details["sensor_exponent"] = j
             if gamma is not None:
                 gamma = float(np.ldexp(gamma, j))
+                written.append((gamma, cert.gamma, j))
             if details.get("gamma_squared") is not None:
                 details["gamma_squared"] = float(np.ldexp(details["gamma_squared"], 2 * j))
-        scaled = [gamma, *(details.get(k) for k in ("gamma_squared", "u_delays", "v_delays"))]
-        if not all(np.all(np.isfinite(x)) for x in scaled if x is not None):
-            return None
-        if "sum_bound_factor" in details:  # sum |xi|^2 <= max(s)^2 sum |xi_b|^2
+                written.append((details["gamma_squared"], cert.details["gamma_squared"], 2 * j))
+    if not all(_undone(x, x_b, k) for x, x_b, k in written):
+        return None
+    if "sum_bound_factor" in details:  # sum |xi|^2 <= max(s)^2 sum |xi_b|^2
+        with np.errstate(over="ignore"):
             details["sum_bound_factor"] = float(
                 np.float64(np.max(s)) ** 2
                 * np.float64(np.linalg.eigvalsh(P[:N, :N])[-1])
                 / details["eta"]
             )
     return replace(cert, P=P, multipliers=t, gamma=gamma, details=details)
+
+
+def _undone(value: Any, before: Any, exponents: Any) -> bool:
+    """Whether ``value`` = ``before`` 2^exponents exactly: finite, and the power of two
+    undone gives ``before`` back bit for bit (no overflow, no bits lost to the subnormals)."""
+    value = np.asarray(value, dtype=float)
+    with np.errstate(over="ignore"):
+        back = np.ldexp(value, -np.asarray(exponents))
+    return bool(np.all(np.isfinite(value)) and np.array_equal(back, np.asarray(before, float)))
 
 
 # the channels' largest entry within this factor of 1 keeps the sensors' units
