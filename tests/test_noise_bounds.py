@@ -1048,3 +1048,6 @@ def test_a_linear_observer_s_noise_bound_survives_states_in_far_units(unit):
         rtol=1e-4,
     )
     assert far.fields["lower_bound"] <= far.fields["ultimate_bound_inf"]
+    # the roundings printed are those the printed series took in (F's is 6.6e132 in the
+    # spec's coordinates at unit 1e150, where the series is the balanced coordinates')
+    assert far.evidence["rounding_F"] <= 1e-12

@@ -390,7 +390,8 @@ def to_original_coordinates(
         details["channel_exponents"] = per.tolist()
     # every number written back must be exactly the one verified, times its power of two
     # (beyond the floats, or into the subnormals where bits are lost: no certificate)
-    written = []  # (the number written back, the one verified, the power of two between)
+    # (the number written back, the one verified, the power of two between)
+    written: list[tuple[Any, Any, Any]] = []
     for key in ("u_delays", "v_delays"):
         if key in details:
             k = 2 * units.channel_exponents(np.shape(details[key])[-1])

@@ -189,13 +189,14 @@ def balanced_noise_bound(
     *,
     rounding_L: float = 0.0,
     max_terms: int = MAX_TERMS,
-) -> tuple[NoiseGain, np.ndarray] | None:
+) -> BalancedNoise | None:
     """``linear_noise_bound`` in balanced state coordinates e = diag(s) e_b (s powers of two
     from LAPACK's balancing of F, exact), written back: |e_i| <= s_i |e_b,i| (the bound and
     the worst case reached, componentwise, exactly; the contraction and the tail are the
-    balanced coordinates'); with s.  None where F's states need no balancing or L does not
-    scale exactly.  A stable F whose states are in units 1e150 apart has powers whose
-    infinity norm no float bound proves below 1 in those units.
+    balanced coordinates'); with s and the roundings of F and L the series used there.
+    None where F's states need no balancing or L does not scale exactly.  A stable F whose
+    states are in units 1e150 apart has powers whose infinity norm no float bound proves
+    below 1 in those units.
 
     ``exact_F`` (an ``ExactMatrix``) gives F's exact value, whose rounding in the balanced
     coordinates is measured on it; ``rounding_L`` bounds ||L - exact||_2, so ||S^-1 (L -
@@ -224,7 +225,7 @@ def balanced_noise_bound(
         F_b, L_b, eta, rounding_F=rounding_F, rounding_L=rounding, max_terms=max_terms
     )
     if found.code is not NoiseGainCode.CERTIFIED:
-        return found, s
+        return BalancedNoise(found, s, rounding_F, rounding)
     with np.errstate(over="ignore"):
         up = np.vectorize(lambda x, c: times_up(float(x), float(c)), otypes=[float])
         componentwise = up(found.componentwise, s) if s.size else found.componentwise
@@ -237,7 +238,17 @@ def balanced_noise_bound(
         bound_inf=float(np.max(componentwise)) if componentwise.size else 0.0,
         lower=float(np.max(reached)) if reached.size else 0.0,
     )
-    return _in_range(back), s
+    return BalancedNoise(_in_range(back), s, rounding_F, rounding)
+
+
+class BalancedNoise(NamedTuple):
+    """``balanced_noise_bound``'s bound, written back, and what its series used: the states'
+    units s (e = diag(s) e_b) and the roundings of F and L in those coordinates."""
+
+    found: NoiseGain
+    scaling: np.ndarray
+    rounding_F: float
+    rounding_L: float
 
 
 def tighter_noise_bound(own: NoiseGain, other: NoiseGain) -> NoiseGain:

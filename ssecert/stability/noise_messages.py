@@ -23,6 +23,7 @@ from ..observers.lure import scaling_text
 from ..results import Check, Verdict
 from .divergence import safe_norms
 from .noise_gain import (
+    BalancedNoise,
     DissipationBound,
     LocalNoise,
     NoiseGain,
@@ -1010,21 +1011,21 @@ def observer_noise_check(
         bounds = np.concatenate([noise.eta, noise.process.omega])
     exact_F = kind.exact_error(design)
 
-    def bound_of(noise_bounds: np.ndarray) -> tuple[NoiseGain, np.ndarray | None, bool]:
+    def bound_of(noise_bounds: np.ndarray) -> tuple[NoiseGain, BalancedNoise | None, bool]:
         """The bound in the spec's units and, where the states' units are far apart, in
-        balanced state coordinates (their s), componentwise the smaller where both are
-        certified (and whether both were)."""
+        balanced state coordinates (with their s and roundings), componentwise the smaller
+        where both are certified (and whether both were)."""
         found = linear_noise_bound(
             F, inputs, noise_bounds, rounding_F=rounding_F, rounding_L=rounding_L
         )
         balanced = balanced_noise_bound(F, inputs, noise_bounds, exact_F, rounding_L=rounding_L)
-        if balanced is None or balanced[0].code is not NoiseGainCode.CERTIFIED:
+        if balanced is None or balanced.found.code is not NoiseGainCode.CERTIFIED:
             return found, None, False
         if found.code is not NoiseGainCode.CERTIFIED:
-            return balanced[0], balanced[1], False
-        return tighter_noise_bound(found, balanced[0]), balanced[1], True
+            return balanced.found, balanced, False
+        return tighter_noise_bound(found, balanced.found), balanced, True
 
-    found, scaling, both = bound_of(bounds)
+    found, balanced, both = bound_of(bounds)
 
     # a sign pattern of +-eta on every sample reaches the series: within a per-sample bound,
     # not within a window's 2-norm bound (which bounds each sample, so the upper bound holds)
@@ -1049,9 +1050,11 @@ def observer_noise_check(
         "rounding_L": rounding_L,
         "code": found.code.value,
     }
-    if scaling is not None:
-        evidence["state_scaling"] = scaling
-        evidence["note"] = balanced_noise_note(scaling, both)
+    if balanced is not None:
+        evidence["state_scaling"] = balanced.scaling
+        evidence["note"] = balanced_noise_note(balanced.scaling, both)
+        if not both:  # (the series is the balanced coordinates', and so are its roundings)
+            evidence.update(rounding_F=balanced.rounding_F, rounding_L=balanced.rounding_L)
     common: dict[str, Any] = {
         "id": "observer_noise_bound",
         "title": TITLE,
@@ -1110,7 +1113,7 @@ def observer_noise_check(
             if lower > 0
             else ""
         )
-        + ("" if scaling is None else " " + balanced_noise_note(scaling, both))
+        + ("" if balanced is None else " " + balanced_noise_note(balanced.scaling, both))
         + harden_words
         + energy_words,
         value=found.bound_2,
@@ -1133,5 +1136,6 @@ def balanced_noise_note(scaling: np.ndarray, both: bool = False) -> str:
     return (
         f"The series was bounded in {where} (an exact change of variables: the states' units "
         "differ widely) and written back componentwise, |e_i| <= s_i |e_b,i|; its terms, "
-        "contraction and tail are those coordinates'."
+        "contraction and tail, and the roundings rounding_F and rounding_L of F and L it "
+        "took in, are those coordinates'."
     )
