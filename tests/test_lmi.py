@@ -137,6 +137,16 @@ def test_iss_gain_bounds_simulated_attacks():
         assert np.all(energy_e <= cert.gamma**2 * energy_a * (1 + 1e-9))
 
 
+def test_the_gain_lmi_s_rounding_bound_counts_the_gain():
+    # the dissipation LMI subtracts g on the attack's block: its entries there round by
+    # eps g, which a margin relative to ||P|| must beat whatever ||P|| is
+    model = LureModel.linear(np.array([[0.5]]), np.array([[1.0]]))
+    P, t = np.eye(1), np.zeros(0)
+    small = verify_certificate(model, P, t, kind="iss", g=10.0)[2]
+    large = verify_certificate(model, P, t, kind="iss", g=1e12)[2]
+    assert large >= 1e12 * np.finfo(float).eps > 100 * small
+
+
 def test_linear_observer_iss_gain():
     F = np.array([[0.5, 0.2], [0.0, 0.3]])
     L = np.array([[1.0], [0.5]])

@@ -60,11 +60,17 @@ def iss_matrix(
 
 
 def _error_bound(
-    model: LureModel, P: np.ndarray, t: np.ndarray, size: int, output: bool = True
+    model: LureModel,
+    P: np.ndarray,
+    t: np.ndarray,
+    size: int,
+    output: bool = True,
+    g: float = 0.0,
 ) -> float:
     """Rounding error bound on the eigenvalues of the recomputed LMI, relative to ||P||;
-    ``output`` when the LMI has the |e|^2 term and the attack (the dissipation LMI, not the
-    circle one: its matrix has no E or Dw, which may be in units of their own)."""
+    ``output`` when the LMI has the |e|^2 term and the attack, ``g`` times the identity
+    subtracted on the attack's block (the dissipation LMI, not the circle one: its matrix
+    has no E or Dw, which may be in units of their own)."""
     normP = max(float(np.linalg.norm(P, 2)), np.finfo(float).tiny)
     G = np.hstack([model.A, model.B, model.E] if output else [model.A, model.B])
     normG = float(np.linalg.norm(G, 2))
@@ -72,7 +78,7 @@ def _error_bound(
     Cw = np.hstack([model.Cw, model.Dw]) if output else model.Cw
     normC = float(np.linalg.norm(Cw, 2)) if model.m else 0.0
     normCe = float(np.linalg.norm(model.Ce, 2)) if output else 0.0
-    raw = (normG**2 + 2.0) * normP + (2 * model.q * normC + 2) * tmax + normCe**2
+    raw = (normG**2 + 2.0) * normP + (2 * model.q * normC + 2) * tmax + normCe**2 + abs(g)
     # the model's floats are within d of the exact matrices of the spec's data: G'PG moves by
     # at most (2 ||G|| + d) d ||P||, the sector terms by 2 q max(T) d
     d = model.rounding
@@ -127,7 +133,7 @@ def verify_certificate(
     normP = max(float(np.linalg.norm(P, 2)), np.finfo(float).tiny)
     lam = float(np.linalg.eigvalsh(M)[-1])
     margin = -lam / normP
-    bound = _error_bound(model, P, t, M.shape[0], output=kind != "circle")
+    bound = _error_bound(model, P, t, M.shape[0], output=kind != "circle", g=g)
     return decide(P, margin, bound, clear)
 
 
