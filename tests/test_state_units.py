@@ -324,6 +324,7 @@ def test_the_thesis_design_keeps_its_region_of_attraction_in_other_units(k):
     s = np.asarray(region.evidence["state_scaling"])
     assert region.value == region.evidence["balanced_radius"] * s[:2].min()
     assert region.code is RegionCode.PIECEWISE_CERTIFIED
+    assert "state_scaling" in region.evidence["certificate"]["coordinates"]
     model = _model(plant, observer)
     rng = np.random.default_rng(4)
     e0 = rng.standard_normal((200, 2))

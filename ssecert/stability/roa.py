@@ -103,6 +103,13 @@ def region_of_attraction(
     if not inner.radius * low > found.radius:
         return found
     evidence = {**inner.evidence, "state_scaling": s, "balanced_radius": inner.radius}
+    if "certificate" in evidence:  # (a piecewise one: its LMIs are the balanced model's)
+        certificate = dict(evidence["certificate"])
+        certificate["coordinates"] += (
+            "; xi is in the balanced coordinates xi = diag(state_scaling)^-1 xi_model (the "
+            "model's states divided by state_scaling, exactly: powers of two)"
+        )
+        evidence["certificate"] = certificate
     if "dead_zone_radius" in evidence:
         evidence["dead_zone_radius"] = float(evidence["dead_zone_radius"]) * low
     if found.radius > 0:
