@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ssecert.design.search_messages import comparison_summary, no_design_text
+from ssecert.design.search_messages import comparison_summary, comparison_words, no_design_text
 
 
 def test_no_design_names_the_kind_the_rejections_and_the_modes():
@@ -24,6 +24,10 @@ def test_the_comparison_counts_the_scenarios_and_names_those_not_compared():
     assert "||x_hat - x||" in no_worse and "is no worse" in no_worse
     assert "in every one of the 2 scenarios compared" in no_worse
     assert "is worse than" not in no_worse and "Not compared" not in no_worse
+    # the tie rule the words rest on is said where they are (a 2.4% larger error is a tie)
+    assert "no worse (within 5%, or smaller)" in no_worse and "(more than 5% larger)" in worse
+    assert comparison_words("no worse") == "no worse (within 5%)"
+    assert comparison_words("worse") == "worse (more than 5% larger)"
 
 
 def test_the_comparison_without_a_design_scenarios_or_finite_errors():

@@ -476,6 +476,14 @@ def test_bad_numbers_for_simulate(capsys, option, value):
     assert_refused(*cli(capsys, "simulate", "ugv", option, value), option)
 
 
+@pytest.mark.parametrize("value", ["-1", str(2**64)])
+def test_design_refuses_a_seed_certify_could_not_replay(tmp_path, capsys, value):
+    # (the search would run to its end first, then fail inside the certification)
+    out = tmp_path / "out"
+    assert_refused(*cli(capsys, "design", "ugv", "--seed", value, "--out", str(out)), "--seed")
+    assert not out.exists()
+
+
 def test_analyses_refuse_what_is_not_a_system():
     for call in (sparse_observability, irrepresentable):
         with pytest.raises(TypeError, match="system must be a System"):

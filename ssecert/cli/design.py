@@ -99,7 +99,10 @@ def add_design_parser(sub: Any) -> None:
         help="folder of NAME-design.toml, .html and .json (default reports)",
     )
     design.add_argument(
-        "--seed", type=int, help="replaces every scenario's seed (both designs get the same)"
+        "--seed",
+        type=_nonnegative_int,
+        metavar="N",
+        help="replaces every scenario's seed (both designs get the same)",
     )
     design.add_argument(
         "--min-decay",
@@ -307,6 +310,7 @@ def _print_design(
     """The terminal summary: the search, both designs' certified numbers, each scenario."""
 
     from ..base.format import one_minus
+    from ..design.search_messages import comparison_words
     from ..observers import get_kind
 
     searched = f"{len(result.candidates)} candidates in {result.seconds:.1f} s"
@@ -383,7 +387,7 @@ def _print_design(
                     f"{label} {_num(sim['mean_error'])}, final {_num(sim['final_mean'])}"
                     + ("" if settle is None else f" (settles by step {settle})")
                 )
-        verdict = f" -> {row['comparison']}" if "comparison" in row else ""
+        verdict = f" -> {comparison_words(row['comparison'])}" if "comparison" in row else ""
         out.write(
             f"  scenario {row['scenario']}: mean error ||x_hat - x|| over the horizon "
             f"{'; '.join(cells)}"

@@ -65,7 +65,7 @@ from ..observers.base import DESIGN_SHRINKS, DESIGN_STEPS
 from ..results import Verdict
 from ..system import System
 from .outcomes import DecayChoice, DecayCode
-from .search_messages import comparison_summary, decay_text, no_design_text
+from .search_messages import WORSE_RTOL, comparison_summary, decay_text, no_design_text
 
 if TYPE_CHECKING:
     from ..noise import MeasurementNoise
@@ -1092,7 +1092,6 @@ DESIGN_HEADER = (
     "# Observer synthesised by ssecert design ({kind}, objective {objective}) for {source}:\n"
     "# {guarantee}\n"
 )
-WORSE_RTOL = 0.05  # a synthesised design is worse when its final mean error is 5% larger
 
 
 def design_spec_text(spec: Any, result: DesignResult, kind: str) -> str:

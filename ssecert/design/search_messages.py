@@ -12,7 +12,12 @@ from collections.abc import Sequence
 
 from .outcomes import DecayChoice, DecayCode
 
-__all__ = ["comparison_summary", "decay_text", "no_design_text"]
+__all__ = ["WORSE_RTOL", "comparison_summary", "comparison_words", "decay_text", "no_design_text"]
+
+# a synthesised design is worse where its mean error over the horizon is more than 5% larger
+# than the spec's own design's, better where more than 5% smaller, else no worse (a tie)
+WORSE_RTOL = 0.05
+_TIE = f"within {WORSE_RTOL:.0%}"
 
 _NO_POINTS = "its solves failed, did not verify, or ran past its share of the time budget"
 
@@ -111,6 +116,20 @@ def no_design_text(
     return reason
 
 
+def comparison_words(comparison: str) -> str:
+    """A scenario's comparison (better, no worse, worse) with the tolerance it rests on.
+
+    >>> comparison_words("no worse"), comparison_words("better")
+    ('no worse (within 5%)', 'better (more than 5% smaller)')
+    """
+    rule = {
+        "better": f"more than {WORSE_RTOL:.0%} smaller",
+        "no worse": _TIE,
+        "worse": f"more than {WORSE_RTOL:.0%} larger",
+    }.get(comparison)
+    return comparison if rule is None else f"{comparison} ({rule})"
+
+
 def comparison_summary(
     own: bool,
     scenarios: int,
@@ -160,15 +179,16 @@ def comparison_summary(
     elif worse:
         summary = (
             f"The synthesised design's mean error ||x_hat - x|| over the horizon is worse than "
-            f"the spec's own design's in {len(worse)} of {compared} scenarios compared "
-            f"({', '.join(worse)}); no worse in the others (same seeds: the same plant "
-            "trajectories and attacks)."
+            f"the spec's own design's (more than {WORSE_RTOL:.0%} larger) in {len(worse)} of "
+            f"{compared} scenarios compared ({', '.join(worse)}); no worse ({_TIE}, or "
+            "smaller) in the others (same seeds: the same plant trajectories and attacks)."
         )
     else:
         summary = (
             f"The synthesised design's mean error ||x_hat - x|| over the horizon is no worse "
-            f"than the spec's own design's in every one of the {compared} scenarios compared "
-            "(same seeds: the same plant trajectories and attacks)."
+            f"({_TIE}, or smaller) than the spec's own design's in every one of the "
+            f"{compared} scenarios compared (same seeds: the same plant trajectories and "
+            "attacks)."
         )
     if own and apart:
         summary += (

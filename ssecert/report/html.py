@@ -14,6 +14,7 @@ from markupsafe import Markup, escape
 
 from ..base.atomic import atomic_write_text
 from ..base.format import readable
+from ..design.search_messages import comparison_words
 from ..results import Certificate, Check, Verdict, to_jsonable
 from .cells import margin_text, number, value_text, verdict_class, verdict_label
 
@@ -398,7 +399,8 @@ def _comparison_context(comparison: Mapping[str, Any]) -> dict[str, Any]:
                     _fmt(sim["final_mean"]),
                     "-" if settle is None else str(settle),
                 ]
-        rows.append({"name": r["scenario"], "cells": cells, "verdict": r.get("comparison", "-")})
+        verdict = comparison_words(r["comparison"]) if "comparison" in r else "-"
+        rows.append({"name": r["scenario"], "cells": cells, "verdict": verdict})
     out: dict[str, Any] = {
         "designs": designs,
         "noise_column": any("observer_noise_bound" in d for d in comparison["designs"]),
