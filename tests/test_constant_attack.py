@@ -188,3 +188,21 @@ def test_growth_from_a_huge_attack_is_measured_past_the_squares_overflow():
     records = constant_attack_outcomes(model, [("huge", np.array([1e150]))], certified=False)
     assert [r["outcome"] for r in records] == ["unbounded"]
     assert records[0]["simulation"]["steps"] < 5000
+
+
+def test_a_run_that_settles_off_the_confirmed_equilibria_is_not_said_to_wander():
+    # duplicate sensors 0 and 1: under an attack on sensor 0 the D-SSO settles in 41 steps on
+    # a point of a family of equilibria, in a pattern whose equations are singular (the
+    # search confirms none of it): undecided, with what the search found, not "did not settle"
+    spec = spec_from_dict(
+        {
+            "name": "dup",
+            "system": {"A": [[1.0, 0.1], [0.0, 0.5]], "C": [[1, 0], [1, 0], [0, 1]]},
+            "attack": {"max_attacked": 1},
+            "observer": {"kind": "dsso", "gain": "deadbeat", "step": 0.5, "threshold": 0.1},
+        }
+    )
+    model = LureModel.from_design(build_observer(spec.system, spec.observer))
+    (record,) = constant_attack_outcomes(model, [("c", np.array([2.0, 0, 0]))], certified=False)
+    assert record["simulation"]["settled"] and record["outcome"] == "undecided"
+    assert record["equilibrium_search"] and record["equilibrium_search"] in record["how"]

@@ -149,4 +149,4 @@ def test_every_search_record_has_words():
     none = searched_text(Searched(SearchCode.PATTERNS_TRIED, facts))
     assert none.startswith("none among the 531,441") and "(2 with a singular" in none
     attacked = searched_text(Searched(SearchCode.PATTERNS_TRIED, {**facts, "nonzero": False}))
-    assert attacked.startswith("0 equilibriums among")
+    assert attacked.startswith("0 equilibria among")

@@ -129,6 +129,15 @@ def constant_attack_outcomes(
                     "observed: the simulation from zero error settles on this exactly confirmed "
                     "equilibrium (no certificate proves that it always does)"
                 )
+            elif sim["settled"]:
+                # (a family of equilibria, from duplicate sensors, sits in a pattern whose
+                # equations are singular: the search confirms none of its points)
+                record.update(
+                    outcome="undecided",
+                    proved=False,
+                    how="the simulation from zero error settled, but not near an equilibrium "
+                    f"confirmed exactly ({record['equilibrium_search'] or 'none searched'})",
+                )
             else:
                 record.update(
                     outcome="undecided", proved=False, how="the simulation did not settle"

@@ -33,10 +33,11 @@ def _text(searched: Searched) -> str:
     if code is SearchCode.FIRST_FOUND:
         return f"{f['tried']:,} of {f['count']:,} active/sign patterns tried"
     if code is SearchCode.PATTERNS_TRIED:
-        what = "nonzero equilibrium" if f["nonzero"] else "equilibrium"
         found, count = f["found"], f["count"]
+        what = "equilibrium" if found == 1 else "equilibria"
+        what = f"nonzero {what}" if f["nonzero"] else what
         note = (
-            f"{found} {what}{'s' if found != 1 else ''} among the {count:,} active/sign "
+            f"{found} {what} among the {count:,} active/sign "
             "patterns of the soft threshold"
             if found or not f["nonzero"]
             else f"none among the {count:,} active/sign patterns of the soft threshold"
