@@ -37,8 +37,7 @@ def _text(searched: Searched) -> str:
         what = "equilibrium" if found == 1 else "equilibria"
         what = f"nonzero {what}" if f["nonzero"] else what
         note = (
-            f"{found} {what} among the {count:,} active/sign "
-            "patterns of the soft threshold"
+            f"{found} {what} among the {count:,} active/sign patterns of the soft threshold"
             if found or not f["nonzero"]
             else f"none among the {count:,} active/sign patterns of the soft threshold"
         )
