@@ -270,6 +270,13 @@ def test_every_lmi_cause_has_words_and_notes_follow_them():
         "gain not verified: P fails the Cholesky test"
     )
     assert "dead zone" in lmi_messages.reason(LMICause.ERROR_MATRIX_UNSTABLE, facts)
+    # a loop whose computed radius is below 1 is said to be unstable by its exact decision,
+    # never by a number below 1
+    below = lmi_messages.reason(
+        LMICause.IDENTITY_IN_SECTOR, {**facts, "radius": 0.9999999999999998}
+    )
+    assert "not asymptotically stable, proved in exact arithmetic" in below
+    assert "(that loop as F: DECISION)" in below and "> 1" not in below
     assert "dead zone" not in lmi_messages.reason(
         LMICause.ERROR_MATRIX_UNSTABLE, {**facts, "channels": 0}
     )

@@ -105,12 +105,18 @@ def _words(cause: LMICause, facts: Mapping[str, Any]) -> str:
         )
     if cause is LMICause.IDENTITY_IN_SECTOR:
         rho = facts["radius"]
+        decided = (
+            f", proved in exact arithmetic (that loop as F: {facts['decision']})"
+            if facts.get("decision")
+            else ""
+        )
         return (
             f"with shrink = 1 the sector [0, 1] contains the identity, and the linear loop it "
-            f"then contains has spectral radius {sig(rho, 6)}{' > 1' if rho > 1 + 1e-9 else ''} "
-            f"(it has an eigenvalue at 1 whenever A does: e = v, a_hat = -C v); no sector "
-            f"certificate can exist, which does not mean the observer is unstable. Shrink < 1 "
-            f"(the elastic-net observer) is what makes a certificate possible"
+            f"then contains (computed spectral radius {sig(rho, 6)}) is not asymptotically "
+            f"stable{decided}. It has an eigenvalue at 1 whenever A does (e = v, a_hat = -C v, "
+            f"or -O_tau v over a window), so no sector certificate can exist, which does not "
+            f"mean the observer is unstable. Shrink < 1 (the elastic-net observer) is what "
+            f"makes a certificate possible"
         )
     if cause is LMICause.VERTEX_UNSTABLE:
         q = facts["q"]
