@@ -100,7 +100,8 @@ class System:
         D, dt)``, dt > 0 or True).
 
         B and D are not used: a known input enters the plant and the estimate alike and
-        cancels in the estimation error, so it changes no verdict.  The sensors are named
+        cancels in the estimation error, so it changes no verdict (an observer exported back,
+        ``ObserverDesign.to_control(plant)``, takes it as an input).  The sensors are named
         after the system's output labels unless ``sensors`` is given.
 
         Raises

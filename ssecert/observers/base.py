@@ -123,18 +123,24 @@ class ObserverDesign:
         """True for observers that also estimate the attack."""
         return self.observer_kind.estimates_attack
 
-    def to_control(self) -> Any:
+    def to_control(self, plant: Any = None) -> Any:
         """The observer as a discrete-time python-control ``StateSpace``, where it is linear.
 
         A Luenberger observer x_hat(k+1) = (A - L C) x_hat(k) + L y(k): inputs the sensors
         (by name), outputs the estimate ``x_hat[0]`` ... (sampling time unspecified, ``dt =
-        True``).
+        True``).  With ``plant``, the python-control ``StateSpace`` the system came from
+        (``System.from_control``), its known input u enters as it enters the plant,
+        x_hat(k+1) = (A - L C) x_hat(k) + L y(k) + (B - L D) u(k), after the sensors as
+        inputs (the plant's input names), and the plant's sampling time is kept: without it
+        the estimate of a plant driven by u does not converge.
 
         Raises
         ------
         ValueError
             For an observer that estimates the attack (its soft thresholds are not linear),
-            naming the linear part it has.
+            naming the linear part it has; for a ``plant`` whose A and C are not the system's.
+        TypeError
+            For a ``plant`` that is not a python-control ``StateSpace``.
         """
         if self.sparse or self.window != 1:
             rows, cols = self.error_matrix.shape
@@ -147,13 +153,20 @@ class ObserverDesign:
 
         A, L = self.system.A, self.L
         n, p = L.shape
+        inputs, B_hat, dt = list(self.system.sensors), L, True
+        if plant is not None:
+            B, D, dt = _plant_input(plant, self.system)
+            names = [f"u[{i}]" for i in range(B.shape[1])]
+            labels = list(getattr(plant, "input_labels", names))
+            inputs += labels if len(set(labels) | set(inputs)) == len(labels) + p else names
+            B_hat = np.hstack([L, B - L @ D])
         return control.ss(
             A - L @ self.sensing,
-            L,
+            B_hat,
             np.eye(n),
-            np.zeros((n, p)),
-            True,
-            inputs=list(self.system.sensors),
+            np.zeros((n, B_hat.shape[1])),
+            dt,
+            inputs=inputs,
             outputs=[f"x_hat[{i}]" for i in range(n)],
             name=f"{self.system.name}_observer",
         )
@@ -596,3 +609,29 @@ def _exact_soft_lure(
         E=Dyadic.block([[Ld], [Dyadic.zeros((m, m))]]),
         Dw=nuL2,
     )
+
+
+def _plant_input(plant: Any, system: Any) -> tuple[np.ndarray, np.ndarray, Any]:
+    """B, D and dt of the python-control plant ``system`` came from (``to_control``)."""
+    import control
+
+    if not isinstance(plant, control.StateSpace):
+        raise TypeError(
+            "plant must be the python-control StateSpace the system came from, got "
+            f"{type(plant).__name__}"
+        )
+    A, C = np.asarray(plant.A, dtype=float), np.asarray(plant.C, dtype=float)
+    if (
+        A.shape != system.A.shape
+        or C.shape != system.C.shape
+        or not (np.array_equal(A, system.A) and np.array_equal(C, system.C))
+    ):
+        raise ValueError(
+            f"plant: its A and C ({A.shape[0]} states, {C.shape[0]} outputs) are not the "
+            f"system's ({system.n} states, {system.p} sensors): pass the StateSpace the system "
+            "was made from"
+        )
+    B, D = np.asarray(plant.B, dtype=float), np.asarray(plant.D, dtype=float)
+    if not (np.all(np.isfinite(B)) and np.all(np.isfinite(D))):
+        raise ValueError("plant: B and D must be finite to enter the observer")
+    return B, D, plant.dt
