@@ -1451,3 +1451,24 @@ def test_regenerating_a_report_changes_only_its_date(tmp_path, capsys, monkeypat
     for text in first:
         assert not re.search(r"0x[0-9a-f]{6,}", text)  # no object ids
         assert ".tmp" not in text and str(tmp_path) not in text
+
+
+@pytest.mark.parametrize(
+    "observer, error, words",
+    [
+        ({"kind": "luenberger", "gian": "deadbeat"}, ValueError, "did you mean 'gain'"),
+        ({"kind": "dsso", "gain": "deadbeat"}, ValueError, "key 'step' is required"),
+        ({"kind": "luenberger", "gain": [[1, 0], [0, 1]]}, ValueError, "2 x 3 matrix"),
+        ({"kind": "luenberger", "gain": "place"}, ValueError, "needs key 'poles'"),
+        ({"gain": "deadbeat"}, ValueError, "key 'kind' is required"),
+        ([("kind", "luenberger")], TypeError, "observer must be a mapping"),
+    ],
+)
+def test_build_observer_checks_the_keys_of_a_section_given_in_python(observer, error, words):
+    # the guide passes a plain dict: a misspelt key was ignored (the default gain built), a
+    # wrong gain failed inside numpy's matmul, a missing key raised a bare KeyError
+    from ssecert.observers import build_observer
+
+    system = System([[1.0, 0.0099], [0.0, 0.9876]], [[1, 0], [0, 1], [0, 1]])
+    with pytest.raises(error, match=words):
+        build_observer(system, observer)

@@ -98,8 +98,53 @@ def build_observer(
     >>> design.kind, design.gain.method.value, design.gain.details["nilpotency_index"]
     ('dsso', 'deadbeat', 1)
     """
-    kind = get_kind(spec["kind"])
+    kind = _checked_kind(system, spec)
     return kind.build(system, spec, budget or Budget(), Tolerances.check(tolerances))
+
+
+def _checked_kind(system: System, spec: Any) -> ObserverKind:
+    """The kind of an observer section given in Python, its keys checked as a spec file's are
+    (unknown, required, the shape of a gain matrix, the poles of a placed gain): the values
+    themselves are the kind's to judge when it builds."""
+    import difflib
+
+    if not isinstance(spec, Mapping):
+        raise TypeError(f"observer must be a mapping of its keys, got {type(spec).__name__}")
+    if "kind" not in spec:
+        raise ValueError(f"observer: key 'kind' is required, one of {', '.join(observer_kinds())}")
+    kind = get_kind(spec["kind"])
+    for key in spec:
+        if key not in kind.keys:
+            near = difflib.get_close_matches(str(key), kind.keys, n=1)
+            hint = f" (did you mean {near[0]!r}?)" if near else ""
+            raise ValueError(
+                f"observer: unknown key {key!r} for kind {kind.name!r}{hint}; its keys: "
+                f"{', '.join(kind.keys)}"
+            )
+    for key in kind.required_keys:
+        if key not in spec:
+            raise ValueError(f"observer: key {key!r} is required for kind {kind.name!r}")
+    gain = spec.get("gain")
+    if gain is not None and not isinstance(gain, str):
+        shape = _nested_shape(gain)
+        if shape != (system.n, system.p):
+            raise ValueError(
+                f"observer: key 'gain' must be an n x p = {system.n} x {system.p} matrix "
+                f"(states by sensors), got shape {tuple(shape)}"
+            )
+    if isinstance(gain, str) and gain == "place" and "poles" not in spec:
+        raise ValueError(f"observer: gain 'place' needs key 'poles' ({system.n} poles)")
+    return kind
+
+
+def _nested_shape(value: Any) -> tuple[int, ...]:
+    """The shape of an array or of nested lists (a ragged one's outer length only)."""
+    import numpy as np
+
+    try:
+        return tuple(np.shape(value))
+    except ValueError:  # ragged
+        return (len(value),) if hasattr(value, "__len__") else ()
 
 
 def observer_from_design(design: ObserverDesign) -> DynamicObserver:
