@@ -10,6 +10,7 @@ observer={...})`` without a spec file.
 from __future__ import annotations
 
 import os
+import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -71,7 +72,10 @@ def as_spec(
     scenarios : sequence of mappings, optional
         ``[[scenario]]`` sections, replacing the spec's.
     name : str, optional
-        The design's name (report file names).
+        The design's name (report file names).  A plant's own name (a python-control
+        system's ``name``, ``System.name``) is used otherwise, written for file names: each
+        run of characters other than letters, digits, '.', '_' and '-' becomes '-' ("UGV
+        plant" is "UGV-plant"; "system" when nothing is left).
 
     Raises
     ------
@@ -127,7 +131,7 @@ def as_spec(
                 "the adversary may control, s)"
             )
         document = {
-            "name": system.name,
+            "name": _file_name(system.name),
             "system": {
                 "A": system.A.tolist(),
                 "C": system.C.tolist(),
@@ -156,3 +160,14 @@ def _load(text: str, **overrides: Any) -> Any:
     if not Path(text).exists() and not Path(text).suffix and text in list_examples():
         return load_spec(example_path(text), source=text, **overrides)
     return load_spec(text, **overrides)
+
+
+def _file_name(name: str) -> str:
+    """A plant's display name written as a spec's name, which names report files: each run of
+    other characters than letters, digits, '.', '_' and '-' replaced by '-', and a first
+    character a letter or a digit ("system" when none is left), at most as long as a spec's
+    name may be."""
+    from .spec.table import MAX_NAME_LENGTH
+
+    written = re.sub(r"[^A-Za-z0-9._-]+", "-", name).lstrip("._-")[:MAX_NAME_LENGTH]
+    return written.rstrip("-") or "system"

@@ -173,3 +173,14 @@ def test_an_exported_observer_takes_the_plant_s_known_input():
         design.to_control(ct.ss(np.eye(2), B, C, D, 0.01))
     with pytest.raises(TypeError, match="plant must be the python-control StateSpace"):
         design.to_control("plant")
+
+
+def test_a_plant_s_display_name_is_written_for_the_report_files():
+    # a python-control plant named "UGV plant" (or a System "ugv (lab)") was refused by
+    # analyze with an error about a spec key the user never wrote
+    plant = ct.ss([[1.0, 0.0099], [0.0, 0.9876]], [[0.0], [0.01]], [[1, 0], [0, 1], [0, 1]], 0,
+                  0.01, name="UGV plant")  # fmt: skip
+    assert analyze(plant, max_attacked=0).meta["spec"]["name"] == "UGV-plant"
+    lab = System(np.eye(2), [[1, 0], [0, 1]], name="ugv (lab) " + "x" * 200)
+    name = analyze(lab, max_attacked=0).meta["spec"]["name"]
+    assert name.startswith("ugv-lab-x") and len(name) == 128
