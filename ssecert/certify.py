@@ -486,12 +486,21 @@ def _command(spec: Spec, seed: int | None, simulate: bool) -> str:
     for name in list_examples():
         if str(example_path(name)) == spec.source:
             target = name
+    made = target.startswith("<")  # ("<python>", "<dict>": a design made in Python)
+    if made:
+        target = f"{spec.name}.toml"
     parts = ["ssecert", "certify", target]
     if seed is not None:
         parts += ["--seed", str(seed)]
     if not simulate:
         parts.append("--no-sim")
-    return " ".join(shlex.quote(p) for p in parts)
+    command = " ".join(shlex.quote(p) for p in parts)
+    if made:
+        command += (
+            f"  # the design was made in Python: write {target} first, "
+            f"open({target!r}, 'w').write(result.spec.to_toml()), result what certify returned"
+        )
+    return command
 
 
 # notebooks show a certify result as its report

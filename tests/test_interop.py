@@ -184,3 +184,23 @@ def test_a_plant_s_display_name_is_written_for_the_report_files():
     lab = System(np.eye(2), [[1, 0], [0, 1]], name="ugv (lab) " + "x" * 200)
     name = analyze(lab, max_attacked=0).meta["spec"]["name"]
     assert name.startswith("ugv-lab-x") and len(name) == 128
+
+
+def test_a_design_made_in_python_says_how_to_reproduce_it(tmp_path, monkeypatch):
+    # the reproduce line was "ssecert certify '<python>' --no-sim", which cannot run
+    import shlex
+
+    from ssecert import certify
+    from ssecert.cli import main
+
+    result = certify(
+        System([[1.0, 0.0099], [0.0, 0.9876]], [[1, 0], [0, 1], [0, 1]], name="ugv lab"),
+        max_attacked=1,
+        observer={"kind": "luenberger", "gain": "deadbeat"},
+        simulate=False,
+    )
+    command = shlex.split(result.command, comments=True)
+    assert command == ["ssecert", "certify", "ugv-lab.toml", "--no-sim"]
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "ugv-lab.toml").write_text(result.spec.to_toml())
+    assert main([*command[1:], "--out", str(tmp_path)]) == result.exit_code

@@ -99,6 +99,23 @@ class Spec:
     source: str = "<dict>"
     sha256: str | None = None
 
+    def to_toml(self) -> str:
+        """The spec file of this design (TOML): ``load_spec`` of it gives the same spec back
+        (a design made in Python has no file of its own).
+
+        Examples
+        --------
+        >>> import tomllib
+        >>> from ssecert.examples import load_example
+        >>> spec = load_example("ugv")
+        >>> again = spec_from_dict(tomllib.loads(spec.to_toml()))
+        >>> bool((again.system.C == spec.system.C).all()), again.observer == spec.observer
+        (True, True)
+        """
+        from .write import dumps, spec_document
+
+        return dumps(spec_document(self))
+
 
 def spec_from_dict(
     data: Mapping[str, Any],
