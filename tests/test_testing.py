@@ -318,6 +318,10 @@ def test_assert_deadbeat():
         assert_deadbeat(plant.A, np.zeros((3, 3)), plant.C)
     with pytest.raises(ValueError, match="rtol must be a number in"):
         assert_deadbeat(plant.A, L, plant.C, rtol=0.0)
+    # any real number type in (0, 1), not a bool
+    assert assert_deadbeat(plant.A, L, plant.C, rtol=np.float32(1e-8)) == 1
+    with pytest.raises(ValueError, match="rtol must be a number in"):
+        assert_deadbeat(plant.A, L, plant.C, rtol=True)
 
 
 def test_assert_deadbeat_is_exact_by_default():

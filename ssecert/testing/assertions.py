@@ -10,6 +10,7 @@ success each assertion returns the result it checked.
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -398,7 +399,9 @@ def assert_deadbeat(A: Any, L: Any, C: Any, *, rtol: float | None = None) -> int
         raise ValueError(f"A must be square, got shape {A.shape}")
     C = as_real_matrix(C, "C", shape=(None, n), shape_hint="the number of states, from A")
     L = as_real_matrix(L, "L", shape=(n, C.shape[0]), shape_hint="n x p: states by sensors")
-    if rtol is not None and not (isinstance(rtol, (int, float)) and 0 < rtol < 1):
+    if rtol is not None and not (
+        isinstance(rtol, numbers.Real) and not isinstance(rtol, bool) and 0 < rtol < 1
+    ):
         raise ValueError(f"rtol must be a number in (0, 1) or None (exact), got {rtol!r}")
     from ..design.gains import DEADBEAT_RTOL, verify_deadbeat
 
