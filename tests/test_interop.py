@@ -204,3 +204,22 @@ def test_a_design_made_in_python_says_how_to_reproduce_it(tmp_path, monkeypatch)
     monkeypatch.chdir(tmp_path)
     (tmp_path / "ugv-lab.toml").write_text(result.spec.to_toml())
     assert main([*command[1:], "--out", str(tmp_path)]) == result.exit_code
+
+
+def test_placed_poles_from_python_and_back_to_a_file():
+    # poles as a numpy array or complex numbers (build_observer took them, analyze did not);
+    # a spec with placed poles, its max_attacked overridden, was refused (its own parsed
+    # poles are complex), and could not be written as a spec file
+    import tomllib
+
+    from ssecert import spec_from_dict
+    from ssecert.inputs import as_spec
+
+    plant = System([[1.0, 0.0099], [0.0, 0.9876]], [[1, 0], [0, 1], [0, 1]])
+    for poles in (np.array([0.5, 0.6]), [0.5 + 0.1j, 0.5 - 0.1j]):
+        spec = as_spec(plant, max_attacked=0, observer={"kind": "luenberger", "gain": "place",
+                                                        "poles": poles})  # fmt: skip
+        assert spec.observer["poles"] == [complex(z) for z in poles]
+        assert as_spec(spec, max_attacked=1).observer == spec.observer
+        again = spec_from_dict(tomllib.loads(spec.to_toml()))
+        assert again.observer == spec.observer

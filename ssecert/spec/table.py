@@ -14,6 +14,8 @@ import re
 from collections.abc import Mapping
 from typing import Any
 
+import numpy as np
+
 from ..base.validation import (
     MAX_MATRIX_DIM,
     MAX_MATRIX_ENTRIES,
@@ -120,6 +122,10 @@ def positive(source: str, key: str, value: Any) -> float:
 
 
 def poles(source: str, key: str, value: Any, n: int) -> list[complex]:
+    """``n`` finite poles, complex ones in conjugate pairs: a list (or, from Python, a tuple
+    or a 1-D array) of real numbers, [re, im] pairs or complex numbers."""
+    if isinstance(value, tuple) or (isinstance(value, np.ndarray) and value.ndim == 1):
+        value = list(value)
     if not isinstance(value, list):
         raise spec_error(source, key, f"expected a list of {n} poles, got {describe(value)}")
     if len(value) != n:
@@ -134,11 +140,14 @@ def poles(source: str, key: str, value: Any, n: int) -> list[complex]:
             pole = complex(float(item[0]), float(item[1]))
         elif isinstance(item, numbers.Real) and not isinstance(item, bool):
             pole = complex(float(item), 0.0)
+        elif isinstance(item, numbers.Complex):  # (from Python: a TOML file has none)
+            pole = complex(item)
         else:
             raise spec_error(
                 source,
                 f"{key}[{i}]",
-                f"expected a real number or a [re, im] pair, got {describe(item)}",
+                f"expected a real number, a [re, im] pair or a complex number, got "
+                f"{describe(item)}",
             )
         if not (math.isfinite(pole.real) and math.isfinite(pole.imag)):
             raise spec_error(source, f"{key}[{i}]", f"must be finite, got {pole}")

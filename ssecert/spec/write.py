@@ -91,6 +91,9 @@ def _value(v: Any) -> str:
         return repr(f)
     if isinstance(v, str):
         return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, complex | np.complexfloating):  # a pole: real, or its [re, im] pair
+        z = complex(v)
+        return _value(z.real) if z.imag == 0 else _value([z.real, z.imag])
     if isinstance(v, list | tuple):
         return "[" + ", ".join(_value(x) for x in v) + "]"
     raise TypeError(f"cannot write {type(v).__name__} to a spec file")
