@@ -140,7 +140,7 @@ def poles(source: str, key: str, value: Any, n: int) -> list[complex]:
             pole = complex(float(item[0]), float(item[1]))
         elif isinstance(item, numbers.Real) and not isinstance(item, bool):
             pole = complex(float(item), 0.0)
-        elif isinstance(item, numbers.Complex):  # (from Python: a TOML file has none)
+        elif isinstance(item, numbers.Complex) and not isinstance(item, bool):  # (Python's)
             pole = complex(item)
         else:
             raise spec_error(
