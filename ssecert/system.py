@@ -138,6 +138,7 @@ class System:
         given = str(getattr(sys, "name", "") or "")
         if not given or given.startswith("sys["):  # python-control's generated name
             given = "system"
+        _check_unused(sys, "sys")
         return cls._from_matrices(sys.A, sys.C, sensors, name or given)
 
     @classmethod
@@ -174,6 +175,7 @@ class System:
                 "scipy.signal.lti: discretise it first, for example with sys.to_discrete(dt)"
             )
         ss = sys.to_ss()
+        _check_unused(ss, "sys")
         return cls._from_matrices(ss.A, ss.C, sensors, name)
 
     @classmethod
@@ -264,3 +266,12 @@ class System:
     def to_dict(self) -> dict[str, Any]:
         """Identity of the system for JSON: name, n, p and sensor names."""
         return {"name": self.name, "n": self.n, "p": self.p, "sensors": list(self.sensors)}
+
+
+def _check_unused(sys: Any, name: str) -> None:
+    """B and D of a library's system, real and finite: they are not used, but a NaN, an inf
+    or a complex entry there is a broken model, not one to certify."""
+    for key in ("B", "D"):
+        value = getattr(sys, key, None)
+        if value is not None and np.size(value):
+            as_real_matrix(np.atleast_2d(np.asarray(value)), f"{name}.{key}")

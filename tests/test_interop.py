@@ -223,3 +223,22 @@ def test_placed_poles_from_python_and_back_to_a_file():
         assert as_spec(spec, max_attacked=1).observer == spec.observer
         again = spec_from_dict(tomllib.loads(spec.to_toml()))
         assert again.observer == spec.observer
+
+
+def test_a_plant_with_nan_in_its_unused_b_or_d_is_refused(tmp_path):
+    # B and D are not used, but a NaN there is a broken model: it was certified ("holds")
+    from ssecert import load_spec
+    from ssecert.spec import SpecError
+
+    A, C = [[1.0, 0.0099], [0.0, 0.9876]], [[1, 0], [0, 1], [0, 1]]
+    nan_b, nan_d = [[0.0], [np.nan]], [[0.0], [0.0], [np.nan]]
+    with pytest.raises(ValueError, match="sys.B must be finite"):
+        System.from_control(ct.ss(A, nan_b, C, 0, 0.01))
+    with pytest.raises(ValueError, match="sys.D must be finite"):
+        System.from_control(ct.ss(A, [[0.0], [1.0]], C, nan_d, 0.01))
+    with pytest.raises(ValueError, match="sys.B must be finite"):
+        System.from_scipy(signal.dlti(A, nan_b, C, np.zeros((3, 1)), dt=0.01))
+    path = tmp_path / "plant.npz"
+    np.savez(path, A=np.array(A), B=np.array(nan_b), C=np.array(C))
+    with pytest.raises(SpecError, match="'B': expected finite entries"):
+        load_spec(path, max_attacked=1)

@@ -325,6 +325,8 @@ def unused_variables(source: str, arrays: dict[str, Any]) -> str | None:
                     key,
                     f"expected {rows} rows (those of {of}), got shape {value.shape}",
                 )
+            if not np.all(np.isfinite(value)):  # (not used, but a NaN there is a broken model)
+                raise spec_error(source, key, "expected finite entries, got NaN or inf")
             columns[key] = value.shape[1]
     if len(set(columns.values())) > 1:
         raise spec_error(
