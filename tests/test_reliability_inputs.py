@@ -1472,3 +1472,29 @@ def test_build_observer_checks_the_keys_of_a_section_given_in_python(observer, e
     system = System([[1.0, 0.0099], [0.0, 0.9876]], [[1, 0], [0, 1], [0, 1]])
     with pytest.raises(error, match=words):
         build_observer(system, observer)
+
+
+def test_an_entry_that_is_not_a_float64_is_refused_not_rounded(tmp_path):
+    # C = [[2^53 + 1, 2^53], [2^53, 2^53]] is invertible; rounded to float64 it is singular,
+    # and the plant was called "not observable (confirmed in exact arithmetic)"
+    from ssecert import load_spec
+    from ssecert.spec import SpecError
+
+    big = 2**53
+    path = tmp_path / "big.toml"
+    path.write_text(
+        f'name = "big"\n[system]\nA = [[1, 0], [0, 1]]\nC = [[{big + 1}, {big}], [{big}, {big}]]\n'
+        "[attack]\nmax_attacked = 0\n"
+    )
+    with pytest.raises(SpecError, match="'system.C': has an entry that is not a float64"):
+        load_spec(path)
+    archive = tmp_path / "big.npz"
+    np.savez(archive, A=np.eye(2, dtype=np.int64), C=np.array([[big + 1, big], [big, big]]))
+    with pytest.raises(SpecError, match="9007199254740993"):
+        load_spec(archive, max_attacked=0)
+    wide = np.array([[1, 1], [1, 1 + np.longdouble(2) ** -60]], dtype=np.longdouble)
+    if wide[1, 1] != 1:  # (a platform whose long double is wider than a float64)
+        with pytest.raises(ValueError, match="not a float64"):
+            System(np.eye(2), wide)
+    # integers a float64 holds exactly are taken, however large
+    assert System(np.eye(2), [[2**60, 3], [0, 1]]).C[0, 0] == 2.0**60

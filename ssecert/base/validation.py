@@ -227,6 +227,8 @@ def as_real_matrix(
                 raise ValueError(
                     f"{name} has an entry too large for a float64: {show_int(int(item))}"
                 )
+            if isinstance(item, numbers.Integral) and int(float(int(item))) != int(item):
+                raise ValueError(_not_a_float(name, int(item), float(int(item))))
         array = np.array(flat, dtype=np.float64).reshape(nested) if flat else np.zeros(nested)
     else:
         if not isinstance(value, np.ndarray) and callable(getattr(value, "toarray", None)):
@@ -249,8 +251,10 @@ def as_real_matrix(
             raise TypeError(f"{name} must be a numeric array, got {describe(array)}")
         if array.ndim == ndim:
             check_size(name, array.shape, max_dim, max_entries)
+        given = array
         with np.errstate(over="ignore"):  # float128 beyond float64: inf, refused below
             array = np.array(array, dtype=np.float64)
+        _check_exactly_float64(given, array, name)
     if array.ndim != ndim:
         raise ValueError(f"{name} must be {_ndim_text(ndim)}, got an array of shape {array.shape}")
     if shape is not None:
@@ -271,6 +275,36 @@ def as_real_matrix(
     array = np.ascontiguousarray(array)
     array.flags.writeable = False
     return array
+
+
+def _not_a_float(name: str, given: Any, nearest: float) -> str:
+    return (
+        f"{name} has an entry that is not a float64: {show_int(given) if isinstance(given, int) else given}"
+        f" (the nearest float64 is {nearest!r}); ssecert's checks, the exact ones "
+        "included, are on the float64 values, so write the entry as the float64 you mean "
+        "(or rescale its row)"
+    )
+
+
+def _check_exactly_float64(given: np.ndarray, array: np.ndarray, name: str) -> None:
+    """ValueError where an integer above 2^53 or a wider float (float128) of ``given`` is
+    not exactly its float64 in ``array`` (NaN and inf are refused by the caller)."""
+    kind, size = given.dtype.kind, given.dtype.itemsize
+    if kind in "iu" and size >= 8:
+        large = np.flatnonzero(np.abs(given.astype(np.float64).ravel()) >= 2.0**53)
+        for i in large:
+            exact = int(given.ravel()[i])
+            if int(array.ravel()[i]) != exact:
+                raise ValueError(_not_a_float(name, exact, float(array.ravel()[i])))
+    elif kind == "f" and size > 8:
+        with np.errstate(over="ignore", invalid="ignore"):
+            back = array.astype(given.dtype)
+        lost = np.isfinite(array) & (back != given)
+        if np.any(lost):
+            first = int(np.flatnonzero(lost.ravel())[0])
+            raise ValueError(
+                _not_a_float(name, repr(given.ravel()[first]), float(array.ravel()[first]))
+            )
 
 
 def as_int_option(
