@@ -260,12 +260,12 @@ def test_rho_from_the_rows_matches_the_definition(seed):
     rng = np.random.default_rng(seed)
     O = rng.integers(-3, 4, size=(8, 3)).astype(float)
     supports = np.array(list(itertools.combinations(range(8), 2)))
-    rho, codes, _ = support_rho(StackedRows.of(O), supports, Tolerances())
+    rho, codes, _, _ = support_rho(StackedRows.of(O), supports, Tolerances())
     direct = [irrepresentable_constant(O, S) for S in supports]
     assert np.allclose(rho, direct, rtol=1e-12)
     assert np.array_equal(np.isinf(rho), codes == 0)
     O[0] *= 2.0**40
-    rho, _, _ = support_rho(StackedRows.of(O), supports, Tolerances())
+    rho, _, _, _ = support_rho(StackedRows.of(O), supports, Tolerances())
     exact = _exact_rows(np.eye(3), O, 1)
     for value, S in zip(rho, supports):
         truth = _exact_rho(exact, list(S))
@@ -316,3 +316,21 @@ def test_an_exact_constant_of_one_fails_by_rational_arithmetic():
     assert check.verdict.value == "fails" and check.code is Code.EXACTLY_AT_LEAST_ONE
     assert check.evidence["worst_support_exact_value"] == "1"
     assert check.witness["exact_value"] == "1"
+
+
+def test_supports_too_ill_conditioned_to_rank_make_the_worst_a_lower_bound():
+    # C's second column holds 2^-57 in two rows: for supports {y1, y3} and {y3, y5} O_Sbar
+    # has a condition number near 2^57 and the QR's rho is off by 20x (exactly 5.0e17 and
+    # 1.3e18, computed 2.2e16); the worst computed precisely, 4.3e17 on {y1, y5}, is then a
+    # lower bound, not the constant
+    from ssecert.structure.irrepresentable import _exact_rho
+
+    e = 2.0**-57
+    C = [[-1, 2, -1], [-2, e, 0], [0, e, 2], [-2, 0, 0], [-1, -1, -2]]
+    plant = System(np.eye(3), C)
+    check = irrepresentable(plant, 2, horizon=1)
+    assert check.verdict.value == "fails" and check.fields["value_is_lower_bound"]
+    assert check.fields["worst_support"] == [0, 4]
+    assert check.evidence["imprecise_supports"] == 2
+    named = check.evidence["imprecise_support"]["support"]
+    assert _exact_rho(plant, 1, np.array(named)) > check.value

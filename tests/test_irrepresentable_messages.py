@@ -11,7 +11,8 @@ FACTS = {
     "max_sets": 5, "refusal": "REFUSAL", "longer_than_n": True, "first": 0, "last": 9, "cause": "X",
     "problem": "PROBLEM", "doubt": "DOUBT.", "label": "y1, y2", "checked": 6, "total": 6,
     "worst": 1.5, "direct": 1.4, "estimate": 0.1, "kappa": 1e3, "counted": "sensors",
-    "stopped": None, "exact": None, "band": 1e-9, "accuracy": None,
+    "stopped": None, "exact": None, "band": 1e-9, "accuracy": None, "imprecise_label": "y3, y4",
+    "error": 24.0,
 }  # fmt: skip
 
 WHAT = "the irrepresentable enumeration (6 supports of 20 rows of the 30 x 3 matrix O_tau)"
@@ -30,6 +31,13 @@ def test_every_irrepresentable_code_has_words_and_a_verdict():
     assert "y1, y2; relative error about 0.2" in accurate
     cut = irrepresentable_messages.summary(Code.ABOVE_ONE, {**FACTS, "stopped": 1234})
     assert "after 1,234 supports" in cut and "--exact" in cut
+    # supports too ill-conditioned to rank: the worst found is a lower bound, or not the worst
+    imprecise = {"count": 2, "imprecise_label": "y3, y4", "error": 24.0}
+    above = irrepresentable_messages.summary(Code.ABOVE_ONE, {**FACTS, "imprecise": imprecise})
+    assert "2 supports' O_Sbar are too ill-conditioned" in above and "at least that" in above
+    below = irrepresentable_messages.summary(Code.IMPRECISE_SUPPORTS, {**FACTS, "worst": 0.5})
+    assert "y3, y4, with a relative error estimate of 24" in below
+    assert Code.IMPRECISE_SUPPORTS.verdict.value == "inconclusive"
 
 
 def test_a_doubted_rank_states_its_singular_value():

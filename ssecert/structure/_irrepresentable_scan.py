@@ -28,7 +28,7 @@ from ..budget import Budget
 from ..numerics.exact import pow2_row_scaling, pow2_scale
 from ..numerics.linalg import screen_positive_definite, stacked_rank
 from ..parallel import map_ranges, rank_ranges
-from ..tolerances import BORDERLINE, NONZERO, ZERO, Tolerances
+from ..tolerances import BORDERLINE, EPS, NONZERO, ZERO, Tolerances
 from ._combinatorics import DEFAULT_CHUNK_BYTES, DEFAULT_MEMORY, colex_blocks
 
 __all__ = [
@@ -118,6 +118,12 @@ class SupportScan:
     n_inf: int = 0
     borderline: int = 0
     stopped_after: int | None = None  # supports checked when the time budget stopped the scan
+    # refined supports whose rho may be off by more than IMPRECISE (relative): their number,
+    # and the one whose value could be largest (rho (1 + error), inf past an error of 1/2)
+    imprecise: int = 0
+    imprecise_upper: float = -1.0
+    imprecise_support: tuple[int, ...] | None = None
+    imprecise_error: float = math.nan
 
     def add_refined(self, codes: np.ndarray, subsets: np.ndarray, smallest: np.ndarray) -> None:
         """Count the SVD rank decisions of refined supports; keep the first deficient one (with
@@ -129,6 +135,20 @@ class SupportScan:
             cand = tuple(int(x) for x in subsets[j])
             if self.infinite is None or cand < self.infinite:
                 self.infinite, self.infinite_smallest = cand, float(smallest[j])
+
+    def add_imprecise(self, rho: np.ndarray, error: np.ndarray, subsets: np.ndarray) -> None:
+        """Count the refined supports whose finite rho may be off by more than IMPRECISE, and
+        keep the one whose true value could be largest."""
+        doubt = np.flatnonzero(np.isfinite(rho) & ~(error <= IMPRECISE))
+        if not doubt.size:
+            return
+        self.imprecise += doubt.size
+        upper = np.where(error[doubt] < 0.5, rho[doubt] * (1 + 2 * error[doubt]), math.inf)
+        j = int(np.argmax(upper))
+        if upper[j] > self.imprecise_upper:
+            self.imprecise_upper = float(upper[j])
+            self.imprecise_support = tuple(int(x) for x in subsets[doubt[j]])
+            self.imprecise_error = float(error[doubt[j]])
 
     def add_finite(self, rho: np.ndarray, subsets: np.ndarray) -> None:
         """Keep the largest finite rho, with the first support among its near-ties."""
@@ -143,6 +163,11 @@ class SupportScan:
         """Add what another range of supports found (ranges merged in colex order)."""
         self.borderline += other.borderline
         self.n_inf += other.n_inf
+        self.imprecise += other.imprecise
+        if other.imprecise_support is not None and other.imprecise_upper > self.imprecise_upper:
+            self.imprecise_upper = other.imprecise_upper
+            self.imprecise_support = other.imprecise_support
+            self.imprecise_error = other.imprecise_error
         if other.infinite is not None and (self.infinite is None or other.infinite < self.infinite):
             self.infinite, self.infinite_smallest = other.infinite, other.infinite_smallest
         if other.worst_support is not None:
@@ -188,7 +213,7 @@ class StackedRows:
 
 def support_rho(
     rows: StackedRows, inside: np.ndarray, tol: Tolerances
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Rank decision and rho of supports from the rows of O_tau, whatever their units.
 
     The rank of O_Sbar is decided by an SVD with its rows and columns scaled
@@ -216,6 +241,9 @@ def support_rho(
         ZERO, BORDERLINE or NONZERO for the smallest singular value.
     smallest : ndarray, shape (N,)
         sigma_min / sigma_max of the scaled O_Sbar.
+    error : ndarray, shape (N,)
+        An estimate of rho's relative error (``rho_error``: the QR's rounding amplified by
+        the condition number of the O_Sbar it factored); NaN where rho is not finite.
     """
     N, h = inside.shape
     m, n = rows.O.shape
@@ -230,6 +258,7 @@ def support_rho(
     columns = columns.reshape(N, 1, n)
     codes, smallest, _ = stacked_rank(scaled * columns, tolerances=tol)
     rho = np.where(codes == ZERO, math.inf, math.nan)
+    error = np.full(N, math.nan)
     full = np.flatnonzero(codes == NONZERO)
     if full.size:
         B = rows.O[outside[full]] * columns[full]
@@ -238,7 +267,22 @@ def support_rho(
         with np.errstate(all="ignore"):
             Z = _forward_substitution(R.transpose(0, 2, 1), Y.transpose(0, 2, 1))
             rho[full] = np.abs(Qb @ Z).sum(axis=2).max(axis=1) if m > h else 0.0
-    return rho, codes, smallest
+            s = np.linalg.svd(R, compute_uv=False)  # (B's singular values)
+            kappa = np.where(s[:, -1] > 0, s[:, 0] / s[:, -1], math.inf)
+        error[full] = rho_error(m - h, n, kappa)
+    return rho, codes, smallest, error
+
+
+def rho_error(rows: int, n: int, kappa: Any) -> Any:
+    """An estimate of the relative error of rho from a Householder QR of an O_Sbar of
+    ``rows`` x ``n`` whose condition number (columns scaled to unit size) is ``kappa``: the
+    QR's normwise backward error, amplified by kappa."""
+    return (rows + n) * EPS * np.asarray(kappa, dtype=float)
+
+
+#: a rho whose relative error may exceed this is imprecise: another support may be the worst,
+#: or the comparison with 1 may be wrong
+IMPRECISE = 1e-6
 
 
 def _forward_substitution(L: np.ndarray, Y: np.ndarray) -> np.ndarray:
@@ -358,8 +402,9 @@ def _block_rho(
     for start in range(0, bad.size, plan.refine_batch):
         sel = bad[start : start + plan.refine_batch]
         inside = rows_of[subsets[sel]].reshape(sel.size, -1)
-        rho[sel], codes, smallest = support_rho(task.rows, inside, task.tol)
+        rho[sel], codes, smallest, error = support_rho(task.rows, inside, task.tol)
         scan.add_refined(codes, subsets[sel], smallest)
+        scan.add_imprecise(rho[sel], error, subsets[sel])
     return rho
 
 

@@ -480,6 +480,7 @@ def _worst_verdict(
     assert support is not None
     inside = rows_of[list(support)].reshape(1, -1)
     direct = float(support_rho(rows, inside, tol)[0][0])
+    imprecise = _imprecise(out, scan)
     kappa = sensor_units_condition(rows, inside)
     rel = abs(direct - worst) / max(1.0, abs(worst))
     # the scan's value is within rel of the QR's, whose rounding reaches rho amplified by at
@@ -499,19 +500,23 @@ def _worst_verdict(
         facts = {"worst": worst, "label": label, "estimate": estimate, "kappa": kappa}
         return out.check(Code.NOT_TOLD_FROM_ONE, worst, support, facts, margin=margin)
     named = {"label": label, "accuracy": (estimate, kappa) if estimate > band else None}
+    if worst < 1.0 - band and imprecise is not None:
+        return out.check(Code.IMPRECISE_SUPPORTS, worst, support, {**named, "worst": worst,
+                         **imprecise}, margin=margin)  # fmt: skip
     if worst < 1.0 - band:
         facts = {**named, "worst": worst, "k": out.k, "counted": out.counted(out.k)}
         return out.check(Code.BELOW_ONE, worst, support, facts, margin=margin)
     if worst > 1.0 + band:
         stopped = scan.stopped_after
+        lower = stopped is not None or imprecise is not None
         return out.check(
             Code.ABOVE_ONE,
             worst,
             support,
-            {**named, "worst": worst, "stopped": stopped},
+            {**named, "worst": worst, "stopped": stopped, "imprecise": imprecise},
             margin=margin,
             witness={"support": list(support), "support_names": out.names(support), "value": worst},
-            extra={"value_is_lower_bound": True} if stopped is not None else None,
+            extra={"value_is_lower_bound": True} if lower else None,
         )
     exact = _exact_rho(out.system, out.tau, rows_of[list(support)].ravel())
     if exact is not None:
@@ -532,6 +537,29 @@ def _worst_verdict(
         )
     facts = {**named, "worst": worst, "band": band, "exact": exact}
     return out.check(Code.WITHIN_BAND, worst, support, facts, margin=margin)
+
+
+def _imprecise(out: _Verdicts, scan: SupportScan) -> dict[str, Any] | None:
+    """Where some support's rho was computed too imprecisely (an ill-conditioned O_Sbar) for
+    the worst to be known, the facts (``count``, ``label``, ``value``, ``error``: the one
+    whose true value could be largest), also in the evidence; None where none could exceed
+    the worst."""
+    if not scan.imprecise or scan.imprecise_support is None:
+        return None
+    out.evidence["imprecise_supports"] = scan.imprecise
+    if scan.imprecise_support == scan.worst_support or not scan.imprecise_upper > scan.worst:
+        return None
+    facts = {
+        "count": scan.imprecise,
+        "imprecise_label": out.label(scan.imprecise_support),
+        "error": scan.imprecise_error,
+    }
+    out.evidence["imprecise_support"] = {
+        "support": list(scan.imprecise_support),
+        "support_names": out.names(scan.imprecise_support),
+        "relative_error_estimate": scan.imprecise_error,
+    }
+    return facts
 
 
 def _exact_rho(system: System, tau: int, inside: np.ndarray) -> Fraction | None:

@@ -127,6 +127,11 @@ def summary(code: Code, facts: Mapping[str, Any]) -> str:
             f"{_label(f)}): Lasso identifies every attack on {f['k']} {f['counted']} for small "
             f"enough lambda."
         )
+    if code is Code.IMPRECISE_SUPPORTS:
+        return (
+            f"The largest constant computed is {sig(f['worst'])} < 1 (support {_label(f)}), "
+            f"but {_imprecise_words(f)}, so it is not known to be the worst."
+        )
     if code is Code.ABOVE_ONE:
         stopped = f["stopped"]
         cut = ""
@@ -135,6 +140,8 @@ def summary(code: Code, facts: Mapping[str, Any]) -> str:
                 f" (the scan stopped at the time budget after {stopped:,} supports: the worst "
                 f"value over all of them may be larger; --exact scans every support)"
             )
+        elif f.get("imprecise") is not None:
+            cut = f" ({_imprecise_words(f['imprecise'])}: the constant is at least that)"
         return (
             f"The irrepresentable constant reaches {sig(f['worst'])} >= 1 on support "
             f"{_label(f)}: Lasso's support recovery is not guaranteed there{cut}."
@@ -155,3 +162,14 @@ def summary(code: Code, facts: Mapping[str, Any]) -> str:
         else "."
     )
     return f"The worst constant {f['worst']:.12g} is within {f['band']:g} of 1{beside}"
+
+
+def _imprecise_words(f: Mapping[str, Any]) -> str:
+    """The supports whose rho was computed too imprecisely to rank (IMPRECISE_SUPPORTS)."""
+    count = f["count"]
+    which = "support's" if count == 1 else "supports'"
+    return (
+        f"{count:,} {which} O_Sbar {'is' if count == 1 else 'are'} too ill-conditioned for "
+        f"rho to be computed precisely (the one that may be largest, {f['imprecise_label']}, "
+        f"with a relative error estimate of {f['error']:.2g}), and may be larger"
+    )

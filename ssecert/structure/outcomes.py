@@ -117,8 +117,13 @@ class IrrepresentableCode(enum.Enum):
     NOT_TOLD_FROM_ONE = "not told from 1"
     #: holds: the worst value is below 1 (``worst``, ``label``, ``k``, ``counted``)
     BELOW_ONE = "below 1"
+    #: inconclusive: the worst value is below 1, but some support's rho was computed too
+    #: imprecisely (an ill-conditioned O_Sbar) to be known below it (``worst``, ``label``,
+    #: ``count``, ``imprecise_label``, ``error``)
+    IMPRECISE_SUPPORTS = "imprecise supports"
     #: fails: the worst value is above 1 (``worst``, ``label``, ``stopped``: supports checked
-    #: when the time budget cut the scan short, else None)
+    #: when the time budget cut the scan short, else None; ``imprecise``: the facts of
+    #: IMPRECISE_SUPPORTS where another support may be larger, else None)
     ABOVE_ONE = "above 1"
     #: fails: the exact value on the worst support is at least 1 (``label``, ``exact``)
     EXACTLY_AT_LEAST_ONE = "exactly at least 1"
