@@ -1498,3 +1498,8 @@ def test_an_entry_that_is_not_a_float64_is_refused_not_rounded(tmp_path):
             System(np.eye(2), wide)
     # integers a float64 holds exactly are taken, however large
     assert System(np.eye(2), [[2**60, 3], [0, 1]]).C[0, 0] == 2.0**60
+
+
+def test_a_horizon_beyond_the_limit_is_refused_as_the_argument_it_is(capsys):
+    # (it was refused as a key of the spec file, "ugv.toml: key '--horizon'")
+    assert_refused(*cli(capsys, "analyze", "ugv", "--horizon", "10001"), "--horizon", "10,000")

@@ -54,6 +54,15 @@ def _positive_int(text: str) -> int:
     return _integer(text, 1, scientific=True)
 
 
+def _horizon(text: str) -> int:
+    from ..spec.core import MAX_HORIZON
+
+    value = _integer(text, 1, scientific=True)
+    if value > MAX_HORIZON:
+        raise argparse.ArgumentTypeError(f"expected an integer <= {MAX_HORIZON:,}, got {value:,}")
+    return value
+
+
 def _local_workers(text: str) -> int:
     from ..parallel import max_local_workers
 
@@ -215,7 +224,7 @@ def _add_analysis_options(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--horizon",
-        type=_positive_int,
+        type=_horizon,
         metavar="T",
         help="stacked horizon tau (default: the spec's, else n)",
     )
