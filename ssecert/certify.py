@@ -216,6 +216,7 @@ def certify(
     >>> result.certificate.verdict.value, result.stealthy["sensors_a"]
     ('fails', [2])
     """
+    overridden = any(v is not None for v in (max_attacked, horizon, observer, scenarios))
     spec = as_spec(
         spec, max_attacked=max_attacked, horizon=horizon, observer=observer, scenarios=scenarios
     )
@@ -280,7 +281,7 @@ def certify(
         stealthy=stealthy,
         region=region_map,
         seed=base_seed,
-        command=command or _command(spec, seed, simulate),
+        command=command or _command(spec, seed, simulate, overridden=overridden),
         notes=tuple(notes),
     )
 
@@ -479,14 +480,17 @@ def _region_refusal(
     )
 
 
-def _command(spec: Spec, seed: int | None, simulate: bool) -> str:
+def _command(spec: Spec, seed: int | None, simulate: bool, *, overridden: bool = False) -> str:
+    """The command that reproduces the report: ``ssecert certify`` of the spec's file, or, for
+    a design made or changed in Python (``overridden``), of the file ``Spec.to_toml`` writes."""
     from .examples import example_path, list_examples
 
     target = spec.source
     for name in list_examples():
         if str(example_path(name)) == spec.source:
             target = name
-    made = target.startswith("<")  # ("<python>", "<dict>": a design made in Python)
+    # ("<python>", "<dict>": a design made in Python; a file's changed by keywords)
+    made = overridden or target.startswith("<")
     if made:
         target = f"{spec.name}.toml"
     parts = ["ssecert", "certify", target]
@@ -497,7 +501,7 @@ def _command(spec: Spec, seed: int | None, simulate: bool) -> str:
     command = " ".join(shlex.quote(p) for p in parts)
     if made:
         command += (
-            f"  # the design was made in Python: write {target} first, "
+            f"  # the design was made or changed in Python: write {target} first, "
             f"open({target!r}, 'w').write(result.spec.to_toml()), result what certify returned"
         )
     return command

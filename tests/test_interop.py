@@ -173,6 +173,8 @@ def test_an_exported_observer_takes_the_plant_s_known_input():
         design.to_control(ct.ss(np.eye(2), B, C, D, 0.01))
     with pytest.raises(TypeError, match="plant must be the python-control StateSpace"):
         design.to_control("plant")
+    with pytest.raises(ValueError, match="plant must be a discrete-time system"):
+        design.to_control(ct.ss(A, B, C, D, 0))
 
 
 def test_a_plant_s_display_name_is_written_for_the_report_files():
@@ -204,6 +206,11 @@ def test_a_design_made_in_python_says_how_to_reproduce_it(tmp_path, monkeypatch)
     monkeypatch.chdir(tmp_path)
     (tmp_path / "ugv-lab.toml").write_text(result.spec.to_toml())
     assert main([*command[1:], "--out", str(tmp_path)]) == result.exit_code
+    # a packaged example changed by keywords is not that example: its own file is named
+    changed = certify("ugv", max_attacked=0, simulate=False)
+    assert shlex.split(changed.command, comments=True)[2] == "ugv.toml"
+    assert "max_attacked = 0" in changed.spec.to_toml()
+    assert shlex.split(certify("ugv", simulate=False).command)[2] == "ugv"
 
 
 def test_placed_poles_from_python_and_back_to_a_file():

@@ -334,3 +334,40 @@ def test_supports_too_ill_conditioned_to_rank_make_the_worst_a_lower_bound():
     assert check.evidence["imprecise_supports"] == 2
     named = check.evidence["imprecise_support"]["support"]
     assert _exact_rho(plant, 1, np.array(named)) > check.value
+
+
+def test_an_imprecise_support_beside_an_imprecise_worst_is_still_seen():
+    # the worst support itself may have the largest upper bound: the next one, above the
+    # worst, must still make the worst a lower bound; ranges merged keep the same two
+    from ssecert.structure._irrepresentable_scan import SupportScan
+    from ssecert.structure.irrepresentable import _imprecise, _Verdicts
+
+    def scan_of(parts):
+        scan = SupportScan()
+        for rho, error, support in parts:
+            part = SupportScan()
+            part.add_finite(np.array([rho]), np.array([support]))
+            part.add_imprecise(np.array([rho]), np.array([error]), np.array([support]))
+            scan.merge(part)
+        return scan
+
+    parts = [(40.0, 0.3, (2,)), (39.96, 1.3e-3, (1,)), (10.0, 1e-3, (0,))]
+    scan = scan_of(parts)
+    assert scan.worst_support == (2,) and scan.imprecise == 3
+    assert [e[1] for e in scan.imprecise_top] == [(2,), (1,)]
+    plant = System(np.eye(1), [[1.0], [2.0], [3.0]])
+    out = _Verdicts(plant, plant, "block", 1, 1, {}, {})
+    facts = _imprecise(out, scan)
+    assert facts is not None and facts["imprecise_label"] == "y2"
+    assert out.evidence["imprecise_support"]["support"] == [1]
+    # below the worst, however imprecise, none is named
+    assert _imprecise(out, scan_of([(40.0, 0.3, (2,)), (10.0, 1e-3, (0,))])) is None
+
+
+def test_sensors_in_far_units_are_not_taken_for_imprecise_supports():
+    # rows 1e12 and 4e13 beside rows near 1: the QR's rho is exact to 2e-16 on every support,
+    # and its error estimate must say so (it read 0.3 with the columns scaled for other rows)
+    C = [[1e12, 0], [40.004e12, 0], [0, 1], [1, 0.01], [0.2, 0.02]]
+    check = irrepresentable(System(np.eye(2), C), 1, horizon=1)
+    assert check.verdict.value == "fails" and "value_is_lower_bound" not in check.fields
+    assert check.evidence.get("imprecise_supports", 0) == 0

@@ -1460,6 +1460,7 @@ def test_regenerating_a_report_changes_only_its_date(tmp_path, capsys, monkeypat
         ({"kind": "dsso", "gain": "deadbeat"}, ValueError, "key 'step' is required"),
         ({"kind": "luenberger", "gain": [[1, 0], [0, 1]]}, ValueError, "2 x 3 matrix"),
         ({"kind": "luenberger", "gain": "place"}, ValueError, "needs key 'poles'"),
+        ({"kind": "luenberger", "poles": [0.5, 0.6]}, ValueError, "only used with gain 'place'"),
         ({"gain": "deadbeat"}, ValueError, "key 'kind' is required"),
         ([("kind", "luenberger")], TypeError, "observer must be a mapping"),
     ],
@@ -1496,8 +1497,13 @@ def test_an_entry_that_is_not_a_float64_is_refused_not_rounded(tmp_path):
     if wide[1, 1] != 1:  # (a platform whose long double is wider than a float64)
         with pytest.raises(ValueError, match="not a float64"):
             System(np.eye(2), wide)
-    # integers a float64 holds exactly are taken, however large
+    # integers a float64 holds exactly are taken, however large; a Fraction only if exact
     assert System(np.eye(2), [[2**60, 3], [0, 1]]).C[0, 0] == 2.0**60
+    from fractions import Fraction
+
+    assert System(np.eye(1), [[Fraction(1, 2)]]).C[0, 0] == 0.5
+    with pytest.raises(ValueError, match="Fraction"):
+        System(np.eye(1), [[Fraction(1, 3)]])
 
 
 def test_a_horizon_beyond_the_limit_is_refused_as_the_argument_it_is(capsys):

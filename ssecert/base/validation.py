@@ -7,6 +7,7 @@ kinds raise ``TypeError``; wrong values raise ``ValueError``.
 
 from __future__ import annotations
 
+import fractions
 import math
 import numbers
 from collections.abc import Sequence
@@ -229,6 +230,8 @@ def as_real_matrix(
                 )
             if isinstance(item, numbers.Integral) and int(float(int(item))) != int(item):
                 raise ValueError(_not_a_float(name, int(item), float(int(item))))
+            if _rounded(item):  # (a float128 or a Fraction the float64 does not hold)
+                raise ValueError(_not_a_float(name, repr(item), float(item)))  # type: ignore[arg-type]
         array = np.array(flat, dtype=np.float64).reshape(nested) if flat else np.zeros(nested)
     else:
         if not isinstance(value, np.ndarray) and callable(getattr(value, "toarray", None)):
@@ -284,6 +287,16 @@ def _not_a_float(name: str, given: Any, nearest: float) -> str:
         "included, are on the float64 values, so write the entry as the float64 you mean "
         "(or rescale its row)"
     )
+
+
+def _rounded(item: Any) -> bool:
+    """Whether a wider float or a non-integer rational is not exactly its float64."""
+    if isinstance(item, np.floating) and item.dtype.itemsize > 8:
+        return bool(np.isfinite(item)) and np.longdouble(float(item)) != item
+    if isinstance(item, numbers.Rational) and not isinstance(item, numbers.Integral):
+        value = float(item)
+        return math.isfinite(value) and fractions.Fraction(value) != item
+    return False
 
 
 def _check_exactly_float64(given: np.ndarray, array: np.ndarray, name: str) -> None:

@@ -560,11 +560,15 @@ def _rate_gain(template: Any, **options: Any) -> tuple[Any, dict[str, Any]]:
 
 
 def _template(system: System, kind: str, row: Any, col: Any, threshold: float) -> Any:
-    """The design of one grid cell with a zero gain."""
-    from ..observers import build_observer
+    """The design of one grid cell with a zero gain (built by the kind itself: a kind whose
+    section has no ``gain`` key, a plugin's, ignores it)."""
+    from ..budget import Budget
+    from ..tolerances import Tolerances
 
-    section = get_kind(kind).design_section(system, row, col, threshold=threshold)
-    return build_observer(system, {**section, "gain": np.zeros((system.n, system.p)).tolist()})
+    observer_kind = get_kind(kind)
+    section = observer_kind.design_section(system, row, col, threshold=threshold)
+    zero = {**section, "gain": np.zeros((system.n, system.p)).tolist()}
+    return observer_kind.build(system, zero, Budget(), Tolerances())
 
 
 def tradeoff_front(

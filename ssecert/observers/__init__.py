@@ -132,8 +132,11 @@ def _checked_kind(system: System, spec: Any) -> ObserverKind:
                 f"observer: key 'gain' must be an n x p = {system.n} x {system.p} matrix "
                 f"(states by sensors), got shape {tuple(shape)}"
             )
-    if isinstance(gain, str) and gain == "place" and "poles" not in spec:
+    placed = isinstance(gain, str) and gain == "place"
+    if placed and "poles" not in spec:
         raise ValueError(f"observer: gain 'place' needs key 'poles' ({system.n} poles)")
+    if not placed and spec.get("poles") is not None:
+        raise ValueError("observer: key 'poles' is only used with gain 'place'")
     return kind
 
 

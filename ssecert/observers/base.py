@@ -631,6 +631,12 @@ def _plant_input(plant: Any, system: Any) -> tuple[np.ndarray, np.ndarray, Any]:
             f"system's ({system.n} states, {system.p} sensors): pass the StateSpace the system "
             "was made from"
         )
+    dt = plant.dt
+    if dt is None or dt is False or (not isinstance(dt, bool) and float(dt) == 0.0):
+        raise ValueError(
+            f"plant must be a discrete-time system (dt > 0 or True), got dt = {dt!r}: the "
+            "observer is discrete-time"
+        )
     B, D = np.asarray(plant.B, dtype=float), np.asarray(plant.D, dtype=float)
     if not (np.all(np.isfinite(B)) and np.all(np.isfinite(D))):
         raise ValueError("plant: B and D must be finite to enter the observer")

@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -119,11 +119,10 @@ class SupportScan:
     borderline: int = 0
     stopped_after: int | None = None  # supports checked when the time budget stopped the scan
     # refined supports whose rho may be off by more than IMPRECISE (relative): their number,
-    # and the one whose value could be largest (rho (1 + error), inf past an error of 1/2)
+    # and the two whose values could be largest, as (upper, support, error) with upper =
+    # rho (1 + 2 error), inf past an error of 1/2 (two: one of them may be the worst itself)
     imprecise: int = 0
-    imprecise_upper: float = -1.0
-    imprecise_support: tuple[int, ...] | None = None
-    imprecise_error: float = math.nan
+    imprecise_top: list[tuple[float, tuple[int, ...], float]] = field(default_factory=list)
 
     def add_refined(self, codes: np.ndarray, subsets: np.ndarray, smallest: np.ndarray) -> None:
         """Count the SVD rank decisions of refined supports; keep the first deficient one (with
@@ -144,11 +143,13 @@ class SupportScan:
             return
         self.imprecise += doubt.size
         upper = np.where(error[doubt] < 0.5, rho[doubt] * (1 + 2 * error[doubt]), math.inf)
-        j = int(np.argmax(upper))
-        if upper[j] > self.imprecise_upper:
-            self.imprecise_upper = float(upper[j])
-            self.imprecise_support = tuple(int(x) for x in subsets[doubt[j]])
-            self.imprecise_error = float(error[doubt[j]])
+        for j in np.argsort(-upper, kind="stable")[:2]:
+            support = tuple(int(x) for x in subsets[doubt[j]])
+            self._keep_imprecise((float(upper[j]), support, float(error[doubt[j]])))
+
+    def _keep_imprecise(self, entry: tuple[float, tuple[int, ...], float]) -> None:
+        """Keep the two largest upper bounds (the first support among ties)."""
+        self.imprecise_top = sorted([*self.imprecise_top, entry], key=lambda e: (-e[0], e[1]))[:2]
 
     def add_finite(self, rho: np.ndarray, subsets: np.ndarray) -> None:
         """Keep the largest finite rho, with the first support among its near-ties."""
@@ -164,10 +165,8 @@ class SupportScan:
         self.borderline += other.borderline
         self.n_inf += other.n_inf
         self.imprecise += other.imprecise
-        if other.imprecise_support is not None and other.imprecise_upper > self.imprecise_upper:
-            self.imprecise_upper = other.imprecise_upper
-            self.imprecise_support = other.imprecise_support
-            self.imprecise_error = other.imprecise_error
+        for entry in other.imprecise_top:
+            self._keep_imprecise(entry)
         if other.infinite is not None and (self.infinite is None or other.infinite < self.infinite):
             self.infinite, self.infinite_smallest = other.infinite, other.infinite_smallest
         if other.worst_support is not None:
@@ -267,7 +266,10 @@ def support_rho(
         with np.errstate(all="ignore"):
             Z = _forward_substitution(R.transpose(0, 2, 1), Y.transpose(0, 2, 1))
             rho[full] = np.abs(Qb @ Z).sum(axis=2).max(axis=1) if m > h else 0.0
-            s = np.linalg.svd(R, compute_uv=False)  # (B's singular values)
+            # B's condition with its columns scaled by powers of two to unit size (a change
+            # of state units, which rho ignores): B D = Q (R D), so that of R D
+            unit = pow2_row_scaling(np.abs(B).max(axis=1, initial=0.0).reshape(-1, 1))
+            s = np.linalg.svd(R * unit.reshape(full.size, 1, n), compute_uv=False)
             kappa = np.where(s[:, -1] > 0, s[:, 0] / s[:, -1], math.inf)
         error[full] = rho_error(m - h, n, kappa)
     return rho, codes, smallest, error

@@ -544,22 +544,19 @@ def _imprecise(out: _Verdicts, scan: SupportScan) -> dict[str, Any] | None:
     the worst to be known, the facts (``count``, ``label``, ``value``, ``error``: the one
     whose true value could be largest), also in the evidence; None where none could exceed
     the worst."""
-    if not scan.imprecise or scan.imprecise_support is None:
+    if not scan.imprecise:
         return None
     out.evidence["imprecise_supports"] = scan.imprecise
-    if scan.imprecise_support == scan.worst_support or not scan.imprecise_upper > scan.worst:
+    others = [e for e in scan.imprecise_top if e[1] != scan.worst_support]
+    if not others or not others[0][0] > scan.worst:
         return None
-    facts = {
-        "count": scan.imprecise,
-        "imprecise_label": out.label(scan.imprecise_support),
-        "error": scan.imprecise_error,
-    }
+    _, support, error = others[0]
     out.evidence["imprecise_support"] = {
-        "support": list(scan.imprecise_support),
-        "support_names": out.names(scan.imprecise_support),
-        "relative_error_estimate": scan.imprecise_error,
+        "support": list(support),
+        "support_names": out.names(support),
+        "relative_error_estimate": error,
     }
-    return facts
+    return {"count": scan.imprecise, "imprecise_label": out.label(support), "error": error}
 
 
 def _exact_rho(system: System, tau: int, inside: np.ndarray) -> Fraction | None:
