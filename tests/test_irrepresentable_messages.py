@@ -35,6 +35,10 @@ def test_every_irrepresentable_code_has_words_and_a_verdict():
     imprecise = {"count": 2, "imprecise_label": "y3, y4", "error": 24.0}
     above = irrepresentable_messages.summary(Code.ABOVE_ONE, {**FACTS, "imprecise": imprecise})
     assert "2 supports' O_Sbar are too ill-conditioned" in above and "at least that" in above
+    exactly = irrepresentable_messages.summary(
+        Code.EXACTLY_AT_LEAST_ONE, {**FACTS, "exact": 1, "imprecise": imprecise}
+    )
+    assert "is exactly 1" in exactly and "at least that" in exactly
     below = irrepresentable_messages.summary(Code.IMPRECISE_SUPPORTS, {**FACTS, "worst": 0.5})
     assert "y3, y4, with a relative error estimate of 24" in below
     assert Code.IMPRECISE_SUPPORTS.verdict.value == "inconclusive"

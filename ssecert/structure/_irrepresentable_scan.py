@@ -47,9 +47,11 @@ _SUB = 128  # largest number of supports per dense product
 #: Margin of the Gramian screening: a support whose whitened Gramian I - Q_S^T Q_S has an
 #: eigenvalue below it (or below ``Tolerances.screen_rtol``) is decided on the rows of O_tau
 #: (``support_rho``).  Above it the Gramian's rounding reaches rho amplified by at most
-#: 2^10; below it rho >= sqrt((1 - 2^-10) / (2^-10 h)) > 1 for h < 1023 attacked rows
-#: (||O_Sbar^dagger^T O_S^T||_2^2 = (1 - lambda_min) / lambda_min), so the supports sent
-#: there all fail Theorem 1's condition.
+#: 2^10; below it rho >= sqrt((1 - 2^-10) / (2^-10 r)) > 1 for r < 1023 rows outside the
+#: support (||O_Sbar^dagger^T O_S^T||_2^2 = (1 - lambda_min) / lambda_min, and ||X||_2 <=
+#: sqrt(r) ||X||_inf for r rows), so with fewer the supports sent there all fail Theorem 1's
+#: condition; with more rows one may not, and its rho, computed by the QR with an error
+#: estimate (``rho_error``), is imprecise where that estimate is large.
 VALUE_SCREEN = 2.0**-10
 
 

@@ -526,7 +526,7 @@ def _worst_verdict(
             Code.EXACTLY_AT_LEAST_ONE,
             worst,
             support,
-            {**named, "exact": exact},
+            {**named, "exact": exact, "imprecise": imprecise},
             margin=margin,
             witness={
                 "support": list(support),
@@ -534,6 +534,7 @@ def _worst_verdict(
                 "value": float(exact),
                 "exact_value": str(exact),
             },
+            extra={"value_is_lower_bound": True} if imprecise is not None else None,
         )
     facts = {**named, "worst": worst, "band": band, "exact": exact}
     return out.check(Code.WITHIN_BAND, worst, support, facts, margin=margin)

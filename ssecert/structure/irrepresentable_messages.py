@@ -149,10 +149,15 @@ def summary(code: Code, facts: Mapping[str, Any]) -> str:
     if code is Code.EXACTLY_AT_LEAST_ONE:
         exact = f["exact"]
         value = "exactly 1" if exact == 1 else f"{float(exact):.17g} >= 1 exactly"
+        lower = (
+            f" ({_imprecise_words(f['imprecise'])}: the constant is at least that)"
+            if f.get("imprecise") is not None
+            else ""
+        )
         return (
             f"The irrepresentable constant on support {_label(f)} is {value} (computed in "
             f"rational arithmetic from the floats of A and C): Lasso's support recovery is "
-            "not guaranteed there."
+            f"not guaranteed there{lower}."
         )
     exact = f["exact"]
     beside = (

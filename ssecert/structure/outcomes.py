@@ -125,7 +125,8 @@ class IrrepresentableCode(enum.Enum):
     #: when the time budget cut the scan short, else None; ``imprecise``: the facts of
     #: IMPRECISE_SUPPORTS where another support may be larger, else None)
     ABOVE_ONE = "above 1"
-    #: fails: the exact value on the worst support is at least 1 (``label``, ``exact``)
+    #: fails: the exact value on the worst support is at least 1 (``label``, ``exact``,
+    #: ``imprecise`` as for ABOVE_ONE)
     EXACTLY_AT_LEAST_ONE = "exactly at least 1"
     #: inconclusive: the worst value is within the band of 1 (``worst``, ``band``, ``label``,
     #: ``exact``: its exact value below 1, or None)
