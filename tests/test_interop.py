@@ -223,10 +223,11 @@ def test_placed_poles_from_python_and_back_to_a_file():
     from ssecert.inputs import as_spec
 
     plant = System([[1.0, 0.0099], [0.0, 0.9876]], [[1, 0], [0, 1], [0, 1]])
-    for poles in (np.array([0.5, 0.6]), [0.5 + 0.1j, 0.5 - 0.1j]):
+    for poles in (np.array([0.5, 0.6]), [0.5 + 0.1j, 0.5 - 0.1j], [(0.5, 0.1), (0.5, -0.1)]):
         spec = as_spec(plant, max_attacked=0, observer={"kind": "luenberger", "gain": "place",
                                                         "poles": poles})  # fmt: skip
-        assert spec.observer["poles"] == [complex(z) for z in poles]
+        assert spec.observer["poles"] == [complex(*z) if isinstance(z, tuple) else complex(z)
+                                          for z in poles]  # fmt: skip
         assert as_spec(spec, max_attacked=1).observer == spec.observer
         again = spec_from_dict(tomllib.loads(spec.to_toml()))
         assert again.observer == spec.observer

@@ -1461,6 +1461,7 @@ def test_regenerating_a_report_changes_only_its_date(tmp_path, capsys, monkeypat
         ({"kind": "luenberger", "gain": [[1, 0], [0, 1]]}, ValueError, "2 x 3 matrix"),
         ({"kind": "luenberger", "gain": "place"}, ValueError, "needs key 'poles'"),
         ({"kind": "luenberger", "poles": [0.5, 0.6]}, ValueError, "only used with gain 'place'"),
+        ({"kind": "luenberger", "gain": None}, ValueError, "'gain' is None"),
         ({"gain": "deadbeat"}, ValueError, "key 'kind' is required"),
         ([("kind", "luenberger")], TypeError, "observer must be a mapping"),
     ],

@@ -124,6 +124,11 @@ def _checked_kind(system: System, spec: Any) -> ObserverKind:
     for key in kind.required_keys:
         if key not in spec:
             raise ValueError(f"observer: key {key!r} is required for kind {kind.name!r}")
+    if "gain" in spec and spec["gain"] is None:
+        raise ValueError(
+            "observer: key 'gain' is None: give a gain's name or an n x p matrix, or leave the "
+            "key out for the kind's default"
+        )
     gain = spec.get("gain")
     if gain is not None and not isinstance(gain, str):
         shape = _nested_shape(gain)

@@ -133,7 +133,7 @@ def poles(source: str, key: str, value: Any, n: int) -> list[complex]:
     poles: list[complex] = []
     for i, item in enumerate(value):
         if (
-            isinstance(item, list)
+            isinstance(item, list | tuple)
             and len(item) == 2
             and all(isinstance(x, numbers.Real) and not isinstance(x, bool) for x in item)
         ):
