@@ -126,12 +126,7 @@ class System:
                 "sys must be a python-control StateSpace (control.ss(A, B, C, D, dt)), got "
                 f"{describe(sys)}"
             )
-        dt = sys.dt
-        if dt is None or dt is False or (not isinstance(dt, bool) and float(dt) == 0.0):
-            raise ValueError(
-                f"sys must be a discrete-time system (dt > 0 or True), got dt = {dt!r}: "
-                "discretise it first, for example with control.c2d(sys, Ts)"
-            )
+        discrete_time(sys, "sys", "discretise it first, for example with control.c2d(sys, Ts)")
         labels = getattr(sys, "output_labels", None)
         if sensors is None and labels is not None and len(labels) == np.shape(sys.C)[0]:
             sensors = [str(label) for label in labels]
@@ -275,3 +270,14 @@ def _check_unused(sys: Any, name: str) -> None:
         value = getattr(sys, key, None)
         if value is not None and np.size(value):
             as_real_matrix(np.atleast_2d(np.asarray(value)), f"{name}.{key}")
+
+
+def discrete_time(sys: Any, name: str, hint: str) -> Any:
+    """The sampling time of a python-control system, which must be discrete (dt > 0 or
+    True); ValueError naming ``name`` with ``hint`` otherwise."""
+    dt = sys.dt
+    if dt is None or dt is False or (not isinstance(dt, bool) and float(dt) == 0.0):
+        raise ValueError(
+            f"{name} must be a discrete-time system (dt > 0 or True), got dt = {dt!r}: {hint}"
+        )
+    return dt

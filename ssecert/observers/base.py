@@ -41,7 +41,7 @@ from ..design.gains import (
     place_gain,
 )
 from ..numerics.exact_powers import Dyadic, ExactMatrix, as_dyadic, dyadic, exact_error_matrix
-from ..system import System
+from ..system import System, discrete_time
 from ..tolerances import Tolerances, product_rounding
 from .lure import EXACT_ENTRIES, ExactLure, LureModel
 
@@ -631,13 +631,8 @@ def _plant_input(plant: Any, system: Any) -> tuple[np.ndarray, np.ndarray, Any]:
             f"system's ({system.n} states, {system.p} sensors): pass the StateSpace the system "
             "was made from"
         )
-    dt = plant.dt
-    if dt is None or dt is False or (not isinstance(dt, bool) and float(dt) == 0.0):
-        raise ValueError(
-            f"plant must be a discrete-time system (dt > 0 or True), got dt = {dt!r}: the "
-            "observer is discrete-time"
-        )
+    dt = discrete_time(plant, "plant", "the observer is discrete-time")
     B, D = np.asarray(plant.B, dtype=float), np.asarray(plant.D, dtype=float)
     if not (np.all(np.isfinite(B)) and np.all(np.isfinite(D))):
         raise ValueError("plant: B and D must be finite to enter the observer")
-    return B, D, plant.dt
+    return B, D, dt

@@ -37,6 +37,7 @@ __all__ = [
     "SupportScan",
     "VALUE_SCREEN",
     "plan_scan",
+    "rho_error",
     "scan_supports",
     "sensor_units_condition",
     "support_rho",

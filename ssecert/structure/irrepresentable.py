@@ -43,13 +43,14 @@ from ..numerics.linalg import balanced_units, staircase
 from ..parallel import ChunkError
 from ..results import Check
 from ..system import System
-from ..tolerances import EPS, Tolerances
+from ..tolerances import Tolerances
 from . import irrepresentable_messages as messages
 from ._irrepresentable_scan import (
     ScanPlan,
     StackedRows,
     SupportScan,
     plan_scan,
+    rho_error,
     scan_supports,
     sensor_units_condition,
     support_rho,
@@ -485,7 +486,7 @@ def _worst_verdict(
     rel = abs(direct - worst) / max(1.0, abs(worst))
     # the scan's value is within rel of the QR's, whose rounding reaches rho amplified by at
     # most about O_Sbar's condition number (normwise backward stability of Householder QR)
-    estimate = rel + (rows.O.shape[0] - inside.shape[1] + rows.O.shape[1]) * EPS * kappa
+    estimate = rel + float(rho_error(rows.O.shape[0] - inside.shape[1], rows.O.shape[1], kappa))
     out.evidence["worst_support_recomputed"] = direct
     out.evidence["recompute_relative_difference"] = rel
     out.evidence["worst_support_condition"] = kappa
