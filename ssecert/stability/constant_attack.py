@@ -164,12 +164,15 @@ def _settle(record: dict[str, Any], eq: dict[str, Any], *, proved: bool) -> None
 
 
 def _row_norms(v: np.ndarray) -> np.ndarray:
-    """Each row's 2-norm, finite for finite rows (their squares may overflow: each row is
-    brought near 1 by a power of two first, which changes no bit where nothing overflows or
-    underflows); inf or NaN for a row that is not finite."""
-    top = np.max(np.abs(v), axis=1, initial=0.0)
-    k = np.frexp(np.where(np.isfinite(top), top, 1.0))[1]
-    return np.ldexp(np.linalg.norm(np.ldexp(v, -k[:, None]), axis=1), k)
+    """Each row's 2-norm, finite for finite rows: where the squares overflow (entries past
+    1e154) the row is brought near 1 by a power of two first; inf or NaN for a row that is
+    not finite."""
+    out = np.linalg.norm(v, axis=1)
+    over = np.flatnonzero(np.isinf(out) & np.all(np.isfinite(v), axis=1))
+    if over.size:
+        k = np.frexp(np.max(np.abs(v[over]), axis=1))[1]
+        out[over] = np.ldexp(np.linalg.norm(np.ldexp(v[over], -k[:, None]), axis=1), k)
+    return out
 
 
 def _distance(final: np.ndarray, eq: dict[str, Any], weight: np.ndarray) -> float:
