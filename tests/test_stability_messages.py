@@ -277,6 +277,11 @@ def test_every_lmi_cause_has_words_and_notes_follow_them():
     )
     assert "not asymptotically stable, proved in exact arithmetic" in below
     assert "(that loop as F: DECISION)" in below and "> 1" not in below
+    estimated = lmi_messages.reason(
+        LMICause.IDENTITY_IN_SECTOR, {**facts, "radius": 1.0 + 1e-9, "rigorous": False}
+    )
+    assert "by a floating-point estimate, not proved" in estimated
+    assert "exact arithmetic" not in estimated
     assert "dead zone" not in lmi_messages.reason(
         LMICause.ERROR_MATRIX_UNSTABLE, {**facts, "channels": 0}
     )

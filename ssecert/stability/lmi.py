@@ -235,7 +235,7 @@ def _prechecks(
                 facts = {"q": model.q, "radius": rho_q, "decision": vertex.reason}
                 return Verdict.INCONCLUSIVE, LMICause.VERTEX_WITHIN_ROUNDING, facts, details
             if model.q >= 1 - 1e-12:
-                facts = {"radius": rho_q, "decision": vertex.reason}
+                facts = {"radius": rho_q, "decision": vertex.reason, "rigorous": vertex.rigorous}
                 return Verdict.INCONCLUSIVE, LMICause.IDENTITY_IN_SECTOR, facts, details
             facts = {"q": model.q, "decision": vertex.reason}
             return Verdict.INCONCLUSIVE, LMICause.VERTEX_UNSTABLE, facts, details

@@ -105,11 +105,12 @@ def _words(cause: LMICause, facts: Mapping[str, Any]) -> str:
         )
     if cause is LMICause.IDENTITY_IN_SECTOR:
         rho = facts["radius"]
-        decided = (
-            f", proved in exact arithmetic (that loop as F: {facts['decision']})"
-            if facts.get("decision")
-            else ""
+        how = (
+            "proved in exact arithmetic"
+            if facts.get("rigorous", True)
+            else "by a floating-point estimate, not proved"
         )
+        decided = f", {how} (that loop as F: {facts['decision']})" if facts.get("decision") else ""
         return (
             f"with shrink = 1 the sector [0, 1] contains the identity, and the linear loop it "
             f"then contains (computed spectral radius {sig(rho, 6)}) is not asymptotically "
